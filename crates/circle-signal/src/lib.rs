@@ -1,0 +1,227 @@
+//! Angles on the circle S¹, as an encoder reports them.
+//!
+//! An encoder gives a whirling angle θ only modulo 2π. This crate holds the few operations every
+//! later stage needs on such a signal, with one convention fixed for the whole workspace:
+//!
+//! - [`wrap`]: `x = ((θ + π) mod 2π) − π`, always in `[−π, π)`.
+//! - [`unwrap`]: the continuous signal `x_c` whose wrap is the input; a step of the wrapped signal
+//!   larger than π in magnitude is taken as a jump of 2π (so the true signal must move by less
+//!   than π between two samples).
+//! - [`circle_distance`]: the distance on the circle, paper eq. 19, `|a − b|_c = min(d, 2π − d)`
+//!   with `d = |a − b| mod 2π`; it lies in `[0, π]`.
+//! - [`max_circle_distance`]: the distance between two delay vectors, the **maximum** over components
+//!   of the per-component circle distance (the Chebyshev norm on the torus). Every stage that
+//!   compares delay vectors of a wrapped angle uses this one norm.
+//! - [`RotationSplit`]: the split of a period-k segment into a constant rotation `w_ck τ` and an
+//!   oscillation `x_var` (paper section 2, `x_ck = w_ck t + x_var,k`), needed before a whirling
+//!   orbit can be expanded in a Fourier series.
+//!
+//! # Example
+//!
+//! ```
+//! use circle_signal::{circle_distance, unwrap, wrap, RotationSplit};
+//! use std::f64::consts::PI;
+//!
+//! // A pendulum whirling once per 8 samples, with a small wobble, seen through an encoder.
+//! let theta: Vec<f64> = (0..=16).map(|n| 2.0 * PI * n as f64 / 8.0 + 0.1 * (n as f64).sin()).collect();
+//! let encoder: Vec<f64> = theta.iter().map(|&t| wrap(t)).collect();
+//! let continuous = unwrap(&encoder);
+//! for (c, t) in continuous.iter().zip(&theta) {
+//!     assert!((c - t).abs() < 1e-12);
+//! }
+//! assert!((circle_distance(3.1, -3.1) - (2.0 * PI - 6.2)).abs() < 1e-12);
+//!
+//! // 16 samples spanning two forcing periods (k = 2) of length 2π each: h = 4π / 16.
+//! let split = RotationSplit::new(&continuous, 2, 4.0 * PI / 16.0).unwrap();
+//! assert_eq!(split.winding, 2);
+//! assert!((split.rate - 1.0).abs() < 1e-12); // m / k rotations per unit time, times 2π / T
+//! ```
+#![deny(missing_docs)]
+
+use std::f64::consts::{PI, TAU};
+
+/// Errors of this crate.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum CircleError {
+    /// A segment is too short for the operation.
+    #[error("segment of {len} samples is too short: at least {needed} are needed")]
+    TooShort {
+        /// Samples given.
+        len: usize,
+        /// Samples needed.
+        needed: usize,
+    },
+    /// A sample is NaN or infinite.
+    #[error("sample {index} is not finite ({value})")]
+    NonFinite {
+        /// Index of the sample.
+        index: usize,
+        /// Its value.
+        value: f64,
+    },
+    /// A parameter is out of range.
+    #[error("invalid {name}: {value} ({why})")]
+    InvalidParameter {
+        /// The parameter's name.
+        name: &'static str,
+        /// The value given.
+        value: f64,
+        /// What it must be.
+        why: &'static str,
+    },
+}
+
+/// Wraps an angle into `[−π, π)`: `((θ + π) mod 2π) − π`.
+///
+/// NaN and infinities give NaN.
+#[inline]
+pub fn wrap(theta: f64) -> f64 {
+    let mut r = (theta + PI).rem_euclid(TAU);
+    // `rem_euclid` may round up to exactly 2π for tiny negative arguments.
+    if r >= TAU {
+        r -= TAU;
+    }
+    r - PI
+}
+
+/// Distance on the circle (paper eq. 19): `min(d, 2π − d)` with `d = |a − b| mod 2π`.
+///
+/// The result lies in `[0, π]`, is exactly symmetric in its arguments, and is zero for `a == b`.
+#[inline]
+pub fn circle_distance(a: f64, b: f64) -> f64 {
+    let d = (a - b).abs().rem_euclid(TAU);
+    d.min(TAU - d)
+}
+
+/// Distance between two delay vectors of a wrapped angle: the maximum over components of the
+/// per-component [`circle_distance`].
+///
+/// # Panics
+/// If the two slices have different lengths.
+#[inline]
+pub fn max_circle_distance(a: &[f64], b: &[f64]) -> f64 {
+    assert_eq!(a.len(), b.len(), "delay vectors of different dimension");
+    a.iter().zip(b).map(|(&x, &y)| circle_distance(x, y)).fold(0.0, f64::max)
+}
+
+/// Unwraps a sampled angle into a continuous signal that starts at `x[0]`.
+///
+/// Each step is taken modulo 2π into `(−π, π]`: the output is `x[n] + 2π m_n` with integer `m_n`,
+/// so no rounding accumulates along a long record. Samples need not be wrapped on input.
+pub fn unwrap(x: &[f64]) -> Vec<f64> {
+    let mut out = Vec::with_capacity(x.len());
+    unwrap_into(x, &mut out);
+    out
+}
+
+/// [`unwrap`] into a caller's buffer (cleared first), to reuse one allocation over many segments.
+pub fn unwrap_into(x: &[f64], out: &mut Vec<f64>) {
+    out.clear();
+    out.reserve(x.len());
+    let mut turns = 0.0_f64;
+    let mut prev = match x.first() {
+        Some(&p) => p,
+        None => return,
+    };
+    out.push(prev);
+    for &xn in &x[1..] {
+        turns -= ((xn - prev) / TAU).round();
+        out.push(xn + TAU * turns);
+        prev = xn;
+    }
+}
+
+/// A period-k segment of an unwrapped angle, split into rotation and oscillation.
+///
+/// With `L` samples one step `h` apart spanning `k` forcing periods, and the closing sample
+/// `x_c[L]` (the first sample of the next repetition), the winding number is
+/// `m = round((x_c[L] − x_c[0]) / 2π)`, the rotation rate `w = 2π m / (L h)` (for the paper's
+/// non-dimensional time, `L h = 2π k` and `w = m / k`), and the oscillation
+/// `x_var[n] = x_c[n] − w n h` for `n = 0..L` is nearly periodic.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RotationSplit {
+    /// Net turns over the segment (`m`); zero for an oscillating orbit.
+    pub winding: i64,
+    /// Rotation rate `w_ck` in radians per unit time.
+    pub rate: f64,
+    /// The oscillating part `x_var`, `L` samples (the closing sample excluded).
+    pub oscillation: Vec<f64>,
+}
+
+impl RotationSplit {
+    /// Splits `x_c`, an unwrapped segment of `L + 1` samples (closing sample last) spanning
+    /// `k` forcing periods with sample step `h`.
+    pub fn new(x_c: &[f64], k: usize, h: f64) -> Result<Self, CircleError> {
+        if !(h.is_finite() && h > 0.0) {
+            return Err(CircleError::InvalidParameter { name: "h", value: h, why: "must be positive and finite" });
+        }
+        if k == 0 {
+            return Err(CircleError::InvalidParameter { name: "k", value: 0.0, why: "must be at least 1" });
+        }
+        if x_c.len() < 3 {
+            return Err(CircleError::TooShort { len: x_c.len(), needed: 3 });
+        }
+        if let Some((index, &value)) = x_c.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return Err(CircleError::NonFinite { index, value });
+        }
+        let l = x_c.len() - 1;
+        let turns = ((x_c[l] - x_c[0]) / TAU).round();
+        let rate = TAU * turns / (l as f64 * h);
+        let oscillation = x_c[..l].iter().enumerate().map(|(n, &x)| x - rate * n as f64 * h).collect();
+        Ok(Self { winding: turns as i64, rate, oscillation })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn wrap_edges() {
+        assert_eq!(wrap(PI), -PI);
+        assert_eq!(wrap(-PI), -PI);
+        assert_eq!(wrap(0.0), 0.0);
+        // -1e-300 + π rounds to π: the nearest representable answer is 0.
+        assert_eq!(wrap(-1e-300), 0.0);
+        assert!(wrap(f64::NAN).is_nan());
+        assert!(wrap(f64::INFINITY).is_nan());
+        let w = wrap(-PI - 1e-17);
+        assert!((-PI..PI).contains(&w), "{w}");
+    }
+
+    #[test]
+    fn distance_values() {
+        assert_eq!(circle_distance(0.0, PI), PI);
+        assert!((circle_distance(-3.0, 3.0) - (TAU - 6.0)).abs() < 1e-15);
+        assert_eq!(max_circle_distance(&[0.0, 1.0], &[0.5, 1.25]), 0.5);
+    }
+
+    #[test]
+    fn unwrap_linear_ramp() {
+        let theta: Vec<f64> = (0..100).map(|n| -0.9 * n as f64).collect();
+        let w: Vec<f64> = theta.iter().map(|&t| wrap(t)).collect();
+        let u = unwrap(&w);
+        for (a, b) in u.iter().zip(&theta) {
+            assert!((a - b).abs() < 1e-12);
+        }
+        assert!(unwrap(&[]).is_empty());
+    }
+
+    #[test]
+    fn split_errors() {
+        assert!(matches!(RotationSplit::new(&[0.0, 1.0], 1, 0.1), Err(CircleError::TooShort { .. })));
+        assert!(RotationSplit::new(&[0.0, 1.0, 2.0], 1, 0.0).is_err());
+        assert!(RotationSplit::new(&[0.0, f64::NAN, 2.0], 1, 0.1).is_err());
+    }
+
+    #[test]
+    fn split_oscillating_orbit_has_zero_winding() {
+        let h = TAU / 25.0;
+        let x: Vec<f64> = (0..=25).map(|n| 1.2 * (n as f64 * h).sin()).collect();
+        let s = RotationSplit::new(&x, 1, h).unwrap();
+        assert_eq!(s.winding, 0);
+        assert_eq!(s.rate, 0.0);
+        assert_eq!(s.oscillation.len(), 25);
+    }
+}
