@@ -102,7 +102,10 @@ pub fn circle_distance(a: f64, b: f64) -> f64 {
 #[inline]
 pub fn max_circle_distance(a: &[f64], b: &[f64]) -> f64 {
     assert_eq!(a.len(), b.len(), "delay vectors of different dimension");
-    a.iter().zip(b).map(|(&x, &y)| circle_distance(x, y)).fold(0.0, f64::max)
+    a.iter()
+        .zip(b)
+        .map(|(&x, &y)| circle_distance(x, y))
+        .fold(0.0, f64::max)
 }
 
 /// Unwraps a sampled angle into a continuous signal that starts at `x[0]`.
@@ -154,13 +157,24 @@ impl RotationSplit {
     /// `k` forcing periods with sample step `h`.
     pub fn new(x_c: &[f64], k: usize, h: f64) -> Result<Self, CircleError> {
         if !(h.is_finite() && h > 0.0) {
-            return Err(CircleError::InvalidParameter { name: "h", value: h, why: "must be positive and finite" });
+            return Err(CircleError::InvalidParameter {
+                name: "h",
+                value: h,
+                why: "must be positive and finite",
+            });
         }
         if k == 0 {
-            return Err(CircleError::InvalidParameter { name: "k", value: 0.0, why: "must be at least 1" });
+            return Err(CircleError::InvalidParameter {
+                name: "k",
+                value: 0.0,
+                why: "must be at least 1",
+            });
         }
         if x_c.len() < 3 {
-            return Err(CircleError::TooShort { len: x_c.len(), needed: 3 });
+            return Err(CircleError::TooShort {
+                len: x_c.len(),
+                needed: 3,
+            });
         }
         if let Some((index, &value)) = x_c.iter().enumerate().find(|(_, v)| !v.is_finite()) {
             return Err(CircleError::NonFinite { index, value });
@@ -168,8 +182,16 @@ impl RotationSplit {
         let l = x_c.len() - 1;
         let turns = ((x_c[l] - x_c[0]) / TAU).round();
         let rate = TAU * turns / (l as f64 * h);
-        let oscillation = x_c[..l].iter().enumerate().map(|(n, &x)| x - rate * n as f64 * h).collect();
-        Ok(Self { winding: turns as i64, rate, oscillation })
+        let oscillation = x_c[..l]
+            .iter()
+            .enumerate()
+            .map(|(n, &x)| x - rate * n as f64 * h)
+            .collect();
+        Ok(Self {
+            winding: turns as i64,
+            rate,
+            oscillation,
+        })
     }
 }
 
@@ -210,7 +232,10 @@ mod tests {
 
     #[test]
     fn split_errors() {
-        assert!(matches!(RotationSplit::new(&[0.0, 1.0], 1, 0.1), Err(CircleError::TooShort { .. })));
+        assert!(matches!(
+            RotationSplit::new(&[0.0, 1.0], 1, 0.1),
+            Err(CircleError::TooShort { .. })
+        ));
         assert!(RotationSplit::new(&[0.0, 1.0, 2.0], 1, 0.0).is_err());
         assert!(RotationSplit::new(&[0.0, f64::NAN, 2.0], 1, 0.1).is_err());
     }

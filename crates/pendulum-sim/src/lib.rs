@@ -1,8 +1,51 @@
-//! Simulation of forced second-order oscillators.
+//! Simulation of forced second-order oscillators `x'' = F(t, x, x')`.
+//!
+//! The true system of the paper is the horizontally base-excited pendulum (Liang & Feeny, eq. 1):
+//!
+//! ```text
+//! x'' + c x' + (1/r²) sin x − f sin(t) cos x = 0,     f = 1.52, c = 0.03, r = 0.8333,
+//! ```
+//!
+//! in non-dimensional time (forcing period 2π). Every system, the pendulum and the models that
+//! later stages identify, implements [`SecondOrderSystem`] and runs through the same code:
+//!
+//! - [`Dop853`]: the explicit Runge–Kutta pair of Dormand and Prince of order 8 with error
+//!   estimators of orders 5 and 3 and a 7th-order dense output (Hairer, Nørsett & Wanner,
+//!   *Solving ODEs I*, II.10), with Hairer's step-size control and initial step;
+//! - [`simulate`]: samples at exactly `t_n = t_0 + n T/P` (computed by multiplication, so no
+//!   sample is lost or shifted by accumulated rounding), from dense output;
+//! - [`poincare_section`]: the stroboscopic map, one state per forcing period;
+//! - [`largest_lyapunov`]: the largest Lyapunov exponent from the tangent-linear equation
+//!   `(δx, δv)' = (δv, ∂F/∂x δx + ∂F/∂v δv)`, renormalised every forcing period.
+//!
+//! # Example
+//!
+//! ```
+//! use pendulum_sim::{simulate, Pendulum, SimulationConfig, Tolerances};
+//!
+//! let pendulum = Pendulum::new(1.52, 0.03, 0.8333)?;
+//! let config = SimulationConfig::paper()
+//!     .with_samples(250)?
+//!     .with_transient_periods(10)
+//!     .with_tolerances(Tolerances::relative(1e-10)?);
+//! let trajectory = simulate(&pendulum, &config)?;
+//! let encoder = trajectory.wrapped(); // what an encoder would report, in [-π, π)
+//! assert_eq!(encoder.len(), 250);
+//! assert!(encoder.iter().all(|x| (-std::f64::consts::PI..std::f64::consts::PI).contains(x)));
+//! # Ok::<(), pendulum_sim::SimError>(())
+//! ```
 #![deny(missing_docs)]
 
+mod dop853;
 mod error;
+mod simulate;
 mod system;
+mod tableau;
 
+pub use dop853::{Dop853, OdeSystem, Stats, Tolerances};
 pub use error::SimError;
+pub use simulate::{
+    FirstOrder, LyapunovConfig, LyapunovEstimate, SimulationConfig, Tangent, Trajectory, largest_lyapunov,
+    poincare_section, simulate, simulate_with_progress,
+};
 pub use system::{Pendulum, SecondOrderSystem};

@@ -48,19 +48,37 @@ impl Pendulum {
     pub fn new(f: f64, c: f64, r: f64) -> Result<Self, SimError> {
         for (name, value) in [("f", f), ("c", c), ("r", r)] {
             if !value.is_finite() {
-                return Err(SimError::InvalidParameter { name, value, why: "must be finite" });
+                return Err(SimError::InvalidParameter {
+                    name,
+                    value,
+                    why: "must be finite",
+                });
             }
         }
         if r == 0.0 {
-            return Err(SimError::InvalidParameter { name: "r", value: r, why: "must be non-zero" });
+            return Err(SimError::InvalidParameter {
+                name: "r",
+                value: r,
+                why: "must be non-zero",
+            });
         }
-        Ok(Self { f, c, r, inv_r2: 1.0 / (r * r) })
+        Ok(Self {
+            f,
+            c,
+            r,
+            inv_r2: 1.0 / (r * r),
+        })
     }
 
     /// The paper's pendulum (`f = 1.52`, `c = 0.03`, `r = 0.8333`).
     pub fn paper() -> Self {
         let (f, c, r) = Self::PAPER;
-        Self { f, c, r, inv_r2: 1.0 / (r * r) }
+        Self {
+            f,
+            c,
+            r,
+            inv_r2: 1.0 / (r * r),
+        }
     }
 
     /// Forcing amplitude `f`.

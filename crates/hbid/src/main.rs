@@ -1,0 +1,43 @@
+//! `hbid`: identify the equation of motion of a forced oscillator from a measured record.
+#![allow(clippy::print_stderr, clippy::print_stdout)]
+
+mod cmd;
+mod progress;
+
+pub use hbid::{input, output};
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+/// Identify the equation of motion of a forced, possibly whirling, oscillator from a record of
+/// its angle (or displacement), knowing only the forcing frequency.
+#[derive(Debug, Parser)]
+#[command(name = "hbid", version, about)]
+struct Cli {
+    /// No progress bars.
+    #[arg(long, global = true)]
+    quiet: bool,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Simulate the base-excited pendulum and write CSV t,theta,omega (defaults: the paper's data set).
+    Simulate(cmd::simulate::SimulateArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match &cli.command {
+        Command::Simulate(args) => cmd::simulate::run(args, cli.quiet),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

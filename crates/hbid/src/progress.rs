@@ -1,0 +1,37 @@
+//! Progress bars on stderr, hidden off a terminal and with `--quiet`.
+
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+
+/// A progress bar for one stage.
+pub struct Progress(ProgressBar);
+
+impl Progress {
+    /// A bar of `len` steps named `stage`.
+    pub fn new(stage: &str, len: u64, quiet: bool) -> Self {
+        let bar = ProgressBar::with_draw_target(
+            Some(len),
+            if quiet {
+                ProgressDrawTarget::hidden()
+            } else {
+                ProgressDrawTarget::stderr()
+            },
+        );
+        bar.set_style(
+            ProgressStyle::with_template("{prefix:>10} [{bar:30}] {pos}/{len} ({elapsed})")
+                .expect("a valid template")
+                .progress_chars("=> "),
+        );
+        bar.set_prefix(stage.to_owned());
+        Self(bar)
+    }
+
+    /// Sets the position.
+    pub fn set(&self, pos: u64) {
+        self.0.set_position(pos);
+    }
+
+    /// Clears the bar.
+    pub fn finish(&self) {
+        self.0.finish_and_clear();
+    }
+}

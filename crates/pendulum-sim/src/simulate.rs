@@ -1,0 +1,395 @@
+//! Sampled trajectories, stroboscopic (Poincaré) sections and the largest Lyapunov exponent.
+
+use std::f64::consts::TAU;
+
+use crate::dop853::{Dop853, OdeSystem, Tolerances};
+use crate::{SecondOrderSystem, SimError};
+
+/// A second-order system seen as the first-order system `(x, v)' = (v, F(t, x, v))`.
+#[derive(Debug, Clone, Copy)]
+pub struct FirstOrder<S>(pub S);
+
+impl<S: SecondOrderSystem> OdeSystem<2> for FirstOrder<S> {
+    #[inline]
+    fn rhs(&self, t: f64, y: &[f64; 2], dy: &mut [f64; 2]) {
+        *dy = [y[1], self.0.acceleration(t, y[0], y[1])];
+    }
+}
+
+/// A second-order system with its tangent-linear equation: state `(x, v, δx, δv)`.
+#[derive(Debug, Clone, Copy)]
+pub struct Tangent<S>(pub S);
+
+impl<S: SecondOrderSystem> OdeSystem<4> for Tangent<S> {
+    #[inline]
+    fn rhs(&self, t: f64, y: &[f64; 4], dy: &mut [f64; 4]) {
+        let [jx, jv] = self.0.jacobian(t, y[0], y[1]);
+        *dy = [
+            y[1],
+            self.0.acceleration(t, y[0], y[1]),
+            y[3],
+            jx * y[2] + jv * y[3],
+        ];
+    }
+}
+
+/// How to sample a simulation: the paper's settings by default ([`SimulationConfig::paper`]).
+///
+/// Samples are taken at `t_n = phase · T + n · T / P` for `n = n_0 .. n_0 + samples`, where
+/// `n_0 = transient_periods · P`, `T` is the forcing period and `P` the samples per period; the
+/// integration starts at `t = 0` from the initial state. So with `phase = 0` the first sample is at
+/// `t = transient_periods · T`, at the forcing's phase zero.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct SimulationConfig {
+    samples: usize,
+    samples_per_period: usize,
+    transient_periods: usize,
+    initial: [f64; 2],
+    forcing_period: f64,
+    phase: f64,
+    tolerances: Tolerances,
+}
+
+fn invalid(name: &'static str, value: f64, why: &'static str) -> SimError {
+    SimError::InvalidParameter { name, value, why }
+}
+
+impl Default for SimulationConfig {
+    fn default() -> Self {
+        Self::paper()
+    }
+}
+
+impl SimulationConfig {
+    /// The paper's data set: 30000 samples, 25 per forcing period `2π`, after 200 periods of
+    /// transient from `θ(0) = 0.1, θ'(0) = 0`, at `rtol = 1e-10` (`atol = 1e-11`).
+    pub fn paper() -> Self {
+        Self {
+            samples: 30_000,
+            samples_per_period: 25,
+            transient_periods: 200,
+            initial: [0.1, 0.0],
+            forcing_period: TAU,
+            phase: 0.0,
+            tolerances: Tolerances::default(),
+        }
+    }
+
+    /// Number of samples kept (`>= 1`).
+    pub fn with_samples(mut self, samples: usize) -> Result<Self, SimError> {
+        if samples == 0 {
+            return Err(invalid("samples", 0.0, "must be at least 1"));
+        }
+        self.samples = samples;
+        Ok(self)
+    }
+
+    /// Samples per forcing period `P` (`>= 1`).
+    pub fn with_samples_per_period(mut self, p: usize) -> Result<Self, SimError> {
+        if p == 0 {
+            return Err(invalid("samples per period", 0.0, "must be at least 1"));
+        }
+        self.samples_per_period = p;
+        Ok(self)
+    }
+
+    /// Forcing periods integrated and dropped before the first sample.
+    pub fn with_transient_periods(mut self, periods: usize) -> Self {
+        self.transient_periods = periods;
+        self
+    }
+
+    /// Initial angle and angular velocity at `t = 0` (finite).
+    pub fn with_initial(mut self, theta0: f64, omega0: f64) -> Result<Self, SimError> {
+        if !theta0.is_finite() {
+            return Err(invalid("theta0", theta0, "must be finite"));
+        }
+        if !omega0.is_finite() {
+            return Err(invalid("omega0", omega0, "must be finite"));
+        }
+        self.initial = [theta0, omega0];
+        Ok(self)
+    }
+
+    /// The forcing period `T` in the system's time unit (`2π` for the paper's non-dimensional time).
+    pub fn with_forcing_period(mut self, period: f64) -> Result<Self, SimError> {
+        if !(period.is_finite() && period > 0.0) {
+            return Err(invalid("forcing period", period, "must be positive and finite"));
+        }
+        self.forcing_period = period;
+        Ok(self)
+    }
+
+    /// Phase of the sampling grid as a fraction of the forcing period, in `[0, 1)`.
+    pub fn with_phase(mut self, phase: f64) -> Result<Self, SimError> {
+        if !(0.0..1.0).contains(&phase) {
+            return Err(invalid("phase", phase, "must lie in [0, 1)"));
+        }
+        self.phase = phase;
+        Ok(self)
+    }
+
+    /// Integration tolerances.
+    pub fn with_tolerances(mut self, tolerances: Tolerances) -> Self {
+        self.tolerances = tolerances;
+        self
+    }
+
+    /// Number of samples.
+    pub fn samples(&self) -> usize {
+        self.samples
+    }
+    /// Samples per forcing period.
+    pub fn samples_per_period(&self) -> usize {
+        self.samples_per_period
+    }
+    /// Transient periods dropped.
+    pub fn transient_periods(&self) -> usize {
+        self.transient_periods
+    }
+    /// Initial `(θ, θ')`.
+    pub fn initial(&self) -> [f64; 2] {
+        self.initial
+    }
+    /// Forcing period.
+    pub fn forcing_period(&self) -> f64 {
+        self.forcing_period
+    }
+    /// Tolerances.
+    pub fn tolerances(&self) -> Tolerances {
+        self.tolerances
+    }
+    /// Sampling step `T / P`.
+    pub fn sample_step(&self) -> f64 {
+        self.forcing_period / self.samples_per_period as f64
+    }
+    /// Time of sample `n` counted from the start of the integration (the transient included).
+    fn grid_time(&self, n: usize) -> f64 {
+        self.phase * self.forcing_period + n as f64 * self.forcing_period / self.samples_per_period as f64
+    }
+}
+
+/// A sampled trajectory: absolute times, the continuous (unwrapped) angle and its velocity.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Trajectory {
+    /// Sample times.
+    pub t: Vec<f64>,
+    /// The angle (or displacement), continuous.
+    pub theta: Vec<f64>,
+    /// Its time derivative.
+    pub omega: Vec<f64>,
+}
+
+impl Trajectory {
+    /// The angle wrapped into `[−π, π)`, as an encoder reports it.
+    pub fn wrapped(&self) -> Vec<f64> {
+        self.theta.iter().map(|&x| circle_signal::wrap(x)).collect()
+    }
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.t.len()
+    }
+    /// Whether there are no samples.
+    pub fn is_empty(&self) -> bool {
+        self.t.is_empty()
+    }
+}
+
+/// Simulates `system` and samples it as `config` says.
+///
+/// ```
+/// use pendulum_sim::{simulate, Pendulum, SimulationConfig};
+/// let cfg = SimulationConfig::paper().with_samples(100)?.with_transient_periods(2);
+/// let traj = simulate(&Pendulum::paper(), &cfg)?;
+/// assert_eq!(traj.len(), 100);
+/// assert!((traj.t[0] - 2.0 * std::f64::consts::TAU).abs() < 1e-12);
+/// # Ok::<(), pendulum_sim::SimError>(())
+/// ```
+pub fn simulate<S: SecondOrderSystem>(system: &S, config: &SimulationConfig) -> Result<Trajectory, SimError> {
+    simulate_with_progress(system, config, |_, _| {})
+}
+
+/// [`simulate`], calling `progress(done, total)` about a hundred times along the way (samples
+/// done out of the total; the transient counts as no samples).
+pub fn simulate_with_progress<S: SecondOrderSystem>(
+    system: &S,
+    config: &SimulationConfig,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<Trajectory, SimError> {
+    let mut traj = Trajectory {
+        t: Vec::with_capacity(config.samples),
+        theta: Vec::with_capacity(config.samples),
+        omega: Vec::with_capacity(config.samples),
+    };
+    let mut ode = Dop853::new(FirstOrder(system), 0.0, config.initial, config.tolerances)?;
+    let n0 = config.transient_periods * config.samples_per_period;
+    let t_first = config.grid_time(n0);
+    let report_every = (config.samples / 100).max(1);
+    progress(0, config.samples);
+    // No stop at the end of the transient: the step sequence then depends only on the end time,
+    // so runs that differ only in their output grid follow the same numerical trajectory.
+    ode.sample_grid(t_first, config.sample_step(), config.samples, |n, _, y| {
+        // Absolute grid time computed from the absolute index: no drift over long records.
+        traj.t.push(config.grid_time(n0 + n));
+        traj.theta.push(y[0]);
+        traj.omega.push(y[1]);
+        if (n + 1) % report_every == 0 {
+            progress(n + 1, config.samples);
+        }
+    })?;
+    progress(config.samples, config.samples);
+    Ok(traj)
+}
+
+/// The stroboscopic (Poincaré) section: the state once per forcing period, at the phase of
+/// `config` (the samples-per-period setting is ignored). Returns `(x, x')` pairs with `x` as
+/// integrated (continuous); wrap it for display on the circle.
+pub fn poincare_section<S: SecondOrderSystem>(
+    system: &S,
+    config: &SimulationConfig,
+) -> Result<Vec<[f64; 2]>, SimError> {
+    let strobe = SimulationConfig {
+        samples_per_period: 1,
+        ..config.clone()
+    };
+    let traj = simulate(system, &strobe)?;
+    Ok(traj
+        .theta
+        .into_iter()
+        .zip(traj.omega)
+        .map(|(x, v)| [x, v])
+        .collect())
+}
+
+/// Settings of a largest-Lyapunov-exponent estimate by tangent-linear integration.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct LyapunovConfig {
+    transient_periods: usize,
+    periods: usize,
+    initial: [f64; 2],
+    forcing_period: f64,
+    tolerances: Tolerances,
+}
+
+impl Default for LyapunovConfig {
+    /// 200 transient periods, then 2000 measured periods of `2π`, from `(0.1, 0)`, `rtol = 1e-10`.
+    fn default() -> Self {
+        Self {
+            transient_periods: 200,
+            periods: 2000,
+            initial: [0.1, 0.0],
+            forcing_period: TAU,
+            tolerances: Tolerances::default(),
+        }
+    }
+}
+
+impl LyapunovConfig {
+    /// Forcing periods measured (`>= 1`); the tangent vector is renormalised once per period.
+    pub fn with_periods(mut self, periods: usize) -> Result<Self, SimError> {
+        if periods == 0 {
+            return Err(invalid("periods", 0.0, "must be at least 1"));
+        }
+        self.periods = periods;
+        Ok(self)
+    }
+    /// Forcing periods integrated before measuring.
+    pub fn with_transient_periods(mut self, periods: usize) -> Self {
+        self.transient_periods = periods;
+        self
+    }
+    /// Initial state (finite).
+    pub fn with_initial(mut self, x0: f64, v0: f64) -> Result<Self, SimError> {
+        if !(x0.is_finite() && v0.is_finite()) {
+            return Err(invalid(
+                "initial state",
+                if x0.is_finite() { v0 } else { x0 },
+                "must be finite",
+            ));
+        }
+        self.initial = [x0, v0];
+        Ok(self)
+    }
+    /// Forcing period `T` (positive).
+    pub fn with_forcing_period(mut self, period: f64) -> Result<Self, SimError> {
+        if !(period.is_finite() && period > 0.0) {
+            return Err(invalid("forcing period", period, "must be positive and finite"));
+        }
+        self.forcing_period = period;
+        Ok(self)
+    }
+    /// Integration tolerances.
+    pub fn with_tolerances(mut self, tolerances: Tolerances) -> Self {
+        self.tolerances = tolerances;
+        self
+    }
+}
+
+/// A largest-Lyapunov-exponent estimate.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct LyapunovEstimate {
+    /// The exponent per unit time.
+    pub per_unit_time: f64,
+    /// The exponent per forcing period.
+    pub per_period: f64,
+    /// Periods measured.
+    pub periods: usize,
+    /// Time measured over.
+    pub time: f64,
+    /// Standard error per unit time, from the spread of the exponent over 10 equal blocks of
+    /// periods (block means are nearly independent for a chaotic flow).
+    pub standard_error: f64,
+}
+
+/// The largest Lyapunov exponent by integrating the tangent-linear equation beside the
+/// trajectory and renormalising the tangent vector once per forcing period (Benettin's method).
+///
+/// `progress(done, total)` is called once per measured period.
+pub fn largest_lyapunov<S: SecondOrderSystem>(
+    system: &S,
+    config: &LyapunovConfig,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<LyapunovEstimate, SimError> {
+    let period = config.forcing_period;
+    let mut ode = Dop853::new(FirstOrder(system), 0.0, config.initial, config.tolerances)?;
+    let t_start = config.transient_periods as f64 * period;
+    ode.advance_to(t_start)?;
+    let [x, v] = *ode.y();
+    let s = std::f64::consts::FRAC_1_SQRT_2;
+    let mut tangent = Dop853::new(Tangent(system), t_start, [x, v, s, s], config.tolerances)?;
+    let mut logs = Vec::with_capacity(config.periods);
+    for p in 1..=config.periods {
+        tangent.advance_to(t_start + p as f64 * period)?;
+        let [x, v, dx, dv] = *tangent.y();
+        let norm = dx.hypot(dv);
+        if !(norm.is_finite() && norm > 0.0) {
+            return Err(SimError::NonFinite { t: tangent.t() });
+        }
+        logs.push(norm.ln());
+        tangent.set_state([x, v, dx / norm, dv / norm])?;
+        progress(p, config.periods);
+    }
+    let total: f64 = logs.iter().sum();
+    let time = config.periods as f64 * period;
+    let blocks = 10.min(logs.len());
+    let block_len = logs.len() / blocks;
+    let means: Vec<f64> = logs
+        .chunks_exact(block_len)
+        .take(blocks)
+        .map(|c| c.iter().sum::<f64>() / (c.len() as f64 * period))
+        .collect();
+    let mean = means.iter().sum::<f64>() / means.len() as f64;
+    let standard_error = if means.len() > 1 {
+        (means.iter().map(|m| (m - mean).powi(2)).sum::<f64>() / ((means.len() - 1) * means.len()) as f64)
+            .sqrt()
+    } else {
+        f64::NAN
+    };
+    Ok(LyapunovEstimate {
+        per_unit_time: total / time,
+        per_period: total / config.periods as f64,
+        periods: config.periods,
+        time,
+        standard_error,
+    })
+}
