@@ -1,0 +1,139 @@
+//! Small plotting helpers on plotters: every figure of the report is a scatter or a set of lines.
+
+use std::path::Path;
+
+use anyhow::{Context, anyhow};
+use plotters::prelude::*;
+
+/// One series of a figure.
+pub struct Series<'a> {
+    pub label: &'a str,
+    pub points: Vec<(f64, f64)>,
+    pub style: Style,
+    pub color: RGBColor,
+}
+
+/// How a series is drawn.
+#[derive(Clone, Copy)]
+pub enum Style {
+    /// Dots of this radius (pixels).
+    Dots(u32),
+    /// A polyline; a jump in x or y larger than the break threshold starts a new piece (so a
+    /// wrapped angle is not joined across ±π).
+    Line { break_above: f64 },
+}
+
+/// A 2-D figure.
+pub struct Figure<'a> {
+    pub title: &'a str,
+    pub x_label: &'a str,
+    pub y_label: &'a str,
+    pub series: Vec<Series<'a>>,
+    pub x_range: Option<(f64, f64)>,
+    pub y_range: Option<(f64, f64)>,
+}
+
+fn extent(series: &[Series<'_>], pick: impl Fn(&(f64, f64)) -> f64) -> (f64, f64) {
+    let (lo, hi) = series
+        .iter()
+        .flat_map(|s| s.points.iter().map(&pick))
+        .filter(|v| v.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(v), hi.max(v))
+        });
+    if !lo.is_finite() {
+        return (0.0, 1.0);
+    }
+    let pad = ((hi - lo) * 0.05).max(1e-9);
+    (lo - pad, hi + pad)
+}
+
+fn split_line(points: &[(f64, f64)], threshold: f64) -> Vec<Vec<(f64, f64)>> {
+    let mut pieces = vec![Vec::new()];
+    for w in points.windows(2) {
+        pieces.last_mut().expect("one piece").push(w[0]);
+        if (w[1].0 - w[0].0).abs() > threshold || (w[1].1 - w[0].1).abs() > threshold {
+            pieces.push(Vec::new());
+        }
+    }
+    if let Some(&p) = points.last() {
+        pieces.last_mut().expect("one piece").push(p);
+    }
+    pieces
+}
+
+impl Figure<'_> {
+    /// Draws the figure into `path` (`.png` or `.svg`, by extension), 900×650 pixels.
+    pub fn save(&self, path: &Path) -> anyhow::Result<()> {
+        let svg = path.extension().is_some_and(|e| e == "svg");
+        if svg {
+            let root = SVGBackend::new(path, (900, 650)).into_drawing_area();
+            self.draw(root)
+                .with_context(|| format!("drawing {}", path.display()))
+        } else {
+            let root = BitMapBackend::new(path, (900, 650)).into_drawing_area();
+            self.draw(root)
+                .with_context(|| format!("drawing {}", path.display()))
+        }
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, plotters::coord::Shift>) -> anyhow::Result<()>
+    where
+        DB::ErrorType: 'static,
+    {
+        let err = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow!("{e:?}");
+        root.fill(&WHITE).map_err(err)?;
+        let (x0, x1) = self.x_range.unwrap_or_else(|| extent(&self.series, |p| p.0));
+        let (y0, y1) = self.y_range.unwrap_or_else(|| extent(&self.series, |p| p.1));
+        let mut chart = ChartBuilder::on(&root)
+            .caption(self.title, ("sans-serif", 24))
+            .margin(12)
+            .x_label_area_size(45)
+            .y_label_area_size(60)
+            .build_cartesian_2d(x0..x1, y0..y1)
+            .map_err(err)?;
+        chart
+            .configure_mesh()
+            .x_desc(self.x_label)
+            .y_desc(self.y_label)
+            .light_line_style(RGBColor(235, 235, 235))
+            .draw()
+            .map_err(err)?;
+        for s in &self.series {
+            let color = s.color;
+            let anno = match s.style {
+                Style::Dots(r) => chart
+                    .draw_series(s.points.iter().map(|&p| Circle::new(p, r, color.filled())))
+                    .map_err(err)?,
+                Style::Line { break_above } => {
+                    let pieces = split_line(&s.points, break_above);
+                    chart
+                        .draw_series(
+                            pieces
+                                .into_iter()
+                                .map(|piece| PathElement::new(piece, color.stroke_width(2))),
+                        )
+                        .map_err(err)?
+                }
+            };
+            if !s.label.is_empty() {
+                anno.label(s.label)
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(3)));
+            }
+        }
+        if self.series.iter().any(|s| !s.label.is_empty()) {
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .draw()
+                .map_err(err)?;
+        }
+        root.present().map_err(err)?;
+        Ok(())
+    }
+}
+
+/// The palette of the report.
+pub const BLUE: RGBColor = RGBColor(31, 119, 180);
+pub const GREY: RGBColor = RGBColor(120, 120, 120);
