@@ -1,0 +1,654 @@
+//! The close-return search: parameters, metric, and the scan over periods.
+
+use crate::catalogue::{Catalogue, group};
+use crate::{OrbitSource, Segment, UpoError};
+use circle_signal::circle_distance;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::f64::consts::{PI, TAU};
+
+/// How two samples (and so two delay vectors) are compared.
+///
+/// Both metrics compare delay vectors by the **maximum** over components of the per-component
+/// distance (the Chebyshev norm), so a close return within `e` means every component is within `e`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
+pub enum Metric {
+    /// A wrapped angle on the circle S¹: per-component distance `|a − b|_c` (paper eq. 19, see
+    /// [`circle_signal::circle_distance`]); the span of the data is 2π.
+    #[default]
+    Circle,
+    /// A signal on the line R¹ (e.g. a displacement): per-component distance `|a − b|`; the span of
+    /// the data is `max − min` of the record.
+    Linear,
+}
+
+impl Metric {
+    /// The distance between two samples in this metric.
+    #[inline]
+    pub fn distance(self, a: f64, b: f64) -> f64 {
+        match self {
+            Metric::Circle => circle_distance(a, b),
+            Metric::Linear => (a - b).abs(),
+        }
+    }
+}
+
+/// Close-return search for unstable periodic orbits (paper section 3.2), validated parameters.
+///
+/// With delay vectors `S(n) = (x_n, x_{n+Td}, …, x_{n+(d−1)Td})`, `P` samples per forcing period and
+/// the absolute tolerance `ε = e · span`, there is a period-`k` close return at `n` when
+/// `|S(n + kP) − S(n)| < ε` (max norm over components, in the [`Metric`]). Every index involved must
+/// exist: `n + kP + (d − 1) Td < N`. A maximal run of consecutive passing `n` is one passage near an
+/// orbit and gives at most one [`Segment`], at the `n` of least error (the earliest on a tie). That
+/// segment is dropped when it already closes at a proper divisor `j` of `k` at the same `n`
+/// (`|S(n + jP) − S(n)| < ε`): it is a repetition of a shorter orbit.
+///
+/// Build with [`CloseReturns::builder`] (or [`CloseReturns::new`] for the defaults).
+#[derive(Debug, Clone, PartialEq)]
+pub struct CloseReturns {
+    samples_per_period: usize,
+    delay: usize,
+    tolerance: f64,
+    max_period: usize,
+    dimension: usize,
+    metric: Metric,
+}
+
+/// Builder of [`CloseReturns`]; [`build`](Self::build) validates.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CloseReturnsBuilder {
+    samples_per_period: usize,
+    delay: usize,
+    tolerance: f64,
+    max_period: usize,
+    dimension: usize,
+    metric: Metric,
+}
+
+impl CloseReturns {
+    /// Default tolerance `e`: 3 % of the span of the data (the paper's choice).
+    pub const DEFAULT_TOLERANCE: f64 = 0.03;
+    /// Default longest period `k_max`, in forcing periods (the paper searched 1 to 16).
+    pub const DEFAULT_MAX_PERIOD: usize = 16;
+    /// Default embedding dimension `d` (the paper's choice for the pendulum).
+    pub const DEFAULT_DIMENSION: usize = 2;
+
+    /// A builder with the required `samples_per_period` (`P`) and `delay` (`Td`, in samples,
+    /// usually the first minimum of the average mutual information) and the defaults:
+    /// tolerance [`DEFAULT_TOLERANCE`](Self::DEFAULT_TOLERANCE), periods
+    /// `1..=`[`DEFAULT_MAX_PERIOD`](Self::DEFAULT_MAX_PERIOD), dimension
+    /// [`DEFAULT_DIMENSION`](Self::DEFAULT_DIMENSION), metric [`Metric::Circle`].
+    pub fn builder(samples_per_period: usize, delay: usize) -> CloseReturnsBuilder {
+        CloseReturnsBuilder {
+            samples_per_period,
+            delay,
+            tolerance: Self::DEFAULT_TOLERANCE,
+            max_period: Self::DEFAULT_MAX_PERIOD,
+            dimension: Self::DEFAULT_DIMENSION,
+            metric: Metric::default(),
+        }
+    }
+
+    /// The search with all defaults but the required `P` and `Td`.
+    pub fn new(samples_per_period: usize, delay: usize) -> Result<Self, UpoError> {
+        Self::builder(samples_per_period, delay).build()
+    }
+
+    /// Samples per forcing period `P`.
+    pub fn samples_per_period(&self) -> usize {
+        self.samples_per_period
+    }
+
+    /// Embedding delay `Td` in samples.
+    pub fn delay(&self) -> usize {
+        self.delay
+    }
+
+    /// Tolerance `e` as a fraction of the span of the data.
+    pub fn tolerance(&self) -> f64 {
+        self.tolerance
+    }
+
+    /// Longest period searched, `k_max`, in forcing periods.
+    pub fn max_period(&self) -> usize {
+        self.max_period
+    }
+
+    /// Embedding dimension `d`.
+    pub fn dimension(&self) -> usize {
+        self.dimension
+    }
+
+    /// The metric.
+    pub fn metric(&self) -> Metric {
+        self.metric
+    }
+
+    /// Samples a record needs for period `k`: `k P + (d − 1) Td + 1` (`None` on overflow).
+    pub fn needed_len(&self, period: usize) -> Option<usize> {
+        period
+            .checked_mul(self.samples_per_period)?
+            .checked_add((self.dimension - 1).checked_mul(self.delay)?)?
+            .checked_add(1)
+    }
+
+    /// The absolute tolerance `ε = e · span` for `signal`: `span = 2π` for [`Metric::Circle`],
+    /// `max − min` of the record for [`Metric::Linear`].
+    ///
+    /// Errors on an empty record, a non-finite sample, or a constant record on the line.
+    pub fn absolute_tolerance(&self, signal: &[f64]) -> Result<f64, UpoError> {
+        Ok(self.scan_input(signal)?.tolerance)
+    }
+
+    /// The recurrence error `|S(start + kP) − S(start)|` of the delay vector at `start` for period
+    /// `period` (`k`), in this search's metric and dimension.
+    ///
+    /// Errors when `period` is zero, an index is out of the record, or a sample involved is not
+    /// finite.
+    pub fn return_error(&self, signal: &[f64], start: usize, period: usize) -> Result<f64, UpoError> {
+        if period == 0 {
+            return Err(UpoError::InvalidCount {
+                name: "period",
+                value: 0,
+                why: "must be at least 1",
+            });
+        }
+        let needed =
+            self.needed_len(period)
+                .and_then(|n| n.checked_add(start))
+                .ok_or(UpoError::InvalidCount {
+                    name: "start",
+                    value: start,
+                    why: "index overflows",
+                })?;
+        if signal.len() < needed {
+            return Err(UpoError::TooShort {
+                len: signal.len(),
+                needed,
+                period,
+            });
+        }
+        let lag = period * self.samples_per_period;
+        for c in 0..self.dimension {
+            for i in [start + c * self.delay, start + c * self.delay + lag] {
+                if !signal[i].is_finite() {
+                    return Err(UpoError::NonFinite {
+                        index: i,
+                        value: signal[i],
+                    });
+                }
+            }
+        }
+        Ok(match self.metric {
+            Metric::Circle => self.error_at(signal, start, lag, AnyCircle),
+            Metric::Linear => self.error_at(signal, start, lag, Line),
+        })
+    }
+
+    /// The close-return segments of `signal`, ordered by period, then start.
+    ///
+    /// Errors when the record is shorter than [`needed_len`](Self::needed_len)`(k_max)`, holds a
+    /// non-finite sample, or (linear metric) is constant.
+    pub fn search(&self, signal: &[f64]) -> Result<Vec<Segment>, UpoError> {
+        let input = self.scan_input(signal)?;
+        Ok(match (self.metric, input.within_pi) {
+            (Metric::Circle, true) => self.scan(signal, input.tolerance, WrappedCircle),
+            (Metric::Circle, false) => self.scan(signal, input.tolerance, AnyCircle),
+            (Metric::Linear, _) => self.scan(signal, input.tolerance, Line),
+        })
+    }
+
+    /// The search and the catalogue of distinct orbits among its segments (see [`Catalogue`]).
+    pub fn catalogue(&self, signal: &[f64]) -> Result<Catalogue, UpoError> {
+        let input = self.scan_input(signal)?;
+        let (p, k_max, eps) = (self.samples_per_period, self.max_period, input.tolerance);
+        Ok(match (self.metric, input.within_pi) {
+            (Metric::Circle, true) => group(
+                signal,
+                self.scan(signal, eps, WrappedCircle),
+                p,
+                k_max,
+                eps,
+                WrappedCircle,
+            ),
+            (Metric::Circle, false) => group(
+                signal,
+                self.scan(signal, eps, AnyCircle),
+                p,
+                k_max,
+                eps,
+                AnyCircle,
+            ),
+            (Metric::Linear, _) => group(signal, self.scan(signal, eps, Line), p, k_max, eps, Line),
+        })
+    }
+
+    /// Validates the record and finds the absolute tolerance.
+    fn scan_input(&self, signal: &[f64]) -> Result<InputScan, UpoError> {
+        let needed = self.needed_len(self.max_period).ok_or(UpoError::InvalidCount {
+            name: "max_period",
+            value: self.max_period,
+            why: "k_max P + (d - 1) Td overflows",
+        })?;
+        if signal.len() < needed {
+            return Err(UpoError::TooShort {
+                len: signal.len(),
+                needed,
+                period: self.max_period,
+            });
+        }
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for (index, &value) in signal.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(UpoError::NonFinite { index, value });
+            }
+            lo = lo.min(value);
+            hi = hi.max(value);
+        }
+        let span = match self.metric {
+            Metric::Circle => TAU,
+            Metric::Linear => hi - lo,
+        };
+        // max − min of finite values can overflow to infinity: the tolerance would be useless.
+        if !(span.is_finite() && span > 0.0) {
+            return Err(UpoError::ConstantSignal { value: lo });
+        }
+        Ok(InputScan {
+            tolerance: self.tolerance * span,
+            within_pi: lo >= -PI && hi <= PI,
+        })
+    }
+
+    /// All periods, in parallel; one block buffer per worker.
+    fn scan<D: Distance>(&self, x: &[f64], eps: f64, dist: D) -> Vec<Segment> {
+        let per_period: Vec<Vec<Segment>> = (1..=self.max_period)
+            .into_par_iter()
+            .map_init(Vec::new, |err, k| self.scan_period(x, k, eps, dist, err))
+            .collect();
+        per_period.concat()
+    }
+
+    /// One period `k`, block by block, in passes over each block that the compiler vectorizes:
+    /// `err[n] = |S(n + kP) − S(n)|` one component at a time (a running max), then a scan of `err`
+    /// that skips chunks with no value below `ε` outside a run.
+    fn scan_period<D: Distance>(
+        &self,
+        x: &[f64],
+        k: usize,
+        eps: f64,
+        dist: D,
+        err: &mut Vec<f64>,
+    ) -> Vec<Segment> {
+        let lag = k * self.samples_per_period;
+        let reach = (self.dimension - 1) * self.delay;
+        // Validated: x.len() ≥ k_max P + reach + 1, so count ≥ 1.
+        let count = x.len() - lag - reach;
+        let mut run = Run {
+            best: None,
+            segments: Vec::new(),
+        };
+        let emit = |segments: &mut Vec<Segment>, (start, error): (usize, f64)| {
+            let repeated = (1..k)
+                .filter(|j| k % j == 0)
+                .any(|j| self.error_at(x, start, j * self.samples_per_period, dist) < eps);
+            if !repeated {
+                segments.push(Segment {
+                    start,
+                    period: k,
+                    len: lag,
+                    error,
+                });
+            }
+        };
+        let mut b0 = 0;
+        while b0 < count {
+            let b1 = (b0 + BLOCK).min(count);
+            let len = b1 - b0;
+            // err[i] = max_c dist(x[n + c Td + kP], x[n + c Td]), n = b0 + i, component by component.
+            err.clear();
+            err.extend(
+                x[b0 + lag..b1 + lag]
+                    .iter()
+                    .zip(&x[b0..b1])
+                    .map(|(&a, &b)| dist.between(a, b)),
+            );
+            for c in 1..self.dimension {
+                let o = b0 + c * self.delay;
+                for (e, (&a, &b)) in err
+                    .iter_mut()
+                    .zip(x[o + lag..o + lag + len].iter().zip(&x[o..o + len]))
+                {
+                    let v = dist.between(a, b);
+                    // `max` without its NaN handling (no NaN here) and without a branch, so that
+                    // it vectorizes.
+                    *e = if v > *e { v } else { *e };
+                }
+            }
+            let mut chunks = err.chunks_exact(CHUNK);
+            let mut base = b0;
+            for chunk in &mut chunks {
+                // An integer sum of comparisons: a reduction the compiler vectorizes.
+                let below: usize = chunk.iter().map(|&v| usize::from(v < eps)).sum();
+                if below > 0 || run.best.is_some() {
+                    run.feed(base, chunk, eps, &emit);
+                }
+                base += CHUNK;
+            }
+            run.feed(base, chunks.remainder(), eps, &emit);
+            b0 = b1;
+        }
+        if let Some(found) = run.best {
+            emit(&mut run.segments, found);
+        }
+        run.segments
+    }
+
+    /// `max_c dist(x[n + c Td + lag], x[n + c Td])`; indices must exist.
+    fn error_at<D: Distance>(&self, x: &[f64], n: usize, lag: usize, dist: D) -> f64 {
+        (0..self.dimension)
+            .map(|c| {
+                let i = n + c * self.delay;
+                dist.between(x[i + lag], x[i])
+            })
+            .fold(0.0, f64::max)
+    }
+}
+
+/// The state of the scan of one period: the best `(n, error)` of the current run, if in one.
+struct Run {
+    best: Option<(usize, f64)>,
+    segments: Vec<Segment>,
+}
+
+impl Run {
+    /// Feeds `err[n]` for `n = base, base + 1, …`.
+    #[inline]
+    fn feed<F>(&mut self, base: usize, err: &[f64], eps: f64, emit: &F)
+    where
+        F: Fn(&mut Vec<Segment>, (usize, f64)),
+    {
+        for (i, &e) in err.iter().enumerate() {
+            if e < eps {
+                if self.best.is_none_or(|(_, b)| e < b) {
+                    self.best = Some((base + i, e));
+                }
+            } else if let Some(found) = self.best.take() {
+                emit(&mut self.segments, found);
+            }
+        }
+    }
+}
+
+/// Values of `err` tested at once before the scan looks at them one by one.
+const CHUNK: usize = 16;
+
+/// Samples per block of the scan: the block's errors (16 KiB) and the samples it reads stay in cache.
+const BLOCK: usize = 2048;
+
+/// A per-sample distance, chosen once per search so that the hot loops are monomorphic.
+pub(crate) trait Distance: Copy + Send + Sync {
+    /// The distance between two samples.
+    fn between(self, a: f64, b: f64) -> f64;
+}
+
+/// The circle distance for samples in `[−π, π]`.
+///
+/// There `|a − b| ≤ 2π`, and the branch-free `min(d, 2π − d)` equals
+/// [`circle_distance`] bit for bit (its `rem_euclid` is then the identity, or maps exactly 2π to 0,
+/// which `min` also gives).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct WrappedCircle;
+
+impl Distance for WrappedCircle {
+    #[inline(always)]
+    fn between(self, a: f64, b: f64) -> f64 {
+        let d = (a - b).abs();
+        let e = TAU - d;
+        // `d.min(e)` for non-NaN operands, without `min`'s NaN handling (so it vectorizes to
+        // one `minpd`).
+        if e < d { e } else { d }
+    }
+}
+
+/// The circle distance for any finite samples.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct AnyCircle;
+
+impl Distance for AnyCircle {
+    #[inline(always)]
+    fn between(self, a: f64, b: f64) -> f64 {
+        circle_distance(a, b)
+    }
+}
+
+/// The distance on the line.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Line;
+
+impl Distance for Line {
+    #[inline(always)]
+    fn between(self, a: f64, b: f64) -> f64 {
+        (a - b).abs()
+    }
+}
+
+/// What one pass over the input finds.
+struct InputScan {
+    tolerance: f64,
+    within_pi: bool,
+}
+
+impl CloseReturnsBuilder {
+    /// Tolerance `e` as a fraction of the span of the data, in `(0, 0.5)`.
+    pub fn tolerance(mut self, fraction: f64) -> Self {
+        self.tolerance = fraction;
+        self
+    }
+
+    /// Longest period `k_max` (at least 1): periods `1..=k_max` are searched.
+    pub fn max_period(mut self, k_max: usize) -> Self {
+        self.max_period = k_max;
+        self
+    }
+
+    /// Embedding dimension `d` (at least 1).
+    pub fn dimension(mut self, d: usize) -> Self {
+        self.dimension = d;
+        self
+    }
+
+    /// The metric.
+    pub fn metric(mut self, metric: Metric) -> Self {
+        self.metric = metric;
+        self
+    }
+
+    /// Validates and builds.
+    pub fn build(self) -> Result<CloseReturns, UpoError> {
+        if !(self.tolerance > 0.0 && self.tolerance < 0.5) {
+            return Err(UpoError::InvalidTolerance {
+                value: self.tolerance,
+            });
+        }
+        for (name, value) in [
+            ("samples_per_period", self.samples_per_period),
+            ("delay", self.delay),
+            ("max_period", self.max_period),
+            ("dimension", self.dimension),
+        ] {
+            if value == 0 {
+                return Err(UpoError::InvalidCount {
+                    name,
+                    value,
+                    why: "must be at least 1",
+                });
+            }
+        }
+        let search = CloseReturns {
+            samples_per_period: self.samples_per_period,
+            delay: self.delay,
+            tolerance: self.tolerance,
+            max_period: self.max_period,
+            dimension: self.dimension,
+            metric: self.metric,
+        };
+        if search.needed_len(search.max_period).is_none() {
+            return Err(UpoError::InvalidCount {
+                name: "max_period",
+                value: search.max_period,
+                why: "k_max P + (d - 1) Td overflows",
+            });
+        }
+        Ok(search)
+    }
+}
+
+impl OrbitSource for CloseReturns {
+    type Error = UpoError;
+
+    fn segments(&self, signal: &[f64]) -> Result<Vec<Segment>, UpoError> {
+        self.search(signal)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn builder_validates() {
+        assert!(CloseReturns::new(25, 5).is_ok());
+        for bad in [0.0, -0.1, 0.5, 0.7, f64::NAN, f64::INFINITY] {
+            assert!(matches!(
+                CloseReturns::builder(25, 5).tolerance(bad).build(),
+                Err(UpoError::InvalidTolerance { .. })
+            ));
+        }
+        assert!(matches!(
+            CloseReturns::new(0, 5),
+            Err(UpoError::InvalidCount {
+                name: "samples_per_period",
+                ..
+            })
+        ));
+        assert!(matches!(
+            CloseReturns::new(25, 0),
+            Err(UpoError::InvalidCount { name: "delay", .. })
+        ));
+        assert!(matches!(
+            CloseReturns::builder(25, 5).max_period(0).build(),
+            Err(UpoError::InvalidCount {
+                name: "max_period",
+                ..
+            })
+        ));
+        assert!(matches!(
+            CloseReturns::builder(25, 5).dimension(0).build(),
+            Err(UpoError::InvalidCount {
+                name: "dimension",
+                ..
+            })
+        ));
+        assert!(matches!(
+            CloseReturns::builder(usize::MAX / 2, 5).max_period(3).build(),
+            Err(UpoError::InvalidCount {
+                name: "max_period",
+                ..
+            })
+        ));
+        let s = CloseReturns::new(25, 5).unwrap();
+        assert_eq!(
+            (s.tolerance(), s.max_period(), s.dimension(), s.metric()),
+            (0.03, 16, 2, Metric::Circle)
+        );
+    }
+
+    #[test]
+    fn short_and_non_finite_records_are_errors() {
+        let s = CloseReturns::builder(10, 3)
+            .max_period(2)
+            .dimension(3)
+            .build()
+            .unwrap();
+        assert_eq!(s.needed_len(2), Some(27));
+        let x = vec![0.0; 26];
+        assert_eq!(
+            s.search(&x),
+            Err(UpoError::TooShort {
+                len: 26,
+                needed: 27,
+                period: 2
+            })
+        );
+        let mut x = vec![0.5; 27];
+        assert!(s.search(&x).is_ok());
+        x[13] = f64::NAN;
+        assert!(matches!(s.search(&x), Err(UpoError::NonFinite { index: 13, .. })));
+        x[13] = f64::NEG_INFINITY;
+        assert!(matches!(
+            s.catalogue(&x),
+            Err(UpoError::NonFinite { index: 13, .. })
+        ));
+        assert!(matches!(
+            s.return_error(&x, 0, 1),
+            Err(UpoError::NonFinite { index: 13, .. })
+        ));
+        let lin = CloseReturns::builder(10, 3)
+            .max_period(2)
+            .metric(Metric::Linear)
+            .build()
+            .unwrap();
+        assert_eq!(
+            lin.search(&[2.0; 40]),
+            Err(UpoError::ConstantSignal { value: 2.0 })
+        );
+    }
+
+    #[test]
+    fn constant_angle_is_one_period_one_orbit() {
+        // Every n returns with error 0 at every period: one run, one segment at n = 0, and the
+        // longer periods are repetitions of it.
+        let s = CloseReturns::builder(4, 1).max_period(3).build().unwrap();
+        let segs = s.search(&[1.0; 30]).unwrap();
+        assert_eq!(
+            segs,
+            vec![Segment {
+                start: 0,
+                period: 1,
+                len: 4,
+                error: 0.0
+            }]
+        );
+    }
+
+    #[test]
+    fn fast_circle_distance_matches_circle_signal() {
+        let vals = [-PI, -3.0, -1.0, -1e-300, 0.0, 1e-17, 0.5, 3.0, PI - 1e-15, PI];
+        for &a in &vals {
+            for &b in &vals {
+                assert_eq!(WrappedCircle.between(a, b), circle_distance(a, b), "{a} {b}");
+            }
+        }
+    }
+
+    #[test]
+    fn return_error_bounds() {
+        let s = CloseReturns::builder(5, 2).max_period(1).build().unwrap();
+        let x: Vec<f64> = (0..20).map(|i| (i as f64 * 0.3).sin()).collect();
+        assert!(s.return_error(&x, 12, 1).is_ok());
+        assert_eq!(
+            s.return_error(&x, 13, 1),
+            Err(UpoError::TooShort {
+                len: 20,
+                needed: 21,
+                period: 1
+            })
+        );
+        assert!(matches!(
+            s.return_error(&x, 0, 0),
+            Err(UpoError::InvalidCount { .. })
+        ));
+        let want = circle_distance(x[5], x[0]).max(circle_distance(x[7], x[2]));
+        assert_eq!(s.return_error(&x, 0, 1).unwrap(), want);
+    }
+}
