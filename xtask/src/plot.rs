@@ -136,4 +136,6 @@ impl Figure<'_> {
 
 /// The palette of the report.
 pub const BLUE: RGBColor = RGBColor(31, 119, 180);
+pub const ORANGE: RGBColor = RGBColor(255, 127, 14);
+pub const RED: RGBColor = RGBColor(214, 39, 40);
 pub const GREY: RGBColor = RGBColor(120, 120, 120);
