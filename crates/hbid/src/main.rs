@@ -26,12 +26,18 @@ struct Cli {
 enum Command {
     /// Simulate the base-excited pendulum and write CSV t,theta,omega (defaults: the paper's data set).
     Simulate(cmd::simulate::SimulateArgs),
+    /// Choose the delay (average mutual information) and check the embedding dimension (false nearest neighbours).
+    Embed(cmd::embed::EmbedArgs),
+    /// Find unstable periodic orbits by close returns.
+    Upos(cmd::upos::UposArgs),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Simulate(args) => cmd::simulate::run(args, cli.quiet),
+        Command::Embed(args) => cmd::embed::run(args),
+        Command::Upos(args) => cmd::upos::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

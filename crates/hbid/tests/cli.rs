@@ -169,3 +169,108 @@ fn bad_options_fail_cleanly_without_output() {
     // Nothing half-written is left in the folder either.
     assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0);
 }
+
+fn paper_dataset() -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/fixtures/paper_dataset.csv")
+        .to_str()
+        .unwrap()
+        .to_owned()
+}
+
+#[test]
+fn embed_json_on_the_paper_data_set() {
+    let out = hbid(&["embed", &paper_dataset(), "--json", "--max-dim", "6"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["delay"], 5);
+    assert_eq!(v["ami"].as_array().unwrap().len(), 41);
+    let fnn: Vec<f64> = v["fnn"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f.as_f64().unwrap())
+        .collect();
+    assert_eq!(fnn.len(), 6);
+    assert!(fnn.windows(2).all(|w| w[1] <= w[0] + 1e-12), "{fnn:?}");
+    assert_eq!(v["embedding_dimension"], 4);
+}
+
+#[test]
+fn upos_json_counts_are_consistent() {
+    let out = hbid(&["upos", &paper_dataset(), "--json", "--max-period", "6"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let segments = v["segments"].as_u64().unwrap();
+    let by_period: u64 = v["by_period"]
+        .as_object()
+        .unwrap()
+        .values()
+        .map(|n| n.as_u64().unwrap())
+        .sum();
+    let distinct: u64 = v["distinct_by_period"]
+        .as_object()
+        .unwrap()
+        .values()
+        .map(|n| n.as_u64().unwrap())
+        .sum();
+    assert_eq!(segments, by_period);
+    assert_eq!(v["distinct_orbits"].as_u64().unwrap(), distinct);
+    assert!(distinct <= segments && segments > 0);
+    let orbits = v["orbits"].as_array().unwrap();
+    assert_eq!(orbits.len() as u64, segments);
+    let eps = 0.03 * std::f64::consts::TAU;
+    assert!(
+        orbits
+            .iter()
+            .all(|o| o["error"].as_f64().unwrap() < eps && o["period"].as_u64().unwrap() <= 6)
+    );
+}
+
+#[test]
+fn analysis_options_are_checked() {
+    let data = paper_dataset();
+    for (args, mentions) in [
+        (vec!["embed", &data, "--bins", "1"], "bins"),
+        (vec!["embed", &data, "--max-dim", "0"], "max-dim"),
+        (vec!["upos", &data, "--tolerance", "0"], "tolerance"),
+        (vec!["upos", &data, "--tolerance", "0.5"], "tolerance"),
+        (vec!["upos", &data, "--max-period", "0"], "max_period"),
+        (vec!["upos", &data, "--forcing-period", "-1"], "forcing-period"),
+        (vec!["upos", &data, "--forcing-period", "6.3"], "nearest: 25"),
+        (vec!["upos", "/no/such/file.csv"], "no/such/file.csv"),
+        (vec!["upos", "/tmp"], "folder"),
+    ] {
+        assert_clean_failure(&hbid(&args), mentions);
+    }
+}
+
+#[test]
+fn bad_files_name_the_problem() {
+    let dir = scratch("badfiles");
+    for (name, content, mentions) in [
+        ("empty.csv", "", "empty"),
+        ("header.csv", "t,theta\n", "no data"),
+        ("cell.csv", "t,theta\n0,1\n0.25,x\n", "line 3"),
+        ("nan.csv", "t,theta\n0,1\n0.25,nan\n", "line 3"),
+        ("ragged.csv", "t,theta\n0,1\n0.25\n", "line 3"),
+        (
+            "decreasing.csv",
+            "t,theta\n0,1\n0.25,1\n0.2,1\n",
+            "does not increase",
+        ),
+        ("uneven.csv", "t,theta\n0,1\n0.25,1\n0.6,1\n", "uniform"),
+        (
+            "short.csv",
+            "t,theta\n0,1\n0.25132741228718347,1\n0.5026548245743669,1\n",
+            "short",
+        ),
+    ] {
+        let p = dir.join(name);
+        std::fs::write(&p, content).unwrap();
+        assert_clean_failure(&hbid(&["upos", p.to_str().unwrap(), "--delay", "5"]), mentions);
+    }
+    let garbage = dir.join("garbage.bin");
+    std::fs::write(&garbage, [0u8, 159, 146, 150, 255, 0, 1, 2]).unwrap();
+    assert_clean_failure(&hbid(&["upos", garbage.to_str().unwrap()]), "line");
+}

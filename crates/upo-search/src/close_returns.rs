@@ -289,7 +289,7 @@ impl CloseReturns {
         };
         let emit = |segments: &mut Vec<Segment>, (start, error): (usize, f64)| {
             let repeated = (1..k)
-                .filter(|j| k % j == 0)
+                .filter(|&j| k.is_multiple_of(j))
                 .any(|j| self.error_at(x, start, j * self.samples_per_period, dist) < eps);
             if !repeated {
                 segments.push(Segment {

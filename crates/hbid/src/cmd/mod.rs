@@ -1,2 +1,5 @@
 //! Subcommands.
+pub mod data;
+pub mod embed;
 pub mod simulate;
+pub mod upos;

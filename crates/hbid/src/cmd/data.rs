@@ -1,0 +1,95 @@
+//! Loading a record the way every analysis subcommand does.
+
+use std::f64::consts::TAU;
+use std::path::PathBuf;
+
+use anyhow::Context;
+use clap::{Args, ValueEnum};
+use hbid::input::{Column, ReadOptions, UniformRecord, read_path};
+
+/// Whether the record is an angle on the circle or a displacement on the line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Signal {
+    /// An angle: wrapped into [-π, π), unwrapped per orbit, circle metric.
+    Circle,
+    /// A displacement: no wrapping, plain differences.
+    Line,
+}
+
+/// The input options shared by the analysis subcommands.
+#[derive(Debug, Args)]
+pub struct InputArgs {
+    /// The record: CSV (header with columns t and theta, or headerless time,angle) or .npy; `-` reads standard input.
+    pub file: PathBuf,
+    /// Time column, by header name or 1-based position.
+    #[arg(long, value_name = "NAME|N")]
+    pub time_col: Option<String>,
+    /// Angle (or displacement) column, by header name or 1-based position.
+    #[arg(long, value_name = "NAME|N")]
+    pub angle_col: Option<String>,
+    /// Sampling step, for records without a time column (the first sample is at t = 0).
+    #[arg(long, allow_hyphen_values = true)]
+    pub dt: Option<f64>,
+    /// Forcing period in the time unit of the data (2π for the paper's non-dimensional time).
+    #[arg(long, default_value_t = TAU, allow_hyphen_values = true)]
+    pub forcing_period: f64,
+    /// An angle on the circle or a displacement on the line.
+    #[arg(long, value_enum, default_value_t = Signal::Circle)]
+    pub signal: Signal,
+}
+
+/// A record ready for analysis.
+#[derive(Debug)]
+pub struct Data {
+    /// Time of the first sample.
+    pub t0: f64,
+    /// Sampling step.
+    pub dt: f64,
+    /// Samples per forcing period.
+    pub p: usize,
+    /// The samples (wrapped into [-π, π) for a signal on the circle).
+    pub x: Vec<f64>,
+    /// What the samples are.
+    pub signal: Signal,
+}
+
+impl Data {
+    /// One line describing the record, for the readable outputs.
+    pub fn summary(&self) -> String {
+        format!(
+            "{} samples from t = {} in steps of {} ({} per forcing period)",
+            self.x.len(),
+            self.t0,
+            self.dt,
+            self.p
+        )
+    }
+}
+
+impl InputArgs {
+    /// Reads, checks and (on the circle) wraps the record.
+    pub fn load(&self) -> anyhow::Result<Data> {
+        let column = |s: &Option<String>| s.as_deref().map(str::parse::<Column>).transpose();
+        let options = ReadOptions {
+            time: column(&self.time_col)?,
+            angle: column(&self.angle_col)?,
+            dt: self.dt,
+        };
+        let record = read_path(&self.file, &options).with_context(|| format!("{}", self.file.display()))?;
+        let mut uniform = UniformRecord::new(record).with_context(|| format!("{}", self.file.display()))?;
+        let p = uniform.samples_per_period(self.forcing_period)?;
+        if self.signal == Signal::Circle && uniform.outside_circle() {
+            eprintln!("note: values outside [-π, π): read as an unwrapped angle and wrapped");
+            for v in &mut uniform.x {
+                *v = circle_signal::wrap(*v);
+            }
+        }
+        Ok(Data {
+            t0: uniform.t0,
+            dt: uniform.dt,
+            p,
+            x: uniform.x,
+            signal: self.signal,
+        })
+    }
+}
