@@ -92,8 +92,11 @@ pub fn run(out: &Path, quick: bool) -> anyhow::Result<()> {
         })?)
     })?;
 
-    // 3. Unstable periodic orbits by close returns (paper section 3.2): e = 3 %, periods 1..16, d = 2.
-    let delay = 5;
+    // 3. Delay and embedding dimension (paper section 3.1), both metrics.
+    let embed = times.stage("AMI and false nearest neighbours", |_| embed_stage(&x))?;
+    let delay = embed.delay;
+
+    // 4. Unstable periodic orbits by close returns (paper section 3.2): e = 3 %, periods 1..16, d = 2.
     let search = CloseReturns::builder(25, delay)
         .tolerance(0.03)
         .max_period(16)
@@ -104,6 +107,7 @@ pub fn run(out: &Path, quick: bool) -> anyhow::Result<()> {
     // Figures.
     times.stage("figures", |_| {
         orbit_figures(out, &x, &catalogue, delay, &mut figures)?;
+        embed_figures(out, &embed, &mut figures)?;
         let phase_plane: Vec<(f64, f64)> = x.iter().zip(&x[delay..]).map(|(&a, &b)| (a, b)).collect();
         let name = "fig2a_reconstructed_phase_plane.png";
         Figure {
@@ -194,6 +198,7 @@ pub fn run(out: &Path, quick: bool) -> anyhow::Result<()> {
         lyapunov.periods, lyapunov.per_unit_time, lyapunov.standard_error, lyapunov.per_period
     )?;
     writeln!(report, "| Poincaré section points | {} |\n", section.len())?;
+    embed_section(&mut report, &embed)?;
     upo_section(&mut report, &catalogue, search.absolute_tolerance(&x)?)?;
     writeln!(report, "## Figures\n")?;
     for (file, caption) in &figures {
@@ -372,10 +377,11 @@ fn orbit_figures(
         }
     }
     let name = "fig4_orbits_delay_plane.png";
+    let y_label = format!("x(t + {delay} dt)");
     Figure {
         title: "Period-1 and period-2 orbits in the delay plane (paper Fig. 4)",
         x_label: "x(t)",
-        y_label: "x(t + 5 dt)",
+        y_label: &y_label,
         series,
         x_range: Some((-PI, PI)),
         y_range: Some((-PI, PI)),
@@ -384,6 +390,147 @@ fn orbit_figures(
     figures.push((
         name,
         "Period-1 and period-2 orbits found by close returns, in the delay plane (Fig. 4).",
+    ));
+    Ok(())
+}
+
+/// What the embedding stage found.
+struct EmbedResult {
+    delay: usize,
+    ami: Vec<f64>,
+    fnn_circle: embedding::FnnResult,
+    fnn_linear: embedding::FnnResult,
+}
+
+fn embed_stage(x: &[f64]) -> anyhow::Result<EmbedResult> {
+    use embedding::{AmiParams, FnnParams, Metric, average_mutual_information, false_nearest_neighbours};
+    let ami = average_mutual_information(
+        x,
+        &AmiParams::new(Metric::Circle).with_bins(16)?.with_max_lag(40)?,
+    )?;
+    let delay = ami.delay()?;
+    let fnn = |metric| -> anyhow::Result<_> {
+        Ok(false_nearest_neighbours(
+            x,
+            &FnnParams::new(metric, delay)?.with_max_dim(8)?,
+        )?)
+    };
+    Ok(EmbedResult {
+        delay,
+        ami: ami.values,
+        fnn_circle: fnn(Metric::Circle)?,
+        fnn_linear: fnn(Metric::Linear)?,
+    })
+}
+
+fn embed_section(report: &mut String, e: &EmbedResult) -> anyhow::Result<()> {
+    writeln!(report, "## Delay and embedding dimension\n")?;
+    let dims = |r: &embedding::FnnResult| r.minimum_dimension().map_or("none".to_owned(), |d| d.to_string());
+    writeln!(report, "| quantity | paper | this run |\n| --- | --- | --- |")?;
+    writeln!(
+        report,
+        "| delay (first minimum of the AMI, 16 boxes) | 5 | {} |",
+        e.delay
+    )?;
+    writeln!(
+        report,
+        "| embedding dimension (false neighbours < {}) | 4 | {} (circle metric), {} (linear metric) |\n",
+        e.fnn_circle.fraction_threshold,
+        dims(&e.fnn_circle),
+        dims(&e.fnn_linear)
+    )?;
+    writeln!(
+        report,
+        "| d | false fraction, circle metric | false fraction, linear metric |\n| --- | --- | --- |"
+    )?;
+    for (c, l) in e.fnn_circle.levels.iter().zip(&e.fnn_linear.levels) {
+        writeln!(
+            report,
+            "| {} | {:.4} | {:.4} |",
+            c.dim,
+            c.fraction(),
+            l.fraction()
+        )?;
+    }
+    writeln!(report)?;
+    Ok(())
+}
+
+fn embed_figures(
+    out: &Path,
+    e: &EmbedResult,
+    figures: &mut Vec<(&'static str, &'static str)>,
+) -> anyhow::Result<()> {
+    let name = "fig3_mutual_information.png";
+    // Lags 0 and 1 are the entropy and near it, far above the rest: the frame starts at lag 2.
+    let curve: Vec<(f64, f64)> = e
+        .ami
+        .iter()
+        .enumerate()
+        .skip(2)
+        .map(|(l, &v)| (l as f64, v))
+        .collect();
+    Figure {
+        title: "Average mutual information (paper Fig. 3)",
+        x_label: "lag (samples)",
+        y_label: "I (nats)",
+        series: vec![
+            Series {
+                label: "AMI, 16 boxes",
+                points: curve.clone(),
+                style: Style::Line {
+                    break_above: f64::INFINITY,
+                },
+                color: BLUE,
+            },
+            Series {
+                label: "first minimum",
+                points: vec![(e.delay as f64, e.ami[e.delay])],
+                style: Style::Dots(6),
+                color: RED,
+            },
+        ],
+        x_range: None,
+        y_range: Some((0.0, 1.05 * e.ami.get(2).copied().unwrap_or(1.0))),
+    }
+    .save(&out.join(name))?;
+    figures.push((
+        name,
+        "Average mutual information against lag, first minimum marked (Fig. 3), from lag 2 (I(0) and I(1) are far above).",
+    ));
+    let name = "fig3b_false_nearest_neighbours.png";
+    let pts = |r: &embedding::FnnResult| -> Vec<(f64, f64)> {
+        r.levels.iter().map(|l| (l.dim as f64, l.fraction())).collect()
+    };
+    Figure {
+        title: "False nearest neighbours, delay from the AMI",
+        x_label: "embedding dimension d",
+        y_label: "fraction of false neighbours",
+        series: vec![
+            Series {
+                label: "circle metric",
+                points: pts(&e.fnn_circle),
+                style: Style::Line {
+                    break_above: f64::INFINITY,
+                },
+                color: BLUE,
+            },
+            Series {
+                label: "linear metric",
+                points: pts(&e.fnn_linear),
+                style: Style::Line {
+                    break_above: f64::INFINITY,
+                },
+                color: ORANGE,
+            },
+        ],
+        x_range: None,
+        y_range: Some((0.0, 1.05)),
+    }
+    .save(&out.join(name))?;
+    figures.push((
+        name,
+        "Fraction of false nearest neighbours against dimension, circle and linear metrics.",
     ));
     Ok(())
 }
