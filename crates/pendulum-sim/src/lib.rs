@@ -16,7 +16,10 @@
 //!   sample is lost or shifted by accumulated rounding), from dense output;
 //! - [`poincare_section`]: the stroboscopic map, one state per forcing period;
 //! - [`largest_lyapunov`]: the largest Lyapunov exponent from the tangent-linear equation
-//!   `(δx, δv)' = (δv, ∂F/∂x δx + ∂F/∂v δv)`, renormalised every forcing period.
+//!   `(δx, δv)' = (δv, ∂F/∂x δx + ∂F/∂v δv)`, renormalised every forcing period;
+//! - validation of identified models: [`periodic_orbits`] of the stroboscopic map by Newton
+//!   shooting (with Floquet multipliers), [`section_energy_distance`] between Poincaré sections,
+//!   and the [`whirling_fraction`].
 //!
 //! # Example
 //!
@@ -41,6 +44,7 @@ mod error;
 mod simulate;
 mod system;
 mod tableau;
+mod validate;
 
 pub use dop853::{Dop853, OdeSystem, Stats, Tolerances};
 pub use error::SimError;
@@ -49,3 +53,7 @@ pub use simulate::{
     poincare_section, simulate, simulate_with_progress,
 };
 pub use system::{Pendulum, SecondOrderSystem};
+pub use validate::{
+    PeriodicOrbit, ShootingConfig, StateSpace, Variational, flow_with_jacobian, periodic_orbits,
+    section_energy_distance, whirling_fraction,
+};
