@@ -1,0 +1,544 @@
+//! The basis functions `φ_i(x)` of paper eqs. 4-5.
+
+use std::f64::consts::{PI, TAU};
+use std::fmt;
+
+use circle_signal::wrap;
+use serde::{Deserialize, Serialize};
+
+use crate::BasisError;
+
+/// Where the displacement `x` lives.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Domain {
+    /// An angle on the circle S¹, as an encoder reports it (wrapped into `[−π, π)`); whirling orbits
+    /// are unwrapped and split into rotation and oscillation before they are balanced.
+    Circle,
+    /// A displacement on the real line R¹; never unwrapped.
+    Line,
+}
+
+/// A finite set of functions `φ_1 .. φ_N` of the displacement, used to expand the unknown
+/// autonomous and parametric parts of the equation of motion (paper eqs. 4-5).
+///
+/// Object safe, so a program can choose a basis at run time (`Box<dyn Basis>`). Bases on the circle
+/// ([`Domain::Circle`]) are 2π-periodic: `φ(x + 2π) = φ(x)`.
+///
+/// `eval` and `eval_deriv` write into a caller's buffer so that evaluation over a long record
+/// allocates nothing; NaN or infinite `x` gives NaN in (at least one entry of) the output.
+pub trait Basis: fmt::Debug + Send + Sync {
+    /// Number of functions `N`.
+    fn len(&self) -> usize;
+
+    /// Whether the basis has no function (never true for the bases of this crate).
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Name of function `i` (`None` if `i >= len()`), e.g. `sin(2x)`, `hat3`, `x^2`.
+    fn name(&self, i: usize) -> Option<String>;
+
+    /// Names of all functions, in order.
+    fn names(&self) -> Vec<String> {
+        (0..self.len()).filter_map(|i| self.name(i)).collect()
+    }
+
+    /// Whether the basis lives on the circle or the line.
+    fn domain(&self) -> Domain;
+
+    /// Writes `φ_i(x)` for every `i` into `out[..len()]`.
+    ///
+    /// # Panics
+    /// If `out.len() < self.len()`.
+    fn eval(&self, x: f64, out: &mut [f64]);
+
+    /// Writes the derivatives `dφ_i/dx (x)` into `out[..len()]` (for the hat basis, the derivative
+    /// from the right at a node).
+    ///
+    /// # Panics
+    /// If `out.len() < self.len()`.
+    fn eval_deriv(&self, x: f64, out: &mut [f64]);
+}
+
+impl<B: Basis + ?Sized> Basis for &B {
+    fn len(&self) -> usize {
+        (**self).len()
+    }
+    fn name(&self, i: usize) -> Option<String> {
+        (**self).name(i)
+    }
+    fn domain(&self) -> Domain {
+        (**self).domain()
+    }
+    fn eval(&self, x: f64, out: &mut [f64]) {
+        (**self).eval(x, out)
+    }
+    fn eval_deriv(&self, x: f64, out: &mut [f64]) {
+        (**self).eval_deriv(x, out)
+    }
+}
+
+impl<B: Basis + ?Sized> Basis for Box<B> {
+    fn len(&self) -> usize {
+        (**self).len()
+    }
+    fn name(&self, i: usize) -> Option<String> {
+        (**self).name(i)
+    }
+    fn domain(&self) -> Domain {
+        (**self).domain()
+    }
+    fn eval(&self, x: f64, out: &mut [f64]) {
+        (**self).eval(x, out)
+    }
+    fn eval_deriv(&self, x: f64, out: &mut [f64]) {
+        (**self).eval_deriv(x, out)
+    }
+}
+
+fn check_len(out: &[f64], n: usize) {
+    assert!(
+        out.len() >= n,
+        "output buffer of {} for a basis of {n} functions",
+        out.len()
+    );
+}
+
+// ---------------------------------------------------------------------------------------------
+
+/// Harmonic basis of order `K` on the circle: `cos(x), sin(x), cos(2x), sin(2x), .., cos(Kx), sin(Kx)`
+/// (paper section 4.2.1, eq. 20), named `cos(x)`, `sin(x)`, `cos(2x)`, ...
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(try_from = "HarmonicRaw", into = "HarmonicRaw")]
+pub struct Harmonic {
+    order: usize,
+}
+
+#[derive(Serialize, Deserialize)]
+struct HarmonicRaw {
+    order: usize,
+}
+
+impl TryFrom<HarmonicRaw> for Harmonic {
+    type Error = BasisError;
+    fn try_from(raw: HarmonicRaw) -> Result<Self, BasisError> {
+        Self::new(raw.order)
+    }
+}
+
+impl From<Harmonic> for HarmonicRaw {
+    fn from(h: Harmonic) -> Self {
+        Self { order: h.order }
+    }
+}
+
+impl Harmonic {
+    /// The harmonic basis of order `K >= 1` (`2K` functions).
+    pub fn new(order: usize) -> Result<Self, BasisError> {
+        if order < 1 {
+            return Err(BasisError::TooSmall {
+                name: "harmonic order K",
+                value: order,
+                min: 1,
+            });
+        }
+        Ok(Self { order })
+    }
+
+    /// The order `K`.
+    pub fn order(&self) -> usize {
+        self.order
+    }
+}
+
+impl Basis for Harmonic {
+    fn len(&self) -> usize {
+        2 * self.order
+    }
+
+    fn name(&self, i: usize) -> Option<String> {
+        if i >= self.len() {
+            return None;
+        }
+        let k = i / 2 + 1;
+        let f = if i.is_multiple_of(2) { "cos" } else { "sin" };
+        Some(if k == 1 {
+            format!("{f}(x)")
+        } else {
+            format!("{f}({k}x)")
+        })
+    }
+
+    fn domain(&self) -> Domain {
+        Domain::Circle
+    }
+
+    fn eval(&self, x: f64, out: &mut [f64]) {
+        check_len(out, self.len());
+        let (s1, c1) = x.sin_cos();
+        let (mut c, mut s) = (c1, s1);
+        for k in 0..self.order {
+            out[2 * k] = c;
+            out[2 * k + 1] = s;
+            // cos((k+1)x), sin((k+1)x) by the angle-addition formulas.
+            (c, s) = (c * c1 - s * s1, s * c1 + c * s1);
+        }
+    }
+
+    fn eval_deriv(&self, x: f64, out: &mut [f64]) {
+        check_len(out, self.len());
+        let (s1, c1) = x.sin_cos();
+        let (mut c, mut s) = (c1, s1);
+        for k in 0..self.order {
+            let kf = (k + 1) as f64;
+            out[2 * k] = -kf * s;
+            out[2 * k + 1] = kf * c;
+            (c, s) = (c * c1 - s * s1, s * c1 + c * s1);
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+
+/// Periodic linear-interpolation ("hat") basis on the circle (paper section 4.2.2).
+///
+/// `N` nodes evenly over `[−π, π)`, node `i` at `x_i = −π + 2π i / N`, spacing `d = 2π / N`.
+/// `hat_i` is 1 at node `i`, 0 at every other node and linear in between; node `N − 1` and node
+/// `0` are neighbours across `±π`, so the hats sum to 1 everywhere. `x` is wrapped into `[−π, π)`
+/// before evaluation. Names `hat0` .. `hat{N-1}`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(try_from = "HatRaw", into = "HatRaw")]
+pub struct Hat {
+    nodes: usize,
+}
+
+#[derive(Serialize, Deserialize)]
+struct HatRaw {
+    nodes: usize,
+}
+
+impl TryFrom<HatRaw> for Hat {
+    type Error = BasisError;
+    fn try_from(raw: HatRaw) -> Result<Self, BasisError> {
+        Self::new(raw.nodes)
+    }
+}
+
+impl From<Hat> for HatRaw {
+    fn from(h: Hat) -> Self {
+        Self { nodes: h.nodes }
+    }
+}
+
+impl Hat {
+    /// The hat basis with `N >= 3` nodes.
+    pub fn new(nodes: usize) -> Result<Self, BasisError> {
+        if nodes < 3 {
+            return Err(BasisError::TooSmall {
+                name: "number of hat nodes N",
+                value: nodes,
+                min: 3,
+            });
+        }
+        Ok(Self { nodes })
+    }
+
+    /// The number of nodes `N`.
+    pub fn nodes(&self) -> usize {
+        self.nodes
+    }
+
+    /// Position of node `i`, `−π + 2π i / N`.
+    pub fn node(&self, i: usize) -> f64 {
+        -PI + TAU * i as f64 / self.nodes as f64
+    }
+
+    /// The interval containing `x`: the left node `i`, and the fraction `s ∈ [0, 1]` of the way
+    /// to node `i + 1 (mod N)`.
+    #[inline]
+    fn locate(&self, x: f64) -> (usize, f64) {
+        let n = self.nodes;
+        let pos = (wrap(x) + PI) * (n as f64 / TAU);
+        // NaN casts to 0; the fraction stays NaN and poisons the output as documented.
+        let i = (pos.floor() as usize).min(n - 1);
+        let frac = pos - i as f64;
+        (i, if frac.is_nan() { frac } else { frac.clamp(0.0, 1.0) })
+    }
+}
+
+impl Basis for Hat {
+    fn len(&self) -> usize {
+        self.nodes
+    }
+
+    fn name(&self, i: usize) -> Option<String> {
+        (i < self.nodes).then(|| format!("hat{i}"))
+    }
+
+    fn domain(&self) -> Domain {
+        Domain::Circle
+    }
+
+    fn eval(&self, x: f64, out: &mut [f64]) {
+        check_len(out, self.nodes);
+        let (i, frac) = self.locate(x);
+        out[..self.nodes].fill(0.0);
+        out[i] = 1.0 - frac;
+        out[(i + 1) % self.nodes] = frac;
+    }
+
+    fn eval_deriv(&self, x: f64, out: &mut [f64]) {
+        check_len(out, self.nodes);
+        let (i, frac) = self.locate(x);
+        let slope = self.nodes as f64 / TAU;
+        out[..self.nodes].fill(0.0);
+        if frac.is_nan() {
+            out[i] = f64::NAN;
+            return;
+        }
+        out[i] = -slope;
+        out[(i + 1) % self.nodes] = slope;
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+
+/// Monomials `x, x², .., x^D` on the line, named `x`, `x^2`, ..., `x^D`, for oscillators whose
+/// displacement is not an angle (e.g. Duffing).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(try_from = "PolynomialRaw", into = "PolynomialRaw")]
+pub struct Polynomial {
+    degree: usize,
+}
+
+#[derive(Serialize, Deserialize)]
+struct PolynomialRaw {
+    degree: usize,
+}
+
+impl TryFrom<PolynomialRaw> for Polynomial {
+    type Error = BasisError;
+    fn try_from(raw: PolynomialRaw) -> Result<Self, BasisError> {
+        Self::new(raw.degree)
+    }
+}
+
+impl From<Polynomial> for PolynomialRaw {
+    fn from(p: Polynomial) -> Self {
+        Self { degree: p.degree }
+    }
+}
+
+impl Polynomial {
+    /// Monomials up to degree `D >= 1`.
+    pub fn new(degree: usize) -> Result<Self, BasisError> {
+        if degree < 1 {
+            return Err(BasisError::TooSmall {
+                name: "polynomial degree",
+                value: degree,
+                min: 1,
+            });
+        }
+        Ok(Self { degree })
+    }
+
+    /// The degree `D`.
+    pub fn degree(&self) -> usize {
+        self.degree
+    }
+}
+
+impl Basis for Polynomial {
+    fn len(&self) -> usize {
+        self.degree
+    }
+
+    fn name(&self, i: usize) -> Option<String> {
+        (i < self.degree).then(|| {
+            if i == 0 {
+                "x".to_owned()
+            } else {
+                format!("x^{}", i + 1)
+            }
+        })
+    }
+
+    fn domain(&self) -> Domain {
+        Domain::Line
+    }
+
+    fn eval(&self, x: f64, out: &mut [f64]) {
+        check_len(out, self.degree);
+        let mut p = x;
+        for o in &mut out[..self.degree] {
+            *o = p;
+            p *= x;
+        }
+    }
+
+    fn eval_deriv(&self, x: f64, out: &mut [f64]) {
+        check_len(out, self.degree);
+        let mut p = 1.0;
+        for (i, o) in out[..self.degree].iter_mut().enumerate() {
+            *o = (i + 1) as f64 * p;
+            p *= x;
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+
+/// One of this crate's bases, chosen at run time and serialisable (so an identified model can be
+/// saved with the basis it was built on). It implements [`Basis`] by delegation.
+///
+/// Serialised externally tagged: `{"harmonic":{"order":1}}`, `{"hat":{"nodes":8}}`,
+/// `{"polynomial":{"degree":3}}`; sizes are validated again when read.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BasisKind {
+    /// [`Harmonic`].
+    Harmonic(Harmonic),
+    /// [`Hat`].
+    Hat(Hat),
+    /// [`Polynomial`].
+    Polynomial(Polynomial),
+}
+
+impl From<Harmonic> for BasisKind {
+    fn from(b: Harmonic) -> Self {
+        Self::Harmonic(b)
+    }
+}
+
+impl From<Hat> for BasisKind {
+    fn from(b: Hat) -> Self {
+        Self::Hat(b)
+    }
+}
+
+impl From<Polynomial> for BasisKind {
+    fn from(b: Polynomial) -> Self {
+        Self::Polynomial(b)
+    }
+}
+
+impl BasisKind {
+    fn inner(&self) -> &dyn Basis {
+        match self {
+            Self::Harmonic(b) => b,
+            Self::Hat(b) => b,
+            Self::Polynomial(b) => b,
+        }
+    }
+}
+
+impl fmt::Display for BasisKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Harmonic(b) => write!(f, "harmonic (K = {})", b.order),
+            Self::Hat(b) => write!(f, "hat (N = {})", b.nodes),
+            Self::Polynomial(b) => write!(f, "polynomial (degree {})", b.degree),
+        }
+    }
+}
+
+impl Basis for BasisKind {
+    fn len(&self) -> usize {
+        self.inner().len()
+    }
+    fn name(&self, i: usize) -> Option<String> {
+        self.inner().name(i)
+    }
+    fn domain(&self) -> Domain {
+        self.inner().domain()
+    }
+    fn eval(&self, x: f64, out: &mut [f64]) {
+        self.inner().eval(x, out)
+    }
+    fn eval_deriv(&self, x: f64, out: &mut [f64]) {
+        self.inner().eval_deriv(x, out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names() {
+        assert_eq!(
+            Harmonic::new(2).unwrap().names(),
+            ["cos(x)", "sin(x)", "cos(2x)", "sin(2x)"]
+        );
+        assert_eq!(Hat::new(3).unwrap().names(), ["hat0", "hat1", "hat2"]);
+        assert_eq!(Polynomial::new(3).unwrap().names(), ["x", "x^2", "x^3"]);
+        assert_eq!(Hat::new(3).unwrap().name(3), None);
+    }
+
+    #[test]
+    fn constructors_validate() {
+        assert!(matches!(
+            Harmonic::new(0),
+            Err(BasisError::TooSmall { value: 0, min: 1, .. })
+        ));
+        assert!(matches!(
+            Hat::new(2),
+            Err(BasisError::TooSmall { value: 2, min: 3, .. })
+        ));
+        assert!(Polynomial::new(0).is_err());
+    }
+
+    #[test]
+    fn hat_is_one_at_its_node_and_periodic() {
+        let hat = Hat::new(8).unwrap();
+        let mut v = [0.0; 8];
+        for i in 0..8 {
+            hat.eval(hat.node(i), &mut v);
+            for (j, &vj) in v.iter().enumerate() {
+                let want = if i == j { 1.0 } else { 0.0 };
+                assert!((vj - want).abs() < 1e-12, "node {i}, hat{j} = {vj}");
+            }
+        }
+        // Between the last node and +π the last and first hats share the weight.
+        let x = PI - TAU / 16.0;
+        hat.eval(x, &mut v);
+        assert!((v[7] - 0.5).abs() < 1e-12 && (v[0] - 0.5).abs() < 1e-12);
+        let mut w = [0.0; 8];
+        hat.eval(x - 3.0 * TAU, &mut w);
+        for (a, b) in v.iter().zip(&w) {
+            assert!((a - b).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn harmonic_values() {
+        let h = Harmonic::new(3).unwrap();
+        let mut v = [0.0; 6];
+        h.eval(0.7, &mut v);
+        for k in 1..=3 {
+            assert!((v[2 * k - 2] - (k as f64 * 0.7).cos()).abs() < 1e-14);
+            assert!((v[2 * k - 1] - (k as f64 * 0.7).sin()).abs() < 1e-14);
+        }
+    }
+
+    #[test]
+    fn nan_poisons() {
+        let mut v = [0.0; 8];
+        Hat::new(8).unwrap().eval(f64::NAN, &mut v);
+        assert!(v.iter().any(|x| x.is_nan()));
+        Hat::new(8).unwrap().eval_deriv(f64::INFINITY, &mut v);
+        assert!(v.iter().any(|x| x.is_nan()));
+    }
+
+    #[test]
+    fn kinds_delegate_and_display() {
+        let k: BasisKind = Hat::new(4).unwrap().into();
+        assert_eq!(k.len(), 4);
+        assert_eq!(k.domain(), Domain::Circle);
+        assert_eq!(k.to_string(), "hat (N = 4)");
+        let b: Box<dyn Basis> = Box::new(Polynomial::new(2).unwrap());
+        assert_eq!(b.domain(), Domain::Line);
+        assert_eq!(b.names(), ["x", "x^2"]);
+    }
+}

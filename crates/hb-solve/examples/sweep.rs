@@ -1,0 +1,232 @@
+//! How the identification error on the paper's data set moves with the harmonics per orbit `M` and
+//! the close-return tolerance `e`.
+//!
+//! ```text
+//! cargo run --release -p hb-solve --example sweep [-- path/to/paper_dataset.csv]
+//! ```
+//!
+//! Prints Markdown tables (the ones in `docs/identification.md`).
+#![allow(clippy::print_stdout)]
+
+use std::error::Error;
+use std::f64::consts::{PI, TAU};
+
+use hb_basis::{Basis, Harmonic, Hat};
+use hb_solve::{Harmonics, IdentifiedModel, IdentifyParams, QrSolver, SampleClock, identify};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use upo_search::{CloseReturns, Metric, OrbitSource, Segment};
+
+const TRUTH_K1: [(&str, f64); 7] = [
+    ("x'", 0.03),
+    ("cos(t)*cos(x)", 0.0),
+    ("sin(t)*cos(x)", -1.52),
+    ("cos(x)", 0.0),
+    ("cos(t)*sin(x)", 0.0),
+    ("sin(t)*sin(x)", 0.0),
+    ("sin(x)", 1.0 / (0.8333 * 0.8333)),
+];
+
+fn read_dataset(path: &str) -> Result<(f64, Vec<f64>), Box<dyn Error>> {
+    let text = std::fs::read_to_string(path)?;
+    let mut t0 = None;
+    let mut x = Vec::new();
+    for line in text
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.starts_with("t,"))
+    {
+        let mut parts = line.split(',');
+        let t: f64 = parts.next().ok_or("missing t")?.trim().parse()?;
+        let theta: f64 = parts.next().ok_or("missing theta")?.trim().parse()?;
+        t0.get_or_insert(t);
+        x.push(theta);
+    }
+    Ok((t0.ok_or("empty data set")?, x))
+}
+
+/// Coefficients of the L2 projection of `f` onto the hat space (Gram system on a fine grid).
+fn hat_projection(hat: &Hat, f: impl Fn(f64) -> f64) -> Vec<f64> {
+    let n = hat.len();
+    let grid = 4096;
+    let mut g = vec![0.0; n * n];
+    let mut b = vec![0.0; n];
+    let mut phi = vec![0.0; n];
+    for s in 0..grid {
+        let x = -PI + TAU * (s as f64 + 0.5) / grid as f64;
+        hat.eval(x, &mut phi);
+        for i in 0..n {
+            b[i] += phi[i] * f(x);
+            for j in 0..n {
+                g[i * n + j] += phi[i] * phi[j];
+            }
+        }
+    }
+    // Gaussian elimination on the small symmetric positive definite Gram matrix.
+    for c in 0..n {
+        for r in c + 1..n {
+            let f = g[r * n + c] / g[c * n + c];
+            for k in c..n {
+                g[r * n + k] -= f * g[c * n + k];
+            }
+            b[r] -= f * b[c];
+        }
+    }
+    let mut x = vec![0.0; n];
+    for r in (0..n).rev() {
+        let s: f64 = (r + 1..n).map(|k| g[r * n + k] * x[k]).sum();
+        x[r] = (b[r] - s) / g[r * n + r];
+    }
+    x
+}
+
+/// RMS over the circle of the difference between the model's curve and the projected curve.
+fn curve_rms(hat: &Hat, model: &IdentifiedModel<Hat>, which: usize, reference: &[f64]) -> f64 {
+    let grid = 2048;
+    let mut phi = vec![0.0; hat.len()];
+    let mut sum = 0.0;
+    for s in 0..grid {
+        let x = -PI + TAU * (s as f64 + 0.5) / grid as f64;
+        hat.eval(x, &mut phi);
+        let want: f64 = phi.iter().zip(reference).map(|(p, r)| p * r).sum();
+        let got = match which {
+            0 => model.autonomous(x),
+            _ => model.parametric(x).1,
+        };
+        sum += (got - want).powi(2);
+    }
+    (sum / grid as f64).sqrt()
+}
+
+fn segments(x: &[f64], e: f64) -> Result<Vec<Segment>, Box<dyn Error>> {
+    let search = CloseReturns::builder(25, 5)
+        .tolerance(e)
+        .max_period(16)
+        .dimension(2)
+        .metric(Metric::Circle)
+        .build()?;
+    Ok(search.segments(x)?)
+}
+
+/// Largest absolute coefficient error of the K = 1 model, and the term.
+fn worst(m: &IdentifiedModel<Harmonic>) -> (&'static str, f64) {
+    TRUTH_K1
+        .iter()
+        .map(|(n, v)| (*n, (m.coefficient(n).map_or(f64::NAN, |c| c.value) - v).abs()))
+        .fold(("", 0.0), |acc, (n, e)| if e > acc.1 { (n, e) } else { acc })
+}
+
+/// Seeded Gaussian noise by Box-Muller.
+fn noisy(x: &[f64], sigma: f64, seed: u64) -> Vec<f64> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    x.iter()
+        .map(|&v| {
+            let (u1, u2): (f64, f64) = (rng.random_range(f64::EPSILON..1.0), rng.random());
+            circle_signal::wrap(v + sigma * (-2.0 * u1.ln()).sqrt() * (TAU * u2).cos())
+        })
+        .collect()
+}
+
+fn label(h: Harmonics) -> String {
+    match h {
+        Harmonics::Fixed(m) => format!("M = {m}"),
+        Harmonics::ForcingCap(c) => format!("j/k <= {c}"),
+        _ => format!("{h:?}"),
+    }
+}
+
+fn main() -> Result<(), Box<dyn Error>> {
+    let default = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/fixtures/paper_dataset.csv"
+    );
+    let path = std::env::args().nth(1).unwrap_or_else(|| default.to_owned());
+    let (t0, x) = read_dataset(&path)?;
+    let clock = SampleClock::nondimensional(25)?.with_start_time(t0)?;
+    let solver = QrSolver::default();
+    let hat = Hat::new(8)?;
+    let k1 = Harmonic::new(1)?;
+    let q_ref = hat_projection(&hat, |x| 1.0 / (0.8333f64 * 0.8333) * x.sin());
+    let p_ref = hat_projection(&hat, |x| -1.52 * x.cos());
+    let params = |h: Harmonics| IdentifyParams::builder(clock).harmonics(h).build();
+
+    let policies: Vec<Harmonics> = [1usize, 2, 3, 6, 12, 24]
+        .iter()
+        .map(|&m| Harmonics::Fixed(m))
+        .chain([1.0, 2.0, 3.0, 6.0].iter().map(|&c| Harmonics::ForcingCap(c)))
+        .collect();
+
+    let segs = segments(&x, 0.03)?;
+    println!("\n### Harmonics per orbit, e = 3 % ({} segments)\n", segs.len());
+    println!(
+        "| harmonics | rows | c_r (K=1) | max coef. error (K=1) | worst term | cond. | c_r (hat 8) | q curve RMS | p curve RMS |"
+    );
+    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- |");
+    for &h in &policies {
+        let m = identify(k1, &x, &segs, &params(h)?, &solver)?;
+        let (term, err) = worst(&m);
+        let s = m.summary().ok_or("no summary")?;
+        let mh = identify(hat, &x, &segs, &params(h)?, &solver)?;
+        println!(
+            "| {} | {} | {:.4} | {:.4} | `{term}` | {:.1} | {:.4} | {:.3} | {:.3} |",
+            label(h),
+            s.rows,
+            m.damping(),
+            err,
+            s.condition,
+            mh.damping(),
+            curve_rms(&hat, &mh, 0, &q_ref),
+            curve_rms(&hat, &mh, 1, &p_ref)
+        );
+    }
+
+    println!("\n### Close-return tolerance e\n");
+    println!(
+        "| e | segments | c_r, default | max error, default | c_r, M = 12 | max error, M = 12 | c_r (hat 8), default | q, p curve RMS (hat 8) |"
+    );
+    println!("| --- | --- | --- | --- | --- | --- | --- | --- |");
+    for &e in &[0.01, 0.02, 0.03, 0.04, 0.05] {
+        let segs = segments(&x, e)?;
+        let d = identify(k1, &x, &segs, &params(Harmonics::DEFAULT)?, &solver)?;
+        let f = identify(k1, &x, &segs, &params(Harmonics::Fixed(12))?, &solver)?;
+        let h = identify(hat, &x, &segs, &params(Harmonics::DEFAULT)?, &solver)?;
+        println!(
+            "| {:.0} % | {} | {:.4} | {:.4} | {:.4} | {:.4} | {:.4} | {:.3}, {:.3} |",
+            e * 100.0,
+            segs.len(),
+            d.damping(),
+            worst(&d).1,
+            f.damping(),
+            worst(&f).1,
+            h.damping(),
+            curve_rms(&hat, &h, 0, &q_ref),
+            curve_rms(&hat, &h, 1, &p_ref)
+        );
+    }
+
+    println!("\n### Gaussian noise on the angle, e = 3 % (max coefficient error, K = 1)\n");
+    let sigmas = [0.005, 0.01, 0.02];
+    let noisy_sets: Vec<(Vec<f64>, Vec<Segment>)> = sigmas
+        .iter()
+        .map(|&s| {
+            let xn = noisy(&x, s, 7);
+            let sg = segments(&xn, 0.03)?;
+            Ok((xn, sg))
+        })
+        .collect::<Result<_, Box<dyn Error>>>()?;
+    print!("| harmonics |");
+    for ((_, sg), s) in noisy_sets.iter().zip(sigmas) {
+        print!(" sigma = {s} rad ({} segments) |", sg.len());
+    }
+    println!("\n| --- |{}", " --- |".repeat(sigmas.len()));
+    for &h in &policies {
+        print!("| {} |", label(h));
+        for (xn, sg) in &noisy_sets {
+            match identify(k1, xn, sg, &params(h)?, &solver) {
+                Ok(m) => print!(" {:.4} (c_r {:.4}) |", worst(&m).1, m.damping()),
+                Err(e) => print!(" {e} |"),
+            }
+        }
+        println!();
+    }
+    Ok(())
+}

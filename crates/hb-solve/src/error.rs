@@ -1,0 +1,165 @@
+use hb_basis::{BasisError, Domain};
+
+/// Errors of identification.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum SolveError {
+    /// The segments give no more equations than there are unknowns.
+    #[error(
+        "too few orbits: {found} segment(s) found but at least {needed} are needed for the unknowns of this \
+         model; use a larger close-return tolerance, a longer record, more harmonics per orbit, or a smaller basis"
+    )]
+    TooFewOrbits {
+        /// Segments given.
+        found: usize,
+        /// Segments needed (each extra one counted as a period-1 orbit).
+        needed: usize,
+    },
+    /// The stacked system does not determine every unknown.
+    #[error(
+        "rank-deficient system: rank {rank} for {unknowns} unknowns ({rows} equations); the term `{suspect}` \
+         is (nearly) a combination of the others: drop it, use a smaller basis, or add orbits"
+    )]
+    RankDeficient {
+        /// Numerical rank found.
+        rank: usize,
+        /// Number of unknowns (columns).
+        unknowns: usize,
+        /// Number of equations (rows).
+        rows: usize,
+        /// Index of the column that weighs most in the weakest singular direction of the system.
+        column: usize,
+        /// Its name (the term's name once assembled; `column N` from a bare solver).
+        suspect: String,
+    },
+    /// A least-squares problem with no more rows than columns.
+    #[error("least squares needs more equations than unknowns: {rows} x {cols}")]
+    Underdetermined {
+        /// Rows.
+        rows: usize,
+        /// Columns.
+        cols: usize,
+    },
+    /// A sample of a segment is NaN or infinite.
+    #[error("segment {segment} (start {start}): sample {index} of the record is not finite ({value})")]
+    NonFiniteSample {
+        /// Index of the segment in the list given.
+        segment: usize,
+        /// Its first sample.
+        start: usize,
+        /// Index of the bad sample in the record.
+        index: usize,
+        /// Its value.
+        value: f64,
+    },
+    /// A term of the model is not finite on a segment (e.g. a monomial overflowed).
+    #[error("segment {segment} (start {start}): the term `{term}` is not finite on it")]
+    NonFiniteTerm {
+        /// Index of the segment.
+        segment: usize,
+        /// Its first sample.
+        start: usize,
+        /// The basis function or term.
+        term: String,
+    },
+    /// An equation built from a segment is not finite (e.g. a monomial overflowed).
+    #[error("segment {segment} (start {start}) gives a non-finite equation (row {row} of its block)")]
+    NonFiniteRow {
+        /// Index of the segment.
+        segment: usize,
+        /// Its first sample.
+        start: usize,
+        /// Row within the segment's block.
+        row: usize,
+    },
+    /// A value given to the solver is NaN or infinite.
+    #[error("non-finite entry in the least-squares {what} at row {row}")]
+    NonFiniteInput {
+        /// `matrix` or `right-hand side`.
+        what: &'static str,
+        /// The row.
+        row: usize,
+    },
+    /// A segment does not fit the record or the sampling.
+    #[error(
+        "segment {segment}: start {start}, period {period}, {len} samples does not fit a record of {record} \
+         samples at {samples_per_period} per forcing period (need len = period * P >= 2 and a closing sample)"
+    )]
+    BadSegment {
+        /// Index of the segment.
+        segment: usize,
+        /// Its first sample.
+        start: usize,
+        /// Its period in forcing periods.
+        period: usize,
+        /// Its number of samples.
+        len: usize,
+        /// Length of the record.
+        record: usize,
+        /// Samples per forcing period.
+        samples_per_period: usize,
+    },
+    /// A parameter is out of range.
+    #[error("invalid {name}: {value} ({why})")]
+    InvalidParameter {
+        /// The parameter's name.
+        name: &'static str,
+        /// The value given.
+        value: f64,
+        /// What it must be.
+        why: &'static str,
+    },
+    /// A model term that does not belong on the basis' domain.
+    #[error("the term `{term}` cannot be used with a basis on the {domain:?} domain: {why}")]
+    TermNotAllowed {
+        /// The term's name.
+        term: &'static str,
+        /// The basis' domain.
+        domain: Domain,
+        /// Why.
+        why: &'static str,
+    },
+    /// The SVD did not converge.
+    #[error("the singular value decomposition did not converge")]
+    SvdNoConvergence,
+    /// A basis or Fourier error.
+    #[error(transparent)]
+    Basis(#[from] BasisError),
+    /// A segment split error.
+    #[error(transparent)]
+    Circle(#[from] circle_signal::CircleError),
+    /// The orbit source failed.
+    #[error("the orbit source failed: {0}")]
+    Source(#[source] Box<dyn std::error::Error + Send + Sync + 'static>),
+    /// A saved model does not start with the magic bytes.
+    #[error("not a saved model: the first bytes are not the model magic number")]
+    BadMagic,
+    /// A saved model of another format version.
+    #[error("saved model format version {found} is not supported (this build reads version {supported})")]
+    UnsupportedVersion {
+        /// Version in the file.
+        found: u32,
+        /// Version this build reads and writes.
+        supported: u32,
+    },
+    /// A saved model whose coefficients do not match its basis and form.
+    #[error("saved model is inconsistent: expected the terms {expected:?}, found {found:?}")]
+    ModelMismatch {
+        /// Terms implied by the basis and form.
+        expected: Vec<String>,
+        /// Terms in the file.
+        found: Vec<String>,
+    },
+    /// A saved model with a non-finite number.
+    #[error("saved model has a non-finite value for `{name}`")]
+    NonFiniteModelValue {
+        /// Which value.
+        name: String,
+    },
+    /// JSON (de)serialisation failed.
+    #[error("JSON: {0}")]
+    Json(#[from] serde_json::Error),
+    /// Binary (de)serialisation failed.
+    #[error("binary model: {0}")]
+    Postcard(#[from] postcard::Error),
+}

@@ -1,0 +1,588 @@
+//! The identified equation of motion: coefficients, statistics, simulation, save and load.
+
+use std::fmt;
+
+use circle_signal::wrap;
+use hb_basis::{Basis, BasisKind, Domain};
+use pendulum_sim::SecondOrderSystem;
+use serde::de::{DeserializeOwned, MapAccess, Visitor};
+use serde::ser::SerializeMap;
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+use crate::assemble::{Term, check_form, term_name, terms};
+use crate::{Forcing, Harmonics, IdentifyParams, LinearSystem, LstsqFit, ModelForm, SampleClock, SolveError};
+
+/// One identified coefficient.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Coefficient {
+    /// The term's name (`x'`, `cos(t)*sin(x)`, `hat3`, `k*x`, ...).
+    pub name: String,
+    /// Its value.
+    pub value: f64,
+    /// Its standard error (0 for a model built from given values).
+    pub std_error: f64,
+}
+
+/// How a model was identified.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
+pub struct FitSummary {
+    /// The least-squares solver (`qr`, `svd`).
+    pub solver: String,
+    /// Harmonics per orbit.
+    pub harmonics: Harmonics,
+    /// The record's sampling clock.
+    pub clock: SampleClock,
+    /// Equations (rows of the stacked system).
+    pub rows: usize,
+    /// Unknowns.
+    pub unknowns: usize,
+    /// Orbit segments used.
+    pub segments: usize,
+    /// Of which whirling (non-zero winding number).
+    pub whirling_segments: usize,
+    /// 2-norm condition number of the column-scaled system matrix.
+    pub condition: f64,
+    /// Residual root mean square of the equations, `sqrt(RSS / rows)`.
+    pub residual_rms: f64,
+    /// Residual variance `s² = RSS / (rows − unknowns)`.
+    pub residual_variance: f64,
+}
+
+/// An identified equation of motion (paper eq. 2 / eq. 6):
+///
+/// `x'' = −( c_r x' + k x + Σ_i [q_i + n_i cos(W t) + p_i sin(W t)] φ_i(x) + F_c cos(W t) + F_s sin(W t) )`
+///
+/// with the terms its [`ModelForm`] has. On the circle the basis is evaluated at `wrap(x)`. It
+/// implements [`SecondOrderSystem`], so it can be simulated and its Lyapunov exponents estimated
+/// with the same code as the true system; `t` is the absolute time of the record's clock.
+///
+/// Saved with [`to_json`](Self::to_json) (for people: coefficients as an object keyed by term
+/// name) or [`to_bytes`](Self::to_bytes) (postcard, after a magic number and a version).
+#[derive(Debug, Clone, PartialEq)]
+pub struct IdentifiedModel<B = BasisKind> {
+    basis: B,
+    form: ModelForm,
+    forcing_frequency: f64,
+    coefficients: Vec<Coefficient>,
+    summary: Option<FitSummary>,
+    eval: Evaluation,
+}
+
+/// The coefficients arranged for evaluation.
+#[derive(Debug, Clone, PartialEq)]
+struct Evaluation {
+    damping: f64,
+    cos_t: Vec<f64>,
+    sin_t: Vec<f64>,
+    auto: Vec<f64>,
+    forcing: (f64, f64),
+    stiffness: f64,
+}
+
+/// Bases with at most this many functions are evaluated in a stack buffer (no allocation per call).
+const STACK: usize = 64;
+
+impl<B: Basis> IdentifiedModel<B> {
+    /// A model with given coefficient `values` in the order of [`crate::term_names`] (e.g. the
+    /// true system, to compare with an identified one), forcing frequency `W` and no fit summary.
+    pub fn new(
+        basis: B,
+        form: ModelForm,
+        forcing_frequency: f64,
+        values: &[f64],
+    ) -> Result<Self, SolveError> {
+        let form = form.validate()?;
+        let names = basis.names();
+        let layout = terms(names.len(), &form);
+        if values.len() != layout.len() {
+            return Err(SolveError::ModelMismatch {
+                expected: layout.iter().map(|&t| term_name(t, &names)).collect(),
+                found: (0..values.len()).map(|i| format!("value {i}")).collect(),
+            });
+        }
+        let coefficients = layout
+            .into_iter()
+            .zip(values)
+            .map(|(t, &value)| Coefficient {
+                name: term_name(t, &names),
+                value,
+                std_error: 0.0,
+            })
+            .collect();
+        Self::from_parts(basis, form, forcing_frequency, coefficients, None)
+    }
+
+    pub(crate) fn from_fit(
+        basis: B,
+        params: &IdentifyParams,
+        system: &LinearSystem,
+        fit: &LstsqFit,
+        solver: &str,
+    ) -> Result<Self, SolveError> {
+        let coefficients = system
+            .names()
+            .iter()
+            .zip(fit.solution.iter().zip(&fit.std_errors))
+            .map(|(name, (&value, &std_error))| Coefficient {
+                name: name.clone(),
+                value,
+                std_error,
+            })
+            .collect();
+        let summary = FitSummary {
+            solver: solver.to_owned(),
+            harmonics: params.harmonics(),
+            clock: *params.clock(),
+            rows: fit.rows,
+            unknowns: fit.cols,
+            segments: system.blocks().len(),
+            whirling_segments: system.blocks().iter().filter(|b| b.winding != 0).count(),
+            condition: fit.condition,
+            residual_rms: fit.residual_rms,
+            residual_variance: fit.residual_variance,
+        };
+        Self::from_parts(
+            basis,
+            *params.form(),
+            params.clock().forcing_frequency(),
+            coefficients,
+            Some(summary),
+        )
+    }
+
+    /// Checks names against the basis and form and arranges the values for evaluation.
+    fn from_parts(
+        basis: B,
+        form: ModelForm,
+        forcing_frequency: f64,
+        coefficients: Vec<Coefficient>,
+        summary: Option<FitSummary>,
+    ) -> Result<Self, SolveError> {
+        check_form(basis.domain(), &form)?;
+        if !(forcing_frequency.is_finite() && forcing_frequency > 0.0) {
+            return Err(SolveError::InvalidParameter {
+                name: "forcing frequency",
+                value: forcing_frequency,
+                why: "must be positive and finite",
+            });
+        }
+        let names = basis.names();
+        let layout = terms(names.len(), &form);
+        let expected: Vec<String> = layout.iter().map(|&t| term_name(t, &names)).collect();
+        if coefficients.len() != expected.len()
+            || coefficients.iter().zip(&expected).any(|(c, e)| &c.name != e)
+        {
+            return Err(SolveError::ModelMismatch {
+                expected,
+                found: coefficients.iter().map(|c| c.name.clone()).collect(),
+            });
+        }
+        if let Some(c) = coefficients
+            .iter()
+            .find(|c| !c.value.is_finite() || !c.std_error.is_finite())
+        {
+            return Err(SolveError::NonFiniteModelValue { name: c.name.clone() });
+        }
+        let n = names.len();
+        let mut eval = Evaluation {
+            damping: 0.0,
+            cos_t: vec![0.0; n],
+            sin_t: vec![0.0; n],
+            auto: vec![0.0; n],
+            forcing: match form.forcing {
+                Forcing::Known { cos, sin } => (cos, sin),
+                _ => (0.0, 0.0),
+            },
+            stiffness: 0.0,
+        };
+        for (&t, c) in layout.iter().zip(&coefficients) {
+            match t {
+                Term::Damping => eval.damping = c.value,
+                Term::CosT(i) => eval.cos_t[i] = c.value,
+                Term::SinT(i) => eval.sin_t[i] = c.value,
+                Term::Auto(i) => eval.auto[i] = c.value,
+                Term::ForcingCos => eval.forcing.0 = c.value,
+                Term::ForcingSin => eval.forcing.1 = c.value,
+                Term::Stiffness => eval.stiffness = c.value,
+            }
+        }
+        Ok(Self {
+            basis,
+            form,
+            forcing_frequency,
+            coefficients,
+            summary,
+            eval,
+        })
+    }
+
+    /// The damping coefficient `c_r` (term `x'`).
+    pub fn damping(&self) -> f64 {
+        self.eval.damping
+    }
+
+    /// All identified coefficients, in column order.
+    pub fn coefficients(&self) -> &[Coefficient] {
+        &self.coefficients
+    }
+
+    /// The coefficient of the term `name`, if the model has it.
+    pub fn coefficient(&self, name: &str) -> Option<&Coefficient> {
+        self.coefficients.iter().find(|c| c.name == name)
+    }
+
+    /// The basis.
+    pub fn basis(&self) -> &B {
+        &self.basis
+    }
+
+    /// Circle or line.
+    pub fn domain(&self) -> Domain {
+        self.basis.domain()
+    }
+
+    /// The model form.
+    pub fn form(&self) -> &ModelForm {
+        &self.form
+    }
+
+    /// Forcing angular frequency `W`.
+    pub fn forcing_frequency(&self) -> f64 {
+        self.forcing_frequency
+    }
+
+    /// How the model was identified (`None` for a model built from given values).
+    pub fn summary(&self) -> Option<&FitSummary> {
+        self.summary.as_ref()
+    }
+
+    fn point(&self, x: f64) -> f64 {
+        match self.basis.domain() {
+            Domain::Circle => wrap(x),
+            Domain::Line => x,
+        }
+    }
+
+    /// Calls `f` with `φ(x)` (or `φ'(x)`) in a buffer, on the stack for small bases.
+    fn with_basis<R>(&self, x: f64, deriv: bool, f: impl FnOnce(&[f64]) -> R) -> R {
+        let n = self.basis.len();
+        let mut stack = [0.0; STACK];
+        let mut heap = Vec::new();
+        let buf: &mut [f64] = if n <= STACK {
+            &mut stack[..n]
+        } else {
+            heap.resize(n, 0.0);
+            &mut heap
+        };
+        if deriv {
+            self.basis.eval_deriv(x, buf)
+        } else {
+            self.basis.eval(x, buf)
+        }
+        f(buf)
+    }
+
+    /// The autonomous part `f_anl(x) = k x + Σ_i q_i φ_i(x)` (eq. 2, 5).
+    pub fn autonomous(&self, x: f64) -> f64 {
+        let xe = self.point(x);
+        self.eval.stiffness * xe + self.with_basis(xe, false, |phi| dot(&self.eval.auto, phi))
+    }
+
+    /// The parametric parts `(Σ_i n_i φ_i(x), Σ_i p_i φ_i(x))`, the factors of `cos(W t)` and
+    /// `sin(W t)` (eq. 4 times the forcing).
+    pub fn parametric(&self, x: f64) -> (f64, f64) {
+        let xe = self.point(x);
+        self.with_basis(xe, false, |phi| {
+            (dot(&self.eval.cos_t, phi), dot(&self.eval.sin_t, phi))
+        })
+    }
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+impl<B: Basis> SecondOrderSystem for IdentifiedModel<B> {
+    #[inline]
+    fn acceleration(&self, t: f64, x: f64, v: f64) -> f64 {
+        let (s, c) = (self.forcing_frequency * t).sin_cos();
+        let xe = self.point(x);
+        let e = &self.eval;
+        let basis_part = self.with_basis(xe, false, |phi| {
+            phi.iter()
+                .enumerate()
+                .map(|(i, &p)| p * (e.auto[i] + e.cos_t[i] * c + e.sin_t[i] * s))
+                .sum::<f64>()
+        });
+        -(e.damping * v + e.stiffness * xe + basis_part + e.forcing.0 * c + e.forcing.1 * s)
+    }
+
+    #[inline]
+    fn jacobian(&self, t: f64, x: f64, _v: f64) -> [f64; 2] {
+        let (s, c) = (self.forcing_frequency * t).sin_cos();
+        let xe = self.point(x);
+        let e = &self.eval;
+        let d = self.with_basis(xe, true, |dphi| {
+            dphi.iter()
+                .enumerate()
+                .map(|(i, &p)| p * (e.auto[i] + e.cos_t[i] * c + e.sin_t[i] * s))
+                .sum::<f64>()
+        });
+        [-(e.stiffness + d), -e.damping]
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Save and load.
+
+/// Name of the JSON format, written in every saved model.
+pub const MODEL_FORMAT: &str = "hbid-model";
+/// Version of the saved-model format this build reads and writes.
+pub const MODEL_VERSION: u32 = 1;
+/// First bytes of a binary model.
+pub const MODEL_MAGIC: [u8; 8] = *b"HBIDMODL";
+
+/// Coefficients serialised as an ordered map `name -> {value, std_error}`.
+#[derive(Debug, Clone, PartialEq)]
+struct CoefficientMap(Vec<Coefficient>);
+
+#[derive(Serialize, Deserialize)]
+struct Estimate {
+    value: f64,
+    std_error: f64,
+}
+
+impl Serialize for CoefficientMap {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut map = s.serialize_map(Some(self.0.len()))?;
+        for c in &self.0 {
+            map.serialize_entry(
+                &c.name,
+                &Estimate {
+                    value: c.value,
+                    std_error: c.std_error,
+                },
+            )?;
+        }
+        map.end()
+    }
+}
+
+impl<'de> Deserialize<'de> for CoefficientMap {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = CoefficientMap;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str("a map from term names to {value, std_error}")
+            }
+            fn visit_map<A: MapAccess<'de>>(self, mut access: A) -> Result<CoefficientMap, A::Error> {
+                let mut out = Vec::with_capacity(access.size_hint().unwrap_or(0).min(4096));
+                while let Some((name, e)) = access.next_entry::<String, Estimate>()? {
+                    out.push(Coefficient {
+                        name,
+                        value: e.value,
+                        std_error: e.std_error,
+                    });
+                }
+                Ok(CoefficientMap(out))
+            }
+        }
+        d.deserialize_map(V)
+    }
+}
+
+#[derive(Serialize, Deserialize)]
+struct ModelRecord<B> {
+    format: String,
+    version: u32,
+    basis: B,
+    form: ModelForm,
+    forcing_frequency: f64,
+    coefficients: CoefficientMap,
+    fit: Option<FitSummary>,
+}
+
+impl<B: Basis + Clone + Serialize> IdentifiedModel<B> {
+    fn record(&self) -> ModelRecord<B> {
+        ModelRecord {
+            format: MODEL_FORMAT.to_owned(),
+            version: MODEL_VERSION,
+            basis: self.basis.clone(),
+            form: self.form,
+            forcing_frequency: self.forcing_frequency,
+            coefficients: CoefficientMap(self.coefficients.clone()),
+            fit: self.summary.clone(),
+        }
+    }
+
+    /// Pretty JSON: `{"format": "hbid-model", "version": 1, "basis": .., "form": ..,
+    /// "forcing_frequency": .., "coefficients": {"x'": {"value": .., "std_error": ..}, ..}, "fit": ..}`.
+    ///
+    /// A model on [`BasisKind`] records which basis it uses (`{"hat": {"nodes": 8}}`), so any
+    /// program can load it; a model on a concrete basis type records only its size and must be
+    /// loaded as the same type.
+    pub fn to_json(&self) -> Result<String, SolveError> {
+        Ok(serde_json::to_string_pretty(&self.record())?)
+    }
+
+    /// Compact binary: the 8 bytes [`MODEL_MAGIC`], the format version as a little-endian `u32`, then
+    /// the model in postcard.
+    pub fn to_bytes(&self) -> Result<Vec<u8>, SolveError> {
+        let mut out = MODEL_MAGIC.to_vec();
+        out.extend_from_slice(&MODEL_VERSION.to_le_bytes());
+        Ok(postcard::to_extend(&self.record(), out)?)
+    }
+}
+
+impl<B: Basis + DeserializeOwned> IdentifiedModel<B> {
+    fn from_record(r: ModelRecord<B>) -> Result<Self, SolveError> {
+        if r.version != MODEL_VERSION {
+            return Err(SolveError::UnsupportedVersion {
+                found: r.version,
+                supported: MODEL_VERSION,
+            });
+        }
+        if r.format != MODEL_FORMAT {
+            return Err(SolveError::BadMagic);
+        }
+        if let Some(fit) = &r.fit {
+            for (name, v) in [
+                ("fit condition", fit.condition),
+                ("fit residual_rms", fit.residual_rms),
+            ] {
+                // The condition number may legitimately be infinite only for a rank-deficient
+                // system, which never becomes a model.
+                if !v.is_finite() {
+                    return Err(SolveError::NonFiniteModelValue {
+                        name: name.to_owned(),
+                    });
+                }
+            }
+        }
+        Self::from_parts(
+            r.basis,
+            r.form.validate()?,
+            r.forcing_frequency,
+            r.coefficients.0,
+            r.fit,
+        )
+    }
+
+    /// Reads a model written by [`to_json`](Self::to_json), checking that its terms match its basis
+    /// and form.
+    pub fn from_json(text: &str) -> Result<Self, SolveError> {
+        Self::from_record(serde_json::from_str(text)?)
+    }
+
+    /// Reads a model written by [`to_bytes`](Self::to_bytes).
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self, SolveError> {
+        if bytes.len() < 12 || bytes[..8] != MODEL_MAGIC {
+            return Err(SolveError::BadMagic);
+        }
+        let version = u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]);
+        if version != MODEL_VERSION {
+            return Err(SolveError::UnsupportedVersion {
+                found: version,
+                supported: MODEL_VERSION,
+            });
+        }
+        Self::from_record(postcard::from_bytes(&bytes[12..])?)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use hb_basis::{Harmonic, Hat, Polynomial};
+
+    fn pendulum() -> IdentifiedModel<BasisKind> {
+        // x'' + 0.03 x' + 1.44 sin x − 1.52 sin t cos x = 0
+        let values = [0.03, 0.0, -1.52, 0.0, 0.0, 0.0, 1.44];
+        IdentifiedModel::new(
+            Harmonic::new(1).unwrap().into(),
+            ModelForm::parametric(),
+            1.0,
+            &values,
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn evaluates_the_pendulum() {
+        let m = pendulum();
+        let (t, x, v): (f64, f64, f64) = (0.7, 2.1 + 6.0 * std::f64::consts::PI, -0.4);
+        let want = -0.03 * v - 1.44 * x.sin() + 1.52 * t.sin() * x.cos();
+        assert!((m.acceleration(t, x, v) - want).abs() < 1e-12);
+        let jx = -1.44 * x.cos() - 1.52 * t.sin() * x.sin();
+        let [a, b] = m.jacobian(t, x, v);
+        assert!((a - jx).abs() < 1e-12 && (b + 0.03).abs() < 1e-15);
+        assert!((m.autonomous(x) - 1.44 * x.sin()).abs() < 1e-12);
+        let (pc, ps) = m.parametric(x);
+        assert!(pc.abs() < 1e-15 && (ps + 1.52 * x.cos()).abs() < 1e-12);
+        assert_eq!(m.coefficient("sin(t)*cos(x)").unwrap().value, -1.52);
+        assert_eq!(m.damping(), 0.03);
+    }
+
+    #[test]
+    fn json_and_bytes_round_trip() {
+        let m = pendulum();
+        let json = m.to_json().unwrap();
+        assert!(json.contains("\"cos(t)*cos(x)\""), "{json}");
+        assert_eq!(IdentifiedModel::<BasisKind>::from_json(&json).unwrap(), m);
+        let bytes = m.to_bytes().unwrap();
+        assert_eq!(&bytes[..8], b"HBIDMODL");
+        assert_eq!(IdentifiedModel::<BasisKind>::from_bytes(&bytes).unwrap(), m);
+    }
+
+    #[test]
+    fn rejects_inconsistent_files() {
+        let m = pendulum();
+        let mut bytes = m.to_bytes().unwrap();
+        bytes[8] = 2;
+        assert!(matches!(
+            IdentifiedModel::<BasisKind>::from_bytes(&bytes),
+            Err(SolveError::UnsupportedVersion {
+                found: 2,
+                supported: 1
+            })
+        ));
+        assert!(matches!(
+            IdentifiedModel::<BasisKind>::from_bytes(b"nonsense"),
+            Err(SolveError::BadMagic)
+        ));
+        // A basis of another size than the coefficients.
+        let json = m.to_json().unwrap().replace("\"order\": 1", "\"order\": 2");
+        assert!(matches!(
+            IdentifiedModel::<BasisKind>::from_json(&json),
+            Err(SolveError::ModelMismatch { .. })
+        ));
+        let json = m.to_json().unwrap().replace("\"value\": 0.03", "\"value\": NaN");
+        assert!(IdentifiedModel::<BasisKind>::from_json(&json).is_err());
+    }
+
+    #[test]
+    fn construction_checks() {
+        let hat: BasisKind = Hat::new(4).unwrap().into();
+        assert!(matches!(
+            IdentifiedModel::new(hat, ModelForm::parametric(), 1.0, &[0.0; 3]),
+            Err(SolveError::ModelMismatch { .. })
+        ));
+        assert!(matches!(
+            IdentifiedModel::new(
+                hat,
+                ModelForm::parametric().with_linear_stiffness(),
+                1.0,
+                &[0.0; 14]
+            ),
+            Err(SolveError::TermNotAllowed { .. })
+        ));
+        let line: BasisKind = Polynomial::new(1).unwrap().into();
+        let form = ModelForm::externally_forced(Forcing::Known { cos: -1.0, sin: 0.0 });
+        let m = IdentifiedModel::new(line, form, 1.0, &[0.1, 2.0]).unwrap();
+        // x'' = −(0.1 v + 2 x − cos t)
+        assert!((m.acceleration(0.3, 0.5, 0.2) - (-(0.02 + 1.0 - 0.3f64.cos()))).abs() < 1e-14);
+        assert!(IdentifiedModel::new(line, form, 0.0, &[0.1, 2.0]).is_err());
+    }
+}

@@ -1,0 +1,372 @@
+//! Parameters of identification: sampling clock, harmonics per orbit, model form.
+
+use std::f64::consts::TAU;
+
+use serde::{Deserialize, Serialize};
+
+use crate::SolveError;
+
+/// How the record was sampled relative to the forcing.
+///
+/// `P` samples per forcing period `T`, sample step `h = T / P`, forcing angular frequency
+/// `W = 2π / T`, and sample `n` of the record at absolute time `t_n = t_0 + n h`. The forcing terms
+/// of the model are `cos(W t)` and `sin(W t)` at these absolute times, so the phase of the forcing
+/// is part of what is identified. The paper's non-dimensional time is `T = 2π` (`W = 1`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SampleClock {
+    forcing_period: f64,
+    samples_per_period: usize,
+    start_time: f64,
+}
+
+impl SampleClock {
+    /// `P >= 2` samples per forcing period of length `T > 0` (in the data's time unit), with
+    /// `t_0 = 0`; set the time of sample 0 with [`with_start_time`](Self::with_start_time).
+    pub fn new(forcing_period: f64, samples_per_period: usize) -> Result<Self, SolveError> {
+        if !(forcing_period.is_finite() && forcing_period > 0.0) {
+            return Err(SolveError::InvalidParameter {
+                name: "forcing period",
+                value: forcing_period,
+                why: "must be positive and finite",
+            });
+        }
+        if samples_per_period < 2 {
+            return Err(SolveError::InvalidParameter {
+                name: "samples per forcing period",
+                value: samples_per_period as f64,
+                why: "must be at least 2",
+            });
+        }
+        Ok(Self {
+            forcing_period,
+            samples_per_period,
+            start_time: 0.0,
+        })
+    }
+
+    /// The paper's non-dimensional time: forcing period `2π`, `P` samples per period, `t_0 = 0`.
+    pub fn nondimensional(samples_per_period: usize) -> Result<Self, SolveError> {
+        Self::new(TAU, samples_per_period)
+    }
+
+    /// The same clock with sample 0 at time `t_0` (finite).
+    pub fn with_start_time(mut self, start_time: f64) -> Result<Self, SolveError> {
+        if !start_time.is_finite() {
+            return Err(SolveError::InvalidParameter {
+                name: "start time",
+                value: start_time,
+                why: "must be finite",
+            });
+        }
+        self.start_time = start_time;
+        Ok(self)
+    }
+
+    /// Samples per forcing period `P`.
+    pub fn samples_per_period(&self) -> usize {
+        self.samples_per_period
+    }
+
+    /// Forcing period `T`.
+    pub fn forcing_period(&self) -> f64 {
+        self.forcing_period
+    }
+
+    /// Forcing angular frequency `W = 2π / T`.
+    pub fn forcing_frequency(&self) -> f64 {
+        TAU / self.forcing_period
+    }
+
+    /// Sample step `h = T / P`.
+    pub fn step(&self) -> f64 {
+        self.forcing_period / self.samples_per_period as f64
+    }
+
+    /// Time `t_0` of sample 0.
+    pub fn start_time(&self) -> f64 {
+        self.start_time
+    }
+
+    /// Absolute time of sample `n`, `t_0 + n h`.
+    pub fn time(&self, n: usize) -> f64 {
+        self.start_time + n as f64 * self.step()
+    }
+}
+
+/// Which harmonics `j` of each orbit give equations (paper eq. 15: `j = 1..M`, plus the mean).
+///
+/// Harmonic `j` of a period-`k` orbit has `j / k` times the forcing frequency. Harmonics at or above
+/// the Nyquist frequency of the segment (`j >= L/2` for `L = kP` samples) are never used.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+#[non_exhaustive]
+pub enum Harmonics {
+    /// `j = 1..=M` for every orbit, whatever its period (the paper's fixed `M`).
+    Fixed(usize),
+    /// Every `j` with `j / k <= cap`: the same band of frequencies, up to `cap` times the forcing
+    /// frequency, for every orbit (`M_k = floor(cap k)`).
+    ForcingCap(f64),
+}
+
+impl Harmonics {
+    /// The default, [`Harmonics::ForcingCap`]`(3.0)`: every orbit is balanced over the same band of
+    /// frequencies, up to three times the forcing frequency. See `docs/identification.md` for the
+    /// measurements behind the choice.
+    pub const DEFAULT: Self = Self::ForcingCap(3.0);
+
+    /// Checks the value: `M >= 1`, or a cap `>= 1` (so that a period-1 orbit has a harmonic).
+    pub fn validate(self) -> Result<Self, SolveError> {
+        match self {
+            Self::Fixed(0) => Err(SolveError::InvalidParameter {
+                name: "harmonics M",
+                value: 0.0,
+                why: "must be at least 1",
+            }),
+            Self::ForcingCap(c) if !(c.is_finite() && c >= 1.0) => Err(SolveError::InvalidParameter {
+                name: "harmonic cap",
+                value: c,
+                why: "must be finite and at least 1 (times the forcing frequency)",
+            }),
+            ok => Ok(ok),
+        }
+    }
+
+    /// Number of harmonics `M_k` used for a period-`k` orbit of `len` samples.
+    pub fn count(self, period: usize, len: usize) -> usize {
+        let below_nyquist = len.saturating_sub(1) / 2;
+        let m = match self {
+            Self::Fixed(m) => m,
+            // A small allowance so that e.g. cap 1.0 with k = 3 gives exactly 3.
+            Self::ForcingCap(c) => (c * period as f64 + 1e-9).floor() as usize,
+        };
+        m.min(below_nyquist)
+    }
+}
+
+impl Default for Harmonics {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// An external forcing term `d_1 p(t) = F_c cos(W t) + F_s sin(W t)` (paper eq. 2).
+///
+/// Its coefficients have the same meaning whether identified or known: they are the coefficients of
+/// the terms `cos(t)` and `sin(t)` in the model's sum, which stands on the same side as `x''`:
+/// `x'' + c_r x' + ... + F_c cos(W t) + F_s sin(W t) = 0`. An oscillator written
+/// `x'' + 0.1 x' + 2 x = cos t` has `F_c = −1`, `F_s = 0`.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Forcing {
+    /// No external forcing term (the pendulum: `d_1 = 0`).
+    #[default]
+    None,
+    /// `F_c` and `F_s` are unknowns (terms `cos(t)`, `sin(t)`).
+    Identified,
+    /// `F_c` and `F_s` are known (a measured forcing) and moved to the right-hand side.
+    Known {
+        /// `F_c`, the coefficient of `cos(W t)`.
+        cos: f64,
+        /// `F_s`, the coefficient of `sin(W t)`.
+        sin: f64,
+    },
+}
+
+/// The terms of the model, paper eq. 2 specialised as in eq. 6:
+///
+/// `c_r x' + [k x] + Σ_i q_i φ_i(x) + [Σ_i (n_i cos W t + p_i sin W t) φ_i(x)] + [F_c cos W t + F_s sin W t] = −x''`.
+///
+/// The default is the paper's eq. 6 for the pendulum: damping, autonomous and parametric terms, no
+/// external forcing, no separate linear stiffness.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ModelForm {
+    /// Include the parametric terms `cos(t)*B` (`n_i`) and `sin(t)*B` (`p_i`) for each basis
+    /// function `B`.
+    pub parametric: bool,
+    /// The external forcing term.
+    pub forcing: Forcing,
+    /// Include a linear stiffness term `k*x` (on the line only; meaningful only when the basis does
+    /// not already contain `x`, otherwise the system is rank deficient and identification says so).
+    pub linear_stiffness: bool,
+}
+
+impl Default for ModelForm {
+    fn default() -> Self {
+        Self::parametric()
+    }
+}
+
+impl ModelForm {
+    /// Paper eq. 6: damping, autonomous and parametric terms.
+    pub fn parametric() -> Self {
+        Self {
+            parametric: true,
+            forcing: Forcing::None,
+            linear_stiffness: false,
+        }
+    }
+
+    /// A non-parametric oscillator with external forcing (e.g. Duffing): damping, autonomous terms
+    /// and the forcing given.
+    pub fn externally_forced(forcing: Forcing) -> Self {
+        Self {
+            parametric: false,
+            forcing,
+            linear_stiffness: false,
+        }
+    }
+
+    /// The same form with this external forcing.
+    pub fn with_forcing(mut self, forcing: Forcing) -> Self {
+        self.forcing = forcing;
+        self
+    }
+
+    /// The same form with a linear stiffness term `k*x`.
+    pub fn with_linear_stiffness(mut self) -> Self {
+        self.linear_stiffness = true;
+        self
+    }
+
+    pub(crate) fn validate(self) -> Result<Self, SolveError> {
+        if let Forcing::Known { cos, sin } = self.forcing {
+            for (name, value) in [
+                ("known forcing cos coefficient", cos),
+                ("known forcing sin coefficient", sin),
+            ] {
+                if !value.is_finite() {
+                    return Err(SolveError::InvalidParameter {
+                        name,
+                        value,
+                        why: "must be finite",
+                    });
+                }
+            }
+        }
+        Ok(self)
+    }
+}
+
+/// Everything identification needs besides the basis, the record and the segments.
+///
+/// Build with [`IdentifyParams::builder`]; [`IdentifyParamsBuilder::build`] validates.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct IdentifyParams {
+    clock: SampleClock,
+    harmonics: Harmonics,
+    form: ModelForm,
+}
+
+/// Builder of [`IdentifyParams`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct IdentifyParamsBuilder {
+    clock: SampleClock,
+    harmonics: Harmonics,
+    form: ModelForm,
+}
+
+impl IdentifyParams {
+    /// A builder with the record's clock and the defaults: [`Harmonics::DEFAULT`] and
+    /// [`ModelForm::parametric`].
+    pub fn builder(clock: SampleClock) -> IdentifyParamsBuilder {
+        IdentifyParamsBuilder {
+            clock,
+            harmonics: Harmonics::DEFAULT,
+            form: ModelForm::default(),
+        }
+    }
+
+    /// The sampling clock.
+    pub fn clock(&self) -> &SampleClock {
+        &self.clock
+    }
+
+    /// The harmonics per orbit.
+    pub fn harmonics(&self) -> Harmonics {
+        self.harmonics
+    }
+
+    /// The model form.
+    pub fn form(&self) -> &ModelForm {
+        &self.form
+    }
+}
+
+impl IdentifyParamsBuilder {
+    /// Harmonics per orbit.
+    pub fn harmonics(mut self, harmonics: Harmonics) -> Self {
+        self.harmonics = harmonics;
+        self
+    }
+
+    /// Model form.
+    pub fn form(mut self, form: ModelForm) -> Self {
+        self.form = form;
+        self
+    }
+
+    /// Validates and builds.
+    pub fn build(self) -> Result<IdentifyParams, SolveError> {
+        Ok(IdentifyParams {
+            clock: self.clock,
+            harmonics: self.harmonics.validate()?,
+            form: self.form.validate()?,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn clock() {
+        let c = SampleClock::nondimensional(25)
+            .unwrap()
+            .with_start_time(10.0)
+            .unwrap();
+        assert!((c.forcing_frequency() - 1.0).abs() < 1e-15);
+        assert!((c.time(25) - (10.0 + TAU)).abs() < 1e-12);
+        let c = SampleClock::new(0.5, 100).unwrap();
+        assert!((c.forcing_frequency() - 4.0 * std::f64::consts::PI).abs() < 1e-12);
+        assert!((c.step() - 0.005).abs() < 1e-15);
+        assert!(SampleClock::new(0.0, 25).is_err());
+        assert!(SampleClock::new(1.0, 1).is_err());
+        assert!(
+            SampleClock::new(1.0, 25)
+                .unwrap()
+                .with_start_time(f64::NAN)
+                .is_err()
+        );
+    }
+
+    #[test]
+    fn harmonic_counts() {
+        assert_eq!(Harmonics::Fixed(12).count(1, 25), 12);
+        assert_eq!(Harmonics::Fixed(12).count(1, 24), 11);
+        assert_eq!(Harmonics::Fixed(3).count(16, 400), 3);
+        assert_eq!(Harmonics::ForcingCap(1.0).count(3, 75), 3);
+        assert_eq!(Harmonics::ForcingCap(2.5).count(2, 50), 5);
+        assert_eq!(Harmonics::ForcingCap(20.0).count(1, 25), 12);
+        assert!(Harmonics::Fixed(0).validate().is_err());
+        assert!(Harmonics::ForcingCap(0.5).validate().is_err());
+        assert!(Harmonics::ForcingCap(f64::NAN).validate().is_err());
+    }
+
+    #[test]
+    fn params_validate() {
+        let clock = SampleClock::nondimensional(25).unwrap();
+        assert!(
+            IdentifyParams::builder(clock)
+                .harmonics(Harmonics::Fixed(0))
+                .build()
+                .is_err()
+        );
+        let bad = ModelForm::externally_forced(Forcing::Known {
+            cos: f64::NAN,
+            sin: 0.0,
+        });
+        assert!(IdentifyParams::builder(clock).form(bad).build().is_err());
+        assert!(IdentifyParams::builder(clock).build().is_ok());
+    }
+}
