@@ -30,6 +30,8 @@ enum Command {
     Embed(cmd::embed::EmbedArgs),
     /// Find unstable periodic orbits by close returns.
     Upos(cmd::upos::UposArgs),
+    /// Identify the equation of motion by harmonic balance.
+    Identify(cmd::identify::IdentifyArgs),
 }
 
 fn main() -> ExitCode {
@@ -38,6 +40,7 @@ fn main() -> ExitCode {
         Command::Simulate(args) => cmd::simulate::run(args, cli.quiet),
         Command::Embed(args) => cmd::embed::run(args),
         Command::Upos(args) => cmd::upos::run(args),
+        Command::Identify(args) => cmd::identify::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

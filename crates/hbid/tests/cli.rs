@@ -274,3 +274,64 @@ fn bad_files_name_the_problem() {
     std::fs::write(&garbage, [0u8, 159, 146, 150, 255, 0, 1, 2]).unwrap();
     assert_clean_failure(&hbid(&["upos", garbage.to_str().unwrap()]), "line");
 }
+
+#[test]
+fn identify_json_recovers_the_pendulum_and_saves_the_model() {
+    let dir = scratch("identify");
+    let model_path = dir.join("model.json");
+    let out = hbid(&[
+        "identify",
+        &paper_dataset(),
+        "--json",
+        "--save-model",
+        model_path.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["method"], "upo");
+    assert_eq!(v["basis"], "harmonic:1");
+    let truth = [
+        ("x'", 0.03),
+        ("cos(x)", 0.0),
+        ("cos(t)*cos(x)", 0.0),
+        ("sin(t)*cos(x)", -1.52),
+        ("sin(x)", 1.0 / (0.8333f64 * 0.8333)),
+        ("cos(t)*sin(x)", 0.0),
+        ("sin(t)*sin(x)", 0.0),
+    ];
+    for (name, value) in truth {
+        let got = v["coefficients"][name]
+            .as_f64()
+            .unwrap_or_else(|| panic!("no {name}"));
+        assert!((got - value).abs() < 0.005, "{name}: {got} vs {value}");
+        assert!(v["std_errors"][name].as_f64().unwrap() > 0.0);
+    }
+    assert!(v["orbits_used"].as_u64().unwrap() > 0 && v["rows"].as_u64().unwrap() > 7);
+    assert!(v["condition_number"].as_f64().unwrap() >= 1.0);
+    let saved = std::fs::read_to_string(&model_path).unwrap();
+    let model = hb_solve::IdentifiedModel::<hb_basis::BasisKind>::from_json(&saved).unwrap();
+    assert_eq!(model.damping(), v["coefficients"]["x'"].as_f64().unwrap());
+}
+
+#[test]
+fn identify_refuses_bad_options_and_too_few_orbits() {
+    let data = paper_dataset();
+    for (args, mentions) in [
+        (vec!["identify", &data, "--basis", "bogus:3"], "bogus"),
+        (vec!["identify", &data, "--basis", "harmonic:0"], "harmonic"),
+        (vec!["identify", &data, "--basis", ""], "harmonic:k"),
+        (vec!["identify", &data, "--harmonics", "0"], "harmonics"),
+        (vec!["identify", &data, "--tolerance", "0.7"], "tolerance"),
+        (
+            vec!["identify", &data, "--tolerance", "0.0001"],
+            "0 segment(s) found but at least",
+        ),
+        (vec!["identify", &data, "--method", "magic"], "magic"),
+    ] {
+        let out = hbid(&args);
+        assert!(!out.status.success());
+        let err = String::from_utf8_lossy(&out.stderr).to_lowercase();
+        assert!(!err.contains("panicked"), "{err}");
+        assert!(err.contains(mentions), "'{mentions}' not in {err}");
+    }
+}

@@ -1,5 +1,6 @@
 //! Subcommands.
 pub mod data;
 pub mod embed;
+pub mod identify;
 pub mod simulate;
 pub mod upos;
