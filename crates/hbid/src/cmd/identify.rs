@@ -176,7 +176,7 @@ pub fn run(args: &IdentifyArgs) -> anyhow::Result<()> {
     };
     let segments = args.close_returns(&data, delay)?.search(&data.x)?;
     let model = identify(
-        setup.basis.clone(),
+        setup.basis,
         &data.x,
         &segments,
         &setup.params,
