@@ -3,6 +3,7 @@
 //! with its figures beside the paper's numbers.
 #![allow(clippy::print_stderr, clippy::print_stdout)]
 
+mod identification;
 mod plot;
 mod reproduce;
 

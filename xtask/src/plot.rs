@@ -139,3 +139,8 @@ pub const BLUE: RGBColor = RGBColor(31, 119, 180);
 pub const ORANGE: RGBColor = RGBColor(255, 127, 14);
 pub const RED: RGBColor = RGBColor(214, 39, 40);
 pub const GREY: RGBColor = RGBColor(120, 120, 120);
+
+/// Adds a figure (file name, caption) to a report's list.
+pub fn add_figure(figures: &mut Vec<(String, String)>, name: impl Into<String>, caption: impl Into<String>) {
+    figures.push((name.into(), caption.into()));
+}

@@ -7,13 +7,12 @@ use std::time::{Duration, Instant};
 use anyhow::Context;
 use circle_signal::wrap;
 use indicatif::{ProgressBar, ProgressStyle};
-use pendulum_sim::{
-    LyapunovConfig, Pendulum, SimulationConfig, largest_lyapunov, poincare_section, simulate,
-};
+use pendulum_sim::{Pendulum, SimulationConfig, simulate};
 
 use circle_signal::{RotationSplit, unwrap};
 use upo_search::{Catalogue, CloseReturns, Segment};
 
+use crate::identification::{hat_curves, identify_upo, table_one, validate, validation_section};
 use crate::plot::{BLUE, Figure, GREY, ORANGE, RED, Series, Style};
 
 /// Sizes of a run.
@@ -79,19 +78,6 @@ pub fn run(out: &Path, quick: bool) -> anyhow::Result<()> {
     let trajectory = times.stage("simulate data set", |_| Ok(simulate(&pendulum, &config)?))?;
     let x = trajectory.wrapped();
 
-    // 2. The original system's Poincaré section and Lyapunov exponent, the reference for validation.
-    let section_cfg = SimulationConfig::paper().with_samples(plan.section_points)?;
-    let section = times.stage("Poincaré section (truth)", |_| {
-        Ok(poincare_section(&pendulum, &section_cfg)?)
-    })?;
-    let lyap_cfg = LyapunovConfig::default().with_periods(plan.lyapunov_periods)?;
-    let lyapunov = times.stage("Lyapunov exponent (truth)", |bar| {
-        bar.set_length(plan.lyapunov_periods as u64);
-        Ok(largest_lyapunov(&pendulum, &lyap_cfg, |done, _| {
-            bar.set_position(done as u64)
-        })?)
-    })?;
-
     // 3. Delay and embedding dimension (paper section 3.1), both metrics.
     let embed = times.stage("AMI and false nearest neighbours", |_| embed_stage(&x))?;
     let delay = embed.delay;
@@ -104,16 +90,49 @@ pub fn run(out: &Path, quick: bool) -> anyhow::Result<()> {
         .build()?;
     let catalogue = times.stage("UPO search (close returns)", |_| Ok(search.catalogue(&x)?))?;
 
+    // 5. Identification by harmonic balance on the UPOs (paper section 4.2).
+    let segments: Vec<Segment> = catalogue.segments().to_vec();
+    let models = times.stage("identification (UPOs)", |_| {
+        identify_upo(&x, trajectory.t[0], &segments)
+    })?;
+
+    // 6. Validation: every model measured as the truth is (paper section 5, and numbers).
+    let (points, lyap) = (plan.section_points, plan.lyapunov_periods);
+    let truth = times.stage("validation: truth", |_| {
+        validate("true pendulum", &pendulum, points, lyap, (0.1, 0.0))
+    })?;
+    let floor = times.stage("validation: floor", |_| {
+        validate(
+            "true pendulum, another initial state",
+            &pendulum,
+            points,
+            lyap,
+            (1.0, 0.5),
+        )
+    })?;
+    let checks = times.stage("validation: models", |_| {
+        models
+            .iter()
+            .map(|m| validate(m.label, &m.model, points, lyap, (0.1, 0.0)))
+            .collect::<anyhow::Result<Vec<_>>>()
+    })?;
+    for m in &models {
+        let path = out.join(m.file);
+        std::fs::write(&path, m.model.to_json()?)
+            .with_context(|| format!("cannot write {}", path.display()))?;
+    }
+
     // Figures.
     times.stage("figures", |_| {
         orbit_figures(out, &x, &catalogue, delay, &mut figures)?;
         embed_figures(out, &embed, &mut figures)?;
         let phase_plane: Vec<(f64, f64)> = x.iter().zip(&x[delay..]).map(|(&a, &b)| (a, b)).collect();
         let name = "fig2a_reconstructed_phase_plane.png";
+        let y_label = format!("theta(t + {delay} dt)");
         Figure {
-            title: "Reconstructed phase plane, delay 5 (paper Fig. 2a)",
+            title: "Reconstructed phase plane, delay from the AMI (paper Fig. 2a)",
             x_label: "theta(t)",
-            y_label: "theta(t + 5 dt)",
+            y_label: &y_label,
             series: vec![Series {
                 label: "",
                 points: phase_plane,
@@ -124,10 +143,11 @@ pub fn run(out: &Path, quick: bool) -> anyhow::Result<()> {
             y_range: Some((-std::f64::consts::PI, std::f64::consts::PI)),
         }
         .save(&out.join(name))?;
-        figures.push((
+        crate::plot::add_figure(
+            &mut figures,
             name,
-            "Reconstructed phase plane of the wrapped angle, delay 5 samples (paper Fig. 2a).",
-        ));
+            "Reconstructed phase plane of the wrapped angle with the AMI delay (paper Fig. 2a).".to_owned(),
+        );
 
         let name = "fig2b_poincare_section.png";
         Figure {
@@ -136,7 +156,7 @@ pub fn run(out: &Path, quick: bool) -> anyhow::Result<()> {
             y_label: "theta'",
             series: vec![Series {
                 label: "",
-                points: section.iter().map(|p| (wrap(p[0]), p[1])).collect(),
+                points: truth.check.section.iter().map(|p| (wrap(p[0]), p[1])).collect(),
                 style: Style::Dots(1),
                 color: BLUE,
             }],
@@ -144,7 +164,11 @@ pub fn run(out: &Path, quick: bool) -> anyhow::Result<()> {
             y_range: None,
         }
         .save(&out.join(name))?;
-        figures.push((name, "Poincaré section of the true pendulum (paper Fig. 2b)."));
+        crate::plot::add_figure(
+            &mut figures,
+            name,
+            "Poincaré section of the true pendulum (paper Fig. 2b).",
+        );
 
         let name = "fig_time_series.png";
         let shown = 25 * 40;
@@ -170,7 +194,11 @@ pub fn run(out: &Path, quick: bool) -> anyhow::Result<()> {
             y_range: Some((-std::f64::consts::PI, std::f64::consts::PI)),
         }
         .save(&out.join(name))?;
-        figures.push((name, "The wrapped angle record, first 40 forcing periods."));
+        crate::plot::add_figure(
+            &mut figures,
+            name,
+            "The wrapped angle record, first 40 forcing periods.",
+        );
         Ok(())
     })?;
 
@@ -190,16 +218,28 @@ pub fn run(out: &Path, quick: bool) -> anyhow::Result<()> {
          into [−π, π). The paper used 30000 samples at the same rate.\n",
         plan.samples
     )?;
-    writeln!(report, "## The true system, for validation\n")?;
-    writeln!(report, "| quantity | value |\n| --- | --- |")?;
-    writeln!(
-        report,
-        "| largest Lyapunov exponent (tangent-linear, {} forcing periods after 200 of transient) | {:.4} ± {:.4} per unit t ({:.3} per forcing period) |",
-        lyapunov.periods, lyapunov.per_unit_time, lyapunov.standard_error, lyapunov.per_period
-    )?;
-    writeln!(report, "| Poincaré section points | {} |\n", section.len())?;
     embed_section(&mut report, &embed)?;
     upo_section(&mut report, &catalogue, search.absolute_tolerance(&x)?)?;
+    table_one(
+        &mut report,
+        &models
+            .iter()
+            .filter(|m| m.label.starts_with("harmonic"))
+            .collect::<Vec<_>>(),
+    )?;
+    if let Some(hat) = models.iter().find(|m| m.label.starts_with("8 hats")) {
+        hat_curves(out, &mut report, &hat.model, &mut figures)?;
+    }
+    validation_section(out, &mut report, &truth, &floor, &checks, &mut figures)?;
+    writeln!(
+        report,
+        "The identified models are saved beside this report: {}.\n",
+        models
+            .iter()
+            .map(|m| format!("`{}`", m.file))
+            .collect::<Vec<_>>()
+            .join(", ")
+    )?;
     writeln!(report, "## Figures\n")?;
     for (file, caption) in &figures {
         writeln!(report, "![{caption}]({file})\n\n{caption}\n")?;
@@ -262,7 +302,7 @@ fn orbit_figures(
     x: &[f64],
     catalogue: &Catalogue,
     delay: usize,
-    figures: &mut Vec<(&'static str, &'static str)>,
+    figures: &mut Vec<(String, String)>,
 ) -> anyhow::Result<()> {
     use std::f64::consts::PI;
     let h = std::f64::consts::TAU / 25.0;
@@ -287,10 +327,11 @@ fn orbit_figures(
             y_range: Some((-PI, PI)),
         }
         .save(&out.join(name))?;
-        figures.push((
+        crate::plot::add_figure(
+            figures,
             name,
             "A period-4 orbit from the close-return search, as the encoder reports it (Fig. 1a).",
-        ));
+        );
         let name = "fig1b_period4_unwrapped.png";
         Figure {
             title: "The same orbit unwrapped, x_c (paper Fig. 1b)",
@@ -308,10 +349,11 @@ fn orbit_figures(
             y_range: None,
         }
         .save(&out.join(name))?;
-        figures.push((
+        crate::plot::add_figure(
+            figures,
             name,
             "The period-4 orbit unwrapped into a continuous signal (Fig. 1b).",
-        ));
+        );
         let name = "fig1c_period4_rotation_oscillation.png";
         Figure {
             title: "Rotation w_ck t and oscillation x_var (paper Fig. 1c)",
@@ -343,10 +385,11 @@ fn orbit_figures(
             y_range: None,
         }
         .save(&out.join(name))?;
-        figures.push((
+        crate::plot::add_figure(
+            figures,
             name,
             "Its split into a constant rotation and a periodic oscillation (Fig. 1c).",
-        ));
+        );
     }
     let delay_plane = |seg: &Segment| -> Vec<(f64, f64)> {
         (seg.start..=seg.start + seg.len)
@@ -387,10 +430,11 @@ fn orbit_figures(
         y_range: Some((-PI, PI)),
     }
     .save(&out.join(name))?;
-    figures.push((
+    crate::plot::add_figure(
+        figures,
         name,
         "Period-1 and period-2 orbits found by close returns, in the delay plane (Fig. 4).",
-    ));
+    );
     Ok(())
 }
 
@@ -456,11 +500,7 @@ fn embed_section(report: &mut String, e: &EmbedResult) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn embed_figures(
-    out: &Path,
-    e: &EmbedResult,
-    figures: &mut Vec<(&'static str, &'static str)>,
-) -> anyhow::Result<()> {
+fn embed_figures(out: &Path, e: &EmbedResult, figures: &mut Vec<(String, String)>) -> anyhow::Result<()> {
     let name = "fig3_mutual_information.png";
     // Lags 0 and 1 are the entropy and near it, far above the rest: the frame starts at lag 2.
     let curve: Vec<(f64, f64)> = e
@@ -494,10 +534,11 @@ fn embed_figures(
         y_range: Some((0.0, 1.05 * e.ami.get(2).copied().unwrap_or(1.0))),
     }
     .save(&out.join(name))?;
-    figures.push((
+    crate::plot::add_figure(
+        figures,
         name,
         "Average mutual information against lag, first minimum marked (Fig. 3), from lag 2 (I(0) and I(1) are far above).",
-    ));
+    );
     let name = "fig3b_false_nearest_neighbours.png";
     let pts = |r: &embedding::FnnResult| -> Vec<(f64, f64)> {
         r.levels.iter().map(|l| (l.dim as f64, l.fraction())).collect()
@@ -528,9 +569,10 @@ fn embed_figures(
         y_range: Some((0.0, 1.05)),
     }
     .save(&out.join(name))?;
-    figures.push((
+    crate::plot::add_figure(
+        figures,
         name,
         "Fraction of false nearest neighbours against dimension, circle and linear metrics.",
-    ));
+    );
     Ok(())
 }

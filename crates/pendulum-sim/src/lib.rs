@@ -54,6 +54,6 @@ pub use simulate::{
 };
 pub use system::{Pendulum, SecondOrderSystem};
 pub use validate::{
-    PeriodicOrbit, ShootingConfig, StateSpace, Variational, flow_with_jacobian, periodic_orbits,
-    section_energy_distance, whirling_fraction,
+    CheckConfig, ModelCheck, PeriodicOrbit, Seeds, ShootingConfig, StateSpace, Variational, check_model,
+    flow_with_jacobian, periodic_orbits, section_energy_distance, whirling_fraction,
 };
