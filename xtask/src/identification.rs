@@ -134,6 +134,9 @@ pub fn hat_projection(hat: &Hat, f: impl Fn(f64) -> f64) -> anyhow::Result<Vec<f
     Ok(c.iter().copied().collect())
 }
 
+/// A curve of the model: its name, the forcing factor it multiplies, and its true shape.
+type Curve = (&'static str, &'static str, fn(f64) -> f64);
+
 /// The hat-basis section: c_r and the RMS distance of each curve to the L2 hat fit of the truth,
 /// and figures 5-7.
 pub fn hat_curves(
@@ -143,7 +146,7 @@ pub fn hat_curves(
     figures: &mut Vec<(String, String)>,
 ) -> anyhow::Result<()> {
     let hat = Hat::new(8)?;
-    let truths: [(&str, &str, fn(f64) -> f64); 3] = [
+    let truths: [Curve; 3] = [
         ("n", "cos(t)", |_| 0.0),
         ("p", "sin(t)", |x| -1.52 * x.cos()),
         ("q", "autonomous", |x| x.sin() / (0.8333 * 0.8333)),
