@@ -12,7 +12,7 @@ use pendulum_sim::{
 };
 use upo_search::Segment;
 
-use crate::plot::{BLUE, Figure, GREY, ORANGE, RED, Series, Style};
+use hbid::plot::{BLUE, Figure, GREY, ORANGE, RED, Series, Style};
 
 /// The true coefficients of the harmonic basis K = 1 (method notes section 1).
 pub const TRUTH: [(&str, f64); 7] = [
@@ -223,7 +223,7 @@ pub fn hat_curves(
             y_range: Some((-1.8, 1.8)),
         }
         .save(&out.join(&name))?;
-        crate::plot::add_figure(
+        hbid::plot::add_figure(
             figures,
             name,
             format!(
@@ -341,7 +341,7 @@ pub fn validation_section(
             y_range: Some((-3.5, 3.5)),
         }
         .save(&out.join(&name))?;
-        crate::plot::add_figure(
+        hbid::plot::add_figure(
             figures,
             name,
             format!("Poincaré section of {} (Fig. 8).", v.label),

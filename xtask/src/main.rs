@@ -4,7 +4,6 @@
 #![allow(clippy::print_stderr, clippy::print_stdout)]
 
 mod identification;
-mod plot;
 mod reproduce;
 
 use std::path::PathBuf;

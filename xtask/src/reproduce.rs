@@ -13,7 +13,7 @@ use circle_signal::{RotationSplit, unwrap};
 use upo_search::{Catalogue, CloseReturns, Segment};
 
 use crate::identification::{hat_curves, identify_upo, table_one, validate, validation_section};
-use crate::plot::{BLUE, Figure, GREY, ORANGE, RED, Series, Style};
+use hbid::plot::{BLUE, Figure, GREY, ORANGE, RED, Series, Style};
 
 /// Sizes of a run.
 struct Plan {
@@ -143,7 +143,7 @@ pub fn run(out: &Path, quick: bool) -> anyhow::Result<()> {
             y_range: Some((-std::f64::consts::PI, std::f64::consts::PI)),
         }
         .save(&out.join(name))?;
-        crate::plot::add_figure(
+        hbid::plot::add_figure(
             &mut figures,
             name,
             "Reconstructed phase plane of the wrapped angle with the AMI delay (paper Fig. 2a).".to_owned(),
@@ -164,7 +164,7 @@ pub fn run(out: &Path, quick: bool) -> anyhow::Result<()> {
             y_range: None,
         }
         .save(&out.join(name))?;
-        crate::plot::add_figure(
+        hbid::plot::add_figure(
             &mut figures,
             name,
             "Poincaré section of the true pendulum (paper Fig. 2b).",
@@ -194,7 +194,7 @@ pub fn run(out: &Path, quick: bool) -> anyhow::Result<()> {
             y_range: Some((-std::f64::consts::PI, std::f64::consts::PI)),
         }
         .save(&out.join(name))?;
-        crate::plot::add_figure(
+        hbid::plot::add_figure(
             &mut figures,
             name,
             "The wrapped angle record, first 40 forcing periods.",
@@ -327,7 +327,7 @@ fn orbit_figures(
             y_range: Some((-PI, PI)),
         }
         .save(&out.join(name))?;
-        crate::plot::add_figure(
+        hbid::plot::add_figure(
             figures,
             name,
             "A period-4 orbit from the close-return search, as the encoder reports it (Fig. 1a).",
@@ -349,7 +349,7 @@ fn orbit_figures(
             y_range: None,
         }
         .save(&out.join(name))?;
-        crate::plot::add_figure(
+        hbid::plot::add_figure(
             figures,
             name,
             "The period-4 orbit unwrapped into a continuous signal (Fig. 1b).",
@@ -385,7 +385,7 @@ fn orbit_figures(
             y_range: None,
         }
         .save(&out.join(name))?;
-        crate::plot::add_figure(
+        hbid::plot::add_figure(
             figures,
             name,
             "Its split into a constant rotation and a periodic oscillation (Fig. 1c).",
@@ -430,7 +430,7 @@ fn orbit_figures(
         y_range: Some((-PI, PI)),
     }
     .save(&out.join(name))?;
-    crate::plot::add_figure(
+    hbid::plot::add_figure(
         figures,
         name,
         "Period-1 and period-2 orbits found by close returns, in the delay plane (Fig. 4).",
@@ -534,7 +534,7 @@ fn embed_figures(out: &Path, e: &EmbedResult, figures: &mut Vec<(String, String)
         y_range: Some((0.0, 1.05 * e.ami.get(2).copied().unwrap_or(1.0))),
     }
     .save(&out.join(name))?;
-    crate::plot::add_figure(
+    hbid::plot::add_figure(
         figures,
         name,
         "Average mutual information against lag, first minimum marked (Fig. 3), from lag 2 (I(0) and I(1) are far above).",
@@ -569,7 +569,7 @@ fn embed_figures(out: &Path, e: &EmbedResult, figures: &mut Vec<(String, String)
         y_range: Some((0.0, 1.05)),
     }
     .save(&out.join(name))?;
-    crate::plot::add_figure(
+    hbid::plot::add_figure(
         figures,
         name,
         "Fraction of false nearest neighbours against dimension, circle and linear metrics.",

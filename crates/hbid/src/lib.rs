@@ -16,3 +16,4 @@
 
 pub mod input;
 pub mod output;
+pub mod plot;

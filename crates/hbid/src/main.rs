@@ -32,6 +32,8 @@ enum Command {
     Upos(cmd::upos::UposArgs),
     /// Identify the equation of motion by harmonic balance.
     Identify(cmd::identify::IdentifyArgs),
+    /// Embed, find orbits, identify and validate, and write a Markdown report with figures.
+    Report(cmd::report::ReportArgs),
 }
 
 fn main() -> ExitCode {
@@ -41,6 +43,9 @@ fn main() -> ExitCode {
         Command::Embed(args) => cmd::embed::run(args),
         Command::Upos(args) => cmd::upos::run(args),
         Command::Identify(args) => cmd::identify::run(args),
+        Command::Report(args) => {
+            cmd::report::check_out(&args.out).and_then(|()| cmd::report::run(args, cli.quiet))
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

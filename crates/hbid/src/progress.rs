@@ -25,6 +25,24 @@ impl Progress {
         Self(bar)
     }
 
+    /// A spinner for a stage of unknown length.
+    pub fn spinner(stage: &str, quiet: bool) -> Self {
+        let bar = ProgressBar::with_draw_target(
+            None,
+            if quiet {
+                ProgressDrawTarget::hidden()
+            } else {
+                ProgressDrawTarget::stderr()
+            },
+        );
+        bar.set_style(
+            ProgressStyle::with_template("{spinner} {prefix} ({elapsed})").expect("a valid template"),
+        );
+        bar.set_prefix(stage.to_owned());
+        bar.enable_steady_tick(std::time::Duration::from_millis(120));
+        Self(bar)
+    }
+
     /// Sets the position.
     pub fn set(&self, pos: u64) {
         self.0.set_position(pos);

@@ -335,3 +335,114 @@ fn identify_refuses_bad_options_and_too_few_orbits() {
         assert!(err.contains(mentions), "'{mentions}' not in {err}");
     }
 }
+
+/// A chaotic Duffing oscillator, x'' + 0.3 x' − x + x³ = 0.5 cos(1.2 t), written as a record with
+/// 50 samples per forcing period.
+fn duffing_record(dir: &Path) -> PathBuf {
+    struct Duffing;
+    impl pendulum_sim::SecondOrderSystem for Duffing {
+        fn acceleration(&self, t: f64, x: f64, v: f64) -> f64 {
+            0.5 * (1.2 * t).cos() - 0.3 * v + x - x * x * x
+        }
+        fn jacobian(&self, _t: f64, x: f64, _v: f64) -> [f64; 2] {
+            [1.0 - 3.0 * x * x, -0.3]
+        }
+    }
+    let period = std::f64::consts::TAU / 1.2;
+    let cfg = pendulum_sim::SimulationConfig::paper()
+        .with_forcing_period(period)
+        .unwrap()
+        .with_samples_per_period(50)
+        .unwrap()
+        .with_samples(50 * 800)
+        .unwrap()
+        .with_transient_periods(100)
+        .with_tolerances(pendulum_sim::Tolerances::relative(1e-12).unwrap());
+    let traj = pendulum_sim::simulate(&Duffing, &cfg).unwrap();
+    let path = dir.join("duffing.csv");
+    let mut text = String::from("t,theta\n");
+    for (t, x) in traj.t.iter().zip(&traj.theta) {
+        text.push_str(&format!("{t},{x}\n"));
+    }
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+#[test]
+fn identify_a_duffing_oscillator_on_the_line() {
+    let dir = scratch("duffing");
+    let record = duffing_record(&dir);
+    let period = (std::f64::consts::TAU / 1.2).to_string();
+    let out = hbid(&[
+        "identify",
+        record.to_str().unwrap(),
+        "--signal",
+        "line",
+        "--forcing-period",
+        &period,
+        "--json",
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["basis"], "poly:3");
+    let c = &v["coefficients"];
+    // The model stands as x'' + c x' + q1 x + q2 x² + q3 x³ + F_c cos(t) + F_s sin(t) + ... = 0.
+    let truth = [
+        ("x'", 0.3),
+        ("x", -1.0),
+        ("x^2", 0.0),
+        ("x^3", 1.0),
+        ("cos(t)", -0.5),
+        ("sin(t)", 0.0),
+    ];
+    let worst = truth
+        .iter()
+        .map(|(n, t)| (c[*n].as_f64().unwrap() - t).abs())
+        .fold(0.0, f64::max);
+    // Measured: 0.010 (the weak form does far better on the same record).
+    assert!(worst < 0.02, "largest error {worst:e}: {c}");
+}
+
+#[test]
+fn report_writes_markdown_figures_and_model() {
+    let dir = scratch("report");
+    let out_dir = dir.join("rep");
+    let out = hbid(&[
+        "report",
+        &paper_dataset(),
+        "--out",
+        out_dir.to_str().unwrap(),
+        "--validation-periods",
+        "300",
+        "--quiet",
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = std::fs::read_to_string(out_dir.join("README.md")).unwrap();
+    for needle in [
+        "Delay (first minimum",
+        "| period | segments |",
+        "`sin(t)*cos(x)`",
+        "Lyapunov",
+        "energy distance",
+    ] {
+        assert!(text.contains(needle), "{needle} missing");
+    }
+    for file in [
+        "ami.png",
+        "fnn.png",
+        "section_record.png",
+        "section_model.png",
+        "model.json",
+    ] {
+        assert!(
+            std::fs::metadata(out_dir.join(file)).unwrap().len() > 100,
+            "{file}"
+        );
+    }
+    let file = dir.join("plain");
+    std::fs::write(&file, "x").unwrap();
+    assert_clean_failure(
+        &hbid(&["report", &paper_dataset(), "--out", file.to_str().unwrap()]),
+        "not a folder",
+    );
+}

@@ -55,5 +55,5 @@ pub use simulate::{
 pub use system::{Pendulum, SecondOrderSystem};
 pub use validate::{
     CheckConfig, ModelCheck, PeriodicOrbit, Seeds, ShootingConfig, StateSpace, Variational, check_model,
-    flow_with_jacobian, periodic_orbits, section_energy_distance, whirling_fraction,
+    energy_distance, flow_with_jacobian, periodic_orbits, section_energy_distance, whirling_fraction,
 };

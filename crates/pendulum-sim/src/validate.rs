@@ -341,20 +341,24 @@ pub fn whirling_fraction(theta: &[f64], samples_per_period: usize) -> Option<f64
 /// samples of the same system (a floor), not with zero. `None` when either section has fewer than
 /// two points.
 pub fn section_energy_distance(a: &[[f64; 2]], b: &[[f64; 2]]) -> Option<f64> {
+    let embed = |p: &[[f64; 2]]| -> Vec<[f64; 3]> { p.iter().map(|&[x, v]| [x.cos(), x.sin(), v]).collect() };
+    energy_distance(&embed(a), &embed(b))
+}
+
+/// The energy distance `2 E|X − Y| − E|X − X'| − E|Y − Y'|` between two samples of points in
+/// R^D with Euclidean distances, estimated without bias (see [`section_energy_distance`]). `None`
+/// when either sample has fewer than two points.
+pub fn energy_distance<const D: usize>(a: &[[f64; D]], b: &[[f64; D]]) -> Option<f64> {
     if a.len() < 2 || b.len() < 2 {
         return None;
     }
-    let embed = |p: &[[f64; 2]]| -> Vec<[f64; 3]> { p.iter().map(|&[x, v]| [x.cos(), x.sin(), v]).collect() };
-    let (ea, eb) = (embed(a), embed(b));
-    let dist = |p: &[f64; 3], q: &[f64; 3]| {
-        ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
-    };
-    let cross: f64 = ea
+    let dist = |p: &[f64; D], q: &[f64; D]| p.iter().zip(q).map(|(x, y)| (x - y).powi(2)).sum::<f64>().sqrt();
+    let cross: f64 = a
         .iter()
-        .map(|p| eb.iter().map(|q| dist(p, q)).sum::<f64>())
+        .map(|p| b.iter().map(|q| dist(p, q)).sum::<f64>())
         .sum::<f64>()
-        / (ea.len() * eb.len()) as f64;
-    let within = |e: &[[f64; 3]]| -> f64 {
+        / (a.len() * b.len()) as f64;
+    let within = |e: &[[f64; D]]| -> f64 {
         let mut s = 0.0;
         for i in 0..e.len() {
             for j in i + 1..e.len() {
@@ -363,7 +367,7 @@ pub fn section_energy_distance(a: &[[f64; 2]], b: &[[f64; 2]]) -> Option<f64> {
         }
         2.0 * s / (e.len() * (e.len() - 1)) as f64
     };
-    Some(2.0 * cross - within(&ea) - within(&eb))
+    Some(2.0 * cross - within(a) - within(b))
 }
 
 /// Settings of [`check_model`]: what is measured of a system to compare it with another.

@@ -2,5 +2,6 @@
 pub mod data;
 pub mod embed;
 pub mod identify;
+pub mod report;
 pub mod simulate;
 pub mod upos;

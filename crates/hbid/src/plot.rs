@@ -1,4 +1,5 @@
-//! Small plotting helpers on plotters: every figure of the report is a scatter or a set of lines.
+//! Small plotting helpers on plotters: every figure of the reports (`hbid report`, `cargo xtask
+//! reproduce`) is a scatter or a set of lines.
 
 use std::path::Path;
 
@@ -6,30 +7,45 @@ use anyhow::{Context, anyhow};
 use plotters::prelude::*;
 
 /// One series of a figure.
+#[derive(Debug)]
 pub struct Series<'a> {
+    /// Legend text (empty: no legend entry).
     pub label: &'a str,
+    /// The points.
     pub points: Vec<(f64, f64)>,
+    /// How they are drawn.
     pub style: Style,
+    /// Their colour.
     pub color: RGBColor,
 }
 
 /// How a series is drawn.
-#[derive(Clone, Copy)]
+#[derive(Debug, Clone, Copy)]
 pub enum Style {
     /// Dots of this radius (pixels).
     Dots(u32),
     /// A polyline; a jump in x or y larger than the break threshold starts a new piece (so a
     /// wrapped angle is not joined across ±π).
-    Line { break_above: f64 },
+    Line {
+        /// The jump that breaks the line.
+        break_above: f64,
+    },
 }
 
 /// A 2-D figure.
+#[derive(Debug)]
 pub struct Figure<'a> {
+    /// Title.
     pub title: &'a str,
+    /// Label of the x axis.
     pub x_label: &'a str,
+    /// Label of the y axis.
     pub y_label: &'a str,
+    /// What is drawn.
     pub series: Vec<Series<'a>>,
+    /// Range of x (default: the data's, padded by 5 %).
     pub x_range: Option<(f64, f64)>,
+    /// Range of y (default: the data's, padded by 5 %).
     pub y_range: Option<(f64, f64)>,
 }
 
@@ -134,10 +150,13 @@ impl Figure<'_> {
     }
 }
 
-/// The palette of the report.
+/// The palette of the reports: blue.
 pub const BLUE: RGBColor = RGBColor(31, 119, 180);
+/// Orange.
 pub const ORANGE: RGBColor = RGBColor(255, 127, 14);
+/// Red.
 pub const RED: RGBColor = RGBColor(214, 39, 40);
+/// Grey.
 pub const GREY: RGBColor = RGBColor(120, 120, 120);
 
 /// Adds a figure (file name, caption) to a report's list.
