@@ -38,6 +38,13 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    // Ctrl-C: remove whatever is half-written (results are only renamed into place when
+    // complete), then exit with the conventional status of an interrupt.
+    let _ = ctrlc::set_handler(|| {
+        output::remove_partial_files();
+        eprintln!("interrupted: no output written");
+        std::process::exit(130);
+    });
     let result = match &cli.command {
         Command::Simulate(args) => cmd::simulate::run(args, cli.quiet),
         Command::Embed(args) => cmd::embed::run(args),

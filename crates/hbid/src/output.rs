@@ -1,7 +1,31 @@
-//! Writing result files atomically: all or nothing.
+//! Writing result files atomically: all or nothing, even when the user presses Ctrl-C.
 
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+/// Temporary files being written; removed by [`remove_partial_files`] on an interrupt.
+static PARTIAL: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+/// Removes every temporary file still being written. Called from the binary's Ctrl-C handler
+/// before it exits, so that an interrupt leaves neither a partial file nor a stray temporary.
+pub fn remove_partial_files() {
+    if let Ok(mut files) = PARTIAL.lock() {
+        for f in files.drain(..) {
+            let _ = std::fs::remove_file(f);
+        }
+    }
+}
+
+fn track(path: &Path, add: bool) {
+    if let Ok(mut files) = PARTIAL.lock() {
+        if add {
+            files.push(path.to_owned());
+        } else {
+            files.retain(|f| f != path);
+        }
+    }
+}
 
 use anyhow::{Context, bail};
 
@@ -35,13 +59,19 @@ pub fn write_atomically(
         .prefix(".hbid-partial-")
         .tempfile_in(parent)
         .with_context(|| format!("cannot create a file in {}", parent.display()))?;
-    {
-        let mut buf = std::io::BufWriter::new(tmp.as_file_mut());
-        write(&mut buf).with_context(|| format!("cannot write {}", path.display()))?;
-        buf.flush()
+    let tmp_path = tmp.path().to_owned();
+    track(&tmp_path, true);
+    let result = (|| -> anyhow::Result<()> {
+        {
+            let mut buf = std::io::BufWriter::new(tmp.as_file_mut());
+            write(&mut buf).with_context(|| format!("cannot write {}", path.display()))?;
+            buf.flush()
+                .with_context(|| format!("cannot write {}", path.display()))?;
+        }
+        tmp.persist(path)
             .with_context(|| format!("cannot write {}", path.display()))?;
-    }
-    tmp.persist(path)
-        .with_context(|| format!("cannot write {}", path.display()))?;
-    Ok(())
+        Ok(())
+    })();
+    track(&tmp_path, false);
+    result
 }
