@@ -476,3 +476,58 @@ fn interrupt_leaves_no_file() {
         dir.display()
     );
 }
+
+#[test]
+fn reads_standard_input_and_npy() {
+    use std::io::Write;
+    let text = std::fs::read_to_string(paper_dataset()).unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_hbid"))
+        .args(["upos", "-", "--json", "--max-period", "4"])
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    child.stdin.take().unwrap().write_all(text.as_bytes()).unwrap();
+    let piped = child.wait_with_output().unwrap();
+    assert!(piped.status.success());
+    let from_file = hbid(&["upos", &paper_dataset(), "--json", "--max-period", "4"]);
+    assert_eq!(piped.stdout, from_file.stdout);
+
+    // The same angle column as a 1-D float64 .npy with --dt: the same orbits (t0 = 0 here, which
+    // the close-return search does not see).
+    let theta: Vec<f64> = text
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.starts_with('t'))
+        .map(|l| l.split(',').nth(1).unwrap().parse().unwrap())
+        .collect();
+    let mut header = format!(
+        "{{'descr': '<f8', 'fortran_order': False, 'shape': ({},), }}",
+        theta.len()
+    );
+    while (10 + header.len() + 1) % 64 != 0 {
+        header.push(' ');
+    }
+    header.push('\n');
+    let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
+    bytes.extend_from_slice(&(header.len() as u16).to_le_bytes());
+    bytes.extend_from_slice(header.as_bytes());
+    for v in &theta {
+        bytes.extend_from_slice(&v.to_le_bytes());
+    }
+    let dir = scratch("npy");
+    let npy = dir.join("theta.npy");
+    std::fs::write(&npy, bytes).unwrap();
+    let dt = (std::f64::consts::TAU / 25.0).to_string();
+    let out = hbid(&[
+        "upos",
+        npy.to_str().unwrap(),
+        "--dt",
+        &dt,
+        "--json",
+        "--max-period",
+        "4",
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(out.stdout, from_file.stdout);
+    assert_clean_failure(&hbid(&["upos", npy.to_str().unwrap()]), "--dt");
+}
