@@ -162,6 +162,26 @@ impl LinearSystem {
         self.matrix.ncols()
     }
 
+    /// A system from its parts (the weak form builds the same type).
+    pub(crate) fn from_parts(
+        matrix: Mat<f64>,
+        rhs: Col<f64>,
+        names: Vec<String>,
+        blocks: Vec<Block>,
+    ) -> Self {
+        Self {
+            matrix,
+            rhs,
+            names,
+            blocks,
+        }
+    }
+
+    /// Multiplies column `c` by `factor` (the noise correction).
+    pub(crate) fn scale_column(&mut self, c: usize, factor: f64) {
+        self.matrix.col_mut(c).iter_mut().for_each(|v| *v *= factor);
+    }
+
     /// Solves by least squares; a rank deficiency names the suspect term.
     pub fn solve<S: LstsqSolver + ?Sized>(&self, solver: &S) -> Result<LstsqFit, SolveError> {
         solver.solve(self.matrix(), self.rhs()).map_err(|e| match e {
@@ -347,12 +367,9 @@ pub fn assemble<B: Basis + ?Sized>(
 
     let rhs = Col::from_fn(rows, |i| rhs[i]);
     let names = terms.iter().map(|&t| term_name(t, &names)).collect();
-    Ok(LinearSystem {
-        matrix,
-        rhs,
-        names,
-        blocks,
-    })
+    let mut system = LinearSystem::from_parts(matrix, rhs, names, blocks);
+    crate::noise::correct(basis, signal, params, &mut system)?;
+    Ok(system)
 }
 
 /// Fills one segment's rows `a` (`2m + 1` rows, all columns) and right-hand side `b`; returns the

@@ -52,6 +52,14 @@ pub enum SolveError {
         /// Its value.
         value: f64,
     },
+    /// A sample of the record is NaN or infinite.
+    #[error("sample {index} of the record is not finite ({value})")]
+    NonFiniteRecordSample {
+        /// Index of the bad sample.
+        index: usize,
+        /// Its value.
+        value: f64,
+    },
     /// A term of the model is not finite on a segment (e.g. a monomial overflowed).
     #[error("segment {segment} (start {start}): the term `{term}` is not finite on it")]
     NonFiniteTerm {
@@ -118,6 +126,37 @@ pub enum SolveError {
         domain: Domain,
         /// Why.
         why: &'static str,
+    },
+    /// The noise correction cannot be applied to a term of this model.
+    #[error("no noise correction for the term `{term}`: {why}")]
+    NoiseCorrectionUnavailable {
+        /// The term (basis function) concerned.
+        term: String,
+        /// Why.
+        why: &'static str,
+    },
+    /// A record too short for what was asked of it.
+    #[error("{what} needs at least {needed} samples; the record has {len}")]
+    RecordTooShort {
+        /// What needed the samples.
+        what: &'static str,
+        /// Samples given.
+        len: usize,
+        /// Samples needed.
+        needed: usize,
+    },
+    /// Too many bootstrap resamples gave a rank-deficient or underdetermined system.
+    #[error(
+        "bootstrap: {failed} of {resamples} resamples did not determine every unknown (more than the \
+         {allowed} allowed); use more segments or a longer record"
+    )]
+    BootstrapFailed {
+        /// Resamples that failed.
+        failed: usize,
+        /// Resamples drawn.
+        resamples: usize,
+        /// Failures tolerated.
+        allowed: usize,
     },
     /// The SVD did not converge.
     #[error("the singular value decomposition did not converge")]

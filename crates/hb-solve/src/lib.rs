@@ -24,6 +24,20 @@
 //! factorisation), the condition number and residual of the fit, simulation through
 //! [`pendulum_sim::SecondOrderSystem`], and JSON or compact binary save/load.
 //!
+//! Beyond the paper:
+//!
+//! - the weak form ([`WeakForm`], [`assemble_weak`], [`identify_weak`]): the equation is multiplied
+//!   by test functions `w(τ) cos(jΩτ)`, `w(τ) sin(jΩτ)` with a window `w = sin^p(π τ / T_s)` that
+//!   vanishes with its first derivative at both ends of a segment, and integrated by parts, so no
+//!   derivative of the data is taken and no segment needs to be periodic: plain windows of the
+//!   record ([`upo_search::Windows`]) replace the orbits, and the equations come out in the same
+//!   [`LinearSystem`];
+//! - confidence intervals for every coefficient by a seeded moving-block bootstrap over segments
+//!   ([`bootstrap`]), for either method;
+//! - a correction of the bias `E[cos(k(x + n))] = e^{−k²σ²/2} cos(kx)` that Gaussian noise on a
+//!   measured angle puts into the trigonometric terms ([`NoiseCorrection`]), with `σ` given or
+//!   estimated from the record ([`estimate_noise_sigma`]).
+//!
 //! # Example
 //!
 //! A linear oscillator `x'' + 0.1 x' + 2 x = cos t` has the exactly periodic solution
@@ -50,21 +64,50 @@
 //! let model = identify(Polynomial::new(1)?, &x, &[segment], &params, &QrSolver::default())?;
 //! assert!((model.damping() - 0.1).abs() < 1e-12);
 //! assert!((model.coefficient("x").unwrap().value - 2.0).abs() < 1e-12);
+//!
+//! // The weak form on plain windows of 2 forcing periods, which need not close: any stretch of
+//! // the record works. Here a transient `e^{−0.05 t} cos(1.4 t)` is added, a solution of the
+//! // homogeneous equation, so that no window is periodic.
+//! let s = (2.0f64 - 0.0025).sqrt();
+//! let x: Vec<f64> = (0..=10 * p)
+//!     .map(|n| {
+//!         let t = clock.time(n);
+//!         (t.cos() + 0.1 * t.sin()) / 1.01 + (-0.05 * t).exp() * (s * t).cos()
+//!     })
+//!     .collect();
+//! let windows = upo_search::Windows::builder(p).metric(upo_search::Metric::Linear).build()?;
+//! let params = IdentifyParams::builder(clock)
+//!     .form(form)
+//!     .harmonics(hb_solve::WeakForm::DEFAULT_HARMONICS)
+//!     .build()?;
+//! let model = hb_solve::identify_weak_from_source(
+//!     Polynomial::new(1)?, &x, &windows, &params, &hb_solve::WeakForm::default(), &QrSolver::default(),
+//! )?;
+//! assert!((model.damping() - 0.1).abs() < 1e-6);
+//! assert!((model.coefficient("x").unwrap().value - 2.0).abs() < 1e-6);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 #![deny(missing_docs)]
 
 mod assemble;
+mod bootstrap;
 mod error;
 mod lstsq;
 mod model;
+mod noise;
 mod params;
+mod weak;
 
 pub use assemble::{Block, LinearSystem, assemble, term_names};
+pub use bootstrap::{Bootstrap, BootstrapParams, BootstrapParamsBuilder, Interval, ResampleBlock, bootstrap};
 pub use error::SolveError;
 pub use lstsq::{LstsqFit, LstsqSolver, QrSolver, RankTolerance, SvdSolver};
 pub use model::{Coefficient, FitSummary, IdentifiedModel, MODEL_FORMAT, MODEL_MAGIC, MODEL_VERSION};
-pub use params::{Forcing, Harmonics, IdentifyParams, IdentifyParamsBuilder, ModelForm, SampleClock};
+pub use noise::{NOISE_BAND_START, NOISE_ESTIMATE_MIN_LEN, estimate_noise_sigma};
+pub use params::{
+    Forcing, Harmonics, IdentifyParams, IdentifyParamsBuilder, ModelForm, NoiseCorrection, SampleClock,
+};
+pub use weak::{WeakForm, assemble_weak};
 
 use hb_basis::Basis;
 use upo_search::{OrbitSource, Segment};
@@ -98,4 +141,36 @@ pub fn identify_from_source<B: Basis, O: OrbitSource, S: LstsqSolver + ?Sized>(
         .segments(signal)
         .map_err(|e| SolveError::Source(Box::new(e)))?;
     identify(basis, signal, &segments, params, solver)
+}
+
+/// Identifies a model by the weak form ([`assemble_weak`], then least squares) from `segments`
+/// of `signal`, which need not be periodic (e.g. [`upo_search::Windows`]).
+///
+/// The harmonics per segment are the params' (use [`WeakForm::DEFAULT_HARMONICS`] unless there
+/// is a reason not to). Errors as for [`identify`].
+pub fn identify_weak<B: Basis, S: LstsqSolver + ?Sized>(
+    basis: B,
+    signal: &[f64],
+    segments: &[Segment],
+    params: &IdentifyParams,
+    weak: &WeakForm,
+    solver: &S,
+) -> Result<IdentifiedModel<B>, SolveError> {
+    let system = assemble_weak(&basis, signal, segments, params, weak)?;
+    IdentifiedModel::fit(basis, params, &system, solver)
+}
+
+/// [`identify_weak`] with the segments of an [`OrbitSource`] (e.g. [`upo_search::Windows`]).
+pub fn identify_weak_from_source<B: Basis, O: OrbitSource, S: LstsqSolver + ?Sized>(
+    basis: B,
+    signal: &[f64],
+    source: &O,
+    params: &IdentifyParams,
+    weak: &WeakForm,
+    solver: &S,
+) -> Result<IdentifiedModel<B>, SolveError> {
+    let segments = source
+        .segments(signal)
+        .map_err(|e| SolveError::Source(Box::new(e)))?;
+    identify_weak(basis, signal, &segments, params, weak, solver)
 }

@@ -10,7 +10,10 @@ use serde::ser::SerializeMap;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use crate::assemble::{Term, check_form, term_name, terms};
-use crate::{Forcing, Harmonics, IdentifyParams, LinearSystem, LstsqFit, ModelForm, SampleClock, SolveError};
+use crate::{
+    Forcing, Harmonics, IdentifyParams, LinearSystem, LstsqFit, LstsqSolver, ModelForm, SampleClock,
+    SolveError,
+};
 
 /// One identified coefficient.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -111,6 +114,22 @@ impl<B: Basis> IdentifiedModel<B> {
             })
             .collect();
         Self::from_parts(basis, form, forcing_frequency, coefficients, None)
+    }
+
+    /// Solves an assembled `system` (from [`crate::assemble`] or [`crate::assemble_weak`] with the
+    /// same `basis` and `params`) with `solver` and builds the model, e.g. to keep the system for
+    /// [`crate::bootstrap`].
+    ///
+    /// Errors: [`SolveError::ModelMismatch`] when the system's unknowns are not those of `basis`
+    /// and `params`, and the solver's errors.
+    pub fn fit<S: LstsqSolver + ?Sized>(
+        basis: B,
+        params: &IdentifyParams,
+        system: &LinearSystem,
+        solver: &S,
+    ) -> Result<Self, SolveError> {
+        let fit = system.solve(solver)?;
+        Self::from_fit(basis, params, system, &fit, solver.name())
     }
 
     pub(crate) fn from_fit(

@@ -66,8 +66,10 @@ mod catalogue;
 mod close_returns;
 mod error;
 mod source;
+mod windows;
 
 pub use catalogue::{Assignment, Catalogue, Orbit, PeriodCount};
 pub use close_returns::{CloseReturns, CloseReturnsBuilder, Metric};
 pub use error::UpoError;
 pub use source::{OrbitSource, Segment};
+pub use windows::{Windows, WindowsBuilder};

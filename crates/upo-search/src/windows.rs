@@ -1,0 +1,288 @@
+//! Plain windows of a record: segments that need not be periodic, for the weak form.
+
+use serde::{Deserialize, Serialize};
+
+use crate::{Metric, OrbitSource, Segment, UpoError};
+
+/// Windows of `k` forcing periods laid over the whole record, periodic or not.
+///
+/// Window `i` starts at sample `i · step` and spans `L = k P` samples plus the closing sample
+/// `start + L`, for every `i` with `start + L < N` (the closing sample is part of the window: the
+/// weak form integrates over the closed interval `[0, k T]`). With `step = k P` the windows are
+/// consecutive; a smaller step makes them overlap. The default step is one forcing period `P`, so
+/// with the default `k = 2` every sample (but those of the first and last periods) lies in two
+/// windows.
+///
+/// The windows are not orbits: their [`Segment::error`] is the distance, in the [`Metric`], between
+/// the closing sample and the first one — how far the window is from closing — and only informs;
+/// the weak form does not need it to be small.
+///
+/// Build with [`Windows::builder`] (or [`Windows::new`] for the defaults).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Windows {
+    samples_per_period: usize,
+    periods: usize,
+    step: usize,
+    metric: Metric,
+}
+
+/// Builder of [`Windows`]; [`build`](Self::build) validates.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct WindowsBuilder {
+    samples_per_period: usize,
+    periods: usize,
+    step: Option<usize>,
+    metric: Metric,
+}
+
+impl Windows {
+    /// Default window length `k`, in forcing periods. Two periods balance harmonics of half the
+    /// forcing frequency (so a period-2 response is represented) while keeping many windows; see
+    /// `docs/identification.md` for the measurements behind the choice.
+    pub const DEFAULT_PERIODS: usize = 2;
+
+    /// A builder with the required samples per forcing period `P` and the defaults: windows of
+    /// [`DEFAULT_PERIODS`](Self::DEFAULT_PERIODS) forcing periods, a step of one forcing period
+    /// (`P` samples), [`Metric::Circle`].
+    pub fn builder(samples_per_period: usize) -> WindowsBuilder {
+        WindowsBuilder {
+            samples_per_period,
+            periods: Self::DEFAULT_PERIODS,
+            step: None,
+            metric: Metric::default(),
+        }
+    }
+
+    /// The windows with all defaults but the required `P`.
+    pub fn new(samples_per_period: usize) -> Result<Self, UpoError> {
+        Self::builder(samples_per_period).build()
+    }
+
+    /// Samples per forcing period `P`.
+    pub fn samples_per_period(&self) -> usize {
+        self.samples_per_period
+    }
+
+    /// Window length `k` in forcing periods.
+    pub fn periods(&self) -> usize {
+        self.periods
+    }
+
+    /// Samples in a window, closing sample excluded: `k P`.
+    pub fn len(&self) -> usize {
+        self.periods * self.samples_per_period
+    }
+
+    /// Always false: a window has at least two samples (kept for the `len` convention).
+    pub fn is_empty(&self) -> bool {
+        false
+    }
+
+    /// Samples between the starts of consecutive windows.
+    pub fn step(&self) -> usize {
+        self.step
+    }
+
+    /// The metric of [`Segment::error`].
+    pub fn metric(&self) -> Metric {
+        self.metric
+    }
+
+    /// Number of windows in a record of `samples` samples.
+    pub fn count(&self, samples: usize) -> usize {
+        let l = self.len();
+        if samples <= l {
+            0
+        } else {
+            // Starts 0, s, 2s, .. with start + L <= samples − 1.
+            (samples - 1 - l) / self.step + 1
+        }
+    }
+
+    /// The windows of `signal`.
+    ///
+    /// Errors when the record is shorter than one window and its closing sample (`k P + 1`
+    /// samples) or holds a non-finite sample.
+    pub fn windows(&self, signal: &[f64]) -> Result<Vec<Segment>, UpoError> {
+        let l = self.len();
+        if signal.len() <= l {
+            return Err(UpoError::TooShort {
+                len: signal.len(),
+                needed: l + 1,
+                period: self.periods,
+            });
+        }
+        if let Some((index, &value)) = signal.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return Err(UpoError::NonFinite { index, value });
+        }
+        Ok((0..self.count(signal.len()))
+            .map(|i| {
+                let start = i * self.step;
+                Segment {
+                    start,
+                    period: self.periods,
+                    len: l,
+                    error: self.metric.distance(signal[start + l], signal[start]),
+                }
+            })
+            .collect())
+    }
+}
+
+impl WindowsBuilder {
+    /// Window length `k >= 1` in forcing periods.
+    pub fn periods(mut self, periods: usize) -> Self {
+        self.periods = periods;
+        self
+    }
+
+    /// Samples between the starts of consecutive windows, `>= 1` (`k P` for consecutive windows,
+    /// less for overlapping ones, more to skip parts of the record).
+    pub fn step(mut self, step: usize) -> Self {
+        self.step = Some(step);
+        self
+    }
+
+    /// The metric of [`Segment::error`]: [`Metric::Circle`] for a wrapped angle, [`Metric::Linear`]
+    /// on the line.
+    pub fn metric(mut self, metric: Metric) -> Self {
+        self.metric = metric;
+        self
+    }
+
+    /// Validates: `P >= 2`, `k >= 1`, `step >= 1`, and `k P` without overflow.
+    pub fn build(self) -> Result<Windows, UpoError> {
+        if self.samples_per_period < 2 {
+            return Err(UpoError::InvalidCount {
+                name: "samples per forcing period",
+                value: self.samples_per_period,
+                why: "must be at least 2",
+            });
+        }
+        if self.periods == 0 {
+            return Err(UpoError::InvalidCount {
+                name: "window periods",
+                value: 0,
+                why: "must be at least 1",
+            });
+        }
+        self.periods
+            .checked_mul(self.samples_per_period)
+            .and_then(|l| l.checked_add(1))
+            .ok_or(UpoError::InvalidCount {
+                name: "window periods",
+                value: self.periods,
+                why: "k P overflows",
+            })?;
+        let step = self.step.unwrap_or(self.samples_per_period);
+        if step == 0 {
+            return Err(UpoError::InvalidCount {
+                name: "window step",
+                value: 0,
+                why: "must be at least 1 sample",
+            });
+        }
+        Ok(Windows {
+            samples_per_period: self.samples_per_period,
+            periods: self.periods,
+            step,
+            metric: self.metric,
+        })
+    }
+}
+
+impl OrbitSource for Windows {
+    type Error = UpoError;
+
+    fn segments(&self, signal: &[f64]) -> Result<Vec<Segment>, UpoError> {
+        self.windows(signal)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    #[test]
+    fn defaults_and_validation() {
+        let w = Windows::new(25).unwrap();
+        assert_eq!((w.periods(), w.step(), w.len()), (2, 25, 50));
+        assert_eq!(w.metric(), Metric::Circle);
+        assert!(Windows::new(1).is_err());
+        assert!(Windows::builder(25).periods(0).build().is_err());
+        assert!(Windows::builder(25).step(0).build().is_err());
+        assert!(matches!(
+            Windows::builder(usize::MAX / 2).periods(3).build(),
+            Err(UpoError::InvalidCount {
+                name: "window periods",
+                ..
+            })
+        ));
+    }
+
+    #[test]
+    fn consecutive_and_overlapping_windows() {
+        let x: Vec<f64> = (0..101).map(|n| (n as f64 * 0.1).sin()).collect();
+        // Consecutive 2-period windows at P = 10: starts 0, 20, .., 80 (80 + 20 = 100 < 101).
+        let w = Windows::builder(10).step(20).build().unwrap();
+        let s = w.segments(&x).unwrap();
+        assert_eq!(s.iter().map(|s| s.start).collect::<Vec<_>>(), [0, 20, 40, 60, 80]);
+        assert!(s.iter().all(|s| s.period == 2 && s.len == 20));
+        // One sample fewer: the last window loses its closing sample.
+        assert_eq!(w.segments(&x[..100]).unwrap().len(), 4);
+        // Default step of one period: starts 0, 10, .., 80.
+        let s = Windows::new(10).unwrap().segments(&x).unwrap();
+        assert_eq!(s.len(), 9);
+        assert_eq!(s[8].start, 80);
+        // The error is how far the window is from closing.
+        let e = (x[80 + 20] - x[80]).abs();
+        assert!((s[8].error - e).abs() < 1e-15);
+    }
+
+    #[test]
+    fn bad_records() {
+        let w = Windows::builder(10).periods(3).build().unwrap();
+        assert_eq!(
+            w.segments(&[0.0; 30]),
+            Err(UpoError::TooShort {
+                len: 30,
+                needed: 31,
+                period: 3
+            })
+        );
+        assert_eq!(w.segments(&[0.0; 31]).unwrap().len(), 1);
+        let mut x = vec![0.0; 40];
+        x[33] = f64::NAN;
+        assert!(matches!(
+            w.segments(&x),
+            Err(UpoError::NonFinite { index: 33, .. })
+        ));
+    }
+
+    proptest! {
+        /// Every window fits the record with its closing sample; starts are the multiples of the
+        /// step; the next start would not fit; `count` agrees.
+        #[test]
+        fn windows_tile_the_record(p in 2usize..30, k in 1usize..5, step in 1usize..80, n in 0usize..600) {
+            let w = Windows::builder(p).periods(k).step(step).build().unwrap();
+            let x = vec![0.5; n];
+            match w.segments(&x) {
+                Ok(s) => {
+                    prop_assert_eq!(s.len(), w.count(n));
+                    for (i, seg) in s.iter().enumerate() {
+                        prop_assert_eq!(seg.start, i * step);
+                        prop_assert_eq!(seg.len, k * p);
+                        prop_assert!(seg.start + seg.len < n);
+                    }
+                    prop_assert!(s.len() * step + k * p >= n);
+                }
+                Err(UpoError::TooShort { needed, .. }) => {
+                    prop_assert_eq!(needed, k * p + 1);
+                    prop_assert!(n <= k * p);
+                }
+                Err(e) => prop_assert!(false, "{e}"),
+            }
+        }
+    }
+}
