@@ -531,3 +531,85 @@ fn reads_standard_input_and_npy() {
     assert_eq!(out.stdout, from_file.stdout);
     assert_clean_failure(&hbid(&["upos", npy.to_str().unwrap()]), "--dt");
 }
+
+#[test]
+fn windowed_method_with_intervals() {
+    let out = hbid(&[
+        "identify",
+        &paper_dataset(),
+        "--method",
+        "windowed",
+        "--json",
+        "--bootstrap",
+        "200",
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["method"], "windowed");
+    let truth = [
+        ("x'", 0.03),
+        ("cos(x)", 0.0),
+        ("cos(t)*cos(x)", 0.0),
+        ("sin(t)*cos(x)", -1.52),
+        ("sin(x)", 1.0 / (0.8333f64 * 0.8333)),
+        ("cos(t)*sin(x)", 0.0),
+        ("sin(t)*sin(x)", 0.0),
+    ];
+    for (name, value) in truth {
+        let got = v["coefficients"][name].as_f64().unwrap();
+        assert!((got - value).abs() < 1e-5, "{name}: {got} vs {value}");
+        let interval = v["intervals"][name].as_array().unwrap();
+        let (lo, hi) = (interval[0].as_f64().unwrap(), interval[1].as_f64().unwrap());
+        assert!(lo <= got && got <= hi, "{name}: {got} outside [{lo}, {hi}]");
+    }
+    assert_eq!(v["interval_level"], 0.95);
+    // Seeded: the same intervals again.
+    let again = hbid(&[
+        "identify",
+        &paper_dataset(),
+        "--method",
+        "windowed",
+        "--json",
+        "--bootstrap",
+        "200",
+    ]);
+    assert_eq!(out.stdout, again.stdout);
+}
+
+#[test]
+fn windowed_method_recovers_duffing_on_the_line() {
+    let dir = scratch("duffing-weak");
+    let record = duffing_record(&dir);
+    let period = (std::f64::consts::TAU / 1.2).to_string();
+    let out = hbid(&[
+        "identify",
+        record.to_str().unwrap(),
+        "--signal",
+        "line",
+        "--forcing-period",
+        &period,
+        "--method",
+        "windowed",
+        "--bootstrap",
+        "0",
+        "--json",
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let c = &v["coefficients"];
+    let truth = [
+        ("x'", 0.3),
+        ("x", -1.0),
+        ("x^2", 0.0),
+        ("x^3", 1.0),
+        ("cos(t)", -0.5),
+        ("sin(t)", 0.0),
+    ];
+    let worst = truth
+        .iter()
+        .map(|(n, t)| (c[*n].as_f64().unwrap() - t).abs())
+        .fold(0.0, f64::max);
+    // The issue expects about 1e-8.
+    assert!(worst < 1e-7, "largest error {worst:e}: {c}");
+    assert!(v["intervals"].is_null());
+}

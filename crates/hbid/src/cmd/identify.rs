@@ -6,10 +6,10 @@ use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
 use hb_basis::{BasisKind, Harmonic, Hat, Polynomial};
 use hb_solve::{
-    Forcing, Harmonics, IdentifiedModel, IdentifyParams, LstsqSolver, ModelForm, QrSolver, SampleClock,
-    SvdSolver, identify,
+    Bootstrap, BootstrapParams, Forcing, Harmonics, IdentifiedModel, IdentifyParams, LstsqSolver, ModelForm,
+    NoiseCorrection, QrSolver, SampleClock, SvdSolver, WeakForm, assemble, assemble_weak, bootstrap,
 };
-use upo_search::{CloseReturns, Metric};
+use upo_search::{CloseReturns, Metric, Segment, Windows};
 
 use super::data::{Data, InputArgs, Signal};
 
@@ -18,6 +18,18 @@ use super::data::{Data, InputArgs, Signal};
 pub enum Method {
     /// The paper's: harmonic balance over unstable periodic orbits found by close returns.
     Upo,
+    /// The weak form: harmonic balance of the windowed equation over plain windows of the record.
+    Windowed,
+}
+
+impl Method {
+    /// The name used in reports and JSON.
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Upo => "upo",
+            Method::Windowed => "windowed",
+        }
+    }
 }
 
 /// Least-squares solver.
@@ -50,9 +62,29 @@ pub struct IdentifyArgs {
     /// (x .. x^D). Default: harmonic:1 on the circle, poly:3 on the line.
     #[arg(long)]
     pub basis: Option<String>,
-    /// Harmonics per orbit (default: all j with j/k <= 3 forcing harmonics for a period-k orbit).
+    /// Harmonics per segment (default: all j with j/k <= 3 forcing harmonics for a period-k orbit with
+    /// --method upo, j/k <= 2 for --method windowed).
     #[arg(long)]
     pub harmonics: Option<usize>,
+    /// Windowed method: window length in forcing periods.
+    #[arg(long, default_value_t = Windows::DEFAULT_PERIODS)]
+    pub window_periods: usize,
+    /// Windowed method: order p of the window w = sin^p (at least 2).
+    #[arg(long, default_value_t = WeakForm::DEFAULT_WINDOW_ORDER)]
+    pub window_order: u32,
+    /// Bootstrap resamples for the confidence intervals (0: none).
+    #[arg(long, default_value_t = BootstrapParams::DEFAULT_RESAMPLES)]
+    pub bootstrap: usize,
+    /// Confidence level of the intervals.
+    #[arg(long, default_value_t = BootstrapParams::DEFAULT_LEVEL, allow_hyphen_values = true)]
+    pub level: f64,
+    /// Seed of the bootstrap (results are the same for a given seed, whatever the number of threads).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Correct the bias of Gaussian noise on the angle in the trigonometric terms: the noise standard deviation
+    /// in radians, or `auto` to estimate it from the record's highest frequencies (harmonic basis only).
+    #[arg(long, value_name = "SIGMA|auto")]
+    pub noise_sigma: Option<String>,
     /// Least-squares solver.
     #[arg(long, value_enum, default_value_t = SolverArg::Qr)]
     pub solver: SolverArg,
@@ -106,10 +138,42 @@ pub struct Setup {
     pub basis_name: String,
     pub params: IdentifyParams,
     pub solver: Box<dyn LstsqSolver>,
+    pub weak: WeakForm,
+    pub bootstrap: Option<BootstrapParams>,
+    pub method: Method,
+}
+
+/// An identified model with its bootstrap intervals.
+pub struct Identification {
+    pub model: IdentifiedModel,
+    pub intervals: Option<Bootstrap>,
+}
+
+impl Setup {
+    /// Assembles the rows of the method over `segments`, solves, and bootstraps.
+    pub fn identify(&self, x: &[f64], segments: &[Segment]) -> anyhow::Result<Identification> {
+        let system = match self.method {
+            Method::Upo => assemble(&self.basis, x, segments, &self.params),
+            Method::Windowed => assemble_weak(&self.basis, x, segments, &self.params, &self.weak),
+        }
+        .map_err(|e| anyhow::anyhow!("{e}"))?;
+        let model = IdentifiedModel::fit(self.basis, &self.params, &system, self.solver.as_ref())
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
+        let intervals = match &self.bootstrap {
+            Some(b) => Some(bootstrap(&system, self.solver.as_ref(), b).map_err(|e| anyhow::anyhow!("{e}"))?),
+            None => None,
+        };
+        Ok(Identification { model, intervals })
+    }
 }
 
 impl IdentifyArgs {
     pub fn setup(&self, data: &Data) -> anyhow::Result<Setup> {
+        self.setup_for(data, self.method)
+    }
+
+    /// [`IdentifyArgs::setup`] for a method other than the one chosen on the command line.
+    pub fn setup_for(&self, data: &Data, method: Method) -> anyhow::Result<Setup> {
         let basis_name = self.basis.clone().unwrap_or_else(|| match data.signal {
             Signal::Circle => "harmonic:1".to_owned(),
             Signal::Line => "poly:3".to_owned(),
@@ -127,25 +191,69 @@ impl IdentifyArgs {
             ..ModelForm::parametric()
         }
         .with_forcing(forcing);
-        let harmonics = match self.harmonics {
-            Some(0) => bail!("--harmonics must be at least 1"),
-            Some(m) => Harmonics::Fixed(m),
-            None => Harmonics::ForcingCap(3.0),
+        let harmonics = match (self.harmonics, method) {
+            (Some(0), _) => bail!("--harmonics must be at least 1"),
+            (Some(m), _) => Harmonics::Fixed(m),
+            (None, Method::Upo) => Harmonics::ForcingCap(3.0),
+            (None, Method::Windowed) => WeakForm::DEFAULT_HARMONICS,
+        };
+        let noise = match self.noise_sigma.as_deref() {
+            None => NoiseCorrection::None,
+            Some("auto") => NoiseCorrection::Estimated,
+            Some(text) => NoiseCorrection::Given {
+                sigma: text
+                    .parse()
+                    .map_err(|_| anyhow::anyhow!("--noise-sigma '{text}': a number of radians or auto"))?,
+            },
         };
         let clock = SampleClock::new(self.input.forcing_period, data.p)?.with_start_time(data.t0)?;
         let params = IdentifyParams::builder(clock)
             .form(form)
             .harmonics(harmonics)
+            .noise_correction(noise)
             .build()?;
         let solver: Box<dyn LstsqSolver> = match self.solver {
             SolverArg::Qr => Box::new(QrSolver::default()),
             SolverArg::Svd => Box::new(SvdSolver::default()),
+        };
+        if self.window_periods == 0 {
+            bail!("--window-periods must be at least 1");
+        }
+        let weak = WeakForm::new(self.window_order)?;
+        let bootstrap = if self.bootstrap == 0 {
+            None
+        } else {
+            Some(
+                BootstrapParams::builder()
+                    .resamples(self.bootstrap)
+                    .level(self.level)
+                    .seed(self.seed)
+                    .build()?,
+            )
         };
         Ok(Setup {
             basis,
             basis_name,
             params,
             solver,
+            weak,
+            bootstrap,
+            method,
+        })
+    }
+
+    /// The segments of the chosen method: close returns (with the delay) or plain windows.
+    pub fn segments(&self, data: &Data, delay: usize, method: Method) -> anyhow::Result<Vec<Segment>> {
+        Ok(match method {
+            Method::Upo => self.close_returns(data, delay)?.search(&data.x)?,
+            Method::Windowed => Windows::builder(data.p)
+                .periods(self.window_periods)
+                .metric(match data.signal {
+                    Signal::Circle => Metric::Circle,
+                    Signal::Line => Metric::Linear,
+                })
+                .build()?
+                .windows(&data.x)?,
         })
     }
 
@@ -174,33 +282,30 @@ pub fn run(args: &IdentifyArgs) -> anyhow::Result<()> {
         Some(d) => d,
         None => super::embed::ami(&data.x, super::embed::metric_for(data.signal, None), 16, 40)?.1,
     };
-    let segments = args.close_returns(&data, delay)?.search(&data.x)?;
-    let model = identify(
-        setup.basis,
-        &data.x,
-        &segments,
-        &setup.params,
-        setup.solver.as_ref(),
-    )
-    .map_err(|e| anyhow::anyhow!("{e}"))
-    .with_context(|| {
-        format!(
+    let segments = args.segments(&data, delay, args.method)?;
+    let found = match args.method {
+        Method::Upo => format!(
             "{} orbit segments found at tolerance {}",
             segments.len(),
             args.tolerance
-        )
-    })?;
+        ),
+        Method::Windowed => format!(
+            "{} windows of {} forcing periods",
+            segments.len(),
+            args.window_periods
+        ),
+    };
+    let id = setup.identify(&data.x, &segments).with_context(|| found)?;
     if let Some(path) = &args.save_model {
-        save_model(&model, path)?;
+        save_model(&id.model, path)?;
     }
-    let method = "upo";
     if args.json {
         println!(
             "{}",
-            serde_json::to_string_pretty(&json(&model, method, &setup.basis_name))?
+            serde_json::to_string_pretty(&json(&id, args.method.name(), &setup.basis_name))?
         );
     } else {
-        print_table(&model, method, &setup.basis_name);
+        print_table(&id, args.method.name(), &setup.basis_name);
     }
     Ok(())
 }
@@ -217,7 +322,14 @@ pub fn save_model(model: &IdentifiedModel, path: &std::path::Path) -> anyhow::Re
 }
 
 /// The JSON report of an identification.
-pub fn json(model: &IdentifiedModel, method: &str, basis: &str) -> serde_json::Value {
+pub fn json(id: &Identification, method: &str, basis: &str) -> serde_json::Value {
+    let model = &id.model;
+    let intervals: Option<serde_json::Map<String, serde_json::Value>> = id.intervals.as_ref().map(|b| {
+        b.intervals
+            .iter()
+            .map(|i| (i.name.clone(), serde_json::json!([i.lower, i.upper])))
+            .collect()
+    });
     let values: serde_json::Map<String, serde_json::Value> = model
         .coefficients()
         .iter()
@@ -238,14 +350,17 @@ pub fn json(model: &IdentifiedModel, method: &str, basis: &str) -> serde_json::V
         "rows": summary.map(|s| s.rows),
         "condition_number": summary.map(|s| s.condition),
         "residual_rms": summary.map(|s| s.residual_rms),
+        "intervals": intervals,
+        "interval_level": id.intervals.as_ref().map(|b| b.level),
     })
 }
 
-fn print_table(model: &IdentifiedModel, method: &str, basis: &str) {
+fn print_table(id: &Identification, method: &str, basis: &str) {
+    let model = &id.model;
     println!("method {method}, basis {basis}");
     if let Some(s) = model.summary() {
         println!(
-            "{} orbit segments ({} whirling), {} equations, {} unknowns, solver {}",
+            "{} segments ({} whirling), {} equations, {} unknowns, solver {}",
             s.segments, s.whirling_segments, s.rows, s.unknowns, s.solver
         );
         println!(
@@ -254,8 +369,33 @@ fn print_table(model: &IdentifiedModel, method: &str, basis: &str) {
         );
     }
     println!();
-    println!("{:<18} {:>14} {:>12}", "term", "coefficient", "std. error");
-    for c in model.coefficients() {
-        println!("{:<18} {:>14.6} {:>12.2e}", c.name, c.value, c.std_error);
+    match &id.intervals {
+        Some(b) => {
+            println!(
+                "{:<18} {:>14} {:>12}   {:.0} % interval (bootstrap, {} resamples)",
+                "term",
+                "coefficient",
+                "std. error",
+                100.0 * b.level,
+                b.resamples
+            );
+            for c in model.coefficients() {
+                let i = b.interval(&c.name);
+                println!(
+                    "{:<18} {:>14.6} {:>12.2e}   [{:.6}, {:.6}]",
+                    c.name,
+                    c.value,
+                    c.std_error,
+                    i.map_or(f64::NAN, |i| i.lower),
+                    i.map_or(f64::NAN, |i| i.upper)
+                );
+            }
+        }
+        None => {
+            println!("{:<18} {:>14} {:>12}", "term", "coefficient", "std. error");
+            for c in model.coefficients() {
+                println!("{:<18} {:>14.6} {:>12.2e}", c.name, c.value, c.std_error);
+            }
+        }
     }
 }

@@ -1,18 +1,20 @@
-//! `hbid report`: embed → orbits → identify → validate on the user's own record, as a Markdown
-//! report with figures.
+//! `hbid report`: embed → orbits → identify (both methods) → validate on the user's own record,
+//! as a Markdown report with figures.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use clap::Args;
-use embedding::{FnnParams, false_nearest_neighbours};
+use embedding::{FnnParams, FnnResult, false_nearest_neighbours};
 use hbid::plot::{BLUE, Figure, GREY, ORANGE, RED, Series, Style, add_figure};
-use pendulum_sim::{CheckConfig, SimulationConfig, StateSpace, check_model, energy_distance, simulate};
-use upo_search::{CloseReturns, Metric};
+use pendulum_sim::{
+    CheckConfig, ModelCheck, SimulationConfig, StateSpace, check_model, energy_distance, simulate,
+};
+use upo_search::{Catalogue, CloseReturns, Metric};
 
 use super::data::{Data, Signal};
-use super::identify::{IdentifyArgs, json};
+use super::identify::{Identification, IdentifyArgs, Method, json};
 use crate::progress::Progress;
 
 /// Options of `hbid report`.
@@ -20,7 +22,7 @@ use crate::progress::Progress;
 pub struct ReportArgs {
     #[command(flatten)]
     pub identify: IdentifyArgs,
-    /// Folder of the report (created if missing; README.md, figures and the model go there).
+    /// Folder of the report (created if missing; README.md, figures and the models go there).
     #[arg(long)]
     pub out: PathBuf,
     /// Forcing periods simulated for each model's Poincaré section and Lyapunov exponent.
@@ -28,9 +30,31 @@ pub struct ReportArgs {
     pub validation_periods: usize,
 }
 
+/// One method's identification and its checks.
+struct MethodResult {
+    method: Method,
+    basis: String,
+    ident: Identification,
+    check: ModelCheck,
+    /// The model's delay-coordinate section and its energy distance to the record's.
+    section: Vec<(f64, f64)>,
+    distance: Option<f64>,
+}
+
+/// What the report shows of the record itself.
+struct RecordFacts<'a> {
+    data: &'a Data,
+    ami: Vec<f64>,
+    delay: usize,
+    fnn: FnnResult,
+    catalogue: Catalogue,
+    section: Vec<(f64, f64)>,
+    floor: Option<f64>,
+}
+
 /// Delay-coordinate section of a wrapped or linear record: `(x_n, x_{n+delay})` at the samples
-/// `n ≡ offset (mod P)`, embedded for the energy distance (`(cos, sin)` of each angle, or the raw
-/// pair on the line).
+/// `n ≡ offset (mod P)`, and its embedding for the energy distance (`(cos, sin)` of each angle, or
+/// the raw pair on the line).
 fn delay_section(
     x: &[f64],
     p: usize,
@@ -52,21 +76,30 @@ fn delay_section(
     (pairs, embedded)
 }
 
+/// The report's figures need a folder; checked before any work.
+pub fn check_out(path: &Path) -> anyhow::Result<()> {
+    if path.exists() && !path.is_dir() {
+        anyhow::bail!("--out {} exists and is not a folder", path.display());
+    }
+    Ok(())
+}
+
 pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
-    std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
     if args.validation_periods < 10 {
         anyhow::bail!(
             "--validation-periods {} must be at least 10",
             args.validation_periods
         );
     }
+    std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
     let id = &args.identify;
     let stage = |name: &str| Progress::spinner(name, quiet);
 
     let bar = stage("read");
     let data = id.input.load()?;
+    // Check every option before the work.
+    id.setup_for(&data, Method::Upo)?;
     bar.finish();
-    let setup = id.setup(&data)?;
 
     let bar = stage("embed");
     let metric = super::embed::metric_for(data.signal, None);
@@ -76,7 +109,7 @@ pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
     bar.finish();
 
     let bar = stage("orbits");
-    let search = CloseReturns::builder(data.p, delay)
+    let catalogue = CloseReturns::builder(data.p, delay)
         .tolerance(id.tolerance)
         .max_period(id.max_period)
         .dimension(id.dim)
@@ -84,89 +117,75 @@ pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
             Signal::Circle => Metric::Circle,
             Signal::Line => Metric::Linear,
         })
-        .build()?;
-    let catalogue = search.catalogue(&data.x)?;
+        .build()?
+        .catalogue(&data.x)?;
     bar.finish();
 
-    let bar = stage("identify");
-    let model = hb_solve::identify(
-        setup.basis,
-        &data.x,
-        catalogue.segments(),
-        &setup.params,
-        setup.solver.as_ref(),
-    )
-    .map_err(|e| anyhow::anyhow!("{e}"))
-    .with_context(|| format!("{} orbit segments found", catalogue.segments().len()))?;
-    bar.finish();
+    // The record's own section at the forcing's phase 0 (t0 + offset·dt ≡ 0 mod T), and the
+    // distance between its two halves: what one attractor gives.
+    let t_period = id.input.forcing_period;
+    let offset = ((-data.t0).rem_euclid(t_period) / data.dt).round() as usize % data.p;
+    let (section, embedded) = delay_section(&data.x, data.p, offset, delay, data.signal);
+    let half = embedded.len() / 2;
+    let floor = energy_distance(&embedded[..half], &embedded[half..]);
 
-    let bar = stage("validate");
     let space = match data.signal {
         Signal::Circle => StateSpace::Circle,
         Signal::Line => StateSpace::Line,
     };
-    let t_period = id.input.forcing_period;
     let x0 = data.x[0];
-    let check = check_model(
-        &model,
-        &CheckConfig::new(t_period, space, args.validation_periods, args.validation_periods)?
-            .with_initial(x0, 0.0)?,
-    )?;
-    // The model sampled like the data, for a section in the same delay coordinates.
-    let sim_cfg = SimulationConfig::paper()
-        .with_forcing_period(t_period)?
-        .with_samples_per_period(data.p)?
-        .with_samples((args.validation_periods * data.p).min(data.x.len().max(50 * data.p)))?
-        .with_initial(x0, 0.0)?;
-    let sim = simulate(&model, &sim_cfg)?;
-    let sim_x: Vec<f64> = match data.signal {
-        Signal::Circle => sim.wrapped(),
-        Signal::Line => sim.theta.clone(),
-    };
-    bar.finish();
+    let mut results = Vec::new();
+    for method in [Method::Upo, Method::Windowed] {
+        let bar = stage(&format!("identify ({})", method.name()));
+        let setup = id.setup_for(&data, method)?;
+        let segments = id.segments(&data, delay, method)?;
+        let ident = setup
+            .identify(&data.x, &segments)
+            .with_context(|| format!("{} segments ({})", segments.len(), method.name()))?;
+        bar.finish();
 
-    // The data's samples at the forcing's phase 0: t0 + offset·dt ≡ 0 (mod T).
-    let offset = ((-data.t0).rem_euclid(t_period) / data.dt).round() as usize % data.p;
-    let (data_pairs, data_embedded) = delay_section(&data.x, data.p, offset, delay, data.signal);
-    let (model_pairs, model_embedded) = delay_section(&sim_x, data.p, 0, delay, data.signal);
-    let half = data_embedded.len() / 2;
-    let distance = energy_distance(&data_embedded, &model_embedded);
-    let floor = energy_distance(&data_embedded[..half], &data_embedded[half..]);
-
-    write_report(
-        args,
-        &data,
-        &ami.values,
+        let bar = stage(&format!("validate ({})", method.name()));
+        let cfg = CheckConfig::new(t_period, space, args.validation_periods, args.validation_periods)?
+            .with_initial(x0, 0.0)?;
+        let check = check_model(&ident.model, &cfg)?;
+        // The model sampled like the record, for a section in the same delay coordinates.
+        let sim_cfg = SimulationConfig::paper()
+            .with_forcing_period(t_period)?
+            .with_samples_per_period(data.p)?
+            .with_samples((args.validation_periods * data.p).min(data.x.len().max(50 * data.p)))?
+            .with_initial(x0, 0.0)?;
+        let sim = simulate(&ident.model, &sim_cfg)?;
+        let sim_x = match data.signal {
+            Signal::Circle => sim.wrapped(),
+            Signal::Line => sim.theta,
+        };
+        let (model_section, model_embedded) = delay_section(&sim_x, data.p, 0, delay, data.signal);
+        let distance = energy_distance(&embedded, &model_embedded);
+        bar.finish();
+        results.push(MethodResult {
+            method,
+            basis: setup.basis_name,
+            ident,
+            check,
+            section: model_section,
+            distance,
+        });
+    }
+    let facts = RecordFacts {
+        data: &data,
+        ami: ami.values,
         delay,
-        &fnn,
-        &catalogue,
-        &model,
-        &setup.basis_name,
-        &check,
-        distance,
+        fnn,
+        catalogue,
+        section,
         floor,
-        &data_pairs,
-        &model_pairs,
-    )
+    };
+    write_report(args, &facts, &results)
 }
 
-#[allow(clippy::too_many_arguments)]
-fn write_report(
-    args: &ReportArgs,
-    data: &Data,
-    ami: &[f64],
-    delay: usize,
-    fnn: &embedding::FnnResult,
-    catalogue: &upo_search::Catalogue,
-    model: &hb_solve::IdentifiedModel,
-    basis: &str,
-    check: &pendulum_sim::ModelCheck,
-    distance: Option<f64>,
-    floor: Option<f64>,
-    data_pairs: &[(f64, f64)],
-    model_pairs: &[(f64, f64)],
-) -> anyhow::Result<()> {
+fn write_report(args: &ReportArgs, f: &RecordFacts<'_>, results: &[MethodResult]) -> anyhow::Result<()> {
     let out = &args.out;
+    let (data, delay) = (f.data, f.delay);
     let mut r = String::new();
     let mut figures: Vec<(String, String)> = Vec::new();
     writeln!(
@@ -186,25 +205,26 @@ fn write_report(
         r,
         "Delay (first minimum of the average mutual information, 16 boxes): **{delay}** samples."
     )?;
-    match fnn.minimum_dimension() {
+    match f.fnn.minimum_dimension() {
         Some(d) => writeln!(
             r,
             "Embedding dimension (false nearest neighbours below {}): **{d}**.\n",
-            fnn.fraction_threshold
+            f.fnn.fraction_threshold
         )?,
         None => writeln!(
             r,
             "No embedding dimension up to {} brings false neighbours below {}.\n",
-            fnn.levels.len(),
-            fnn.fraction_threshold
+            f.fnn.levels.len(),
+            f.fnn.fraction_threshold
         )?,
     }
     writeln!(r, "| d | false neighbours |\n| --- | --- |")?;
-    for l in &fnn.levels {
+    for l in &f.fnn.levels {
         writeln!(r, "| {} | {:.4} |", l.dim, l.fraction())?;
     }
     writeln!(r)?;
-    let ami_pts: Vec<(f64, f64)> = ami
+    let ami_pts: Vec<(f64, f64)> = f
+        .ami
         .iter()
         .enumerate()
         .skip(1)
@@ -225,7 +245,7 @@ fn write_report(
             },
             Series {
                 label: "delay",
-                points: vec![(delay as f64, ami.get(delay).copied().unwrap_or(0.0))],
+                points: vec![(delay as f64, f.ami.get(delay).copied().unwrap_or(0.0))],
                 style: Style::Dots(6),
                 color: RED,
             },
@@ -245,7 +265,12 @@ fn write_report(
         y_label: "fraction",
         series: vec![Series {
             label: "",
-            points: fnn.levels.iter().map(|l| (l.dim as f64, l.fraction())).collect(),
+            points: f
+                .fnn
+                .levels
+                .iter()
+                .map(|l| (l.dim as f64, l.fraction()))
+                .collect(),
             style: Style::Line {
                 break_above: f64::INFINITY,
             },
@@ -266,104 +291,124 @@ fn write_report(
         r,
         "Tolerance {} of the span (ε = {:.4}), delay vectors of dimension {}.\n",
         args.identify.tolerance,
-        catalogue.tolerance(),
+        f.catalogue.tolerance(),
         args.identify.dim
     )?;
     writeln!(r, "| period | segments | distinct orbits |\n| --- | --- | --- |")?;
-    for c in catalogue.counts() {
+    for c in f.catalogue.counts() {
         writeln!(r, "| {} | {} | {} |", c.period, c.segments, c.orbits)?;
     }
     writeln!(r)?;
 
-    writeln!(
-        r,
-        "## Identified model (harmonic balance on the orbits, basis {basis})\n"
-    )?;
-    let j = json(model, "upo", basis);
-    writeln!(
-        r,
-        "{} orbit segments, {} equations, condition number {:.3e}, residual RMS {:.3e}. The standard errors treat the \
-         equations as independent: read them as lower bounds.\n",
-        j["orbits_used"],
-        j["rows"],
-        j["condition_number"].as_f64().unwrap_or(f64::NAN),
-        j["residual_rms"].as_f64().unwrap_or(f64::NAN)
-    )?;
-    writeln!(r, "| term | coefficient | std. error |\n| --- | --- | --- |")?;
-    for c in model.coefficients() {
-        writeln!(r, "| `{}` | {:.6} | {:.2e} |", c.name, c.value, c.std_error)?;
+    for res in results {
+        let j = json(&res.ident, res.method.name(), &res.basis);
+        let how = match res.method {
+            Method::Upo => "harmonic balance on the orbits above, the paper's method",
+            Method::Windowed => "the weak form on plain windows of the record",
+        };
+        writeln!(
+            r,
+            "## Identified model: {} ({how}), basis {}\n",
+            res.method.name(),
+            res.basis
+        )?;
+        writeln!(
+            r,
+            "{} segments, {} equations, condition number {:.3e}, residual RMS {:.3e}. Standard errors treat the \
+             equations as independent (read them as lower bounds); the intervals come from a bootstrap over \
+             segments.\n",
+            j["orbits_used"],
+            j["rows"],
+            j["condition_number"].as_f64().unwrap_or(f64::NAN),
+            j["residual_rms"].as_f64().unwrap_or(f64::NAN)
+        )?;
+        writeln!(
+            r,
+            "| term | coefficient | std. error | interval |\n| --- | --- | --- | --- |"
+        )?;
+        for c in res.ident.model.coefficients() {
+            let interval = res
+                .ident
+                .intervals
+                .as_ref()
+                .and_then(|b| b.interval(&c.name))
+                .map_or("—".to_owned(), |i| format!("[{:.6}, {:.6}]", i.lower, i.upper));
+            writeln!(
+                r,
+                "| `{}` | {:.6} | {:.2e} | {interval} |",
+                c.name, c.value, c.std_error
+            )?;
+        }
+        writeln!(r)?;
+        let model_file = format!("model_{}.json", res.method.name());
+        std::fs::write(out.join(&model_file), res.ident.model.to_json()?).context("saving a model")?;
+        writeln!(
+            r,
+            "Saved as `{model_file}` (load it with `hb_solve::IdentifiedModel::from_json`).\n"
+        )?;
     }
-    writeln!(r)?;
-    let model_file = "model.json";
-    std::fs::write(out.join(model_file), model.to_json()?).context("saving the model")?;
-    writeln!(
-        r,
-        "The model is saved as `{model_file}` (load it with `hb_solve::IdentifiedModel::from_json`).\n"
-    )?;
 
-    writeln!(r, "## Does the model behave like the record?\n")?;
-    writeln!(r, "| quantity | value |\n| --- | --- |")?;
+    writeln!(r, "## Do the models behave like the record?\n")?;
     let fmt = |v: Option<f64>| v.map_or("n/a".to_owned(), |v| format!("{v:.2e}"));
     writeln!(
         r,
-        "| energy distance, record vs model, sections in delay coordinates at the forcing's phase 0 | {} |",
-        fmt(distance)
+        "Energy distance between the record's section and the model's, in delay coordinates at the forcing's phase \
+         0; the floor is the distance between the two halves of the record ({}): a distance of that order means the \
+         model's attractor cannot be told from the record's with this many points.\n",
+        fmt(f.floor)
     )?;
     writeln!(
         r,
-        "| the same between the two halves of the record (the floor: what one attractor gives) | {} |",
-        fmt(floor)
+        "| model | energy distance to the record | largest Lyapunov exponent (per unit time) | whirling fraction | \
+         period-1 orbits at phase 0: x (winding) |\n| --- | --- | --- | --- | --- |"
     )?;
-    writeln!(
-        r,
-        "| largest Lyapunov exponent of the model (per unit time) | {:.4} ± {:.4} |",
-        check.lyapunov.per_unit_time, check.lyapunov.standard_error
-    )?;
-    writeln!(
-        r,
-        "| fraction of forcing periods the model whirls | {:.3} |",
-        check.whirling
-    )?;
-    let orbits: Vec<String> = check
-        .orbits
-        .iter()
-        .map(|o| format!("{:.4} ({})", o.x, o.winding))
-        .collect();
-    writeln!(
-        r,
-        "| the model's period-1 orbits at phase 0: x (winding) | {} |\n",
-        if orbits.is_empty() {
-            "none found".to_owned()
-        } else {
-            orbits.join(", ")
-        }
-    )?;
-    writeln!(
-        r,
-        "A distance of the order of the floor means the model's attractor cannot be told from the record's with this many points.\n"
-    )?;
+    for res in results {
+        let orbits: Vec<String> = res
+            .check
+            .orbits
+            .iter()
+            .map(|o| format!("{:.4} ({})", o.x, o.winding))
+            .collect();
+        writeln!(
+            r,
+            "| {} | {} | {:.4} ± {:.4} | {:.3} | {} |",
+            res.method.name(),
+            fmt(res.distance),
+            res.check.lyapunov.per_unit_time,
+            res.check.lyapunov.standard_error,
+            res.check.whirling,
+            if orbits.is_empty() {
+                "none found".to_owned()
+            } else {
+                orbits.join(", ")
+            }
+        )?;
+    }
+    writeln!(r)?;
 
     let (range, label) = match data.signal {
         Signal::Circle => (Some((-std::f64::consts::PI, std::f64::consts::PI)), "x (wrapped)"),
         Signal::Line => (None, "x"),
     };
     let y_label = format!("x(t + {delay} dt)");
-    for (file, title, pts, color) in [
-        (
-            "section_record.png",
-            "Record: section in delay coordinates",
-            data_pairs,
-            GREY,
-        ),
-        (
-            "section_model.png",
-            "Model: section in delay coordinates",
-            model_pairs,
-            ORANGE,
-        ),
-    ] {
+    let mut panels = vec![(
+        "section_record.png".to_owned(),
+        "Record".to_owned(),
+        &f.section[..],
+        GREY,
+    )];
+    for (res, color) in results.iter().zip([ORANGE, BLUE]) {
+        panels.push((
+            format!("section_model_{}.png", res.method.name()),
+            format!("Model ({})", res.method.name()),
+            &res.section[..],
+            color,
+        ));
+    }
+    for (file, who, pts, color) in panels {
+        let title = format!("{who}: section in delay coordinates");
         Figure {
-            title,
+            title: &title,
             x_label: label,
             y_label: &y_label,
             series: vec![Series {
@@ -375,7 +420,7 @@ fn write_report(
             x_range: range,
             y_range: range,
         }
-        .save(&out.join(file))?;
+        .save(&out.join(&file))?;
         add_figure(
             &mut figures,
             file,
@@ -389,13 +434,5 @@ fn write_report(
     let path = out.join("README.md");
     crate::output::write_atomically(&path, |w| w.write_all(r.as_bytes()))?;
     eprintln!("report written to {}", path.display());
-    Ok(())
-}
-
-/// The report's figures need a folder; checked before any work.
-pub fn check_out(path: &Path) -> anyhow::Result<()> {
-    if path.exists() && !path.is_dir() {
-        anyhow::bail!("--out {} exists and is not a folder", path.display());
-    }
     Ok(())
 }
