@@ -97,6 +97,8 @@ fn noise_is_seeded() {
             "simulate",
             "--samples",
             "300",
+            "--bootstrap",
+            "100",
             "--transient-periods",
             "5",
             "--noise",
@@ -116,6 +118,8 @@ fn noise_is_seeded() {
                 "simulate",
                 "--samples",
                 "300",
+                "--bootstrap",
+                "100",
                 "--transient-periods",
                 "5",
                 "--out",
@@ -414,6 +418,8 @@ fn report_writes_markdown_figures_and_model() {
         out_dir.to_str().unwrap(),
         "--validation-periods",
         "300",
+        "--bootstrap",
+        "100",
         "--quiet",
     ]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
