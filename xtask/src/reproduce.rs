@@ -12,7 +12,9 @@ use pendulum_sim::{Pendulum, SimulationConfig, simulate};
 use circle_signal::{RotationSplit, unwrap};
 use upo_search::{Catalogue, CloseReturns, Segment};
 
-use crate::identification::{hat_curves, identify_upo, table_one, validate, validation_section};
+use crate::identification::{
+    hat_curves, identify_upo, identify_windowed, table_one, validate, validation_section,
+};
 use hbid::plot::{BLUE, Figure, GREY, ORANGE, RED, Series, Style};
 
 /// Sizes of a run.
@@ -92,9 +94,13 @@ pub fn run(out: &Path, quick: bool) -> anyhow::Result<()> {
 
     // 5. Identification by harmonic balance on the UPOs (paper section 4.2).
     let segments: Vec<Segment> = catalogue.segments().to_vec();
-    let models = times.stage("identification (UPOs)", |_| {
+    let mut models = times.stage("identification (UPOs)", |_| {
         identify_upo(&x, trajectory.t[0], &segments)
     })?;
+    // ... and by the weak form on plain windows, beside it.
+    models.extend(times.stage("identification (windowed)", |_| {
+        identify_windowed(&x, trajectory.t[0])
+    })?);
 
     // 6. Validation: every model measured as the truth is (paper section 5, and numbers).
     let (points, lyap) = (plan.section_points, plan.lyapunov_periods);
@@ -229,6 +235,13 @@ pub fn run(out: &Path, quick: bool) -> anyhow::Result<()> {
     )?;
     if let Some(hat) = models.iter().find(|m| m.label.starts_with("8 hats")) {
         hat_curves(out, &mut report, &hat.model, &mut figures)?;
+    }
+    if let Some(hat) = models.iter().find(|m| m.label == "8 hats, windowed") {
+        writeln!(
+            report,
+            "With the weak form on plain windows the 8-hat model has c_r = {:.6}.\n",
+            hat.model.damping()
+        )?;
     }
     validation_section(out, &mut report, &truth, &floor, &checks, &mut figures)?;
     writeln!(
