@@ -47,9 +47,9 @@ fn main() -> ExitCode {
     });
     let result = match &cli.command {
         Command::Simulate(args) => cmd::simulate::run(args, cli.quiet),
-        Command::Embed(args) => cmd::embed::run(args),
-        Command::Upos(args) => cmd::upos::run(args),
-        Command::Identify(args) => cmd::identify::run(args),
+        Command::Embed(args) => cmd::embed::run(args, cli.quiet),
+        Command::Upos(args) => cmd::upos::run(args, cli.quiet),
+        Command::Identify(args) => cmd::identify::run(args, cli.quiet),
         Command::Report(args) => {
             cmd::report::check_out(&args.out).and_then(|()| cmd::report::run(args, cli.quiet))
         }

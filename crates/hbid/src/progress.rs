@@ -53,3 +53,10 @@ impl Progress {
         self.0.finish_and_clear();
     }
 }
+
+impl Drop for Progress {
+    /// A bar never outlives its stage, even when the stage fails.
+    fn drop(&mut self) {
+        self.0.finish_and_clear();
+    }
+}

@@ -71,13 +71,14 @@ pub fn ami(x: &[f64], metric: Metric, bins: usize, max_lag: usize) -> anyhow::Re
     Ok((curve, delay))
 }
 
-pub fn run(args: &EmbedArgs) -> anyhow::Result<()> {
+pub fn run(args: &EmbedArgs, quiet: bool) -> anyhow::Result<()> {
     if args.bins < 2 {
         anyhow::bail!("--bins {} must be at least 2", args.bins);
     }
     if args.max_dim == 0 {
         anyhow::bail!("--max-dim must be at least 1");
     }
+    let bar = crate::progress::Progress::spinner("embed", quiet);
     let data = args.input.load()?;
     let metric = metric_for(data.signal, args.metric);
     let (curve, delay) = ami(&data.x, metric, args.bins, args.max_lag)?;
@@ -85,6 +86,7 @@ pub fn run(args: &EmbedArgs) -> anyhow::Result<()> {
         .with_max_dim(args.max_dim)?
         .with_theiler_window(args.theiler);
     let fnn = false_nearest_neighbours(&data.x, &params)?;
+    bar.finish();
     if args.json {
         println!("{}", serde_json::to_string(&json(&curve, delay, &fnn))?);
     } else {

@@ -270,7 +270,8 @@ impl IdentifyArgs {
     }
 }
 
-pub fn run(args: &IdentifyArgs) -> anyhow::Result<()> {
+pub fn run(args: &IdentifyArgs, quiet: bool) -> anyhow::Result<()> {
+    let bar = crate::progress::Progress::spinner("identify", quiet);
     if let Some(path) = &args.save_model {
         crate::output::check_output_path(path).context("--save-model")?;
     }
@@ -296,6 +297,7 @@ pub fn run(args: &IdentifyArgs) -> anyhow::Result<()> {
         ),
     };
     let id = setup.identify(&data.x, &segments).with_context(|| found)?;
+    bar.finish();
     if let Some(path) = &args.save_model {
         save_model(&id.model, path)?;
     }

@@ -29,7 +29,8 @@ pub struct UposArgs {
     pub json: bool,
 }
 
-pub fn run(args: &UposArgs) -> anyhow::Result<()> {
+pub fn run(args: &UposArgs, quiet: bool) -> anyhow::Result<()> {
+    let bar = crate::progress::Progress::spinner("orbits", quiet);
     let data = args.input.load()?;
     let metric = match data.signal {
         Signal::Circle => Metric::Circle,
@@ -51,6 +52,7 @@ pub fn run(args: &UposArgs) -> anyhow::Result<()> {
     };
     let search = build(delay)?;
     let catalogue = search.catalogue(&data.x)?;
+    bar.finish();
     if args.json {
         println!("{}", serde_json::to_string(&json(&catalogue))?);
     } else {
