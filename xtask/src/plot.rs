@@ -139,3 +139,6 @@ pub const BLUE: RGBColor = RGBColor(31, 119, 180);
 pub const ORANGE: RGBColor = RGBColor(255, 127, 14);
 pub const RED: RGBColor = RGBColor(214, 39, 40);
 pub const GREY: RGBColor = RGBColor(120, 120, 120);
+pub const GREEN: RGBColor = RGBColor(44, 160, 44);
+pub const PURPLE: RGBColor = RGBColor(148, 103, 189);
+pub const INK: RGBColor = RGBColor(0, 0, 0);
