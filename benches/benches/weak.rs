@@ -30,15 +30,22 @@ fn bench(c: &mut Criterion) {
     let hat = Hat::new(8).expect("basis");
     let qr = QrSolver::default();
 
-    c.bench_function("windows of 2 periods", |b| {
+    c.bench_function("windows (defaults: 3 periods, step 1)", |b| {
         b.iter(|| black_box(windows.segments(&x).expect("segments")))
     });
     c.bench_function("assemble weak K=1 (j <= 2k)", |b| {
         b.iter(|| black_box(assemble_weak(&harmonic, &x, &segments, &params, &weak).expect("assemble")))
     });
-    c.bench_function("assemble weak K=1 (j <= 16)", |b| {
-        b.iter(|| black_box(assemble_weak(&harmonic, &x, &segments, &params16, &weak).expect("assemble")))
-    });
+    let windows2 = Windows::builder(25).periods(2).build().expect("windows");
+    c.bench_function(
+        "identify weak K=1, 2 periods, j <= 16 (windows + assemble + qr, the Python reference's setting)",
+        |b| {
+            b.iter(|| {
+                let segments = windows2.segments(&x).expect("segments");
+                black_box(identify_weak(harmonic, &x, &segments, &params16, &weak, &qr).expect("identify"))
+            })
+        },
+    );
     c.bench_function("assemble weak hat N=8 (j <= 2k)", |b| {
         b.iter(|| black_box(assemble_weak(&hat, &x, &segments, &params, &weak).expect("assemble")))
     });

@@ -3,6 +3,7 @@
 //! with its figures beside the paper's numbers.
 #![allow(clippy::print_stderr, clippy::print_stdout)]
 
+mod accuracy;
 mod identification;
 mod reproduce;
 
@@ -28,12 +29,23 @@ enum Command {
         #[arg(long)]
         quick: bool,
     },
+    /// Noise and record-length studies of both identification methods, and the coverage of the
+    /// bootstrap intervals; writes the report with its figures (in a folder named after it).
+    Accuracy {
+        /// The report (its figures go to the folder of the same name without extension).
+        #[arg(long, default_value = "docs/accuracy.md")]
+        out: PathBuf,
+        /// Shorter records and fewer seeds: checks the studies in seconds.
+        #[arg(long)]
+        quick: bool,
+    },
 }
 
 fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Reproduce { out, quick } => reproduce::run(&out, quick),
+        Command::Accuracy { out, quick } => accuracy::run(&out, quick),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

@@ -21,8 +21,8 @@ use crate::{LinearSystem, LstsqSolver, SolveError};
 #[non_exhaustive]
 pub enum ResampleBlock {
     /// As many consecutive segments as cover, on average, one segment's length:
-    /// `ceil(median length / median gap between consecutive starts)`, at least 1 (2 for the
-    /// default windows of two periods stepped by one).
+    /// `ceil(median length / median gap between consecutive starts)`, at least 1 (3 for the
+    /// default windows of three periods stepped by one).
     #[default]
     Auto,
     /// A given number `>= 1` of consecutive segments (1: every segment drawn on its own).
@@ -59,8 +59,8 @@ impl Default for BootstrapParams {
 }
 
 impl BootstrapParams {
-    /// Default number of resamples: enough for the 2.5 % and 97.5 % percentiles to move by less
-    /// than about a tenth of the interval's width from one seed to another.
+    /// Default number of resamples: the 2.5 % and 97.5 % percentiles then move by about 2 % of the
+    /// interval's width from one seed to another (their standard error for a normal law).
     pub const DEFAULT_RESAMPLES: usize = 1000;
     /// Default confidence level, 95 %.
     pub const DEFAULT_LEVEL: f64 = 0.95;

@@ -5,6 +5,8 @@ use std::path::Path;
 
 use anyhow::{Context, anyhow};
 use plotters::prelude::*;
+/// Colours of series, re-exported so that users of these helpers need no plotters of their own.
+pub use plotters::style::RGBColor;
 
 /// One series of a figure.
 #[derive(Debug)]
@@ -158,6 +160,12 @@ pub const ORANGE: RGBColor = RGBColor(255, 127, 14);
 pub const RED: RGBColor = RGBColor(214, 39, 40);
 /// Grey.
 pub const GREY: RGBColor = RGBColor(120, 120, 120);
+/// Green.
+pub const GREEN: RGBColor = RGBColor(44, 160, 44);
+/// Purple.
+pub const PURPLE: RGBColor = RGBColor(148, 103, 189);
+/// Black.
+pub const INK: RGBColor = RGBColor(0, 0, 0);
 
 /// Adds a figure (file name, caption) to a report's list.
 pub fn add_figure(figures: &mut Vec<(String, String)>, name: impl Into<String>, caption: impl Into<String>) {

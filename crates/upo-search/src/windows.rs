@@ -10,8 +10,7 @@ use crate::{Metric, OrbitSource, Segment, UpoError};
 /// `start + L`, for every `i` with `start + L < N` (the closing sample is part of the window: the
 /// weak form integrates over the closed interval `[0, k T]`). With `step = k P` the windows are
 /// consecutive; a smaller step makes them overlap. The default step is one forcing period `P`, so
-/// with the default `k = 2` every sample (but those of the first and last periods) lies in two
-/// windows.
+/// with the default `k = 3` every sample (but those near the ends) lies in three windows.
 ///
 /// The windows are not orbits: their [`Segment::error`] is the distance, in the [`Metric`], between
 /// the closing sample and the first one — how far the window is from closing — and only informs;
@@ -36,10 +35,11 @@ pub struct WindowsBuilder {
 }
 
 impl Windows {
-    /// Default window length `k`, in forcing periods. Two periods balance harmonics of half the
-    /// forcing frequency (so a period-2 response is represented) while keeping many windows; see
-    /// `docs/identification.md` for the measurements behind the choice.
-    pub const DEFAULT_PERIODS: usize = 2;
+    /// Default window length `k`, in forcing periods. Longer windows reach lower frequencies
+    /// (harmonic `j` of a window is `j / k` times the forcing frequency) and, on the measurements of
+    /// `docs/accuracy.md`, three periods gave smaller errors than two with and without noise, while
+    /// four gave no further gain with noise; see `docs/identification.md`.
+    pub const DEFAULT_PERIODS: usize = 3;
 
     /// A builder with the required samples per forcing period `P` and the defaults: windows of
     /// [`DEFAULT_PERIODS`](Self::DEFAULT_PERIODS) forcing periods, a step of one forcing period
@@ -207,7 +207,7 @@ mod tests {
     #[test]
     fn defaults_and_validation() {
         let w = Windows::new(25).unwrap();
-        assert_eq!((w.periods(), w.step(), w.len()), (2, 25, 50));
+        assert_eq!((w.periods(), w.step(), w.len()), (3, 25, 75));
         assert_eq!(w.metric(), Metric::Circle);
         assert!(Windows::new(1).is_err());
         assert!(Windows::builder(25).periods(0).build().is_err());
@@ -225,14 +225,19 @@ mod tests {
     fn consecutive_and_overlapping_windows() {
         let x: Vec<f64> = (0..101).map(|n| (n as f64 * 0.1).sin()).collect();
         // Consecutive 2-period windows at P = 10: starts 0, 20, .., 80 (80 + 20 = 100 < 101).
-        let w = Windows::builder(10).step(20).build().unwrap();
+        let w = Windows::builder(10).periods(2).step(20).build().unwrap();
         let s = w.segments(&x).unwrap();
         assert_eq!(s.iter().map(|s| s.start).collect::<Vec<_>>(), [0, 20, 40, 60, 80]);
         assert!(s.iter().all(|s| s.period == 2 && s.len == 20));
         // One sample fewer: the last window loses its closing sample.
         assert_eq!(w.segments(&x[..100]).unwrap().len(), 4);
         // Default step of one period: starts 0, 10, .., 80.
-        let s = Windows::new(10).unwrap().segments(&x).unwrap();
+        let s = Windows::builder(10)
+            .periods(2)
+            .build()
+            .unwrap()
+            .segments(&x)
+            .unwrap();
         assert_eq!(s.len(), 9);
         assert_eq!(s[8].start, 80);
         // The error is how far the window is from closing.
