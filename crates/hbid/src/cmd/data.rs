@@ -93,3 +93,45 @@ impl InputArgs {
         })
     }
 }
+
+/// The close-return options shared by `upos`, `identify` and `report`.
+#[derive(Debug, Args)]
+pub struct SearchArgs {
+    /// Close-return tolerance as a fraction of the span of the data (2π for an angle), in (0, 0.5).
+    #[arg(long, default_value_t = 0.03, allow_hyphen_values = true)]
+    pub tolerance: f64,
+    /// Longest orbit period searched, in forcing periods.
+    #[arg(long, default_value_t = 16)]
+    pub max_period: usize,
+    /// Dimension of the delay vectors compared.
+    #[arg(long, default_value_t = 2)]
+    pub dim: usize,
+    /// Delay in samples (default: the first minimum of the average mutual information, 16 boxes).
+    #[arg(long)]
+    pub delay: Option<usize>,
+}
+
+impl SearchArgs {
+    /// The close-return search on `data` with `delay`, validated.
+    pub fn close_returns(&self, data: &Data, delay: usize) -> anyhow::Result<upo_search::CloseReturns> {
+        Ok(upo_search::CloseReturns::builder(data.p, delay)
+            .tolerance(self.tolerance)
+            .max_period(self.max_period)
+            .dimension(self.dim)
+            .metric(match data.signal {
+                Signal::Circle => upo_search::Metric::Circle,
+                Signal::Line => upo_search::Metric::Linear,
+            })
+            .build()?)
+    }
+
+    /// The delay: the one given, or the first minimum of the AMI. The search's options are checked
+    /// first, so that a bad option fails before any work.
+    pub fn delay(&self, data: &Data) -> anyhow::Result<usize> {
+        self.close_returns(data, self.delay.unwrap_or(1))?;
+        Ok(match self.delay {
+            Some(d) => d,
+            None => super::embed::ami(&data.x, super::embed::metric_for(data.signal, None), 16, 40)?.1,
+        })
+    }
+}

@@ -9,9 +9,9 @@ use hb_solve::{
     Bootstrap, BootstrapParams, Forcing, Harmonics, IdentifiedModel, IdentifyParams, LstsqSolver, ModelForm,
     NoiseCorrection, QrSolver, SampleClock, SvdSolver, WeakForm, assemble, assemble_weak, bootstrap,
 };
-use upo_search::{CloseReturns, Metric, Segment, Windows};
+use upo_search::{Metric, Segment, Windows};
 
-use super::data::{Data, InputArgs, Signal};
+use super::data::{Data, InputArgs, SearchArgs, Signal};
 
 /// Identification method.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -88,18 +88,8 @@ pub struct IdentifyArgs {
     /// Least-squares solver.
     #[arg(long, value_enum, default_value_t = SolverArg::Qr)]
     pub solver: SolverArg,
-    /// Close-return tolerance as a fraction of the span of the data, in (0, 0.5).
-    #[arg(long, default_value_t = 0.03, allow_hyphen_values = true)]
-    pub tolerance: f64,
-    /// Longest orbit period searched, in forcing periods.
-    #[arg(long, default_value_t = 16)]
-    pub max_period: usize,
-    /// Dimension of the delay vectors of the close-return search.
-    #[arg(long, default_value_t = 2)]
-    pub dim: usize,
-    /// Delay in samples (default: the first minimum of the average mutual information).
-    #[arg(long)]
-    pub delay: Option<usize>,
+    #[command(flatten)]
+    pub search: SearchArgs,
     /// External forcing terms (default: none on the circle, identified on the line).
     #[arg(long, value_enum)]
     pub forcing: Option<ForcingArg>,
@@ -245,7 +235,7 @@ impl IdentifyArgs {
     /// The segments of the chosen method: close returns (with the delay) or plain windows.
     pub fn segments(&self, data: &Data, delay: usize, method: Method) -> anyhow::Result<Vec<Segment>> {
         Ok(match method {
-            Method::Upo => self.close_returns(data, delay)?.search(&data.x)?,
+            Method::Upo => self.search.close_returns(data, delay)?.search(&data.x)?,
             Method::Windowed => Windows::builder(data.p)
                 .periods(self.window_periods)
                 .metric(match data.signal {
@@ -256,18 +246,6 @@ impl IdentifyArgs {
                 .windows(&data.x)?,
         })
     }
-
-    fn close_returns(&self, data: &Data, delay: usize) -> anyhow::Result<CloseReturns> {
-        Ok(CloseReturns::builder(data.p, delay)
-            .tolerance(self.tolerance)
-            .max_period(self.max_period)
-            .dimension(self.dim)
-            .metric(match data.signal {
-                Signal::Circle => Metric::Circle,
-                Signal::Line => Metric::Linear,
-            })
-            .build()?)
-    }
 }
 
 pub fn run(args: &IdentifyArgs, quiet: bool) -> anyhow::Result<()> {
@@ -277,18 +255,13 @@ pub fn run(args: &IdentifyArgs, quiet: bool) -> anyhow::Result<()> {
     }
     let data = args.input.load()?;
     let setup = args.setup(&data)?;
-    // Check the search's options before the embedding work.
-    args.close_returns(&data, args.delay.unwrap_or(1))?;
-    let delay = match args.delay {
-        Some(d) => d,
-        None => super::embed::ami(&data.x, super::embed::metric_for(data.signal, None), 16, 40)?.1,
-    };
+    let delay = args.search.delay(&data)?;
     let segments = args.segments(&data, delay, args.method)?;
     let found = match args.method {
         Method::Upo => format!(
             "{} orbit segments found at tolerance {}",
             segments.len(),
-            args.tolerance
+            args.search.tolerance
         ),
         Method::Windowed => format!(
             "{} windows of {} forcing periods",

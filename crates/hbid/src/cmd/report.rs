@@ -11,7 +11,7 @@ use hbid::plot::{BLUE, Figure, GREY, ORANGE, RED, Series, Style, add_figure};
 use pendulum_sim::{
     CheckConfig, ModelCheck, SimulationConfig, StateSpace, check_model, energy_distance, simulate,
 };
-use upo_search::{Catalogue, CloseReturns, Metric};
+use upo_search::Catalogue;
 
 use super::data::{Data, Signal};
 use super::identify::{Identification, IdentifyArgs, Method, json};
@@ -104,21 +104,12 @@ pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
     let bar = stage("embed");
     let metric = super::embed::metric_for(data.signal, None);
     let (ami, ami_delay) = super::embed::ami(&data.x, metric, 16, 40)?;
-    let delay = id.delay.unwrap_or(ami_delay);
+    let delay = id.search.delay.unwrap_or(ami_delay);
     let fnn = false_nearest_neighbours(&data.x, &FnnParams::new(metric, delay)?.with_max_dim(8)?)?;
     bar.finish();
 
     let bar = stage("orbits");
-    let catalogue = CloseReturns::builder(data.p, delay)
-        .tolerance(id.tolerance)
-        .max_period(id.max_period)
-        .dimension(id.dim)
-        .metric(match data.signal {
-            Signal::Circle => Metric::Circle,
-            Signal::Line => Metric::Linear,
-        })
-        .build()?
-        .catalogue(&data.x)?;
+    let catalogue = id.search.close_returns(&data, delay)?.catalogue(&data.x)?;
     bar.finish();
 
     // The record's own section at the forcing's phase 0 (t0 + offset·dt ≡ 0 mod T), and the
@@ -290,9 +281,9 @@ fn write_report(args: &ReportArgs, f: &RecordFacts<'_>, results: &[MethodResult]
     writeln!(
         r,
         "Tolerance {} of the span (ε = {:.4}), delay vectors of dimension {}.\n",
-        args.identify.tolerance,
+        args.identify.search.tolerance,
         f.catalogue.tolerance(),
-        args.identify.dim
+        args.identify.search.dim
     )?;
     writeln!(r, "| period | segments | distinct orbits |\n| --- | --- | --- |")?;
     for c in f.catalogue.counts() {

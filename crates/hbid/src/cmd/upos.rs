@@ -3,27 +3,17 @@
 use std::collections::BTreeMap;
 
 use clap::Args;
-use upo_search::{Catalogue, CloseReturns, Metric};
+use upo_search::Catalogue;
 
-use super::data::{InputArgs, Signal};
+use super::data::{InputArgs, SearchArgs};
 
 /// Options of `hbid upos`.
 #[derive(Debug, Args)]
 pub struct UposArgs {
     #[command(flatten)]
     pub input: InputArgs,
-    /// Close-return tolerance as a fraction of the span of the data (2π for an angle), in (0, 0.5).
-    #[arg(long, default_value_t = 0.03, allow_hyphen_values = true)]
-    pub tolerance: f64,
-    /// Longest period searched, in forcing periods.
-    #[arg(long, default_value_t = 16)]
-    pub max_period: usize,
-    /// Dimension of the delay vectors compared.
-    #[arg(long, default_value_t = 2)]
-    pub dim: usize,
-    /// Delay in samples (default: the first minimum of the average mutual information, 16 boxes).
-    #[arg(long)]
-    pub delay: Option<usize>,
+    #[command(flatten)]
+    pub search: SearchArgs,
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -32,25 +22,8 @@ pub struct UposArgs {
 pub fn run(args: &UposArgs, quiet: bool) -> anyhow::Result<()> {
     let bar = crate::progress::Progress::spinner("orbits", quiet);
     let data = args.input.load()?;
-    let metric = match data.signal {
-        Signal::Circle => Metric::Circle,
-        Signal::Line => Metric::Linear,
-    };
-    let build = |delay: usize| {
-        CloseReturns::builder(data.p, delay)
-            .tolerance(args.tolerance)
-            .max_period(args.max_period)
-            .dimension(args.dim)
-            .metric(metric)
-            .build()
-    };
-    // Check the options before any work.
-    build(args.delay.unwrap_or(1))?;
-    let delay = match args.delay {
-        Some(d) => d,
-        None => super::embed::ami(&data.x, super::embed::metric_for(data.signal, None), 16, 40)?.1,
-    };
-    let search = build(delay)?;
+    let delay = args.search.delay(&data)?;
+    let search = args.search.close_returns(&data, delay)?;
     let catalogue = search.catalogue(&data.x)?;
     bar.finish();
     if args.json {
