@@ -170,6 +170,28 @@ fn bad_options_fail_cleanly_without_output() {
     assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0);
 }
 
+/// The true coefficients of the paper's pendulum with the harmonic basis K = 1.
+const PENDULUM_TRUTH: [(&str, f64); 7] = [
+    ("x'", 0.03),
+    ("cos(x)", 0.0),
+    ("cos(t)*cos(x)", 0.0),
+    ("sin(t)*cos(x)", -1.52),
+    ("sin(x)", 1.0 / (0.8333 * 0.8333)),
+    ("cos(t)*sin(x)", 0.0),
+    ("sin(t)*sin(x)", 0.0),
+];
+
+/// The true coefficients of the Duffing record: the model stands as
+/// x'' + c x' + q1 x + q2 x² + q3 x³ + F_c cos(t) + F_s sin(t) + ... = 0.
+const DUFFING_TRUTH: [(&str, f64); 6] = [
+    ("x'", 0.3),
+    ("x", -1.0),
+    ("x^2", 0.0),
+    ("x^3", 1.0),
+    ("cos(t)", -0.5),
+    ("sin(t)", 0.0),
+];
+
 fn paper_dataset() -> String {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../../../shared/fixtures/paper_dataset.csv")
@@ -290,16 +312,7 @@ fn identify_json_recovers_the_pendulum_and_saves_the_model() {
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["method"], "upo");
     assert_eq!(v["basis"], "harmonic:1");
-    let truth = [
-        ("x'", 0.03),
-        ("cos(x)", 0.0),
-        ("cos(t)*cos(x)", 0.0),
-        ("sin(t)*cos(x)", -1.52),
-        ("sin(x)", 1.0 / (0.8333f64 * 0.8333)),
-        ("cos(t)*sin(x)", 0.0),
-        ("sin(t)*sin(x)", 0.0),
-    ];
-    for (name, value) in truth {
+    for (name, value) in PENDULUM_TRUTH {
         let got = v["coefficients"][name]
             .as_f64()
             .unwrap_or_else(|| panic!("no {name}"));
@@ -387,15 +400,7 @@ fn identify_a_duffing_oscillator_on_the_line() {
     assert_eq!(v["basis"], "poly:3");
     let c = &v["coefficients"];
     // The model stands as x'' + c x' + q1 x + q2 x² + q3 x³ + F_c cos(t) + F_s sin(t) + ... = 0.
-    let truth = [
-        ("x'", 0.3),
-        ("x", -1.0),
-        ("x^2", 0.0),
-        ("x^3", 1.0),
-        ("cos(t)", -0.5),
-        ("sin(t)", 0.0),
-    ];
-    let worst = truth
+    let worst = DUFFING_TRUTH
         .iter()
         .map(|(n, t)| (c[*n].as_f64().unwrap() - t).abs())
         .fold(0.0, f64::max);
@@ -550,16 +555,7 @@ fn windowed_method_with_intervals() {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["method"], "windowed");
-    let truth = [
-        ("x'", 0.03),
-        ("cos(x)", 0.0),
-        ("cos(t)*cos(x)", 0.0),
-        ("sin(t)*cos(x)", -1.52),
-        ("sin(x)", 1.0 / (0.8333f64 * 0.8333)),
-        ("cos(t)*sin(x)", 0.0),
-        ("sin(t)*sin(x)", 0.0),
-    ];
-    for (name, value) in truth {
+    for (name, value) in PENDULUM_TRUTH {
         let got = v["coefficients"][name].as_f64().unwrap();
         assert!((got - value).abs() < 1e-5, "{name}: {got} vs {value}");
         let interval = v["intervals"][name].as_array().unwrap();
@@ -601,15 +597,7 @@ fn windowed_method_recovers_duffing_on_the_line() {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let c = &v["coefficients"];
-    let truth = [
-        ("x'", 0.3),
-        ("x", -1.0),
-        ("x^2", 0.0),
-        ("x^3", 1.0),
-        ("cos(t)", -0.5),
-        ("sin(t)", 0.0),
-    ];
-    let worst = truth
+    let worst = DUFFING_TRUTH
         .iter()
         .map(|(n, t)| (c[*n].as_f64().unwrap() - t).abs())
         .fold(0.0, f64::max);

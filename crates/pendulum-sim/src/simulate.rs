@@ -54,6 +54,15 @@ fn invalid(name: &'static str, value: f64, why: &'static str) -> SimError {
     SimError::InvalidParameter { name, value, why }
 }
 
+/// A forcing period, checked to be positive and finite (the one rule every config shares).
+pub(crate) fn checked_period(period: f64) -> Result<f64, SimError> {
+    if period.is_finite() && period > 0.0 {
+        Ok(period)
+    } else {
+        Err(invalid("forcing period", period, "must be positive and finite"))
+    }
+}
+
 impl Default for SimulationConfig {
     fn default() -> Self {
         Self::paper()
@@ -113,10 +122,7 @@ impl SimulationConfig {
 
     /// The forcing period `T` in the system's time unit (`2π` for the paper's non-dimensional time).
     pub fn with_forcing_period(mut self, period: f64) -> Result<Self, SimError> {
-        if !(period.is_finite() && period > 0.0) {
-            return Err(invalid("forcing period", period, "must be positive and finite"));
-        }
-        self.forcing_period = period;
+        self.forcing_period = checked_period(period)?;
         Ok(self)
     }
 
@@ -312,10 +318,7 @@ impl LyapunovConfig {
     }
     /// Forcing period `T` (positive).
     pub fn with_forcing_period(mut self, period: f64) -> Result<Self, SimError> {
-        if !(period.is_finite() && period > 0.0) {
-            return Err(invalid("forcing period", period, "must be positive and finite"));
-        }
-        self.forcing_period = period;
+        self.forcing_period = checked_period(period)?;
         Ok(self)
     }
     /// Integration tolerances.

@@ -7,6 +7,7 @@ use std::f64::consts::{PI, TAU};
 use nalgebra::{Matrix2, Vector2};
 
 use crate::dop853::{Dop853, OdeSystem, Tolerances};
+use crate::simulate::checked_period;
 use crate::{
     LyapunovConfig, LyapunovEstimate, SecondOrderSystem, SimError, SimulationConfig, largest_lyapunov,
     poincare_section,
@@ -126,10 +127,7 @@ fn invalid(name: &'static str, value: f64, why: &'static str) -> SimError {
 impl ShootingConfig {
     /// The forcing period `T` (positive).
     pub fn with_forcing_period(mut self, period: f64) -> Result<Self, SimError> {
-        if !(period.is_finite() && period > 0.0) {
-            return Err(invalid("forcing period", period, "must be positive and finite"));
-        }
-        self.forcing_period = period;
+        self.forcing_period = checked_period(period)?;
         Ok(self)
     }
     /// Orbits of period `k` forcing periods (`>= 1`).
