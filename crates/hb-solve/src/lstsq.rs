@@ -7,6 +7,7 @@ use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::qr::col_pivoting;
 use faer::linalg::svd::{self, ComputeSvdVectors};
 use faer::{ColRef, Conj, Mat, MatRef, Par};
+use rayon::prelude::*;
 
 use crate::SolveError;
 
@@ -103,8 +104,12 @@ impl<S: LstsqSolver + ?Sized> LstsqSolver for Box<S> {
     }
 }
 
-/// Householder QR with column pivoting (faer's `col_pivoting`), run sequentially
-/// (`Par::Seq`) so that it may be called from inside a rayon loop.
+/// Householder QR with column pivoting (faer's `col_pivoting`).
+///
+/// The factorisations run sequentially (`Par::Seq`), so that the solver may be called from inside
+/// a rayon loop; a system of at least 4096 rows is first reduced to its triangular factor by
+/// unpivoted QR of blocks of rows on rayon's threads (a tall system then costs one pass over its
+/// rows and no copy of the matrix).
 ///
 /// Rank and condition come from the singular values of `R`, which are those of the scaled `A`;
 /// `(AᵀA)⁻¹ = P R⁻¹ R⁻ᵀ Pᵀ` gives the standard errors.
@@ -128,7 +133,9 @@ impl QrSolver {
     }
 }
 
-/// Thin singular value decomposition `A = U Σ Vᵀ` (faer), run sequentially.
+/// Thin singular value decomposition `A = U Σ Vᵀ` (faer), run sequentially, after the same
+/// reduction of tall systems as [`QrSolver`] (the SVD of the triangular factor has the singular
+/// values and right vectors of `A`).
 ///
 /// `x = V Σ⁻¹ Uᵀ b` and `(AᵀA)⁻¹ = V Σ⁻² Vᵀ`. faer's own `Svd::solve_lstsq` divides by every
 /// singular value; here the rank is checked first against the [`RankTolerance`].
@@ -152,10 +159,95 @@ impl SvdSolver {
     }
 }
 
-/// The column-scaled copy of `A` and the scales.
+/// The column-scaled system, reduced for tall systems, and the scales.
+///
+/// The least-squares problem `min ||A D⁻¹ y − b||` (`D` the column norms) is replaced by the
+/// smaller `min ||S y − c||` with the same minimiser, the same singular values and a residual
+/// that differs by a constant: `[S | c]` is the triangular factor of a QR factorisation of
+/// `[A D⁻¹ | b]` (for systems of at least [`REDUCE_ROWS`] rows), or `[A D⁻¹ | b]` itself.
 struct Scaled {
     a: Mat<f64>,
+    b: Vec<f64>,
     norms: Vec<f64>,
+}
+
+/// Systems with at least this many rows are reduced to their triangular factor, in parallel
+/// blocks of rows, before the pivoted QR or SVD: those then work on `(cols + 1)²` numbers instead
+/// of a scaled copy of the whole system.
+pub(crate) const REDUCE_ROWS: usize = 4096;
+
+/// Rows of one block of the parallel reduction.
+const REDUCE_BLOCK: usize = 2048;
+
+/// The `cols × cols` triangular factor `R` of a Householder QR of `m` (`rows × cols`, taken by
+/// value and overwritten), or `m` itself when it has no more rows than columns. The same
+/// least-squares problem, since the factor `Q` is orthogonal. Sequential (`Par::Seq`).
+pub(crate) fn triangular_factor(mut m: Mat<f64>) -> Mat<f64> {
+    let (rows, cols) = m.shape();
+    if rows <= cols {
+        return m;
+    }
+    let par = Par::Seq;
+    let block = faer::linalg::qr::no_pivoting::factor::recommended_block_size::<f64>(rows, cols);
+    let mut q_coeff = Mat::<f64>::zeros(block, cols);
+    let mut mem = MemBuffer::new(faer::linalg::qr::no_pivoting::factor::qr_in_place_scratch::<f64>(
+        rows,
+        cols,
+        block,
+        par,
+        Default::default(),
+    ));
+    faer::linalg::qr::no_pivoting::factor::qr_in_place(
+        m.as_mut(),
+        q_coeff.as_mut(),
+        par,
+        MemStack::new(&mut mem),
+        Default::default(),
+    );
+    Mat::from_fn(cols, cols, |i, j| if j >= i { m[(i, j)] } else { 0.0 })
+}
+
+/// The triangular factor of `[A D⁻¹ | b]` (`D = diag(norms)`): QR of consecutive blocks of rows
+/// in parallel, their factors stacked and reduced again until at most [`REDUCE_BLOCK`] rows
+/// remain.
+fn reduce_rows(a: MatRef<'_, f64>, b: ColRef<'_, f64>, norms: &[f64]) -> Mat<f64> {
+    let (rows, n) = a.shape();
+    let blocks: Vec<Mat<f64>> = (0..rows.div_ceil(REDUCE_BLOCK))
+        .into_par_iter()
+        .map(|k| {
+            let first = k * REDUCE_BLOCK;
+            let len = REDUCE_BLOCK.min(rows - first);
+            let mut m = Mat::<f64>::zeros(len, n + 1);
+            for (j, &norm) in norms.iter().enumerate() {
+                let src = a.col(j).subrows(first, len);
+                m.col_mut(j)
+                    .iter_mut()
+                    .zip(src.iter())
+                    .for_each(|(d, s)| *d = s / norm);
+            }
+            m.col_mut(n).copy_from(b.subrows(first, len));
+            triangular_factor(m)
+        })
+        .collect();
+    let mut stacked = stack(&blocks, n + 1);
+    while stacked.nrows() > REDUCE_BLOCK {
+        let ones = vec![1.0; n];
+        let (a, b) = (stacked.get(.., ..n), stacked.col(n));
+        stacked = reduce_rows(a, b, &ones);
+    }
+    stacked
+}
+
+/// The rows of `blocks` one after another.
+fn stack(blocks: &[Mat<f64>], cols: usize) -> Mat<f64> {
+    let total = blocks.iter().map(|m| m.nrows()).sum();
+    let mut out = Mat::<f64>::zeros(total, cols);
+    let mut at = 0;
+    for m in blocks {
+        out.get_mut(at..at + m.nrows(), ..).copy_from(m);
+        at += m.nrows();
+    }
+    out
 }
 
 fn prepare(a: MatRef<'_, f64>, b: ColRef<'_, f64>) -> Result<Scaled, SolveError> {
@@ -182,18 +274,32 @@ fn prepare(a: MatRef<'_, f64>, b: ColRef<'_, f64>) -> Result<Scaled, SolveError>
         if let Some(row) = col.iter().position(|v| !v.is_finite()) {
             return Err(SolveError::NonFiniteInput { what: "matrix", row });
         }
-        // Scaled sum of squares: no overflow for large entries.
-        let big = col.iter().fold(0.0_f64, |acc, v| acc.max(v.abs()));
-        let norm = if big == 0.0 {
-            0.0
+        // The plain sum of squares, or a scaled one when that over- or underflows.
+        let plain: f64 = col.iter().map(|v| v * v).sum();
+        let norm = if plain.is_finite() && plain > f64::MIN_POSITIVE / f64::EPSILON {
+            plain.sqrt()
         } else {
-            big * col.iter().map(|v| (v / big) * (v / big)).sum::<f64>().sqrt()
+            let big = col.iter().fold(0.0_f64, |acc, v| acc.max(v.abs()));
+            if big == 0.0 {
+                0.0
+            } else {
+                let inv = 1.0 / big;
+                big * col.iter().map(|v| (v * inv) * (v * inv)).sum::<f64>().sqrt()
+            }
         };
         // A zero column stays zero: the rank check then names it.
         norms.push(if norm > 0.0 { norm } else { 1.0 });
     }
-    let scaled = Mat::from_fn(m, n, |i, j| a[(i, j)] / norms[j]);
-    Ok(Scaled { a: scaled, norms })
+    let reduced = if m >= REDUCE_ROWS {
+        reduce_rows(a, b, &norms)
+    } else {
+        Mat::from_fn(m, n + 1, |i, j| if j < n { a[(i, j)] / norms[j] } else { b[i] })
+    };
+    Ok(Scaled {
+        a: reduced.get(.., ..n).to_owned(),
+        b: reduced.col(n).iter().copied().collect(),
+        norms,
+    })
 }
 
 /// A thin SVD `A = U diag(s) Vᵀ`.
@@ -310,14 +416,16 @@ impl LstsqSolver for QrSolver {
     fn solve(&self, a: MatRef<'_, f64>, b: ColRef<'_, f64>) -> Result<LstsqFit, SolveError> {
         let sc = prepare(a, b)?;
         let (m, n) = a.shape();
+        // The factorisation works on the (possibly reduced) scaled system of `ms` rows.
+        let ms = sc.a.nrows();
         let par = Par::Seq;
-        let block = faer::linalg::qr::no_pivoting::factor::recommended_block_size::<f64>(m, n);
+        let block = faer::linalg::qr::no_pivoting::factor::recommended_block_size::<f64>(ms, n);
         let mut qr = sc.a;
         let mut q_coeff = Mat::<f64>::zeros(block, n);
         let mut fwd = vec![0usize; n];
         let mut bwd = vec![0usize; n];
         let mut mem = MemBuffer::new(col_pivoting::factor::qr_in_place_scratch::<usize, f64>(
-            m,
+            ms,
             n,
             block,
             par,
@@ -350,9 +458,9 @@ impl LstsqSolver for QrSolver {
             return Err(rank_error(rank, m, n, perm_fwd[heaviest(v.as_ref(), imin)]));
         }
 
-        let mut rhs = Mat::from_fn(m, 1, |i, _| b[i]);
+        let mut rhs = Mat::from_fn(ms, 1, |i, _| sc.b[i]);
         let mut mem = MemBuffer::new(col_pivoting::solve::solve_lstsq_in_place_scratch::<usize, f64>(
-            m, n, block, 1, par,
+            ms, n, block, 1, par,
         ));
         col_pivoting::solve::solve_lstsq_in_place_with_conj(
             qr.as_ref(),
@@ -393,7 +501,7 @@ impl LstsqSolver for SvdSolver {
         let mut x = vec![0.0; n];
         let mut gram_inv = vec![0.0; n];
         for (k, &sk) in s.iter().enumerate() {
-            let coef = u.col(k).iter().zip(b.iter()).map(|(ui, bi)| ui * bi).sum::<f64>() / sk;
+            let coef = u.col(k).iter().zip(&sc.b).map(|(ui, bi)| ui * bi).sum::<f64>() / sk;
             for c in 0..n {
                 let vck = v[(c, k)];
                 x[c] += vck * coef;
@@ -485,5 +593,44 @@ mod tests {
         ));
         assert!(QrSolver::new(RankTolerance::Relative(1.5)).is_err());
         assert!(SvdSolver::new(RankTolerance::Relative(f64::NAN)).is_err());
+    }
+
+    /// A tall system, reduced by blocks, gives the least-squares fit of all its rows: residuals
+    /// orthogonal to every column, the residual sum of squares of the rows, both solvers agreeing.
+    #[test]
+    fn tall_systems_reduced_by_blocks_give_the_same_fit() {
+        let m = 3 * REDUCE_ROWS + 17;
+        let a = Mat::from_fn(m, 4, |i, j| {
+            let t = i as f64 * 0.01;
+            [1.0, t.sin(), (3.0 * t).cos(), 1e3 * (0.5 * t).sin() * t.cos()][j]
+        });
+        let noise = |i: usize| ((i * 7919) % 1000) as f64 / 1000.0 - 0.5;
+        let b = Col::from_fn(m, |i| {
+            0.5 * a[(i, 0)] - 2.0 * a[(i, 1)] + a[(i, 3)] * 1e-3 + 0.01 * noise(i)
+        });
+        // The minimiser is characterised by orthogonal residuals; the solvers must also agree.
+        for solver in [&QrSolver::default() as &dyn LstsqSolver, &SvdSolver::default()] {
+            let fit = solver.solve(a.as_ref(), b.as_ref()).unwrap();
+            // Normal equations: Aᵀ(b − A x) = 0 at the minimiser.
+            let r: Vec<f64> = (0..m)
+                .map(|i| b[i] - (0..4).map(|j| a[(i, j)] * fit.solution[j]).sum::<f64>())
+                .collect();
+            for j in 0..4 {
+                let norm = (0..m).map(|i| a[(i, j)] * a[(i, j)]).sum::<f64>().sqrt();
+                let g = (0..m).map(|i| a[(i, j)] * r[i]).sum::<f64>();
+                let rn = r.iter().map(|v| v * v).sum::<f64>().sqrt();
+                assert!(g.abs() < 1e-10 * norm * rn, "{} column {j}: {g}", solver.name());
+            }
+            let rss: f64 = r.iter().map(|v| v * v).sum();
+            assert!((fit.rss - rss).abs() < 1e-12 * rss);
+            assert_eq!(fit.rows, m);
+        }
+        let qr = QrSolver::default().solve(a.as_ref(), b.as_ref()).unwrap();
+        let svd = SvdSolver::default().solve(a.as_ref(), b.as_ref()).unwrap();
+        for j in 0..4 {
+            assert!((qr.solution[j] - svd.solution[j]).abs() < 1e-12 * qr.solution[j].abs().max(1.0));
+            assert!((qr.std_errors[j] - svd.std_errors[j]).abs() < 1e-9 * qr.std_errors[j]);
+        }
+        assert!((qr.condition - svd.condition).abs() < 1e-9 * qr.condition);
     }
 }
