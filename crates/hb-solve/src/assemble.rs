@@ -177,6 +177,19 @@ impl LinearSystem {
         }
     }
 
+    /// Column `c` of the matrix, contiguous.
+    pub(crate) fn column(&self, c: usize) -> &[f64] {
+        self.matrix.col_as_slice(c)
+    }
+
+    /// The right-hand side, contiguous (an owned column always is).
+    pub(crate) fn rhs_slice(&self) -> &[f64] {
+        self.rhs
+            .as_ref()
+            .try_as_col_major()
+            .map_or(&[][..], |c| c.as_slice())
+    }
+
     /// Multiplies column `c` by `factor` (the noise correction).
     pub(crate) fn scale_column(&mut self, c: usize, factor: f64) {
         self.matrix.col_mut(c).iter_mut().for_each(|v| *v *= factor);

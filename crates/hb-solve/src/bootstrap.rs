@@ -1,14 +1,12 @@
 //! Confidence intervals for every coefficient by a seeded bootstrap over segments.
 
-use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::linalg::qr::no_pivoting::factor;
-use faer::{Col, Mat, Par};
+use faer::{Col, Mat};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::{LinearSystem, LstsqSolver, SolveError};
+use crate::{LinearSystem, LstsqFit, LstsqSolver, SolveError};
 
 /// How many consecutive segments are drawn together.
 ///
@@ -20,9 +18,12 @@ use crate::{LinearSystem, LstsqSolver, SolveError};
 #[serde(rename_all = "snake_case")]
 #[non_exhaustive]
 pub enum ResampleBlock {
-    /// As many consecutive segments as cover, on average, one segment's length:
-    /// `ceil(median length / median gap between consecutive starts)`, at least 1 (3 for the
-    /// default windows of three periods stepped by one).
+    /// At least as many consecutive segments as cover, on average, one segment's length
+    /// (`ceil(median length / median gap between consecutive starts)`: 3 for the default windows of
+    /// three periods stepped by one), and at least `ceil(n^(1/3))` for `n` segments, the order of
+    /// block length that balances the bias and the variance of a block bootstrap's variance
+    /// (Hall, Horowitz and Jing 1995): runs grow with the record, so that they span its
+    /// correlations and a resample's cost grows like `n^(2/3)`.
     #[default]
     Auto,
     /// A given number `>= 1` of consecutive segments (1: every segment drawn on its own).
@@ -204,75 +205,141 @@ impl Bootstrap {
     }
 }
 
+/// Largest condition number (of the column-scaled system) for which resamples are solved by
+/// their normal equations around the estimate: each resample's correction then carries a relative
+/// error of about `condition² · ε ≤ 2e-6`, far below the spread of the resamples.
+pub const NORMAL_EQUATIONS_CONDITION: f64 = 1e5;
+
 /// Percentile bootstrap over the segments of an assembled system (either method).
 ///
 /// A resample draws `ceil(n / ℓ)` runs of `ℓ` consecutive segments (ordered by their first
-/// sample; `ℓ` from [`ResampleBlock`]) with replacement, stacks their rows, and solves with
-/// `solver`; the interval of each coefficient is between the `(1 − level) / 2` and
+/// sample; `ℓ` from [`ResampleBlock`]) with replacement, stacks their rows, and solves them by
+/// least squares; the interval of each coefficient is between the `(1 − level) / 2` and
 /// `(1 + level) / 2` quantiles (linear interpolation) of its `B` resampled values. Whole segments'
 /// row blocks are resampled because the rows of one segment share its data and are not
 /// independent.
 ///
-/// Each segment's block `[A_s | b_s]` is reduced once to its triangular QR factor (at most
-/// `unknowns + 1` rows, the same least-squares problem since `Q` is orthogonal), so that a
-/// resample stacks small factors instead of every row. Resamples run in parallel; resample `r`
-/// draws from the ChaCha8 stream `r` of `seed`, so results do not depend on the number of threads.
+/// How a resample is solved, in a time that does not grow with the rows of the system:
 ///
-/// Resamples that do not determine every unknown are left out; more than a tenth of them is an
-/// error ([`SolveError::BootstrapFailed`]).
+/// - when the whole system's condition number (column-scaled, from `solver`) is at most
+///   [`NORMAL_EQUATIONS_CONDITION`], by the normal equations of the correction `δ = x − x̂` to the
+///   estimate `x̂`: `(Σ Gₖ) δ = Σ gₖ` over the drawn runs, with `Gₖ = Σ Aₛᵀ Aₛ` and
+///   `gₖ = Σ Aₛᵀ (bₛ − Aₛ x̂)` summed once, in parallel, for every run of `ℓ` consecutive
+///   segments (Cholesky; `x̂ + δ` is the resample's least-squares solution);
+/// - otherwise each segment's block `[Aₛ | bₛ]` is reduced once to its triangular QR factor and a
+///   resample stacks the drawn factors and solves with `solver`.
+///
+/// Resamples run in parallel; resample `r` draws from the ChaCha8 stream `r` of `seed`, so results
+/// do not depend on the number of threads. Resamples that do not determine every unknown are left
+/// out; more than a tenth of them is an error ([`SolveError::BootstrapFailed`]).
+///
+/// Memory: `(n − ℓ + 1) · u (u + 3) / 2` numbers for `u` unknowns (the run sums), or the reduced
+/// factors, `n (u + 1)²` numbers, for ill-conditioned systems.
 pub fn bootstrap<S: LstsqSolver + ?Sized>(
     system: &LinearSystem,
     solver: &S,
     params: &BootstrapParams,
 ) -> Result<Bootstrap, SolveError> {
-    let estimate = system.solve(solver)?.solution;
+    let fit = system.solve(solver)?;
+    bootstrap_fit(system, &fit, solver, params)
+}
+
+/// [`bootstrap`] with the system's fit already computed: `fit = system.solve(solver)` (its
+/// estimate and condition number are used; a fit of another shape is an error).
+pub fn bootstrap_fit<S: LstsqSolver + ?Sized>(
+    system: &LinearSystem,
+    fit: &LstsqFit,
+    solver: &S,
+    params: &BootstrapParams,
+) -> Result<Bootstrap, SolveError> {
+    if fit.rows != system.rows() || fit.solution.len() != system.unknowns() {
+        return Err(SolveError::InvalidParameter {
+            name: "fit rows",
+            value: fit.rows as f64,
+            why: "the fit is not one of this system",
+        });
+    }
+    let resampler = if fit.condition <= NORMAL_EQUATIONS_CONDITION {
+        Resampler::Normal
+    } else {
+        Resampler::Stacked
+    };
+    bootstrap_with(system, solver, params, &fit.solution, resampler)
+}
+
+/// How resamples are solved (see [`bootstrap`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Resampler {
+    Normal,
+    Stacked,
+}
+
+fn bootstrap_with<S: LstsqSolver + ?Sized>(
+    system: &LinearSystem,
+    solver: &S,
+    params: &BootstrapParams,
+    estimate: &[f64],
+    resampler: Resampler,
+) -> Result<Bootstrap, SolveError> {
     let blocks = system.blocks();
     let mut order: Vec<usize> = (0..blocks.len()).collect();
     order.sort_by_key(|&i| blocks[i].segment.start);
-    let reduced: Vec<Mat<f64>> = order
-        .par_iter()
-        .map(|&i| reduce(system, blocks[i].first_row, blocks[i].rows()))
-        .collect();
-    let n = reduced.len();
+    let n = order.len();
     let ell = match params.block {
         ResampleBlock::Segments(l) => l,
         ResampleBlock::Auto => auto_block(system),
     }
     .clamp(1, n.max(1));
     let draws = n.div_ceil(ell);
-    let cols = system.unknowns();
+    let draw_starts = |r: usize| {
+        let mut rng = ChaCha8Rng::seed_from_u64(params.seed);
+        rng.set_stream(r as u64);
+        (0..draws).map(move |_| rng.random_range(0..=n - ell))
+    };
 
-    let outcomes: Vec<Option<Vec<f64>>> = (0..params.resamples)
-        .into_par_iter()
-        .map(|r| {
-            let mut rng = ChaCha8Rng::seed_from_u64(params.seed);
-            rng.set_stream(r as u64);
-            let mut picked = Vec::with_capacity(draws * ell);
-            for _ in 0..draws {
-                let s = rng.random_range(0..=n - ell);
-                picked.extend(s..s + ell);
-            }
-            let rows: usize = picked.iter().map(|&i| reduced[i].nrows()).sum();
-            let mut a = Mat::<f64>::zeros(rows, cols);
-            let mut b = Col::<f64>::zeros(rows);
-            let mut at = 0;
-            for &i in &picked {
-                let m = &reduced[i];
-                for rr in 0..m.nrows() {
-                    for c in 0..cols {
-                        a[(at + rr, c)] = m[(rr, c)];
+    let outcomes: Vec<Option<Vec<f64>>> = match resampler {
+        Resampler::Normal => {
+            let runs = RunMoments::new(system, &order, ell, estimate);
+            (0..params.resamples)
+                .into_par_iter()
+                .map(|r| Ok(runs.solve(draw_starts(r), estimate)))
+                .collect::<Result<_, SolveError>>()?
+        }
+        Resampler::Stacked => {
+            let reduced: Vec<Mat<f64>> = order
+                .par_iter()
+                .map(|&i| reduce(system, blocks[i].first_row, blocks[i].rows()))
+                .collect();
+            let cols = system.unknowns();
+            (0..params.resamples)
+                .into_par_iter()
+                .map(|r| {
+                    let picked: Vec<usize> = draw_starts(r).flat_map(|s| s..s + ell).collect();
+                    let rows: usize = picked.iter().map(|&i| reduced[i].nrows()).sum();
+                    let mut a = Mat::<f64>::zeros(rows, cols);
+                    let mut b = Col::<f64>::zeros(rows);
+                    let mut at = 0;
+                    for &i in &picked {
+                        let m = &reduced[i];
+                        for rr in 0..m.nrows() {
+                            for c in 0..cols {
+                                a[(at + rr, c)] = m[(rr, c)];
+                            }
+                            b[at + rr] = m[(rr, cols)];
+                        }
+                        at += m.nrows();
                     }
-                    b[at + rr] = m[(rr, cols)];
-                }
-                at += m.nrows();
-            }
-            match solver.solve(a.as_ref(), b.as_ref()) {
-                Ok(fit) => Ok(Some(fit.solution)),
-                Err(SolveError::RankDeficient { .. } | SolveError::Underdetermined { .. }) => Ok(None),
-                Err(e) => Err(e),
-            }
-        })
-        .collect::<Result<_, SolveError>>()?;
+                    match solver.solve(a.as_ref(), b.as_ref()) {
+                        Ok(fit) => Ok(Some(fit.solution)),
+                        Err(SolveError::RankDeficient { .. } | SolveError::Underdetermined { .. }) => {
+                            Ok(None)
+                        }
+                        Err(e) => Err(e),
+                    }
+                })
+                .collect::<Result<_, SolveError>>()?
+        }
+    };
 
     let failed = outcomes.iter().filter(|o| o.is_none()).count();
     let allowed = params.resamples / 10;
@@ -313,6 +380,163 @@ pub fn bootstrap<S: LstsqSolver + ?Sized>(
     })
 }
 
+/// The column-scaled normal equations of every run of `ℓ` consecutive segments, about the
+/// estimate: packed upper triangle of `Σ Aₛᵀ Aₛ`, then `Σ Aₛᵀ (bₛ − Aₛ x̂)`, one row of `width`
+/// numbers per run start.
+struct RunMoments {
+    cols: usize,
+    width: usize,
+    norms: Vec<f64>,
+    sums: Vec<f64>,
+}
+
+impl RunMoments {
+    fn new(system: &LinearSystem, order: &[usize], ell: usize, estimate: &[f64]) -> Self {
+        let a = system.matrix();
+        let cols = a.ncols();
+        let packed = cols * (cols + 1) / 2;
+        let width = packed + cols;
+        let norms: Vec<f64> = (0..cols)
+            .map(|c| {
+                let n = a.col(c).iter().map(|v| v * v).sum::<f64>().sqrt();
+                if n > 0.0 { n } else { 1.0 }
+            })
+            .collect();
+        let blocks = system.blocks();
+        let columns: Vec<&[f64]> = (0..cols).map(|c| system.column(c)).collect();
+        let rhs = system.rhs_slice();
+        // One segment's moments, added into `out`: its rows scaled into `rows` (row-major), then
+        // each entry of the packed Gram matrix as one pass over them.
+        let moments = |k: usize, out: &mut [f64], rows: &mut Vec<f64>, resid: &mut Vec<f64>| {
+            let block = &blocks[order[k]];
+            let (first, len) = (block.first_row, block.rows());
+            resid.clear();
+            resid.extend_from_slice(&rhs[first..first + len]);
+            rows.clear();
+            rows.resize(len * cols, 0.0);
+            for (c, col) in columns.iter().enumerate() {
+                let (col, x, inv) = (&col[first..first + len], estimate[c], 1.0 / norms[c]);
+                for (i, &v) in col.iter().enumerate() {
+                    resid[i] -= v * x;
+                    rows[i * cols + c] = v * inv;
+                }
+            }
+            for (row, &r) in rows.chunks_exact(cols).zip(resid.iter()) {
+                let mut at = 0;
+                for c in 0..cols {
+                    let rc = row[c];
+                    let tail = &row[c..];
+                    out[at..at + tail.len()]
+                        .iter_mut()
+                        .zip(tail)
+                        .for_each(|(o, &v)| *o += rc * v);
+                    at += tail.len();
+                    out[packed + c] += rc * r;
+                }
+            }
+        };
+        let n = order.len();
+        let starts = n + 1 - ell;
+        let mut sums = vec![0.0; starts * width];
+        // Chunks of ℓ run starts: the first run summed afresh, the others by sliding (adding the
+        // segment that enters, subtracting the one that leaves), so that rounding cannot build up
+        // over more than 2ℓ terms.
+        sums.par_chunks_mut(ell * width)
+            .enumerate()
+            .for_each(|(chunk, out)| {
+                let first = chunk * ell;
+                let last = (first + out.len() / width - 1 + ell).min(n); // segments [first, last)
+                let mut seg = vec![0.0; (last - first) * width];
+                let (mut rows, mut resid) = (Vec::new(), Vec::new());
+                for (k, m) in (first..last).zip(seg.chunks_mut(width)) {
+                    moments(k, m, &mut rows, &mut resid);
+                }
+                let (head, rest) = out.split_at_mut(width);
+                for m in seg.chunks(width).take(ell) {
+                    head.iter_mut().zip(m).for_each(|(h, v)| *h += v);
+                }
+                let mut previous: &[f64] = head;
+                for (j, run) in rest.chunks_mut(width).enumerate() {
+                    let (leave, enter) = (
+                        &seg[j * width..(j + 1) * width],
+                        &seg[(j + ell) * width..(j + ell + 1) * width],
+                    );
+                    for (((o, p), e), l) in run.iter_mut().zip(previous).zip(enter).zip(leave) {
+                        *o = p + e - l;
+                    }
+                    previous = run;
+                }
+            });
+        Self {
+            cols,
+            width,
+            norms,
+            sums,
+        }
+    }
+
+    /// The resample of the runs starting at `starts`: `None` if its normal matrix is not safely
+    /// positive definite (a pivot below 1e-12 of the largest diagonal entry).
+    fn solve(&self, starts: impl Iterator<Item = usize>, estimate: &[f64]) -> Option<Vec<f64>> {
+        let (cols, width) = (self.cols, self.width);
+        let mut total = vec![0.0; width];
+        for s in starts {
+            let run = &self.sums[s * width..(s + 1) * width];
+            total.iter_mut().zip(run).for_each(|(t, v)| *t += v);
+        }
+        // Unpack into a full matrix and factor G = L Lᵀ in place (lower triangle).
+        let mut g = vec![0.0; cols * cols];
+        let mut at = 0;
+        for c in 0..cols {
+            for d in c..cols {
+                g[d * cols + c] = total[at];
+                at += 1;
+            }
+        }
+        let largest = (0..cols).map(|c| g[c * cols + c]).fold(0.0_f64, f64::max);
+        for j in 0..cols {
+            let mut pivot = g[j * cols + j];
+            for k in 0..j {
+                pivot -= g[j * cols + k] * g[j * cols + k];
+            }
+            if pivot.is_nan() || pivot <= 1e-12 * largest {
+                return None;
+            }
+            let pivot = pivot.sqrt();
+            g[j * cols + j] = pivot;
+            for i in j + 1..cols {
+                let mut v = g[i * cols + j];
+                for k in 0..j {
+                    v -= g[i * cols + k] * g[j * cols + k];
+                }
+                g[i * cols + j] = v / pivot;
+            }
+        }
+        // L y = g, then Lᵀ δ = y.
+        let mut y: Vec<f64> = total[width - cols..].to_vec();
+        for i in 0..cols {
+            for k in 0..i {
+                y[i] -= g[i * cols + k] * y[k];
+            }
+            y[i] /= g[i * cols + i];
+        }
+        for i in (0..cols).rev() {
+            for k in i + 1..cols {
+                y[i] -= g[k * cols + i] * y[k];
+            }
+            y[i] /= g[i * cols + i];
+        }
+        Some(
+            estimate
+                .iter()
+                .zip(&y)
+                .zip(&self.norms)
+                .map(|((x, d), s)| x + d / s)
+                .collect(),
+        )
+    }
+}
+
 /// The `q` quantile of sorted `v` by linear interpolation between order statistics.
 fn quantile(v: &[f64], q: f64) -> f64 {
     let pos = q * (v.len() - 1) as f64;
@@ -322,7 +546,8 @@ fn quantile(v: &[f64], q: f64) -> f64 {
     v[lo] + frac * (v[hi] - v[lo])
 }
 
-/// `ceil(median length / median gap)` over the segments ordered by start, at least 1.
+/// The larger of `ceil(median length / median gap)` over the segments ordered by start and
+/// `ceil(n^(1/3))` for `n` segments; at least 1.
 fn auto_block(system: &LinearSystem) -> usize {
     let mut starts: Vec<usize> = system.blocks().iter().map(|b| b.segment.start).collect();
     let mut lens: Vec<usize> = system.blocks().iter().map(|b| b.segment.len).collect();
@@ -334,7 +559,13 @@ fn auto_block(system: &LinearSystem) -> usize {
     let mut gaps: Vec<usize> = starts.windows(2).map(|w| w[1] - w[0]).collect();
     gaps.sort_unstable();
     let gap = gaps[gaps.len() / 2].max(1);
-    lens[lens.len() / 2].div_ceil(gap).max(1)
+    let cover = lens[lens.len() / 2].div_ceil(gap);
+    // The smallest whole number whose cube is at least n (exact, unlike a float cube root).
+    let n = starts.len();
+    let root = (1..)
+        .find(|&l: &usize| l.saturating_mul(l).saturating_mul(l) >= n)
+        .unwrap_or(1);
+    cover.max(root).max(1)
 }
 
 /// The block `[A_s | b_s]` of `rows` rows from `first`, reduced to its R factor when it has more
@@ -342,34 +573,13 @@ fn auto_block(system: &LinearSystem) -> usize {
 fn reduce(system: &LinearSystem, first: usize, rows: usize) -> Mat<f64> {
     let (a, b) = (system.matrix(), system.rhs());
     let cols = a.ncols() + 1;
-    let mut m = Mat::from_fn(rows, cols, |i, j| {
+    crate::lstsq::triangular_factor(Mat::from_fn(rows, cols, |i, j| {
         if j + 1 < cols {
             a[(first + i, j)]
         } else {
             b[first + i]
         }
-    });
-    if rows <= cols {
-        return m;
-    }
-    let par = Par::Seq;
-    let block = factor::recommended_block_size::<f64>(rows, cols);
-    let mut q_coeff = Mat::<f64>::zeros(block, cols);
-    let mut mem = MemBuffer::new(factor::qr_in_place_scratch::<f64>(
-        rows,
-        cols,
-        block,
-        par,
-        Default::default(),
-    ));
-    factor::qr_in_place(
-        m.as_mut(),
-        q_coeff.as_mut(),
-        par,
-        MemStack::new(&mut mem),
-        Default::default(),
-    );
-    Mat::from_fn(cols, cols, |i, j| if j >= i { m[(i, j)] } else { 0.0 })
+    }))
 }
 
 #[cfg(test)]
@@ -413,5 +623,79 @@ mod tests {
         assert_eq!(quantile(&v, 1.0), 4.0);
         assert!((quantile(&v, 0.625) - 2.5).abs() < 1e-15);
         assert_eq!(quantile(&[7.0], 0.3), 7.0);
+    }
+
+    /// A synthetic system of `n` segments of 5 rows and 3 unknowns, in shuffled order.
+    fn synthetic(n: usize, scale: f64) -> LinearSystem {
+        use crate::Block;
+        use upo_search::Segment;
+        let rows = 5 * n;
+        let noise = |i: usize| ((i * 7919 + 13) % 1009) as f64 / 1009.0 - 0.5;
+        let matrix = Mat::from_fn(rows, 3, |i, j| {
+            let t = i as f64 * 0.37;
+            [1.0, scale * t.sin(), (2.0 * t).cos() + 0.3 * t.sin()][j]
+        });
+        let rhs = Col::from_fn(rows, |i| {
+            0.5 * matrix[(i, 0)] - 2.0 / scale * matrix[(i, 1)] + matrix[(i, 2)] + 0.1 * noise(i)
+        });
+        let blocks = (0..n)
+            .map(|k| {
+                let s = (k * 17) % n; // segments listed out of time order
+                Block {
+                    segment: Segment {
+                        start: 10 * s,
+                        period: 1,
+                        len: 25,
+                        error: 0.0,
+                    },
+                    first_row: 5 * k,
+                    harmonics: 2,
+                    winding: 0,
+                    rotation_rate: 0.0,
+                }
+            })
+            .collect();
+        let names = ["a", "b", "c"].map(String::from).to_vec();
+        LinearSystem::from_parts(matrix, rhs, names, blocks)
+    }
+
+    /// The normal-equation resamples are the stacked least-squares resamples, draw for draw.
+    #[test]
+    fn normal_equation_resamples_match_stacked_least_squares() {
+        for (n, scale) in [(101, 1.0), (64, 1e4)] {
+            let system = synthetic(n, scale);
+            let solver = crate::QrSolver::default();
+            let estimate = system.solve(&solver).unwrap().solution;
+            for block in [
+                ResampleBlock::Auto,
+                ResampleBlock::Segments(1),
+                ResampleBlock::Segments(7),
+            ] {
+                let params = BootstrapParams::builder()
+                    .resamples(100)
+                    .seed(7)
+                    .block(block)
+                    .build()
+                    .unwrap();
+                let fast = bootstrap_with(&system, &solver, &params, &estimate, Resampler::Normal).unwrap();
+                let slow = bootstrap_with(&system, &solver, &params, &estimate, Resampler::Stacked).unwrap();
+                assert_eq!((fast.block, fast.failed), (slow.block, slow.failed));
+                for (f, s) in fast.intervals.iter().zip(&slow.intervals) {
+                    let width = s.upper - s.lower;
+                    assert!(width > 0.0);
+                    for (a, b) in [(f.lower, s.lower), (f.upper, s.upper), (f.std_error, s.std_error)] {
+                        assert!((a - b).abs() < 1e-9 * width, "{n} {block:?} {f:?} {s:?}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn auto_block_grows_with_the_cube_root() {
+        // 10-sample gaps, 25-sample segments: cover 3; 101 segments: cube root 4.66 -> 5.
+        assert_eq!(auto_block(&synthetic(101, 1.0)), 5);
+        assert_eq!(auto_block(&synthetic(27, 1.0)), 3);
+        assert_eq!(auto_block(&synthetic(28, 1.0)), 4);
     }
 }

@@ -99,7 +99,10 @@ mod params;
 mod weak;
 
 pub use assemble::{Block, LinearSystem, assemble, term_names};
-pub use bootstrap::{Bootstrap, BootstrapParams, BootstrapParamsBuilder, Interval, ResampleBlock, bootstrap};
+pub use bootstrap::{
+    Bootstrap, BootstrapParams, BootstrapParamsBuilder, Interval, NORMAL_EQUATIONS_CONDITION, ResampleBlock,
+    bootstrap, bootstrap_fit,
+};
 pub use error::SolveError;
 pub use lstsq::{LstsqFit, LstsqSolver, QrSolver, RankTolerance, SvdSolver};
 pub use model::{Coefficient, FitSummary, IdentifiedModel, MODEL_FORMAT, MODEL_MAGIC, MODEL_VERSION};

@@ -132,7 +132,9 @@ impl<B: Basis> IdentifiedModel<B> {
         Self::from_fit(basis, params, system, &fit, solver.name())
     }
 
-    pub(crate) fn from_fit(
+    /// [`IdentifiedModel::fit`] from a fit already computed, `fit = system.solve(solver)` with a
+    /// solver named `solver`: the fit can then also serve [`crate::bootstrap_fit`].
+    pub fn from_fit(
         basis: B,
         params: &IdentifyParams,
         system: &LinearSystem,
