@@ -18,6 +18,9 @@ struct Cli {
     /// No progress bars.
     #[arg(long, global = true)]
     quiet: bool,
+    /// Print the wall time of each stage on stderr at the end (identify).
+    #[arg(long, global = true)]
+    timings: bool,
     #[command(subcommand)]
     command: Command,
 }
@@ -49,7 +52,7 @@ fn main() -> ExitCode {
         Command::Simulate(args) => cmd::simulate::run(args, cli.quiet),
         Command::Embed(args) => cmd::embed::run(args, cli.quiet),
         Command::Upos(args) => cmd::upos::run(args, cli.quiet),
-        Command::Identify(args) => cmd::identify::run(args, cli.quiet),
+        Command::Identify(args) => cmd::identify::run(args, cli.quiet, cli.timings),
         Command::Report(args) => {
             cmd::report::check_out(&args.out).and_then(|()| cmd::report::run(args, cli.quiet))
         }

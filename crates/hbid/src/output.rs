@@ -55,8 +55,15 @@ pub fn write_atomically(
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
     };
-    let mut tmp = tempfile::Builder::new()
-        .prefix(".hbid-partial-")
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(".hbid-partial-");
+    // An ordinary file's permissions (0o666 less the umask), not the temporary file's owner-only.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        builder.permissions(std::fs::Permissions::from_mode(0o666));
+    }
+    let mut tmp = builder
         .tempfile_in(parent)
         .with_context(|| format!("cannot create a file in {}", parent.display()))?;
     let tmp_path = tmp.path().to_owned();

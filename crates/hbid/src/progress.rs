@@ -36,7 +36,7 @@ impl Progress {
             },
         );
         bar.set_style(
-            ProgressStyle::with_template("{spinner} {prefix} ({elapsed})").expect("a valid template"),
+            ProgressStyle::with_template("{spinner} {prefix} {msg} ({elapsed})").expect("a valid template"),
         );
         bar.set_prefix(stage.to_owned());
         bar.enable_steady_tick(std::time::Duration::from_millis(120));
@@ -58,5 +58,52 @@ impl Drop for Progress {
     /// A bar never outlives its stage, even when the stage fails.
     fn drop(&mut self) {
         self.0.finish_and_clear();
+    }
+}
+
+/// The stages of a command, shown on a spinner as they go and, with `--timings`, listed with
+/// their wall times on stderr at the end.
+pub struct Stages {
+    bar: Progress,
+    current: Option<(&'static str, std::time::Instant)>,
+    done: Vec<(&'static str, std::time::Duration)>,
+    timings: bool,
+}
+
+impl Stages {
+    /// Starts the spinner of `command`.
+    pub fn new(command: &str, quiet: bool, timings: bool) -> Self {
+        Self {
+            bar: Progress::spinner(command, quiet),
+            current: None,
+            done: Vec::new(),
+            timings,
+        }
+    }
+
+    /// Ends the current stage (if any) and starts `name`.
+    pub fn start(&mut self, name: &'static str) {
+        self.end();
+        self.bar.0.set_message(name);
+        self.current = Some((name, std::time::Instant::now()));
+    }
+
+    fn end(&mut self) {
+        if let Some((name, t)) = self.current.take() {
+            self.done.push((name, t.elapsed()));
+        }
+    }
+
+    /// Ends the last stage, clears the spinner and, with `--timings`, prints the stages' times.
+    pub fn finish(mut self) {
+        self.end();
+        self.bar.finish();
+        if self.timings {
+            let total: std::time::Duration = self.done.iter().map(|(_, d)| *d).sum();
+            for (name, d) in &self.done {
+                eprintln!("{name:>12} {:>9.3} s", d.as_secs_f64());
+            }
+            eprintln!("{:>12} {:>9.3} s", "total", total.as_secs_f64());
+        }
     }
 }

@@ -605,3 +605,62 @@ fn windowed_method_recovers_duffing_on_the_line() {
     assert!(worst < 1e-7, "largest error {worst:e}: {c}");
     assert!(v["intervals"].is_null());
 }
+
+#[test]
+fn simulate_writes_npy_that_identify_reads_like_the_csv() {
+    let dir = scratch("npy-out");
+    let (csv, npy) = (dir.join("r.csv"), dir.join("r.npy"));
+    for p in [&csv, &npy] {
+        let out = hbid(&["simulate", "--samples", "6000", "--out", p.to_str().unwrap()]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    }
+    let bytes = std::fs::read(&npy).unwrap();
+    assert!(bytes.starts_with(b"\x93NUMPY"));
+    // The permissions of any file the user writes (0o666 less the umask), not owner-only.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        let plain = dir.join("plain");
+        std::fs::write(&plain, b"x").unwrap();
+        let mode = |p: &Path| std::fs::metadata(p).unwrap().permissions().mode() & 0o777;
+        assert_eq!(mode(&npy), mode(&plain));
+    }
+    // f8 little-endian, 6000 × 3, and the payload is exactly that.
+    let header = String::from_utf8_lossy(&bytes[10..128]);
+    assert!(
+        header.contains("'<f8'") && header.contains("(6000, 3, )"),
+        "{header}"
+    );
+    assert_eq!(bytes.len() % 16, 0, "payload after a 16-byte-aligned header");
+    assert_eq!(bytes.len() - 6000 * 3 * 8, 128);
+    // Same numbers as the CSV (which prints the shortest round-trip decimal).
+    let (_, rows) = read_rows(&csv);
+    for (i, row) in rows.iter().enumerate().step_by(997) {
+        for (j, v) in row.iter().enumerate() {
+            let at = 128 + 8 * (3 * i + j);
+            let got = f64::from_le_bytes(bytes[at..at + 8].try_into().unwrap());
+            assert_eq!(got, *v, "row {i} column {j}");
+        }
+    }
+    let id = |p: &Path| {
+        hbid(&[
+            "identify",
+            p.to_str().unwrap(),
+            "--json",
+            "--bootstrap",
+            "0",
+            "--timings",
+        ])
+    };
+    let (a, b) = (id(&csv), id(&npy));
+    assert!(b.status.success(), "{}", String::from_utf8_lossy(&b.stderr));
+    assert_eq!(a.stdout, b.stdout);
+    // --timings lists the stages on stderr.
+    let err = String::from_utf8_lossy(&b.stderr);
+    for stage in ["read", "delay", "segments", "assemble", "solve", "total"] {
+        assert!(
+            err.lines().any(|l| l.trim_start().starts_with(stage)),
+            "{stage}: {err}"
+        );
+    }
+}

@@ -7,7 +7,7 @@ use clap::{Args, ValueEnum};
 use hb_basis::{BasisKind, Harmonic, Hat, Polynomial};
 use hb_solve::{
     Bootstrap, BootstrapParams, Forcing, Harmonics, IdentifiedModel, IdentifyParams, LstsqSolver, ModelForm,
-    NoiseCorrection, QrSolver, SampleClock, SvdSolver, WeakForm, assemble, assemble_weak, bootstrap,
+    NoiseCorrection, QrSolver, SampleClock, SvdSolver, WeakForm, assemble, assemble_weak, bootstrap_fit,
 };
 use upo_search::{Metric, Segment, Windows};
 
@@ -142,15 +142,32 @@ pub struct Identification {
 impl Setup {
     /// Assembles the rows of the method over `segments`, solves, and bootstraps.
     pub fn identify(&self, x: &[f64], segments: &[Segment]) -> anyhow::Result<Identification> {
+        self.identify_in_stages(x, segments, |_| {})
+    }
+
+    /// [`Setup::identify`], calling `stage` with the name of each stage as it starts.
+    pub fn identify_in_stages(
+        &self,
+        x: &[f64],
+        segments: &[Segment],
+        mut stage: impl FnMut(&'static str),
+    ) -> anyhow::Result<Identification> {
+        stage("assemble");
         let system = match self.method {
             Method::Upo => assemble(&self.basis, x, segments, &self.params),
             Method::Windowed => assemble_weak(&self.basis, x, segments, &self.params, &self.weak),
         }
         .map_err(|e| anyhow::anyhow!("{e}"))?;
-        let model = IdentifiedModel::fit(self.basis, &self.params, &system, self.solver.as_ref())
+        stage("solve");
+        let solver = self.solver.as_ref();
+        let fit = system.solve(solver).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let model = IdentifiedModel::from_fit(self.basis, &self.params, &system, &fit, solver.name())
             .map_err(|e| anyhow::anyhow!("{e}"))?;
         let intervals = match &self.bootstrap {
-            Some(b) => Some(bootstrap(&system, self.solver.as_ref(), b).map_err(|e| anyhow::anyhow!("{e}"))?),
+            Some(b) => {
+                stage("bootstrap");
+                Some(bootstrap_fit(&system, &fit, solver, b).map_err(|e| anyhow::anyhow!("{e}"))?)
+            }
             None => None,
         };
         Ok(Identification { model, intervals })
@@ -248,14 +265,22 @@ impl IdentifyArgs {
     }
 }
 
-pub fn run(args: &IdentifyArgs, quiet: bool) -> anyhow::Result<()> {
-    let bar = crate::progress::Progress::spinner("identify", quiet);
+pub fn run(args: &IdentifyArgs, quiet: bool, timings: bool) -> anyhow::Result<()> {
+    let mut stages = crate::progress::Stages::new("identify", quiet, timings);
     if let Some(path) = &args.save_model {
         crate::output::check_output_path(path).context("--save-model")?;
     }
+    stages.start("read");
     let data = args.input.load()?;
     let setup = args.setup(&data)?;
-    let delay = args.search.delay(&data)?;
+    let delay = match args.method {
+        Method::Upo => {
+            stages.start("delay");
+            args.search.delay(&data)?
+        }
+        Method::Windowed => 1,
+    };
+    stages.start("segments");
     let segments = args.segments(&data, delay, args.method)?;
     let found = match args.method {
         Method::Upo => format!(
@@ -269,8 +294,10 @@ pub fn run(args: &IdentifyArgs, quiet: bool) -> anyhow::Result<()> {
             args.window_periods
         ),
     };
-    let id = setup.identify(&data.x, &segments).with_context(|| found)?;
-    bar.finish();
+    let id = setup
+        .identify_in_stages(&data.x, &segments, |name| stages.start(name))
+        .with_context(|| found)?;
+    stages.finish();
     if let Some(path) = &args.save_model {
         save_model(&id.model, path)?;
     }

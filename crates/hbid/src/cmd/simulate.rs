@@ -5,6 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context, bail};
 use clap::Args;
+use npyz::WriterBuilder;
 use pendulum_sim::{Pendulum, SimulationConfig, Tolerances, simulate_with_progress};
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
@@ -12,7 +13,8 @@ use rand_distr::{Distribution, Normal};
 use crate::progress::Progress;
 
 /// Simulate the base-excited pendulum x'' + c x' + (1/r²) sin x − f sin(t) cos x = 0 and write
-/// CSV `t,theta,omega`. The defaults are the paper's data set.
+/// `t,theta,omega`: CSV, or a samples × 3 `.npy` array of f8 when the file name ends in `.npy`.
+/// The defaults are the paper's data set.
 #[derive(Debug, Args)]
 pub struct SimulateArgs {
     /// Forcing amplitude f.
@@ -51,7 +53,7 @@ pub struct SimulateArgs {
     /// Relative tolerance of the integrator (the absolute one is rtol/10).
     #[arg(long, default_value_t = 1e-10, allow_hyphen_values = true)]
     rtol: f64,
-    /// Output CSV file.
+    /// Output file: `.npy` (samples × 3, f8, columns t, theta, omega) or CSV (anything else).
     #[arg(long)]
     out: PathBuf,
 }
@@ -81,6 +83,24 @@ pub fn run(args: &SimulateArgs, quiet: bool) -> anyhow::Result<()> {
         }
     }
     let wrap = !args.unwrapped;
+    let npy = args
+        .out
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("npy"));
+    if npy {
+        return crate::output::write_atomically(&args.out, |w: &mut dyn Write| {
+            let mut writer = npyz::WriteOptions::<f64>::new()
+                .default_dtype()
+                .shape(&[traj.t.len() as u64, 3])
+                .writer(w)
+                .begin_nd()?;
+            for ((t, x), v) in traj.t.iter().zip(&traj.theta).zip(&traj.omega) {
+                let x = if wrap { circle_signal::wrap(*x) } else { *x };
+                writer.extend([*t, x, *v])?;
+            }
+            writer.finish()
+        });
+    }
     crate::output::write_atomically(&args.out, |w: &mut dyn Write| {
         writeln!(w, "t,theta,omega")?;
         for ((t, x), v) in traj.t.iter().zip(&traj.theta).zip(&traj.omega) {
