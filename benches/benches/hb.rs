@@ -72,6 +72,18 @@ fn bench(c: &mut Criterion) {
             })
         });
     }
+    // The paper's identification as the NumPy script does it: close returns, rows, least squares.
+    c.bench_function("identify paper path K=1 (close returns + assemble + qr)", |b| {
+        let search = CloseReturns::builder(25, 5)
+            .tolerance(0.03)
+            .max_period(16)
+            .build()
+            .expect("search");
+        b.iter(|| {
+            let segments = search.segments(&x).expect("segments");
+            black_box(identify(harmonic, &x, &segments, &params, &QrSolver::default()).expect("identify"))
+        })
+    });
     c.bench_function("identify hat N=8 (assemble + qr)", |b| {
         b.iter(|| black_box(identify(hat, &x, &segments, &params, &QrSolver::default()).expect("identify")))
     });

@@ -6,6 +6,7 @@
 mod accuracy;
 mod identification;
 mod reproduce;
+mod scale;
 
 use std::path::PathBuf;
 
@@ -39,6 +40,26 @@ enum Command {
         #[arg(long)]
         quick: bool,
     },
+    /// `hbid identify` (both methods, defaults) on records of growing length: wall time, peak
+    /// memory and the cost slope; writes a Markdown report.
+    Scale {
+        /// The report.
+        #[arg(long, default_value = "docs/scale.md")]
+        out: PathBuf,
+        /// Where the simulated records are kept (made once, reused).
+        #[arg(long, default_value = "target/scale")]
+        data: PathBuf,
+        /// Record lengths in samples.
+        #[arg(
+            long,
+            value_delimiter = ',',
+            default_value = "100000,300000,1000000,3000000,10000000"
+        )]
+        sizes: Vec<usize>,
+        /// Runs per size and method (the median is reported).
+        #[arg(long, default_value_t = 3)]
+        repeats: usize,
+    },
 }
 
 fn main() -> std::process::ExitCode {
@@ -46,6 +67,12 @@ fn main() -> std::process::ExitCode {
     let result = match cli.command {
         Command::Reproduce { out, quick } => reproduce::run(&out, quick),
         Command::Accuracy { out, quick } => accuracy::run(&out, quick),
+        Command::Scale {
+            out,
+            data,
+            sizes,
+            repeats,
+        } => scale::run(&out, &data, &sizes, repeats),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

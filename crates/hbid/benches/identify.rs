@@ -1,0 +1,51 @@
+//! The whole `hbid identify` as a user runs it (process start, reading, delay, segments, assembly,
+//! least squares, 1000 bootstrap resamples): on the paper's data set and on 10^6 samples.
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use criterion::{Criterion, criterion_group, criterion_main};
+
+fn hbid(args: &[&str], file: &Path) {
+    let out = Command::new(env!("CARGO_BIN_EXE_hbid"))
+        .args(args)
+        .arg(file)
+        .output()
+        .expect("hbid runs");
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+}
+
+/// 10^6 samples of the paper's pendulum as `.npy`, simulated once per bench run.
+fn million(dir: &Path) -> PathBuf {
+    let path = dir.join("pendulum_1e6.npy");
+    let status = Command::new(env!("CARGO_BIN_EXE_hbid"))
+        .args(["simulate", "--quiet", "--samples", "1000000", "--out"])
+        .arg(&path)
+        .status()
+        .expect("hbid simulate runs");
+    assert!(status.success());
+    path
+}
+
+fn bench(c: &mut Criterion) {
+    let paper = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/fixtures/paper_dataset.csv");
+    let mut group = c.benchmark_group("hbid_identify");
+    group.sample_size(10);
+    if paper.exists() {
+        for method in ["upo", "windowed"] {
+            group.bench_function(format!("paper_30000_csv/{method}"), |b| {
+                b.iter(|| hbid(&["identify", "--quiet", "--method", method], &paper))
+            });
+        }
+    }
+    let dir = tempfile::tempdir().expect("temporary folder");
+    let record = million(dir.path());
+    for method in ["upo", "windowed"] {
+        group.bench_function(format!("simulated_1e6_npy/{method}"), |b| {
+            b.iter(|| hbid(&["identify", "--quiet", "--method", method], &record))
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

@@ -1,0 +1,243 @@
+//! `cargo xtask scale`: `hbid identify` end to end on records of growing length, with wall time,
+//! peak memory (`/usr/bin/time -v`) and the slope of the cost against the record length.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use anyhow::{Context, bail};
+
+/// One timed run of `hbid identify`.
+#[derive(Debug, Clone)]
+struct Run {
+    wall: f64,
+    peak_mib: f64,
+    stages: Vec<(String, f64)>,
+}
+
+/// Runs the study and writes the report to `out`.
+pub fn run(out: &Path, data: &Path, sizes: &[usize], repeats: usize) -> anyhow::Result<()> {
+    if sizes.is_empty() || repeats == 0 {
+        bail!("give at least one size and one repeat");
+    }
+    let time = Path::new("/usr/bin/time");
+    if !time.exists() {
+        bail!("/usr/bin/time (GNU time, Debian package `time`) is needed for the peak memory");
+    }
+    let hbid = build_hbid()?;
+    std::fs::create_dir_all(data).with_context(|| format!("{}", data.display()))?;
+    let methods = ["windowed", "upo"];
+    let mut rows: Vec<(usize, &str, Run)> = Vec::new();
+    for &n in sizes {
+        let record = data.join(format!("pendulum_{n}.npy"));
+        if !record.exists() {
+            eprintln!("simulating {n} samples -> {}", record.display());
+            let status = Command::new(&hbid)
+                .args(["simulate", "--quiet", "--samples", &n.to_string(), "--out"])
+                .arg(&record)
+                .status()
+                .context("hbid simulate")?;
+            if !status.success() {
+                bail!("hbid simulate failed for {n} samples");
+            }
+        }
+        for method in methods {
+            let mut runs: Vec<Run> = (0..repeats)
+                .map(|_| identify(time, &hbid, &record, method))
+                .collect::<anyhow::Result<_>>()?;
+            runs.sort_by(|a, b| a.wall.total_cmp(&b.wall));
+            let median = runs[runs.len() / 2].clone();
+            eprintln!(
+                "{n:>10} samples  {method:<8} {:>7.3} s  {:>6.0} MiB",
+                median.wall, median.peak_mib
+            );
+            rows.push((n, method, median));
+        }
+    }
+    let report = render(&rows, sizes, repeats)?;
+    if let Some(parent) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
+        std::fs::create_dir_all(parent)?;
+    }
+    std::fs::write(out, report).with_context(|| format!("{}", out.display()))?;
+    eprintln!("wrote {}", out.display());
+    Ok(())
+}
+
+/// Builds the release `hbid` next to this (release) xtask and returns its path.
+fn build_hbid() -> anyhow::Result<PathBuf> {
+    let status = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
+        .args(["build", "--release", "-p", "hbid"])
+        .status()
+        .context("cargo build")?;
+    if !status.success() {
+        bail!("cargo build --release -p hbid failed");
+    }
+    let exe = std::env::current_exe()?;
+    let dir = exe.parent().context("xtask has no folder")?;
+    let hbid = dir.join(format!("hbid{}", std::env::consts::EXE_SUFFIX));
+    if !hbid.exists() || !dir.ends_with("release") {
+        bail!(
+            "expected the release hbid beside a release xtask ({}): run `cargo xtask scale`",
+            hbid.display()
+        );
+    }
+    Ok(hbid)
+}
+
+/// `hbid identify` with its defaults (1000 bootstrap resamples included) under GNU time.
+fn identify(time: &Path, hbid: &Path, record: &Path, method: &str) -> anyhow::Result<Run> {
+    let out = Command::new(time)
+        .arg("-v")
+        .arg(hbid)
+        .args(["identify", "--quiet", "--timings", "--json", "--method", method])
+        .arg(record)
+        .output()
+        .context("running hbid identify")?;
+    let err = String::from_utf8_lossy(&out.stderr);
+    if !out.status.success() {
+        bail!(
+            "hbid identify --method {method} {} failed:\n{err}",
+            record.display()
+        );
+    }
+    let field = |name: &str| -> anyhow::Result<String> {
+        err.lines()
+            .find_map(|l| l.trim().strip_prefix(name).map(|v| v.trim().to_owned()))
+            .with_context(|| format!("no '{name}' in the output of time -v"))
+    };
+    let wall = parse_clock(&field("Elapsed (wall clock) time (h:mm:ss or m:ss):")?)?;
+    let peak_kib: f64 = field("Maximum resident set size (kbytes):")?.parse()?;
+    let stages = err
+        .lines()
+        .filter_map(|l| {
+            let mut it = l.split_whitespace();
+            let (name, secs, unit) = (it.next()?, it.next()?, it.next()?);
+            (unit == "s" && it.next().is_none())
+                .then(|| secs.parse().ok().map(|s| (name.to_owned(), s)))
+                .flatten()
+        })
+        .collect();
+    Ok(Run {
+        wall,
+        peak_mib: peak_kib / 1024.0,
+        stages,
+    })
+}
+
+/// `m:ss.ss` or `h:mm:ss` as seconds.
+fn parse_clock(text: &str) -> anyhow::Result<f64> {
+    text.split(':')
+        .try_fold(0.0, |acc, part| Ok(acc * 60.0 + part.parse::<f64>()?))
+        .map_err(|e: std::num::ParseFloatError| anyhow::anyhow!("clock '{text}': {e}"))
+}
+
+/// Least-squares line `y = a + b x`.
+fn line_fit(x: &[f64], y: &[f64]) -> (f64, f64) {
+    let n = x.len() as f64;
+    let (mx, my) = (x.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
+    let sxy: f64 = x.iter().zip(y).map(|(a, b)| (a - mx) * (b - my)).sum();
+    let sxx: f64 = x.iter().map(|a| (a - mx) * (a - mx)).sum();
+    let b = if sxx > 0.0 { sxy / sxx } else { 0.0 };
+    (my - b * mx, b)
+}
+
+fn render(rows: &[(usize, &str, Run)], sizes: &[usize], repeats: usize) -> anyhow::Result<String> {
+    let mut s = String::new();
+    let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
+    let cores = std::thread::available_parallelism().map_or(0, |n| n.get());
+    writeln!(s, "# Scale: `hbid identify` on long records\n")?;
+    writeln!(
+        s,
+        "Written by `cargo xtask scale` (records: the paper's pendulum from `hbid simulate`, \
+         25 samples per forcing period, saved as `.npy` f8 with columns t, theta, omega). Each \
+         run is `hbid identify FILE --method M` with its defaults, 1000 bootstrap resamples \
+         included, under `/usr/bin/time -v`; the median wall time of {repeats} runs and its peak \
+         resident memory. {cores} cores; load average at the end: {}.\n",
+        load.split_whitespace().take(3).collect::<Vec<_>>().join(" ")
+    )?;
+    writeln!(
+        s,
+        "| samples | method | wall time | per 10^6 samples | peak memory |\n| ---: | --- | ---: | ---: | ---: |"
+    )?;
+    for (n, method, run) in rows {
+        writeln!(
+            s,
+            "| {n} | {method} | {:.3} s | {:.3} s | {:.0} MiB |",
+            run.wall,
+            run.wall / (*n as f64 / 1e6),
+            run.peak_mib
+        )?;
+    }
+    writeln!(s, "\n## Cost against record length\n")?;
+    writeln!(
+        s,
+        "Fits over every size: the slope of log(time) against log(samples) (1 is linear), and the \
+         line time = a + b · samples (b in seconds per 10^6 samples; a is the fixed cost: \
+         process start, thread pool, plans).\n"
+    )?;
+    writeln!(
+        s,
+        "| method | log-log slope | b (s per 10^6) | a (s) | peak memory per 10^6 samples (largest) |\n| --- | ---: | ---: | ---: | ---: |"
+    )?;
+    for method in ["windowed", "upo"] {
+        let pts: Vec<(f64, &Run)> = rows
+            .iter()
+            .filter(|r| r.1 == method)
+            .map(|r| (r.0 as f64, &r.2))
+            .collect();
+        if pts.len() < 2 {
+            continue;
+        }
+        let lx: Vec<f64> = pts.iter().map(|p| p.0.ln()).collect();
+        let ly: Vec<f64> = pts.iter().map(|p| p.1.wall.ln()).collect();
+        let (_, slope) = line_fit(&lx, &ly);
+        let x: Vec<f64> = pts.iter().map(|p| p.0 / 1e6).collect();
+        let y: Vec<f64> = pts.iter().map(|p| p.1.wall).collect();
+        let (a, b) = line_fit(&x, &y);
+        let (n_max, big) = pts.last().map(|p| (p.0, p.1)).context("no runs")?;
+        writeln!(
+            s,
+            "| {method} | {slope:.3} | {b:.3} | {a:.3} | {:.1} MiB |",
+            big.peak_mib / (n_max / 1e6)
+        )?;
+    }
+    let largest = sizes.iter().copied().max().unwrap_or(0);
+    writeln!(s, "\n## Stages at {largest} samples (`--timings`)\n")?;
+    writeln!(s, "| stage | windowed | upo |\n| --- | ---: | ---: |")?;
+    let stages_of = |method: &str| -> Vec<(String, f64)> {
+        rows.iter()
+            .find(|r| r.0 == largest && r.1 == method)
+            .map(|r| r.2.stages.clone())
+            .unwrap_or_default()
+    };
+    let (w, u) = (stages_of("windowed"), stages_of("upo"));
+    let mut names: Vec<&String> = u.iter().map(|(n, _)| n).collect();
+    for (n, _) in &w {
+        if !names.contains(&n) {
+            names.insert(names.len().saturating_sub(1), n);
+        }
+    }
+    for name in names {
+        let get = |v: &[(String, f64)]| {
+            v.iter()
+                .find(|(n, _)| n == name)
+                .map_or("—".to_owned(), |(_, t)| format!("{t:.3} s"))
+        };
+        writeln!(s, "| {name} | {} | {} |", get(&w), get(&u))?;
+    }
+    Ok(s)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn clocks_and_lines() {
+        assert_eq!(parse_clock("0:03.52").unwrap(), 3.52);
+        assert_eq!(parse_clock("1:02:03").unwrap(), 3723.0);
+        assert!(parse_clock("x:1").is_err());
+        let (a, b) = line_fit(&[1.0, 2.0, 3.0], &[3.0, 5.0, 7.0]);
+        assert!((a - 1.0).abs() < 1e-12 && (b - 2.0).abs() < 1e-12);
+    }
+}
