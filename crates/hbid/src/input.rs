@@ -566,10 +566,24 @@ fn read_npy(bytes: &[u8], options: &ReadOptions) -> Result<Record, InputError> {
     if rows == 0 || cols == 0 {
         return Err(InputError::NoData);
     }
-    let values = npy_values(npy)?;
-    let at = |r: usize, c: usize| match order {
-        npyz::Order::C => values[r * cols + c],
-        npyz::Order::Fortran => values[c * rows + r],
+    // Little-endian f8, the usual case (and 10^7-sample records): read straight from the payload,
+    // without a converted copy of every element.
+    let payload_bytes = &bytes[bytes.len() - payload..];
+    let plain_f8 = npy.dtype().descr() == "'<f8'";
+    let values = if plain_f8 { Vec::new() } else { npy_values(npy)? };
+    let index = |r: usize, c: usize| match order {
+        npyz::Order::C => r * cols + c,
+        npyz::Order::Fortran => c * rows + r,
+    };
+    let at = |r: usize, c: usize| {
+        let i = index(r, c);
+        if plain_f8 {
+            let mut le = [0u8; 8];
+            le.copy_from_slice(&payload_bytes[8 * i..8 * i + 8]);
+            f64::from_le_bytes(le)
+        } else {
+            values[i]
+        }
     };
     let pick = |wanted: Option<&Column>, default: usize, option: &'static str| -> Result<usize, InputError> {
         let p = match wanted {
