@@ -3,7 +3,9 @@ use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use hb_basis::{FourierPlanner, Harmonic, Hat};
-use hb_solve::{IdentifyParams, LstsqSolver, QrSolver, SampleClock, SvdSolver, assemble, identify};
+use hb_solve::{
+    Harmonics, IdentifyParams, LstsqSolver, QrSolver, SampleClock, SvdSolver, assemble, identify,
+};
 use upo_search::{CloseReturns, OrbitSource, Segment};
 
 fn paper() -> (f64, Vec<f64>, Vec<Segment>) {
@@ -84,6 +86,25 @@ fn bench(c: &mut Criterion) {
             black_box(identify(harmonic, &x, &segments, &params, &QrSolver::default()).expect("identify"))
         })
     });
+    // The same work as the NumPy script: M = 12 harmonics of every orbit (11225 equations).
+    c.bench_function(
+        "identify paper path K=1, M=12 (the NumPy script's equations)",
+        |b| {
+            let search = CloseReturns::builder(25, 5)
+                .tolerance(0.03)
+                .max_period(16)
+                .build()
+                .expect("search");
+            let params = IdentifyParams::builder(clock)
+                .harmonics(Harmonics::Fixed(12))
+                .build()
+                .expect("params");
+            b.iter(|| {
+                let segments = search.segments(&x).expect("segments");
+                black_box(identify(harmonic, &x, &segments, &params, &QrSolver::default()).expect("identify"))
+            })
+        },
+    );
     c.bench_function("identify hat N=8 (assemble + qr)", |b| {
         b.iter(|| black_box(identify(hat, &x, &segments, &params, &QrSolver::default()).expect("identify")))
     });

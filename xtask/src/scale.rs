@@ -13,6 +13,8 @@ struct Run {
     wall: f64,
     peak_mib: f64,
     stages: Vec<(String, f64)>,
+    /// Largest |identified − true| over the seven coefficients.
+    error: f64,
 }
 
 /// Runs the study and writes the report to `out`.
@@ -107,6 +109,16 @@ fn identify(time: &Path, hbid: &Path, record: &Path, method: &str) -> anyhow::Re
     };
     let wall = parse_clock(&field("Elapsed (wall clock) time (h:mm:ss or m:ss):")?)?;
     let peak_kib: f64 = field("Maximum resident set size (kbytes):")?.parse()?;
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).context("hbid identify --json")?;
+    let error = crate::identification::TRUTH
+        .iter()
+        .map(|(name, truth)| {
+            json["coefficients"][name]
+                .as_f64()
+                .map(|v| (v - truth).abs())
+                .with_context(|| format!("no coefficient {name}"))
+        })
+        .try_fold(0.0_f64, |m, e| e.map(|e| m.max(e)))?;
     let stages = err
         .lines()
         .filter_map(|l| {
@@ -121,6 +133,7 @@ fn identify(time: &Path, hbid: &Path, record: &Path, method: &str) -> anyhow::Re
         wall,
         peak_mib: peak_kib / 1024.0,
         stages,
+        error,
     })
 }
 
@@ -157,17 +170,26 @@ fn render(rows: &[(usize, &str, Run)], sizes: &[usize], repeats: usize) -> anyho
     )?;
     writeln!(
         s,
-        "| samples | method | wall time | per 10^6 samples | peak memory |\n| ---: | --- | ---: | ---: | ---: |"
+        "| samples | method | wall time | per 10^6 samples | peak memory | largest coefficient error |\n| ---: | --- | ---: | ---: | ---: | ---: |"
     )?;
     for (n, method, run) in rows {
         writeln!(
             s,
-            "| {n} | {method} | {:.3} s | {:.3} s | {:.0} MiB |",
+            "| {n} | {method} | {:.3} s | {:.3} s | {:.0} MiB | {:.1e} |",
             run.wall,
             run.wall / (*n as f64 / 1e6),
-            run.peak_mib
+            run.peak_mib,
+            run.error
         )?;
     }
+    writeln!(
+        s,
+        "\nThe error is the largest |identified − true| of the seven coefficients of the harmonic basis \
+         K = 1 (noise-free records). The windowed method's stays at its quadrature floor whatever the \
+         length; the paper's method (close returns at e = 3 %) keeps a bias from the approximate \
+         closure of its orbits, which more data does not remove (its bootstrap intervals then do not cover the truth either). GNU time reports wall \
+         time in hundredths of a second."
+    )?;
     writeln!(s, "\n## Cost against record length\n")?;
     writeln!(
         s,
