@@ -227,9 +227,29 @@ struct Workspace {
     unwrapped: Vec<f64>,
     line: Vec<f64>,
     phi: Vec<f64>,
-    phi_rows: Vec<f64>,
+    /// The basis functions over a group's stretch of samples, one row of `span` per function.
+    table: Vec<f64>,
     u: Vec<f64>,
     v: Vec<f64>,
+}
+
+/// Segments whose starts lie within this many samples share one table of the basis.
+const GROUP_SPAN: usize = 2048;
+
+/// The basis functions at a segment's samples: rows of a group's table.
+#[derive(Clone, Copy)]
+struct Rows<'a> {
+    table: &'a [f64],
+    span: usize,
+    offset: usize,
+}
+
+impl<'a> Rows<'a> {
+    /// Function `i` at the segment's first `len` samples.
+    fn row(&self, i: usize, len: usize) -> &'a [f64] {
+        let at = i * self.span + self.offset;
+        &self.table[at..at + len]
+    }
 }
 
 /// What every segment shares.
@@ -334,7 +354,7 @@ pub fn assemble<B: Basis + ?Sized>(
         unwrapped: Vec::with_capacity(max_len + 1),
         line: Vec::with_capacity(max_len),
         phi: vec![0.0; names.len()],
-        phi_rows: vec![0.0; names.len() * max_len],
+        table: Vec::new(),
         u: Vec::new(),
         v: Vec::new(),
     };
@@ -360,23 +380,69 @@ pub fn assemble<B: Basis + ?Sized>(
         jobs.push((i, *s, m, first, a, b));
         first += r;
     }
-    let blocks: Vec<Block> = jobs
+    // Segments overlap (close returns find the same stretch at several periods): group them by
+    // start so that each group evaluates the basis once per sample of the stretch it covers.
+    jobs.sort_by_key(|job| job.1.start);
+    let mut groups: Vec<Vec<_>> = Vec::new();
+    let mut group_start = 0;
+    for job in jobs {
+        match groups.last_mut() {
+            Some(g) if job.1.start - group_start < GROUP_SPAN => g.push(job),
+            _ => {
+                group_start = job.1.start;
+                groups.push(vec![job]);
+            }
+        }
+    }
+    let mut blocks: Vec<(usize, Block)> = groups
         .into_par_iter()
-        .with_min_len(4)
         .map_init(
             || ws.clone(),
-            |ws, (i, segment, m, first_row, a, b)| {
-                let (winding, rotation_rate) = fill_block(ws, &shared, i, &segment, m, a, b)?;
-                Ok(Block {
-                    segment,
-                    first_row,
-                    harmonics: m,
-                    winding,
-                    rotation_rate,
-                })
+            |ws, group| {
+                let lo = group[0].1.start;
+                let hi = group.iter().map(|j| j.1.start + j.1.len).max().unwrap_or(lo);
+                let span = hi - lo;
+                ws.table.clear();
+                ws.table.resize(ws.phi.len() * span, 0.0);
+                for (n, &x) in signal[lo..hi].iter().enumerate() {
+                    let xe = if domain == Domain::Circle { wrap(x) } else { x };
+                    basis.eval(xe, &mut ws.phi);
+                    for (i, &p) in ws.phi.iter().enumerate() {
+                        ws.table[i * span + n] = p;
+                    }
+                }
+                let table = std::mem::take(&mut ws.table);
+                let out = group
+                    .into_iter()
+                    .map(|(i, segment, m, first_row, a, b)| {
+                        let rows = Rows {
+                            table: &table,
+                            span,
+                            offset: segment.start - lo,
+                        };
+                        let (winding, rotation_rate) = fill_block(ws, &shared, rows, i, &segment, m, a, b)?;
+                        Ok((
+                            i,
+                            Block {
+                                segment,
+                                first_row,
+                                harmonics: m,
+                                winding,
+                                rotation_rate,
+                            },
+                        ))
+                    })
+                    .collect::<Result<Vec<_>, SolveError>>();
+                ws.table = table;
+                out
             },
         )
-        .collect::<Result<_, SolveError>>()?;
+        .collect::<Result<Vec<Vec<_>>, SolveError>>()?
+        .into_iter()
+        .flatten()
+        .collect();
+    blocks.sort_by_key(|(i, _)| *i);
+    let blocks: Vec<Block> = blocks.into_iter().map(|(_, b)| b).collect();
 
     let rhs = Col::from_fn(rows, |i| rhs[i]);
     let names = terms.iter().map(|&t| term_name(t, &names)).collect();
@@ -387,9 +453,11 @@ pub fn assemble<B: Basis + ?Sized>(
 
 /// Fills one segment's rows `a` (`2m + 1` rows, all columns) and right-hand side `b`; returns the
 /// winding number and rotation rate.
+#[allow(clippy::too_many_arguments)]
 fn fill_block<B: Basis + ?Sized>(
     ws: &mut Workspace,
     sh: &Shared<'_, B>,
+    phi: Rows<'_>,
     index: usize,
     seg: &Segment,
     m: usize,
@@ -443,15 +511,7 @@ fn fill_block<B: Basis + ?Sized>(
     // Fourier coefficients of cos(W t) and sin(W t) over the segment: harmonic k only.
     let forcing_rows = (k <= m).then_some((2 * k - 1, 2 * k));
 
-    // Basis functions at every sample.
     let n_fn = ws.phi.len();
-    for (n, &x) in raw[..l].iter().enumerate() {
-        let xe = if sh.domain == Domain::Circle { wrap(x) } else { x };
-        sh.basis.eval(xe, &mut ws.phi);
-        for (i, &p) in ws.phi.iter().enumerate() {
-            ws.phi_rows[i * l + n] = p;
-        }
-    }
 
     for (c, &term) in sh.terms.iter().enumerate() {
         match term {
@@ -494,7 +554,7 @@ fn fill_block<B: Basis + ?Sized>(
 
     // Basis terms: one transform per function, the modulated ones by the shift theorem.
     for i in 0..n_fn {
-        let row = &ws.phi_rows[i * l..(i + 1) * l];
+        let row = phi.row(i, l);
         if row.iter().any(|v| !v.is_finite()) {
             let term = sh.basis.name(i).unwrap_or_default();
             return Err(SolveError::NonFiniteTerm {

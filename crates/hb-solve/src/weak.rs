@@ -171,24 +171,62 @@ struct Workspace {
     forcing: Vec<(f64, f64)>,
 }
 
-/// `Σ a_i b_i` with four independent partial sums, which the compiler vectorizes.
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    let n = a.len().min(b.len());
-    let (a, b) = (&a[..n], &b[..n]);
-    let mut acc = [0.0; 4];
-    let (ca, cb) = (a.chunks_exact(4), b.chunks_exact(4));
-    let tail: f64 = ca
-        .remainder()
-        .iter()
-        .zip(cb.remainder())
-        .map(|(x, y)| x * y)
-        .sum();
-    for (x, y) in ca.zip(cb) {
-        for k in 0..4 {
-            acc[k] += x[k] * y[k];
+/// `Σ a_i b_i` (slices of equal length) in the vectors of `simd`, two partial sums.
+#[inline(always)]
+fn dot<S: pulp::Simd>(simd: S, a: &[f64], b: &[f64]) -> f64 {
+    let (a_head, a_tail) = S::as_simd_f64s(a);
+    let (b_head, b_tail) = S::as_simd_f64s(b);
+    let (mut acc0, mut acc1) = (simd.splat_f64s(0.0), simd.splat_f64s(0.0));
+    let mut pairs_a = a_head.chunks_exact(2);
+    let mut pairs_b = b_head.chunks_exact(2);
+    for (x, y) in (&mut pairs_a).zip(&mut pairs_b) {
+        acc0 = simd.mul_add_f64s(x[0], y[0], acc0);
+        acc1 = simd.mul_add_f64s(x[1], y[1], acc1);
+    }
+    for (x, y) in pairs_a.remainder().iter().zip(pairs_b.remainder()) {
+        acc0 = simd.mul_add_f64s(*x, *y, acc0);
+    }
+    let tail: f64 = a_tail.iter().zip(b_tail).map(|(x, y)| x * y).sum();
+    simd.reduce_sum_f64s(simd.add_f64s(acc0, acc1)) + tail
+}
+
+/// The rows of one window, `A[r, c] = Σ ψ_r g_c` (the damping column `−Σ ψ'_r x`) and
+/// `b[r] = −Σ ψ''_r x`, in the widest SIMD the machine has (chosen at run time: the build itself
+/// targets the x86-64 baseline).
+struct WindowRows<'a> {
+    t: &'a Tables,
+    /// One column of `samples` values per unknown; column 0, the damping term, holds `x − mean`,
+    /// also the data of the right-hand side.
+    g: &'a [f64],
+    samples: usize,
+    cols: usize,
+    a: MatMut<'a, f64>,
+    b: &'a mut [f64],
+}
+
+impl pulp::WithSimd for WindowRows<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, simd: S) {
+        let WindowRows {
+            t,
+            g,
+            samples,
+            cols,
+            mut a,
+            b,
+        } = self;
+        let x = &g[..samples];
+        for (r, br) in b.iter_mut().enumerate() {
+            let (psi, dpsi, ddpsi) = (t.row(&t.psi, r), t.row(&t.dpsi, r), t.row(&t.ddpsi, r));
+            a[(r, 0)] = -dot(simd, dpsi, x);
+            for c in 1..cols {
+                a[(r, c)] = dot(simd, psi, &g[c * samples..(c + 1) * samples]);
+            }
+            *br = -dot(simd, ddpsi, x);
         }
     }
-    (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
 }
 
 /// Assembles the weak-form system of `segments` of `signal` for a model on `basis`: the same
@@ -354,24 +392,22 @@ fn fill_block<B: Basis + ?Sized>(
         _ => None,
     };
     let rows = b.len();
-    // Column 0 is always the damping term x': it holds x − mean, the data of the right-hand side.
-    let x = &ws.g[..samples];
-    for r in 0..rows {
-        let (psi, dpsi, ddpsi) = (t.row(&t.psi, r), t.row(&t.dpsi, r), t.row(&t.ddpsi, r));
-        for (col, &term) in sh.terms.iter().enumerate() {
-            let g = &ws.g[col * samples..(col + 1) * samples];
-            a[(r, col)] = match term {
-                Term::Damping => -dot(dpsi, g),
-                _ => dot(psi, g),
-            };
-        }
-        b[r] = -dot(ddpsi, x);
-        if let Some((fc, fs)) = known {
-            let (ic, is) = psi
+    pulp::Arch::new().dispatch(WindowRows {
+        t,
+        g: &ws.g,
+        samples,
+        cols,
+        a: a.as_mut(),
+        b: &mut *b,
+    });
+    if let Some((fc, fs)) = known {
+        for (r, br) in b.iter_mut().enumerate() {
+            let (ic, is) = t
+                .row(&t.psi, r)
                 .iter()
                 .zip(&ws.forcing)
                 .fold((0.0, 0.0), |(ic, is), (&w, &(c, s))| (ic + w * c, is + w * s));
-            b[r] -= fc * ic + fs * is;
+            *br -= fc * ic + fs * is;
         }
     }
 
@@ -407,6 +443,7 @@ mod tests {
         let (f, df, ddf) = (at(f64::sin), at(f64::cos), at(f64::sin));
         let df: Vec<f64> = df.iter().map(|v| 1.3 * v).collect();
         let ddf: Vec<f64> = ddf.iter().map(|v| -1.69 * v).collect();
+        let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
         (0..2 * m + 1)
             .map(|r| {
                 let e1 = (dot(t.row(&t.dpsi, r), &f) + dot(t.row(&t.psi, r), &df)).abs();

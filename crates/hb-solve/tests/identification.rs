@@ -701,3 +701,46 @@ fn paper_dataset_hat_basis() {
     assert!(dq < 0.1 && dp < 0.1, "q curve RMS {dq}, p curve RMS {dp}");
     assert!(dn < 0.1, "n curve RMS {dn} (true curve 0)");
 }
+
+/// A segment's rows do not depend on the other segments or their order (segments are grouped by
+/// start to share one evaluation of the basis): the rows of the paper's segments assembled in
+/// reverse order, and of a few segments alone, are those of the full system, bit for bit.
+#[test]
+fn rows_do_not_depend_on_the_other_segments() {
+    let (t0, x) = read_paper_dataset();
+    let segs = paper_segments(&x);
+    let clock = SampleClock::nondimensional(25)
+        .unwrap()
+        .with_start_time(t0)
+        .unwrap();
+    let params = IdentifyParams::builder(clock).build().unwrap();
+    let basis = Hat::new(8).unwrap();
+    let all = assemble(&basis, &x, &segs, &params).unwrap();
+    let reversed: Vec<Segment> = segs.iter().rev().copied().collect();
+    let rev = assemble(&basis, &x, &reversed, &params).unwrap();
+    // Far-apart segments (different groups), enough rows for 25 unknowns.
+    let few: Vec<Segment> = segs.iter().step_by(37).copied().collect();
+    let some = assemble(&basis, &x, &few, &params).unwrap();
+    let same_rows = |a: &hb_solve::LinearSystem, ia: usize, b: &hb_solve::LinearSystem, ib: usize| {
+        let (ba, bb) = (&a.blocks()[ia], &b.blocks()[ib]);
+        assert_eq!(ba.segment, bb.segment);
+        assert_eq!(ba.rows(), bb.rows());
+        for r in 0..ba.rows() {
+            assert_eq!(a.rhs()[ba.first_row + r], b.rhs()[bb.first_row + r]);
+            for c in 0..a.unknowns() {
+                assert_eq!(
+                    a.matrix()[(ba.first_row + r, c)],
+                    b.matrix()[(bb.first_row + r, c)]
+                );
+            }
+        }
+    };
+    let n = segs.len();
+    assert_eq!(rev.blocks().len(), n);
+    for i in 0..n {
+        same_rows(&all, i, &rev, n - 1 - i);
+    }
+    for (k, i) in (0..n).step_by(37).enumerate() {
+        same_rows(&all, i, &some, k);
+    }
+}
