@@ -306,10 +306,12 @@ fn bootstrap_with<S: LstsqSolver + ?Sized>(
                 .collect::<Result<_, SolveError>>()?
         }
         Resampler::Stacked => {
-            let reduced: Vec<Mat<f64>> = order
-                .par_iter()
-                .map(|&i| reduce(system, blocks[i].first_row, blocks[i].rows()))
-                .collect();
+            let reduced: Vec<Mat<f64>> = crate::lstsq::on_factor_pool(|| {
+                order
+                    .par_iter()
+                    .map(|&i| reduce(system, blocks[i].first_row, blocks[i].rows()))
+                    .collect()
+            });
             let cols = system.unknowns();
             (0..params.resamples)
                 .into_par_iter()
