@@ -240,11 +240,12 @@ fn reduce_rows(a: MatRef<'_, f64>, b: ColRef<'_, f64>, norms: &[f64]) -> Mat<f64
 
 /// Runs `f` (a factorisation) on a thread pool of its own.
 ///
-/// Measured on the machines this was developed for: after faer's factorisation kernels have run on
-/// a thread (they pick AVX-512 at run time), plain floating-point code on that thread runs about 2.7
-/// times slower for the rest of the process (the close-return scan: 0.27 ms before, 0.82 ms after,
-/// also with one thread; an AVX `vzeroall` does not undo it). Keeping the factorisations on their
-/// own threads leaves the caller's and rayon's global pool unaffected (0.29 ms).
+/// Measured on the project's 2-core benchmark machine (`docs/performance.md`): after faer's
+/// factorisation kernels have run on a thread (they pick AVX-512 at run time), plain floating-point
+/// code on that thread runs about 2.7 times slower for the rest of the process (the close-return
+/// scan: 0.27 ms before, 0.82 ms after, also with one thread; an AVX `vzeroall` does not undo it).
+/// Keeping the factorisations on their own threads leaves the caller's threads and rayon's global
+/// pool unaffected (0.29 ms).
 pub(crate) fn on_factor_pool<R: Send>(f: impl FnOnce() -> R + Send) -> R {
     static POOL: std::sync::OnceLock<Option<rayon::ThreadPool>> = std::sync::OnceLock::new();
     let pool = POOL.get_or_init(|| {
