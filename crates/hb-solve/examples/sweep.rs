@@ -17,32 +17,9 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use upo_search::{CloseReturns, Metric, OrbitSource, Segment};
 
-const TRUTH_K1: [(&str, f64); 7] = [
-    ("x'", 0.03),
-    ("cos(t)*cos(x)", 0.0),
-    ("sin(t)*cos(x)", -1.52),
-    ("cos(x)", 0.0),
-    ("cos(t)*sin(x)", 0.0),
-    ("sin(t)*sin(x)", 0.0),
-    ("sin(x)", 1.0 / (0.8333 * 0.8333)),
-];
-
-fn read_dataset(path: &str) -> Result<(f64, Vec<f64>), Box<dyn Error>> {
-    let text = std::fs::read_to_string(path)?;
-    let mut t0 = None;
-    let mut x = Vec::new();
-    for line in text
-        .lines()
-        .filter(|l| !l.starts_with('#') && !l.starts_with("t,"))
-    {
-        let mut parts = line.split(',');
-        let t: f64 = parts.next().ok_or("missing t")?.trim().parse()?;
-        let theta: f64 = parts.next().ok_or("missing theta")?.trim().parse()?;
-        t0.get_or_insert(t);
-        x.push(theta);
-    }
-    Ok((t0.ok_or("empty data set")?, x))
-}
+#[path = "../tests/common/mod.rs"]
+mod common;
+use common::{TRUTH as TRUTH_K1, read_dataset};
 
 /// Coefficients of the L2 projection of `f` onto the hat space (Gram system on a fine grid).
 fn hat_projection(hat: &Hat, f: impl Fn(f64) -> f64) -> Vec<f64> {
@@ -135,11 +112,9 @@ fn label(h: Harmonics) -> String {
 }
 
 fn main() -> Result<(), Box<dyn Error>> {
-    let default = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/fixtures/paper_dataset.csv"
-    );
-    let path = std::env::args().nth(1).unwrap_or_else(|| default.to_owned());
+    let path = std::env::args()
+        .nth(1)
+        .unwrap_or_else(|| common::PAPER_DATASET.to_owned());
     let (t0, x) = read_dataset(&path)?;
     let clock = SampleClock::nondimensional(25)?.with_start_time(t0)?;
     let solver = QrSolver::default();

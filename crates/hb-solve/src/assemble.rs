@@ -233,6 +233,33 @@ struct Workspace {
     v: Vec<f64>,
 }
 
+/// One segment's share of the stacked system: `(index, segment, harmonics, first row, its rows of
+/// A, its entries of b)`.
+pub(crate) type RowJob<'a> = (usize, Segment, usize, usize, MatMut<'a, f64>, &'a mut [f64]);
+
+/// Splits the stacked system into each segment's `2 M_k + 1` rows (`counts` from [`plan_rows`]),
+/// in the order of `segments`: disjoint views of the column-major matrix, filled in parallel
+/// without a copy.
+pub(crate) fn split_rows<'a>(
+    matrix: MatMut<'a, f64>,
+    rhs: &'a mut [f64],
+    segments: &[Segment],
+    counts: &[usize],
+) -> Vec<RowJob<'a>> {
+    let mut jobs = Vec::with_capacity(segments.len());
+    let (mut rest_a, mut rest_b) = (matrix, rhs);
+    let mut first = 0;
+    for (i, (s, &m)) in segments.iter().zip(counts).enumerate() {
+        let r = 2 * m + 1;
+        let (a, ta) = rest_a.split_at_row_mut(r);
+        let (b, tb) = rest_b.split_at_mut(r);
+        (rest_a, rest_b) = (ta, tb);
+        jobs.push((i, *s, m, first, a, b));
+        first += r;
+    }
+    jobs
+}
+
 /// Segments whose starts lie within this many samples share one table of the basis.
 const GROUP_SPAN: usize = 2048;
 
@@ -366,20 +393,9 @@ pub fn assemble<B: Basis + ?Sized>(
         domain,
     };
 
-    // Each segment writes its own rows of the column-major matrix: disjoint views, no copy.
     let mut matrix = Mat::<f64>::zeros(rows, cols);
     let mut rhs = vec![0.0; rows];
-    let mut jobs = Vec::with_capacity(segments.len());
-    let (mut rest_a, mut rest_b) = (matrix.as_mut(), rhs.as_mut_slice());
-    let mut first = 0;
-    for (i, (s, &m)) in segments.iter().zip(&counts).enumerate() {
-        let r = 2 * m + 1;
-        let (a, ta) = rest_a.split_at_row_mut(r);
-        let (b, tb) = rest_b.split_at_mut(r);
-        (rest_a, rest_b) = (ta, tb);
-        jobs.push((i, *s, m, first, a, b));
-        first += r;
-    }
+    let mut jobs = split_rows(matrix.as_mut(), &mut rhs, segments, &counts);
     // Segments overlap (close returns find the same stretch at several periods): group them by
     // start so that each group evaluates the basis once per sample of the stretch it covers.
     jobs.sort_by_key(|job| job.1.start);

@@ -10,7 +10,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use upo_search::Segment;
 
-use crate::assemble::{Term, check_enough, check_form, plan_rows, term_name, terms};
+use crate::assemble::{Term, check_enough, check_form, plan_rows, split_rows, term_name, terms};
 use crate::{Block, Forcing, Harmonics, IdentifyParams, LinearSystem, SolveError};
 
 /// Parameters of the weak form: the order `p` of the window `w(τ) = sin^p(π τ / T_s)`.
@@ -271,17 +271,7 @@ pub fn assemble_weak<B: Basis + ?Sized>(
 
     let mut matrix = Mat::<f64>::zeros(rows, cols);
     let mut rhs = vec![0.0; rows];
-    let mut jobs = Vec::with_capacity(segments.len());
-    let (mut rest_a, mut rest_b) = (matrix.as_mut(), rhs.as_mut_slice());
-    let mut first = 0;
-    for (i, (s, &m)) in segments.iter().zip(&counts).enumerate() {
-        let r = 2 * m + 1;
-        let (a, ta) = rest_a.split_at_row_mut(r);
-        let (b, tb) = rest_b.split_at_mut(r);
-        (rest_a, rest_b) = (ta, tb);
-        jobs.push((i, *s, m, first, a, b));
-        first += r;
-    }
+    let jobs = split_rows(matrix.as_mut(), &mut rhs, segments, &counts);
     let shared = Shared {
         basis,
         signal,

@@ -17,6 +17,9 @@ use upo_search::{CloseReturns, Metric, Segment};
 // Helpers
 
 /// One classical Runge-Kutta step of x'' = f(t, x, v).
+mod common;
+use common::{TRUTH, read_paper_dataset};
+
 fn rk4(f: &impl Fn(f64, f64, f64) -> f64, t: f64, (x, v): (f64, f64), h: f64) -> (f64, f64) {
     let k1 = (v, f(t, x, v));
     let k2 = (
@@ -75,26 +78,6 @@ fn attractor_samples(
         advance(&mut y, sub);
     }
     (start, out)
-}
-
-fn read_paper_dataset() -> (f64, Vec<f64>) {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/fixtures/paper_dataset.csv"
-    );
-    let text = std::fs::read_to_string(path).expect("the shared fixtures are next to the repository");
-    let mut t0 = None;
-    let mut x = Vec::new();
-    for line in text
-        .lines()
-        .filter(|l| !l.starts_with('#') && !l.starts_with("t,"))
-    {
-        let mut parts = line.split(',');
-        let t: f64 = parts.next().unwrap().trim().parse().unwrap();
-        t0.get_or_insert(t);
-        x.push(parts.next().unwrap().trim().parse().unwrap());
-    }
-    (t0.unwrap(), x)
 }
 
 fn paper_segments(x: &[f64]) -> Vec<Segment> {
@@ -594,16 +577,7 @@ fn paper_dataset_harmonic_basis() {
     let params = IdentifyParams::builder(clock).build().unwrap();
     let basis: BasisKind = Harmonic::new(1).unwrap().into();
     let m = identify(basis, &x, &segs, &params, &QrSolver::default()).unwrap();
-    let truth = [
-        ("x'", 0.03),
-        ("cos(t)*cos(x)", 0.0),
-        ("sin(t)*cos(x)", -1.52),
-        ("cos(x)", 0.0),
-        ("cos(t)*sin(x)", 0.0),
-        ("sin(t)*sin(x)", 0.0),
-        ("sin(x)", 1.0 / (0.8333 * 0.8333)),
-    ];
-    for (name, want) in truth {
+    for (name, want) in TRUTH {
         let c = m.coefficient(name).unwrap();
         assert!((c.value - want).abs() < 0.005, "{name}: {} vs {want}", c.value);
         assert!(

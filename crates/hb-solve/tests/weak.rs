@@ -13,38 +13,10 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 use upo_search::{CloseReturns, Metric, OrbitSource, Windows};
 
-const Q_SIN: f64 = 1.0 / (0.8333 * 0.8333);
+mod common;
+use common::{TRUTH, read_paper_dataset};
 
-/// The pendulum's coefficients in column order for the harmonic basis K = 1.
-const TRUTH: [(&str, f64); 7] = [
-    ("x'", 0.03),
-    ("cos(t)*cos(x)", 0.0),
-    ("sin(t)*cos(x)", -1.52),
-    ("cos(x)", 0.0),
-    ("cos(t)*sin(x)", 0.0),
-    ("sin(t)*sin(x)", 0.0),
-    ("sin(x)", Q_SIN),
-];
-
-fn read_paper_dataset() -> (f64, Vec<f64>) {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/fixtures/paper_dataset.csv"
-    );
-    let text = std::fs::read_to_string(path).expect("the shared fixtures are next to the repository");
-    let mut t0 = None;
-    let mut x = Vec::new();
-    for line in text
-        .lines()
-        .filter(|l| !l.starts_with('#') && !l.starts_with("t,"))
-    {
-        let mut parts = line.split(',');
-        let t: f64 = parts.next().unwrap().trim().parse().unwrap();
-        t0.get_or_insert(t);
-        x.push(parts.next().unwrap().trim().parse().unwrap());
-    }
-    (t0.unwrap(), x)
-}
+const Q_SIN: f64 = TRUTH[6].1;
 
 fn max_error<B: hb_basis::Basis>(m: &IdentifiedModel<B>) -> f64 {
     TRUTH

@@ -1,0 +1,47 @@
+//! What the tests and the `sweep` example of hb-solve share: the shared fixture's paper data set
+//! and the true coefficients of the pendulum.
+// Each user takes the part it needs.
+#![allow(dead_code)]
+
+use std::error::Error;
+
+/// The pendulum's coefficients in column order for the harmonic basis K = 1 (method notes
+/// section 1): x'' + 0.03 x' + (1/0.8333²) sin x − 1.52 sin t cos x = 0.
+pub const TRUTH: [(&str, f64); 7] = [
+    ("x'", 0.03),
+    ("cos(t)*cos(x)", 0.0),
+    ("sin(t)*cos(x)", -1.52),
+    ("cos(x)", 0.0),
+    ("cos(t)*sin(x)", 0.0),
+    ("sin(t)*sin(x)", 0.0),
+    ("sin(x)", 1.0 / (0.8333 * 0.8333)),
+];
+
+/// The shared fixture `paper_dataset.csv`, beside the repository.
+pub const PAPER_DATASET: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../../shared/fixtures/paper_dataset.csv"
+);
+
+/// `(t0, theta)` of a `t,theta` CSV (`#` comments and the header skipped).
+pub fn read_dataset(path: &str) -> Result<(f64, Vec<f64>), Box<dyn Error>> {
+    let text = std::fs::read_to_string(path)?;
+    let mut t0 = None;
+    let mut x = Vec::new();
+    for line in text
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.starts_with("t,"))
+    {
+        let mut parts = line.split(',');
+        let t: f64 = parts.next().ok_or("missing t")?.trim().parse()?;
+        let theta: f64 = parts.next().ok_or("missing theta")?.trim().parse()?;
+        t0.get_or_insert(t);
+        x.push(theta);
+    }
+    Ok((t0.ok_or("empty data set")?, x))
+}
+
+/// The paper's data set from the shared fixtures.
+pub fn read_paper_dataset() -> (f64, Vec<f64>) {
+    read_dataset(PAPER_DATASET).expect("the shared fixtures are next to the repository")
+}
