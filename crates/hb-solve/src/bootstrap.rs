@@ -442,7 +442,8 @@ impl RunMoments {
         let mut sums = vec![0.0; starts * width];
         // Chunks of ℓ run starts: the first run summed afresh, the others by sliding (adding the
         // segment that enters, subtracting the one that leaves), so that rounding cannot build up
-        // over more than 2ℓ terms.
+        // over more than 2ℓ terms. A chunk computes the moments of its 2ℓ − 1 segments itself, so
+        // most segments' moments are computed twice: the price of not holding n of them at once.
         sums.par_chunks_mut(ell * width)
             .enumerate()
             .for_each(|(chunk, out)| {

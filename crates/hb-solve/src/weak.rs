@@ -278,6 +278,7 @@ pub fn assemble_weak<B: Basis + ?Sized>(
         params,
         terms: &terms,
         domain,
+        arch: pulp::Arch::new(),
     };
     let blocks: Vec<Block> = jobs
         .into_par_iter()
@@ -312,6 +313,8 @@ struct Shared<'a, B: ?Sized> {
     params: &'a IdentifyParams,
     terms: &'a [Term],
     domain: Domain,
+    /// The machine's SIMD, detected once per assembly.
+    arch: pulp::Arch,
 }
 
 /// Fills one segment's rows; returns its winding number and rotation rate.
@@ -382,7 +385,7 @@ fn fill_block<B: Basis + ?Sized>(
         _ => None,
     };
     let rows = b.len();
-    pulp::Arch::new().dispatch(WindowRows {
+    sh.arch.dispatch(WindowRows {
         t,
         g: &ws.g,
         samples,
