@@ -233,6 +233,42 @@ struct Workspace {
     v: Vec<f64>,
 }
 
+/// What both assemblies check and count before any work.
+pub(crate) struct Layout {
+    pub(crate) domain: Domain,
+    /// The basis functions' names.
+    pub(crate) names: Vec<String>,
+    /// The unknowns, in column order.
+    pub(crate) terms: Vec<Term>,
+    /// Harmonics `M_k` per segment.
+    pub(crate) counts: Vec<usize>,
+    /// Total equations.
+    pub(crate) rows: usize,
+}
+
+/// Checks the model form against the basis and the segments against the signal, and counts the
+/// equations (enough of them for the unknowns).
+pub(crate) fn layout<B: Basis + ?Sized>(
+    basis: &B,
+    signal: &[f64],
+    segments: &[Segment],
+    params: &IdentifyParams,
+) -> Result<Layout, SolveError> {
+    let domain = basis.domain();
+    check_form(domain, params.form())?;
+    let names = basis.names();
+    let terms = terms(names.len(), params.form());
+    let (counts, rows) = plan_rows(signal, segments, params)?;
+    check_enough(segments.len(), rows, terms.len(), params)?;
+    Ok(Layout {
+        domain,
+        names,
+        terms,
+        counts,
+        rows,
+    })
+}
+
 /// One segment's share of the stacked system: `(index, segment, harmonics, first row, its rows of
 /// A, its entries of b)`.
 pub(crate) type RowJob<'a> = (usize, Segment, usize, usize, MatMut<'a, f64>, &'a mut [f64]);
@@ -362,13 +398,14 @@ pub fn assemble<B: Basis + ?Sized>(
     segments: &[Segment],
     params: &IdentifyParams,
 ) -> Result<LinearSystem, SolveError> {
-    let domain = basis.domain();
-    check_form(domain, params.form())?;
-    let names = basis.names();
-    let terms = terms(names.len(), params.form());
+    let Layout {
+        domain,
+        names,
+        terms,
+        counts,
+        rows,
+    } = layout(basis, signal, segments, params)?;
     let cols = terms.len();
-    let (counts, rows) = plan_rows(signal, segments, params)?;
-    check_enough(segments.len(), rows, cols, params)?;
 
     let mut planner = FourierPlanner::new();
     let mut max_len = 0;

@@ -10,7 +10,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use upo_search::Segment;
 
-use crate::assemble::{Term, check_enough, check_form, plan_rows, split_rows, term_name, terms};
+use crate::assemble::{Layout, Term, layout, split_rows, term_name};
 use crate::{Block, Forcing, Harmonics, IdentifyParams, LinearSystem, SolveError};
 
 /// Parameters of the weak form: the order `p` of the window `w(τ) = sin^p(π τ / T_s)`.
@@ -245,13 +245,14 @@ pub fn assemble_weak<B: Basis + ?Sized>(
     params: &IdentifyParams,
     weak: &WeakForm,
 ) -> Result<LinearSystem, SolveError> {
-    let domain = basis.domain();
-    check_form(domain, params.form())?;
-    let names = basis.names();
-    let terms = terms(names.len(), params.form());
+    let Layout {
+        domain,
+        names,
+        terms,
+        counts,
+        rows,
+    } = layout(basis, signal, segments, params)?;
     let cols = terms.len();
-    let (counts, rows) = plan_rows(signal, segments, params)?;
-    check_enough(segments.len(), rows, cols, params)?;
 
     let h = params.clock().step();
     let mut tables: HashMap<(usize, usize), Tables> = HashMap::new();

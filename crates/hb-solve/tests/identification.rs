@@ -342,10 +342,7 @@ fn whirling_pendulum_orbits_identify_the_pendulum_exactly() {
 #[test]
 fn too_few_orbits_says_how_many() {
     let (t0, x) = read_paper_dataset();
-    let clock = SampleClock::nondimensional(25)
-        .unwrap()
-        .with_start_time(t0)
-        .unwrap();
+    let clock = common::paper_clock(t0);
     let params = IdentifyParams::builder(clock)
         .harmonics(Harmonics::Fixed(3))
         .build()
@@ -377,10 +374,7 @@ fn too_few_orbits_says_how_many() {
 #[test]
 fn bad_input_never_reaches_the_solver() {
     let (t0, mut x) = read_paper_dataset();
-    let clock = SampleClock::nondimensional(25)
-        .unwrap()
-        .with_start_time(t0)
-        .unwrap();
+    let clock = common::paper_clock(t0);
     let params = IdentifyParams::builder(clock).build().unwrap();
     let segs: Vec<Segment> = (0..4)
         .map(|i| Segment {
@@ -570,10 +564,7 @@ fn standard_errors_match_the_textbook_formula() {
 fn paper_dataset_harmonic_basis() {
     let (t0, x) = read_paper_dataset();
     let segs = paper_segments(&x);
-    let clock = SampleClock::nondimensional(25)
-        .unwrap()
-        .with_start_time(t0)
-        .unwrap();
+    let clock = common::paper_clock(t0);
     let params = IdentifyParams::builder(clock).build().unwrap();
     let basis: BasisKind = Harmonic::new(1).unwrap().into();
     let m = identify(basis, &x, &segs, &params, &QrSolver::default()).unwrap();
@@ -644,10 +635,7 @@ fn hat_projection(hat: &Hat, f: impl Fn(f64) -> f64) -> Vec<f64> {
 fn paper_dataset_hat_basis() {
     let (t0, x) = read_paper_dataset();
     let segs = paper_segments(&x);
-    let clock = SampleClock::nondimensional(25)
-        .unwrap()
-        .with_start_time(t0)
-        .unwrap();
+    let clock = common::paper_clock(t0);
     let params = IdentifyParams::builder(clock).build().unwrap();
     let hat = Hat::new(8).unwrap();
     let m = identify(hat, &x, &segs, &params, &QrSolver::default()).unwrap();
@@ -683,10 +671,7 @@ fn paper_dataset_hat_basis() {
 fn rows_do_not_depend_on_the_other_segments() {
     let (t0, x) = read_paper_dataset();
     let segs = paper_segments(&x);
-    let clock = SampleClock::nondimensional(25)
-        .unwrap()
-        .with_start_time(t0)
-        .unwrap();
+    let clock = common::paper_clock(t0);
     let params = IdentifyParams::builder(clock).build().unwrap();
     let basis = Hat::new(8).unwrap();
     let all = assemble(&basis, &x, &segs, &params).unwrap();

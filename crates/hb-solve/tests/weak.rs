@@ -160,10 +160,7 @@ fn unforced_pendulum_on_the_circle() {
 #[test]
 fn paper_dataset_with_the_defaults() {
     let (t0, x) = read_paper_dataset();
-    let clock = SampleClock::nondimensional(25)
-        .unwrap()
-        .with_start_time(t0)
-        .unwrap();
+    let clock = common::paper_clock(t0);
     let windows = Windows::new(25).unwrap();
     let segments = windows.segments(&x).unwrap();
     assert_eq!(segments.len(), 1197);
@@ -217,10 +214,7 @@ fn paper_dataset_with_the_defaults() {
 fn bootstrap_is_deterministic_and_brackets_the_estimate() {
     let (t0, x) = read_paper_dataset();
     let x = with_noise(&x[..250 * 25 + 1], 0.05, 3);
-    let clock = SampleClock::nondimensional(25)
-        .unwrap()
-        .with_start_time(t0)
-        .unwrap();
+    let clock = common::paper_clock(t0);
     let params = IdentifyParams::builder(clock)
         .harmonics(WeakForm::DEFAULT_HARMONICS)
         .build()
@@ -285,10 +279,7 @@ fn bootstrap_is_deterministic_and_brackets_the_estimate() {
 fn bootstrap_of_orbit_segments() {
     let (t0, x) = read_paper_dataset();
     let x = &x[..600 * 25];
-    let clock = SampleClock::nondimensional(25)
-        .unwrap()
-        .with_start_time(t0)
-        .unwrap();
+    let clock = common::paper_clock(t0);
     let params = IdentifyParams::builder(clock).build().unwrap();
     let basis = Harmonic::new(1).unwrap();
     let segments = CloseReturns::builder(25, 5).build().unwrap().segments(x).unwrap();
@@ -321,10 +312,7 @@ fn noise_correction_removes_the_bias_of_the_trigonometric_terms() {
     let est = estimate_noise_sigma(&x, Domain::Circle).unwrap();
     assert!((est / sigma - 1.0).abs() < 0.03, "estimated sigma {est}");
 
-    let clock = SampleClock::nondimensional(25)
-        .unwrap()
-        .with_start_time(t0)
-        .unwrap();
+    let clock = common::paper_clock(t0);
     let segments = Windows::new(25).unwrap().segments(&x).unwrap();
     let fit = |noise: NoiseCorrection| {
         let params = IdentifyParams::builder(clock)
@@ -372,10 +360,7 @@ fn noise_correction_removes_the_bias_of_the_trigonometric_terms() {
 fn noise_correction_needs_single_harmonics_on_the_circle() {
     let (t0, x) = read_paper_dataset();
     let x = &x[..100 * 25 + 1];
-    let clock = SampleClock::nondimensional(25)
-        .unwrap()
-        .with_start_time(t0)
-        .unwrap();
+    let clock = common::paper_clock(t0);
     let params = IdentifyParams::builder(clock)
         .harmonics(WeakForm::DEFAULT_HARMONICS)
         .noise_correction(NoiseCorrection::Given { sigma: 0.1 })

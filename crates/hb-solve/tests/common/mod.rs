@@ -45,3 +45,12 @@ pub fn read_dataset(path: &str) -> Result<(f64, Vec<f64>), Box<dyn Error>> {
 pub fn read_paper_dataset() -> (f64, Vec<f64>) {
     read_dataset(PAPER_DATASET).expect("the shared fixtures are next to the repository")
 }
+
+/// The clock of the paper's data set: non-dimensional time, 25 samples per forcing period, first
+/// sample at `t0`.
+pub fn paper_clock(t0: f64) -> hb_solve::SampleClock {
+    hb_solve::SampleClock::nondimensional(25)
+        .unwrap()
+        .with_start_time(t0)
+        .unwrap()
+}
