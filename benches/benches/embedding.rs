@@ -5,16 +5,16 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use embedding::{AmiParams, FnnParams, Metric, average_mutual_information, false_nearest_neighbours};
+use embedding::{AmiParams, Domain, FnnParams, average_mutual_information, false_nearest_neighbours};
 
 fn run(c: &mut Criterion, name: &str, x: &[f64]) {
-    let ami = AmiParams::new(Metric::Circle)
+    let ami = AmiParams::new(Domain::Circle)
         .with_max_lag(40)
         .expect("valid lag");
-    let fnn_linear = FnnParams::new(Metric::Linear, 5)
+    let fnn_linear = FnnParams::new(Domain::Line, 5)
         .and_then(|p| p.with_max_dim(6))
         .expect("valid params");
-    let fnn_circle = FnnParams::new(Metric::Circle, 5)
+    let fnn_circle = FnnParams::new(Domain::Circle, 5)
         .and_then(|p| p.with_max_dim(6))
         .expect("valid params");
     let mut group = c.benchmark_group(name);

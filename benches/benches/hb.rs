@@ -10,7 +10,7 @@ use upo_search::{CloseReturns, OrbitSource, Segment};
 
 fn paper() -> (f64, Vec<f64>, Vec<Segment>) {
     let (t, x) = hbid_benches::paper_fixture();
-    let search = CloseReturns::builder(25, 5)
+    let search = CloseReturns::builder(&upo_search::SampleClock::nondimensional(25).expect("clock"), 5)
         .tolerance(0.03)
         .max_period(16)
         .build()
@@ -35,8 +35,8 @@ fn bench(c: &mut Criterion) {
         let mut bb = vec![0.0; 13];
         b.iter(|| {
             for s in &segments {
-                let plan = planner.plan(s.len).expect("plan");
-                plan.coefficients(&x[s.start..s.start + s.len], &mut a, &mut bb)
+                let plan = planner.plan(s.len()).expect("plan");
+                plan.coefficients(&x[s.start()..s.start() + s.len()], &mut a, &mut bb)
                     .expect("coefficients");
                 black_box(&a);
             }
@@ -76,7 +76,7 @@ fn bench(c: &mut Criterion) {
     }
     // The paper's identification as the NumPy script does it: close returns, rows, least squares.
     c.bench_function("identify paper path K=1 (close returns + assemble + qr)", |b| {
-        let search = CloseReturns::builder(25, 5)
+        let search = CloseReturns::builder(&upo_search::SampleClock::nondimensional(25).expect("clock"), 5)
             .tolerance(0.03)
             .max_period(16)
             .build()
@@ -90,11 +90,12 @@ fn bench(c: &mut Criterion) {
     c.bench_function(
         "identify paper path K=1, M=12 (the NumPy script's equations)",
         |b| {
-            let search = CloseReturns::builder(25, 5)
-                .tolerance(0.03)
-                .max_period(16)
-                .build()
-                .expect("search");
+            let search =
+                CloseReturns::builder(&upo_search::SampleClock::nondimensional(25).expect("clock"), 5)
+                    .tolerance(0.03)
+                    .max_period(16)
+                    .build()
+                    .expect("search");
             let params = IdentifyParams::builder(clock)
                 .harmonics(Harmonics::Fixed(12))
                 .build()

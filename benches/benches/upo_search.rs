@@ -5,7 +5,8 @@ use std::hint::black_box;
 use upo_search::CloseReturns;
 
 fn bench(c: &mut Criterion) {
-    let search = CloseReturns::new(25, 5).expect("parameters");
+    let search = CloseReturns::new(&upo_search::SampleClock::nondimensional(25).expect("clock"), 5)
+        .expect("parameters");
     let (_, paper) = hbid_benches::paper_fixture();
     let million = hbid_benches::record(1_000_000).expect("simulation");
 

@@ -15,7 +15,8 @@ fn bench(c: &mut Criterion) {
         .expect("clock")
         .with_start_time(t[0])
         .expect("t0");
-    let windows = Windows::new(25).expect("windows");
+    let windows =
+        Windows::new(&upo_search::SampleClock::nondimensional(25).expect("clock")).expect("windows");
     let segments = windows.segments(&x).expect("segments");
     let params = IdentifyParams::builder(clock)
         .harmonics(WeakForm::DEFAULT_HARMONICS)
@@ -36,7 +37,10 @@ fn bench(c: &mut Criterion) {
     c.bench_function("assemble weak K=1 (j <= 2k)", |b| {
         b.iter(|| black_box(assemble_weak(&harmonic, &x, &segments, &params, &weak).expect("assemble")))
     });
-    let windows2 = Windows::builder(25).periods(2).build().expect("windows");
+    let windows2 = Windows::builder(&upo_search::SampleClock::nondimensional(25).expect("clock"))
+        .periods(2)
+        .build()
+        .expect("windows");
     c.bench_function(
         "identify weak K=1, 2 periods, j <= 16 (windows + assemble + qr, the Python reference's setting)",
         |b| {

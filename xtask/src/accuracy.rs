@@ -219,7 +219,9 @@ fn system(method: Method, x: &[f64], t0: f64, weak: WeakSetup) -> anyhow::Result
     let basis = Harmonic::new(1)?;
     Ok(match method {
         Method::Upo | Method::UpoCorrected => {
-            let segments = CloseReturns::builder(P, DELAY).build()?.segments(x)?;
+            let segments = CloseReturns::builder(&upo_search::SampleClock::nondimensional(P)?, DELAY)
+                .build()?
+                .segments(x)?;
             assemble(
                 &basis,
                 x,
@@ -228,7 +230,7 @@ fn system(method: Method, x: &[f64], t0: f64, weak: WeakSetup) -> anyhow::Result
             )?
         }
         Method::Weak | Method::WeakCorrected => {
-            let segments = Windows::builder(P)
+            let segments = Windows::builder(&upo_search::SampleClock::nondimensional(P)?)
                 .periods(weak.periods)
                 .step(weak.step * P)
                 .build()?

@@ -8,7 +8,7 @@ use std::path::Path;
 use hb_basis::{Basis, BasisKind, Harmonic, Hat};
 use hb_solve::{IdentifiedModel, IdentifyParams, QrSolver, SampleClock, WeakForm, identify, identify_weak};
 use pendulum_sim::{
-    CheckConfig, ModelCheck, SecondOrderSystem, StateSpace, check_model, section_energy_distance,
+    CheckConfig, Domain, ModelCheck, SecondOrderSystem, check_model, section_energy_distance,
 };
 use upo_search::Segment;
 
@@ -73,7 +73,7 @@ pub fn identify_windowed(x: &[f64], t0: f64) -> anyhow::Result<Vec<Identified>> 
     let params = IdentifyParams::builder(clock)
         .harmonics(WeakForm::DEFAULT_HARMONICS)
         .build()?;
-    let windows = upo_search::Windows::new(25)?.windows(x)?;
+    let windows = upo_search::Windows::new(&upo_search::SampleClock::nondimensional(25)?)?.windows(x)?;
     let mut out = Vec::new();
     for (label, file, basis) in [
         (
@@ -286,7 +286,7 @@ pub fn validate<S: SecondOrderSystem + Sync>(
     lyapunov_periods: usize,
     initial: (f64, f64),
 ) -> anyhow::Result<Validation> {
-    let cfg = CheckConfig::new(TAU, StateSpace::Circle, points, lyapunov_periods)?
+    let cfg = CheckConfig::new(TAU, Domain::Circle, points, lyapunov_periods)?
         .with_initial(initial.0, initial.1)?;
     Ok(Validation {
         label: label.to_owned(),

@@ -85,7 +85,7 @@ pub fn run(out: &Path, quick: bool) -> anyhow::Result<()> {
     let delay = embed.delay;
 
     // 4. Unstable periodic orbits by close returns (paper section 3.2): e = 3 %, periods 1..16, d = 2.
-    let search = CloseReturns::builder(25, delay)
+    let search = CloseReturns::builder(&upo_search::SampleClock::nondimensional(25)?, delay)
         .tolerance(0.03)
         .max_period(16)
         .dimension(2)
@@ -300,10 +300,10 @@ fn upo_section(report: &mut String, catalogue: &Catalogue, epsilon: f64) -> anyh
 fn pick_orbit<'a>(x: &[f64], catalogue: &'a Catalogue, period: usize, whirling: bool) -> Option<&'a Segment> {
     catalogue
         .representatives()
-        .filter(|s| s.period == period)
+        .filter(|s| s.period() == period)
         .find(|s| {
-            let xc = unwrap(&x[s.start..=s.start + s.len]);
-            let turns = ((xc[s.len] - xc[0]) / std::f64::consts::TAU).round();
+            let xc = unwrap(&x[s.start()..=s.start() + s.len()]);
+            let turns = ((xc[s.len()] - xc[0]) / std::f64::consts::TAU).round();
             (turns != 0.0) == whirling
         })
 }
@@ -321,10 +321,10 @@ fn orbit_figures(
     let h = std::f64::consts::TAU / 25.0;
     let four = pick_orbit(x, catalogue, 4, true).or_else(|| pick_orbit(x, catalogue, 4, false));
     if let Some(seg) = four {
-        let tau: Vec<f64> = (0..=seg.len).map(|n| n as f64 * h).collect();
-        let wrapped = &x[seg.start..=seg.start + seg.len];
+        let tau: Vec<f64> = (0..=seg.len()).map(|n| n as f64 * h).collect();
+        let wrapped = &x[seg.start()..=seg.start() + seg.len()];
         let xc = unwrap(wrapped);
-        let split = RotationSplit::new(&xc, seg.period, h)?;
+        let split = RotationSplit::new(&xc, h)?;
         let name = "fig1a_period4_sampled.png";
         Figure {
             title: "A period-4 orbit as sampled (paper Fig. 1a)",
@@ -405,7 +405,7 @@ fn orbit_figures(
         );
     }
     let delay_plane = |seg: &Segment| -> Vec<(f64, f64)> {
-        (seg.start..=seg.start + seg.len)
+        (seg.start()..=seg.start() + seg.len())
             .filter(|&n| n + delay < x.len())
             .map(|n| (x[n], x[n + delay]))
             .collect()
@@ -422,7 +422,7 @@ fn orbit_figures(
         } else {
             pick_orbit(x, catalogue, period, i == 1)
         }
-        .or_else(|| catalogue.representatives().find(|s| s.period == period));
+        .or_else(|| catalogue.representatives().find(|s| s.period() == period));
         if let Some(seg) = seg {
             series.push(Series {
                 label,
@@ -460,10 +460,10 @@ struct EmbedResult {
 }
 
 fn embed_stage(x: &[f64]) -> anyhow::Result<EmbedResult> {
-    use embedding::{AmiParams, FnnParams, Metric, average_mutual_information, false_nearest_neighbours};
+    use embedding::{AmiParams, Domain, FnnParams, average_mutual_information, false_nearest_neighbours};
     let ami = average_mutual_information(
         x,
-        &AmiParams::new(Metric::Circle).with_bins(16)?.with_max_lag(40)?,
+        &AmiParams::new(Domain::Circle).with_bins(16)?.with_max_lag(40)?,
     )?;
     let delay = ami.delay()?;
     let fnn = |metric| -> anyhow::Result<_> {
@@ -475,8 +475,8 @@ fn embed_stage(x: &[f64]) -> anyhow::Result<EmbedResult> {
     Ok(EmbedResult {
         delay,
         ami: ami.values,
-        fnn_circle: fnn(Metric::Circle)?,
-        fnn_linear: fnn(Metric::Linear)?,
+        fnn_circle: fnn(Domain::Circle)?,
+        fnn_linear: fnn(Domain::Line)?,
     })
 }
 

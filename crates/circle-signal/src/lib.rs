@@ -16,6 +16,15 @@
 //!   oscillation `x_var` (paper section 2, `x_ck = w_ck t + x_var,k`), needed before a whirling
 //!   orbit can be expanded in a Fourier series.
 //!
+//! It also holds the vocabulary every later stage shares, so that each is defined once:
+//!
+//! - [`Domain`]: whether the measured coordinate is an angle on the circle or a displacement on
+//!   the line, and the distance between samples and delay vectors that goes with it;
+//! - [`SampleClock`]: the forcing period, the sample step and the time of the first sample, made
+//!   once from the record;
+//! - [`Segment`] and [`OrbitSource`]: pieces of the record spanning whole forcing periods, and the
+//!   interface of whatever finds them (close returns, plain windows).
+//!
 //! # Example
 //!
 //! ```
@@ -31,12 +40,20 @@
 //! }
 //! assert!((circle_distance(3.1, -3.1) - (2.0 * PI - 6.2)).abs() < 1e-12);
 //!
-//! // 16 samples spanning two forcing periods (k = 2) of length 2π each: h = 4π / 16.
-//! let split = RotationSplit::new(&continuous, 2, 4.0 * PI / 16.0).unwrap();
+//! // 16 samples spanning two forcing periods of length 2π each: h = 4π / 16.
+//! let split = RotationSplit::new(&continuous, 4.0 * PI / 16.0).unwrap();
 //! assert_eq!(split.winding, 2);
 //! assert!((split.rate - 1.0).abs() < 1e-12); // m / k rotations per unit time, times 2π / T
 //! ```
 #![deny(missing_docs)]
+
+mod clock;
+mod domain;
+mod segment;
+
+pub use clock::SampleClock;
+pub use domain::{Domain, UnknownDomain};
+pub use segment::{OrbitSource, Segment};
 
 use std::f64::consts::{PI, TAU};
 
@@ -59,6 +76,27 @@ pub enum CircleError {
         index: usize,
         /// Its value.
         value: f64,
+    },
+    /// The forcing period is not a whole number of sampling steps, and the operation needs one.
+    #[error(
+        "the forcing period is {samples_per_period} sampling steps, not a whole number: this stage \
+         cuts the record into whole forcing periods"
+    )]
+    NotWholePeriod {
+        /// Samples per forcing period, `T / h`.
+        samples_per_period: f64,
+    },
+    /// A segment's closing sample lies outside the record.
+    #[error(
+        "segment of {len} samples from sample {start} does not close inside the record of {record} samples"
+    )]
+    SegmentOutside {
+        /// First sample.
+        start: usize,
+        /// Samples `k P`.
+        len: usize,
+        /// Samples in the record.
+        record: usize,
     },
     /// A parameter is out of range.
     #[error("invalid {name}: {value} ({why})")]
@@ -137,8 +175,8 @@ pub fn unwrap_into(x: &[f64], out: &mut Vec<f64>) {
 
 /// A period-k segment of an unwrapped angle, split into rotation and oscillation.
 ///
-/// With `L` samples one step `h` apart spanning `k` forcing periods, and the closing sample
-/// `x_c[L]` (the first sample of the next repetition), the winding number is
+/// With `L` samples one step `h` apart (spanning `k` forcing periods, `L h = k T`), and the
+/// closing sample `x_c[L]` (the first sample of the next repetition), the winding number is
 /// `m = round((x_c[L] − x_c[0]) / 2π)`, the rotation rate `w = 2π m / (L h)` (for the paper's
 /// non-dimensional time, `L h = 2π k` and `w = m / k`), and the oscillation
 /// `x_var[n] = x_c[n] − w n h` for `n = 0..L` is nearly periodic.
@@ -153,21 +191,31 @@ pub struct RotationSplit {
 }
 
 impl RotationSplit {
-    /// Splits `x_c`, an unwrapped segment of `L + 1` samples (closing sample last) spanning
-    /// `k` forcing periods with sample step `h`.
-    pub fn new(x_c: &[f64], k: usize, h: f64) -> Result<Self, CircleError> {
-        if !(h.is_finite() && h > 0.0) {
+    /// Splits `x_c`, an unwrapped segment of `L + 1` samples (closing sample last) with sample
+    /// step `h`.
+    pub fn new(x_c: &[f64], step: f64) -> Result<Self, CircleError> {
+        let (winding, rate) = Self::winding_and_rate(x_c, step)?;
+        let l = x_c.len() - 1;
+        let oscillation = x_c[..l]
+            .iter()
+            .enumerate()
+            .map(|(n, &x)| x - rate * n as f64 * step)
+            .collect();
+        Ok(Self {
+            winding,
+            rate,
+            oscillation,
+        })
+    }
+
+    /// The winding number `m` and rotation rate `w` of [`RotationSplit::new`], without the
+    /// oscillation (for a caller that subtracts the rotation as it goes).
+    pub fn winding_and_rate(x_c: &[f64], step: f64) -> Result<(i64, f64), CircleError> {
+        if !(step.is_finite() && step > 0.0) {
             return Err(CircleError::InvalidParameter {
                 name: "h",
-                value: h,
+                value: step,
                 why: "must be positive and finite",
-            });
-        }
-        if k == 0 {
-            return Err(CircleError::InvalidParameter {
-                name: "k",
-                value: 0.0,
-                why: "must be at least 1",
             });
         }
         if x_c.len() < 3 {
@@ -181,17 +229,7 @@ impl RotationSplit {
         }
         let l = x_c.len() - 1;
         let turns = ((x_c[l] - x_c[0]) / TAU).round();
-        let rate = TAU * turns / (l as f64 * h);
-        let oscillation = x_c[..l]
-            .iter()
-            .enumerate()
-            .map(|(n, &x)| x - rate * n as f64 * h)
-            .collect();
-        Ok(Self {
-            winding: turns as i64,
-            rate,
-            oscillation,
-        })
+        Ok((turns as i64, TAU * turns / (l as f64 * step)))
     }
 }
 
@@ -233,18 +271,18 @@ mod tests {
     #[test]
     fn split_errors() {
         assert!(matches!(
-            RotationSplit::new(&[0.0, 1.0], 1, 0.1),
+            RotationSplit::new(&[0.0, 1.0], 0.1),
             Err(CircleError::TooShort { .. })
         ));
-        assert!(RotationSplit::new(&[0.0, 1.0, 2.0], 1, 0.0).is_err());
-        assert!(RotationSplit::new(&[0.0, f64::NAN, 2.0], 1, 0.1).is_err());
+        assert!(RotationSplit::new(&[0.0, 1.0, 2.0], 0.0).is_err());
+        assert!(RotationSplit::new(&[0.0, f64::NAN, 2.0], 0.1).is_err());
     }
 
     #[test]
     fn split_oscillating_orbit_has_zero_winding() {
         let h = TAU / 25.0;
         let x: Vec<f64> = (0..=25).map(|n| 1.2 * (n as f64 * h).sin()).collect();
-        let s = RotationSplit::new(&x, 1, h).unwrap();
+        let s = RotationSplit::new(&x, h).unwrap();
         assert_eq!(s.winding, 0);
         assert_eq!(s.rate, 0.0);
         assert_eq!(s.oscillation.len(), 25);

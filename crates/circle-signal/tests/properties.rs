@@ -87,7 +87,7 @@ proptest! {
             })
             .collect();
         let wrapped: Vec<f64> = x_c.iter().map(|&x| wrap(x)).collect();
-        let s = RotationSplit::new(&unwrap(&wrapped), k, h).unwrap();
+        let s = RotationSplit::new(&unwrap(&wrapped), h).unwrap();
         prop_assert_eq!(s.winding, m);
         prop_assert!((s.rate - rate).abs() < 1e-12);
         // The oscillation is periodic: its first sample matches the closing one.

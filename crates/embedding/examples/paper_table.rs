@@ -7,7 +7,7 @@
 
 use std::time::Instant;
 
-use embedding::{AmiParams, FnnParams, Metric, average_mutual_information, false_nearest_neighbours};
+use embedding::{AmiParams, Domain, FnnParams, average_mutual_information, false_nearest_neighbours};
 
 /// TISEAN `false_nearest` at delay 5, ratio 10, no Theiler window, d = 1..6.
 const CLASSIC_FNN: [f64; 6] = [1.000, 0.776, 0.196, 0.033, 0.014, 0.008];
@@ -24,9 +24,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("{} samples from {path}\n", theta.len());
 
     let clock = Instant::now();
-    let lin = average_mutual_information(&theta, &AmiParams::new(Metric::Linear))?;
+    let lin = average_mutual_information(&theta, &AmiParams::new(Domain::Line))?;
     let ami_time = clock.elapsed();
-    let circ = average_mutual_information(&theta, &AmiParams::new(Metric::Circle))?;
+    let circ = average_mutual_information(&theta, &AmiParams::new(Domain::Circle))?;
     println!("| lag | I linear (nats) | I circle (nats) |");
     println!("| --- | --- | --- |");
     for lag in 0..=15 {
@@ -42,7 +42,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // Defaults (Kennel's two tests), then TISEAN's rule (ratio test only, neighbours farther
     // than R_A / R_tol left out), for both metrics.
     let mut rows = Vec::new();
-    for metric in [Metric::Linear, Metric::Circle] {
+    for metric in [Domain::Line, Domain::Circle] {
         let defaults = FnnParams::new(metric, delay)?;
         let tisean = defaults
             .with_attractor_threshold(None)?

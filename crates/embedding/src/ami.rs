@@ -2,7 +2,8 @@ use std::f64::consts::{LN_2, TAU};
 
 use rayon::prelude::*;
 
-use crate::{EmbeddingError, Metric, check_finite};
+use crate::metric::Metric;
+use crate::{Domain, EmbeddingError, check_finite};
 
 /// The unit of the mutual information.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
@@ -19,7 +20,7 @@ pub enum InfoUnit {
 /// Defaults: 16 boxes, lags `0..=40`, nats.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct AmiParams {
-    metric: Metric,
+    metric: Domain,
     bins: usize,
     max_lag: usize,
     unit: InfoUnit,
@@ -34,7 +35,7 @@ impl AmiParams {
     pub const MAX_BINS: usize = 1024;
 
     /// Defaults for a record compared with `metric`.
-    pub fn new(metric: Metric) -> Self {
+    pub fn new(metric: Domain) -> Self {
         Self {
             metric,
             bins: Self::DEFAULT_BINS,
@@ -76,7 +77,7 @@ impl AmiParams {
     }
 
     /// The metric.
-    pub fn metric(&self) -> Metric {
+    pub fn metric(&self) -> Domain {
         self.metric
     }
 
@@ -170,11 +171,11 @@ pub fn average_mutual_information(x: &[f64], params: &AmiParams) -> Result<AmiCu
 }
 
 /// Box index of every sample.
-fn box_indices(x: &[f64], metric: Metric, bins: usize) -> Result<Vec<u16>, EmbeddingError> {
+fn box_indices(x: &[f64], metric: Domain, bins: usize) -> Result<Vec<u16>, EmbeddingError> {
     let top = bins - 1;
     let b = bins as f64;
     let boxes = match metric {
-        Metric::Linear => {
+        Domain::Line => {
             let (lo, hi) = x.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
                 (lo.min(v), hi.max(v))
             });
@@ -186,7 +187,7 @@ fn box_indices(x: &[f64], metric: Metric, bins: usize) -> Result<Vec<u16>, Embed
                 .map(|&v| (((v - lo) / range * b) as usize).min(top) as u16)
                 .collect()
         }
-        Metric::Circle => x
+        Domain::Circle => x
             .iter()
             .map(|&v| ((metric.tree_coordinate(v) / TAU * b) as usize).min(top) as u16)
             .collect(),
@@ -236,7 +237,7 @@ mod tests {
 
     #[test]
     fn params_are_checked() {
-        let p = AmiParams::new(Metric::Linear);
+        let p = AmiParams::new(Domain::Line);
         assert!(p.with_bins(1).is_err());
         assert!(p.with_bins(1025).is_err());
         assert!(p.with_max_lag(0).is_err());
@@ -261,7 +262,7 @@ mod tests {
     fn lag_zero_is_the_entropy_and_bits_are_nats_over_ln2() {
         // Eight values, one per box of 8: entropy ln 8.
         let x: Vec<f64> = (0..8).map(f64::from).collect();
-        let p = AmiParams::new(Metric::Linear)
+        let p = AmiParams::new(Domain::Line)
             .with_bins(8)
             .unwrap()
             .with_max_lag(2)
@@ -277,7 +278,7 @@ mod tests {
     fn independent_boxes_give_zero() {
         // Period-4 pattern a a b b: at lag 1 the pairs (a,a) (a,b) (b,b) (b,a) are equally frequent.
         let x: Vec<f64> = (0..400).map(|k| if k % 4 < 2 { 0.0 } else { 1.0 }).collect();
-        let p = AmiParams::new(Metric::Linear)
+        let p = AmiParams::new(Domain::Line)
             .with_bins(2)
             .unwrap()
             .with_max_lag(2)
@@ -298,7 +299,7 @@ mod tests {
             .enumerate()
             .map(|(k, v)| v + TAU * (k % 5) as f64)
             .collect();
-        let p = AmiParams::new(Metric::Circle).with_max_lag(5).unwrap();
+        let p = AmiParams::new(Domain::Circle).with_max_lag(5).unwrap();
         assert_eq!(
             average_mutual_information(&x, &p).unwrap(),
             average_mutual_information(&y, &p).unwrap()

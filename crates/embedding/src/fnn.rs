@@ -1,4 +1,4 @@
-use crate::{Embedding, EmbeddingError, MAX_SEARCH_DIM, Metric, check_finite, nearest_neighbours};
+use crate::{Domain, Embedding, EmbeddingError, MAX_SEARCH_DIM, check_finite, nearest_neighbours};
 
 /// Parameters of the false-nearest-neighbour test, validated at construction.
 ///
@@ -6,7 +6,7 @@ use crate::{Embedding, EmbeddingError, MAX_SEARCH_DIM, Metric, check_finite, nea
 /// fraction threshold 0.05, no neighbour cutoff.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FnnParams {
-    metric: Metric,
+    metric: Domain,
     delay: usize,
     max_dim: usize,
     ratio_threshold: f64,
@@ -27,7 +27,7 @@ impl FnnParams {
     pub const DEFAULT_FRACTION_THRESHOLD: f64 = 0.05;
 
     /// Defaults for a record compared with `metric`, embedded with delay `delay ≥ 1` samples.
-    pub fn new(metric: Metric, delay: usize) -> Result<Self, EmbeddingError> {
+    pub fn new(metric: Domain, delay: usize) -> Result<Self, EmbeddingError> {
         if delay == 0 {
             return Err(EmbeddingError::InvalidParameter {
                 name: "delay",
@@ -105,7 +105,7 @@ impl FnnParams {
     }
 
     /// The metric.
-    pub fn metric(&self) -> Metric {
+    pub fn metric(&self) -> Domain {
         self.metric
     }
 
@@ -200,7 +200,7 @@ impl FnnLevel {
 pub struct FnnResult {
     /// One entry per dimension, `levels[d − 1]` for dimension `d`.
     pub levels: Vec<FnnLevel>,
-    /// `R_A`, the size of the attractor ([`Metric::spread`] of the record).
+    /// `R_A`, the size of the attractor ([`spread`](crate::spread) of the record).
     pub attractor_size: f64,
     /// The fraction threshold used for [`FnnResult::minimum_dimension`].
     pub fraction_threshold: f64,
@@ -226,7 +226,7 @@ impl FnnResult {
 /// metric and `R_{d+1} = max(R_d, Δ)`, the neighbour is false if
 ///
 /// - distance-ratio test: `Δ / R_d > R_tol`, or
-/// - attractor-size test: `R_{d+1} / R_A > A_tol`, `R_A` the [`Metric::spread`] of the record.
+/// - attractor-size test: `R_{d+1} / R_A > A_tol`, `R_A` the [`spread`](crate::spread) of the record.
 ///
 /// The fraction for `d` is the false count over the vectors that have a neighbour (and, with
 /// [`FnnParams::with_neighbour_cutoff`], a neighbour closer than the cutoff).
@@ -242,7 +242,7 @@ pub fn false_nearest_neighbours(x: &[f64], params: &FnnParams) -> Result<FnnResu
         return Err(EmbeddingError::TooShort { len: x.len(), needed });
     }
     let points = x.len() - max_dim * delay;
-    let attractor_size = metric.spread(x);
+    let attractor_size = crate::metric::spread(metric, x);
     let size_limit = params.attractor_threshold.map(|a| a * attractor_size);
     let distance_limit = params.neighbour_cutoff.map(|c| c * attractor_size);
     let mut levels = Vec::with_capacity(max_dim);
@@ -298,8 +298,8 @@ mod tests {
 
     #[test]
     fn params_are_checked() {
-        assert!(FnnParams::new(Metric::Linear, 0).is_err());
-        let p = FnnParams::new(Metric::Circle, 3).unwrap();
+        assert!(FnnParams::new(Domain::Line, 0).is_err());
+        let p = FnnParams::new(Domain::Circle, 3).unwrap();
         assert!(p.with_max_dim(0).is_err());
         assert!(p.with_max_dim(9).is_err());
         assert!(p.with_ratio_threshold(0.0).is_err());
@@ -326,7 +326,7 @@ mod tests {
         let x: Vec<f64> = (0..2000)
             .map(|n| (std::f64::consts::TAU * n as f64 / period).sin())
             .collect();
-        let p = FnnParams::new(Metric::Linear, 12)
+        let p = FnnParams::new(Domain::Line, 12)
             .unwrap()
             .with_max_dim(3)
             .unwrap()

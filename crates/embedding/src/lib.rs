@@ -20,11 +20,11 @@
 //! - [`nearest_neighbours`]: the all-points nearest-neighbour search behind it (a kiddo k-d tree,
 //!   in parallel with rayon), with a Theiler window.
 //!
-//! # Metric
+//! # Domain and metric
 //!
-//! Every distance goes through a [`Metric`]. [`Metric::Circle`] is the circle distance of paper
+//! Every distance goes through the record's [`Domain`]. [`Domain::Circle`] is the circle distance of paper
 //! eq. 19, `|a − b|_c = |wrap(a − b)|`: the right one for a wrapped angle, where −3.1 and 3.1 are
-//! 0.08 apart. [`Metric::Linear`] takes plain differences, as classic tools do; on a wrapped angle
+//! 0.08 apart. [`Domain::Line`] takes plain differences, as classic tools do; on a wrapped angle
 //! it sees a jump of 2π where the pendulum hardly moved and calls many neighbours false.
 //! Delay vectors are compared with the **maximum** over components (the Chebyshev norm), the same
 //! norm as `circle_signal::max_circle_distance`; in the false-nearest-neighbour test the extra
@@ -35,7 +35,7 @@
 //! # Example
 //!
 //! ```
-//! use embedding::{average_mutual_information, false_nearest_neighbours, AmiParams, FnnParams, Metric};
+//! use embedding::{average_mutual_information, false_nearest_neighbours, AmiParams, FnnParams, Domain};
 //!
 //! // A quasi-periodic angle winding round the circle, seen wrapped.
 //! let x: Vec<f64> = (0..3000)
@@ -45,11 +45,11 @@
 //!     })
 //!     .collect();
 //!
-//! let ami = average_mutual_information(&x, &AmiParams::new(Metric::Circle).with_max_lag(30)?)?;
+//! let ami = average_mutual_information(&x, &AmiParams::new(Domain::Circle).with_max_lag(30)?)?;
 //! assert!(ami.values[0] > ami.values[1]); // I(0) is the entropy of the boxed record
 //! let delay = ami.delay()?;
 //!
-//! let params = FnnParams::new(Metric::Circle, delay)?.with_max_dim(4)?;
+//! let params = FnnParams::new(Domain::Circle, delay)?.with_max_dim(4)?;
 //! let fnn = false_nearest_neighbours(&x, &params)?;
 //! assert_eq!(fnn.levels.len(), 4);
 //! // The orbit lies on a torus: two delay coordinates unfold most of it.
@@ -66,10 +66,11 @@ mod metric;
 mod neighbours;
 
 pub use ami::{AmiCurve, AmiParams, InfoUnit, average_mutual_information};
+pub use circle_signal::Domain;
 pub use delay::{DelayVector, DelayVectors, Embedding};
 pub use error::EmbeddingError;
 pub use fnn::{FnnLevel, FnnParams, FnnResult, false_nearest_neighbours};
-pub use metric::Metric;
+pub use metric::{delay_distance, spread};
 pub use neighbours::{MAX_SEARCH_DIM, Neighbour, nearest_neighbours};
 
 /// The first non-finite sample, as an error.

@@ -6,7 +6,8 @@ use kiddo::ImmutableKdTree;
 use kiddo::dist::Chebyshev;
 use rayon::prelude::*;
 
-use crate::{DelayVectors, EmbeddingError, Metric, check_finite};
+use crate::metric::Metric;
+use crate::{DelayVectors, Domain, EmbeddingError, check_finite};
 
 /// Largest dimension the k-d tree search handles.
 pub const MAX_SEARCH_DIM: usize = 8;
@@ -25,7 +26,7 @@ pub struct Neighbour {
 
 /// The nearest neighbour of every delay vector, by a k-d tree (kiddo), in parallel.
 ///
-/// The neighbour of `S(n)` is the `S(m)` of least [`Metric::vector_distance`] among those with
+/// The neighbour of `S(n)` is the `S(m)` of least the maximum over components of [`Domain::distance`] among those with
 /// `|m − n| > theiler` (the Theiler window; 0 excludes only `n` itself) and a distance above zero
 /// (an exact copy of `S(n)` says nothing about its neighbourhood). `None` if no vector qualifies.
 /// Among neighbours at the same distance any one may be returned.
@@ -33,14 +34,14 @@ pub struct Neighbour {
 /// The circle metric uses the tree's periodic boundary condition: each coordinate is shifted into
 /// `[0, 2π)` and the tree measures `min(|a − b|, 2π − |a − b|)` per axis, which is the circle
 /// distance; the Chebyshev (max) norm combines the axes. The returned distance is recomputed from
-/// the record with [`Metric::vector_distance`].
+/// the record with the maximum over components of [`Domain::distance`].
 ///
 /// # Errors
 /// Non-finite samples, a dimension above [`MAX_SEARCH_DIM`], a Theiler window that leaves no
 /// candidate (`theiler + 1 ≥ len`), or more than `u32::MAX` vectors.
 pub fn nearest_neighbours(
     vectors: &DelayVectors<'_>,
-    metric: Metric,
+    metric: Domain,
     theiler: usize,
 ) -> Result<Vec<Option<Neighbour>>, EmbeddingError> {
     let used = (vectors.len() - 1) + vectors.delay() * (vectors.dim() - 1) + 1;
@@ -70,7 +71,7 @@ pub fn nearest_neighbours(
 
 fn search<const D: usize>(
     vectors: &DelayVectors<'_>,
-    metric: Metric,
+    metric: Domain,
     theiler: usize,
 ) -> Result<Vec<Option<Neighbour>>, EmbeddingError> {
     let points: Vec<[f64; D]> = vectors
@@ -114,8 +115,8 @@ fn search<const D: usize>(
             loop {
                 let k_nz = NonZeroUsize::new(k)?;
                 let found = match metric {
-                    Metric::Linear => tree.query(p).nearest_n::<Chebyshev<f64>>(k_nz).execute(),
-                    Metric::Circle => tree
+                    Domain::Line => tree.query(p).nearest_n::<Chebyshev<f64>>(k_nz).execute(),
+                    Domain::Circle => tree
                         .query(p)
                         .periodic_boundary_condition(&period)
                         .nearest_n::<Chebyshev<f64>>(k_nz)
@@ -130,7 +131,7 @@ fn search<const D: usize>(
                         Some(c) => c.outside_window(r.item as usize, n, theiler),
                     });
                 if let Some(index) = admissible {
-                    let distance = metric.vector_distance(&vectors.at(n), &vectors.at(index));
+                    let distance = metric.delay_distance(&vectors.at(n), &vectors.at(index));
                     return Some(Neighbour { index, distance });
                 }
                 if k >= distinct.len() {
@@ -215,8 +216,8 @@ mod tests {
         // Linear: 3.1 is nearest to 2.0; on the circle it is nearest to −3.1.
         let x = [3.1, 0.0, 2.0, -3.1];
         let v = Embedding::new(1, 1).unwrap().vectors(&x).unwrap();
-        let lin = nearest_neighbours(&v, Metric::Linear, 0).unwrap();
-        let circ = nearest_neighbours(&v, Metric::Circle, 0).unwrap();
+        let lin = nearest_neighbours(&v, Domain::Line, 0).unwrap();
+        let circ = nearest_neighbours(&v, Domain::Circle, 0).unwrap();
         assert_eq!(lin[0].unwrap().index, 2);
         assert_eq!(circ[0].unwrap().index, 3);
         assert!((circ[0].unwrap().distance - (2.0 * PI - 6.2)).abs() < 1e-12);
@@ -227,20 +228,20 @@ mod tests {
         // Points 0, 1 and 2 coincide: none may be the other's neighbour.
         let x = [0.5, 0.5, 0.5, 0.7, 1.5];
         let v = Embedding::new(1, 1).unwrap().vectors(&x).unwrap();
-        let nn = nearest_neighbours(&v, Metric::Linear, 0).unwrap();
+        let nn = nearest_neighbours(&v, Domain::Line, 0).unwrap();
         assert_eq!(nn[0].unwrap().index, 3);
         assert_eq!(nn[4].unwrap().index, 3);
-        let nn = nearest_neighbours(&v, Metric::Linear, 3).unwrap();
+        let nn = nearest_neighbours(&v, Domain::Line, 3).unwrap();
         assert_eq!(nn[0].unwrap().index, 4);
         assert_eq!(nn[2], None);
         assert!(matches!(
-            nearest_neighbours(&v, Metric::Linear, 4),
+            nearest_neighbours(&v, Domain::Line, 4),
             Err(EmbeddingError::TheilerTooLarge { .. })
         ));
         let all_same = [1.0; 6];
         let v = Embedding::new(2, 1).unwrap().vectors(&all_same).unwrap();
         assert!(
-            nearest_neighbours(&v, Metric::Circle, 0)
+            nearest_neighbours(&v, Domain::Circle, 0)
                 .unwrap()
                 .iter()
                 .all(Option::is_none)
@@ -253,7 +254,7 @@ mod tests {
         // level, at the nearest index outside the window that the ascending copy list offers.
         let x: Vec<f64> = (0..3000).map(|n| f64::from((n % 3) as u8) * 0.25).collect();
         let v = Embedding::new(1, 1).unwrap().vectors(&x).unwrap();
-        let nn = nearest_neighbours(&v, Metric::Linear, 2).unwrap();
+        let nn = nearest_neighbours(&v, Domain::Line, 2).unwrap();
         for (n, nb) in nn.iter().enumerate() {
             let nb = nb.unwrap();
             assert_eq!(nb.distance, 0.25, "n = {n}");
@@ -273,7 +274,7 @@ mod tests {
         let x: Vec<f64> = (0..20).map(f64::from).collect();
         let v = Embedding::new(9, 1).unwrap().vectors(&x).unwrap();
         assert!(matches!(
-            nearest_neighbours(&v, Metric::Linear, 0),
+            nearest_neighbours(&v, Domain::Line, 0),
             Err(EmbeddingError::InvalidParameter { .. })
         ));
     }

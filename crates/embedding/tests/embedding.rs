@@ -4,7 +4,7 @@
 use std::f64::consts::{PI, TAU};
 
 use embedding::{
-    AmiParams, DelayVectors, Embedding, FnnParams, Metric, Neighbour, average_mutual_information,
+    AmiParams, DelayVectors, Domain, Embedding, FnnParams, Neighbour, average_mutual_information,
     false_nearest_neighbours, nearest_neighbours,
 };
 use proptest::prelude::*;
@@ -40,16 +40,16 @@ fn paper_data_set_delay_and_dimension() {
     assert_eq!(theta.len(), 30_000);
 
     // TISEAN `mutual -b 16`: first minimum at lag 5, I(5) = 0.0220, I(6) = 0.0225 nats.
-    let ami = average_mutual_information(&theta, &AmiParams::new(Metric::Linear)).unwrap();
+    let ami = average_mutual_information(&theta, &AmiParams::new(Domain::Line)).unwrap();
     assert_eq!(ami.delay().unwrap(), 5);
     assert!((ami.values[5] - 0.0220).abs() < 5e-4, "I(5) = {}", ami.values[5]);
     assert!((ami.values[6] - 0.0225).abs() < 5e-4, "I(6) = {}", ami.values[6]);
-    let circle_ami = average_mutual_information(&theta, &AmiParams::new(Metric::Circle)).unwrap();
+    let circle_ami = average_mutual_information(&theta, &AmiParams::new(Domain::Circle)).unwrap();
     assert_eq!(circle_ami.delay().unwrap(), 5);
 
     // Kennel's two tests, linear metric: within 0.01 of TISEAN (which drops distant neighbours
     // instead of applying the attractor-size test; see docs/embedding.md).
-    let linear = false_nearest_neighbours(&theta, &FnnParams::new(Metric::Linear, 5).unwrap()).unwrap();
+    let linear = false_nearest_neighbours(&theta, &FnnParams::new(Domain::Line, 5).unwrap()).unwrap();
     for (level, classic) in linear.levels.iter().zip(TISEAN_FNN) {
         assert!(
             (level.fraction() - classic).abs() < 0.01,
@@ -61,7 +61,7 @@ fn paper_data_set_delay_and_dimension() {
     assert_eq!(linear.minimum_dimension(), Some(4));
 
     // TISEAN's own rule (ratio test only, neighbours beyond R_A / 10 left out): within 0.002.
-    let tisean = FnnParams::new(Metric::Linear, 5)
+    let tisean = FnnParams::new(Domain::Line, 5)
         .unwrap()
         .with_max_dim(6)
         .unwrap()
@@ -81,7 +81,7 @@ fn paper_data_set_delay_and_dimension() {
 
     // The circle metric removes the wrap artefacts: lower from d = 4, at least 3 times lower from
     // d = 5, and the same minimum dimension as the paper.
-    let circle = false_nearest_neighbours(&theta, &FnnParams::new(Metric::Circle, 5).unwrap()).unwrap();
+    let circle = false_nearest_neighbours(&theta, &FnnParams::new(Domain::Circle, 5).unwrap()).unwrap();
     for (c, l) in circle.levels.iter().zip(&linear.levels).skip(3) {
         assert!(
             c.fraction() < l.fraction(),
@@ -104,7 +104,7 @@ fn paper_data_set_delay_and_dimension() {
 }
 
 /// The definition of `nearest_neighbours`, by exhaustive search.
-fn brute_force(vectors: &DelayVectors<'_>, metric: Metric, theiler: usize) -> Vec<Option<Neighbour>> {
+fn brute_force(vectors: &DelayVectors<'_>, metric: Domain, theiler: usize) -> Vec<Option<Neighbour>> {
     vectors
         .iter()
         .enumerate()
@@ -115,7 +115,7 @@ fn brute_force(vectors: &DelayVectors<'_>, metric: Metric, theiler: usize) -> Ve
                 .filter(|&(m, _)| m.abs_diff(n) > theiler)
                 .map(|(m, b)| Neighbour {
                     index: m,
-                    distance: metric.vector_distance(&a, &b),
+                    distance: embedding::delay_distance(metric, &a, &b),
                 })
                 .filter(|nb| nb.distance > 0.0)
                 .min_by(|p, q| p.distance.total_cmp(&q.distance))
@@ -145,7 +145,7 @@ proptest! {
         theiler in 0usize..=12,
         circle in any::<bool>(),
     ) {
-        let metric = if circle { Metric::Circle } else { Metric::Linear };
+        let metric = if circle { Domain::Circle } else { Domain::Line };
         let Ok(vectors) = Embedding::new(dim, delay).unwrap().vectors(&x) else { return Ok(()) };
         prop_assume!(theiler + 1 < vectors.len());
         let tree = nearest_neighbours(&vectors, metric, theiler).unwrap();
@@ -157,7 +157,7 @@ proptest! {
                 (Some(t), Some(b)) => {
                     prop_assert!((t.distance - b.distance).abs() <= 1e-12, "n = {}: {:?} vs {:?}", n, t, b);
                     prop_assert!(t.index.abs_diff(n) > theiler);
-                    let d = metric.vector_distance(&vectors.get(n).unwrap(), &vectors.get(t.index).unwrap());
+                    let d = embedding::delay_distance(metric, &vectors.get(n).unwrap(), &vectors.get(t.index).unwrap());
                     prop_assert_eq!(d, t.distance);
                 }
                 _ => prop_assert!(false, "n = {}: tree {:?}, brute force {:?}", n, t, b),
@@ -168,7 +168,7 @@ proptest! {
     /// FNN with the circle metric does not see whole turns: x and x + 2π k_n give the same counts.
     #[test]
     fn circle_fnn_ignores_turns(x in prop::collection::vec(-PI..PI, 40..120), turns in prop::collection::vec(-3i32..=3, 120)) {
-        let params = FnnParams::new(Metric::Circle, 2).unwrap().with_max_dim(3).unwrap();
+        let params = FnnParams::new(Domain::Circle, 2).unwrap().with_max_dim(3).unwrap();
         let y: Vec<f64> = x.iter().zip(&turns).map(|(v, &k)| v + TAU * f64::from(k)).collect();
         let (a, b) = (false_nearest_neighbours(&x, &params), false_nearest_neighbours(&y, &params));
         let (Ok(a), Ok(b)) = (a, b) else { return Ok(()) };
@@ -181,7 +181,7 @@ proptest! {
     /// FNN with the linear metric is scale-free: x and 4x give the same counts (exact in binary).
     #[test]
     fn linear_fnn_is_scale_free(x in prop::collection::vec(-10.0..10.0f64, 40..120)) {
-        let params = FnnParams::new(Metric::Linear, 1).unwrap().with_max_dim(4).unwrap();
+        let params = FnnParams::new(Domain::Line, 1).unwrap().with_max_dim(4).unwrap();
         let y: Vec<f64> = x.iter().map(|v| 4.0 * v).collect();
         let a = false_nearest_neighbours(&x, &params).unwrap();
         let b = false_nearest_neighbours(&y, &params).unwrap();

@@ -8,16 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::BasisError;
 
-/// Where the displacement `x` lives.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Domain {
-    /// An angle on the circle S¹, as an encoder reports it (wrapped into `[−π, π)`); whirling orbits
-    /// are unwrapped and split into rotation and oscillation before they are balanced.
-    Circle,
-    /// A displacement on the real line R¹; never unwrapped.
-    Line,
-}
+pub use circle_signal::Domain;
 
 /// A finite set of functions `φ_1 .. φ_N` of the displacement, used to expand the unknown
 /// autonomous and parametric parts of the equation of motion (paper eqs. 4-5).

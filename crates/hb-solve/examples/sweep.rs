@@ -15,7 +15,7 @@ use hb_basis::{Basis, Harmonic, Hat};
 use hb_solve::{Harmonics, IdentifiedModel, IdentifyParams, QrSolver, SampleClock, identify};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use upo_search::{CloseReturns, Metric, OrbitSource, Segment};
+use upo_search::{CloseReturns, Domain, OrbitSource, Segment};
 
 #[path = "../tests/common/mod.rs"]
 mod common;
@@ -75,11 +75,11 @@ fn curve_rms(hat: &Hat, model: &IdentifiedModel<Hat>, which: usize, reference: &
 }
 
 fn segments(x: &[f64], e: f64) -> Result<Vec<Segment>, Box<dyn Error>> {
-    let search = CloseReturns::builder(25, 5)
+    let search = CloseReturns::builder(&upo_search::SampleClock::nondimensional(25)?, 5)
         .tolerance(e)
         .max_period(16)
         .dimension(2)
-        .metric(Metric::Circle)
+        .domain(Domain::Circle)
         .build()?;
     Ok(search.segments(x)?)
 }

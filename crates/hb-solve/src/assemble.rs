@@ -1,11 +1,11 @@
 //! Assembly of the harmonic-balance equations (paper eqs. 15-16).
 
+use circle_signal::Segment;
 use circle_signal::{RotationSplit, unwrap_into, wrap};
 use faer::{Col, ColRef, Mat, MatMut, MatRef};
 use hb_basis::{Basis, Complex64, Domain, FourierPlanner, coefficients_from_bin};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
-use upo_search::Segment;
 
 use crate::{Forcing, IdentifyParams, LstsqFit, LstsqSolver, ModelForm, SolveError};
 
@@ -330,36 +330,34 @@ pub(crate) fn plan_rows(
     segments: &[Segment],
     params: &IdentifyParams,
 ) -> Result<(Vec<usize>, usize), SolveError> {
-    let p = params.clock().samples_per_period();
+    let clock = params.clock();
+    let p = clock.require_whole()?;
     let mut counts = Vec::with_capacity(segments.len());
     let mut rows = 0;
     for (i, s) in segments.iter().enumerate() {
-        let fits = s.period >= 1
-            && s.period.checked_mul(p) == Some(s.len)
-            && s.start.checked_add(s.len).is_some_and(|end| end < signal.len());
-        if !fits {
+        if !s.fits(clock, signal.len()) {
             return Err(SolveError::BadSegment {
                 segment: i,
-                start: s.start,
-                period: s.period,
-                len: s.len,
+                start: s.start(),
+                period: s.period(),
+                len: s.len(),
                 record: signal.len(),
                 samples_per_period: p,
             });
         }
-        if let Some((j, &value)) = signal[s.start..=s.start + s.len]
+        if let Some((j, &value)) = signal[s.start()..=s.start() + s.len()]
             .iter()
             .enumerate()
             .find(|(_, v)| !v.is_finite())
         {
             return Err(SolveError::NonFiniteSample {
                 segment: i,
-                start: s.start,
-                index: s.start + j,
+                start: s.start(),
+                index: s.start() + j,
                 value,
             });
         }
-        let m = params.harmonics().count(s.period, s.len);
+        let m = params.harmonics().count(s.period(), s.len());
         counts.push(m);
         rows += 2 * m + 1;
     }
@@ -377,7 +375,7 @@ pub(crate) fn check_enough(
     if rows > unknowns {
         return Ok(());
     }
-    let p = params.clock().samples_per_period();
+    let p = params.clock().require_whole()?;
     let per_orbit = 2 * params.harmonics().count(1, p) + 1;
     let missing = unknowns + 1 - rows;
     Err(SolveError::TooFewOrbits {
@@ -410,8 +408,8 @@ pub fn assemble<B: Basis + ?Sized>(
     let mut planner = FourierPlanner::new();
     let mut max_len = 0;
     for s in segments {
-        planner.plan(s.len)?;
-        max_len = max_len.max(s.len);
+        planner.plan(s.len())?;
+        max_len = max_len.max(s.len());
     }
     let ws = Workspace {
         planner,
@@ -435,14 +433,14 @@ pub fn assemble<B: Basis + ?Sized>(
     let mut jobs = split_rows(matrix.as_mut(), &mut rhs, segments, &counts);
     // Segments overlap (close returns find the same stretch at several periods): group them by
     // start so that each group evaluates the basis once per sample of the stretch it covers.
-    jobs.sort_by_key(|job| job.1.start);
+    jobs.sort_by_key(|job| job.1.start());
     let mut groups: Vec<Vec<_>> = Vec::new();
     let mut group_start = 0;
     for job in jobs {
         match groups.last_mut() {
-            Some(g) if job.1.start - group_start < GROUP_SPAN => g.push(job),
+            Some(g) if job.1.start() - group_start < GROUP_SPAN => g.push(job),
             _ => {
-                group_start = job.1.start;
+                group_start = job.1.start();
                 groups.push(vec![job]);
             }
         }
@@ -452,8 +450,8 @@ pub fn assemble<B: Basis + ?Sized>(
         .map_init(
             || ws.clone(),
             |ws, group| {
-                let lo = group[0].1.start;
-                let hi = group.iter().map(|j| j.1.start + j.1.len).max().unwrap_or(lo);
+                let lo = group[0].1.start();
+                let hi = group.iter().map(|j| j.1.start() + j.1.len()).max().unwrap_or(lo);
                 let span = hi - lo;
                 ws.table.clear();
                 ws.table.resize(ws.phi.len() * span, 0.0);
@@ -471,7 +469,7 @@ pub fn assemble<B: Basis + ?Sized>(
                         let rows = Rows {
                             table: &table,
                             span,
-                            offset: segment.start - lo,
+                            offset: segment.start() - lo,
                         };
                         let (winding, rotation_rate) = fill_block(ws, &shared, rows, i, &segment, m, a, b)?;
                         Ok((
@@ -520,17 +518,17 @@ fn fill_block<B: Basis + ?Sized>(
     let clock = sh.params.clock();
     let form = sh.params.form();
     let cols = sh.terms.len();
-    let (k, l) = (seg.period, seg.len);
+    let (k, l) = (seg.period(), seg.len());
     let big_w = clock.forcing_frequency();
     let omega = big_w / k as f64;
-    let raw = &sh.signal[seg.start..=seg.start + l];
+    let raw = &sh.signal[seg.start()..=seg.start() + l];
 
     // Rotation and oscillation (paper section 2, x_ck = w_ck t + x_var).
     let split;
     let (winding, rate, osc): (i64, f64, &[f64]) = match sh.domain {
         Domain::Circle => {
             unwrap_into(raw, &mut ws.unwrapped);
-            split = RotationSplit::new(&ws.unwrapped, k, clock.step())?;
+            split = RotationSplit::new(&ws.unwrapped, clock.step())?;
             (split.winding, split.rate, &split.oscillation)
         }
         Domain::Line => {
@@ -558,7 +556,7 @@ fn fill_block<B: Basis + ?Sized>(
     }
 
     // Phase of the forcing at the first sample; cos(W t_n) = cos(θ0 + 2π k n / L).
-    let theta0 = big_w * clock.time(seg.start);
+    let theta0 = big_w * clock.time(seg.start());
     let (s0, c0) = theta0.sin_cos();
     let phasor = Complex64::new(c0, s0);
     // Fourier coefficients of cos(W t) and sin(W t) over the segment: harmonic k only.
@@ -612,7 +610,7 @@ fn fill_block<B: Basis + ?Sized>(
             let term = sh.basis.name(i).unwrap_or_default();
             return Err(SolveError::NonFiniteTerm {
                 segment: index,
-                start: seg.start,
+                start: seg.start(),
                 term,
             });
         }
@@ -648,7 +646,7 @@ fn fill_block<B: Basis + ?Sized>(
     if let Some(row) = bad_row {
         return Err(SolveError::NonFiniteRow {
             segment: index,
-            start: seg.start,
+            start: seg.start(),
             row,
         });
     }

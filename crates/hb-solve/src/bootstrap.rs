@@ -283,7 +283,7 @@ fn bootstrap_with<S: LstsqSolver + ?Sized>(
 ) -> Result<Bootstrap, SolveError> {
     let blocks = system.blocks();
     let mut order: Vec<usize> = (0..blocks.len()).collect();
-    order.sort_by_key(|&i| blocks[i].segment.start);
+    order.sort_by_key(|&i| blocks[i].segment.start());
     let n = order.len();
     let ell = match params.block {
         ResampleBlock::Segments(l) => l,
@@ -552,8 +552,8 @@ fn quantile(v: &[f64], q: f64) -> f64 {
 /// The larger of `ceil(median length / median gap)` over the segments ordered by start and
 /// `ceil(n^(1/3))` for `n` segments; at least 1.
 fn auto_block(system: &LinearSystem) -> usize {
-    let mut starts: Vec<usize> = system.blocks().iter().map(|b| b.segment.start).collect();
-    let mut lens: Vec<usize> = system.blocks().iter().map(|b| b.segment.len).collect();
+    let mut starts: Vec<usize> = system.blocks().iter().map(|b| b.segment.start()).collect();
+    let mut lens: Vec<usize> = system.blocks().iter().map(|b| b.segment.len()).collect();
     if starts.len() < 2 {
         return 1;
     }
@@ -631,7 +631,7 @@ mod tests {
     /// A synthetic system of `n` segments of 5 rows and 3 unknowns, in shuffled order.
     fn synthetic(n: usize, scale: f64) -> LinearSystem {
         use crate::Block;
-        use upo_search::Segment;
+        use circle_signal::Segment;
         let rows = 5 * n;
         let noise = |i: usize| ((i * 7919 + 13) % 1009) as f64 / 1009.0 - 0.5;
         let matrix = Mat::from_fn(rows, 3, |i, j| {
@@ -645,12 +645,14 @@ mod tests {
             .map(|k| {
                 let s = (k * 17) % n; // segments listed out of time order
                 Block {
-                    segment: Segment {
-                        start: 10 * s,
-                        period: 1,
-                        len: 25,
-                        error: 0.0,
-                    },
+                    segment: Segment::new(
+                        10 * s,
+                        1,
+                        &circle_signal::SampleClock::nondimensional(25).unwrap(),
+                        0.0,
+                        usize::MAX,
+                    )
+                    .unwrap(),
                     first_row: 5 * k,
                     harmonics: 2,
                     winding: 0,

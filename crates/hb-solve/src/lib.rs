@@ -47,7 +47,7 @@
 //! ```
 //! use hb_basis::Polynomial;
 //! use hb_solve::{Forcing, IdentifyParams, ModelForm, QrSolver, SampleClock, identify};
-//! use upo_search::Segment;
+//! use circle_signal::Segment;
 //!
 //! let p = 25;
 //! let clock = SampleClock::nondimensional(p)?.with_start_time(3.7)?;
@@ -57,7 +57,7 @@
 //!         (t.cos() + 0.1 * t.sin()) / 1.01
 //!     })
 //!     .collect();
-//! let segment = Segment { start: 0, period: 1, len: p, error: 0.0 };
+//! let segment = Segment::new(0, 1, &clock, 0.0, x.len())?;
 //! // The term cos(t) sits on the left with x'': its known coefficient is −1.
 //! let form = ModelForm::externally_forced(Forcing::Known { cos: -1.0, sin: 0.0 });
 //! let params = IdentifyParams::builder(clock).form(form).build()?;
@@ -75,7 +75,7 @@
 //!         (t.cos() + 0.1 * t.sin()) / 1.01 + (-0.05 * t).exp() * (s * t).cos()
 //!     })
 //!     .collect();
-//! let windows = upo_search::Windows::builder(p).metric(upo_search::Metric::Linear).build()?;
+//! let windows = upo_search::Windows::builder(&clock).domain(circle_signal::Domain::Line).build()?;
 //! let params = IdentifyParams::builder(clock)
 //!     .form(form)
 //!     .harmonics(hb_solve::WeakForm::DEFAULT_HARMONICS)
@@ -112,8 +112,8 @@ pub use params::{
 };
 pub use weak::{WeakForm, assemble_weak};
 
+use circle_signal::{OrbitSource, Segment};
 use hb_basis::Basis;
-use upo_search::{OrbitSource, Segment};
 
 /// Identifies a model on `basis` from `segments` of `signal` (assembly, then least squares).
 ///

@@ -359,8 +359,9 @@ impl<B: Basis> SecondOrderSystem for IdentifiedModel<B> {
 
 /// Name of the JSON format, written in every saved model.
 pub const MODEL_FORMAT: &str = "hbid-model";
-/// Version of the saved-model format this build reads and writes.
-pub const MODEL_VERSION: u32 = 1;
+/// Version of the saved-model format this build reads and writes (2: the clock is written with
+/// an optional whole `samples_per_period` and an optional `step`).
+pub const MODEL_VERSION: u32 = 2;
 /// First bytes of a binary model.
 pub const MODEL_MAGIC: [u8; 8] = *b"HBIDMODL";
 
@@ -561,13 +562,14 @@ mod tests {
     fn rejects_inconsistent_files() {
         let m = pendulum();
         let mut bytes = m.to_bytes().unwrap();
-        bytes[8] = 2;
+        let foreign = MODEL_VERSION + 1;
+        bytes[8..12].copy_from_slice(&foreign.to_le_bytes());
         assert!(matches!(
             IdentifiedModel::<BasisKind>::from_bytes(&bytes),
             Err(SolveError::UnsupportedVersion {
-                found: 2,
-                supported: 1
-            })
+                found,
+                supported: MODEL_VERSION
+            }) if found == foreign
         ));
         assert!(matches!(
             IdentifiedModel::<BasisKind>::from_bytes(b"nonsense"),

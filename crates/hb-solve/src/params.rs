@@ -1,97 +1,10 @@
 //! Parameters of identification: sampling clock, harmonics per orbit, model form.
 
-use std::f64::consts::TAU;
-
 use serde::{Deserialize, Serialize};
 
+pub use circle_signal::SampleClock;
+
 use crate::SolveError;
-
-/// How the record was sampled relative to the forcing.
-///
-/// `P` samples per forcing period `T`, sample step `h = T / P`, forcing angular frequency
-/// `W = 2π / T`, and sample `n` of the record at absolute time `t_n = t_0 + n h`. The forcing terms
-/// of the model are `cos(W t)` and `sin(W t)` at these absolute times, so the phase of the forcing
-/// is part of what is identified. The paper's non-dimensional time is `T = 2π` (`W = 1`).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct SampleClock {
-    forcing_period: f64,
-    samples_per_period: usize,
-    start_time: f64,
-}
-
-impl SampleClock {
-    /// `P >= 2` samples per forcing period of length `T > 0` (in the data's time unit), with
-    /// `t_0 = 0`; set the time of sample 0 with [`with_start_time`](Self::with_start_time).
-    pub fn new(forcing_period: f64, samples_per_period: usize) -> Result<Self, SolveError> {
-        if !(forcing_period.is_finite() && forcing_period > 0.0) {
-            return Err(SolveError::InvalidParameter {
-                name: "forcing period",
-                value: forcing_period,
-                why: "must be positive and finite",
-            });
-        }
-        if samples_per_period < 2 {
-            return Err(SolveError::InvalidParameter {
-                name: "samples per forcing period",
-                value: samples_per_period as f64,
-                why: "must be at least 2",
-            });
-        }
-        Ok(Self {
-            forcing_period,
-            samples_per_period,
-            start_time: 0.0,
-        })
-    }
-
-    /// The paper's non-dimensional time: forcing period `2π`, `P` samples per period, `t_0 = 0`.
-    pub fn nondimensional(samples_per_period: usize) -> Result<Self, SolveError> {
-        Self::new(TAU, samples_per_period)
-    }
-
-    /// The same clock with sample 0 at time `t_0` (finite).
-    pub fn with_start_time(mut self, start_time: f64) -> Result<Self, SolveError> {
-        if !start_time.is_finite() {
-            return Err(SolveError::InvalidParameter {
-                name: "start time",
-                value: start_time,
-                why: "must be finite",
-            });
-        }
-        self.start_time = start_time;
-        Ok(self)
-    }
-
-    /// Samples per forcing period `P`.
-    pub fn samples_per_period(&self) -> usize {
-        self.samples_per_period
-    }
-
-    /// Forcing period `T`.
-    pub fn forcing_period(&self) -> f64 {
-        self.forcing_period
-    }
-
-    /// Forcing angular frequency `W = 2π / T`.
-    pub fn forcing_frequency(&self) -> f64 {
-        TAU / self.forcing_period
-    }
-
-    /// Sample step `h = T / P`.
-    pub fn step(&self) -> f64 {
-        self.forcing_period / self.samples_per_period as f64
-    }
-
-    /// Time `t_0` of sample 0.
-    pub fn start_time(&self) -> f64 {
-        self.start_time
-    }
-
-    /// Absolute time of sample `n`, `t_0 + n h`.
-    pub fn time(&self, n: usize) -> f64 {
-        self.start_time + n as f64 * self.step()
-    }
-}
 
 /// Which harmonics `j` of each orbit give equations (paper eq. 15: `j = 1..M`, plus the mean).
 ///
@@ -380,6 +293,7 @@ impl IdentifyParamsBuilder {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::f64::consts::TAU;
 
     #[test]
     fn clock() {

@@ -3,12 +3,12 @@
 use std::collections::HashMap;
 use std::f64::consts::{PI, TAU};
 
-use circle_signal::{unwrap_into, wrap};
+use circle_signal::Segment;
+use circle_signal::{RotationSplit, unwrap_into, wrap};
 use faer::{Col, Mat, MatMut};
 use hb_basis::{Basis, Domain};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
-use upo_search::Segment;
 
 use crate::assemble::{Layout, Term, layout, split_rows, term_name};
 use crate::{Block, Forcing, Harmonics, IdentifyParams, LinearSystem, SolveError};
@@ -259,9 +259,9 @@ pub fn assemble_weak<B: Basis + ?Sized>(
     let mut max_samples = 0;
     for (s, &m) in segments.iter().zip(&counts) {
         tables
-            .entry((s.len, m))
-            .or_insert_with(|| weak.tables(s.len, m, h, params.clock().forcing_frequency()));
-        max_samples = max_samples.max(s.len + 1);
+            .entry((s.len(), m))
+            .or_insert_with(|| weak.tables(s.len(), m, h, params.clock().forcing_frequency()));
+        max_samples = max_samples.max(s.len() + 1);
     }
     let ws = Workspace {
         x: Vec::with_capacity(max_samples),
@@ -287,7 +287,7 @@ pub fn assemble_weak<B: Basis + ?Sized>(
         .map_init(
             || ws.clone(),
             |ws, (i, segment, m, first_row, a, b)| {
-                let t = &tables[&(segment.len, m)];
+                let t = &tables[&(segment.len(), m)];
                 let (winding, rotation_rate) = fill_block(ws, &shared, t, i, &segment, a, b)?;
                 Ok(Block {
                     segment,
@@ -329,8 +329,8 @@ fn fill_block<B: Basis + ?Sized>(
     b: &mut [f64],
 ) -> Result<(i64, f64), SolveError> {
     let clock = sh.params.clock();
-    let samples = seg.len + 1;
-    let raw = &sh.signal[seg.start..seg.start + samples];
+    let samples = seg.len() + 1;
+    let raw = &sh.signal[seg.start()..seg.start() + samples];
     let cols = sh.terms.len();
 
     // The continuous displacement of the window, less its mean (∫ψ' and ∫ψ'' of a constant
@@ -338,8 +338,7 @@ fn fill_block<B: Basis + ?Sized>(
     let (winding, rate) = match sh.domain {
         Domain::Circle => {
             unwrap_into(raw, &mut ws.x);
-            let turns = ((ws.x[seg.len] - ws.x[0]) / TAU).round();
-            (turns as i64, TAU * turns / (seg.len as f64 * clock.step()))
+            RotationSplit::winding_and_rate(&ws.x, clock.step())?
         }
         Domain::Line => {
             ws.x.clear();
@@ -353,14 +352,14 @@ fn fill_block<B: Basis + ?Sized>(
     ws.g.clear();
     ws.g.resize(cols * samples, 0.0);
     ws.forcing.clear();
-    let (s0, c0) = (clock.forcing_frequency() * clock.time(seg.start)).sin_cos();
+    let (s0, c0) = (clock.forcing_frequency() * clock.time(seg.start())).sin_cos();
     for (n, &xr) in raw.iter().enumerate() {
         let xe = if sh.domain == Domain::Circle { wrap(xr) } else { xr };
         sh.basis.eval(xe, &mut ws.phi);
         if let Some(i) = ws.phi.iter().position(|v| !v.is_finite()) {
             return Err(SolveError::NonFiniteTerm {
                 segment: index,
-                start: seg.start,
+                start: seg.start(),
                 term: sh.basis.name(i).unwrap_or_default(),
             });
         }
@@ -409,7 +408,7 @@ fn fill_block<B: Basis + ?Sized>(
     if let Some(row) = bad_row {
         return Err(SolveError::NonFiniteRow {
             segment: index,
-            start: seg.start,
+            start: seg.start(),
             row,
         });
     }

@@ -11,7 +11,7 @@ use hb_solve::{
 };
 use pendulum_sim::{Pendulum, SecondOrderSystem};
 use proptest::prelude::*;
-use upo_search::{CloseReturns, Metric, Segment};
+use upo_search::{CloseReturns, Domain, Segment};
 
 // ---------------------------------------------------------------------------------------------
 // Helpers
@@ -82,11 +82,11 @@ fn attractor_samples(
 
 fn paper_segments(x: &[f64]) -> Vec<Segment> {
     use upo_search::OrbitSource;
-    let search = CloseReturns::builder(25, 5)
+    let search = CloseReturns::builder(&SampleClock::nondimensional(25).unwrap(), 5)
         .tolerance(0.03)
         .max_period(16)
         .dimension(2)
-        .metric(Metric::Circle)
+        .domain(Domain::Circle)
         .build()
         .unwrap();
     search.segments(x).unwrap()
@@ -116,20 +116,7 @@ fn linear_oscillator() -> (SampleClock, Vec<f64>, (f64, f64, f64)) {
 fn linear_oscillator_with_known_forcing_is_recovered_exactly() {
     let (clock, x, (c, k, amp)) = linear_oscillator();
     // One period-1 segment starting off the forcing's phase, and one period-2 segment.
-    let segments = [
-        Segment {
-            start: 13,
-            period: 1,
-            len: 40,
-            error: 0.0,
-        },
-        Segment {
-            start: 3,
-            period: 2,
-            len: 80,
-            error: 0.0,
-        },
-    ];
+    let segments = [common::segment(13, 1, 40, 0.0), common::segment(3, 2, 80, 0.0)];
     let form = ModelForm::externally_forced(Forcing::Known { cos: -amp, sin: 0.0 });
     let params = IdentifyParams::builder(clock).form(form).build().unwrap();
     for solver in [&QrSolver::default() as &dyn LstsqSolver, &SvdSolver::default()] {
@@ -155,12 +142,7 @@ fn linear_oscillator_with_known_forcing_is_recovered_exactly() {
 fn linear_oscillator_with_unknown_forcing_is_rank_deficient() {
     // One sinusoidal orbit balances only harmonic 1: two equations for c, k, F_c, F_s.
     let (clock, x, _) = linear_oscillator();
-    let segments = [Segment {
-        start: 13,
-        period: 1,
-        len: 40,
-        error: 0.0,
-    }];
+    let segments = [common::segment(13, 1, 40, 0.0)];
     let params = IdentifyParams::builder(clock)
         .form(ModelForm::externally_forced(Forcing::Identified))
         .build()
@@ -209,20 +191,7 @@ fn duffing_orbit_identifies_stiffness_nonlinearity_and_forcing() {
         .unwrap()
         .with_start_time(t0)
         .unwrap();
-    let segments = [
-        Segment {
-            start: 21,
-            period: 1,
-            len: p,
-            error: 0.0,
-        },
-        Segment {
-            start: 5,
-            period: 2,
-            len: 2 * p,
-            error: 0.0,
-        },
-    ];
+    let segments = [common::segment(21, 1, p, 0.0), common::segment(5, 2, 2 * p, 0.0)];
     let params = IdentifyParams::builder(clock)
         .harmonics(Harmonics::Fixed(20))
         .form(ModelForm::externally_forced(Forcing::Identified))
@@ -284,18 +253,8 @@ fn whirling_pendulum_orbits_identify_the_pendulum_exactly() {
     assert_eq!(b_start % p, 0);
     record.extend(xb.iter().map(|&v| wrap(v)));
     let segments = [
-        Segment {
-            start: 17,
-            period: 2,
-            len: 2 * p,
-            error: 0.0,
-        },
-        Segment {
-            start: b_start + 29,
-            period: 3,
-            len: 3 * p,
-            error: 0.0,
-        },
+        common::segment(17, 2, 2 * p, 0.0),
+        common::segment(b_start + 29, 3, 3 * p, 0.0),
     ];
     let want = [
         ("x'", 0.2),
@@ -347,12 +306,7 @@ fn too_few_orbits_says_how_many() {
         .harmonics(Harmonics::Fixed(3))
         .build()
         .unwrap();
-    let one = [Segment {
-        start: 0,
-        period: 1,
-        len: 25,
-        error: 0.0,
-    }];
+    let one = [common::segment(0, 1, 25, 0.0)];
     // Harmonic K = 3: 1 + 3·6 = 19 unknowns; a period-1 orbit gives 7 equations; 20 are needed.
     let err = identify(Harmonic::new(3).unwrap(), &x, &one, &params, &QrSolver::default()).unwrap_err();
     assert!(
@@ -376,14 +330,7 @@ fn bad_input_never_reaches_the_solver() {
     let (t0, mut x) = read_paper_dataset();
     let clock = common::paper_clock(t0);
     let params = IdentifyParams::builder(clock).build().unwrap();
-    let segs: Vec<Segment> = (0..4)
-        .map(|i| Segment {
-            start: 100 * i,
-            period: 1,
-            len: 25,
-            error: 0.0,
-        })
-        .collect();
+    let segs: Vec<Segment> = (0..4).map(|i| common::segment(100 * i, 1, 25, 0.0)).collect();
     x[310] = f64::NAN;
     let err = identify(
         Harmonic::new(1).unwrap(),
@@ -405,22 +352,12 @@ fn bad_input_never_reaches_the_solver() {
         "{err:?}"
     );
     x[310] = 0.0;
-    let bad = [Segment {
-        start: 0,
-        period: 2,
-        len: 25,
-        error: 0.0,
-    }];
+    let bad = [common::segment(0, 2, 25, 0.0)];
     assert!(matches!(
         identify(Harmonic::new(1).unwrap(), &x, &bad, &params, &QrSolver::default()),
         Err(SolveError::BadSegment { segment: 0, .. })
     ));
-    let past_end = [Segment {
-        start: x.len() - 25,
-        period: 1,
-        len: 25,
-        error: 0.0,
-    }];
+    let past_end = [common::segment(x.len() - 25, 1, 25, 0.0)];
     assert!(matches!(
         identify(
             Harmonic::new(1).unwrap(),
@@ -452,20 +389,7 @@ fn bad_input_never_reaches_the_solver() {
         .form(ModelForm::externally_forced(Forcing::None))
         .build()
         .unwrap();
-    let segs = [
-        Segment {
-            start: 0,
-            period: 1,
-            len: 25,
-            error: 0.0,
-        },
-        Segment {
-            start: 50,
-            period: 1,
-            len: 25,
-            error: 0.0,
-        },
-    ];
+    let segs = [common::segment(0, 1, 25, 0.0), common::segment(50, 1, 25, 0.0)];
     assert!(matches!(
         identify(Polynomial::new(3).unwrap(), &huge, &segs, &params, &QrSolver::default()),
         Err(SolveError::NonFiniteTerm { segment: 0, ref term, .. }) if term == "x^3"
@@ -583,7 +507,7 @@ fn paper_dataset_harmonic_basis() {
     assert!(s.condition > 1.0 && s.condition < 100.0);
 
     // The same through the OrbitSource and the SVD, and after a save/load round trip.
-    let search = CloseReturns::builder(25, 5)
+    let search = CloseReturns::builder(&SampleClock::nondimensional(25).unwrap(), 5)
         .tolerance(0.03)
         .max_period(16)
         .dimension(2)

@@ -11,7 +11,7 @@ use pendulum_sim::{Pendulum, SimulationConfig, Tolerances, simulate};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
-use upo_search::{CloseReturns, Metric, OrbitSource, Windows};
+use upo_search::{CloseReturns, OrbitSource, Windows};
 
 mod common;
 use common::{TRUTH, read_paper_dataset};
@@ -58,10 +58,13 @@ fn linear_transient() -> (SampleClock, Vec<f64>, [f64; 4]) {
 #[test]
 fn non_periodic_windows_of_a_linear_oscillator_are_exact() {
     let (clock, x, want) = linear_transient();
-    let windows = Windows::builder(40).metric(Metric::Linear).build().unwrap();
+    let windows = Windows::builder(&SampleClock::nondimensional(40).unwrap())
+        .domain(Domain::Line)
+        .build()
+        .unwrap();
     let segments = windows.segments(&x).unwrap();
     // Not one window closes: the free oscillation is still there.
-    assert!(segments.iter().all(|s| s.error > 1e-3), "{segments:?}");
+    assert!(segments.iter().all(|s| s.error() > 1e-3), "{segments:?}");
     let form = ModelForm::externally_forced(Forcing::Identified);
     for (p, harmonics, tol) in [
         (4, WeakForm::DEFAULT_HARMONICS, 1e-6),
@@ -136,7 +139,11 @@ fn unforced_pendulum_on_the_circle() {
         .harmonics(Harmonics::Fixed(6))
         .build()
         .unwrap();
-    let windows = Windows::builder(40).periods(3).step(20).build().unwrap();
+    let windows = Windows::builder(&SampleClock::nondimensional(40).unwrap())
+        .periods(3)
+        .step(20)
+        .build()
+        .unwrap();
     let m = identify_weak_from_source(
         Harmonic::new(1).unwrap(),
         &x,
@@ -161,7 +168,7 @@ fn unforced_pendulum_on_the_circle() {
 fn paper_dataset_with_the_defaults() {
     let (t0, x) = read_paper_dataset();
     let clock = common::paper_clock(t0);
-    let windows = Windows::new(25).unwrap();
+    let windows = Windows::new(&SampleClock::nondimensional(25).unwrap()).unwrap();
     let segments = windows.segments(&x).unwrap();
     assert_eq!(segments.len(), 1197);
     let params = IdentifyParams::builder(clock)
@@ -184,7 +191,7 @@ fn paper_dataset_with_the_defaults() {
     assert!(s.whirling_segments > 0 && s.whirling_segments < s.segments);
 
     // By hand: 2-period windows and 16 harmonics.
-    let segments = Windows::builder(25)
+    let segments = Windows::builder(&SampleClock::nondimensional(25).unwrap())
         .periods(2)
         .build()
         .unwrap()
@@ -220,7 +227,10 @@ fn bootstrap_is_deterministic_and_brackets_the_estimate() {
         .build()
         .unwrap();
     let basis = Harmonic::new(1).unwrap();
-    let segments = Windows::new(25).unwrap().segments(&x).unwrap();
+    let segments = Windows::new(&SampleClock::nondimensional(25).unwrap())
+        .unwrap()
+        .segments(&x)
+        .unwrap();
     let system = assemble_weak(&basis, &x, &segments, &params, &WeakForm::default()).unwrap();
     let bp = BootstrapParams::builder()
         .resamples(200)
@@ -282,7 +292,11 @@ fn bootstrap_of_orbit_segments() {
     let clock = common::paper_clock(t0);
     let params = IdentifyParams::builder(clock).build().unwrap();
     let basis = Harmonic::new(1).unwrap();
-    let segments = CloseReturns::builder(25, 5).build().unwrap().segments(x).unwrap();
+    let segments = CloseReturns::builder(&SampleClock::nondimensional(25).unwrap(), 5)
+        .build()
+        .unwrap()
+        .segments(x)
+        .unwrap();
     let system = assemble(&basis, x, &segments, &params).unwrap();
     let bp = BootstrapParams::builder().resamples(100).build().unwrap();
     let boot = bootstrap(&system, &QrSolver::default(), &bp).unwrap();
@@ -313,7 +327,10 @@ fn noise_correction_removes_the_bias_of_the_trigonometric_terms() {
     assert!((est / sigma - 1.0).abs() < 0.03, "estimated sigma {est}");
 
     let clock = common::paper_clock(t0);
-    let segments = Windows::new(25).unwrap().segments(&x).unwrap();
+    let segments = Windows::new(&SampleClock::nondimensional(25).unwrap())
+        .unwrap()
+        .segments(&x)
+        .unwrap();
     let fit = |noise: NoiseCorrection| {
         let params = IdentifyParams::builder(clock)
             .harmonics(WeakForm::DEFAULT_HARMONICS)
@@ -366,7 +383,10 @@ fn noise_correction_needs_single_harmonics_on_the_circle() {
         .noise_correction(NoiseCorrection::Given { sigma: 0.1 })
         .build()
         .unwrap();
-    let segments = Windows::new(25).unwrap().segments(x).unwrap();
+    let segments = Windows::new(&SampleClock::nondimensional(25).unwrap())
+        .unwrap()
+        .segments(x)
+        .unwrap();
     let hat = Hat::new(8).unwrap();
     assert!(matches!(
         assemble_weak(&hat, x, &segments, &params, &WeakForm::default()),
@@ -399,8 +419,8 @@ fn bad_input_is_refused() {
         .unwrap();
     let weak = WeakForm::default();
     let basis = Polynomial::new(1).unwrap();
-    let mut segments = Windows::builder(40)
-        .metric(Metric::Linear)
+    let mut segments = Windows::builder(&SampleClock::nondimensional(40).unwrap())
+        .domain(Domain::Line)
         .build()
         .unwrap()
         .segments(&x)
@@ -417,7 +437,7 @@ fn bad_input_is_refused() {
         Err(SolveError::TooFewOrbits { .. })
     ));
     // A window that runs past the record.
-    segments[0].start = x.len() - 10;
+    segments[0] = common::segment(x.len() - 10, 3, 120, 0.0);
     assert!(matches!(
         assemble_weak(&basis, &x, &segments, &params, &weak),
         Err(SolveError::BadSegment { segment: 0, .. })

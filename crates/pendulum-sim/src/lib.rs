@@ -46,6 +46,7 @@ mod system;
 mod tableau;
 mod validate;
 
+pub use circle_signal::Domain;
 pub use dop853::{Dop853, OdeSystem, Stats, Tolerances};
 pub use error::SimError;
 pub use simulate::{
@@ -54,6 +55,6 @@ pub use simulate::{
 };
 pub use system::{Pendulum, SecondOrderSystem};
 pub use validate::{
-    CheckConfig, ModelCheck, PeriodicOrbit, Seeds, ShootingConfig, StateSpace, Variational, check_model,
-    energy_distance, flow_with_jacobian, periodic_orbits, section_energy_distance, whirling_fraction,
+    CheckConfig, ModelCheck, PeriodicOrbit, Seeds, ShootingConfig, Variational, check_model, energy_distance,
+    flow_with_jacobian, periodic_orbits, section_energy_distance, whirling_fraction,
 };

@@ -2,6 +2,7 @@
 //! stroboscopic map by Newton shooting, the distance between Poincaré sections, and the fraction
 //! of time spent whirling.
 
+use circle_signal::Domain;
 use std::f64::consts::{PI, TAU};
 
 use nalgebra::{Matrix2, Vector2};
@@ -54,16 +55,6 @@ pub fn flow_with_jacobian<S: SecondOrderSystem>(
     Ok(([y[0], y[1]], Matrix2::new(y[2], y[4], y[3], y[5])))
 }
 
-/// Where the state lives: an angle is compared modulo 2π, so a whirling orbit that returns after
-/// whole turns is periodic.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-pub enum StateSpace {
-    /// `x` is an angle.
-    Circle,
-    /// `x` is a displacement.
-    Line,
-}
-
 /// Where Newton's method starts.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Seeds {
@@ -91,7 +82,7 @@ pub struct ShootingConfig {
     phase: f64,
     periods: usize,
     seeds: Seeds,
-    space: StateSpace,
+    space: Domain,
     tolerances: Tolerances,
     newton_tolerance: f64,
     max_iterations: usize,
@@ -112,7 +103,7 @@ impl Default for ShootingConfig {
                 x_range: (-PI, PI),
                 v_range: (-3.0, 3.0),
             },
-            space: StateSpace::Circle,
+            space: Domain::Circle,
             tolerances: Tolerances::new(1e-11, 1e-12).expect("valid tolerances"),
             newton_tolerance: 1e-9,
             max_iterations: 40,
@@ -174,7 +165,7 @@ impl ShootingConfig {
         Ok(self)
     }
     /// Whether `x` is an angle (default) or a displacement.
-    pub fn with_space(mut self, space: StateSpace) -> Self {
+    pub fn with_space(mut self, space: Domain) -> Self {
         self.space = space;
         self
     }
@@ -241,8 +232,8 @@ pub fn periodic_orbits<S: SecondOrderSystem + Sync>(
     for orbit in solutions.into_iter().flatten() {
         let same = |o: &PeriodicOrbit| {
             let dx = match config.space {
-                StateSpace::Circle => circle_signal::circle_distance(o.x, orbit.x),
-                StateSpace::Line => (o.x - orbit.x).abs(),
+                Domain::Circle => circle_signal::circle_distance(o.x, orbit.x),
+                Domain::Line => (o.x - orbit.x).abs(),
             };
             dx < 1e-6 && (o.v - orbit.v).abs() < 1e-6
         };
@@ -273,8 +264,8 @@ fn newton<S: SecondOrderSystem>(
         let tol = if polishing { config.tolerances } else { loose };
         let (end, m) = flow_with_jacobian(system, t0, z, duration, tol).ok()?;
         let turns = match config.space {
-            StateSpace::Circle => ((end[0] - z[0]) / TAU).round(),
-            StateSpace::Line => 0.0,
+            Domain::Circle => ((end[0] - z[0]) / TAU).round(),
+            Domain::Line => 0.0,
         };
         let f = Vector2::new(end[0] - z[0] - TAU * turns, end[1] - z[1]);
         let residual = f.norm();
@@ -287,8 +278,8 @@ fn newton<S: SecondOrderSystem>(
         if polishing && residual < config.newton_tolerance {
             let eig = m.complex_eigenvalues();
             let x = match config.space {
-                StateSpace::Circle => circle_signal::wrap(z[0]),
-                StateSpace::Line => z[0],
+                Domain::Circle => circle_signal::wrap(z[0]),
+                Domain::Line => z[0],
             };
             return Some(PeriodicOrbit {
                 x,
@@ -302,12 +293,12 @@ fn newton<S: SecondOrderSystem>(
         // Damp long steps: Newton's basin on a chaotic map is small.
         let scale = (0.5 / step.norm()).min(1.0);
         z = [z[0] + scale * step[0], z[1] + scale * step[1]];
-        if config.space == StateSpace::Circle {
+        if config.space == Domain::Circle {
             z[0] = circle_signal::wrap(z[0]);
         }
         // Far from its seed: diverged (and integrating wild states only costs time).
         let far = |a: f64, b: f64| (a - b).abs() > 3.0 * (1.0 + b.abs());
-        if far(z[1], seed[1]) || (config.space == StateSpace::Line && far(z[0], seed[0])) {
+        if far(z[1], seed[1]) || (config.space == Domain::Line && far(z[0], seed[0])) {
             return None;
         }
     }
@@ -383,7 +374,7 @@ impl CheckConfig {
     /// section, for a forcing period `T` and a state space.
     pub fn new(
         forcing_period: f64,
-        space: StateSpace,
+        space: Domain,
         points: usize,
         lyapunov_periods: usize,
     ) -> Result<Self, SimError> {
@@ -442,7 +433,7 @@ pub fn check_model<S: SecondOrderSystem + Sync>(
     let xs: Vec<f64> = section.iter().map(|p| p[0]).collect();
     let whirling = whirling_fraction(&xs, 1).unwrap_or(0.0);
     let lyapunov = largest_lyapunov(system, &config.lyapunov, |_, _| {})?;
-    let circle = config.shooting.space == StateSpace::Circle;
+    let circle = config.shooting.space == Domain::Circle;
     let mut returns: Vec<(f64, [f64; 2])> = section
         .windows(2)
         .map(|w| {
@@ -534,7 +525,7 @@ mod tests {
             }
         }
         let cfg = ShootingConfig::default()
-            .with_space(StateSpace::Line)
+            .with_space(Domain::Line)
             .with_seeds(2, 2, (-2.0, 2.0), (-2.0, 2.0))
             .unwrap();
         let orbits = periodic_orbits(&Linear, &cfg);
@@ -549,7 +540,7 @@ mod tests {
 
     #[test]
     fn checking_the_pendulum_against_itself() {
-        let cfg = CheckConfig::new(TAU, StateSpace::Circle, 400, 300).unwrap();
+        let cfg = CheckConfig::new(TAU, Domain::Circle, 400, 300).unwrap();
         let a = check_model(&Pendulum::paper(), &cfg).unwrap();
         let b = check_model(&Pendulum::paper(), &cfg.clone().with_initial(1.0, 0.5).unwrap()).unwrap();
         assert_eq!(a.section.len(), 400);

@@ -38,7 +38,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         theta.push(field.trim().parse::<f64>()?);
     }
 
-    let search = CloseReturns::builder(p, td)
+    let search = CloseReturns::builder(&upo_search::SampleClock::nondimensional(p)?, td)
         .tolerance(e)
         .max_period(k_max)
         .dimension(d)
@@ -74,8 +74,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let least = cat
             .segments()
             .iter()
-            .filter(|s| s.period == c.period)
-            .map(|s| s.error)
+            .filter(|s| s.period() == c.period)
+            .map(|s| s.error())
             .fold(f64::INFINITY, f64::min);
         let least = if least.is_finite() {
             format!("{least:.4}")

@@ -1,7 +1,7 @@
 //! Distinct orbits among close-return segments.
 
 use crate::Segment;
-use crate::close_returns::Distance;
+use crate::metric::Distance;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -11,10 +11,10 @@ pub struct Assignment {
     /// Index of the segment's orbit in [`Catalogue::orbits`].
     pub orbit: usize,
     /// Cyclic shift `r` (samples, `0 ≤ r < kP`) that aligns the segment with its orbit's
-    /// representative: `x[rep.start + i]` agrees with `x[start + (i + r) mod kP]` for every `i`.
-    /// `r ≡ rep.start − start (mod P)`, so aligned samples share the phase of the forcing.
+    /// representative: `x[rep.start() + i]` agrees with `x[start + (i + r) mod kP]` for every `i`.
+    /// `r ≡ rep.start() − start (mod P)`, so aligned samples share the phase of the forcing.
     pub shift: usize,
-    /// `max_i |x[rep.start + i] − x[start + (i + r) mod kP]|` in the search's metric (`< ε`; zero
+    /// `max_i |x[rep.start() + i] − x[start + (i + r) mod kP]|` in the search's metric (`< ε`; zero
     /// for the representative itself).
     pub distance: f64,
 }
@@ -118,7 +118,7 @@ impl Catalogue {
             })
             .collect();
         for s in &self.segments {
-            counts[s.period - 1].segments += 1;
+            counts[s.period() - 1].segments += 1;
         }
         for o in &self.orbits {
             counts[o.period - 1].orbits += 1;
@@ -140,8 +140,8 @@ pub(crate) fn group<D: Distance>(
     let mut ranges = Vec::new();
     let mut first = 0;
     while first < segments.len() {
-        let k = segments[first].period;
-        let end = first + segments[first..].iter().take_while(|s| s.period == k).count();
+        let k = segments[first].period();
+        let end = first + segments[first..].iter().take_while(|s| s.period() == k).count();
         ranges.push(first..end);
         first = end;
     }
@@ -154,7 +154,7 @@ pub(crate) fn group<D: Distance>(
     for (r, (local, reps)) in ranges.iter().zip(per_period) {
         let offset = orbits.len();
         orbits.extend(reps.iter().map(|&rep| Orbit {
-            period: segments[r.start].period,
+            period: segments[r.start].period(),
             representative: r.start + rep,
             members: Vec::new(),
         }));
@@ -183,7 +183,12 @@ fn group_period<D: Distance>(
     dist: D,
 ) -> (Vec<Assignment>, Vec<usize>) {
     let mut order: Vec<usize> = (0..segments.len()).collect();
-    order.sort_by(|&i, &j| segments[i].error.total_cmp(&segments[j].error).then(i.cmp(&j)));
+    order.sort_by(|&i, &j| {
+        segments[i]
+            .error()
+            .total_cmp(&segments[j].error())
+            .then(i.cmp(&j))
+    });
     let unset = Assignment {
         orbit: usize::MAX,
         shift: 0,
@@ -233,10 +238,10 @@ fn best_shift<D: Distance>(
     tol: f64,
     dist: D,
 ) -> Option<(usize, f64)> {
-    let len = rep.len;
-    let a = &x[rep.start..rep.start + len];
-    let b = &x[seg.start..seg.start + len];
-    let r0 = (rep.start % p + p - seg.start % p) % p;
+    let len = rep.len();
+    let a = &x[rep.start()..rep.start() + len];
+    let b = &x[seg.start()..seg.start() + len];
+    let r0 = (rep.start() % p + p - seg.start() % p) % p;
     let mut best: Option<(usize, f64)> = None;
     for r in (r0..len).step_by(p) {
         let bound = best.map_or(tol, |(_, d)| d);
@@ -263,15 +268,11 @@ fn best_shift<D: Distance>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::close_returns::Line;
+    use crate::metric::Line;
 
     fn seg(start: usize, period: usize, p: usize, error: f64) -> Segment {
-        Segment {
-            start,
-            period,
-            len: period * p,
-            error,
-        }
+        let clock = crate::SampleClock::nondimensional(p).unwrap();
+        Segment::new(start, period, &clock, error, usize::MAX).unwrap()
     }
 
     #[test]
@@ -341,7 +342,7 @@ mod tests {
             ]
         );
         assert_eq!(
-            cat.representatives().map(|s| s.start).collect::<Vec<_>>(),
+            cat.representatives().map(|s| s.start()).collect::<Vec<_>>(),
             vec![4, 24]
         );
     }

@@ -1,43 +1,16 @@
 //! The close-return search: parameters, metric, and the scan over periods.
 
 use crate::catalogue::{Catalogue, group};
-use crate::{OrbitSource, Segment, UpoError};
-use circle_signal::circle_distance;
+use crate::metric::{AnyCircle, Distance, Line, WrappedCircle};
+use crate::{Domain, OrbitSource, SampleClock, Segment, UpoError};
 use rayon::prelude::*;
-use serde::{Deserialize, Serialize};
 use std::f64::consts::{PI, TAU};
-
-/// How two samples (and so two delay vectors) are compared.
-///
-/// Both metrics compare delay vectors by the **maximum** over components of the per-component
-/// distance (the Chebyshev norm), so a close return within `e` means every component is within `e`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
-pub enum Metric {
-    /// A wrapped angle on the circle S¹: per-component distance `|a − b|_c` (paper eq. 19, see
-    /// [`circle_signal::circle_distance`]); the span of the data is 2π.
-    #[default]
-    Circle,
-    /// A signal on the line R¹ (e.g. a displacement): per-component distance `|a − b|`; the span of
-    /// the data is `max − min` of the record.
-    Linear,
-}
-
-impl Metric {
-    /// The distance between two samples in this metric.
-    #[inline]
-    pub fn distance(self, a: f64, b: f64) -> f64 {
-        match self {
-            Metric::Circle => circle_distance(a, b),
-            Metric::Linear => (a - b).abs(),
-        }
-    }
-}
 
 /// Close-return search for unstable periodic orbits (paper section 3.2), validated parameters.
 ///
 /// With delay vectors `S(n) = (x_n, x_{n+Td}, …, x_{n+(d−1)Td})`, `P` samples per forcing period and
 /// the absolute tolerance `ε = e · span`, there is a period-`k` close return at `n` when
-/// `|S(n + kP) − S(n)| < ε` (max norm over components, in the [`Metric`]). Every index involved must
+/// `|S(n + kP) − S(n)| < ε` (max norm over components, in the [`Domain`]). Every index involved must
 /// exist: `n + kP + (d − 1) Td < N`. A maximal run of consecutive passing `n` is one passage near an
 /// orbit and gives at most one [`Segment`], at the `n` of least error (the earliest on a tie). That
 /// segment is dropped when it already closes at a proper divisor `j` of `k` at the same `n`
@@ -46,23 +19,24 @@ impl Metric {
 /// Build with [`CloseReturns::builder`] (or [`CloseReturns::new`] for the defaults).
 #[derive(Debug, Clone, PartialEq)]
 pub struct CloseReturns {
+    clock: SampleClock,
     samples_per_period: usize,
     delay: usize,
     tolerance: f64,
     max_period: usize,
     dimension: usize,
-    metric: Metric,
+    domain: Domain,
 }
 
 /// Builder of [`CloseReturns`]; [`build`](Self::build) validates.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CloseReturnsBuilder {
-    samples_per_period: usize,
+    clock: SampleClock,
     delay: usize,
     tolerance: f64,
     max_period: usize,
     dimension: usize,
-    metric: Metric,
+    domain: Domain,
 }
 
 impl CloseReturns {
@@ -73,25 +47,30 @@ impl CloseReturns {
     /// Default embedding dimension `d` (the paper's choice for the pendulum).
     pub const DEFAULT_DIMENSION: usize = 2;
 
-    /// A builder with the required `samples_per_period` (`P`) and `delay` (`Td`, in samples,
+    /// A builder with the required clock (whole `P` samples per forcing period) and `delay` (`Td`, in samples,
     /// usually the first minimum of the average mutual information) and the defaults:
     /// tolerance [`DEFAULT_TOLERANCE`](Self::DEFAULT_TOLERANCE), periods
     /// `1..=`[`DEFAULT_MAX_PERIOD`](Self::DEFAULT_MAX_PERIOD), dimension
-    /// [`DEFAULT_DIMENSION`](Self::DEFAULT_DIMENSION), metric [`Metric::Circle`].
-    pub fn builder(samples_per_period: usize, delay: usize) -> CloseReturnsBuilder {
+    /// [`DEFAULT_DIMENSION`](Self::DEFAULT_DIMENSION), domain [`Domain::Circle`].
+    pub fn builder(clock: &SampleClock, delay: usize) -> CloseReturnsBuilder {
         CloseReturnsBuilder {
-            samples_per_period,
+            clock: *clock,
             delay,
             tolerance: Self::DEFAULT_TOLERANCE,
             max_period: Self::DEFAULT_MAX_PERIOD,
             dimension: Self::DEFAULT_DIMENSION,
-            metric: Metric::default(),
+            domain: Domain::default(),
         }
     }
 
-    /// The search with all defaults but the required `P` and `Td`.
-    pub fn new(samples_per_period: usize, delay: usize) -> Result<Self, UpoError> {
-        Self::builder(samples_per_period, delay).build()
+    /// The search with all defaults but the required clock and `Td`.
+    pub fn new(clock: &SampleClock, delay: usize) -> Result<Self, UpoError> {
+        Self::builder(clock, delay).build()
+    }
+
+    /// The clock the segments are cut on.
+    pub fn clock(&self) -> &SampleClock {
+        &self.clock
     }
 
     /// Samples per forcing period `P`.
@@ -119,9 +98,9 @@ impl CloseReturns {
         self.dimension
     }
 
-    /// The metric.
-    pub fn metric(&self) -> Metric {
-        self.metric
+    /// The domain of the signal, and so the metric.
+    pub fn domain(&self) -> Domain {
+        self.domain
     }
 
     /// Samples a record needs for period `k`: `k P + (d − 1) Td + 1` (`None` on overflow).
@@ -132,8 +111,8 @@ impl CloseReturns {
             .checked_add(1)
     }
 
-    /// The absolute tolerance `ε = e · span` for `signal`: `span = 2π` for [`Metric::Circle`],
-    /// `max − min` of the record for [`Metric::Linear`].
+    /// The absolute tolerance `ε = e · span` for `signal`: `span = 2π` for [`Domain::Circle`],
+    /// `max − min` of the record for [`Domain::Line`].
     ///
     /// Errors on an empty record, a non-finite sample, or a constant record on the line.
     pub fn absolute_tolerance(&self, signal: &[f64]) -> Result<f64, UpoError> {
@@ -179,9 +158,9 @@ impl CloseReturns {
                 }
             }
         }
-        Ok(match self.metric {
-            Metric::Circle => self.error_at(signal, start, lag, AnyCircle),
-            Metric::Linear => self.error_at(signal, start, lag, Line),
+        Ok(match self.domain {
+            Domain::Circle => self.error_at(signal, start, lag, AnyCircle),
+            Domain::Line => self.error_at(signal, start, lag, Line),
         })
     }
 
@@ -191,10 +170,10 @@ impl CloseReturns {
     /// non-finite sample, or (linear metric) is constant.
     pub fn search(&self, signal: &[f64]) -> Result<Vec<Segment>, UpoError> {
         let input = self.scan_input(signal)?;
-        Ok(match (self.metric, input.within_pi) {
-            (Metric::Circle, true) => self.scan(signal, input.tolerance, WrappedCircle),
-            (Metric::Circle, false) => self.scan(signal, input.tolerance, AnyCircle),
-            (Metric::Linear, _) => self.scan(signal, input.tolerance, Line),
+        Ok(match (self.domain, input.within_pi) {
+            (Domain::Circle, true) => self.scan(signal, input.tolerance, WrappedCircle),
+            (Domain::Circle, false) => self.scan(signal, input.tolerance, AnyCircle),
+            (Domain::Line, _) => self.scan(signal, input.tolerance, Line),
         })
     }
 
@@ -202,8 +181,8 @@ impl CloseReturns {
     pub fn catalogue(&self, signal: &[f64]) -> Result<Catalogue, UpoError> {
         let input = self.scan_input(signal)?;
         let (p, k_max, eps) = (self.samples_per_period, self.max_period, input.tolerance);
-        Ok(match (self.metric, input.within_pi) {
-            (Metric::Circle, true) => group(
+        Ok(match (self.domain, input.within_pi) {
+            (Domain::Circle, true) => group(
                 signal,
                 self.scan(signal, eps, WrappedCircle),
                 p,
@@ -211,7 +190,7 @@ impl CloseReturns {
                 eps,
                 WrappedCircle,
             ),
-            (Metric::Circle, false) => group(
+            (Domain::Circle, false) => group(
                 signal,
                 self.scan(signal, eps, AnyCircle),
                 p,
@@ -219,7 +198,7 @@ impl CloseReturns {
                 eps,
                 AnyCircle,
             ),
-            (Metric::Linear, _) => group(signal, self.scan(signal, eps, Line), p, k_max, eps, Line),
+            (Domain::Line, _) => group(signal, self.scan(signal, eps, Line), p, k_max, eps, Line),
         })
     }
 
@@ -245,9 +224,9 @@ impl CloseReturns {
             lo = lo.min(value);
             hi = hi.max(value);
         }
-        let span = match self.metric {
-            Metric::Circle => TAU,
-            Metric::Linear => hi - lo,
+        let span = match self.domain {
+            Domain::Circle => TAU,
+            Domain::Line => hi - lo,
         };
         // max − min of finite values can overflow to infinity: the tolerance would be useless.
         if !(span.is_finite() && span > 0.0) {
@@ -292,12 +271,9 @@ impl CloseReturns {
                 .filter(|&j| k.is_multiple_of(j))
                 .any(|j| self.error_at(x, start, j * self.samples_per_period, dist) < eps);
             if !repeated {
-                segments.push(Segment {
-                    start,
-                    period: k,
-                    len: lag,
-                    error,
-                });
+                segments.push(Segment::new(start, k, &self.clock, error, x.len()).expect(
+                    "a close return closes inside the record on the search's clock (checked by `count`)",
+                ));
             }
         };
         let mut b0 = 0;
@@ -385,53 +361,6 @@ const CHUNK: usize = 16;
 /// Samples per block of the scan: the block's errors (16 KiB) and the samples it reads stay in cache.
 const BLOCK: usize = 2048;
 
-/// A per-sample distance, chosen once per search so that the hot loops are monomorphic.
-pub(crate) trait Distance: Copy + Send + Sync {
-    /// The distance between two samples.
-    fn between(self, a: f64, b: f64) -> f64;
-}
-
-/// The circle distance for samples in `[−π, π]`.
-///
-/// There `|a − b| ≤ 2π`, and the branch-free `min(d, 2π − d)` equals
-/// [`circle_distance`] bit for bit (its `rem_euclid` is then the identity, or maps exactly 2π to 0,
-/// which `min` also gives).
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct WrappedCircle;
-
-impl Distance for WrappedCircle {
-    #[inline(always)]
-    fn between(self, a: f64, b: f64) -> f64 {
-        let d = (a - b).abs();
-        let e = TAU - d;
-        // `d.min(e)` for non-NaN operands, without `min`'s NaN handling (so it vectorizes to
-        // one `minpd`).
-        if e < d { e } else { d }
-    }
-}
-
-/// The circle distance for any finite samples.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct AnyCircle;
-
-impl Distance for AnyCircle {
-    #[inline(always)]
-    fn between(self, a: f64, b: f64) -> f64 {
-        circle_distance(a, b)
-    }
-}
-
-/// The distance on the line.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct Line;
-
-impl Distance for Line {
-    #[inline(always)]
-    fn between(self, a: f64, b: f64) -> f64 {
-        (a - b).abs()
-    }
-}
-
 /// What one pass over the input finds.
 struct InputScan {
     tolerance: f64,
@@ -457,9 +386,10 @@ impl CloseReturnsBuilder {
         self
     }
 
-    /// The metric.
-    pub fn metric(mut self, metric: Metric) -> Self {
-        self.metric = metric;
+    /// The domain of the signal, and so the metric: [`Domain::Circle`] for a wrapped angle,
+    /// [`Domain::Line`] for a displacement.
+    pub fn domain(mut self, domain: Domain) -> Self {
+        self.domain = domain;
         self
     }
 
@@ -470,8 +400,8 @@ impl CloseReturnsBuilder {
                 value: self.tolerance,
             });
         }
+        let samples_per_period = self.clock.require_whole()?;
         for (name, value) in [
-            ("samples_per_period", self.samples_per_period),
             ("delay", self.delay),
             ("max_period", self.max_period),
             ("dimension", self.dimension),
@@ -485,12 +415,13 @@ impl CloseReturnsBuilder {
             }
         }
         let search = CloseReturns {
-            samples_per_period: self.samples_per_period,
+            clock: self.clock,
+            samples_per_period,
             delay: self.delay,
             tolerance: self.tolerance,
             max_period: self.max_period,
             dimension: self.dimension,
-            metric: self.metric,
+            domain: self.domain,
         };
         if search.needed_len(search.max_period).is_none() {
             return Err(UpoError::InvalidCount {
@@ -506,6 +437,10 @@ impl CloseReturnsBuilder {
 impl OrbitSource for CloseReturns {
     type Error = UpoError;
 
+    fn clock(&self) -> &SampleClock {
+        &self.clock
+    }
+
     fn segments(&self, signal: &[f64]) -> Result<Vec<Segment>, UpoError> {
         self.search(signal)
     }
@@ -514,58 +449,64 @@ impl OrbitSource for CloseReturns {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use circle_signal::circle_distance;
+
+    fn clock(p: usize) -> SampleClock {
+        SampleClock::nondimensional(p).unwrap()
+    }
 
     #[test]
     fn builder_validates() {
-        assert!(CloseReturns::new(25, 5).is_ok());
+        assert!(CloseReturns::new(&clock(25), 5).is_ok());
         for bad in [0.0, -0.1, 0.5, 0.7, f64::NAN, f64::INFINITY] {
             assert!(matches!(
-                CloseReturns::builder(25, 5).tolerance(bad).build(),
+                CloseReturns::builder(&clock(25), 5).tolerance(bad).build(),
                 Err(UpoError::InvalidTolerance { .. })
             ));
         }
+        assert!(SampleClock::nondimensional(0).is_err());
+        let odd = SampleClock::from_step(1.0, 0.3).unwrap();
         assert!(matches!(
-            CloseReturns::new(0, 5),
-            Err(UpoError::InvalidCount {
-                name: "samples_per_period",
-                ..
-            })
+            CloseReturns::new(&odd, 5),
+            Err(UpoError::Clock(circle_signal::CircleError::NotWholePeriod { .. }))
         ));
         assert!(matches!(
-            CloseReturns::new(25, 0),
+            CloseReturns::new(&clock(25), 0),
             Err(UpoError::InvalidCount { name: "delay", .. })
         ));
         assert!(matches!(
-            CloseReturns::builder(25, 5).max_period(0).build(),
+            CloseReturns::builder(&clock(25), 5).max_period(0).build(),
             Err(UpoError::InvalidCount {
                 name: "max_period",
                 ..
             })
         ));
         assert!(matches!(
-            CloseReturns::builder(25, 5).dimension(0).build(),
+            CloseReturns::builder(&clock(25), 5).dimension(0).build(),
             Err(UpoError::InvalidCount {
                 name: "dimension",
                 ..
             })
         ));
         assert!(matches!(
-            CloseReturns::builder(usize::MAX / 2, 5).max_period(3).build(),
+            CloseReturns::builder(&clock(usize::MAX / 2), 5)
+                .max_period(3)
+                .build(),
             Err(UpoError::InvalidCount {
                 name: "max_period",
                 ..
             })
         ));
-        let s = CloseReturns::new(25, 5).unwrap();
+        let s = CloseReturns::new(&clock(25), 5).unwrap();
         assert_eq!(
-            (s.tolerance(), s.max_period(), s.dimension(), s.metric()),
-            (0.03, 16, 2, Metric::Circle)
+            (s.tolerance(), s.max_period(), s.dimension(), s.domain()),
+            (0.03, 16, 2, Domain::Circle)
         );
     }
 
     #[test]
     fn short_and_non_finite_records_are_errors() {
-        let s = CloseReturns::builder(10, 3)
+        let s = CloseReturns::builder(&clock(10), 3)
             .max_period(2)
             .dimension(3)
             .build()
@@ -593,9 +534,9 @@ mod tests {
             s.return_error(&x, 0, 1),
             Err(UpoError::NonFinite { index: 13, .. })
         ));
-        let lin = CloseReturns::builder(10, 3)
+        let lin = CloseReturns::builder(&clock(10), 3)
             .max_period(2)
-            .metric(Metric::Linear)
+            .domain(Domain::Line)
             .build()
             .unwrap();
         assert_eq!(
@@ -608,17 +549,9 @@ mod tests {
     fn constant_angle_is_one_period_one_orbit() {
         // Every n returns with error 0 at every period: one run, one segment at n = 0, and the
         // longer periods are repetitions of it.
-        let s = CloseReturns::builder(4, 1).max_period(3).build().unwrap();
+        let s = CloseReturns::builder(&clock(4), 1).max_period(3).build().unwrap();
         let segs = s.search(&[1.0; 30]).unwrap();
-        assert_eq!(
-            segs,
-            vec![Segment {
-                start: 0,
-                period: 1,
-                len: 4,
-                error: 0.0
-            }]
-        );
+        assert_eq!(segs, vec![Segment::new(0, 1, &clock(4), 0.0, 30).unwrap()]);
     }
 
     #[test]
@@ -633,7 +566,7 @@ mod tests {
 
     #[test]
     fn return_error_bounds() {
-        let s = CloseReturns::builder(5, 2).max_period(1).build().unwrap();
+        let s = CloseReturns::builder(&clock(5), 2).max_period(1).build().unwrap();
         let x: Vec<f64> = (0..20).map(|i| (i as f64 * 0.3).sin()).collect();
         assert!(s.return_error(&x, 12, 1).is_ok());
         assert_eq!(

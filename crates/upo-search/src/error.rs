@@ -41,6 +41,9 @@ pub enum UpoError {
         /// Its value.
         value: f64,
     },
+    /// The clock cannot cut the record into whole forcing periods, or a segment does not fit.
+    #[error(transparent)]
+    Clock(#[from] circle_signal::CircleError),
     /// With the linear metric, a constant record has zero span and so no tolerance.
     #[error("the record is constant ({value}): its span is zero, so a tolerance relative to it is zero")]
     ConstantSignal {

@@ -20,7 +20,7 @@
 //! ```
 //!
 //! where the per-component distance is the circle distance `|a − b|_c` of paper eq. 19 for a
-//! wrapped angle ([`Metric::Circle`]) or `|a − b|` on the line ([`Metric::Linear`]), and the
+//! wrapped angle ([`Domain::Circle`]) or `|a − b|` on the line ([`Domain::Line`]), and the
 //! absolute tolerance is `ε = e · span`, `e` a fraction (the paper: 1–5 %, default 3 %) of the span
 //! of the data (2π on the circle, `max − min` on the line). The paper writes the test backwards in
 //! time, `|S(n − kT) − S(n)|_c < e`; it is the same set of pairs.
@@ -48,28 +48,29 @@
 //!     (0..p).map(|i| circle_signal::wrap(2.0 * PI * i as f64 / p as f64 + 0.4 * (4.0 * PI * i as f64 / p as f64).sin())).collect();
 //! let x: Vec<f64> = orbit.iter().copied().cycle().take(6 * p).collect();
 //!
-//! let search = CloseReturns::builder(p, 3).max_period(3).build()?;
+//! let clock = upo_search::SampleClock::nondimensional(p)?;
+//! let search = CloseReturns::builder(&clock, 3).max_period(3).build()?;
 //! let segments = search.segments(&x)?;
 //! // One passage, found at its first sample; the returns after 2 and 3 forcing periods are
 //! // repetitions of the period-1 orbit.
 //! assert_eq!(segments.len(), 1);
-//! assert_eq!((segments[0].start, segments[0].period, segments[0].len), (0, 1, 20));
-//! assert_eq!(segments[0].error, 0.0);
+//! assert_eq!((segments[0].start(), segments[0].period(), segments[0].len()), (0, 1, 20));
+//! assert_eq!(segments[0].error(), 0.0);
 //!
 //! let catalogue = search.catalogue(&x)?;
 //! assert_eq!(catalogue.orbits().len(), 1);
-//! # Ok::<(), upo_search::UpoError>(())
+//! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 #![deny(missing_docs)]
 
 mod catalogue;
 mod close_returns;
 mod error;
-mod source;
+mod metric;
 mod windows;
 
 pub use catalogue::{Assignment, Catalogue, Orbit, PeriodCount};
-pub use close_returns::{CloseReturns, CloseReturnsBuilder, Metric};
+pub use circle_signal::{Domain, OrbitSource, SampleClock, Segment};
+pub use close_returns::{CloseReturns, CloseReturnsBuilder};
 pub use error::UpoError;
-pub use source::{OrbitSource, Segment};
 pub use windows::{Windows, WindowsBuilder};

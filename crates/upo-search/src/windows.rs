@@ -1,8 +1,6 @@
 //! Plain windows of a record: segments that need not be periodic, for the weak form.
 
-use serde::{Deserialize, Serialize};
-
-use crate::{Metric, OrbitSource, Segment, UpoError};
+use crate::{Domain, OrbitSource, SampleClock, Segment, UpoError};
 
 /// Windows of `k` forcing periods laid over the whole record, periodic or not.
 ///
@@ -12,26 +10,27 @@ use crate::{Metric, OrbitSource, Segment, UpoError};
 /// consecutive; a smaller step makes them overlap. The default step is one forcing period `P`, so
 /// with the default `k = 3` every sample (but those near the ends) lies in three windows.
 ///
-/// The windows are not orbits: their [`Segment::error`] is the distance, in the [`Metric`], between
+/// The windows are not orbits: their [`Segment::error`] is the distance, in the [`Domain`], between
 /// the closing sample and the first one — how far the window is from closing — and only informs;
 /// the weak form does not need it to be small.
 ///
 /// Build with [`Windows::builder`] (or [`Windows::new`] for the defaults).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Windows {
+    clock: SampleClock,
     samples_per_period: usize,
     periods: usize,
     step: usize,
-    metric: Metric,
+    domain: Domain,
 }
 
 /// Builder of [`Windows`]; [`build`](Self::build) validates.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct WindowsBuilder {
-    samples_per_period: usize,
+    clock: SampleClock,
     periods: usize,
     step: Option<usize>,
-    metric: Metric,
+    domain: Domain,
 }
 
 impl Windows {
@@ -41,21 +40,26 @@ impl Windows {
     /// four gave no further gain with noise; see `docs/identification.md`.
     pub const DEFAULT_PERIODS: usize = 3;
 
-    /// A builder with the required samples per forcing period `P` and the defaults: windows of
+    /// A builder with the required clock (whole `P` samples per forcing period) and the defaults: windows of
     /// [`DEFAULT_PERIODS`](Self::DEFAULT_PERIODS) forcing periods, a step of one forcing period
-    /// (`P` samples), [`Metric::Circle`].
-    pub fn builder(samples_per_period: usize) -> WindowsBuilder {
+    /// (`P` samples), [`Domain::Circle`].
+    pub fn builder(clock: &SampleClock) -> WindowsBuilder {
         WindowsBuilder {
-            samples_per_period,
+            clock: *clock,
             periods: Self::DEFAULT_PERIODS,
             step: None,
-            metric: Metric::default(),
+            domain: Domain::default(),
         }
     }
 
-    /// The windows with all defaults but the required `P`.
-    pub fn new(samples_per_period: usize) -> Result<Self, UpoError> {
-        Self::builder(samples_per_period).build()
+    /// The windows with all defaults but the required clock.
+    pub fn new(clock: &SampleClock) -> Result<Self, UpoError> {
+        Self::builder(clock).build()
+    }
+
+    /// The clock the windows are cut on.
+    pub fn clock(&self) -> &SampleClock {
+        &self.clock
     }
 
     /// Samples per forcing period `P`.
@@ -83,9 +87,9 @@ impl Windows {
         self.step
     }
 
-    /// The metric of [`Segment::error`].
-    pub fn metric(&self) -> Metric {
-        self.metric
+    /// The domain of the signal, and so the metric of [`Segment::error`].
+    pub fn domain(&self) -> Domain {
+        self.domain
     }
 
     /// Number of windows in a record of `samples` samples.
@@ -115,17 +119,19 @@ impl Windows {
         if let Some((index, &value)) = signal.iter().enumerate().find(|(_, v)| !v.is_finite()) {
             return Err(UpoError::NonFinite { index, value });
         }
-        Ok((0..self.count(signal.len()))
+        (0..self.count(signal.len()))
             .map(|i| {
                 let start = i * self.step;
-                Segment {
+                Segment::new(
                     start,
-                    period: self.periods,
-                    len: l,
-                    error: self.metric.distance(signal[start + l], signal[start]),
-                }
+                    self.periods,
+                    &self.clock,
+                    self.domain.distance(signal[start + l], signal[start]),
+                    signal.len(),
+                )
             })
-            .collect())
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(UpoError::from)
     }
 }
 
@@ -143,22 +149,17 @@ impl WindowsBuilder {
         self
     }
 
-    /// The metric of [`Segment::error`]: [`Metric::Circle`] for a wrapped angle, [`Metric::Linear`]
-    /// on the line.
-    pub fn metric(mut self, metric: Metric) -> Self {
-        self.metric = metric;
+    /// The domain of the signal, and so the metric of [`Segment::error`]: [`Domain::Circle`] for
+    /// a wrapped angle, [`Domain::Line`] on the line.
+    pub fn domain(mut self, domain: Domain) -> Self {
+        self.domain = domain;
         self
     }
 
-    /// Validates: `P >= 2`, `k >= 1`, `step >= 1`, and `k P` without overflow.
+    /// Validates: a clock with whole `P` (at least 2), `k >= 1`, `step >= 1`, and `k P` without
+    /// overflow.
     pub fn build(self) -> Result<Windows, UpoError> {
-        if self.samples_per_period < 2 {
-            return Err(UpoError::InvalidCount {
-                name: "samples per forcing period",
-                value: self.samples_per_period,
-                why: "must be at least 2",
-            });
-        }
+        let samples_per_period = self.clock.require_whole()?;
         if self.periods == 0 {
             return Err(UpoError::InvalidCount {
                 name: "window periods",
@@ -167,14 +168,14 @@ impl WindowsBuilder {
             });
         }
         self.periods
-            .checked_mul(self.samples_per_period)
+            .checked_mul(samples_per_period)
             .and_then(|l| l.checked_add(1))
             .ok_or(UpoError::InvalidCount {
                 name: "window periods",
                 value: self.periods,
                 why: "k P overflows",
             })?;
-        let step = self.step.unwrap_or(self.samples_per_period);
+        let step = self.step.unwrap_or(samples_per_period);
         if step == 0 {
             return Err(UpoError::InvalidCount {
                 name: "window step",
@@ -183,16 +184,21 @@ impl WindowsBuilder {
             });
         }
         Ok(Windows {
-            samples_per_period: self.samples_per_period,
+            clock: self.clock,
+            samples_per_period,
             periods: self.periods,
             step,
-            metric: self.metric,
+            domain: self.domain,
         })
     }
 }
 
 impl OrbitSource for Windows {
     type Error = UpoError;
+
+    fn clock(&self) -> &SampleClock {
+        &self.clock
+    }
 
     fn segments(&self, signal: &[f64]) -> Result<Vec<Segment>, UpoError> {
         self.windows(signal)
@@ -204,16 +210,20 @@ mod tests {
     use super::*;
     use proptest::prelude::*;
 
+    fn clock(p: usize) -> SampleClock {
+        SampleClock::nondimensional(p).unwrap()
+    }
+
     #[test]
     fn defaults_and_validation() {
-        let w = Windows::new(25).unwrap();
+        let w = Windows::new(&clock(25)).unwrap();
         assert_eq!((w.periods(), w.step(), w.len()), (3, 25, 75));
-        assert_eq!(w.metric(), Metric::Circle);
-        assert!(Windows::new(1).is_err());
-        assert!(Windows::builder(25).periods(0).build().is_err());
-        assert!(Windows::builder(25).step(0).build().is_err());
+        assert_eq!(w.domain(), Domain::Circle);
+        assert!(SampleClock::nondimensional(1).is_err());
+        assert!(Windows::builder(&clock(25)).periods(0).build().is_err());
+        assert!(Windows::builder(&clock(25)).step(0).build().is_err());
         assert!(matches!(
-            Windows::builder(usize::MAX / 2).periods(3).build(),
+            Windows::builder(&clock(usize::MAX / 2)).periods(3).build(),
             Err(UpoError::InvalidCount {
                 name: "window periods",
                 ..
@@ -225,29 +235,32 @@ mod tests {
     fn consecutive_and_overlapping_windows() {
         let x: Vec<f64> = (0..101).map(|n| (n as f64 * 0.1).sin()).collect();
         // Consecutive 2-period windows at P = 10: starts 0, 20, .., 80 (80 + 20 = 100 < 101).
-        let w = Windows::builder(10).periods(2).step(20).build().unwrap();
+        let w = Windows::builder(&clock(10)).periods(2).step(20).build().unwrap();
         let s = w.segments(&x).unwrap();
-        assert_eq!(s.iter().map(|s| s.start).collect::<Vec<_>>(), [0, 20, 40, 60, 80]);
-        assert!(s.iter().all(|s| s.period == 2 && s.len == 20));
+        assert_eq!(
+            s.iter().map(|s| s.start()).collect::<Vec<_>>(),
+            [0, 20, 40, 60, 80]
+        );
+        assert!(s.iter().all(|s| s.period() == 2 && s.len() == 20));
         // One sample fewer: the last window loses its closing sample.
         assert_eq!(w.segments(&x[..100]).unwrap().len(), 4);
         // Default step of one period: starts 0, 10, .., 80.
-        let s = Windows::builder(10)
+        let s = Windows::builder(&clock(10))
             .periods(2)
             .build()
             .unwrap()
             .segments(&x)
             .unwrap();
         assert_eq!(s.len(), 9);
-        assert_eq!(s[8].start, 80);
+        assert_eq!(s[8].start(), 80);
         // The error is how far the window is from closing.
         let e = (x[80 + 20] - x[80]).abs();
-        assert!((s[8].error - e).abs() < 1e-15);
+        assert!((s[8].error() - e).abs() < 1e-15);
     }
 
     #[test]
     fn bad_records() {
-        let w = Windows::builder(10).periods(3).build().unwrap();
+        let w = Windows::builder(&clock(10)).periods(3).build().unwrap();
         assert_eq!(
             w.segments(&[0.0; 30]),
             Err(UpoError::TooShort {
@@ -270,15 +283,15 @@ mod tests {
         /// step; the next start would not fit; `count` agrees.
         #[test]
         fn windows_tile_the_record(p in 2usize..30, k in 1usize..5, step in 1usize..80, n in 0usize..600) {
-            let w = Windows::builder(p).periods(k).step(step).build().unwrap();
+            let w = Windows::builder(&clock(p)).periods(k).step(step).build().unwrap();
             let x = vec![0.5; n];
             match w.segments(&x) {
                 Ok(s) => {
                     prop_assert_eq!(s.len(), w.count(n));
                     for (i, seg) in s.iter().enumerate() {
-                        prop_assert_eq!(seg.start, i * step);
-                        prop_assert_eq!(seg.len, k * p);
-                        prop_assert!(seg.start + seg.len < n);
+                        prop_assert_eq!(seg.start(), i * step);
+                        prop_assert_eq!(seg.len(), k * p);
+                        prop_assert!(seg.start() + seg.len() < n);
                     }
                     prop_assert!(s.len() * step + k * p >= n);
                 }

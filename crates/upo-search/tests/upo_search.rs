@@ -6,7 +6,11 @@ use proptest::test_runner::RngSeed;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::f64::consts::{PI, TAU};
-use upo_search::{Catalogue, CloseReturns, Metric, OrbitSource, Segment, UpoError};
+use upo_search::{Catalogue, CloseReturns, Domain, OrbitSource, SampleClock, Segment, UpoError};
+
+fn clock(p: usize) -> SampleClock {
+    SampleClock::nondimensional(p).unwrap()
+}
 
 /// Uniform noise on the circle, seeded.
 fn noise(rng: &mut ChaCha8Rng, n: usize) -> Vec<f64> {
@@ -54,16 +58,19 @@ fn verify(search: &CloseReturns, x: &[f64], segments: &[Segment]) {
     let (p, d, td) = (search.samples_per_period(), search.dimension(), search.delay());
     let eps = search.absolute_tolerance(x).unwrap();
     for s in segments {
-        assert_eq!(s.len, s.period * p);
-        assert!(s.start + s.len + (d - 1) * td < x.len(), "{s:?} out of bounds");
-        let a = delay_vector(x, s.start, d, td);
-        let b = delay_vector(x, s.start + s.len, d, td);
-        let recomputed = match search.metric() {
-            Metric::Circle => max_circle_distance(&b, &a),
-            Metric::Linear => a.iter().zip(&b).map(|(u, v)| (u - v).abs()).fold(0.0, f64::max),
+        assert_eq!(s.len(), s.period() * p);
+        assert!(
+            s.start() + s.len() + (d - 1) * td < x.len(),
+            "{s:?} out of bounds"
+        );
+        let a = delay_vector(x, s.start(), d, td);
+        let b = delay_vector(x, s.start() + s.len(), d, td);
+        let recomputed = match search.domain() {
+            Domain::Circle => max_circle_distance(&b, &a),
+            Domain::Line => a.iter().zip(&b).map(|(u, v)| (u - v).abs()).fold(0.0, f64::max),
         };
-        assert_eq!(s.error, recomputed, "{s:?}");
-        assert!(s.error < eps, "{s:?} eps {eps}");
+        assert_eq!(s.error(), recomputed, "{s:?}");
+        assert!(s.error() < eps, "{s:?} eps {eps}");
     }
 }
 
@@ -97,7 +104,7 @@ fn spliced_orbits_are_found_at_their_starts() {
             .windows(2)
             .any(|w| (w[1] - w[0]).abs() > PI)
     );
-    let search = CloseReturns::builder(20, 3)
+    let search = CloseReturns::builder(&clock(20), 3)
         .tolerance(0.01)
         .max_period(6)
         .dimension(3)
@@ -105,9 +112,9 @@ fn spliced_orbits_are_found_at_their_starts() {
         .unwrap();
     let segments = search.segments(&x).unwrap();
     verify(&search, &x, &segments);
-    let found: Vec<(usize, usize)> = segments.iter().map(|s| (s.start, s.period)).collect();
+    let found: Vec<(usize, usize)> = segments.iter().map(|s| (s.start(), s.period())).collect();
     assert_eq!(found, vec![(start_one, 1), (start_three, 3)]);
-    assert!(segments.iter().all(|s| s.error == 0.0));
+    assert!(segments.iter().all(|s| s.error() == 0.0));
     // The repetitions exist (error 0 at 2, 3, 4, 5 forcing periods, and at 6 for the period-3
     // orbit) and were dropped by the divisor rule.
     for k in 2..=5 {
@@ -122,7 +129,7 @@ fn spliced_orbits_are_found_at_their_starts() {
 #[test]
 fn divisor_rule_drops_the_period_2_copy_of_a_period_1_orbit() {
     let (x, start_one, _) = spliced_record();
-    let search = CloseReturns::builder(20, 3)
+    let search = CloseReturns::builder(&clock(20), 3)
         .tolerance(0.01)
         .max_period(2)
         .dimension(3)
@@ -131,8 +138,8 @@ fn divisor_rule_drops_the_period_2_copy_of_a_period_1_orbit() {
     let eps = search.absolute_tolerance(&x).unwrap();
     assert!(search.return_error(&x, start_one, 2).unwrap() < eps);
     let segments = search.search(&x).unwrap();
-    assert!(segments.iter().any(|s| s.period == 1 && s.start == start_one));
-    assert!(!segments.iter().any(|s| s.period == 2), "{segments:?}");
+    assert!(segments.iter().any(|s| s.period() == 1 && s.start() == start_one));
+    assert!(!segments.iter().any(|s| s.period() == 2), "{segments:?}");
 }
 
 #[test]
@@ -140,11 +147,11 @@ fn linear_metric_uses_the_span_of_the_record() {
     // A displacement: the period-1 piece scaled onto the line, noise of span 20.
     let (x, start_one, _) = spliced_record();
     let y: Vec<f64> = x.iter().map(|v| 10.0 * v / PI).collect();
-    let search = CloseReturns::builder(20, 3)
+    let search = CloseReturns::builder(&clock(20), 3)
         .tolerance(0.01)
         .max_period(2)
         .dimension(3)
-        .metric(Metric::Linear)
+        .domain(Domain::Line)
         .build()
         .unwrap();
     let (lo, hi) = y.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| {
@@ -153,7 +160,7 @@ fn linear_metric_uses_the_span_of_the_record() {
     assert_eq!(search.absolute_tolerance(&y).unwrap(), 0.01 * (hi - lo));
     let segments = search.search(&y).unwrap();
     verify(&search, &y, &segments);
-    assert!(segments.iter().any(|s| s.period == 1 && s.start == start_one));
+    assert!(segments.iter().any(|s| s.period() == 1 && s.start() == start_one));
 }
 
 /// An orbit of period 2 (P = 10) as a function of absolute time: `x_n = orbit(n mod 20)`, so that
@@ -181,7 +188,7 @@ fn catalogue_merges_passages_of_one_orbit() {
     x.extend(noise(&mut rng, 100));
     // A small tolerance: at the edges of a passage a delay vector mixes noise and orbit samples, and
     // may return by chance when the noise lands near the orbit (a genuine, if short, close return).
-    let search = CloseReturns::builder(10, 2)
+    let search = CloseReturns::builder(&clock(10), 2)
         .tolerance(0.002)
         .max_period(4)
         .dimension(3)
@@ -189,7 +196,7 @@ fn catalogue_merges_passages_of_one_orbit() {
         .unwrap();
     let cat: Catalogue = search.catalogue(&x).unwrap();
     verify(&search, &x, cat.segments());
-    let starts: Vec<(usize, usize)> = cat.segments().iter().map(|s| (s.start, s.period)).collect();
+    let starts: Vec<(usize, usize)> = cat.segments().iter().map(|s| (s.start(), s.period())).collect();
     assert_eq!(starts, vec![(100, 2), (310, 2), (500, 2), (703, 2)]);
     assert_eq!(cat.orbits().len(), 2);
     let ids: Vec<usize> = (0..4).map(|i| cat.orbit_of(i)).collect();
@@ -197,17 +204,17 @@ fn catalogue_merges_passages_of_one_orbit() {
     let counts = cat.counts();
     assert_eq!((counts[1].segments, counts[1].orbits), (4, 2));
     // Shifts align samples of equal orbit phase: start + shift ≡ representative start (mod 20).
-    let rep = cat.segments()[cat.orbits()[0].representative].start;
+    let rep = cat.segments()[cat.orbits()[0].representative].start();
     for i in [0, 1, 3] {
         let a = cat.assignments()[i];
-        assert_eq!((cat.segments()[i].start + a.shift) % 20, rep % 20);
+        assert_eq!((cat.segments()[i].start() + a.shift) % 20, rep % 20);
         assert_eq!(a.distance, 0.0);
     }
 }
 
 #[test]
 fn errors_are_typed() {
-    let search = CloseReturns::new(25, 5).unwrap();
+    let search = CloseReturns::new(&clock(25), 5).unwrap();
     // 16 periods of 25 samples, plus the delay, plus the closing sample.
     assert_eq!(
         search.search(&vec![0.1; 405]),
@@ -234,7 +241,7 @@ fn errors_are_typed() {
 fn paper_dataset_close_returns() {
     let x = paper_theta();
     assert_eq!(x.len(), 30000);
-    let search = CloseReturns::builder(25, 5)
+    let search = CloseReturns::builder(&clock(25), 5)
         .tolerance(0.03)
         .max_period(16)
         .dimension(2)
@@ -257,12 +264,14 @@ fn paper_dataset_close_returns() {
         let rep = cat.segments()[o.representative];
         for &m in &o.members {
             let s = cat.segments()[m];
-            assert_eq!(s.period, o.period);
-            assert!(rep.error <= s.error);
+            assert_eq!(s.period(), o.period);
+            assert!(rep.error() <= s.error());
             let a = cat.assignments()[m];
             assert!(a.distance < cat.tolerance());
-            let recomputed = (0..s.len)
-                .map(|i| circle_signal::circle_distance(x[rep.start + i], x[s.start + (i + a.shift) % s.len]))
+            let recomputed = (0..s.len())
+                .map(|i| {
+                    circle_signal::circle_distance(x[rep.start() + i], x[s.start() + (i + a.shift) % s.len()])
+                })
                 .fold(0.0, f64::max);
             assert_eq!(a.distance, recomputed);
         }
@@ -323,12 +332,7 @@ fn naive(search: &CloseReturns, x: &[f64]) -> Vec<Segment> {
             }
             let repeated = (1..k).any(|j| k % j == 0 && search.return_error(x, best, j).unwrap() < eps);
             if !repeated {
-                out.push(Segment {
-                    start: best,
-                    period: k,
-                    len: k * p,
-                    error: errors[best],
-                });
+                out.push(Segment::new(best, k, search.clock(), errors[best], x.len()).unwrap());
             }
         }
     }
@@ -349,8 +353,8 @@ proptest! {
         linear in any::<bool>(),
     ) {
         let x = random_record(seed, p, linear, 120..500);
-        let metric = if linear { Metric::Linear } else { Metric::Circle };
-        let search = CloseReturns::builder(p, td).tolerance(e).max_period(k_max).dimension(d).metric(metric).build().unwrap();
+        let metric = if linear { Domain::Line } else { Domain::Circle };
+        let search = CloseReturns::builder(&clock(p), td).tolerance(e).max_period(k_max).dimension(d).domain(metric).build().unwrap();
         let Ok(cat) = search.catalogue(&x) else {
             // Only a record too short for k_max may fail here.
             prop_assert!(x.len() < search.needed_len(k_max).unwrap());
@@ -364,16 +368,16 @@ proptest! {
         prop_assert_eq!(segments, expected.as_slice());
         // Ordered by period, then start; no two segments of one period from one run.
         for w in segments.windows(2) {
-            prop_assert!((w[0].period, w[0].start) < (w[1].period, w[1].start));
-            if w[0].period == w[1].period {
-                let k = w[0].period;
-                prop_assert!((w[0].start + 1..w[1].start).any(|n| search.return_error(&x, n, k).unwrap() >= eps));
+            prop_assert!((w[0].period(), w[0].start()) < (w[1].period(), w[1].start()));
+            if w[0].period() == w[1].period() {
+                let k = w[0].period();
+                prop_assert!((w[0].start() + 1..w[1].start()).any(|n| search.return_error(&x, n, k).unwrap() >= eps));
             }
         }
         // No segment closes at a proper divisor of its period.
         for s in segments {
-            for j in (1..s.period).filter(|j| s.period % j == 0) {
-                prop_assert!(search.return_error(&x, s.start, j).unwrap() >= eps);
+            for j in (1..s.period()).filter(|j| s.period() % j == 0) {
+                prop_assert!(search.return_error(&x, s.start(), j).unwrap() >= eps);
             }
         }
         // The orbits partition the segments; representatives have least error; members agree.
@@ -383,10 +387,10 @@ proptest! {
             for &m in &o.members {
                 seen[m] += 1;
                 prop_assert_eq!(cat.orbit_of(m), id);
-                prop_assert_eq!(segments[m].period, o.period);
-                prop_assert!(segments[o.representative].error <= segments[m].error);
+                prop_assert_eq!(segments[m].period(), o.period);
+                prop_assert!(segments[o.representative].error() <= segments[m].error());
                 let a = cat.assignments()[m];
-                prop_assert_eq!(a.shift % p, (segments[o.representative].start + p - segments[m].start % p) % p);
+                prop_assert_eq!(a.shift % p, (segments[o.representative].start() + p - segments[m].start() % p) % p);
                 prop_assert!(a.distance < eps);
             }
         }
@@ -405,7 +409,7 @@ proptest! {
     #[test]
     fn long_records_equal_definition(seed in any::<u64>(), p in 2usize..6, d in 1usize..4, e in 0.05..0.3f64) {
         let x = random_record(seed, p, false, 4000..9000);
-        let search = CloseReturns::builder(p, 2).tolerance(e).max_period(4).dimension(d).build().unwrap();
+        let search = CloseReturns::builder(&clock(p), 2).tolerance(e).max_period(4).dimension(d).build().unwrap();
         let segments = search.search(&x).unwrap();
         verify(&search, &x, &segments);
         let expected = naive(&search, &x);
@@ -416,6 +420,6 @@ proptest! {
 #[test]
 fn paper_dataset_search_equals_definition() {
     let x = paper_theta();
-    let search = CloseReturns::new(25, 5).unwrap();
+    let search = CloseReturns::new(&clock(25), 5).unwrap();
     assert_eq!(search.search(&x).unwrap(), naive(&search, &x));
 }

@@ -54,3 +54,10 @@ pub fn paper_clock(t0: f64) -> hb_solve::SampleClock {
         .with_start_time(t0)
         .unwrap()
 }
+
+/// A segment of `period` forcing periods and `len` samples from `start`, on the non-dimensional
+/// clock with `len / period` samples per period (the record's length is checked by the assembly).
+pub fn segment(start: usize, period: usize, len: usize, error: f64) -> circle_signal::Segment {
+    let clock = circle_signal::SampleClock::nondimensional(len / period).unwrap();
+    circle_signal::Segment::new(start, period, &clock, error, usize::MAX).unwrap()
+}

@@ -4,16 +4,21 @@ use std::f64::consts::TAU;
 use std::path::PathBuf;
 
 use anyhow::Context;
-use clap::{Args, ValueEnum};
+use circle_signal::{Domain, SampleClock};
+use clap::Args;
+use clap::builder::{PossibleValuesParser, TypedValueParser};
+use embedding::AmiParams;
 use hbid::input::{Column, ReadOptions, UniformRecord, read_path};
 
-/// Whether the record is an angle on the circle or a displacement on the line.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum Signal {
-    /// An angle: wrapped into [-π, π), unwrapped per orbit, circle metric.
-    Circle,
-    /// A displacement: no wrapping, plain differences.
-    Line,
+/// The command-line values of a [`Domain`]: `circle` or `line` (`linear` too where `also_linear`,
+/// the name classic embedding tools give plain differences).
+pub fn domain_parser(also_linear: bool) -> impl TypedValueParser<Value = Domain> {
+    let names: &[&str] = if also_linear {
+        &["circle", "line", "linear"]
+    } else {
+        &["circle", "line"]
+    };
+    PossibleValuesParser::new(names).map(|name| name.parse::<Domain>().unwrap_or_default())
 }
 
 /// The input options shared by the analysis subcommands.
@@ -33,24 +38,23 @@ pub struct InputArgs {
     /// Forcing period in the time unit of the data (2π for the paper's non-dimensional time).
     #[arg(long, default_value_t = TAU, allow_hyphen_values = true)]
     pub forcing_period: f64,
-    /// An angle on the circle or a displacement on the line.
-    #[arg(long, value_enum, default_value_t = Signal::Circle)]
-    pub signal: Signal,
+    /// An angle on the circle (wrapped into [-π, π), unwrapped per orbit, circle metric) or a
+    /// displacement on the line (no wrapping, plain differences): circle or line.
+    #[arg(long, default_value = "circle", value_parser = domain_parser(false))]
+    pub signal: Domain,
 }
 
 /// A record ready for analysis.
 #[derive(Debug)]
 pub struct Data {
-    /// Time of the first sample.
-    pub t0: f64,
-    /// Sampling step.
-    pub dt: f64,
-    /// Samples per forcing period.
+    /// The record's clock: forcing period, step `T / P`, time of the first sample.
+    pub clock: SampleClock,
+    /// Samples per forcing period `P`.
     pub p: usize,
     /// The samples (wrapped into [-π, π) for a signal on the circle).
     pub x: Vec<f64>,
     /// What the samples are.
-    pub signal: Signal,
+    pub domain: Domain,
 }
 
 impl Data {
@@ -59,8 +63,8 @@ impl Data {
         format!(
             "{} samples from t = {} in steps of {} ({} per forcing period)",
             self.x.len(),
-            self.t0,
-            self.dt,
+            self.clock.start_time(),
+            self.clock.step(),
             self.p
         )
     }
@@ -78,18 +82,18 @@ impl InputArgs {
         let record = read_path(&self.file, &options).with_context(|| format!("{}", self.file.display()))?;
         let mut uniform = UniformRecord::new(record).with_context(|| format!("{}", self.file.display()))?;
         let p = uniform.samples_per_period(self.forcing_period)?;
-        if self.signal == Signal::Circle && uniform.outside_circle() {
+        let clock = SampleClock::new(self.forcing_period, p)?.with_start_time(uniform.t0)?;
+        if self.signal == Domain::Circle && uniform.outside_circle() {
             eprintln!("note: values outside [-π, π): read as an unwrapped angle and wrapped");
             for v in &mut uniform.x {
                 *v = circle_signal::wrap(*v);
             }
         }
         Ok(Data {
-            t0: uniform.t0,
-            dt: uniform.dt,
+            clock,
             p,
             x: uniform.x,
-            signal: self.signal,
+            domain: self.signal,
         })
     }
 }
@@ -114,14 +118,11 @@ pub struct SearchArgs {
 impl SearchArgs {
     /// The close-return search on `data` with `delay`, validated.
     pub fn close_returns(&self, data: &Data, delay: usize) -> anyhow::Result<upo_search::CloseReturns> {
-        Ok(upo_search::CloseReturns::builder(data.p, delay)
+        Ok(upo_search::CloseReturns::builder(&data.clock, delay)
             .tolerance(self.tolerance)
             .max_period(self.max_period)
             .dimension(self.dim)
-            .metric(match data.signal {
-                Signal::Circle => upo_search::Metric::Circle,
-                Signal::Line => upo_search::Metric::Linear,
-            })
+            .domain(data.domain)
             .build()?)
     }
 
@@ -131,7 +132,16 @@ impl SearchArgs {
         self.close_returns(data, self.delay.unwrap_or(1))?;
         Ok(match self.delay {
             Some(d) => d,
-            None => super::embed::ami(&data.x, super::embed::metric_for(data.signal, None), 16, 40)?.1,
+            None => ami(&data.x, &AmiParams::new(data.domain))?.1,
         })
     }
+}
+
+/// The AMI curve of `x` and its first minimum, the default delay of every later stage.
+pub fn ami(x: &[f64], params: &AmiParams) -> anyhow::Result<(embedding::AmiCurve, usize)> {
+    let curve = embedding::average_mutual_information(x, params)?;
+    let delay = curve
+        .delay()
+        .context("choose the delay with --delay, or raise --max-lag")?;
+    Ok((curve, delay))
 }

@@ -1,31 +1,10 @@
 //! `hbid embed`: the delay (first minimum of the average mutual information) and the embedding
 //! dimension (false nearest neighbours).
 
-use anyhow::Context;
-use clap::{Args, ValueEnum};
-use embedding::{
-    AmiCurve, AmiParams, FnnParams, FnnResult, Metric, average_mutual_information, false_nearest_neighbours,
-};
+use clap::Args;
+use embedding::{AmiCurve, AmiParams, Domain, FnnParams, FnnResult, false_nearest_neighbours};
 
-use super::data::{InputArgs, Signal};
-
-/// The distance between samples.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum MetricArg {
-    /// Circle distance |wrap(a - b)|: the right one for a wrapped angle.
-    Circle,
-    /// Plain differences, as classic tools do.
-    Linear,
-}
-
-impl From<MetricArg> for Metric {
-    fn from(m: MetricArg) -> Self {
-        match m {
-            MetricArg::Circle => Metric::Circle,
-            MetricArg::Linear => Metric::Linear,
-        }
-    }
-}
+use super::data::{InputArgs, ami, domain_parser};
 
 /// Options of `hbid embed`.
 #[derive(Debug, Args)]
@@ -41,34 +20,16 @@ pub struct EmbedArgs {
     /// Largest embedding dimension tested by false nearest neighbours.
     #[arg(long, default_value_t = 8)]
     pub max_dim: usize,
-    /// Distance between samples (default: circle for --signal circle, linear for --signal line).
-    #[arg(long, value_enum)]
-    pub metric: Option<MetricArg>,
+    /// Distance between samples: circle (|wrap(a - b)|, the right one for a wrapped angle) or
+    /// linear (plain differences, as classic tools do). Default: that of --signal.
+    #[arg(long, value_parser = domain_parser(true))]
+    pub metric: Option<Domain>,
     /// Theiler window: neighbours closer in time than this many samples are not counted.
     #[arg(long, default_value_t = 0)]
     pub theiler: usize,
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
-}
-
-/// The metric of a signal kind unless one is given.
-pub fn metric_for(signal: Signal, given: Option<MetricArg>) -> Metric {
-    match (given, signal) {
-        (Some(m), _) => m.into(),
-        (None, Signal::Circle) => Metric::Circle,
-        (None, Signal::Line) => Metric::Linear,
-    }
-}
-
-/// The AMI curve and its first minimum, the default delay of every later stage.
-pub fn ami(x: &[f64], metric: Metric, bins: usize, max_lag: usize) -> anyhow::Result<(AmiCurve, usize)> {
-    let params = AmiParams::new(metric).with_bins(bins)?.with_max_lag(max_lag)?;
-    let curve = average_mutual_information(x, &params)?;
-    let delay = curve
-        .delay()
-        .context("choose the delay with --delay, or raise --max-lag")?;
-    Ok((curve, delay))
 }
 
 pub fn run(args: &EmbedArgs, quiet: bool) -> anyhow::Result<()> {
@@ -80,8 +41,13 @@ pub fn run(args: &EmbedArgs, quiet: bool) -> anyhow::Result<()> {
     }
     let bar = crate::progress::Progress::spinner("embed", quiet);
     let data = args.input.load()?;
-    let metric = metric_for(data.signal, args.metric);
-    let (curve, delay) = ami(&data.x, metric, args.bins, args.max_lag)?;
+    let metric = args.metric.unwrap_or(data.domain);
+    let (curve, delay) = ami(
+        &data.x,
+        &AmiParams::new(metric)
+            .with_bins(args.bins)?
+            .with_max_lag(args.max_lag)?,
+    )?;
     let params = FnnParams::new(metric, delay)?
         .with_max_dim(args.max_dim)?
         .with_theiler_window(args.theiler);
@@ -105,7 +71,7 @@ fn json(curve: &AmiCurve, delay: usize, fnn: &FnnResult) -> serde_json::Value {
     })
 }
 
-fn print_table(curve: &AmiCurve, delay: usize, fnn: &FnnResult, metric: Metric) {
+fn print_table(curve: &AmiCurve, delay: usize, fnn: &FnnResult, metric: Domain) {
     println!("metric: {metric:?}");
     println!("delay (first minimum of the average mutual information): {delay}");
     match fnn.minimum_dimension() {

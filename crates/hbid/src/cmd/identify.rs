@@ -3,15 +3,16 @@
 use std::path::PathBuf;
 
 use anyhow::{Context, bail};
+use circle_signal::{Domain, Segment};
 use clap::{Args, ValueEnum};
 use hb_basis::{BasisKind, Harmonic, Hat, Polynomial};
 use hb_solve::{
     Bootstrap, BootstrapParams, Forcing, Harmonics, IdentifiedModel, IdentifyParams, LstsqSolver, ModelForm,
-    NoiseCorrection, QrSolver, SampleClock, SvdSolver, WeakForm, assemble, assemble_weak, bootstrap_fit,
+    NoiseCorrection, QrSolver, SvdSolver, WeakForm, assemble, assemble_weak, bootstrap_fit,
 };
-use upo_search::{Metric, Segment, Windows};
+use upo_search::Windows;
 
-use super::data::{Data, InputArgs, SearchArgs, Signal};
+use super::data::{Data, InputArgs, SearchArgs};
 
 /// Identification method.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -181,14 +182,14 @@ impl IdentifyArgs {
 
     /// [`IdentifyArgs::setup`] for a method other than the one chosen on the command line.
     pub fn setup_for(&self, data: &Data, method: Method) -> anyhow::Result<Setup> {
-        let basis_name = self.basis.clone().unwrap_or_else(|| match data.signal {
-            Signal::Circle => "harmonic:1".to_owned(),
-            Signal::Line => "poly:3".to_owned(),
+        let basis_name = self.basis.clone().unwrap_or_else(|| match data.domain {
+            Domain::Circle => "harmonic:1".to_owned(),
+            Domain::Line => "poly:3".to_owned(),
         });
         let basis = parse_basis(&basis_name)?;
-        let forcing = match self.forcing.unwrap_or(match data.signal {
-            Signal::Circle => ForcingArg::None,
-            Signal::Line => ForcingArg::Identified,
+        let forcing = match self.forcing.unwrap_or(match data.domain {
+            Domain::Circle => ForcingArg::None,
+            Domain::Line => ForcingArg::Identified,
         }) {
             ForcingArg::None => Forcing::None,
             ForcingArg::Identified => Forcing::Identified,
@@ -213,8 +214,7 @@ impl IdentifyArgs {
                     .map_err(|_| anyhow::anyhow!("--noise-sigma '{text}': a number of radians or auto"))?,
             },
         };
-        let clock = SampleClock::new(self.input.forcing_period, data.p)?.with_start_time(data.t0)?;
-        let params = IdentifyParams::builder(clock)
+        let params = IdentifyParams::builder(data.clock)
             .form(form)
             .harmonics(harmonics)
             .noise_correction(noise)
@@ -253,12 +253,9 @@ impl IdentifyArgs {
     pub fn segments(&self, data: &Data, delay: usize, method: Method) -> anyhow::Result<Vec<Segment>> {
         Ok(match method {
             Method::Upo => self.search.close_returns(data, delay)?.search(&data.x)?,
-            Method::Windowed => Windows::builder(data.p)
+            Method::Windowed => Windows::builder(&data.clock)
                 .periods(self.window_periods)
-                .metric(match data.signal {
-                    Signal::Circle => Metric::Circle,
-                    Signal::Line => Metric::Linear,
-                })
+                .domain(data.domain)
                 .build()?
                 .windows(&data.x)?,
         })

@@ -6,14 +6,14 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use clap::Args;
-use embedding::{FnnParams, FnnResult, false_nearest_neighbours};
+use embedding::{AmiParams, FnnParams, FnnResult, false_nearest_neighbours};
 use hbid::plot::{BLUE, Figure, GREY, ORANGE, RED, Series, Style, add_figure};
 use pendulum_sim::{
-    CheckConfig, ModelCheck, SimulationConfig, StateSpace, check_model, energy_distance, simulate,
+    CheckConfig, Domain, ModelCheck, SimulationConfig, check_model, energy_distance, simulate,
 };
 use upo_search::Catalogue;
 
-use super::data::{Data, Signal};
+use super::data::{Data, ami};
 use super::identify::{Identification, IdentifyArgs, Method, json};
 use crate::progress::Progress;
 
@@ -60,7 +60,7 @@ fn delay_section(
     p: usize,
     offset: usize,
     delay: usize,
-    signal: Signal,
+    domain: Domain,
 ) -> (Vec<(f64, f64)>, Vec<[f64; 4]>) {
     let pairs: Vec<(f64, f64)> = (offset..x.len().saturating_sub(delay))
         .step_by(p.max(1))
@@ -68,9 +68,9 @@ fn delay_section(
         .collect();
     let embedded = pairs
         .iter()
-        .map(|&(a, b)| match signal {
-            Signal::Circle => [a.cos(), a.sin(), b.cos(), b.sin()],
-            Signal::Line => [a, b, 0.0, 0.0],
+        .map(|&(a, b)| match domain {
+            Domain::Circle => [a.cos(), a.sin(), b.cos(), b.sin()],
+            Domain::Line => [a, b, 0.0, 0.0],
         })
         .collect();
     (pairs, embedded)
@@ -102,8 +102,8 @@ pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
     bar.finish();
 
     let bar = stage("embed");
-    let metric = super::embed::metric_for(data.signal, None);
-    let (ami, ami_delay) = super::embed::ami(&data.x, metric, 16, 40)?;
+    let metric = data.domain;
+    let (ami, ami_delay) = ami(&data.x, &AmiParams::new(metric))?;
     let delay = id.search.delay.unwrap_or(ami_delay);
     let fnn = false_nearest_neighbours(&data.x, &FnnParams::new(metric, delay)?.with_max_dim(8)?)?;
     bar.finish();
@@ -115,15 +115,13 @@ pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
     // The record's own section at the forcing's phase 0 (t0 + offset·dt ≡ 0 mod T), and the
     // distance between its two halves: what one attractor gives.
     let t_period = id.input.forcing_period;
-    let offset = ((-data.t0).rem_euclid(t_period) / data.dt).round() as usize % data.p;
-    let (section, embedded) = delay_section(&data.x, data.p, offset, delay, data.signal);
+    let offset =
+        ((-data.clock.start_time()).rem_euclid(t_period) / data.clock.step()).round() as usize % data.p;
+    let (section, embedded) = delay_section(&data.x, data.p, offset, delay, data.domain);
     let half = embedded.len() / 2;
     let floor = energy_distance(&embedded[..half], &embedded[half..]);
 
-    let space = match data.signal {
-        Signal::Circle => StateSpace::Circle,
-        Signal::Line => StateSpace::Line,
-    };
+    let space = data.domain;
     let x0 = data.x[0];
     let mut results = Vec::new();
     for method in [Method::Upo, Method::Windowed] {
@@ -146,11 +144,11 @@ pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
             .with_samples((args.validation_periods * data.p).min(data.x.len().max(50 * data.p)))?
             .with_initial(x0, 0.0)?;
         let sim = simulate(&ident.model, &sim_cfg)?;
-        let sim_x = match data.signal {
-            Signal::Circle => sim.wrapped(),
-            Signal::Line => sim.theta,
+        let sim_x = match data.domain {
+            Domain::Circle => sim.wrapped(),
+            Domain::Line => sim.theta,
         };
-        let (model_section, model_embedded) = delay_section(&sim_x, data.p, 0, delay, data.signal);
+        let (model_section, model_embedded) = delay_section(&sim_x, data.p, 0, delay, data.domain);
         let distance = energy_distance(&embedded, &model_embedded);
         bar.finish();
         results.push(MethodResult {
@@ -377,9 +375,9 @@ fn write_report(args: &ReportArgs, f: &RecordFacts<'_>, results: &[MethodResult]
     }
     writeln!(r)?;
 
-    let (range, label) = match data.signal {
-        Signal::Circle => (Some((-std::f64::consts::PI, std::f64::consts::PI)), "x (wrapped)"),
-        Signal::Line => (None, "x"),
+    let (range, label) = match data.domain {
+        Domain::Circle => (Some((-std::f64::consts::PI, std::f64::consts::PI)), "x (wrapped)"),
+        Domain::Line => (None, "x"),
     };
     let y_label = format!("x(t + {delay} dt)");
     let mut panels = vec![(

@@ -48,7 +48,7 @@ fn json(catalogue: &Catalogue) -> serde_json::Value {
         "distinct_orbits": catalogue.orbits().len(),
         "distinct_by_period": distinct,
         "orbits": catalogue.segments().iter().map(|s| serde_json::json!({
-            "period": s.period, "start": s.start, "error": s.error,
+            "period": s.period(), "start": s.start(), "error": s.error(),
         })).collect::<Vec<_>>(),
     })
 }
