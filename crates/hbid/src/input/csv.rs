@@ -2,51 +2,11 @@
 
 use std::path::PathBuf;
 
-use super::{Column, InputError, ReadOptions, Record};
+use csv::StringRecord;
 
-fn column_index(
-    wanted: Option<&Column>,
-    header: Option<&csv::StringRecord>,
-    default_name: &str,
-    default_position: usize,
-    width: usize,
-    option: &'static str,
-) -> Result<usize, InputError> {
-    let missing = |wanted: String| InputError::MissingColumn {
-        wanted,
-        found: match header {
-            Some(h) => h.iter().collect::<Vec<_>>().join(","),
-            None => format!("{width} unnamed"),
-        },
-        option,
-    };
-    match (wanted, header) {
-        (Some(Column::Position(p)), _) => {
-            if *p <= width {
-                Ok(p - 1)
-            } else {
-                Err(missing(p.to_string()))
-            }
-        }
-        (Some(Column::Name(n)), Some(h)) => h
-            .iter()
-            .position(|c| c == n)
-            .ok_or_else(|| missing(format!("'{n}'"))),
-        (Some(Column::Name(n)), None) => Err(missing(format!("'{n}'"))),
-        (None, Some(h)) => h
-            .iter()
-            .position(|c| c == default_name)
-            .ok_or_else(|| missing(format!("'{default_name}'"))),
-        (None, None) => {
-            if default_position <= width {
-                Ok(default_position - 1)
-            } else {
-                Err(missing(default_position.to_string()))
-            }
-        }
-    }
-}
+use super::{Columns, InputError, ReadOptions, Record, Times, grid};
 
+/// Reads CSV text; the options are assumed valid.
 pub(super) fn read(bytes: &[u8], options: &ReadOptions) -> Result<Record, InputError> {
     let mut reader = csv::ReaderBuilder::new()
         .comment(Some(b'#'))
@@ -54,86 +14,61 @@ pub(super) fn read(bytes: &[u8], options: &ReadOptions) -> Result<Record, InputE
         .flexible(false)
         .trim(csv::Trim::All)
         .from_reader(bytes);
-    let mut row = csv::StringRecord::new();
-    let first = loop {
-        match reader.read_record(&mut row) {
-            Ok(false) => return Err(InputError::Empty),
-            Ok(true) if row.len() == 1 && row[0].is_empty() => continue,
-            Ok(true) => break row.clone(),
-            Err(e) => return Err(csv_error(e)),
-        }
-    };
-    let is_header = first.iter().any(|c| c.parse::<f64>().is_err());
-    let header = is_header.then_some(&first);
-    let width = first.len();
-    let time = match options.dt {
-        Some(_) => None,
-        None => {
-            if header.is_none() && width == 1 && options.time.is_none() {
-                return Err(InputError::NeedStep);
-            }
-            Some(column_index(
-                options.time.as_ref(),
-                header,
-                "t",
-                1,
-                width,
-                "--time-col",
-            )?)
-        }
-    };
-    let angle_default = if options.dt.is_some() { 1 } else { 2 };
-    let angle = column_index(
-        options.angle.as_ref(),
-        header,
-        "theta",
-        angle_default,
-        width,
-        "--angle-col",
-    )?;
+    let mut row = StringRecord::new();
+    if !next_row(&mut reader, &mut row)? {
+        return Err(InputError::Empty);
+    }
+    let first = row.clone();
+    let header = first.iter().any(|c| c.parse::<f64>().is_err()).then_some(&first);
+    let names: Option<Vec<&str>> = header.map(|h| h.iter().collect());
+    let Columns { time, angle } = options.columns(names.as_deref(), first.len())?;
     let name = |i: usize| match header {
         Some(h) => format!("'{}'", &h[i]),
         None => (i + 1).to_string(),
     };
-    let (time_name, angle_name) = (time.map(name).unwrap_or_default(), name(angle));
+    let (time_name, angle_name) = (time.column().map(name).unwrap_or_default(), name(angle));
 
-    let mut record = Record {
-        lines: Some(Vec::new()),
-        ..Record::default()
-    };
-    let lines = record.lines.as_mut().expect("text input has lines");
+    let mut record = Record::default();
+    let mut lines = Vec::new();
     let mut counter = LineCounter {
         bytes,
         pos: 0,
         line: 1,
     };
-    let mut push = |row: &csv::StringRecord| -> Result<(), InputError> {
+    let mut push = |row: &StringRecord| -> Result<(), InputError> {
         let line = row.position().map_or(0, |p| counter.line_at(p.byte()));
-        if let Some(it) = time {
+        if let Times::Column(it) = time {
             record.t.push(cell(row, it, &time_name, line)?);
         }
         record.theta.push(cell(row, angle, &angle_name, line)?);
         lines.push(line);
         Ok(())
     };
-    if !is_header {
+    if header.is_none() {
         push(&first)?;
     }
-    loop {
-        match reader.read_record(&mut row) {
-            Ok(false) => break,
-            Ok(true) if row.len() == 1 && row[0].is_empty() => continue,
-            Ok(true) => push(&row)?,
-            Err(e) => return Err(csv_error(e)),
-        }
+    while next_row(&mut reader, &mut row)? {
+        push(&row)?;
     }
     if record.theta.is_empty() {
         return Err(InputError::NoData);
     }
-    if let Some(dt) = options.dt {
-        record.t = (0..record.theta.len()).map(|n| n as f64 * dt).collect();
+    if let Times::Step(dt) = time {
+        record.t = grid(record.theta.len(), dt);
     }
+    record.lines = Some(lines);
     Ok(record)
+}
+
+/// The next row that is not blank, into `row`; false at the end of the input.
+fn next_row(reader: &mut csv::Reader<&[u8]>, row: &mut StringRecord) -> Result<bool, InputError> {
+    loop {
+        match reader.read_record(row) {
+            Ok(true) if row.len() == 1 && row[0].is_empty() => continue,
+            Ok(more) => return Ok(more),
+            Err(e) => return Err(csv_error(e)),
+        }
+    }
 }
 
 /// Physical line numbers (comment lines included, which the CSV parser does not count) from
@@ -168,7 +103,7 @@ impl LineCounter<'_> {
     }
 }
 
-fn cell(row: &csv::StringRecord, index: usize, column: &str, line: u64) -> Result<f64, InputError> {
+fn cell(row: &StringRecord, index: usize, column: &str, line: u64) -> Result<f64, InputError> {
     let text = &row[index];
     let value: f64 = text.parse().map_err(|_| InputError::NotANumber {
         line,

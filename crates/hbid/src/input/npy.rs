@@ -2,7 +2,7 @@
 
 use std::io::Read;
 
-use super::{Column, InputError, ReadOptions, Record};
+use super::{Columns, InputError, ReadOptions, Record, Times, grid};
 
 fn npy_error(why: impl std::fmt::Display) -> InputError {
     InputError::Npy { why: why.to_string() }
@@ -102,42 +102,11 @@ pub(super) fn read(bytes: &[u8], options: &ReadOptions) -> Result<Record, InputE
             values[i]
         }
     };
-    let pick = |wanted: Option<&Column>, default: usize, option: &'static str| -> Result<usize, InputError> {
-        let p = match wanted {
-            Some(Column::Position(p)) => *p,
-            Some(Column::Name(n)) => {
-                return Err(InputError::MissingColumn {
-                    wanted: format!("'{n}'"),
-                    found: format!("{cols} unnamed (.npy has no names: give positions)"),
-                    option,
-                });
-            }
-            None => default,
-        };
-        if p > cols {
-            return Err(InputError::MissingColumn {
-                wanted: p.to_string(),
-                found: format!("{cols} unnamed"),
-                option,
-            });
-        }
-        Ok(p - 1)
-    };
-    let angle = pick(
-        options.angle.as_ref(),
-        if options.dt.is_some() || cols == 1 { 1 } else { 2 },
-        "--angle-col",
-    )?;
+    let Columns { time, angle } = options.columns(None, cols)?;
     let theta: Vec<f64> = (0..rows).map(|r| at(r, angle)).collect();
-    let t: Vec<f64> = match options.dt {
-        Some(dt) => (0..rows).map(|n| n as f64 * dt).collect(),
-        None => {
-            if cols == 1 && options.time.is_none() {
-                return Err(InputError::NeedStep);
-            }
-            let it = pick(options.time.as_ref(), 1, "--time-col")?;
-            (0..rows).map(|r| at(r, it)).collect()
-        }
+    let t: Vec<f64> = match time {
+        Times::Column(it) => (0..rows).map(|r| at(r, it)).collect(),
+        Times::Step(dt) => grid(rows, dt),
     };
     for (i, (&ti, &xi)) in t.iter().zip(&theta).enumerate() {
         for (what, v) in [("the time", ti), ("a value", xi)] {
@@ -157,25 +126,28 @@ pub(super) fn read(bytes: &[u8], options: &ReadOptions) -> Result<Record, InputE
     })
 }
 
+/// An `.npy` file (format 1.0) with this header and payload.
+#[cfg(test)]
+pub(super) fn npy_bytes(descr: &str, shape: &str, fortran: bool, payload: &[u8]) -> Vec<u8> {
+    let mut header = format!(
+        "{{'descr': '{descr}', 'fortran_order': {}, 'shape': {shape}, }}",
+        if fortran { "True" } else { "False" }
+    );
+    while (10 + header.len() + 1) % 64 != 0 {
+        header.push(' ');
+    }
+    header.push('\n');
+    let mut out = b"\x93NUMPY\x01\x00".to_vec();
+    out.extend_from_slice(&(header.len() as u16).to_le_bytes());
+    out.extend_from_slice(header.as_bytes());
+    out.extend_from_slice(payload);
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::super::*;
-
-    fn npy_bytes(descr: &str, shape: &str, fortran: bool, payload: &[u8]) -> Vec<u8> {
-        let mut header = format!(
-            "{{'descr': '{descr}', 'fortran_order': {}, 'shape': {shape}, }}",
-            if fortran { "True" } else { "False" }
-        );
-        while (10 + header.len() + 1) % 64 != 0 {
-            header.push(' ');
-        }
-        header.push('\n');
-        let mut out = b"\x93NUMPY\x01\x00".to_vec();
-        out.extend_from_slice(&(header.len() as u16).to_le_bytes());
-        out.extend_from_slice(header.as_bytes());
-        out.extend_from_slice(payload);
-        out
-    }
+    use super::npy_bytes;
 
     #[test]
     fn reads_npy_1d_2d_and_orders() {
