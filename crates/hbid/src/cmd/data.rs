@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use clap::{Args, ValueEnum};
-use hbid::input::{Column, ReadOptions, UniformRecord, read_path};
+use hbid::input::{Column, InputError, ReadOptions, Role, UniformRecord, read_path};
 
 /// Whether the record is an angle on the circle or a displacement on the line.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -75,9 +75,13 @@ impl InputArgs {
             angle: column(&self.angle_col)?,
             dt: self.dt,
         };
-        let record = read_path(&self.file, &options).with_context(|| format!("{}", self.file.display()))?;
+        let record = read_path(&self.file, &options)
+            .map_err(naming_options)
+            .with_context(|| format!("{}", self.file.display()))?;
         let mut uniform = UniformRecord::new(record).with_context(|| format!("{}", self.file.display()))?;
-        let p = uniform.samples_per_period(self.forcing_period)?;
+        let p = uniform
+            .samples_per_period(self.forcing_period)
+            .map_err(naming_options)?;
         if self.signal == Signal::Circle && uniform.outside_circle() {
             eprintln!("note: values outside [-π, π): read as an unwrapped angle and wrapped");
             for v in &mut uniform.x {
@@ -92,6 +96,43 @@ impl InputArgs {
             signal: self.signal,
         })
     }
+}
+
+/// An input error with the options of this command line that set what it is about, which the
+/// library does not know.
+#[derive(Debug)]
+struct WithOptions {
+    error: InputError,
+    /// Appended to the error's text.
+    options: &'static str,
+}
+
+impl std::fmt::Display for WithOptions {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}{}", self.error, self.options)
+    }
+}
+
+impl std::error::Error for WithOptions {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        self.error.source()
+    }
+}
+
+/// The error, naming the options that set what it is about, if any.
+fn naming_options(error: InputError) -> anyhow::Error {
+    let options = match &error {
+        InputError::NeedStep => " with --dt",
+        InputError::BadStep { .. } => " (--dt)",
+        InputError::TimeTwice => " (--dt, --time-col)",
+        InputError::MissingColumn { role: Role::Time, .. } => "; choose one with --time-col",
+        InputError::MissingColumn {
+            role: Role::Angle, ..
+        } => "; choose one with --angle-col",
+        InputError::BadForcingPeriod { .. } => " (--forcing-period)",
+        _ => return error.into(),
+    };
+    WithOptions { error, options }.into()
 }
 
 /// The close-return options shared by `upos`, `identify` and `report`.
@@ -133,5 +174,36 @@ impl SearchArgs {
             Some(d) => d,
             None => super::embed::ami(&data.x, super::embed::metric_for(data.signal, None), 16, 40)?.1,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn input_errors_name_the_options_that_fix_them() {
+        let missing = |role| InputError::MissingColumn {
+            role,
+            wanted: Column::Position(3),
+            found: Vec::new(),
+            width: 2,
+        };
+        for (error, option) in [
+            (InputError::NeedStep, "--dt"),
+            (InputError::BadStep { dt: 0.0 }, "--dt"),
+            (InputError::TimeTwice, "--time-col"),
+            (missing(Role::Time), "--time-col"),
+            (missing(Role::Angle), "--angle-col"),
+            (InputError::BadForcingPeriod { period: -1.0 }, "--forcing-period"),
+        ] {
+            let text = error.to_string();
+            let named = format!("{:#}", naming_options(error));
+            assert!(named.starts_with(&text) && named.contains(option), "{named}");
+        }
+        assert_eq!(
+            naming_options(InputError::NeedStep).to_string(),
+            "the input has a single column: give its sampling step with --dt"
+        );
     }
 }

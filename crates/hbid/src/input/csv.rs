@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use csv::StringRecord;
 
-use super::{Columns, InputError, ReadOptions, Record, Times, grid};
+use super::{Column, Columns, InputError, Location, ReadOptions, Record, Role, Times, grid};
 
 /// Reads CSV text; the options are assumed valid.
 pub(super) fn read(bytes: &[u8], options: &ReadOptions) -> Result<Record, InputError> {
@@ -22,11 +22,11 @@ pub(super) fn read(bytes: &[u8], options: &ReadOptions) -> Result<Record, InputE
     let header = first.iter().any(|c| c.parse::<f64>().is_err()).then_some(&first);
     let names: Option<Vec<&str>> = header.map(|h| h.iter().collect());
     let Columns { time, angle } = options.columns(names.as_deref(), first.len())?;
-    let name = |i: usize| match header {
-        Some(h) => format!("'{}'", &h[i]),
-        None => (i + 1).to_string(),
-    };
-    let (time_name, angle_name) = (time.column().map(name).unwrap_or_default(), name(angle));
+    let field = |role, index| Field { index, role, header };
+    let (time_field, angle_field) = (
+        time.column().map(|i| field(Role::Time, i)),
+        field(Role::Angle, angle),
+    );
 
     let mut record = Record::default();
     let mut lines = Vec::new();
@@ -37,10 +37,10 @@ pub(super) fn read(bytes: &[u8], options: &ReadOptions) -> Result<Record, InputE
     };
     let mut push = |row: &StringRecord| -> Result<(), InputError> {
         let line = row.position().map_or(0, |p| counter.line_at(p.byte()));
-        if let Times::Column(it) = time {
-            record.t.push(cell(row, it, &time_name, line)?);
+        if let Some(time) = &time_field {
+            record.t.push(time.value(row, line)?);
         }
-        record.theta.push(cell(row, angle, &angle_name, line)?);
+        record.theta.push(angle_field.value(row, line)?);
         lines.push(line);
         Ok(())
     };
@@ -103,47 +103,60 @@ impl LineCounter<'_> {
     }
 }
 
-fn cell(row: &StringRecord, index: usize, column: &str, line: u64) -> Result<f64, InputError> {
-    let text = &row[index];
-    let value: f64 = text.parse().map_err(|_| InputError::NotANumber {
-        line,
-        column: column.to_owned(),
-        value: text.chars().take(40).collect(),
-    })?;
-    if !value.is_finite() {
-        return Err(InputError::NonFinite {
-            at: format!("line {line}"),
-            what: if column == "'t'" { "the time" } else { "a value" },
-            value,
-        });
+/// A column read from every row: where it is, what it holds, and the header to name it in errors.
+struct Field<'a> {
+    index: usize,
+    role: Role,
+    header: Option<&'a StringRecord>,
+}
+
+impl Field<'_> {
+    /// The finite number in this column of `row`, which is on `line`.
+    fn value(&self, row: &StringRecord, line: u64) -> Result<f64, InputError> {
+        let text = &row[self.index];
+        let value: f64 = text.parse().map_err(|_| InputError::NotANumber {
+            line,
+            column: self.column(),
+            value: text.chars().take(40).collect(),
+        })?;
+        if !value.is_finite() {
+            return Err(InputError::NonFinite {
+                at: Location::Line(line),
+                role: self.role,
+                value,
+            });
+        }
+        Ok(value)
     }
-    Ok(value)
+
+    /// The column by its header name, or by position without a header.
+    fn column(&self) -> Column {
+        match self.header {
+            Some(h) => Column::Name(h[self.index].to_owned()),
+            None => Column::Position(self.index + 1),
+        }
+    }
 }
 
 fn csv_error(e: csv::Error) -> InputError {
     let line = e.position().map_or(0, |p| p.line());
-    match e.into_kind() {
+    match *e.kind() {
         csv::ErrorKind::UnequalLengths {
-            expected_len,
-            len,
-            pos,
+            expected_len, len, ..
         } => InputError::Ragged {
-            line: pos.map_or(line, |p| p.line()),
+            line,
             expected: expected_len as usize,
             found: len as usize,
         },
-        csv::ErrorKind::Utf8 { pos, .. } => InputError::Malformed {
-            line: pos.map_or(line, |p| p.line()),
-            why: "not UTF-8 text (binary data?)".to_owned(),
+        // Not from text in memory, but the parser reads any source.
+        csv::ErrorKind::Io(_) => match e.into_kind() {
+            csv::ErrorKind::Io(source) => InputError::Io {
+                path: PathBuf::from("<input>"),
+                source,
+            },
+            _ => unreachable!("the kind was Io"),
         },
-        csv::ErrorKind::Io(source) => InputError::Io {
-            path: PathBuf::from("<input>"),
-            source,
-        },
-        other => InputError::Malformed {
-            line,
-            why: format!("{other:?}"),
-        },
+        _ => InputError::Malformed { line, source: e },
     }
 }
 
@@ -211,7 +224,8 @@ mod tests {
             other => panic!("{other:?}"),
         }
         match read("t,theta\n0,1\n1,NaN\n") {
-            Err(InputError::NonFinite { at, .. }) if at == "line 3" => {}
+            Err(InputError::NonFinite { at, .. })
+                if at == Location::Line(3) && at.to_string() == "line 3" => {}
             other => panic!("{other:?}"),
         }
         match read("t,theta\n0,1\n1,inf\n") {
@@ -227,6 +241,71 @@ mod tests {
             other => panic!("{other:?}"),
         }
         assert!(read_bytes(&[0xff, 0xfe, 0x00, 0x01], &ReadOptions::default()).is_err());
+    }
+
+    #[test]
+    fn a_time_column_is_reported_as_a_time_whatever_its_name() {
+        let named = ReadOptions {
+            time: Some(Column::Name("time".into())),
+            angle: Some(Column::Name("angle".into())),
+            dt: None,
+        };
+        let unnamed = ReadOptions::default();
+        for (text, options, role, line, says) in [
+            (
+                "time,angle\n0,1\nnan,2\n",
+                &named,
+                Role::Time,
+                3,
+                "the time is NaN",
+            ),
+            (
+                "time,angle\n0,1\n1,inf\n",
+                &named,
+                Role::Angle,
+                3,
+                "a value is inf",
+            ),
+            ("0,1\n-inf,2\n", &unnamed, Role::Time, 2, "the time is -inf"),
+        ] {
+            match read_bytes(text.as_bytes(), options) {
+                Err(e @ InputError::NonFinite { role: r, at, .. })
+                    if r == role && at == Location::Line(line) =>
+                {
+                    assert!(e.to_string().contains(says), "{e}");
+                }
+                other => panic!("{text:?}: {other:?}"),
+            }
+        }
+    }
+
+    #[test]
+    fn bad_cells_name_their_column() {
+        match read("time,theta,t\n0,1,2\n1,x,3\n") {
+            Err(InputError::NotANumber {
+                line: 3,
+                column,
+                value,
+            }) => {
+                assert_eq!((column, value.as_str()), (Column::Name("theta".into()), "x"));
+            }
+            other => panic!("{other:?}"),
+        }
+        match read("0,1\nx,2\n") {
+            Err(InputError::NotANumber { column, .. }) => assert_eq!(column, Column::Position(1)),
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn binary_data_keeps_the_parser_complaint() {
+        match read_bytes(&[b'1', b',', 0xff, 0xfe, b'\n'], &ReadOptions::default()) {
+            Err(e @ InputError::Malformed { line: 1, .. }) => {
+                assert!(e.to_string().contains("binary data"), "{e}");
+                assert!(std::error::Error::source(&e).is_some());
+            }
+            other => panic!("{other:?}"),
+        }
     }
 
     proptest::proptest! {

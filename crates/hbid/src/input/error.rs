@@ -1,6 +1,30 @@
-//! What can be wrong with an input.
+//! What can be wrong with an input, and where.
+//!
+//! The texts name the input's own terms (a sampling step, a time column), never the options of a
+//! program that reads it: the command line adds its option names itself.
 
+use std::fmt;
 use std::path::PathBuf;
+
+use super::{Column, Role};
+
+/// Where in the input a value is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Location {
+    /// A line of text, counted from 1, comment lines included.
+    Line(u64),
+    /// A sample of an array, counted from 1.
+    Sample(usize),
+}
+
+impl fmt::Display for Location {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Location::Line(n) => write!(f, "line {n}"),
+            Location::Sample(n) => write!(f, "sample {n}"),
+        }
+    }
+}
 
 /// What can be wrong with an input. Line numbers count from 1 and include comment lines.
 #[derive(Debug, thiserror::Error)]
@@ -26,15 +50,17 @@ pub enum InputError {
     /// A header but no data rows.
     #[error("the input has a header but no data rows")]
     NoData,
-    /// A column the reader needs is not in the header.
-    #[error("no column {wanted} in the input (columns: {found}); choose one with {option}")]
+    /// A column the reader needs is not in the input.
+    #[error("no {role} column {wanted} in the input ({})", columns_found(.found, *.width, .wanted))]
     MissingColumn {
-        /// The column wanted.
-        wanted: String,
-        /// The header, or the number of columns.
-        found: String,
-        /// The option that picks it.
-        option: &'static str,
+        /// What the column would hold.
+        role: Role,
+        /// The column wanted, chosen or by default.
+        wanted: Column,
+        /// The header's names; empty without a header.
+        found: Vec<String>,
+        /// The number of columns.
+        width: usize,
     },
     /// A column option that is neither a name nor a positive position.
     #[error("'{given}' is not a column: give a header name or a position counted from 1")]
@@ -42,35 +68,35 @@ pub enum InputError {
         /// What was given.
         given: String,
     },
-    /// A non-positive or non-finite `--dt`.
-    #[error("--dt {dt} must be positive and finite")]
+    /// A sampling step that is not positive and finite.
+    #[error("the sampling step {dt} must be positive and finite")]
     BadStep {
         /// The step given.
         dt: f64,
     },
-    /// Both a time column and `--dt`.
-    #[error("give either --dt or --time-col, not both")]
+    /// Both a time column and a sampling step.
+    #[error("give either a sampling step or a time column, not both")]
     TimeTwice,
-    /// Neither a time column nor `--dt` for a single-channel record.
-    #[error("the input has a single column: give its sampling step with --dt")]
+    /// A single unnamed column, and neither a sampling step nor a time column chosen.
+    #[error("the input has a single column: give its sampling step")]
     NeedStep,
     /// A cell is not a number.
     #[error("line {line}: '{value}' in column {column} is not a number")]
     NotANumber {
         /// Line number.
         line: u64,
-        /// Column.
-        column: String,
+        /// The column, by name with a header, by position without.
+        column: Column,
         /// The cell.
         value: String,
     },
     /// A value is NaN or infinite.
-    #[error("{at}: {what} is {value}: only finite numbers are accepted")]
+    #[error("{at}: {} is {value}: only finite numbers are accepted", .role.value_noun())]
     NonFinite {
-        /// Where ("line 12" or "sample 12").
-        at: String,
-        /// Which value.
-        what: &'static str,
+        /// Where.
+        at: Location,
+        /// What the value is.
+        role: Role,
         /// The value.
         value: f64,
     },
@@ -85,12 +111,13 @@ pub enum InputError {
         found: usize,
     },
     /// The bytes are not CSV text.
-    #[error("line {line}: not CSV text ({why})")]
+    #[error("line {line}: not CSV text{}", binary_hint(.source))]
     Malformed {
         /// Line number.
         line: u64,
         /// The parser's complaint.
-        why: String,
+        #[source]
+        source: csv::Error,
     },
     /// An `.npy` file that cannot be read.
     #[error("not a readable .npy array: {why}")]
@@ -110,7 +137,7 @@ pub enum InputError {
     #[error("{at}: time {t} does not increase (previous sample at {previous})")]
     TimeNotIncreasing {
         /// Where.
-        at: String,
+        at: Location,
         /// The time.
         t: f64,
         /// The previous time.
@@ -122,14 +149,14 @@ pub enum InputError {
     )]
     NonUniform {
         /// Where.
-        at: String,
+        at: Location,
         /// The step.
         step: f64,
         /// The mean step.
         mean: f64,
     },
-    /// A forcing period that is not positive.
-    #[error("--forcing-period {period} must be positive and finite")]
+    /// A forcing period that is not positive and finite.
+    #[error("the forcing period {period} must be positive and finite")]
     BadForcingPeriod {
         /// The period given.
         period: f64,
@@ -148,4 +175,82 @@ pub enum InputError {
         /// The nearest whole number.
         nearest: u64,
     },
+}
+
+impl Role {
+    /// The value in a column of this role, as the errors name it.
+    fn value_noun(self) -> &'static str {
+        match self {
+            Role::Time => "the time",
+            Role::Angle => "a value",
+        }
+    }
+}
+
+/// The columns an input has, for [`InputError::MissingColumn`].
+fn columns_found(found: &[String], width: usize, wanted: &Column) -> String {
+    match (found, wanted) {
+        ([], Column::Name(_)) => format!("{width} unnamed columns: give a position"),
+        ([], Column::Position(_)) => format!("{width} unnamed columns"),
+        (names, _) => format!("columns: {}", names.join(",")),
+    }
+}
+
+/// What the parser's complaint means for a user, for [`InputError::Malformed`].
+fn binary_hint(source: &csv::Error) -> &'static str {
+    match source.kind() {
+        csv::ErrorKind::Utf8 { .. } => " (not UTF-8 text: binary data?)",
+        _ => "",
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn locations_read_as_before() {
+        assert_eq!(Location::Line(12).to_string(), "line 12");
+        assert_eq!(Location::Sample(12).to_string(), "sample 12");
+    }
+
+    #[test]
+    fn missing_columns_say_what_there_is() {
+        let missing = |wanted, found: &[&str], width| InputError::MissingColumn {
+            role: Role::Time,
+            wanted,
+            found: found.iter().map(|&c| c.to_owned()).collect(),
+            width,
+        };
+        assert_eq!(
+            missing(Column::Name("t".into()), &["time", "theta"], 2).to_string(),
+            "no time column 't' in the input (columns: time,theta)"
+        );
+        assert_eq!(
+            missing(Column::Position(3), &[], 2).to_string(),
+            "no time column 3 in the input (2 unnamed columns)"
+        );
+        assert_eq!(
+            missing(Column::Name("t".into()), &[], 2).to_string(),
+            "no time column 't' in the input (2 unnamed columns: give a position)"
+        );
+    }
+
+    #[test]
+    fn texts_name_no_command_line_options() {
+        for e in [
+            InputError::NeedStep,
+            InputError::TimeTwice,
+            InputError::BadStep { dt: 0.0 },
+            InputError::BadForcingPeriod { period: -1.0 },
+            InputError::MissingColumn {
+                role: Role::Angle,
+                wanted: Column::Position(2),
+                found: Vec::new(),
+                width: 1,
+            },
+        ] {
+            assert!(!e.to_string().contains("--"), "{e}");
+        }
+    }
 }

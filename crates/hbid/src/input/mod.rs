@@ -21,7 +21,7 @@ mod error;
 mod npy;
 mod uniform;
 
-pub use error::InputError;
+pub use error::{InputError, Location};
 pub use uniform::{UNIFORM_TOLERANCE, UniformRecord};
 
 use std::io::Read;
@@ -191,15 +191,10 @@ fn find(role: Role, wanted: Column, names: Option<&[&str]>, width: usize) -> Res
         (Column::Name(_), None) => None,
     };
     index.ok_or_else(|| InputError::MissingColumn {
-        wanted: wanted.to_string(),
-        found: match names {
-            Some(names) => names.join(","),
-            None => format!("{width} unnamed"),
-        },
-        option: match role {
-            Role::Time => "--time-col",
-            Role::Angle => "--angle-col",
-        },
+        role,
+        wanted,
+        found: names.map_or_else(Vec::new, |n| n.iter().map(|&c| c.to_owned()).collect()),
+        width,
     })
 }
 

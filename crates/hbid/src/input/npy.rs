@@ -2,7 +2,7 @@
 
 use std::io::Read;
 
-use super::{Columns, InputError, ReadOptions, Record, Times, grid};
+use super::{Columns, InputError, Location, ReadOptions, Record, Role, Times, grid};
 
 fn npy_error(why: impl std::fmt::Display) -> InputError {
     InputError::Npy { why: why.to_string() }
@@ -109,12 +109,12 @@ pub(super) fn read(bytes: &[u8], options: &ReadOptions) -> Result<Record, InputE
         Times::Step(dt) => grid(rows, dt),
     };
     for (i, (&ti, &xi)) in t.iter().zip(&theta).enumerate() {
-        for (what, v) in [("the time", ti), ("a value", xi)] {
-            if !v.is_finite() {
+        for (role, value) in [(Role::Time, ti), (Role::Angle, xi)] {
+            if !value.is_finite() {
                 return Err(InputError::NonFinite {
-                    at: format!("sample {}", i + 1),
-                    what,
-                    value: v,
+                    at: Location::Sample(i + 1),
+                    role,
+                    value,
                 });
             }
         }

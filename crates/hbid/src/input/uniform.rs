@@ -1,7 +1,7 @@
 //! The checks a record must pass before identification: uniform time steps, a whole number of
 //! samples per forcing period.
 
-use super::{InputError, Record};
+use super::{InputError, Location, Record};
 
 /// A record on a uniform time grid: `t_n = t0 + n · dt`.
 #[derive(Debug, Clone, PartialEq)]
@@ -24,9 +24,9 @@ impl UniformRecord {
         if n < 2 {
             return Err(InputError::TooFewSamples { found: n, needed: 2 });
         }
-        let at = |i: usize| match &record.lines {
-            Some(lines) => format!("line {}", lines[i]),
-            None => format!("sample {}", i + 1),
+        let at = |i: usize| match record.lines.as_ref().and_then(|lines| lines.get(i)) {
+            Some(&line) => Location::Line(line),
+            None => Location::Sample(i + 1),
         };
         for i in 1..n {
             if record.t[i] <= record.t[i - 1] {
