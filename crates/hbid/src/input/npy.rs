@@ -52,63 +52,118 @@ fn npy_values(npy: npyz::NpyFile<&[u8]>) -> Result<Vec<f64>, InputError> {
     }
 }
 
+/// Reads an `.npy` array; the options are assumed valid.
 pub(super) fn read(bytes: &[u8], options: &ReadOptions) -> Result<Record, InputError> {
-    let mut probe = bytes;
-    npyz::NpyHeader::from_reader(&mut probe).map_err(npy_error)?;
-    let payload = probe.len();
-    let npy = npyz::NpyFile::new(bytes).map_err(npy_error)?;
-    let shape: Vec<u64> = npy.shape().to_vec();
-    let order = npy.order();
+    let array = Array::open(bytes)?;
+    let Columns { time, angle } = options.columns(None, array.cols)?;
+    let theta = array.column(angle);
+    let t = match time {
+        Times::Column(c) => array.column(c),
+        Times::Step(dt) => grid(array.rows, dt),
+    };
+    check_finite(&t, &theta)?;
+    Ok(Record {
+        t,
+        theta,
+        lines: None,
+    })
+}
+
+/// An array as a matrix: samples in rows, channels in columns (a 1-D array is one column).
+struct Array<'a> {
+    rows: usize,
+    cols: usize,
+    order: npyz::Order,
+    elements: Elements<'a>,
+}
+
+/// The elements of an array, in its order.
+enum Elements<'a> {
+    /// Little-endian f8, the usual case (and 10^7-sample records): read straight from the
+    /// payload, without a converted copy of every element.
+    F8(&'a [u8]),
+    /// Any other supported type, converted.
+    Converted(Vec<f64>),
+}
+
+impl<'a> Array<'a> {
+    /// Reads the header, checks it against the payload, and converts the elements unless they are
+    /// little-endian f8.
+    fn open(bytes: &'a [u8]) -> Result<Self, InputError> {
+        let mut probe = bytes;
+        npyz::NpyHeader::from_reader(&mut probe).map_err(npy_error)?;
+        let payload = &bytes[bytes.len() - probe.len()..];
+        let npy = npyz::NpyFile::new(bytes).map_err(npy_error)?;
+        check_size(npy.shape(), &npy.dtype(), payload.len())?;
+        let (rows, cols) = matrix_shape(npy.shape())?;
+        if rows == 0 || cols == 0 {
+            return Err(InputError::NoData);
+        }
+        let order = npy.order();
+        let elements = if npy.dtype().descr() == "'<f8'" {
+            Elements::F8(payload)
+        } else {
+            Elements::Converted(npy_values(npy)?)
+        };
+        Ok(Self {
+            rows,
+            cols,
+            order,
+            elements,
+        })
+    }
+
+    /// Column `c` (from 0), every row.
+    fn column(&self, c: usize) -> Vec<f64> {
+        (0..self.rows).map(|r| self.get(r, c)).collect()
+    }
+
+    fn get(&self, r: usize, c: usize) -> f64 {
+        let i = match self.order {
+            npyz::Order::C => r * self.cols + c,
+            npyz::Order::Fortran => c * self.rows + r,
+        };
+        match &self.elements {
+            Elements::F8(payload) => {
+                let mut le = [0u8; 8];
+                le.copy_from_slice(&payload[8 * i..8 * i + 8]);
+                f64::from_le_bytes(le)
+            }
+            Elements::Converted(values) => values[i],
+        }
+    }
+}
+
+/// Checks that the payload holds the elements the header announces, before anything the header
+/// claims is allocated.
+fn check_size(shape: &[u64], dtype: &npyz::DType, payload: usize) -> Result<(), InputError> {
     let total: u64 = shape
         .iter()
         .try_fold(1u64, |a, &b| a.checked_mul(b))
         .ok_or_else(|| npy_error("shape overflows"))?;
-    let item = npy.dtype().num_bytes().unwrap_or(usize::MAX) as u64;
-    // Check the payload's size before allocating anything the header claims.
+    let item = dtype.num_bytes().unwrap_or(usize::MAX) as u64;
     if total.checked_mul(item).is_none_or(|n| n > payload as u64) {
         return Err(npy_error(format!(
-            "the header announces {total} elements but the file holds {} bytes of data",
-            payload
+            "the header announces {total} elements but the file holds {payload} bytes of data"
         )));
     }
-    let (rows, cols) = match shape[..] {
-        [n] => (n as usize, 1usize),
-        [n, m] => (n as usize, m as usize),
-        _ => {
-            return Err(npy_error(format!(
-                "shape {shape:?}: expected 1-D (angle) or 2-D (samples × channels)"
-            )));
-        }
-    };
-    if rows == 0 || cols == 0 {
-        return Err(InputError::NoData);
+    Ok(())
+}
+
+/// Rows (samples) and columns (channels) of a 1-D or 2-D shape.
+fn matrix_shape(shape: &[u64]) -> Result<(usize, usize), InputError> {
+    match *shape {
+        [n] => Ok((n as usize, 1)),
+        [n, m] => Ok((n as usize, m as usize)),
+        _ => Err(npy_error(format!(
+            "shape {shape:?}: expected 1-D (angle) or 2-D (samples × channels)"
+        ))),
     }
-    // Little-endian f8, the usual case (and 10^7-sample records): read straight from the payload,
-    // without a converted copy of every element.
-    let payload_bytes = &bytes[bytes.len() - payload..];
-    let plain_f8 = npy.dtype().descr() == "'<f8'";
-    let values = if plain_f8 { Vec::new() } else { npy_values(npy)? };
-    let index = |r: usize, c: usize| match order {
-        npyz::Order::C => r * cols + c,
-        npyz::Order::Fortran => c * rows + r,
-    };
-    let at = |r: usize, c: usize| {
-        let i = index(r, c);
-        if plain_f8 {
-            let mut le = [0u8; 8];
-            le.copy_from_slice(&payload_bytes[8 * i..8 * i + 8]);
-            f64::from_le_bytes(le)
-        } else {
-            values[i]
-        }
-    };
-    let Columns { time, angle } = options.columns(None, cols)?;
-    let theta: Vec<f64> = (0..rows).map(|r| at(r, angle)).collect();
-    let t: Vec<f64> = match time {
-        Times::Column(it) => (0..rows).map(|r| at(r, it)).collect(),
-        Times::Step(dt) => grid(rows, dt),
-    };
-    for (i, (&ti, &xi)) in t.iter().zip(&theta).enumerate() {
+}
+
+/// Checks that every time and value is finite, naming the first sample that is not.
+fn check_finite(t: &[f64], theta: &[f64]) -> Result<(), InputError> {
+    for (i, (&ti, &xi)) in t.iter().zip(theta).enumerate() {
         for (role, value) in [(Role::Time, ti), (Role::Angle, xi)] {
             if !value.is_finite() {
                 return Err(InputError::NonFinite {
@@ -119,11 +174,7 @@ pub(super) fn read(bytes: &[u8], options: &ReadOptions) -> Result<Record, InputE
             }
         }
     }
-    Ok(Record {
-        t,
-        theta,
-        lines: None,
-    })
+    Ok(())
 }
 
 /// An `.npy` file (format 1.0) with this header and payload.
@@ -186,6 +237,35 @@ mod tests {
             read_bytes(&npy_bytes("<f8", "(2,)", false, &nan), &dt),
             Err(InputError::NonFinite { .. })
         ));
+    }
+
+    #[test]
+    fn converted_elements_follow_the_order_and_name_samples() {
+        let f4: Vec<u8> = [0.0f32, 0.5, 1.0, 0.25, -0.5, 2.0]
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        let r = read_bytes(&npy_bytes("<f4", "(3, 2)", true, &f4), &ReadOptions::default()).unwrap();
+        assert_eq!((r.t, r.theta), (vec![0.0, 0.5, 1.0], vec![0.25, -0.5, 2.0]));
+        let r = read_bytes(&npy_bytes("<f4", "(3, 2)", false, &f4), &ReadOptions::default()).unwrap();
+        assert_eq!((r.t, r.theta), (vec![0.0, 1.0, -0.5], vec![0.5, 0.25, 2.0]));
+        for shape in ["()", "(1, 2, 3)"] {
+            assert!(matches!(
+                read_bytes(&npy_bytes("<f4", shape, false, &f4), &ReadOptions::default()),
+                Err(InputError::Npy { .. })
+            ));
+        }
+        let f8: Vec<u8> = [0.0f64, 1.0, 1.0, f64::INFINITY]
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        match read_bytes(&npy_bytes("<f8", "(2, 2)", false, &f8), &ReadOptions::default()) {
+            Err(InputError::NonFinite { at, role, .. }) => {
+                assert_eq!((at, role), (Location::Sample(2), Role::Angle));
+                assert_eq!(at.to_string(), "sample 2");
+            }
+            other => panic!("{other:?}"),
+        }
     }
 
     proptest::proptest! {
