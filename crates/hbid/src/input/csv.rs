@@ -311,10 +311,12 @@ mod tests {
     proptest::proptest! {
         #[test]
         fn csv_never_panics_on_arbitrary_bytes(bytes in proptest::collection::vec(proptest::prelude::any::<u8>(), 0..300)) {
-            let _ = read_bytes(&bytes, &ReadOptions::default());
-            let _ = read_bytes(&bytes, &ReadOptions { dt: Some(0.1), ..Default::default() });
+            for options in [ReadOptions::default(), ReadOptions { dt: Some(0.1), ..Default::default() }] {
+                if let Err(e) = read_bytes(&bytes, &options) {
+                    proptest::prop_assert!(e.is_about_the_content(), "{e:?}");
+                }
+            }
         }
-
 
         #[test]
         fn csv_round_trips_numbers(values in proptest::collection::vec(-1e6..1e6f64, 1..50)) {

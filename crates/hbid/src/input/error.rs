@@ -187,6 +187,35 @@ impl Role {
     }
 }
 
+#[cfg(test)]
+impl InputError {
+    /// Whether the error is about what the input holds, the only kind bytes alone can cause (not
+    /// reading a file, the options on their own, or the checks after reading).
+    pub(crate) fn is_about_the_content(&self) -> bool {
+        match self {
+            InputError::Empty
+            | InputError::NoData
+            | InputError::MissingColumn { .. }
+            | InputError::NeedStep
+            | InputError::NotANumber { .. }
+            | InputError::NonFinite { .. }
+            | InputError::Ragged { .. }
+            | InputError::Malformed { .. }
+            | InputError::Npy { .. } => true,
+            InputError::Io { .. }
+            | InputError::IsFolder { .. }
+            | InputError::BadColumn { .. }
+            | InputError::BadStep { .. }
+            | InputError::TimeTwice
+            | InputError::TooFewSamples { .. }
+            | InputError::TimeNotIncreasing { .. }
+            | InputError::NonUniform { .. }
+            | InputError::BadForcingPeriod { .. }
+            | InputError::NotWholeSamples { .. } => false,
+        }
+    }
+}
+
 /// The columns an input has, for [`InputError::MissingColumn`].
 fn columns_found(found: &[String], width: usize, wanted: &Column) -> String {
     match (found, wanted) {

@@ -280,9 +280,11 @@ mod tests {
                 if i < bytes.len() { bytes[i] = b; }
             }
             bytes.truncate(cut.max(6));
-            let _ = read_bytes(&bytes, &ReadOptions::default());
-            let _ = read_bytes(&bytes, &ReadOptions { dt: Some(0.1), ..Default::default() });
+            for options in [ReadOptions::default(), ReadOptions { dt: Some(0.1), ..Default::default() }] {
+                if let Err(e) = read_bytes(&bytes, &options) {
+                    proptest::prop_assert!(e.is_about_the_content(), "{e:?}");
+                }
+            }
         }
-
     }
 }
