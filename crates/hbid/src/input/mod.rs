@@ -200,6 +200,7 @@ fn find(role: Role, wanted: Column, names: Option<&[&str]>, width: usize) -> Res
 
 /// Reads a record from a path (`-` is standard input), CSV or `.npy` by content.
 pub fn read_path(path: &Path, options: &ReadOptions) -> Result<Record, InputError> {
+    // Before reading, so that bad options do not wait for standard input.
     options.validate()?;
     let io = |source| InputError::Io {
         path: path.to_owned(),
