@@ -8,7 +8,7 @@ use circle_signal::{Domain, SampleClock};
 use clap::Args;
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use embedding::AmiParams;
-use hbid::input::{Column, ReadOptions, UniformRecord, read_path};
+use hbid::input::{Column, InputError, ReadOptions, Role, UniformRecord, read_path};
 
 /// The command-line values of a [`Domain`]: `circle` or `line` (`linear` too where `also_linear`,
 /// the name classic embedding tools give plain differences).
@@ -79,9 +79,13 @@ impl InputArgs {
             angle: column(&self.angle_col)?,
             dt: self.dt,
         };
-        let record = read_path(&self.file, &options).with_context(|| format!("{}", self.file.display()))?;
+        let record = read_path(&self.file, &options)
+            .map_err(naming_options)
+            .with_context(|| format!("{}", self.file.display()))?;
         let mut uniform = UniformRecord::new(record).with_context(|| format!("{}", self.file.display()))?;
-        let p = uniform.samples_per_period(self.forcing_period)?;
+        let p = uniform
+            .samples_per_period(self.forcing_period)
+            .map_err(naming_options)?;
         let clock = SampleClock::new(self.forcing_period, p)?.with_start_time(uniform.t0)?;
         if self.signal == Domain::Circle && uniform.outside_circle() {
             eprintln!("note: values outside [-π, π): read as an unwrapped angle and wrapped");
@@ -96,6 +100,43 @@ impl InputArgs {
             domain: self.signal,
         })
     }
+}
+
+/// An input error with the options of this command line that set what it is about, which the
+/// library does not know.
+#[derive(Debug)]
+struct WithOptions {
+    error: InputError,
+    /// Appended to the error's text.
+    options: &'static str,
+}
+
+impl std::fmt::Display for WithOptions {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}{}", self.error, self.options)
+    }
+}
+
+impl std::error::Error for WithOptions {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        self.error.source()
+    }
+}
+
+/// The error, naming the options that set what it is about, if any.
+fn naming_options(error: InputError) -> anyhow::Error {
+    let options = match &error {
+        InputError::NeedStep => " with --dt",
+        InputError::BadStep { .. } => " (--dt)",
+        InputError::TimeTwice => " (--dt, --time-col)",
+        InputError::MissingColumn { role: Role::Time, .. } => "; choose one with --time-col",
+        InputError::MissingColumn {
+            role: Role::Angle, ..
+        } => "; choose one with --angle-col",
+        InputError::BadForcingPeriod { .. } => " (--forcing-period)",
+        _ => return error.into(),
+    };
+    WithOptions { error, options }.into()
 }
 
 /// The close-return options shared by `upos`, `identify` and `report`.
@@ -144,4 +185,35 @@ pub fn ami(x: &[f64], params: &AmiParams) -> anyhow::Result<(embedding::AmiCurve
         .delay()
         .context("choose the delay with --delay, or raise --max-lag")?;
     Ok((curve, delay))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn input_errors_name_the_options_that_fix_them() {
+        let missing = |role| InputError::MissingColumn {
+            role,
+            wanted: Column::Position(3),
+            found: Vec::new(),
+            width: 2,
+        };
+        for (error, option) in [
+            (InputError::NeedStep, "--dt"),
+            (InputError::BadStep { dt: 0.0 }, "--dt"),
+            (InputError::TimeTwice, "--time-col"),
+            (missing(Role::Time), "--time-col"),
+            (missing(Role::Angle), "--angle-col"),
+            (InputError::BadForcingPeriod { period: -1.0 }, "--forcing-period"),
+        ] {
+            let text = error.to_string();
+            let named = format!("{:#}", naming_options(error));
+            assert!(named.starts_with(&text) && named.contains(option), "{named}");
+        }
+        assert_eq!(
+            naming_options(InputError::NeedStep).to_string(),
+            "the input has a single column: give its sampling step with --dt"
+        );
+    }
 }

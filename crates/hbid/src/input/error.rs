@@ -1,0 +1,285 @@
+//! What can be wrong with an input, and where.
+//!
+//! The texts name the input's own terms (a sampling step, a time column), never the options of a
+//! program that reads it: the command line adds its option names itself.
+
+use std::fmt;
+use std::path::PathBuf;
+
+use super::{Column, Role};
+
+/// Where in the input a value is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Location {
+    /// A line of text, counted from 1, comment lines included.
+    Line(u64),
+    /// A sample of an array, counted from 1.
+    Sample(usize),
+}
+
+impl fmt::Display for Location {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Location::Line(n) => write!(f, "line {n}"),
+            Location::Sample(n) => write!(f, "sample {n}"),
+        }
+    }
+}
+
+/// What can be wrong with an input. Line numbers count from 1 and include comment lines.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum InputError {
+    /// The file cannot be opened or read.
+    #[error("cannot read {path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// The path is a folder.
+    #[error("{path} is a folder, not a file")]
+    IsFolder {
+        /// The path.
+        path: PathBuf,
+    },
+    /// Nothing but comments and white space.
+    #[error("the input is empty")]
+    Empty,
+    /// A header but no data rows.
+    #[error("the input has a header but no data rows")]
+    NoData,
+    /// A column the reader needs is not in the input.
+    #[error("no {role} column {wanted} in the input ({})", columns_found(.found, *.width, .wanted))]
+    MissingColumn {
+        /// What the column would hold.
+        role: Role,
+        /// The column wanted, chosen or by default.
+        wanted: Column,
+        /// The header's names; empty without a header.
+        found: Vec<String>,
+        /// The number of columns.
+        width: usize,
+    },
+    /// A column option that is neither a name nor a positive position.
+    #[error("'{given}' is not a column: give a header name or a position counted from 1")]
+    BadColumn {
+        /// What was given.
+        given: String,
+    },
+    /// A sampling step that is not positive and finite.
+    #[error("the sampling step {dt} must be positive and finite")]
+    BadStep {
+        /// The step given.
+        dt: f64,
+    },
+    /// Both a time column and a sampling step.
+    #[error("give either a sampling step or a time column, not both")]
+    TimeTwice,
+    /// A single unnamed column, and neither a sampling step nor a time column chosen.
+    #[error("the input has a single column: give its sampling step")]
+    NeedStep,
+    /// A cell is not a number.
+    #[error("line {line}: '{value}' in column {column} is not a number")]
+    NotANumber {
+        /// Line number.
+        line: u64,
+        /// The column, by name with a header, by position without.
+        column: Column,
+        /// The cell.
+        value: String,
+    },
+    /// A value is NaN or infinite.
+    #[error("{at}: {} is {value}: only finite numbers are accepted", .role.value_noun())]
+    NonFinite {
+        /// Where.
+        at: Location,
+        /// What the value is.
+        role: Role,
+        /// The value.
+        value: f64,
+    },
+    /// A row has a different number of cells from the first row.
+    #[error("line {line}: {found} cells where the first row has {expected}")]
+    Ragged {
+        /// Line number.
+        line: u64,
+        /// Cells in the first row.
+        expected: usize,
+        /// Cells in this row.
+        found: usize,
+    },
+    /// The bytes are not CSV text.
+    #[error("line {line}: not CSV text{}", binary_hint(.source))]
+    Malformed {
+        /// Line number.
+        line: u64,
+        /// The parser's complaint.
+        #[source]
+        source: csv::Error,
+    },
+    /// An `.npy` file that cannot be read.
+    #[error("not a readable .npy array: {why}")]
+    Npy {
+        /// Why.
+        why: String,
+    },
+    /// Too few samples.
+    #[error("{found} samples: at least {needed} are needed")]
+    TooFewSamples {
+        /// Samples in the record.
+        found: usize,
+        /// Samples needed.
+        needed: usize,
+    },
+    /// Time does not increase.
+    #[error("{at}: time {t} does not increase (previous sample at {previous})")]
+    TimeNotIncreasing {
+        /// Where.
+        at: Location,
+        /// The time.
+        t: f64,
+        /// The previous time.
+        previous: f64,
+    },
+    /// A time step differs from the mean step by more than 1e-6 relative.
+    #[error(
+        "{at}: time step {step} differs from the record's mean step {mean} (more than 1e-6 relative): resample to a uniform grid first"
+    )]
+    NonUniform {
+        /// Where.
+        at: Location,
+        /// The step.
+        step: f64,
+        /// The mean step.
+        mean: f64,
+    },
+    /// A forcing period that is not positive and finite.
+    #[error("the forcing period {period} must be positive and finite")]
+    BadForcingPeriod {
+        /// The period given.
+        period: f64,
+    },
+    /// The forcing period is not a whole number of samples.
+    #[error(
+        "the forcing period {period} is {ratio} sampling steps of {dt}, not a whole number (nearest: {nearest}); the method needs a whole number of samples per forcing period"
+    )]
+    NotWholeSamples {
+        /// Forcing period.
+        period: f64,
+        /// Sampling step.
+        dt: f64,
+        /// Their ratio.
+        ratio: f64,
+        /// The nearest whole number.
+        nearest: u64,
+    },
+}
+
+impl Role {
+    /// The value in a column of this role, as the errors name it.
+    fn value_noun(self) -> &'static str {
+        match self {
+            Role::Time => "the time",
+            Role::Angle => "a value",
+        }
+    }
+}
+
+#[cfg(test)]
+impl InputError {
+    /// Whether the error is about what the input holds, the only kind bytes alone can cause (not
+    /// reading a file, the options on their own, or the checks after reading).
+    pub(crate) fn is_about_the_content(&self) -> bool {
+        match self {
+            InputError::Empty
+            | InputError::NoData
+            | InputError::MissingColumn { .. }
+            | InputError::NeedStep
+            | InputError::NotANumber { .. }
+            | InputError::NonFinite { .. }
+            | InputError::Ragged { .. }
+            | InputError::Malformed { .. }
+            | InputError::Npy { .. } => true,
+            InputError::Io { .. }
+            | InputError::IsFolder { .. }
+            | InputError::BadColumn { .. }
+            | InputError::BadStep { .. }
+            | InputError::TimeTwice
+            | InputError::TooFewSamples { .. }
+            | InputError::TimeNotIncreasing { .. }
+            | InputError::NonUniform { .. }
+            | InputError::BadForcingPeriod { .. }
+            | InputError::NotWholeSamples { .. } => false,
+        }
+    }
+}
+
+/// The columns an input has, for [`InputError::MissingColumn`].
+fn columns_found(found: &[String], width: usize, wanted: &Column) -> String {
+    match (found, wanted) {
+        ([], Column::Name(_)) => format!("{width} unnamed columns: give a position"),
+        ([], Column::Position(_)) => format!("{width} unnamed columns"),
+        (names, _) => format!("columns: {}", names.join(",")),
+    }
+}
+
+/// What the parser's complaint means for a user, for [`InputError::Malformed`].
+fn binary_hint(source: &csv::Error) -> &'static str {
+    match source.kind() {
+        csv::ErrorKind::Utf8 { .. } => " (not UTF-8 text: binary data?)",
+        _ => "",
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn locations_read_as_before() {
+        assert_eq!(Location::Line(12).to_string(), "line 12");
+        assert_eq!(Location::Sample(12).to_string(), "sample 12");
+    }
+
+    #[test]
+    fn missing_columns_say_what_there_is() {
+        let missing = |wanted, found: &[&str], width| InputError::MissingColumn {
+            role: Role::Time,
+            wanted,
+            found: found.iter().map(|&c| c.to_owned()).collect(),
+            width,
+        };
+        assert_eq!(
+            missing(Column::Name("t".into()), &["time", "theta"], 2).to_string(),
+            "no time column 't' in the input (columns: time,theta)"
+        );
+        assert_eq!(
+            missing(Column::Position(3), &[], 2).to_string(),
+            "no time column 3 in the input (2 unnamed columns)"
+        );
+        assert_eq!(
+            missing(Column::Name("t".into()), &[], 2).to_string(),
+            "no time column 't' in the input (2 unnamed columns: give a position)"
+        );
+    }
+
+    #[test]
+    fn texts_name_no_command_line_options() {
+        for e in [
+            InputError::NeedStep,
+            InputError::TimeTwice,
+            InputError::BadStep { dt: 0.0 },
+            InputError::BadForcingPeriod { period: -1.0 },
+            InputError::MissingColumn {
+                role: Role::Angle,
+                wanted: Column::Position(2),
+                found: Vec::new(),
+                width: 1,
+            },
+        ] {
+            assert!(!e.to_string().contains("--"), "{e}");
+        }
+    }
+}

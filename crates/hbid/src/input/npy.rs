@@ -1,0 +1,290 @@
+//! NumPy `.npy` arrays: 1-D (the angle) or 2-D (samples × channels).
+
+use std::io::Read;
+
+use super::{Columns, InputError, Location, ReadOptions, Record, Role, Times, grid};
+
+fn npy_error(why: impl std::fmt::Display) -> InputError {
+    InputError::Npy { why: why.to_string() }
+}
+
+/// Reads all elements of an `.npy` payload as f64, whatever the supported element type.
+fn npy_values(npy: npyz::NpyFile<&[u8]>) -> Result<Vec<f64>, InputError> {
+    fn collect<T: npyz::Deserialize + Into<f64>, R: Read>(
+        r: npyz::NpyReader<T, R>,
+    ) -> Result<Vec<f64>, InputError> {
+        r.map(|v| v.map(Into::into))
+            .collect::<Result<_, _>>()
+            .map_err(npy_error)
+    }
+    let npy = match npy.try_data::<f64>() {
+        Ok(r) => return collect(r),
+        Err(npy) => npy,
+    };
+    let npy = match npy.try_data::<f32>() {
+        Ok(r) => return collect(r),
+        Err(npy) => npy,
+    };
+    let npy = match npy.try_data::<i32>() {
+        Ok(r) => return collect(r),
+        Err(npy) => npy,
+    };
+    let npy = match npy.try_data::<i16>() {
+        Ok(r) => return collect(r),
+        Err(npy) => npy,
+    };
+    match npy.try_data::<i64>() {
+        // Encoder counts fit in 53 bits; larger ones would not convert exactly and are refused.
+        Ok(r) => r
+            .map(|v| {
+                let v = v.map_err(npy_error)?;
+                if v.unsigned_abs() > (1u64 << 53) {
+                    Err(npy_error(format!("integer {v} is too large to convert exactly")))
+                } else {
+                    Ok(v as f64)
+                }
+            })
+            .collect(),
+        Err(npy) => Err(npy_error(format!(
+            "element type {:?} is not supported (use f8, f4, i8, i4 or i2)",
+            npy.dtype()
+        ))),
+    }
+}
+
+/// Reads an `.npy` array; the options are assumed valid.
+pub(super) fn read(bytes: &[u8], options: &ReadOptions) -> Result<Record, InputError> {
+    let array = Array::open(bytes)?;
+    let Columns { time, angle } = options.columns(None, array.cols)?;
+    let theta = array.column(angle);
+    let t = match time {
+        Times::Column(c) => array.column(c),
+        Times::Step(dt) => grid(array.rows, dt),
+    };
+    check_finite(&t, &theta)?;
+    Ok(Record {
+        t,
+        theta,
+        lines: None,
+    })
+}
+
+/// An array as a matrix: samples in rows, channels in columns (a 1-D array is one column).
+struct Array<'a> {
+    rows: usize,
+    cols: usize,
+    order: npyz::Order,
+    elements: Elements<'a>,
+}
+
+/// The elements of an array, in its order.
+enum Elements<'a> {
+    /// Little-endian f8, the usual case (and 10^7-sample records): read straight from the
+    /// payload, without a converted copy of every element.
+    F8(&'a [u8]),
+    /// Any other supported type, converted.
+    Converted(Vec<f64>),
+}
+
+impl<'a> Array<'a> {
+    /// Reads the header, checks it against the payload, and converts the elements unless they are
+    /// little-endian f8.
+    fn open(bytes: &'a [u8]) -> Result<Self, InputError> {
+        let mut probe = bytes;
+        npyz::NpyHeader::from_reader(&mut probe).map_err(npy_error)?;
+        let payload = &bytes[bytes.len() - probe.len()..];
+        let npy = npyz::NpyFile::new(bytes).map_err(npy_error)?;
+        check_size(npy.shape(), &npy.dtype(), payload.len())?;
+        let (rows, cols) = matrix_shape(npy.shape())?;
+        if rows == 0 || cols == 0 {
+            return Err(InputError::NoData);
+        }
+        let order = npy.order();
+        let elements = if npy.dtype().descr() == "'<f8'" {
+            Elements::F8(payload)
+        } else {
+            Elements::Converted(npy_values(npy)?)
+        };
+        Ok(Self {
+            rows,
+            cols,
+            order,
+            elements,
+        })
+    }
+
+    /// Column `c` (from 0), every row.
+    fn column(&self, c: usize) -> Vec<f64> {
+        (0..self.rows).map(|r| self.get(r, c)).collect()
+    }
+
+    fn get(&self, r: usize, c: usize) -> f64 {
+        let i = match self.order {
+            npyz::Order::C => r * self.cols + c,
+            npyz::Order::Fortran => c * self.rows + r,
+        };
+        match &self.elements {
+            Elements::F8(payload) => {
+                let mut le = [0u8; 8];
+                le.copy_from_slice(&payload[8 * i..8 * i + 8]);
+                f64::from_le_bytes(le)
+            }
+            Elements::Converted(values) => values[i],
+        }
+    }
+}
+
+/// Checks that the payload holds the elements the header announces, before anything the header
+/// claims is allocated.
+fn check_size(shape: &[u64], dtype: &npyz::DType, payload: usize) -> Result<(), InputError> {
+    let total: u64 = shape
+        .iter()
+        .try_fold(1u64, |a, &b| a.checked_mul(b))
+        .ok_or_else(|| npy_error("shape overflows"))?;
+    let item = dtype.num_bytes().unwrap_or(usize::MAX) as u64;
+    if total.checked_mul(item).is_none_or(|n| n > payload as u64) {
+        return Err(npy_error(format!(
+            "the header announces {total} elements but the file holds {payload} bytes of data"
+        )));
+    }
+    Ok(())
+}
+
+/// Rows (samples) and columns (channels) of a 1-D or 2-D shape.
+fn matrix_shape(shape: &[u64]) -> Result<(usize, usize), InputError> {
+    match *shape {
+        [n] => Ok((n as usize, 1)),
+        [n, m] => Ok((n as usize, m as usize)),
+        _ => Err(npy_error(format!(
+            "shape {shape:?}: expected 1-D (angle) or 2-D (samples × channels)"
+        ))),
+    }
+}
+
+/// Checks that every time and value is finite, naming the first sample that is not.
+fn check_finite(t: &[f64], theta: &[f64]) -> Result<(), InputError> {
+    for (i, (&ti, &xi)) in t.iter().zip(theta).enumerate() {
+        for (role, value) in [(Role::Time, ti), (Role::Angle, xi)] {
+            if !value.is_finite() {
+                return Err(InputError::NonFinite {
+                    at: Location::Sample(i + 1),
+                    role,
+                    value,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// An `.npy` file (format 1.0) with this header and payload.
+#[cfg(test)]
+pub(super) fn npy_bytes(descr: &str, shape: &str, fortran: bool, payload: &[u8]) -> Vec<u8> {
+    let mut header = format!(
+        "{{'descr': '{descr}', 'fortran_order': {}, 'shape': {shape}, }}",
+        if fortran { "True" } else { "False" }
+    );
+    while (10 + header.len() + 1) % 64 != 0 {
+        header.push(' ');
+    }
+    header.push('\n');
+    let mut out = b"\x93NUMPY\x01\x00".to_vec();
+    out.extend_from_slice(&(header.len() as u16).to_le_bytes());
+    out.extend_from_slice(header.as_bytes());
+    out.extend_from_slice(payload);
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::*;
+    use super::npy_bytes;
+
+    #[test]
+    fn reads_npy_1d_2d_and_orders() {
+        let f8: Vec<u8> = [0.0f64, 0.5, 1.0, 0.1, 0.2, 0.3]
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        // C order, 3 samples × 2 channels: rows (0, 0.5), (1, 0.1), (0.2, 0.3).
+        let r = read_bytes(&npy_bytes("<f8", "(3, 2)", false, &f8), &ReadOptions::default()).unwrap();
+        assert_eq!(r.t, vec![0.0, 1.0, 0.2]);
+        assert_eq!(r.theta, vec![0.5, 0.1, 0.3]);
+        // Fortran order: column 1 is (0, 0.5, 1), column 2 is (0.1, 0.2, 0.3).
+        let r = read_bytes(&npy_bytes("<f8", "(3, 2)", true, &f8), &ReadOptions::default()).unwrap();
+        assert_eq!(r.t, vec![0.0, 0.5, 1.0]);
+        assert_eq!(r.theta, vec![0.1, 0.2, 0.3]);
+        let dt = ReadOptions {
+            dt: Some(0.1),
+            ..Default::default()
+        };
+        let r = read_bytes(&npy_bytes("<f8", "(6,)", false, &f8), &dt).unwrap();
+        assert_eq!(r.theta.len(), 6);
+        assert!(matches!(
+            read_bytes(&npy_bytes("<f8", "(6,)", false, &f8), &ReadOptions::default()),
+            Err(InputError::NeedStep)
+        ));
+        let i4: Vec<u8> = [1i32, -2, 3].iter().flat_map(|v| v.to_le_bytes()).collect();
+        let r = read_bytes(&npy_bytes("<i4", "(3,)", false, &i4), &dt).unwrap();
+        assert_eq!(r.theta, vec![1.0, -2.0, 3.0]);
+        // A header that promises more data than the file holds.
+        assert!(matches!(
+            read_bytes(&npy_bytes("<f8", "(1000000000000,)", false, &f8), &dt),
+            Err(InputError::Npy { .. })
+        ));
+        let nan: Vec<u8> = [0.0f64, f64::NAN].iter().flat_map(|v| v.to_le_bytes()).collect();
+        assert!(matches!(
+            read_bytes(&npy_bytes("<f8", "(2,)", false, &nan), &dt),
+            Err(InputError::NonFinite { .. })
+        ));
+    }
+
+    #[test]
+    fn converted_elements_follow_the_order_and_name_samples() {
+        let f4: Vec<u8> = [0.0f32, 0.5, 1.0, 0.25, -0.5, 2.0]
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        let r = read_bytes(&npy_bytes("<f4", "(3, 2)", true, &f4), &ReadOptions::default()).unwrap();
+        assert_eq!((r.t, r.theta), (vec![0.0, 0.5, 1.0], vec![0.25, -0.5, 2.0]));
+        let r = read_bytes(&npy_bytes("<f4", "(3, 2)", false, &f4), &ReadOptions::default()).unwrap();
+        assert_eq!((r.t, r.theta), (vec![0.0, 1.0, -0.5], vec![0.5, 0.25, 2.0]));
+        for shape in ["()", "(1, 2, 3)"] {
+            assert!(matches!(
+                read_bytes(&npy_bytes("<f4", shape, false, &f4), &ReadOptions::default()),
+                Err(InputError::Npy { .. })
+            ));
+        }
+        let f8: Vec<u8> = [0.0f64, 1.0, 1.0, f64::INFINITY]
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        match read_bytes(&npy_bytes("<f8", "(2, 2)", false, &f8), &ReadOptions::default()) {
+            Err(InputError::NonFinite { at, role, .. }) => {
+                assert_eq!((at, role), (Location::Sample(2), Role::Angle));
+                assert_eq!(at.to_string(), "sample 2");
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn npy_never_panics_on_corrupted_files(
+            cut in 0usize..200,
+            flips in proptest::collection::vec((0usize..200, proptest::prelude::any::<u8>()), 0..6),
+        ) {
+            let f8: Vec<u8> = (0..12).flat_map(|v| (v as f64).to_le_bytes()).collect();
+            let mut bytes = npy_bytes("<f8", "(6, 2)", false, &f8);
+            for (i, b) in flips {
+                if i < bytes.len() { bytes[i] = b; }
+            }
+            bytes.truncate(cut.max(6));
+            for options in [ReadOptions::default(), ReadOptions { dt: Some(0.1), ..Default::default() }] {
+                if let Err(e) = read_bytes(&bytes, &options) {
+                    proptest::prop_assert!(e.is_about_the_content(), "{e:?}");
+                }
+            }
+        }
+    }
+}
