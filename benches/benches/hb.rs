@@ -83,7 +83,17 @@ fn bench(c: &mut Criterion) {
             .expect("search");
         b.iter(|| {
             let segments = search.segments(&x).expect("segments");
-            black_box(identify(harmonic, &x, &segments, &params, &QrSolver::default()).expect("identify"))
+            black_box(
+                identify(
+                    harmonic,
+                    &x,
+                    &segments,
+                    &params,
+                    &hb_solve::HarmonicBalance,
+                    &QrSolver::default(),
+                )
+                .expect("identify"),
+            )
         })
     });
     // The same work as the NumPy script: M = 12 harmonics of every orbit (11225 equations).
@@ -102,12 +112,34 @@ fn bench(c: &mut Criterion) {
                 .expect("params");
             b.iter(|| {
                 let segments = search.segments(&x).expect("segments");
-                black_box(identify(harmonic, &x, &segments, &params, &QrSolver::default()).expect("identify"))
+                black_box(
+                    identify(
+                        harmonic,
+                        &x,
+                        &segments,
+                        &params,
+                        &hb_solve::HarmonicBalance,
+                        &QrSolver::default(),
+                    )
+                    .expect("identify"),
+                )
             })
         },
     );
     c.bench_function("identify hat N=8 (assemble + qr)", |b| {
-        b.iter(|| black_box(identify(hat, &x, &segments, &params, &QrSolver::default()).expect("identify")))
+        b.iter(|| {
+            black_box(
+                identify(
+                    hat,
+                    &x,
+                    &segments,
+                    &params,
+                    &hb_solve::HarmonicBalance,
+                    &QrSolver::default(),
+                )
+                .expect("identify"),
+            )
+        })
     });
 }
 

@@ -5,7 +5,7 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use hb_basis::{Domain, Harmonic, Hat};
 use hb_solve::{
     BootstrapParams, Harmonics, IdentifyParams, QrSolver, SampleClock, WeakForm, assemble_weak, bootstrap,
-    estimate_noise_sigma, identify_weak,
+    estimate_noise_sigma, identify,
 };
 use upo_search::{OrbitSource, Windows};
 
@@ -46,7 +46,7 @@ fn bench(c: &mut Criterion) {
         |b| {
             b.iter(|| {
                 let segments = windows2.segments(&x).expect("segments");
-                black_box(identify_weak(harmonic, &x, &segments, &params16, &weak, &qr).expect("identify"))
+                black_box(identify(harmonic, &x, &segments, &params16, &weak, &qr).expect("identify"))
             })
         },
     );
@@ -56,7 +56,7 @@ fn bench(c: &mut Criterion) {
     c.bench_function("identify weak K=1 (windows + assemble + qr)", |b| {
         b.iter(|| {
             let segments = windows.segments(&x).expect("segments");
-            black_box(identify_weak(harmonic, &x, &segments, &params, &weak, &qr).expect("identify"))
+            black_box(identify(harmonic, &x, &segments, &params, &weak, &qr).expect("identify"))
         })
     });
     let system = assemble_weak(&harmonic, &x, &segments, &params, &weak).expect("assemble");

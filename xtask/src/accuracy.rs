@@ -3,25 +3,23 @@
 //! bootstrap intervals cover the truth; and the measurements behind the weak form's defaults.
 //! Writes a Markdown report with its figures.
 
-use std::f64::consts::TAU;
 use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{Context, anyhow};
-use circle_signal::{unwrap, wrap};
-use faer::{Col, Mat};
+use circle_signal::wrap;
 use hb_basis::Harmonic;
 use hb_solve::{
-    BootstrapParams, Harmonics, IdentifyParams, LinearSystem, LstsqSolver, NoiseCorrection, QrSolver,
-    SampleClock, WeakForm, assemble, assemble_weak, bootstrap, estimate_noise_sigma,
+    BootstrapParams, FiniteDifferences, Harmonics, IdentifyParams, LinearSystem, NoiseCorrection, QrSolver,
+    SampleClock, WeakForm, assemble, assemble_weak, bootstrap, build_system, estimate_noise_sigma,
 };
 use pendulum_sim::{Pendulum, SimulationConfig, simulate};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 use rayon::prelude::*;
-use upo_search::{CloseReturns, OrbitSource, Windows};
+use upo_search::{CloseReturns, OrbitSource, Segment, Windows};
 
 use hbid::plot::{BLUE, Figure, GREEN, GREY, INK, ORANGE, PURPLE, RED, Series, Style};
 
@@ -138,11 +136,12 @@ enum Method {
     Upo,
     /// The same with the noise correction, σ estimated.
     UpoCorrected,
-    /// Windows of 2 periods stepped by one, the weak form with its defaults.
+    /// Windows of 3 periods (the default) stepped by one, the weak form with its defaults.
     Weak,
     /// The same with the noise correction, σ estimated.
     WeakCorrected,
-    /// Fourth-order central differences and least squares on the same seven terms.
+    /// Fourth-order central differences and least squares on the same seven terms
+    /// ([`FiniteDifferences`]).
     Differences,
 }
 
@@ -214,7 +213,7 @@ impl Default for WeakSetup {
     }
 }
 
-/// The assembled system of a method (not the finite differences).
+/// The assembled system of a method.
 fn system(method: Method, x: &[f64], t0: f64, weak: WeakSetup) -> anyhow::Result<LinearSystem> {
     let basis = Harmonic::new(1)?;
     Ok(match method {
@@ -243,44 +242,24 @@ fn system(method: Method, x: &[f64], t0: f64, weak: WeakSetup) -> anyhow::Result
                 &WeakForm::new(weak.order)?,
             )?
         }
-        Method::Differences => return Err(anyhow!("finite differences assemble no harmonic balance")),
+        Method::Differences => {
+            // One segment over the whole record: a row at every sample with its stencil inside.
+            let clock = upo_search::SampleClock::nondimensional(P)?;
+            let whole = Segment::new(0, (x.len() - 1) / P, &clock, 0.0, x.len())?;
+            build_system(
+                &basis,
+                x,
+                &[whole],
+                &params(t0, Harmonics::DEFAULT, false)?,
+                &FiniteDifferences,
+            )?
+        }
     })
 }
 
 /// The seven coefficients identified by `method`.
 fn identify(method: Method, x: &[f64], t0: f64, weak: WeakSetup) -> anyhow::Result<[f64; 7]> {
-    let fit = match method {
-        Method::Differences => return finite_differences(x, t0),
-        _ => system(method, x, t0, weak)?.solve(&QrSolver::default())?,
-    };
-    fit.solution
-        .try_into()
-        .map_err(|_| anyhow!("expected seven coefficients"))
-}
-
-/// Least squares of `−x''` on the seven terms, with `x'` and `x''` from fourth-order central
-/// differences of the unwrapped angle.
-fn finite_differences(x: &[f64], t0: f64) -> anyhow::Result<[f64; 7]> {
-    let y = unwrap(x);
-    let h = TAU / P as f64;
-    let rows = y.len().saturating_sub(4);
-    let mut a = Mat::<f64>::zeros(rows, 7);
-    let mut b = Col::<f64>::zeros(rows);
-    for r in 0..rows {
-        let i = r + 2;
-        let d1 = (-y[i + 2] + 8.0 * y[i + 1] - 8.0 * y[i - 1] + y[i - 2]) / (12.0 * h);
-        let d2 = (-y[i + 2] + 16.0 * y[i + 1] - 30.0 * y[i] + 16.0 * y[i - 1] - y[i - 2]) / (12.0 * h * h);
-        let (s, c) = (t0 + i as f64 * h).sin_cos();
-        let (sx, cx) = y[i].sin_cos();
-        for (col, v) in [d1, c * cx, s * cx, cx, c * sx, s * sx, sx]
-            .into_iter()
-            .enumerate()
-        {
-            a[(r, col)] = v;
-        }
-        b[r] = -d2;
-    }
-    let fit = QrSolver::default().solve(a.as_ref(), b.as_ref())?;
+    let fit = system(method, x, t0, weak)?.solve(&QrSolver::default())?;
     fit.solution
         .try_into()
         .map_err(|_| anyhow!("expected seven coefficients"))

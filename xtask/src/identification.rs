@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use hb_basis::{Basis, BasisKind, Harmonic, Hat};
-use hb_solve::{IdentifiedModel, IdentifyParams, QrSolver, SampleClock, WeakForm, identify, identify_weak};
+use hb_solve::{IdentifiedModel, IdentifyParams, QrSolver, SampleClock, WeakForm, identify};
 use pendulum_sim::{
     CheckConfig, Domain, ModelCheck, SecondOrderSystem, check_model, section_energy_distance,
 };
@@ -60,7 +60,14 @@ pub fn identify_upo(x: &[f64], t0: f64, segments: &[Segment]) -> anyhow::Result<
             BasisKind::from(Hat::new(8)?),
         ),
     ] {
-        let model = identify(basis, x, segments, &params, &QrSolver::default())?;
+        let model = identify(
+            basis,
+            x,
+            segments,
+            &params,
+            &hb_solve::HarmonicBalance,
+            &QrSolver::default(),
+        )?;
         out.push(Identified { label, file, model });
     }
     Ok(out)
@@ -87,7 +94,7 @@ pub fn identify_windowed(x: &[f64], t0: f64) -> anyhow::Result<Vec<Identified>> 
             BasisKind::from(Hat::new(8)?),
         ),
     ] {
-        let model = identify_weak(
+        let model = identify(
             basis,
             x,
             &windows,

@@ -137,10 +137,10 @@ fn main() -> Result<(), Box<dyn Error>> {
     );
     println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- |");
     for &h in &policies {
-        let m = identify(k1, &x, &segs, &params(h)?, &solver)?;
+        let m = identify(k1, &x, &segs, &params(h)?, &hb_solve::HarmonicBalance, &solver)?;
         let (term, err) = worst(&m);
         let s = m.summary().ok_or("no summary")?;
-        let mh = identify(hat, &x, &segs, &params(h)?, &solver)?;
+        let mh = identify(hat, &x, &segs, &params(h)?, &hb_solve::HarmonicBalance, &solver)?;
         println!(
             "| {} | {} | {:.4} | {:.4} | `{term}` | {:.1} | {:.4} | {:.3} | {:.3} |",
             label(h),
@@ -161,9 +161,30 @@ fn main() -> Result<(), Box<dyn Error>> {
     println!("| --- | --- | --- | --- | --- | --- | --- | --- |");
     for &e in &[0.01, 0.02, 0.03, 0.04, 0.05] {
         let segs = segments(&x, e)?;
-        let d = identify(k1, &x, &segs, &params(Harmonics::DEFAULT)?, &solver)?;
-        let f = identify(k1, &x, &segs, &params(Harmonics::Fixed(12))?, &solver)?;
-        let h = identify(hat, &x, &segs, &params(Harmonics::DEFAULT)?, &solver)?;
+        let d = identify(
+            k1,
+            &x,
+            &segs,
+            &params(Harmonics::DEFAULT)?,
+            &hb_solve::HarmonicBalance,
+            &solver,
+        )?;
+        let f = identify(
+            k1,
+            &x,
+            &segs,
+            &params(Harmonics::Fixed(12))?,
+            &hb_solve::HarmonicBalance,
+            &solver,
+        )?;
+        let h = identify(
+            hat,
+            &x,
+            &segs,
+            &params(Harmonics::DEFAULT)?,
+            &hb_solve::HarmonicBalance,
+            &solver,
+        )?;
         println!(
             "| {:.0} % | {} | {:.4} | {:.4} | {:.4} | {:.4} | {:.4} | {:.3}, {:.3} |",
             e * 100.0,
@@ -196,7 +217,7 @@ fn main() -> Result<(), Box<dyn Error>> {
     for &h in &policies {
         print!("| {} |", label(h));
         for (xn, sg) in &noisy_sets {
-            match identify(k1, xn, sg, &params(h)?, &solver) {
+            match identify(k1, xn, sg, &params(h)?, &hb_solve::HarmonicBalance, &solver) {
                 Ok(m) => print!(" {:.4} (c_r {:.4}) |", worst(&m).1, m.damping()),
                 Err(e) => print!(" {e} |"),
             }

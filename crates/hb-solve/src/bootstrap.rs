@@ -309,7 +309,7 @@ fn bootstrap_with<S: LstsqSolver + ?Sized>(
             let reduced: Vec<Mat<f64>> = crate::lstsq::on_factor_pool(|| {
                 order
                     .par_iter()
-                    .map(|&i| reduce(system, blocks[i].first_row, blocks[i].rows()))
+                    .map(|&i| reduce(system, blocks[i].first_row, blocks[i].rows))
                     .collect()
             });
             let cols = system.unknowns();
@@ -411,7 +411,7 @@ impl RunMoments {
         // each entry of the packed Gram matrix as one pass over them.
         let moments = |k: usize, out: &mut [f64], rows: &mut Vec<f64>, resid: &mut Vec<f64>| {
             let block = &blocks[order[k]];
-            let (first, len) = (block.first_row, block.rows());
+            let (first, len) = (block.first_row, block.rows);
             resid.clear();
             resid.extend_from_slice(&rhs[first..first + len]);
             rows.clear();
@@ -654,6 +654,7 @@ mod tests {
                     )
                     .unwrap(),
                     first_row: 5 * k,
+                    rows: 5,
                     harmonics: 2,
                     winding: 0,
                     rotation_rate: 0.0,

@@ -127,6 +127,12 @@ pub enum SolveError {
         /// Why.
         why: &'static str,
     },
+    /// A term the identification methods do not balance yet.
+    #[error("the term `{term}` is not supported by the identification methods yet")]
+    TermNotSupported {
+        /// The term's name.
+        term: String,
+    },
     /// The noise correction cannot be applied to a term of this model.
     #[error("no noise correction for the term `{term}`: {why}")]
     NoiseCorrectionUnavailable {

@@ -26,7 +26,7 @@
 //!
 //! Beyond the paper:
 //!
-//! - the weak form ([`WeakForm`], [`assemble_weak`], [`identify_weak`]): the equation is multiplied
+//! - the weak form ([`WeakForm`], [`assemble_weak`]): the equation is multiplied
 //!   by test functions `w(τ) cos(jΩτ)`, `w(τ) sin(jΩτ)` with a window `w = sin^p(π τ / T_s)` that
 //!   vanishes with its first derivative at both ends of a segment, and integrated by parts, so no
 //!   derivative of the data is taken and no segment needs to be periodic: plain windows of the
@@ -46,7 +46,7 @@
 //!
 //! ```
 //! use hb_basis::Polynomial;
-//! use hb_solve::{Forcing, IdentifyParams, ModelForm, QrSolver, SampleClock, identify};
+//! use hb_solve::{Forcing, HarmonicBalance, IdentifyParams, ModelForm, QrSolver, SampleClock, identify};
 //! use circle_signal::Segment;
 //!
 //! let p = 25;
@@ -61,7 +61,7 @@
 //! // The term cos(t) sits on the left with x'': its known coefficient is −1.
 //! let form = ModelForm::externally_forced(Forcing::Known { cos: -1.0, sin: 0.0 });
 //! let params = IdentifyParams::builder(clock).form(form).build()?;
-//! let model = identify(Polynomial::new(1)?, &x, &[segment], &params, &QrSolver::default())?;
+//! let model = identify(Polynomial::new(1)?, &x, &[segment], &params, &HarmonicBalance, &QrSolver::default())?;
 //! assert!((model.damping() - 0.1).abs() < 1e-12);
 //! assert!((model.coefficient("x").unwrap().value - 2.0).abs() < 1e-12);
 //!
@@ -80,100 +80,138 @@
 //!     .form(form)
 //!     .harmonics(hb_solve::WeakForm::DEFAULT_HARMONICS)
 //!     .build()?;
-//! let model = hb_solve::identify_weak_from_source(
+//! let model = hb_solve::identify_from_source(
 //!     Polynomial::new(1)?, &x, &windows, &params, &hb_solve::WeakForm::default(), &QrSolver::default(),
 //! )?;
 //! assert!((model.damping() - 0.1).abs() < 1e-6);
 //! assert!((model.coefficient("x").unwrap().value - 2.0).abs() < 1e-6);
+//!
+//! // Every method sits behind the one trait `Assembly`: a program chooses it at run time.
+//! let methods: [Box<dyn hb_solve::Assembly>; 2] =
+//!     [Box::new(hb_solve::WeakForm::default()), Box::new(hb_solve::FiniteDifferences)];
+//! let segments = upo_search::OrbitSource::segments(&windows, &x)?;
+//! for method in &methods {
+//!     let model = identify(Polynomial::new(1)?, &x, &segments, &params, method.as_ref(), &QrSolver::default())?;
+//!     assert!((model.damping() - 0.1).abs() < 1e-3, "{}", method.name());
+//! }
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 #![deny(missing_docs)]
 
 mod assemble;
 mod bootstrap;
+mod differences;
 mod error;
 mod lstsq;
+mod method;
 mod model;
 mod noise;
 mod params;
+mod system;
+mod terms;
 mod weak;
 
-pub use assemble::{Block, LinearSystem, assemble, term_names};
 pub use bootstrap::{
     Bootstrap, BootstrapParams, BootstrapParamsBuilder, Interval, NORMAL_EQUATIONS_CONDITION, ResampleBlock,
     bootstrap, bootstrap_fit,
 };
+pub use differences::FiniteDifferences;
 pub use error::SolveError;
 pub use lstsq::{LstsqFit, LstsqSolver, QrSolver, RankTolerance, SvdSolver};
+pub use method::{Assembly, HarmonicBalance};
 pub use model::{Coefficient, FitSummary, IdentifiedModel, MODEL_FORMAT, MODEL_MAGIC, MODEL_VERSION};
-pub use noise::{NOISE_BAND_START, NOISE_ESTIMATE_MIN_LEN, estimate_noise_sigma};
+pub use noise::{NOISE_BAND_START, NOISE_ESTIMATE_MIN_LEN, correct_noise, estimate_noise_sigma};
 pub use params::{
     Forcing, Harmonics, IdentifyParams, IdentifyParamsBuilder, ModelForm, NoiseCorrection, SampleClock,
 };
-pub use weak::{WeakForm, assemble_weak};
+pub use system::{Block, LinearSystem};
+pub use terms::{DriveFactor, PositionFactor, Term, VelocityFactor, columns, term_names};
+pub use weak::WeakForm;
 
 use circle_signal::{OrbitSource, Segment};
 use hb_basis::Basis;
 
-/// Identifies a model on `basis` from `segments` of `signal` (assembly, then least squares).
+/// The stacked system of `segments` of `signal` for a model on `basis` by `method`, with the
+/// params' noise correction applied to its columns: what every identification solves.
+pub fn build_system<B: Basis, A: Assembly + ?Sized>(
+    basis: &B,
+    signal: &[f64],
+    segments: &[Segment],
+    params: &IdentifyParams,
+    method: &A,
+) -> Result<LinearSystem, SolveError> {
+    let mut system = method.assemble(basis, signal, segments, params)?;
+    correct_noise(basis, signal, params, &mut system)?;
+    Ok(system)
+}
+
+/// The paper's stacked system (eq. 16) of `segments` of `signal` for a model on `basis`, noise
+/// correction applied: [`build_system`] with [`HarmonicBalance`], for any basis.
+///
+/// Segments must satisfy the [`Segment`] invariant for the clock's `P`; each gives `2 M_k + 1`
+/// equations (see [`Harmonics`]). On the circle each segment is unwrapped with its closing
+/// sample and split into rotation and oscillation ([`circle_signal::RotationSplit`]); on the line
+/// it is used as it is. Segments are processed in parallel; FFT plans and buffers are reused.
+pub fn assemble<B: Basis + ?Sized>(
+    basis: &B,
+    signal: &[f64],
+    segments: &[Segment],
+    params: &IdentifyParams,
+) -> Result<LinearSystem, SolveError> {
+    let mut system = assemble::harmonic_rows(basis, signal, segments, params)?;
+    correct_noise(basis, signal, params, &mut system)?;
+    Ok(system)
+}
+
+/// The weak form's stacked system of `segments` of `signal` for a model on `basis`, noise
+/// correction applied: [`build_system`] with `weak`, for any basis.
+///
+/// Segments must satisfy the [`Segment`] invariant for the clock's `P` (including the closing
+/// sample, the window's last point) but need not be periodic: `upo_search::Windows` gives plain
+/// windows. `M` per segment is `params.harmonics().count(k, L)`. Segments are processed in
+/// parallel; the test functions are tabulated once per segment length.
+pub fn assemble_weak<B: Basis + ?Sized>(
+    basis: &B,
+    signal: &[f64],
+    segments: &[Segment],
+    params: &IdentifyParams,
+    weak: &WeakForm,
+) -> Result<LinearSystem, SolveError> {
+    let mut system = weak::weak_rows(basis, signal, segments, params, weak)?;
+    correct_noise(basis, signal, params, &mut system)?;
+    Ok(system)
+}
+
+/// Identifies a model on `basis` from `segments` of `signal` by `method` ([`HarmonicBalance`],
+/// [`WeakForm`] or [`FiniteDifferences`]): [`build_system`], then least squares by `solver`.
 ///
 /// Errors: [`SolveError::TooFewOrbits`] when the segments give no more equations than unknowns,
 /// [`SolveError::RankDeficient`] when they do not determine every unknown, and typed errors for
 /// bad segments and non-finite samples.
-pub fn identify<B: Basis, S: LstsqSolver + ?Sized>(
+pub fn identify<B: Basis, A: Assembly + ?Sized, S: LstsqSolver + ?Sized>(
     basis: B,
     signal: &[f64],
     segments: &[Segment],
     params: &IdentifyParams,
+    method: &A,
     solver: &S,
 ) -> Result<IdentifiedModel<B>, SolveError> {
-    let system = assemble(&basis, signal, segments, params)?;
-    let fit = system.solve(solver)?;
-    IdentifiedModel::from_fit(basis, params, &system, &fit, solver.name())
-}
-
-/// [`identify`] with the segments of an [`OrbitSource`] (e.g. `upo_search::CloseReturns`).
-pub fn identify_from_source<B: Basis, O: OrbitSource, S: LstsqSolver + ?Sized>(
-    basis: B,
-    signal: &[f64],
-    source: &O,
-    params: &IdentifyParams,
-    solver: &S,
-) -> Result<IdentifiedModel<B>, SolveError> {
-    let segments = source
-        .segments(signal)
-        .map_err(|e| SolveError::Source(Box::new(e)))?;
-    identify(basis, signal, &segments, params, solver)
-}
-
-/// Identifies a model by the weak form ([`assemble_weak`], then least squares) from `segments`
-/// of `signal`, which need not be periodic (e.g. [`upo_search::Windows`]).
-///
-/// The harmonics per segment are the params' (use [`WeakForm::DEFAULT_HARMONICS`] unless there
-/// is a reason not to). Errors as for [`identify`].
-pub fn identify_weak<B: Basis, S: LstsqSolver + ?Sized>(
-    basis: B,
-    signal: &[f64],
-    segments: &[Segment],
-    params: &IdentifyParams,
-    weak: &WeakForm,
-    solver: &S,
-) -> Result<IdentifiedModel<B>, SolveError> {
-    let system = assemble_weak(&basis, signal, segments, params, weak)?;
+    let system = build_system(&basis, signal, segments, params, method)?;
     IdentifiedModel::fit(basis, params, &system, solver)
 }
 
-/// [`identify_weak`] with the segments of an [`OrbitSource`] (e.g. [`upo_search::Windows`]).
-pub fn identify_weak_from_source<B: Basis, O: OrbitSource, S: LstsqSolver + ?Sized>(
+/// [`identify`] with the segments of an [`OrbitSource`] (e.g. `upo_search::CloseReturns` for the
+/// paper's method, `upo_search::Windows` for the weak form).
+pub fn identify_from_source<B: Basis, O: OrbitSource, A: Assembly + ?Sized, S: LstsqSolver + ?Sized>(
     basis: B,
     signal: &[f64],
     source: &O,
     params: &IdentifyParams,
-    weak: &WeakForm,
+    method: &A,
     solver: &S,
 ) -> Result<IdentifiedModel<B>, SolveError> {
     let segments = source
         .segments(signal)
         .map_err(|e| SolveError::Source(Box::new(e)))?;
-    identify_weak(basis, signal, &segments, params, weak, solver)
+    identify(basis, signal, &segments, params, method, solver)
 }

@@ -9,7 +9,7 @@ use serde::de::{DeserializeOwned, MapAccess, Visitor};
 use serde::ser::SerializeMap;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
-use crate::assemble::{Term, check_form, term_name, terms};
+use crate::terms::{Column, check_form, column_families, columns};
 use crate::{
     Forcing, Harmonics, IdentifyParams, LinearSystem, LstsqFit, LstsqSolver, ModelForm, SampleClock,
     SolveError,
@@ -97,10 +97,10 @@ impl<B: Basis> IdentifiedModel<B> {
     ) -> Result<Self, SolveError> {
         let form = form.validate()?;
         let names = basis.names();
-        let layout = terms(names.len(), &form);
+        let layout = columns(names.len(), &form);
         if values.len() != layout.len() {
             return Err(SolveError::ModelMismatch {
-                expected: layout.iter().map(|&t| term_name(t, &names)).collect(),
+                expected: layout.iter().map(|t| t.name(&names)).collect(),
                 found: (0..values.len()).map(|i| format!("value {i}")).collect(),
             });
         }
@@ -108,7 +108,7 @@ impl<B: Basis> IdentifiedModel<B> {
             .into_iter()
             .zip(values)
             .map(|(t, &value)| Coefficient {
-                name: term_name(t, &names),
+                name: t.name(&names),
                 value,
                 std_error: 0.0,
             })
@@ -189,8 +189,9 @@ impl<B: Basis> IdentifiedModel<B> {
             });
         }
         let names = basis.names();
-        let layout = terms(names.len(), &form);
-        let expected: Vec<String> = layout.iter().map(|&t| term_name(t, &names)).collect();
+        let terms = columns(names.len(), &form);
+        let expected: Vec<String> = terms.iter().map(|t| t.name(&names)).collect();
+        let layout = column_families(&terms, &names)?;
         if coefficients.len() != expected.len()
             || coefficients.iter().zip(&expected).any(|(c, e)| &c.name != e)
         {
@@ -211,7 +212,7 @@ impl<B: Basis> IdentifiedModel<B> {
             cos_t: vec![0.0; n],
             sin_t: vec![0.0; n],
             auto: vec![0.0; n],
-            forcing: match form.forcing {
+            forcing: match form.forcing() {
                 Forcing::Known { cos, sin } => (cos, sin),
                 _ => (0.0, 0.0),
             },
@@ -219,13 +220,13 @@ impl<B: Basis> IdentifiedModel<B> {
         };
         for (&t, c) in layout.iter().zip(&coefficients) {
             match t {
-                Term::Damping => eval.damping = c.value,
-                Term::CosT(i) => eval.cos_t[i] = c.value,
-                Term::SinT(i) => eval.sin_t[i] = c.value,
-                Term::Auto(i) => eval.auto[i] = c.value,
-                Term::ForcingCos => eval.forcing.0 = c.value,
-                Term::ForcingSin => eval.forcing.1 = c.value,
-                Term::Stiffness => eval.stiffness = c.value,
+                Column::Damping => eval.damping = c.value,
+                Column::CosT(i) => eval.cos_t[i] = c.value,
+                Column::SinT(i) => eval.sin_t[i] = c.value,
+                Column::Auto(i) => eval.auto[i] = c.value,
+                Column::ForcingCos => eval.forcing.0 = c.value,
+                Column::ForcingSin => eval.forcing.1 = c.value,
+                Column::Stiffness => eval.stiffness = c.value,
             }
         }
         Ok(Self {

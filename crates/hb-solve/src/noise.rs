@@ -4,7 +4,7 @@
 use circle_signal::unwrap;
 use hb_basis::{Basis, Domain, FourierPlan};
 
-use crate::assemble::{Term, terms};
+use crate::terms::{Column, column_families, columns};
 use crate::{IdentifyParams, LinearSystem, NoiseCorrection, SolveError};
 
 /// The band of the noise estimate: frequencies from this fraction of the Nyquist frequency up to
@@ -113,13 +113,13 @@ pub(crate) fn column_factors<B: Basis + ?Sized>(
     sigma: f64,
 ) -> Result<Vec<f64>, SolveError> {
     let names = basis.names();
-    let layout = terms(names.len(), params.form());
+    let layout = column_families(&columns(names.len(), params.form()), &names)?;
     let mut orders = vec![None; names.len()];
     let mut factors = Vec::with_capacity(layout.len());
     for term in layout {
         let i = match term {
-            Term::Auto(i) | Term::CosT(i) | Term::SinT(i) => i,
-            Term::Damping | Term::ForcingCos | Term::ForcingSin | Term::Stiffness => {
+            Column::Auto(i) | Column::CosT(i) | Column::SinT(i) => i,
+            Column::Damping | Column::ForcingCos | Column::ForcingSin | Column::Stiffness => {
                 factors.push(1.0);
                 continue;
             }
@@ -150,7 +150,7 @@ pub(crate) fn column_factors<B: Basis + ?Sized>(
 }
 
 /// Applies the params' [`NoiseCorrection`] to an assembled system of `basis` on `signal`.
-pub(crate) fn correct<B: Basis + ?Sized>(
+pub fn correct_noise<B: Basis + ?Sized>(
     basis: &B,
     signal: &[f64],
     params: &IdentifyParams,

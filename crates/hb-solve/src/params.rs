@@ -92,15 +92,42 @@ pub enum Forcing {
 /// The default is the paper's eq. 6 for the pendulum: damping, autonomous and parametric terms, no
 /// external forcing, no separate linear stiffness.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "ModelFormRaw", into = "ModelFormRaw")]
 pub struct ModelForm {
-    /// Include the parametric terms `cos(t)*B` (`n_i`) and `sin(t)*B` (`p_i`) for each basis
-    /// function `B`.
-    pub parametric: bool,
-    /// The external forcing term.
-    pub forcing: Forcing,
-    /// Include a linear stiffness term `k*x` (on the line only; meaningful only when the basis does
-    /// not already contain `x`, otherwise the system is rank deficient and identification says so).
-    pub linear_stiffness: bool,
+    parametric: bool,
+    forcing: Forcing,
+    linear_stiffness: bool,
+}
+
+/// The serialised form of [`ModelForm`] (the same field names as ever), validated on reading.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+struct ModelFormRaw {
+    parametric: bool,
+    forcing: Forcing,
+    linear_stiffness: bool,
+}
+
+impl From<ModelForm> for ModelFormRaw {
+    fn from(f: ModelForm) -> Self {
+        Self {
+            parametric: f.parametric,
+            forcing: f.forcing,
+            linear_stiffness: f.linear_stiffness,
+        }
+    }
+}
+
+impl TryFrom<ModelFormRaw> for ModelForm {
+    type Error = SolveError;
+
+    fn try_from(raw: ModelFormRaw) -> Result<Self, SolveError> {
+        Self {
+            parametric: raw.parametric,
+            forcing: raw.forcing,
+            linear_stiffness: raw.linear_stiffness,
+        }
+        .validate()
+    }
 }
 
 impl Default for ModelForm {
@@ -139,6 +166,30 @@ impl ModelForm {
     pub fn with_linear_stiffness(mut self) -> Self {
         self.linear_stiffness = true;
         self
+    }
+
+    /// The same form without the parametric terms `cos(t)*B`, `sin(t)*B`.
+    pub fn without_parametric_terms(mut self) -> Self {
+        self.parametric = false;
+        self
+    }
+
+    /// Whether the parametric terms `cos(t)*B` (`n_i`) and `sin(t)*B` (`p_i`) are in the model,
+    /// for each basis function `B`.
+    pub fn is_parametric(&self) -> bool {
+        self.parametric
+    }
+
+    /// The external forcing term.
+    pub fn forcing(&self) -> Forcing {
+        self.forcing
+    }
+
+    /// Whether a linear stiffness term `k*x` is in the model (on the line only; meaningful only
+    /// when the basis does not already contain `x`, otherwise the system is rank deficient and
+    /// identification says so).
+    pub fn has_linear_stiffness(&self) -> bool {
+        self.linear_stiffness
     }
 
     pub(crate) fn validate(self) -> Result<Self, SolveError> {

@@ -10,7 +10,8 @@ use hb_basis::{Basis, Domain};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::assemble::{Layout, Term, layout, split_rows, term_name};
+use crate::system::{Layout, RowJob, layout, split_rows};
+use crate::terms::Column;
 use crate::{Block, Forcing, Harmonics, IdentifyParams, LinearSystem, SolveError};
 
 /// Parameters of the weak form: the order `p` of the window `w(τ) = sin^p(π τ / T_s)`.
@@ -238,26 +239,28 @@ impl pulp::WithSimd for WindowRows<'_> {
 /// sample, the window's last point) but need not be periodic: [`upo_search::Windows`] gives plain
 /// windows. `M` per segment is `params.harmonics().count(k, L)`. Segments are processed in
 /// parallel; the test functions are tabulated once per segment length.
-pub fn assemble_weak<B: Basis + ?Sized>(
+pub(crate) fn weak_rows<B: Basis + ?Sized>(
     basis: &B,
     signal: &[f64],
     segments: &[Segment],
     params: &IdentifyParams,
     weak: &WeakForm,
 ) -> Result<LinearSystem, SolveError> {
+    let layout = layout(basis, signal, segments, params)?;
     let Layout {
         domain,
-        names,
-        terms,
-        counts,
+        ref names,
+        ref columns,
+        ref counts,
         rows,
-    } = layout(basis, signal, segments, params)?;
-    let cols = terms.len();
+        ..
+    } = layout;
+    let cols = columns.len();
 
     let h = params.clock().step();
     let mut tables: HashMap<(usize, usize), Tables> = HashMap::new();
     let mut max_samples = 0;
-    for (s, &m) in segments.iter().zip(&counts) {
+    for (s, &m) in segments.iter().zip(counts) {
         tables
             .entry((s.len(), m))
             .or_insert_with(|| weak.tables(s.len(), m, h, params.clock().forcing_frequency()));
@@ -272,12 +275,12 @@ pub fn assemble_weak<B: Basis + ?Sized>(
 
     let mut matrix = Mat::<f64>::zeros(rows, cols);
     let mut rhs = vec![0.0; rows];
-    let jobs = split_rows(matrix.as_mut(), &mut rhs, segments, &counts);
+    let jobs = split_rows(matrix.as_mut(), &mut rhs, segments, counts);
     let shared = Shared {
         basis,
         signal,
         params,
-        terms: &terms,
+        columns,
         domain,
         arch: pulp::Arch::new(),
     };
@@ -286,25 +289,15 @@ pub fn assemble_weak<B: Basis + ?Sized>(
         .with_min_len(8)
         .map_init(
             || ws.clone(),
-            |ws, (i, segment, m, first_row, a, b)| {
-                let t = &tables[&(segment.len(), m)];
-                let (winding, rotation_rate) = fill_block(ws, &shared, t, i, &segment, a, b)?;
-                Ok(Block {
-                    segment,
-                    first_row,
-                    harmonics: m,
-                    winding,
-                    rotation_rate,
-                })
+            |ws, job: RowJob<'_>| {
+                let t = &tables[&(job.segment.len(), job.harmonics)];
+                fill_block(ws, &shared, t, job)
             },
         )
         .collect::<Result<_, SolveError>>()?;
 
     let rhs = Col::from_fn(rows, |i| rhs[i]);
-    let names = terms.iter().map(|&t| term_name(t, &names)).collect();
-    let mut system = LinearSystem::from_parts(matrix, rhs, names, blocks);
-    crate::noise::correct(basis, signal, params, &mut system)?;
-    Ok(system)
+    Ok(LinearSystem::from_parts(matrix, rhs, layout.term_names(), blocks))
 }
 
 /// What every segment shares.
@@ -312,26 +305,32 @@ struct Shared<'a, B: ?Sized> {
     basis: &'a B,
     signal: &'a [f64],
     params: &'a IdentifyParams,
-    terms: &'a [Term],
+    columns: &'a [Column],
     domain: Domain,
     /// The machine's SIMD, detected once per assembly.
     arch: pulp::Arch,
 }
 
-/// Fills one segment's rows; returns its winding number and rotation rate.
+/// Fills one segment's rows; returns its block.
 fn fill_block<B: Basis + ?Sized>(
     ws: &mut Workspace,
     sh: &Shared<'_, B>,
     t: &Tables,
-    index: usize,
-    seg: &Segment,
-    mut a: MatMut<'_, f64>,
-    b: &mut [f64],
-) -> Result<(i64, f64), SolveError> {
+    job: RowJob<'_>,
+) -> Result<Block, SolveError> {
+    let RowJob {
+        index,
+        segment,
+        harmonics,
+        first_row,
+        mut a,
+        b,
+    } = job;
+    let seg = &segment;
     let clock = sh.params.clock();
     let samples = seg.len() + 1;
     let raw = &sh.signal[seg.start()..seg.start() + samples];
-    let cols = sh.terms.len();
+    let cols = sh.columns.len();
 
     // The continuous displacement of the window, less its mean (∫ψ' and ∫ψ'' of a constant
     // vanish, so the mean only adds rounding).
@@ -367,20 +366,20 @@ fn fill_block<B: Basis + ?Sized>(
         let (cr, sr) = t.turn[n];
         let (c, s) = (c0 * cr - s0 * sr, s0 * cr + c0 * sr);
         ws.forcing.push((c, s));
-        for (col, &term) in sh.terms.iter().enumerate() {
-            ws.g[col * samples + n] = match term {
-                Term::Damping => ws.x[n] - mean,
-                Term::Auto(i) => ws.phi[i],
-                Term::CosT(i) => ws.phi[i] * c,
-                Term::SinT(i) => ws.phi[i] * s,
-                Term::ForcingCos => c,
-                Term::ForcingSin => s,
-                Term::Stiffness => xr,
+        for (col, &column) in sh.columns.iter().enumerate() {
+            ws.g[col * samples + n] = match column {
+                Column::Damping => ws.x[n] - mean,
+                Column::Auto(i) => ws.phi[i],
+                Column::CosT(i) => ws.phi[i] * c,
+                Column::SinT(i) => ws.phi[i] * s,
+                Column::ForcingCos => c,
+                Column::ForcingSin => s,
+                Column::Stiffness => xr,
             };
         }
     }
 
-    let known = match sh.params.form().forcing {
+    let known = match sh.params.form().forcing() {
         Forcing::Known { cos, sin } => Some((cos, sin)),
         _ => None,
     };
@@ -412,7 +411,14 @@ fn fill_block<B: Basis + ?Sized>(
             row,
         });
     }
-    Ok((winding, rate))
+    Ok(Block {
+        segment,
+        first_row,
+        rows: 2 * harmonics + 1,
+        harmonics,
+        winding,
+        rotation_rate: rate,
+    })
 }
 
 #[cfg(test)]

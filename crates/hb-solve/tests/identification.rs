@@ -120,7 +120,15 @@ fn linear_oscillator_with_known_forcing_is_recovered_exactly() {
     let form = ModelForm::externally_forced(Forcing::Known { cos: -amp, sin: 0.0 });
     let params = IdentifyParams::builder(clock).form(form).build().unwrap();
     for solver in [&QrSolver::default() as &dyn LstsqSolver, &SvdSolver::default()] {
-        let m = identify(Polynomial::new(1).unwrap(), &x, &segments, &params, solver).unwrap();
+        let m = identify(
+            Polynomial::new(1).unwrap(),
+            &x,
+            &segments,
+            &params,
+            &hb_solve::HarmonicBalance,
+            solver,
+        )
+        .unwrap();
         assert_eq!(m.coefficients().len(), 2);
         assert!(
             (m.damping() - c).abs() <= 1e-9 * c,
@@ -148,7 +156,14 @@ fn linear_oscillator_with_unknown_forcing_is_rank_deficient() {
         .build()
         .unwrap();
     for solver in [&QrSolver::default() as &dyn LstsqSolver, &SvdSolver::default()] {
-        match identify(Polynomial::new(1).unwrap(), &x, &segments, &params, solver) {
+        match identify(
+            Polynomial::new(1).unwrap(),
+            &x,
+            &segments,
+            &params,
+            &hb_solve::HarmonicBalance,
+            solver,
+        ) {
             Err(SolveError::RankDeficient { rank, unknowns, .. }) => {
                 assert_eq!((rank, unknowns), (2, 4), "{}", solver.name())
             }
@@ -165,6 +180,7 @@ fn linear_oscillator_with_unknown_forcing_is_rank_deficient() {
         &x,
         &segments,
         &params,
+        &hb_solve::HarmonicBalance,
         &QrSolver::default(),
     ) {
         Err(SolveError::RankDeficient {
@@ -202,6 +218,7 @@ fn duffing_orbit_identifies_stiffness_nonlinearity_and_forcing() {
         &x,
         &segments,
         &params,
+        &hb_solve::HarmonicBalance,
         &QrSolver::default(),
     )
     .unwrap();
@@ -280,7 +297,15 @@ fn whirling_pendulum_orbits_identify_the_pendulum_exactly() {
             let system = assemble(&Harmonic::new(1).unwrap(), &record, &segments, &params).unwrap();
             let windings: Vec<i64> = system.blocks().iter().map(|b| b.winding).collect();
             assert_eq!(windings, [-2, 3]);
-            let m = identify(Harmonic::new(1).unwrap(), &record, &segments, &params, solver).unwrap();
+            let m = identify(
+                Harmonic::new(1).unwrap(),
+                &record,
+                &segments,
+                &params,
+                &hb_solve::HarmonicBalance,
+                solver,
+            )
+            .unwrap();
             for (name, v) in want {
                 let scale = if name == "x'" { scale_c } else { scale_q };
                 let got = m.coefficient(name).unwrap().value / scale;
@@ -308,7 +333,15 @@ fn too_few_orbits_says_how_many() {
         .unwrap();
     let one = [common::segment(0, 1, 25, 0.0)];
     // Harmonic K = 3: 1 + 3·6 = 19 unknowns; a period-1 orbit gives 7 equations; 20 are needed.
-    let err = identify(Harmonic::new(3).unwrap(), &x, &one, &params, &QrSolver::default()).unwrap_err();
+    let err = identify(
+        Harmonic::new(3).unwrap(),
+        &x,
+        &one,
+        &params,
+        &hb_solve::HarmonicBalance,
+        &QrSolver::default(),
+    )
+    .unwrap_err();
     assert!(
         matches!(err, SolveError::TooFewOrbits { found: 1, needed: 3 }),
         "{err:?}"
@@ -318,7 +351,15 @@ fn too_few_orbits_says_how_many() {
         msg.contains("1 segment") && msg.contains("at least 3") && msg.contains("tolerance"),
         "{msg}"
     );
-    let err = identify(Harmonic::new(1).unwrap(), &x, &[], &params, &QrSolver::default()).unwrap_err();
+    let err = identify(
+        Harmonic::new(1).unwrap(),
+        &x,
+        &[],
+        &params,
+        &hb_solve::HarmonicBalance,
+        &QrSolver::default(),
+    )
+    .unwrap_err();
     assert!(
         matches!(err, SolveError::TooFewOrbits { found: 0, needed: 2 }),
         "{err:?}"
@@ -337,6 +378,7 @@ fn bad_input_never_reaches_the_solver() {
         &x,
         &segs,
         &params,
+        &hb_solve::HarmonicBalance,
         &QrSolver::default(),
     )
     .unwrap_err();
@@ -354,7 +396,14 @@ fn bad_input_never_reaches_the_solver() {
     x[310] = 0.0;
     let bad = [common::segment(0, 2, 25, 0.0)];
     assert!(matches!(
-        identify(Harmonic::new(1).unwrap(), &x, &bad, &params, &QrSolver::default()),
+        identify(
+            Harmonic::new(1).unwrap(),
+            &x,
+            &bad,
+            &params,
+            &hb_solve::HarmonicBalance,
+            &QrSolver::default()
+        ),
         Err(SolveError::BadSegment { segment: 0, .. })
     ));
     let past_end = [common::segment(x.len() - 25, 1, 25, 0.0)];
@@ -364,6 +413,7 @@ fn bad_input_never_reaches_the_solver() {
             &x,
             &past_end,
             &params,
+            &hb_solve::HarmonicBalance,
             &QrSolver::default()
         ),
         Err(SolveError::BadSegment { .. })
@@ -379,6 +429,7 @@ fn bad_input_never_reaches_the_solver() {
             &x,
             &segs,
             &params,
+            &hb_solve::HarmonicBalance,
             &QrSolver::default()
         ),
         Err(SolveError::TermNotAllowed { term: "k*x", .. })
@@ -391,7 +442,7 @@ fn bad_input_never_reaches_the_solver() {
         .unwrap();
     let segs = [common::segment(0, 1, 25, 0.0), common::segment(50, 1, 25, 0.0)];
     assert!(matches!(
-        identify(Polynomial::new(3).unwrap(), &huge, &segs, &params, &QrSolver::default()),
+        identify(Polynomial::new(3).unwrap(), &huge, &segs, &params, &hb_solve::HarmonicBalance, &QrSolver::default()),
         Err(SolveError::NonFiniteTerm { segment: 0, ref term, .. }) if term == "x^3"
     ));
 }
@@ -491,7 +542,15 @@ fn paper_dataset_harmonic_basis() {
     let clock = common::paper_clock(t0);
     let params = IdentifyParams::builder(clock).build().unwrap();
     let basis: BasisKind = Harmonic::new(1).unwrap().into();
-    let m = identify(basis, &x, &segs, &params, &QrSolver::default()).unwrap();
+    let m = identify(
+        basis,
+        &x,
+        &segs,
+        &params,
+        &hb_solve::HarmonicBalance,
+        &QrSolver::default(),
+    )
+    .unwrap();
     for (name, want) in TRUTH {
         let c = m.coefficient(name).unwrap();
         assert!((c.value - want).abs() < 0.005, "{name}: {} vs {want}", c.value);
@@ -513,7 +572,15 @@ fn paper_dataset_harmonic_basis() {
         .dimension(2)
         .build()
         .unwrap();
-    let m2 = identify_from_source(basis, &x, &search, &params, &SvdSolver::default()).unwrap();
+    let m2 = identify_from_source(
+        basis,
+        &x,
+        &search,
+        &params,
+        &hb_solve::HarmonicBalance,
+        &SvdSolver::default(),
+    )
+    .unwrap();
     for (a, b) in m.coefficients().iter().zip(m2.coefficients()) {
         assert!((a.value - b.value).abs() < 1e-10, "{}", a.name);
     }
@@ -562,7 +629,15 @@ fn paper_dataset_hat_basis() {
     let clock = common::paper_clock(t0);
     let params = IdentifyParams::builder(clock).build().unwrap();
     let hat = Hat::new(8).unwrap();
-    let m = identify(hat, &x, &segs, &params, &QrSolver::default()).unwrap();
+    let m = identify(
+        hat,
+        &x,
+        &segs,
+        &params,
+        &hb_solve::HarmonicBalance,
+        &QrSolver::default(),
+    )
+    .unwrap();
     assert!((m.damping() - 0.03).abs() < 0.003, "c_r = {}", m.damping());
     let q_ref = hat_projection(&hat, |x| 1.0 / (0.8333f64 * 0.8333) * x.sin());
     let p_ref = hat_projection(&hat, |x| -1.52 * x.cos());
@@ -607,8 +682,8 @@ fn rows_do_not_depend_on_the_other_segments() {
     let same_rows = |a: &hb_solve::LinearSystem, ia: usize, b: &hb_solve::LinearSystem, ib: usize| {
         let (ba, bb) = (&a.blocks()[ia], &b.blocks()[ib]);
         assert_eq!(ba.segment, bb.segment);
-        assert_eq!(ba.rows(), bb.rows());
-        for r in 0..ba.rows() {
+        assert_eq!(ba.rows, bb.rows);
+        for r in 0..ba.rows {
             assert_eq!(a.rhs()[ba.first_row + r], b.rhs()[bb.first_row + r]);
             for c in 0..a.unknowns() {
                 assert_eq!(

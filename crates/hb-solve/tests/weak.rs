@@ -5,7 +5,7 @@ use hb_basis::{BasisKind, Domain, Harmonic, Hat, Polynomial};
 use hb_solve::{
     BootstrapParams, Forcing, Harmonics, IdentifiedModel, IdentifyParams, ModelForm, NoiseCorrection,
     QrSolver, ResampleBlock, SampleClock, SolveError, SvdSolver, WeakForm, assemble, assemble_weak,
-    bootstrap, estimate_noise_sigma, identify_weak, identify_weak_from_source,
+    bootstrap, estimate_noise_sigma, identify, identify_from_source,
 };
 use pendulum_sim::{Pendulum, SimulationConfig, Tolerances, simulate};
 use rand::SeedableRng;
@@ -75,7 +75,7 @@ fn non_periodic_windows_of_a_linear_oscillator_are_exact() {
             .harmonics(harmonics)
             .build()
             .unwrap();
-        let m = identify_weak(
+        let m = identify(
             Polynomial::new(1).unwrap(),
             &x,
             &segments,
@@ -105,7 +105,7 @@ fn non_periodic_windows_of_a_linear_oscillator_are_exact() {
         sin: want[3],
     });
     let params = IdentifyParams::builder(clock).form(known).build().unwrap();
-    let m = identify_weak(
+    let m = identify(
         Polynomial::new(1).unwrap(),
         &x,
         &segments,
@@ -144,7 +144,7 @@ fn unforced_pendulum_on_the_circle() {
         .step(20)
         .build()
         .unwrap();
-    let m = identify_weak_from_source(
+    let m = identify_from_source(
         Harmonic::new(1).unwrap(),
         &x,
         &windows,
@@ -176,7 +176,7 @@ fn paper_dataset_with_the_defaults() {
         .build()
         .unwrap();
     let basis: BasisKind = Harmonic::new(1).unwrap().into();
-    let m = identify_weak(
+    let m = identify(
         basis,
         &x,
         &segments,
@@ -202,7 +202,7 @@ fn paper_dataset_with_the_defaults() {
         .harmonics(Harmonics::Fixed(16))
         .build()
         .unwrap();
-    let m = identify_weak(
+    let m = identify(
         basis,
         &x,
         &segments,
@@ -337,7 +337,7 @@ fn noise_correction_removes_the_bias_of_the_trigonometric_terms() {
             .noise_correction(noise)
             .build()
             .unwrap();
-        identify_weak(
+        identify(
             Harmonic::new(1).unwrap(),
             &x,
             &segments,

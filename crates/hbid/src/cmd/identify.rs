@@ -7,8 +7,9 @@ use circle_signal::{Domain, Segment};
 use clap::{Args, ValueEnum};
 use hb_basis::{BasisKind, Harmonic, Hat, Polynomial};
 use hb_solve::{
-    Bootstrap, BootstrapParams, Forcing, Harmonics, IdentifiedModel, IdentifyParams, LstsqSolver, ModelForm,
-    NoiseCorrection, QrSolver, SvdSolver, WeakForm, assemble, assemble_weak, bootstrap_fit,
+    Assembly, Bootstrap, BootstrapParams, Forcing, HarmonicBalance, Harmonics, IdentifiedModel,
+    IdentifyParams, LstsqSolver, ModelForm, NoiseCorrection, QrSolver, SvdSolver, WeakForm, bootstrap_fit,
+    build_system,
 };
 use upo_search::Windows;
 
@@ -24,12 +25,17 @@ pub enum Method {
 }
 
 impl Method {
-    /// The name used in reports and JSON.
-    pub fn name(self) -> &'static str {
+    /// The assembly of the method: the one place the command line turns a method into rows.
+    pub fn assembly(self, weak: WeakForm) -> Box<dyn Assembly> {
         match self {
-            Method::Upo => "upo",
-            Method::Windowed => "windowed",
+            Method::Upo => Box::new(HarmonicBalance),
+            Method::Windowed => Box::new(weak),
         }
+    }
+
+    /// The name used in reports and JSON (the assembly's).
+    pub fn name(self) -> &'static str {
+        self.assembly(WeakForm::default()).name()
     }
 }
 
@@ -129,9 +135,8 @@ pub struct Setup {
     pub basis_name: String,
     pub params: IdentifyParams,
     pub solver: Box<dyn LstsqSolver>,
-    pub weak: WeakForm,
     pub bootstrap: Option<BootstrapParams>,
-    pub method: Method,
+    pub assembly: Box<dyn Assembly>,
 }
 
 /// An identified model with its bootstrap intervals.
@@ -154,20 +159,15 @@ impl Setup {
         mut stage: impl FnMut(&'static str),
     ) -> anyhow::Result<Identification> {
         stage("assemble");
-        let system = match self.method {
-            Method::Upo => assemble(&self.basis, x, segments, &self.params),
-            Method::Windowed => assemble_weak(&self.basis, x, segments, &self.params, &self.weak),
-        }
-        .map_err(|e| anyhow::anyhow!("{e}"))?;
+        let system = build_system(&self.basis, x, segments, &self.params, self.assembly.as_ref())?;
         stage("solve");
         let solver = self.solver.as_ref();
-        let fit = system.solve(solver).map_err(|e| anyhow::anyhow!("{e}"))?;
-        let model = IdentifiedModel::from_fit(self.basis, &self.params, &system, &fit, solver.name())
-            .map_err(|e| anyhow::anyhow!("{e}"))?;
+        let fit = system.solve(solver)?;
+        let model = IdentifiedModel::from_fit(self.basis, &self.params, &system, &fit, solver.name())?;
         let intervals = match &self.bootstrap {
             Some(b) => {
                 stage("bootstrap");
-                Some(bootstrap_fit(&system, &fit, solver, b).map_err(|e| anyhow::anyhow!("{e}"))?)
+                Some(bootstrap_fit(&system, &fit, solver, b)?)
             }
             None => None,
         };
@@ -194,16 +194,15 @@ impl IdentifyArgs {
             ForcingArg::None => Forcing::None,
             ForcingArg::Identified => Forcing::Identified,
         };
-        let form = ModelForm {
-            parametric: !self.no_parametric,
-            ..ModelForm::parametric()
+        let mut form = ModelForm::parametric().with_forcing(forcing);
+        if self.no_parametric {
+            form = form.without_parametric_terms();
         }
-        .with_forcing(forcing);
-        let harmonics = match (self.harmonics, method) {
-            (Some(0), _) => bail!("--harmonics must be at least 1"),
-            (Some(m), _) => Harmonics::Fixed(m),
-            (None, Method::Upo) => Harmonics::ForcingCap(3.0),
-            (None, Method::Windowed) => WeakForm::DEFAULT_HARMONICS,
+        let assembly = method.assembly(WeakForm::new(self.window_order)?);
+        let harmonics = match self.harmonics {
+            Some(0) => bail!("--harmonics must be at least 1"),
+            Some(m) => Harmonics::Fixed(m),
+            None => assembly.default_harmonics(),
         };
         let noise = match self.noise_sigma.as_deref() {
             None => NoiseCorrection::None,
@@ -226,7 +225,6 @@ impl IdentifyArgs {
         if self.window_periods == 0 {
             bail!("--window-periods must be at least 1");
         }
-        let weak = WeakForm::new(self.window_order)?;
         let bootstrap = if self.bootstrap == 0 {
             None
         } else {
@@ -243,9 +241,8 @@ impl IdentifyArgs {
             basis_name,
             params,
             solver,
-            weak,
             bootstrap,
-            method,
+            assembly,
         })
     }
 

@@ -1,0 +1,88 @@
+//! The identification methods behind one trait: how segments of a record become the stacked
+//! system of a model.
+
+use std::fmt;
+
+use circle_signal::Segment;
+use hb_basis::Basis;
+
+use crate::{Harmonics, IdentifyParams, LinearSystem, SolveError, WeakForm};
+
+/// A way of turning segments of a record into the stacked system `A λ = β` of a model
+/// ([`LinearSystem`]): the paper's harmonic-balance rows ([`HarmonicBalance`]), the weak form
+/// ([`WeakForm`]), or pointwise finite differences ([`crate::FiniteDifferences`], the classic peer).
+///
+/// Every method produces the same column layout (the [`crate::columns`] of the params' form), so
+/// that solvers, models and the bootstrap serve them all; a front end chooses a method in one
+/// place (`Box<dyn Assembly>`) and calls [`crate::identify`].
+pub trait Assembly: fmt::Debug + Send + Sync {
+    /// A short name: `upo` (the paper's rows on periodic orbits), `windowed` (the weak form) or
+    /// `differences`.
+    fn name(&self) -> &'static str;
+
+    /// The harmonics per segment to balance when the user gives none.
+    fn default_harmonics(&self) -> Harmonics;
+
+    /// Assembles the stacked system of `segments` of `signal` for a model on `basis` with
+    /// `params`. Segments must satisfy the [`Segment`] invariant for the params' clock. The
+    /// params' noise correction is not applied here but by [`crate::build_system`], the same way
+    /// for every method.
+    fn assemble(
+        &self,
+        basis: &dyn Basis,
+        signal: &[f64],
+        segments: &[Segment],
+        params: &IdentifyParams,
+    ) -> Result<LinearSystem, SolveError>;
+}
+
+/// The paper's method: eq. 15 on every segment, which must be (nearly) periodic, stacked as
+/// eq. 16 (see [`LinearSystem`] for the rows).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct HarmonicBalance;
+
+impl HarmonicBalance {
+    /// Default harmonics: [`Harmonics::DEFAULT`], every orbit balanced up to three times the
+    /// forcing frequency.
+    pub const DEFAULT_HARMONICS: Harmonics = Harmonics::DEFAULT;
+}
+
+impl Assembly for HarmonicBalance {
+    fn name(&self) -> &'static str {
+        "upo"
+    }
+
+    fn default_harmonics(&self) -> Harmonics {
+        Self::DEFAULT_HARMONICS
+    }
+
+    fn assemble(
+        &self,
+        basis: &dyn Basis,
+        signal: &[f64],
+        segments: &[Segment],
+        params: &IdentifyParams,
+    ) -> Result<LinearSystem, SolveError> {
+        crate::assemble::harmonic_rows(basis, signal, segments, params)
+    }
+}
+
+impl Assembly for WeakForm {
+    fn name(&self) -> &'static str {
+        "windowed"
+    }
+
+    fn default_harmonics(&self) -> Harmonics {
+        Self::DEFAULT_HARMONICS
+    }
+
+    fn assemble(
+        &self,
+        basis: &dyn Basis,
+        signal: &[f64],
+        segments: &[Segment],
+        params: &IdentifyParams,
+    ) -> Result<LinearSystem, SolveError> {
+        crate::weak::weak_rows(basis, signal, segments, params, self)
+    }
+}

@@ -1,0 +1,294 @@
+//! The stacked linear system `A λ = β` every assembly fills, its layout by segment, and the checks
+//! that come before any work.
+
+use circle_signal::Segment;
+use faer::{Col, ColRef, Mat, MatMut, MatRef};
+use hb_basis::{Basis, Domain};
+use serde::{Deserialize, Serialize};
+
+use crate::terms::{Column, Term, check_form, column_families, columns};
+use crate::{IdentifyParams, LstsqFit, LstsqSolver, SolveError};
+
+/// Where one segment's equations sit in the stacked system, and what was found on it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Block {
+    /// The segment.
+    pub segment: Segment,
+    /// Its first row (for the harmonic rows, the mean equation; then `cos j`, `sin j` for
+    /// `j = 1..=harmonics`).
+    pub first_row: usize,
+    /// Its number of rows (`2 M_k + 1` for the harmonic rows).
+    pub rows: usize,
+    /// Harmonics `M_k` balanced (0 for an assembly that does not balance harmonics).
+    pub harmonics: usize,
+    /// Net turns `m` of the orbit (0 on the line and for oscillating orbits).
+    pub winding: i64,
+    /// Rotation rate `w_ck = m W / k` (radians per unit time).
+    pub rotation_rate: f64,
+}
+
+/// The stacked system `A λ = β` (paper eq. 16) with the names of its unknowns.
+///
+/// For a period-`k` segment of `L = kP` samples with fundamental `Ω = W / k`, rotation rate `w_ck`
+/// and the Fourier coefficients (hb-basis conventions) `u_j, v_j` of its oscillation, `c_ij, d_ij`
+/// of `φ_i(x)`, `e_ij, f_ij` of `φ_i(x) cos(W t)` and `g_ij, h_ij` of `φ_i(x) sin(W t)` (absolute
+/// time `t`), the rows are (paper eq. 15, method notes section 4):
+///
+/// ```text
+/// mean:   c_r w_ck        + Σ_i [ n_i e_i0/2 + p_i g_i0/2 + q_i c_i0/2 ] = 0
+/// cos j:  c_r (jΩ) v_j    + Σ_i [ n_i e_ij   + p_i g_ij   + q_i c_ij   ] = (jΩ)² u_j
+/// sin j: −c_r (jΩ) u_j    + Σ_i [ n_i f_ij   + p_i h_ij   + q_i d_ij   ] = (jΩ)² v_j
+/// ```
+///
+/// and likewise for the forcing terms `cos(t)`, `sin(t)` (the Fourier coefficients of
+/// `cos(W t)`, `sin(W t)`) and `k*x` (those of `x`). A known forcing is subtracted from the
+/// right-hand side.
+#[derive(Debug, Clone)]
+pub struct LinearSystem {
+    matrix: Mat<f64>,
+    rhs: Col<f64>,
+    names: Vec<String>,
+    blocks: Vec<Block>,
+}
+
+impl LinearSystem {
+    /// The matrix `A` (rows × unknowns).
+    pub fn matrix(&self) -> MatRef<'_, f64> {
+        self.matrix.as_ref()
+    }
+
+    /// The right-hand side `β`.
+    pub fn rhs(&self) -> ColRef<'_, f64> {
+        self.rhs.as_ref()
+    }
+
+    /// The names of the unknowns, in column order.
+    pub fn names(&self) -> &[String] {
+        &self.names
+    }
+
+    /// One block per segment, in the order given.
+    pub fn blocks(&self) -> &[Block] {
+        &self.blocks
+    }
+
+    /// Number of equations.
+    pub fn rows(&self) -> usize {
+        self.matrix.nrows()
+    }
+
+    /// Number of unknowns.
+    pub fn unknowns(&self) -> usize {
+        self.matrix.ncols()
+    }
+
+    /// A system from its parts (every assembly builds the same type).
+    pub(crate) fn from_parts(
+        matrix: Mat<f64>,
+        rhs: Col<f64>,
+        names: Vec<String>,
+        blocks: Vec<Block>,
+    ) -> Self {
+        Self {
+            matrix,
+            rhs,
+            names,
+            blocks,
+        }
+    }
+
+    /// Column `c` of the matrix, contiguous.
+    pub(crate) fn column(&self, c: usize) -> &[f64] {
+        self.matrix.col_as_slice(c)
+    }
+
+    /// The right-hand side, contiguous (an owned column always is).
+    pub(crate) fn rhs_slice(&self) -> &[f64] {
+        self.rhs
+            .as_ref()
+            .try_as_col_major()
+            .map_or(&[][..], |c| c.as_slice())
+    }
+
+    /// Multiplies column `c` by `factor` (the noise correction).
+    pub(crate) fn scale_column(&mut self, c: usize, factor: f64) {
+        self.matrix.col_mut(c).iter_mut().for_each(|v| *v *= factor);
+    }
+
+    /// Solves by least squares; a rank deficiency names the suspect term.
+    pub fn solve<S: LstsqSolver + ?Sized>(&self, solver: &S) -> Result<LstsqFit, SolveError> {
+        solver.solve(self.matrix(), self.rhs()).map_err(|e| match e {
+            SolveError::RankDeficient {
+                rank,
+                unknowns,
+                rows,
+                column,
+                suspect,
+            } => {
+                // The solver knows columns by index; give the term's name.
+                let suspect = self.names.get(column).cloned().unwrap_or(suspect);
+                SolveError::RankDeficient {
+                    rank,
+                    unknowns,
+                    rows,
+                    column,
+                    suspect,
+                }
+            }
+            other => other,
+        })
+    }
+}
+
+/// What both assemblies check and count before any work.
+pub(crate) struct Layout {
+    pub(crate) domain: Domain,
+    /// The basis functions' names.
+    pub(crate) names: Vec<String>,
+    /// The unknowns, in column order.
+    pub(crate) terms: Vec<Term>,
+    /// Their column families, the assemblies' view of them.
+    pub(crate) columns: Vec<Column>,
+    /// Harmonics `M_k` per segment.
+    pub(crate) counts: Vec<usize>,
+    /// Total equations.
+    pub(crate) rows: usize,
+}
+
+/// Checks the model form against the basis and the segments against the signal, and counts the
+/// equations (enough of them for the unknowns).
+pub(crate) fn layout<B: Basis + ?Sized>(
+    basis: &B,
+    signal: &[f64],
+    segments: &[Segment],
+    params: &IdentifyParams,
+) -> Result<Layout, SolveError> {
+    let domain = basis.domain();
+    check_form(domain, params.form())?;
+    let names = basis.names();
+    let terms = columns(names.len(), params.form());
+    let columns = column_families(&terms, &names)?;
+    let (counts, rows) = plan_rows(signal, segments, params)?;
+    check_enough(segments.len(), rows, terms.len(), params)?;
+    Ok(Layout {
+        domain,
+        names,
+        terms,
+        columns,
+        counts,
+        rows,
+    })
+}
+
+impl Layout {
+    /// The names of the unknowns, in column order.
+    pub(crate) fn term_names(&self) -> Vec<String> {
+        self.terms.iter().map(|t| t.name(&self.names)).collect()
+    }
+}
+
+/// One segment's share of the stacked system.
+pub(crate) struct RowJob<'a> {
+    /// Index of the segment in the caller's order.
+    pub(crate) index: usize,
+    /// The segment.
+    pub(crate) segment: Segment,
+    /// Harmonics `M_k` balanced on it.
+    pub(crate) harmonics: usize,
+    /// Its first row in the stacked system.
+    pub(crate) first_row: usize,
+    /// Its `2 M_k + 1` rows of `A`.
+    pub(crate) a: MatMut<'a, f64>,
+    /// Its entries of `β`.
+    pub(crate) b: &'a mut [f64],
+}
+
+/// Splits the stacked system into each segment's `2 M_k + 1` rows (`counts` from [`plan_rows`]),
+/// in the order of `segments`: disjoint views of the column-major matrix, filled in parallel
+/// without a copy.
+pub(crate) fn split_rows<'a>(
+    matrix: MatMut<'a, f64>,
+    rhs: &'a mut [f64],
+    segments: &[Segment],
+    counts: &[usize],
+) -> Vec<RowJob<'a>> {
+    let mut jobs = Vec::with_capacity(segments.len());
+    let (mut rest_a, mut rest_b) = (matrix, rhs);
+    let mut first = 0;
+    for (i, (s, &m)) in segments.iter().zip(counts).enumerate() {
+        let r = 2 * m + 1;
+        let (a, ta) = rest_a.split_at_row_mut(r);
+        let (b, tb) = rest_b.split_at_mut(r);
+        (rest_a, rest_b) = (ta, tb);
+        jobs.push(RowJob {
+            index: i,
+            segment: *s,
+            harmonics: m,
+            first_row: first,
+            a,
+            b,
+        });
+        first += r;
+    }
+    jobs
+}
+
+/// Checks the segments and counts their equations: `(harmonics per segment, total rows)`.
+pub(crate) fn plan_rows(
+    signal: &[f64],
+    segments: &[Segment],
+    params: &IdentifyParams,
+) -> Result<(Vec<usize>, usize), SolveError> {
+    let clock = params.clock();
+    let p = clock.require_whole()?;
+    let mut counts = Vec::with_capacity(segments.len());
+    let mut rows = 0;
+    for (i, s) in segments.iter().enumerate() {
+        if !s.fits(clock, signal.len()) {
+            return Err(SolveError::BadSegment {
+                segment: i,
+                start: s.start(),
+                period: s.period(),
+                len: s.len(),
+                record: signal.len(),
+                samples_per_period: p,
+            });
+        }
+        if let Some((j, &value)) = signal[s.start()..=s.start() + s.len()]
+            .iter()
+            .enumerate()
+            .find(|(_, v)| !v.is_finite())
+        {
+            return Err(SolveError::NonFiniteSample {
+                segment: i,
+                start: s.start(),
+                index: s.start() + j,
+                value,
+            });
+        }
+        let m = params.harmonics().count(s.period(), s.len());
+        counts.push(m);
+        rows += 2 * m + 1;
+    }
+    Ok((counts, rows))
+}
+
+/// The `TooFewOrbits` check: more equations than unknowns are needed (so that the residual
+/// variance is defined); each missing segment is counted as a period-1 orbit.
+pub(crate) fn check_enough(
+    segments: usize,
+    rows: usize,
+    unknowns: usize,
+    params: &IdentifyParams,
+) -> Result<(), SolveError> {
+    if rows > unknowns {
+        return Ok(());
+    }
+    let p = params.clock().require_whole()?;
+    let per_orbit = 2 * params.harmonics().count(1, p) + 1;
+    let missing = unknowns + 1 - rows;
+    Err(SolveError::TooFewOrbits {
+        found: segments,
+        needed: segments + missing.div_ceil(per_orbit),
+    })
+}
