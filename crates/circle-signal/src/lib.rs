@@ -49,10 +49,12 @@
 
 mod clock;
 mod domain;
+mod resample;
 mod segment;
 
 pub use clock::SampleClock;
 pub use domain::{Domain, UnknownDomain};
+pub use resample::{RESAMPLE_HALF_WIDTH, Resampled, resample_to_whole};
 pub use segment::{OrbitSource, Segment};
 
 use std::f64::consts::{PI, TAU};
