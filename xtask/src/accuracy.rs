@@ -614,7 +614,8 @@ pub fn run(out: &Path, quick: bool) -> anyhow::Result<()> {
     writeln!(r, "## Wall time\n")?;
     writeln!(
         r,
-        "On the machine that generated this page (2 shared cores, release build):\n\n| stage | seconds |\n| --- | --- |"
+        "On the machine that generated this page (2 shared cores, {}):\n\n| stage | seconds |\n| --- | --- |",
+        crate::build_profile()
     )?;
     for (name, s) in &times {
         writeln!(r, "| {name} | {s:.1} |")?;

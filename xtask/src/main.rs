@@ -62,6 +62,16 @@ enum Command {
     },
 }
 
+/// How this xtask was built, for the generated pages that report wall times: `cargo xtask` runs
+/// in the test profile so that it shares one build with `cargo test` (see README.md).
+pub fn build_profile() -> &'static str {
+    if cfg!(debug_assertions) {
+        "test-profile build: opt-level 2, debug assertions on"
+    } else {
+        "release build"
+    }
+}
+
 fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {

@@ -65,7 +65,8 @@ pub fn run(out: &Path, data: &Path, sizes: &[usize], repeats: usize) -> anyhow::
     Ok(())
 }
 
-/// Builds the release `hbid` next to this (release) xtask and returns its path.
+/// Builds the release `hbid` (whatever profile this xtask was built in: `cargo xtask` uses the
+/// test profile) and returns its path, `<target>/release/hbid`.
 fn build_hbid() -> anyhow::Result<PathBuf> {
     let status = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
         .args(["build", "--release", "-p", "hbid"])
@@ -75,13 +76,15 @@ fn build_hbid() -> anyhow::Result<PathBuf> {
         bail!("cargo build --release -p hbid failed");
     }
     let exe = std::env::current_exe()?;
-    let dir = exe.parent().context("xtask has no folder")?;
-    let hbid = dir.join(format!("hbid{}", std::env::consts::EXE_SUFFIX));
-    if !hbid.exists() || !dir.ends_with("release") {
-        bail!(
-            "expected the release hbid beside a release xtask ({}): run `cargo xtask scale`",
-            hbid.display()
-        );
+    let target = exe
+        .parent()
+        .and_then(Path::parent)
+        .context("xtask is not in a cargo target folder")?;
+    let hbid = target
+        .join("release")
+        .join(format!("hbid{}", std::env::consts::EXE_SUFFIX));
+    if !hbid.exists() {
+        bail!("expected the release hbid at {}", hbid.display());
     }
     Ok(hbid)
 }
