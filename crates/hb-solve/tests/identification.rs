@@ -18,7 +18,7 @@ use upo_search::{CloseReturns, Domain, Segment};
 
 /// One classical Runge-Kutta step of x'' = f(t, x, v).
 mod common;
-use common::{TRUTH, read_paper_dataset};
+use common::{read_paper_dataset, truth};
 
 fn rk4(f: &impl Fn(f64, f64, f64) -> f64, t: f64, (x, v): (f64, f64), h: f64) -> (f64, f64) {
     let k1 = (v, f(t, x, v));
@@ -551,7 +551,8 @@ fn paper_dataset_harmonic_basis() {
         &QrSolver::default(),
     )
     .unwrap();
-    for (name, want) in TRUTH {
+    for t in truth().coefficients() {
+        let (name, want) = (&t.name, t.value);
         let c = m.coefficient(name).unwrap();
         assert!((c.value - want).abs() < 0.005, "{name}: {} vs {want}", c.value);
         assert!(
@@ -638,9 +639,15 @@ fn paper_dataset_hat_basis() {
         &QrSolver::default(),
     )
     .unwrap();
-    assert!((m.damping() - 0.03).abs() < 0.003, "c_r = {}", m.damping());
-    let q_ref = hat_projection(&hat, |x| 1.0 / (0.8333f64 * 0.8333) * x.sin());
-    let p_ref = hat_projection(&hat, |x| -1.52 * x.cos());
+    let truth = truth();
+    assert!(
+        (m.damping() - truth.damping()).abs() < 0.003,
+        "c_r = {}",
+        m.damping()
+    );
+    // The true curves: q(x) = (1/r²) sin x, p(x) = −f cos x (and n(x) = 0).
+    let q_ref = hat_projection(&hat, |x| truth.autonomous(x));
+    let p_ref = hat_projection(&hat, |x| truth.parametric(x).1);
     let (mut dq, mut dp, mut dn) = (0.0, 0.0, 0.0);
     let grid = 1000;
     let mut phi = vec![0.0; 8];
