@@ -5,14 +5,16 @@
 
 use std::fmt::Write as _;
 use std::path::Path;
+use std::sync::LazyLock;
 use std::time::Instant;
 
 use anyhow::{Context, anyhow};
 use circle_signal::wrap;
 use hb_basis::Harmonic;
 use hb_solve::{
-    BootstrapParams, FiniteDifferences, Harmonics, IdentifyParams, LinearSystem, NoiseCorrection, QrSolver,
-    SampleClock, WeakForm, assemble, assemble_weak, bootstrap, build_system, estimate_noise_sigma,
+    BootstrapParams, FiniteDifferences, Harmonics, IdentifiedModel, IdentifyParams, LinearSystem,
+    NoiseCorrection, QrSolver, SampleClock, WeakForm, assemble, assemble_weak, bootstrap, build_system,
+    estimate_noise_sigma,
 };
 use pendulum_sim::{Pendulum, SimulationConfig, simulate};
 use rand::SeedableRng;
@@ -27,7 +29,7 @@ use hbid::plot::{BLUE, Figure, GREEN, GREY, INK, ORANGE, PURPLE, RED, Series, St
 const P: usize = 25;
 /// Delay of the close-return search (the first minimum of the AMI on this system).
 const DELAY: usize = 5;
-/// The coefficients of the harmonic basis K = 1, in column order, and their true values.
+/// The coefficients of the harmonic basis K = 1, in column order.
 const NAMES: [&str; 7] = [
     "c_r (x')",
     "n_cos",
@@ -37,10 +39,64 @@ const NAMES: [&str; 7] = [
     "p_sin",
     "q_sin = 1/r²",
 ];
-const Q_SIN: f64 = 1.0 / (0.8333 * 0.8333);
-const TRUTH: [f64; 7] = [0.03, 0.0, -1.52, 0.0, 0.0, 0.0, Q_SIN];
-/// Columns of c, 1/r² and f (f = −p_cos).
-const PHYSICAL: [usize; 3] = [0, 6, 2];
+
+/// The true coefficients of the harmonic basis K = 1, and where the physical parameters sit
+/// among them.
+struct Truth {
+    /// In column order.
+    values: [f64; 7],
+    /// Columns of c (`x'`), 1/r² (`sin(x)`) and f (`sin(t)*cos(x)`, whose coefficient is −f).
+    physical: [usize; 3],
+}
+
+impl Truth {
+    /// The true model of `pendulum`.
+    fn of(pendulum: &Pendulum) -> anyhow::Result<Self> {
+        let model = IdentifiedModel::<Harmonic>::from_pendulum(pendulum)?;
+        let column = |name: &str| {
+            model
+                .coefficients()
+                .iter()
+                .position(|c| c.name == name)
+                .with_context(|| format!("no term {name} in the true model"))
+        };
+        let values: Vec<f64> = model.coefficients().iter().map(|c| c.value).collect();
+        Ok(Self {
+            values: values
+                .try_into()
+                .map_err(|_| anyhow!("expected seven coefficients"))?,
+            physical: [column("x'")?, column("sin(x)")?, column("sin(t)*cos(x)")?],
+        })
+    }
+
+    /// Column of c.
+    fn c(&self) -> usize {
+        self.physical[0]
+    }
+
+    /// Column of 1/r².
+    fn inv_r2(&self) -> usize {
+        self.physical[1]
+    }
+
+    /// Column of −f.
+    fn minus_f(&self) -> usize {
+        self.physical[2]
+    }
+
+    /// The true c, 1/r² and f.
+    fn parameters(&self) -> [f64; 3] {
+        [
+            self.values[self.c()],
+            self.values[self.inv_r2()],
+            -self.values[self.minus_f()],
+        ]
+    }
+}
+
+/// The pendulum every record is simulated from, as coefficients.
+static TRUTH: LazyLock<Truth> =
+    LazyLock::new(|| Truth::of(&Pendulum::paper()).expect("the paper's pendulum is a valid model"));
 /// The peer, sparse regression on fourth-order finite differences (SINDy-style), as reported for
 /// this system: (σ, [c, 1/r², f]).
 const PEER: [(f64, [f64; 3]); 3] = [
@@ -270,7 +326,7 @@ fn identify(method: Method, x: &[f64], t0: f64, weak: WeakSetup) -> anyhow::Resu
 
 /// Errors of one coefficient: identified − true, except f = −p_cos reported as f − 1.52.
 fn error(coefficients: &[f64; 7], i: usize) -> f64 {
-    coefficients[i] - TRUTH[i]
+    coefficients[i] - TRUTH.values[i]
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -314,7 +370,11 @@ fn mean_sd(s: Stats) -> String {
 
 /// Largest absolute error among c, 1/r² and f.
 fn physical_max(c: &[f64; 7]) -> f64 {
-    PHYSICAL.iter().map(|&i| error(c, i).abs()).fold(0.0, f64::max)
+    TRUTH
+        .physical
+        .iter()
+        .map(|&i| error(c, i).abs())
+        .fold(0.0, f64::max)
 }
 
 /// Largest absolute error among all seven coefficients.
@@ -439,7 +499,7 @@ fn coverage_study(plan: &Plan) -> anyhow::Result<Vec<Coverage>> {
                         Some(
                             boot.intervals
                                 .iter()
-                                .zip(TRUTH)
+                                .zip(TRUTH.values)
                                 .map(|(iv, t)| (iv.contains(t), iv.upper - iv.lower))
                                 .collect(),
                         )
@@ -705,9 +765,10 @@ fn cell(runs: &[Run], s: usize, m: Method) -> (Vec<&[f64; 7]>, Vec<&str>) {
 }
 
 fn peer_errors(sigma: f64) -> Option<[f64; 3]> {
-    PEER.iter()
-        .find(|(s, _)| *s == sigma)
-        .map(|(_, [c, q, f])| [c - 0.03, q - Q_SIN, f - 1.52])
+    PEER.iter().find(|(s, _)| *s == sigma).map(|(_, [c, q, f])| {
+        let [tc, tq, tf] = TRUTH.parameters();
+        [c - tc, q - tq, f - tf]
+    })
 }
 
 fn write_noise(r: &mut String, plan: &Plan, runs: &[Run], dir: &Path, rel: &str) -> anyhow::Result<()> {
@@ -741,9 +802,9 @@ fn write_noise(r: &mut String, plan: &Plan, runs: &[Run], dir: &Path, rel: &str)
                 r,
                 "| {sigma} | {}{note} | {} | {} | {} | {} |",
                 m.label(),
-                mean_sd(col(0, 1.0)),
-                mean_sd(col(6, 1.0)),
-                mean_sd(col(2, -1.0)),
+                mean_sd(col(TRUTH.c(), 1.0)),
+                mean_sd(col(TRUTH.inv_r2(), 1.0)),
+                mean_sd(col(TRUTH.minus_f(), -1.0)),
                 sci(worst.mean)
             )?;
         }
@@ -788,7 +849,7 @@ fn write_noise(r: &mut String, plan: &Plan, runs: &[Run], dir: &Path, rel: &str)
         let peer = peer_errors(sigma).expect("listed");
         for m in [Method::Weak, Method::WeakCorrected] {
             let (ok, _) = cell(runs, s, m);
-            for (k, (&i, name)) in PHYSICAL.iter().zip(["c", "1/r²", "f"]).enumerate() {
+            for (k, (&i, name)) in TRUTH.physical.iter().zip(["c", "1/r²", "f"]).enumerate() {
                 let ours = stats(&ok.iter().map(|c| error(c, i)).collect::<Vec<_>>());
                 let worst = ok.iter().map(|c| error(c, i).abs()).fold(0.0, f64::max);
                 if worst >= peer[k].abs() {
@@ -931,7 +992,7 @@ fn write_noise(r: &mut String, plan: &Plan, runs: &[Run], dir: &Path, rel: &str)
         .collect();
     let mut series = Vec::new();
     for (l, (m, suffix)) in lines.iter().enumerate() {
-        for (k, (&i, &(_, color))) in PHYSICAL.iter().zip(&params).enumerate() {
+        for (k, (&i, &(_, color))) in TRUTH.physical.iter().zip(&params).enumerate() {
             let points = plan
                 .sigmas
                 .iter()
@@ -1020,7 +1081,7 @@ fn write_lengths(
                     continue;
                 }
                 let worst = stats(&ok.iter().map(all_max).collect::<Vec<_>>());
-                let c = stats(&ok.iter().map(|c| error(c, 0)).collect::<Vec<_>>());
+                let c = stats(&ok.iter().map(|c| error(c, TRUTH.c())).collect::<Vec<_>>());
                 let note = if failed > 0 {
                     format!(", {failed} failed")
                 } else {
@@ -1150,8 +1211,8 @@ fn write_coverage(r: &mut String, plan: &Plan, coverage: &[Coverage]) -> anyhow:
             r,
             " {:.0} % | {} | {} |",
             100.0 * total as f64 / (7 * c.records) as f64,
-            sci(c.width[0]),
-            sci(c.width[6])
+            sci(c.width[TRUTH.c()]),
+            sci(c.width[TRUTH.inv_r2()])
         )?;
     }
     writeln!(r)?;
@@ -1198,4 +1259,19 @@ fn write_sweep(r: &mut String, plan: &Plan, sweep: &[SweepLine]) -> anyhow::Resu
     }
     writeln!(r)?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The truth's physical parameters sit in the columns the report's labels name, with f's sign
+    /// turned.
+    #[test]
+    fn labels_name_the_columns_of_the_physical_parameters() {
+        assert_eq!(NAMES[TRUTH.c()], "c_r (x')");
+        assert_eq!(NAMES[TRUTH.inv_r2()], "q_sin = 1/r²");
+        assert_eq!(NAMES[TRUTH.minus_f()], "p_cos = −f");
+        assert_eq!(TRUTH.parameters(), [0.03, 1.0 / (0.8333 * 0.8333), 1.52]);
+    }
 }

@@ -8,22 +8,17 @@ use std::path::Path;
 use hb_basis::{Basis, BasisKind, Harmonic, Hat};
 use hb_solve::{IdentifiedModel, IdentifyParams, QrSolver, SampleClock, WeakForm, identify};
 use pendulum_sim::{
-    CheckConfig, Domain, ModelCheck, SecondOrderSystem, check_model, section_energy_distance,
+    CheckConfig, Domain, ModelCheck, Pendulum, SecondOrderSystem, check_model, section_energy_distance,
 };
 use upo_search::Segment;
 
 use hbid::plot::{BLUE, Figure, GREY, ORANGE, RED, Series, Style};
 
-/// The true coefficients of the harmonic basis K = 1 (method notes section 1).
-pub const TRUTH: [(&str, f64); 7] = [
-    ("x'", 0.03),
-    ("cos(t)*cos(x)", 0.0),
-    ("sin(t)*cos(x)", -1.52),
-    ("cos(x)", 0.0),
-    ("cos(t)*sin(x)", 0.0),
-    ("sin(t)*sin(x)", 0.0),
-    ("sin(x)", 1.0 / (0.8333 * 0.8333)),
-];
+/// The paper's pendulum as a model on the harmonic basis K = 1 (method notes section 1): the
+/// truth of Table I and of the hat curves.
+pub fn truth() -> anyhow::Result<IdentifiedModel<Harmonic>> {
+    Ok(IdentifiedModel::from_pendulum(&Pendulum::paper())?)
+}
 
 /// The paper's Table I (and c_r from section 4.2.1).
 const PAPER: [(&str, f64); 7] = [
@@ -120,7 +115,12 @@ pub fn table_one(report: &mut String, models: &[&Identified]) -> anyhow::Result<
     writeln!(report)?;
     writeln!(report, "|{}", " --- |".repeat(4 + 2 * models.len()))?;
     let mut worst = vec![0.0f64; models.len() + 1];
-    for ((name, truth), (_, paper)) in TRUTH.iter().zip(PAPER) {
+    for (t, (paper_name, paper)) in truth()?.coefficients().iter().zip(PAPER) {
+        let (name, truth) = (&t.name, t.value);
+        anyhow::ensure!(
+            name == paper_name,
+            "Table I lists {paper_name} where the model has {name}"
+        );
         write!(
             report,
             "| `{name}` | {truth:.6} | {paper:.4} | {:.4} |",
@@ -176,7 +176,7 @@ pub fn hat_projection(hat: &Hat, f: impl Fn(f64) -> f64) -> anyhow::Result<Vec<f
 }
 
 /// A curve of the model: its name, the forcing factor it multiplies, and its true shape.
-type Curve = (&'static str, &'static str, fn(f64) -> f64);
+type Curve<'a> = (&'static str, &'static str, &'a dyn Fn(f64) -> f64);
 
 /// The hat-basis section: c_r and the RMS distance of each curve to the L2 hat fit of the truth,
 /// and figures 5-7.
@@ -187,17 +187,23 @@ pub fn hat_curves(
     figures: &mut Vec<(String, String)>,
 ) -> anyhow::Result<()> {
     let hat = Hat::new(8)?;
-    let truths: [Curve; 3] = [
-        ("n", "cos(t)", |_| 0.0),
-        ("p", "sin(t)", |x| -1.52 * x.cos()),
-        ("q", "autonomous", |x| x.sin() / (0.8333 * 0.8333)),
+    let truth = truth()?;
+    // n(x) = 0, p(x) = −f cos x, q(x) = (1/r²) sin x.
+    let truths: [Curve<'_>; 3] = [
+        ("n", "cos(t)", &|x| truth.parametric(x).0),
+        ("p", "sin(t)", &|x| truth.parametric(x).1),
+        ("q", "autonomous", &|x| truth.autonomous(x)),
     ];
     writeln!(
         report,
         "## Linear-interpolation (hat) basis, 8 nodes, close returns\n"
     )?;
     let cr = model.damping();
-    writeln!(report, "c_r = {cr:.5} (truth 0.03, paper 0.0348).\n")?;
+    writeln!(
+        report,
+        "c_r = {cr:.5} (truth {}, paper 0.0348).\n",
+        truth.damping()
+    )?;
     writeln!(
         report,
         "| curve | RMS distance to the L2 hat fit of the true curve | RMS distance to the true curve |\n| --- | --- | --- |"
@@ -409,4 +415,24 @@ fn slug(label: &str) -> String {
         .filter(|s| !s.is_empty())
         .collect::<Vec<_>>()
         .join("_")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Table I pairs the truth and the paper term by term.
+    #[test]
+    fn table_one_sets_the_truth_beside_the_paper() {
+        let mut report = String::new();
+        table_one(&mut report, &[]).unwrap();
+        for row in [
+            "| `x'` | 0.030000 | 0.0339 | 0.0039 |",
+            "| `sin(t)*cos(x)` | -1.520000 | -1.5255 | 0.0055 |",
+            "| `cos(x)` | 0.000000 | -0.0044 | 0.0044 |",
+            "| `sin(x)` | 1.440115 | 1.4335 | 0.0066 |",
+        ] {
+            assert!(report.contains(row), "no {row} in\n{report}");
+        }
+    }
 }

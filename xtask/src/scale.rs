@@ -113,13 +113,14 @@ fn identify(time: &Path, hbid: &Path, record: &Path, method: &str) -> anyhow::Re
     let wall = parse_clock(&field("Elapsed (wall clock) time (h:mm:ss or m:ss):")?)?;
     let peak_kib: f64 = field("Maximum resident set size (kbytes):")?.parse()?;
     let json: serde_json::Value = serde_json::from_slice(&out.stdout).context("hbid identify --json")?;
-    let error = crate::identification::TRUTH
+    let error = crate::identification::truth()?
+        .coefficients()
         .iter()
-        .map(|(name, truth)| {
-            json["coefficients"][name]
+        .map(|t| {
+            json["coefficients"][&t.name]
                 .as_f64()
-                .map(|v| (v - truth).abs())
-                .with_context(|| format!("no coefficient {name}"))
+                .map(|v| (v - t.value).abs())
+                .with_context(|| format!("no coefficient {}", t.name))
         })
         .try_fold(0.0_f64, |m, e| e.map(|e| m.max(e)))?;
     let stages = err

@@ -19,7 +19,7 @@ use upo_search::{CloseReturns, Domain, OrbitSource, Segment};
 
 #[path = "../tests/common/mod.rs"]
 mod common;
-use common::{TRUTH as TRUTH_K1, read_dataset};
+use common::{read_dataset, truth};
 
 /// Coefficients of the L2 projection of `f` onto the hat space (Gram system on a fine grid).
 fn hat_projection(hat: &Hat, f: impl Fn(f64) -> f64) -> Vec<f64> {
@@ -85,11 +85,20 @@ fn segments(x: &[f64], e: f64) -> Result<Vec<Segment>, Box<dyn Error>> {
 }
 
 /// Largest absolute coefficient error of the K = 1 model, and the term.
-fn worst(m: &IdentifiedModel<Harmonic>) -> (&'static str, f64) {
-    TRUTH_K1
+fn worst(m: &IdentifiedModel<Harmonic>, truth: &IdentifiedModel<Harmonic>) -> (String, f64) {
+    truth
+        .coefficients()
         .iter()
-        .map(|(n, v)| (*n, (m.coefficient(n).map_or(f64::NAN, |c| c.value) - v).abs()))
-        .fold(("", 0.0), |acc, (n, e)| if e > acc.1 { (n, e) } else { acc })
+        .map(|t| {
+            (
+                &t.name,
+                (m.coefficient(&t.name).map_or(f64::NAN, |c| c.value) - t.value).abs(),
+            )
+        })
+        .fold(
+            (String::new(), 0.0),
+            |acc, (n, e)| if e > acc.1 { (n.clone(), e) } else { acc },
+        )
 }
 
 /// Seeded Gaussian noise by Box-Muller.
@@ -120,8 +129,9 @@ fn main() -> Result<(), Box<dyn Error>> {
     let solver = QrSolver::default();
     let hat = Hat::new(8)?;
     let k1 = Harmonic::new(1)?;
-    let q_ref = hat_projection(&hat, |x| 1.0 / (0.8333f64 * 0.8333) * x.sin());
-    let p_ref = hat_projection(&hat, |x| -1.52 * x.cos());
+    let truth = truth();
+    let q_ref = hat_projection(&hat, |x| truth.autonomous(x));
+    let p_ref = hat_projection(&hat, |x| truth.parametric(x).1);
     let params = |h: Harmonics| IdentifyParams::builder(clock).harmonics(h).build();
 
     let policies: Vec<Harmonics> = [1usize, 2, 3, 6, 12, 24]
@@ -138,7 +148,7 @@ fn main() -> Result<(), Box<dyn Error>> {
     println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- |");
     for &h in &policies {
         let m = identify(k1, &x, &segs, &params(h)?, &hb_solve::HarmonicBalance, &solver)?;
-        let (term, err) = worst(&m);
+        let (term, err) = worst(&m, &truth);
         let s = m.summary().ok_or("no summary")?;
         let mh = identify(hat, &x, &segs, &params(h)?, &hb_solve::HarmonicBalance, &solver)?;
         println!(
@@ -190,9 +200,9 @@ fn main() -> Result<(), Box<dyn Error>> {
             e * 100.0,
             segs.len(),
             d.damping(),
-            worst(&d).1,
+            worst(&d, &truth).1,
             f.damping(),
-            worst(&f).1,
+            worst(&f, &truth).1,
             h.damping(),
             curve_rms(&hat, &h, 0, &q_ref),
             curve_rms(&hat, &h, 1, &p_ref)
@@ -218,7 +228,7 @@ fn main() -> Result<(), Box<dyn Error>> {
         print!("| {} |", label(h));
         for (xn, sg) in &noisy_sets {
             match identify(k1, xn, sg, &params(h)?, &hb_solve::HarmonicBalance, &solver) {
-                Ok(m) => print!(" {:.4} (c_r {:.4}) |", worst(&m).1, m.damping()),
+                Ok(m) => print!(" {:.4} (c_r {:.4}) |", worst(&m, &truth).1, m.damping()),
                 Err(e) => print!(" {e} |"),
             }
         }

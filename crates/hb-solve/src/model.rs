@@ -3,13 +3,13 @@
 use std::fmt;
 
 use circle_signal::wrap;
-use hb_basis::{Basis, BasisKind, Domain};
-use pendulum_sim::SecondOrderSystem;
+use hb_basis::{Basis, BasisKind, Domain, Harmonic};
+use pendulum_sim::{Pendulum, SecondOrderSystem};
 use serde::de::{DeserializeOwned, MapAccess, Visitor};
 use serde::ser::SerializeMap;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
-use crate::terms::{Column, check_form, column_families, columns};
+use crate::terms::{Column, DriveFactor, Term, check_form, column_families, columns};
 use crate::{
     Forcing, Harmonics, IdentifyParams, LinearSystem, LstsqFit, LstsqSolver, ModelForm, SampleClock,
     SolveError,
@@ -321,6 +321,52 @@ impl<B: Basis> IdentifiedModel<B> {
     }
 }
 
+impl<B: Basis + From<Harmonic>> IdentifiedModel<B> {
+    /// The true equation of `pendulum` (paper eq. 1 in non-dimensional time,
+    /// `x'' + c x' + (1/r²) sin x − f sin(t) cos x = 0`) as a model on the harmonic basis `K = 1`
+    /// with the paper's terms ([`ModelForm::parametric`]) and forcing frequency `W = 1`: the
+    /// reference every identified pendulum model is compared with.
+    ///
+    /// In the order of [`crate::columns`] the coefficients are `x'` = `c`, `cos(t)*cos(x)` = 0,
+    /// `sin(t)*cos(x)` = `−f`, `cos(x)` = 0, `cos(t)*sin(x)` = 0, `sin(t)*sin(x)` = 0 and
+    /// `sin(x)` = `1/r²` (computed as `1.0 / (r * r)`, as the pendulum does), every standard error
+    /// 0 and no fit summary. The model drives exactly like the pendulum
+    /// ([`SecondOrderSystem::acceleration`] agrees to rounding). `B` is [`Harmonic`] or
+    /// [`BasisKind`].
+    ///
+    /// ```
+    /// use hb_basis::Harmonic;
+    /// use hb_solve::IdentifiedModel;
+    /// use pendulum_sim::Pendulum;
+    ///
+    /// let truth = IdentifiedModel::<Harmonic>::from_pendulum(&Pendulum::paper())?;
+    /// assert_eq!(truth.damping(), 0.03);
+    /// assert_eq!(truth.coefficient("sin(t)*cos(x)").unwrap().value, -1.52);
+    /// assert_eq!(truth.coefficient("sin(x)").unwrap().value, 1.0 / (0.8333 * 0.8333));
+    /// # Ok::<(), hb_solve::SolveError>(())
+    /// ```
+    ///
+    /// Errors: [`SolveError::NonFiniteModelValue`] when `1/r²` overflows (`|r|` below about
+    /// `1e-154`).
+    pub fn from_pendulum(pendulum: &Pendulum) -> Result<Self, SolveError> {
+        let basis = Harmonic::new(1)?;
+        // Harmonic K = 1 is cos(x), sin(x), in this order.
+        let (cos_x, sin_x) = (0, 1);
+        let form = ModelForm::parametric();
+        let r = pendulum.r();
+        let values: Vec<f64> = columns(basis.len(), &form)
+            .into_iter()
+            .map(|term| match term {
+                Term::DAMPING => pendulum.c(),
+                t if t == Term::basis(DriveFactor::Sin(1), cos_x) => -pendulum.f(),
+                t if t == Term::basis(DriveFactor::One, sin_x) => 1.0 / (r * r),
+                _ => 0.0,
+            })
+            .collect();
+        Self::new(B::from(basis), form, 1.0, &values)
+    }
+}
+
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
@@ -518,34 +564,89 @@ impl<B: Basis + DeserializeOwned> IdentifiedModel<B> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use hb_basis::{Harmonic, Hat, Polynomial};
+    use hb_basis::{Hat, Polynomial};
 
+    /// The paper's pendulum, x'' + 0.03 x' + (1/0.8333²) sin x − 1.52 sin t cos x = 0.
     fn pendulum() -> IdentifiedModel<BasisKind> {
-        // x'' + 0.03 x' + 1.44 sin x − 1.52 sin t cos x = 0
-        let values = [0.03, 0.0, -1.52, 0.0, 0.0, 0.0, 1.44];
-        IdentifiedModel::new(
-            Harmonic::new(1).unwrap().into(),
-            ModelForm::parametric(),
-            1.0,
-            &values,
-        )
-        .unwrap()
+        IdentifiedModel::from_pendulum(&Pendulum::paper()).unwrap()
     }
 
     #[test]
     fn evaluates_the_pendulum() {
         let m = pendulum();
+        let q = 1.0 / (0.8333 * 0.8333);
         let (t, x, v): (f64, f64, f64) = (0.7, 2.1 + 6.0 * std::f64::consts::PI, -0.4);
-        let want = -0.03 * v - 1.44 * x.sin() + 1.52 * t.sin() * x.cos();
+        let want = -0.03 * v - q * x.sin() + 1.52 * t.sin() * x.cos();
         assert!((m.acceleration(t, x, v) - want).abs() < 1e-12);
-        let jx = -1.44 * x.cos() - 1.52 * t.sin() * x.sin();
+        let jx = -q * x.cos() - 1.52 * t.sin() * x.sin();
         let [a, b] = m.jacobian(t, x, v);
         assert!((a - jx).abs() < 1e-12 && (b + 0.03).abs() < 1e-15);
-        assert!((m.autonomous(x) - 1.44 * x.sin()).abs() < 1e-12);
+        assert!((m.autonomous(x) - q * x.sin()).abs() < 1e-12);
         let (pc, ps) = m.parametric(x);
         assert!(pc.abs() < 1e-15 && (ps + 1.52 * x.cos()).abs() < 1e-12);
         assert_eq!(m.coefficient("sin(t)*cos(x)").unwrap().value, -1.52);
         assert_eq!(m.damping(), 0.03);
+    }
+
+    /// The true model of a pendulum: the coefficients, bit for bit, by name, and the same
+    /// equation as the pendulum's own (acceleration and Jacobian at points all over the phase
+    /// space and the forcing cycle).
+    #[test]
+    fn from_pendulum_is_the_pendulum() {
+        let pendulums = [
+            Pendulum::paper(),
+            Pendulum::new(2.5, 0.2, 2f64.sqrt()).unwrap(),
+            Pendulum::new(-0.7, -0.05, -3.0).unwrap(),
+            Pendulum::new(0.0, 0.0, 1.0).unwrap(),
+        ];
+        for p in pendulums {
+            let m = IdentifiedModel::<Harmonic>::from_pendulum(&p).unwrap();
+            assert_eq!(m.basis(), &Harmonic::new(1).unwrap());
+            assert_eq!(m.form(), &ModelForm::parametric());
+            assert_eq!(m.forcing_frequency(), 1.0);
+            assert!(m.summary().is_none());
+            let want = [
+                ("x'", p.c()),
+                ("cos(t)*cos(x)", 0.0),
+                ("sin(t)*cos(x)", -p.f()),
+                ("cos(x)", 0.0),
+                ("cos(t)*sin(x)", 0.0),
+                ("sin(t)*sin(x)", 0.0),
+                ("sin(x)", 1.0 / (p.r() * p.r())),
+            ];
+            let got: Vec<(&str, f64, f64)> = m
+                .coefficients()
+                .iter()
+                .map(|c| (c.name.as_str(), c.value, c.std_error))
+                .collect();
+            let want: Vec<(&str, f64, f64)> = want.iter().map(|&(n, v)| (n, v, 0.0)).collect();
+            assert_eq!(got, want, "{p:?}");
+            for i in 0..200 {
+                let i = f64::from(i);
+                let (t, x, v) = (0.37 * i, -20.0 + 0.21 * i, 3.0 * (0.7 * i).sin());
+                let scale = 1.0 + p.c().abs() * v.abs() + p.f().abs() + 1.0 / (p.r() * p.r());
+                let d = m.acceleration(t, x, v) - p.acceleration(t, x, v);
+                assert!(d.abs() <= 1e-14 * scale, "{p:?} at ({t}, {x}, {v}): {d:e}");
+                let [mx, mv] = m.jacobian(t, x, v);
+                let [px, pv] = p.jacobian(t, x, v);
+                assert!(
+                    (mx - px).abs() <= 1e-14 * scale && mv == pv,
+                    "{p:?} at ({t}, {x}, {v})"
+                );
+            }
+            let kind = IdentifiedModel::<BasisKind>::from_pendulum(&p).unwrap();
+            assert_eq!(kind.coefficients(), m.coefficients());
+            assert_eq!(kind.basis(), &BasisKind::from(Harmonic::new(1).unwrap()));
+        }
+        // The paper's, as the tests and the reproduction have always written it.
+        let paper = IdentifiedModel::<Harmonic>::from_pendulum(&Pendulum::paper()).unwrap();
+        let values: Vec<f64> = paper.coefficients().iter().map(|c| c.value).collect();
+        assert_eq!(values, [0.03, 0.0, -1.52, 0.0, 0.0, 0.0, 1.0 / (0.8333 * 0.8333)]);
+        // 1/r² overflows.
+        assert!(matches!(
+            IdentifiedModel::<Harmonic>::from_pendulum(&Pendulum::new(1.0, 0.1, 1e-160).unwrap()),
+            Err(SolveError::NonFiniteModelValue { ref name }) if name == "sin(x)"
+        ));
     }
 
     #[test]

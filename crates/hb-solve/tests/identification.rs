@@ -11,6 +11,7 @@ use hb_solve::{
 };
 use pendulum_sim::{Pendulum, SecondOrderSystem};
 use proptest::prelude::*;
+use proptest::test_runner::RngSeed;
 use upo_search::{CloseReturns, Domain, Segment};
 
 // ---------------------------------------------------------------------------------------------
@@ -18,7 +19,7 @@ use upo_search::{CloseReturns, Domain, Segment};
 
 /// One classical Runge-Kutta step of x'' = f(t, x, v).
 mod common;
-use common::{TRUTH, read_paper_dataset};
+use common::{read_paper_dataset, truth};
 
 fn rk4(f: &impl Fn(f64, f64, f64) -> f64, t: f64, (x, v): (f64, f64), h: f64) -> (f64, f64) {
     let k1 = (v, f(t, x, v));
@@ -551,7 +552,8 @@ fn paper_dataset_harmonic_basis() {
         &QrSolver::default(),
     )
     .unwrap();
-    for (name, want) in TRUTH {
+    for t in truth().coefficients() {
+        let (name, want) = (&t.name, t.value);
         let c = m.coefficient(name).unwrap();
         assert!((c.value - want).abs() < 0.005, "{name}: {} vs {want}", c.value);
         assert!(
@@ -638,9 +640,15 @@ fn paper_dataset_hat_basis() {
         &QrSolver::default(),
     )
     .unwrap();
-    assert!((m.damping() - 0.03).abs() < 0.003, "c_r = {}", m.damping());
-    let q_ref = hat_projection(&hat, |x| 1.0 / (0.8333f64 * 0.8333) * x.sin());
-    let p_ref = hat_projection(&hat, |x| -1.52 * x.cos());
+    let truth = truth();
+    assert!(
+        (m.damping() - truth.damping()).abs() < 0.003,
+        "c_r = {}",
+        m.damping()
+    );
+    // The true curves: q(x) = (1/r²) sin x, p(x) = −f cos x (and n(x) = 0).
+    let q_ref = hat_projection(&hat, |x| truth.autonomous(x));
+    let p_ref = hat_projection(&hat, |x| truth.parametric(x).1);
     let (mut dq, mut dp, mut dn) = (0.0, 0.0, 0.0);
     let grid = 1000;
     let mut phi = vec![0.0; 8];
@@ -700,5 +708,679 @@ fn rows_do_not_depend_on_the_other_segments() {
     }
     for (k, i) in (0..n).step_by(37).enumerate() {
         same_rows(&all, i, &some, k);
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// The assembly identity: every row of `A λ − β` is a balance of the residual of the equation
+//
+// A record is sampled from a signal known in closed form, `x(t) = x_0 + w t + Σ a cos(ω t + φ)`
+// (a rotation only on the circle, where the record is wrapped), on any of the three bases with
+// any model form, and the coefficients `λ` of every column are drawn at random. The
+// residual of the model, `r(t) = x'' + Σ_c λ_c g_c(x, x', t)` (plus a known forcing), is computed
+// here independently of the assemblies: `x'` and `x''` from their closed forms, `g_c` from the
+// factors of the column's term (drive × function of x × function of x'), the basis evaluated at
+// the sample. Each method's rows must then be a linear functional of `r`: its Fourier coefficients
+// over an orbit (harmonic balance), its trapezoid integral against the test functions (the weak
+// form), or its value at each sample (finite differences). A wrong column, sign, phase or scale
+// breaks the equality by the size of that column's terms.
+//
+// Besides the rounding of the arithmetic (`1e-12` of the size of the terms), each sample carries
+// the rounding `δ` of its computation and wrapping; the bounds add `δ` times the norm of each
+// method's map from the samples to a row.
+
+/// A signal in closed form, `x(t) = x_0 + w (t − t_mid) + Σ a cos(ω t + φ)`.
+#[derive(Debug, Clone)]
+struct Signal {
+    offset: f64,
+    rate: f64,
+    /// `t_mid`, the middle of the record, so that the rotation adds as little as possible to `|x|`.
+    origin: f64,
+    /// `(a, ω, φ)`.
+    waves: Vec<(f64, f64, f64)>,
+}
+
+impl Signal {
+    fn x(&self, t: f64) -> f64 {
+        self.offset
+            + self.rate * (t - self.origin)
+            + self
+                .waves
+                .iter()
+                .map(|&(a, w, p)| a * (w * t + p).cos())
+                .sum::<f64>()
+    }
+
+    fn dx(&self, t: f64) -> f64 {
+        self.rate
+            - self
+                .waves
+                .iter()
+                .map(|&(a, w, p)| a * w * (w * t + p).sin())
+                .sum::<f64>()
+    }
+
+    fn ddx(&self, t: f64) -> f64 {
+        -self
+            .waves
+            .iter()
+            .map(|&(a, w, p)| a * w * w * (w * t + p).cos())
+            .sum::<f64>()
+    }
+
+    /// `Σ |a| ω^n`, a bound of `|x^(n)|` for `n >= 2`.
+    fn derivative_bound(&self, n: i32) -> f64 {
+        self.waves.iter().map(|&(a, w, _)| a.abs() * w.powi(n)).sum()
+    }
+
+    /// A bound of every intermediate of `x(t)` for `|t| <= t_max`, and of the wrapped angle's.
+    fn magnitude(&self, t_max: f64) -> f64 {
+        self.offset.abs()
+            + self.rate.abs() * (t_max + self.origin.abs())
+            + self
+                .waves
+                .iter()
+                .map(|&(a, w, p)| a.abs() * (1.0 + w * t_max + p.abs()))
+                .sum::<f64>()
+            + PI
+    }
+}
+
+/// What proptest draws for one case of the identity.
+#[derive(Debug, Clone)]
+struct Draw {
+    basis: BasisKind,
+    parametric: bool,
+    /// 0: no forcing, 1: identified, 2: known.
+    forcing: u8,
+    known: (f64, f64),
+    stiffness: bool,
+    /// Forcing period `T` of the clock.
+    forcing_period: f64,
+    samples_per_period: usize,
+    start_time: f64,
+    /// The orbit's period `k` in forcing periods.
+    period: usize,
+    /// Turns per `k` periods on the circle (periodic records).
+    winding: i64,
+    /// Rotation rate in units of `W` on the circle (records that need not be periodic).
+    rate: f64,
+    offset: f64,
+    /// `(ω / W, a, φ)`; for a periodic record `ω` is rounded to a harmonic of `W / k`.
+    waves: Vec<(f64, f64, f64)>,
+    /// `(where in the record, twice the orbit's period)`.
+    segments: Vec<(f64, bool)>,
+    harmonics: usize,
+    lambda: Vec<f64>,
+}
+
+fn basis_strategy() -> impl Strategy<Value = BasisKind> {
+    prop_oneof![
+        (1usize..=3).prop_map(|k| BasisKind::from(Harmonic::new(k).unwrap())),
+        (3usize..=8).prop_map(|n| BasisKind::from(Hat::new(n).unwrap())),
+        (1usize..=3).prop_map(|d| BasisKind::from(Polynomial::new(d).unwrap())),
+    ]
+}
+
+prop_compose! {
+    fn draw()(
+        basis in basis_strategy(),
+        (parametric, forcing, known, stiffness) in (any::<bool>(), 0u8..3, (-2.0..2.0, -2.0..2.0), any::<bool>()),
+        forcing_period in prop_oneof![Just(TAU), Just(0.5)],
+        samples_per_period in prop_oneof![Just(24usize), Just(32), Just(40)],
+        start_time in -20.0..20.0,
+        (period, winding, rate, offset) in (1usize..=3, -2i64..=2, -2.0..2.0, -1.0..1.0),
+        waves in proptest::collection::vec((0.2..2.0, 0.05..0.8, 0.0..TAU), 1..=3),
+        segments in proptest::collection::vec((0.0..1.0, any::<bool>()), 1..=4),
+        harmonics in 1usize..=8,
+        lambda in proptest::collection::vec(-2.0..2.0, 40),
+    ) -> Draw {
+        Draw {
+            basis, parametric, forcing, known, stiffness, forcing_period, samples_per_period,
+            start_time, period, winding, rate, offset, waves, segments, harmonics, lambda,
+        }
+    }
+}
+
+/// One case: a model (basis, params, coefficients), the signal and its record, and segments.
+#[derive(Debug)]
+struct Case {
+    basis: BasisKind,
+    params: IdentifyParams,
+    signal: Signal,
+    record: Vec<f64>,
+    segments: Vec<Segment>,
+    lambda: Vec<f64>,
+}
+
+impl Case {
+    /// The case of `draw`; with `periodic`, the signal repeats after `k` forcing periods (the
+    /// rotation included) and every segment spans `k` or `2k` periods.
+    fn new(d: &Draw, periodic: bool) -> Self {
+        let clock = SampleClock::new(d.forcing_period, d.samples_per_period)
+            .unwrap()
+            .with_start_time(d.start_time)
+            .unwrap();
+        let big_w = clock.forcing_frequency();
+        let k = d.period;
+        let omega = big_w / k as f64;
+        let circle = d.basis.domain() == Domain::Circle;
+        let p = d.samples_per_period;
+        let len = 6 * k * p + 1;
+        let waves = d
+            .waves
+            .iter()
+            .map(|&(f, a, phase)| {
+                let w = if periodic {
+                    (f * k as f64).round().max(1.0) * omega
+                } else {
+                    f * big_w
+                };
+                (a, w, phase)
+            })
+            .collect();
+        let signal = Signal {
+            offset: if circle { d.offset * PI } else { 0.5 * d.offset },
+            rate: match (circle, periodic) {
+                (false, _) => 0.0,
+                (true, true) => d.winding as f64 * omega,
+                (true, false) => d.rate * big_w,
+            },
+            origin: clock.time(len / 2),
+            waves,
+        };
+        let forcing = match d.forcing {
+            0 => Forcing::None,
+            1 => Forcing::Identified,
+            _ => Forcing::Known {
+                cos: d.known.0,
+                sin: d.known.1,
+            },
+        };
+        let mut form = ModelForm::parametric().with_forcing(forcing);
+        if !d.parametric {
+            form = form.without_parametric_terms();
+        }
+        if d.stiffness && !circle {
+            form = form.with_linear_stiffness();
+        }
+        let params = IdentifyParams::builder(clock)
+            .harmonics(Harmonics::Fixed(d.harmonics))
+            .form(form)
+            .build()
+            .unwrap();
+        let unknowns = hb_solve::columns(d.basis.len(), &form).len();
+        let segments: Vec<(f64, usize)> = d
+            .segments
+            .iter()
+            .map(|&(at, double)| (at, if double { 2 * k } else { k }))
+            .collect();
+        Self::from_parts(
+            d.basis,
+            params,
+            signal,
+            len,
+            &segments,
+            d.lambda[..unknowns].to_vec(),
+        )
+    }
+
+    /// The record of `len` samples of `signal` (wrapped on the circle) and segments of it: at
+    /// `(where, period)`, each leaving two samples on either side (the stencils of the
+    /// differences), repeated at other places until there are more equations than unknowns
+    /// (2M + 1 per segment; the differences give more).
+    fn from_parts(
+        basis: BasisKind,
+        params: IdentifyParams,
+        signal: Signal,
+        len: usize,
+        segments: &[(f64, usize)],
+        lambda: Vec<f64>,
+    ) -> Self {
+        let clock = *params.clock();
+        let circle = basis.domain() == Domain::Circle;
+        let record: Vec<f64> = (0..len)
+            .map(|n| {
+                let x = signal.x(clock.time(n));
+                if circle { wrap(x) } else { x }
+            })
+            .collect();
+        let p = clock.whole_samples_per_period().unwrap();
+        let mut placed = Vec::new();
+        let mut rows = 0;
+        for (i, &(at, period)) in segments.iter().cycle().enumerate() {
+            if i >= segments.len() && rows > lambda.len() {
+                break;
+            }
+            let room = len - 5 - period * p;
+            let at = (at + 0.377 * (i / segments.len()) as f64).fract();
+            let start = 2 + (at * room as f64) as usize;
+            placed.push(Segment::new(start, period, &clock, 0.0, len).unwrap());
+            rows += 2 * params.harmonics().count(period, period * p) + 1;
+        }
+        Self {
+            basis,
+            params,
+            signal,
+            record,
+            segments: placed,
+            lambda,
+        }
+    }
+
+    fn clock(&self) -> &SampleClock {
+        self.params.clock()
+    }
+
+    /// The damping coefficient `c` (column `x'`, always the first).
+    fn damping(&self) -> f64 {
+        self.lambda[0]
+    }
+
+    /// The residual `x'' + Σ λ g + F_c cos(W t) + F_s sin(W t)` at sample `n`, from the closed
+    /// form of the signal and the terms' factors.
+    fn residual(&self, n: usize) -> f64 {
+        self.residual_terms(n).0
+    }
+
+    /// The residual at sample `n`; the sum of the absolute values of its terms; and the sum of
+    /// the absolute values of the derivatives of its terms in `x` (`|∂r/∂x|` bounded, the
+    /// sensitivity of the basis terms to an error in the sample).
+    fn residual_terms(&self, n: usize) -> (f64, f64, f64) {
+        use hb_solve::{DriveFactor, PositionFactor, VelocityFactor};
+        let t = self.clock().time(n);
+        let big_w = self.clock().forcing_frequency();
+        let sample = self.record[n];
+        let (mut phi, mut dphi) = (vec![0.0; self.basis.len()], vec![0.0; self.basis.len()]);
+        let at = if self.basis.domain() == Domain::Circle {
+            wrap(sample)
+        } else {
+            sample
+        };
+        self.basis.eval(at, &mut phi);
+        self.basis.eval_deriv(at, &mut dphi);
+        let v = self.signal.dx(t);
+        let form = self.params.form();
+        let mut r = self.signal.ddx(t);
+        let (mut size, mut slope) = (r.abs(), 0.0);
+        for (term, lambda) in hb_solve::columns(self.basis.len(), form).iter().zip(&self.lambda) {
+            let drive = match term.drive {
+                DriveFactor::One => 1.0,
+                DriveFactor::Cos(j) => (f64::from(j) * big_w * t).cos(),
+                DriveFactor::Sin(j) => (f64::from(j) * big_w * t).sin(),
+            };
+            let (position, dposition) = match term.position {
+                PositionFactor::One => (1.0, 0.0),
+                PositionFactor::Basis(i) => (phi[i], dphi[i]),
+                PositionFactor::Linear => (sample, 1.0),
+            };
+            let velocity = match term.velocity {
+                VelocityFactor::One => 1.0,
+                VelocityFactor::Linear => v,
+                VelocityFactor::Sign => v.signum(),
+                VelocityFactor::Quadratic => v * v.abs(),
+                VelocityFactor::Cubic => v * v * v,
+            };
+            let g = lambda * drive * position * velocity;
+            r += g;
+            size += g.abs();
+            slope += (lambda * drive * dposition * velocity).abs();
+        }
+        if let Forcing::Known { cos, sin } = form.forcing() {
+            let f = [cos * (big_w * t).cos(), sin * (big_w * t).sin()];
+            r += f[0] + f[1];
+            size += f[0].abs() + f[1].abs();
+        }
+        (r, size, slope)
+    }
+
+    /// The assembled system (noise correction included, here none), `A λ − β` row by row, and
+    /// the size of the terms of both sides: the largest of `Σ_c |A_rc λ_c| + |β_r|` over the rows
+    /// and of the sum of the absolute values of the residual's terms over the record.
+    fn rows(&self, method: &dyn hb_solve::Assembly) -> (hb_solve::LinearSystem, Vec<f64>, f64) {
+        let system =
+            hb_solve::build_system(&self.basis, &self.record, &self.segments, &self.params, method).unwrap();
+        let (a, b) = (system.matrix(), system.rhs());
+        assert_eq!(a.ncols(), self.lambda.len());
+        let mut scale = 0.0f64;
+        let rows = (0..a.nrows())
+            .map(|r| {
+                let terms = (0..a.ncols()).map(|c| a[(r, c)] * self.lambda[c]);
+                scale = scale.max(terms.clone().map(f64::abs).sum::<f64>() + b[r].abs());
+                terms.sum::<f64>() - b[r]
+            })
+            .collect();
+        let residual_size = (0..self.record.len())
+            .map(|n| self.residual_terms(n).1)
+            .fold(0.0, f64::max);
+        (system, rows, scale.max(residual_size))
+    }
+
+    /// `δ`, a bound of the rounding error of a sample as the assemblies see it: the closed form
+    /// evaluated, wrapped and unwrapped, eight roundings of its largest intermediate.
+    fn sample_error(&self) -> f64 {
+        let t_max = (0..self.record.len())
+            .map(|n| self.clock().time(n).abs())
+            .fold(0.0, f64::max);
+        8.0 * f64::EPSILON * self.signal.magnitude(t_max)
+    }
+
+    /// The largest `Σ |∂g/∂x|` of the residual's basis terms over the record.
+    fn slope(&self) -> f64 {
+        (0..self.record.len())
+            .map(|n| self.residual_terms(n).2)
+            .fold(0.0, f64::max)
+    }
+}
+
+/// The Fourier coefficients of the residual over each block's segment by a naive DFT: the mean,
+/// then `(2/L) Σ r_n cos(2π j n / L)`, `(2/L) Σ r_n sin(2π j n / L)` for `j = 1..M`, with `n`
+/// counted from the segment's first sample (local time, as in eq. 15).
+fn residual_fourier(case: &Case, system: &hb_solve::LinearSystem) -> Vec<f64> {
+    let mut want = Vec::with_capacity(system.rows());
+    for block in system.blocks() {
+        let (s, l) = (block.segment.start(), block.segment.len());
+        let r: Vec<f64> = (0..l).map(|n| case.residual(s + n)).collect();
+        want.push(r.iter().sum::<f64>() / l as f64);
+        for j in 1..=block.harmonics {
+            let (mut c, mut d) = (0.0, 0.0);
+            for (n, &rn) in r.iter().enumerate() {
+                let (sin, cos) = (TAU * ((j * n) % l) as f64 / l as f64).sin_cos();
+                c += rn * cos;
+                d += rn * sin;
+            }
+            want.push(2.0 * c / l as f64);
+            want.push(2.0 * d / l as f64);
+        }
+    }
+    want
+}
+
+/// The trapezoid integrals `∫ ψ r` over each block's window for the weak form's test functions
+/// `ψ = w(τ)`, `w(τ) cos(jΩτ)`, `w(τ) sin(jΩτ)` (`j = 1..M`), `w = sin^p(π τ / T_s)`,
+/// `Ω = 2π / T_s`, `τ` the time from the window's first sample, `T_s = L h`.
+fn residual_weak(case: &Case, system: &hb_solve::LinearSystem, p: i32) -> Vec<f64> {
+    let h = case.clock().step();
+    let mut want = Vec::with_capacity(system.rows());
+    for block in system.blocks() {
+        let (s, l) = (block.segment.start(), block.segment.len());
+        let terms: Vec<(f64, f64)> = (0..=l)
+            .map(|n| {
+                let weight = if n == 0 || n == l { 0.5 * h } else { h };
+                let window = (PI * n as f64 / l as f64).sin().powi(p);
+                (weight * window, case.residual(s + n))
+            })
+            .collect();
+        want.push(terms.iter().map(|(w, r)| w * r).sum());
+        for j in 1..=block.harmonics {
+            let (mut c, mut d) = (0.0, 0.0);
+            for (n, &(w, r)) in terms.iter().enumerate() {
+                let (sin, cos) = (TAU * ((j * n) % l) as f64 / l as f64).sin_cos();
+                c += w * cos * r;
+                d += w * sin * r;
+            }
+            want.push(c);
+            want.push(d);
+        }
+    }
+    want
+}
+
+/// `δ` times the norm of the map from the samples to a row of harmonic balance over `block`:
+/// `(jΩ)² u_j`, `c (jΩ) v_j` and the coefficients of the basis terms move by at most twice the
+/// change of the samples times `(MΩ)²`, `|c| MΩ` and `Σ|∂g/∂x|`.
+fn harmonic_allowance(case: &Case, block: &hb_solve::Block, delta: f64, slope: f64) -> f64 {
+    let m_omega = block.harmonics as f64 * block.segment.fundamental(case.clock());
+    2.0 * delta * (m_omega * m_omega + case.damping().abs() * m_omega + slope)
+}
+
+/// `δ` times the norm of the map from the samples to a row of the weak form of order `p` over
+/// `block`: `∫|ψ''|`, `|c| ∫|ψ'|` and `Σ|∂g/∂x| ∫|ψ|`, with `|ψ| <= 1`, `|ψ'| <= p a + MΩ`,
+/// `|ψ''| <= (p a + MΩ)²` (`a = π / T_s`, `Ω = 2π / T_s`).
+fn weak_allowance(case: &Case, block: &hb_solve::Block, p: u32, delta: f64, slope: f64) -> f64 {
+    let span = block.segment.duration(case.clock());
+    let rate = f64::from(p) * PI / span + block.harmonics as f64 * TAU / span;
+    delta * span * (rate * rate + case.damping().abs() * rate + slope)
+}
+
+/// `δ` times the norm of the map from the samples to a row of the differences: the stencils'
+/// `64/12h²` (`x''`) and `18/12h` (`x'`, times `|c|`), and `Σ|∂g/∂x|`.
+fn difference_allowance(case: &Case, delta: f64, slope: f64) -> f64 {
+    let h = case.clock().step();
+    delta * (64.0 / (12.0 * h * h) + case.damping().abs() * 18.0 / (12.0 * h) + slope)
+}
+
+/// The truncation error of the fourth-order differences on the signal: for a sinusoid with
+/// `ω h <= 1` at most `h⁴ ω⁵ / 30` in `x'` and `h⁴ ω⁶ / 90` in `x''` (alternating series).
+fn truncation(case: &Case) -> f64 {
+    let h = case.clock().step();
+    case.damping().abs() * h.powi(4) / 30.0 * case.signal.derivative_bound(5)
+        + h.powi(4) / 90.0 * case.signal.derivative_bound(6)
+}
+
+/// Window order of the weak-form identity, on records of twice the drawn samples per period (48
+/// to 80): the two sides are trapezoid sums of the same integral, the method's after moving the
+/// derivatives onto `ψ` by parts, and the rule's errors on their integrands (which vanish with
+/// their first `p − 1` derivatives at both ends) are then far below the rounding allowed.
+const IDENTITY_WINDOW: u32 = 16;
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 32, rng_seed: RngSeed::Fixed(0x1de7_1717), ..ProptestConfig::default() })]
+
+    /// Harmonic balance on orbits of an exactly periodic, band-limited record (harmonics of
+    /// `W / k` below the Nyquist frequency, any winding): row for row, `A λ − β` equals the
+    /// Fourier coefficients of the residual by a naive DFT.
+    #[test]
+    fn harmonic_rows_are_the_fourier_coefficients_of_the_residual(d in draw()) {
+        let case = Case::new(&d, true);
+        let (system, got, scale) = case.rows(&hb_solve::HarmonicBalance);
+        let want = residual_fourier(&case, &system);
+        let (delta, slope) = (case.sample_error(), case.slope());
+        prop_assert_eq!(got.len(), want.len());
+        for block in system.blocks() {
+            let tolerance = 1e-12 * scale + harmonic_allowance(&case, block, delta, slope);
+            for r in block.first_row..block.first_row + block.rows {
+                prop_assert!((got[r] - want[r]).abs() <= tolerance,
+                    "row {}: {} vs {} (tolerance {})", r, got[r], want[r], tolerance);
+            }
+        }
+    }
+
+    /// The weak form on windows of a record that need not repeat (any frequencies, any rotation
+    /// rate): row for row, `A λ − β` equals the trapezoid integral of the residual against the
+    /// row's test function.
+    #[test]
+    fn weak_rows_are_the_test_integrals_of_the_residual(d in draw()) {
+        let d = Draw { samples_per_period: 2 * d.samples_per_period, ..d };
+        let case = Case::new(&d, false);
+        let weak = hb_solve::WeakForm::new(IDENTITY_WINDOW).unwrap();
+        let (system, got, scale) = case.rows(&weak);
+        let want = residual_weak(&case, &system, IDENTITY_WINDOW as i32);
+        let (delta, slope) = (case.sample_error(), case.slope());
+        prop_assert_eq!(got.len(), want.len());
+        for block in system.blocks() {
+            let tolerance = 1e-12 * scale + weak_allowance(&case, block, IDENTITY_WINDOW, delta, slope);
+            for r in block.first_row..block.first_row + block.rows {
+                prop_assert!((got[r] - want[r]).abs() <= tolerance,
+                    "row {}: {} vs {} (tolerance {})", r, got[r], want[r], tolerance);
+            }
+        }
+    }
+
+    /// Finite differences on a record that need not repeat: the row of sample `n` is the residual
+    /// at `t_n` up to the truncation error of the fourth-order differences ([`truncation`], of
+    /// order `h⁴`).
+    #[test]
+    fn difference_rows_are_the_residual_up_to_h4(d in draw()) {
+        let case = Case::new(&d, false);
+        let (system, got, scale) = case.rows(&hb_solve::FiniteDifferences);
+        let h = case.clock().step();
+        let w_max = case.signal.waves.iter().map(|w| w.1).fold(0.0, f64::max);
+        prop_assert!(w_max * h <= 1.0);
+        let tolerance = truncation(&case)
+            + 1e-12 * scale
+            + difference_allowance(&case, case.sample_error(), case.slope());
+        for block in system.blocks() {
+            prop_assert_eq!(block.rows, block.segment.len());
+            for r in 0..block.rows {
+                let n = block.segment.start() + r;
+                let (g, w) = (got[block.first_row + r], case.residual(n));
+                prop_assert!((g - w).abs() <= tolerance,
+                    "sample {}: {} vs {} (tolerance {})", n, g, w, tolerance);
+            }
+        }
+    }
+}
+
+/// The record of an exact solution and the true coefficients of its equation, with the
+/// identity's windows, harmonics and segments: on the line (`whirl` false)
+/// `x = a cos(W t + φ)`, which solves `x'' + c x' + k x + F_c cos(W t) + F_s sin(W t) = 0` for
+/// `F_c = (W² − k) A − c W B`, `F_s = (W² − k) B + c W A` (`A = a cos φ`, `B = −a sin φ`), on the
+/// polynomial basis (higher powers 0) with the forcing identified or known; on the circle
+/// (`whirl` true) the uniform whirl `x = W t + φ`, which solves the harmonic-basis (K = 1) model
+/// with identified forcing when `sin(t)*sin(x)` = `n_cc`, `cos(t)*sin(x)` = `−p_sc`,
+/// `c = (p_sc sin φ − n_cc cos φ) / W`, `F_c = −(q_c cos φ + q_s sin φ)` and
+/// `F_s = q_c sin φ − q_s cos φ` for any `n_cc` (`cos(t)*cos(x)`), `p_sc` (`sin(t)*cos(x)`),
+/// `q_c`, `q_s`: the products of the drive and the whirl balance in the mean and the second
+/// harmonic, the autonomous terms against the forcing in the first.
+fn exact_case(d: &Draw, whirl: bool, known: bool) -> Case {
+    // The whirl on twice the samples, as the weak-form identity (its `∫ψ' x` is a trapezoid sum
+    // of a non-periodic integrand).
+    let samples_per_period = if whirl { 2 } else { 1 } * d.samples_per_period;
+    let clock = SampleClock::new(d.forcing_period, samples_per_period)
+        .unwrap()
+        .with_start_time(d.start_time)
+        .unwrap();
+    let big_w = clock.forcing_frequency();
+    let len = 6 * 3 * samples_per_period + 1;
+    let origin = clock.time(len / 2);
+    let l = &d.lambda;
+    let segments: Vec<(f64, usize)> = d
+        .segments
+        .iter()
+        .enumerate()
+        .map(|(i, &(at, _))| (at, 1 + i % 3))
+        .collect();
+    let params = |form| {
+        IdentifyParams::builder(clock)
+            .harmonics(Harmonics::Fixed(d.harmonics))
+            .form(form)
+            .build()
+            .unwrap()
+    };
+    if whirl {
+        let basis = BasisKind::from(Harmonic::new(1).unwrap());
+        let offset = d.offset * PI;
+        // x = W (t − t_mid) + offset = W t + φ.
+        let phi = offset - big_w * origin;
+        let (s, c) = phi.sin_cos();
+        let (n_cc, p_sc, q_c, q_s) = (l[0], l[1], l[2], l[3]);
+        let lambda = vec![
+            (p_sc * s - n_cc * c) / big_w,
+            n_cc,
+            p_sc,
+            q_c,
+            -p_sc,
+            n_cc,
+            q_s,
+            -(q_c * c + q_s * s),
+            q_c * s - q_s * c,
+        ];
+        let form = ModelForm::parametric().with_forcing(Forcing::Identified);
+        assert_eq!(
+            hb_solve::term_names(&basis, &form),
+            [
+                "x'",
+                "cos(t)*cos(x)",
+                "sin(t)*cos(x)",
+                "cos(x)",
+                "cos(t)*sin(x)",
+                "sin(t)*sin(x)",
+                "sin(x)",
+                "cos(t)",
+                "sin(t)"
+            ]
+        );
+        let signal = Signal {
+            offset,
+            rate: big_w,
+            origin,
+            waves: Vec::new(),
+        };
+        Case::from_parts(basis, params(form), signal, len, &segments, lambda)
+    } else {
+        let basis = match d.basis {
+            BasisKind::Polynomial(p) => BasisKind::from(p),
+            _ => BasisKind::from(Polynomial::new(1 + d.period % 3).unwrap()),
+        };
+        let (_, a, phase) = d.waves[0];
+        let (big_a, big_b) = (a * phase.cos(), -a * phase.sin());
+        let (c, k) = (l[0] * big_w, l[1] * big_w * big_w);
+        let f_c = (big_w * big_w - k) * big_a - c * big_w * big_b;
+        let f_s = (big_w * big_w - k) * big_b + c * big_w * big_a;
+        let forcing = if known {
+            Forcing::Known { cos: f_c, sin: f_s }
+        } else {
+            Forcing::Identified
+        };
+        let form = ModelForm::externally_forced(forcing);
+        let lambda = hb_solve::term_names(&basis, &form)
+            .iter()
+            .map(|name| match name.as_str() {
+                "x'" => c,
+                "x" => k,
+                "cos(t)" => f_c,
+                "sin(t)" => f_s,
+                _ => 0.0,
+            })
+            .collect();
+        let signal = Signal {
+            offset: 0.0,
+            rate: 0.0,
+            origin,
+            waves: vec![(a, big_w, phase)],
+        };
+        Case::from_parts(basis, params(form), signal, len, &segments, lambda)
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 32, rng_seed: RngSeed::Fixed(0x0e8a_c7ed), ..ProptestConfig::default() })]
+
+    /// A record of an exact solution ([`exact_case`]) satisfies every method's system with the
+    /// true coefficients: `|(A λ − β)_r|` is at most `1e-12` of the size of the terms plus the
+    /// samples' rounding through the method (harmonic balance; the weak form with an even window
+    /// order `p = 2..8` on windows of whole forcing periods, where every integrand on the line is a
+    /// trigonometric polynomial of degree below `L` and the trapezoid rule is exact, and `p = 16`
+    /// for the whirl, whose `∫ψ' x` is not periodic, on 48 to 80 samples per period), and the
+    /// differences' `h⁴` truncation (zero
+    /// for the whirl, which they differentiate exactly).
+    #[test]
+    fn an_exact_solution_satisfies_every_system(d in draw(), whirl in any::<bool>(), known in any::<bool>(), order in 1u32..=4) {
+        let case = exact_case(&d, whirl, known);
+        let (delta, slope) = (case.sample_error(), case.slope());
+        let (_, _, scale) = case.rows(&hb_solve::HarmonicBalance);
+        // The residual is zero up to rounding.
+        for n in 0..case.record.len() {
+            prop_assert!(case.residual(n).abs() <= 1e-12 * scale, "residual {} at {}", case.residual(n), n);
+        }
+        let p = if whirl { IDENTITY_WINDOW } else { 2 * order };
+        let weak = hb_solve::WeakForm::new(p).unwrap();
+        let methods: [&dyn hb_solve::Assembly; 3] = [&hb_solve::HarmonicBalance, &weak, &hb_solve::FiniteDifferences];
+        for method in methods {
+            let (system, got, scale) = case.rows(method);
+            for block in system.blocks() {
+                let tolerance = 1e-12 * scale + match method.name() {
+                    "upo" => harmonic_allowance(&case, block, delta, slope),
+                    "windowed" => weak_allowance(&case, block, p, delta, slope),
+                    _ => truncation(&case) + difference_allowance(&case, delta, slope),
+                };
+                let rows = &got[block.first_row..block.first_row + block.rows];
+                for (i, g) in rows.iter().enumerate() {
+                    prop_assert!(g.abs() <= tolerance,
+                        "{} p {}: row {} of A λ − β is {} (tolerance {})", method.name(), p, block.first_row + i, g, tolerance);
+                }
+            }
+        }
     }
 }

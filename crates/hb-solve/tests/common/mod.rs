@@ -1,21 +1,15 @@
 //! What the tests and the `sweep` example of hb-solve share: the shared fixture's paper data set
-//! and the true coefficients of the pendulum.
+//! and the true model of the pendulum.
 // Each user takes the part it needs.
 #![allow(dead_code)]
 
 use std::error::Error;
 
-/// The pendulum's coefficients in column order for the harmonic basis K = 1 (method notes
-/// section 1): x'' + 0.03 x' + (1/0.8333²) sin x − 1.52 sin t cos x = 0.
-pub const TRUTH: [(&str, f64); 7] = [
-    ("x'", 0.03),
-    ("cos(t)*cos(x)", 0.0),
-    ("sin(t)*cos(x)", -1.52),
-    ("cos(x)", 0.0),
-    ("cos(t)*sin(x)", 0.0),
-    ("sin(t)*sin(x)", 0.0),
-    ("sin(x)", 1.0 / (0.8333 * 0.8333)),
-];
+/// The paper's pendulum, x'' + 0.03 x' + (1/0.8333²) sin x − 1.52 sin t cos x = 0, as a model on
+/// the harmonic basis K = 1 (method notes section 1): the truth identified models are compared with.
+pub fn truth() -> hb_solve::IdentifiedModel<hb_basis::Harmonic> {
+    hb_solve::IdentifiedModel::from_pendulum(&pendulum_sim::Pendulum::paper()).unwrap()
+}
 
 /// The shared fixture `paper_dataset.csv`, beside the repository.
 pub const PAPER_DATASET: &str = concat!(
