@@ -21,40 +21,8 @@ use upo_search::{CloseReturns, Metric, OrbitSource, Segment};
 mod common;
 use common::{TRUTH as TRUTH_K1, read_dataset};
 
-/// Coefficients of the L2 projection of `f` onto the hat space (Gram system on a fine grid).
-fn hat_projection(hat: &Hat, f: impl Fn(f64) -> f64) -> Vec<f64> {
-    let n = hat.len();
-    let grid = 4096;
-    let mut g = vec![0.0; n * n];
-    let mut b = vec![0.0; n];
-    let mut phi = vec![0.0; n];
-    for s in 0..grid {
-        let x = -PI + TAU * (s as f64 + 0.5) / grid as f64;
-        hat.eval(x, &mut phi);
-        for i in 0..n {
-            b[i] += phi[i] * f(x);
-            for j in 0..n {
-                g[i * n + j] += phi[i] * phi[j];
-            }
-        }
-    }
-    // Gaussian elimination on the small symmetric positive definite Gram matrix.
-    for c in 0..n {
-        for r in c + 1..n {
-            let f = g[r * n + c] / g[c * n + c];
-            for k in c..n {
-                g[r * n + k] -= f * g[c * n + k];
-            }
-            b[r] -= f * b[c];
-        }
-    }
-    let mut x = vec![0.0; n];
-    for r in (0..n).rev() {
-        let s: f64 = (r + 1..n).map(|k| g[r * n + k] * x[k]).sum();
-        x[r] = (b[r] - s) / g[r * n + r];
-    }
-    x
-}
+/// Quadrature points of the L2 projections of the true curves onto the hats.
+const PROJECTION_POINTS: usize = 4096;
 
 /// RMS over the circle of the difference between the model's curve and the projected curve.
 fn curve_rms(hat: &Hat, model: &IdentifiedModel<Hat>, which: usize, reference: &[f64]) -> f64 {
@@ -120,8 +88,8 @@ fn main() -> Result<(), Box<dyn Error>> {
     let solver = QrSolver::default();
     let hat = Hat::new(8)?;
     let k1 = Harmonic::new(1)?;
-    let q_ref = hat_projection(&hat, |x| 1.0 / (0.8333f64 * 0.8333) * x.sin());
-    let p_ref = hat_projection(&hat, |x| -1.52 * x.cos());
+    let q_ref = hat.project(PROJECTION_POINTS, |x| 1.0 / (0.8333f64 * 0.8333) * x.sin())?;
+    let p_ref = hat.project(PROJECTION_POINTS, |x| -1.52 * x.cos())?;
     let params = |h: Harmonics| IdentifyParams::builder(clock).harmonics(h).build();
 
     let policies: Vec<Harmonics> = [1usize, 2, 3, 6, 12, 24]
