@@ -13,8 +13,7 @@ use std::f64::consts::{PI, TAU};
 
 use hb_basis::{Basis, Harmonic, Hat};
 use hb_solve::{Harmonics, IdentifiedModel, IdentifyParams, QrSolver, SampleClock, identify};
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
+use pendulum_sim::observe::{Encoder, NormalDraw};
 use upo_search::{CloseReturns, Metric, OrbitSource, Segment};
 
 #[path = "../tests/common/mod.rs"]
@@ -58,17 +57,6 @@ fn worst(m: &IdentifiedModel<Harmonic>) -> (&'static str, f64) {
         .iter()
         .map(|(n, v)| (*n, (m.coefficient(n).map_or(f64::NAN, |c| c.value) - v).abs()))
         .fold(("", 0.0), |acc, (n, e)| if e > acc.1 { (n, e) } else { acc })
-}
-
-/// Seeded Gaussian noise by Box-Muller.
-fn noisy(x: &[f64], sigma: f64, seed: u64) -> Vec<f64> {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    x.iter()
-        .map(|&v| {
-            let (u1, u2): (f64, f64) = (rng.random_range(f64::EPSILON..1.0), rng.random());
-            circle_signal::wrap(v + sigma * (-2.0 * u1.ln()).sqrt() * (TAU * u2).cos())
-        })
-        .collect()
 }
 
 fn label(h: Harmonics) -> String {
@@ -151,7 +139,11 @@ fn main() -> Result<(), Box<dyn Error>> {
     let noisy_sets: Vec<(Vec<f64>, Vec<Segment>)> = sigmas
         .iter()
         .map(|&s| {
-            let xn = noisy(&x, s, 7);
+            // Box-Muller, the draw the table in docs/identification.md was made with.
+            let xn = Encoder::seeded(7)
+                .with_noise(s)?
+                .with_draw(NormalDraw::BoxMuller)
+                .observe(&x);
             let sg = segments(&xn, 0.03)?;
             Ok((xn, sg))
         })
