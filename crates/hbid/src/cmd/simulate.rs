@@ -94,7 +94,8 @@ pub fn run(args: &SimulateArgs, quiet: bool) -> anyhow::Result<()> {
                 writer.extend([*t, x, *v])?;
             }
             writer.finish()
-        });
+        })
+        .map_err(Into::into);
     }
     crate::output::write_atomically(&args.out, |w: &mut dyn Write| {
         writeln!(w, "t,theta,omega")?;
@@ -104,4 +105,5 @@ pub fn run(args: &SimulateArgs, quiet: bool) -> anyhow::Result<()> {
         }
         Ok(())
     })
+    .map_err(Into::into)
 }
