@@ -9,17 +9,14 @@ use std::sync::LazyLock;
 use std::time::Instant;
 
 use anyhow::{Context, anyhow};
-use circle_signal::wrap;
 use hb_basis::Harmonic;
 use hb_solve::{
     BootstrapParams, FiniteDifferences, Harmonics, IdentifiedModel, IdentifyParams, LinearSystem,
     NoiseCorrection, QrSolver, SampleClock, WeakForm, assemble, assemble_weak, bootstrap, build_system,
     estimate_noise_sigma,
 };
+use pendulum_sim::observe::Encoder;
 use pendulum_sim::{Pendulum, SimulationConfig, simulate};
-use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, Normal};
 use rayon::prelude::*;
 use upo_search::{CloseReturns, OrbitSource, Segment, Windows};
 
@@ -174,16 +171,11 @@ fn record(seed: u64, periods: usize) -> anyhow::Result<Record> {
 /// What an encoder with Gaussian noise of `sigma` rad reports: `wrap(θ + n)`, noise from the
 /// ChaCha8 stream `stream` of `seed`.
 fn observe(rec: &Record, sigma: f64, seed: u64, stream: u64) -> Vec<f64> {
-    if sigma == 0.0 {
-        return rec.theta.iter().map(|&v| wrap(v)).collect();
-    }
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    rng.set_stream(stream);
-    let noise = Normal::new(0.0, sigma).expect("a positive sigma");
-    rec.theta
-        .iter()
-        .map(|&v| wrap(v + noise.sample(&mut rng)))
-        .collect()
+    Encoder::seeded(seed)
+        .with_stream(stream)
+        .with_noise(sigma)
+        .expect("a finite sigma >= 0")
+        .observe(&rec.theta)
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -148,32 +148,8 @@ pub fn table_one(report: &mut String, models: &[&Identified]) -> anyhow::Result<
     Ok(())
 }
 
-/// The L2 projection of `f` onto the periodic hats of `hat` (the least-squares hat fit of a true
-/// curve, method notes section 6): the mass-matrix system `M c = b`, `M_ij = ∫ φ_i φ_j`,
-/// `b_i = ∫ f φ_i`, by quadrature on a fine grid.
-pub fn hat_projection(hat: &Hat, f: impl Fn(f64) -> f64) -> anyhow::Result<Vec<f64>> {
-    let n = hat.len();
-    let grid = 20_000;
-    let mut m = nalgebra::DMatrix::<f64>::zeros(n, n);
-    let mut b = nalgebra::DVector::<f64>::zeros(n);
-    let mut phi = vec![0.0; n];
-    for g in 0..grid {
-        let x = -PI + (g as f64 + 0.5) * TAU / grid as f64;
-        hat.eval(x, &mut phi);
-        let fx = f(x);
-        for i in 0..n {
-            b[i] += fx * phi[i];
-            for j in 0..n {
-                m[(i, j)] += phi[i] * phi[j];
-            }
-        }
-    }
-    let c = m
-        .lu()
-        .solve(&b)
-        .ok_or_else(|| anyhow::anyhow!("singular hat mass matrix"))?;
-    Ok(c.iter().copied().collect())
-}
+/// Quadrature points of the L2 hat fit of a true curve (method notes section 6).
+const PROJECTION_POINTS: usize = 20_000;
 
 /// A curve of the model: its name, the forcing factor it multiplies, and its true shape.
 type Curve<'a> = (&'static str, &'static str, &'a dyn Fn(f64) -> f64);
@@ -210,7 +186,7 @@ pub fn hat_curves(
     )?;
     let nodes: Vec<f64> = (0..8).map(|i| hat.node(i)).collect();
     for (fig, (curve, factor, truth)) in truths.iter().enumerate() {
-        let fit = hat_projection(&hat, truth)?;
+        let fit = hat.project(PROJECTION_POINTS, truth)?;
         let identified = |x: f64| match *curve {
             "n" => model.parametric(x).0,
             "p" => model.parametric(x).1,

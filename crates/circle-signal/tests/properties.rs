@@ -87,11 +87,18 @@ proptest! {
             })
             .collect();
         let wrapped: Vec<f64> = x_c.iter().map(|&x| wrap(x)).collect();
-        let s = RotationSplit::new(&unwrap(&wrapped), h).unwrap();
+        let continuous = unwrap(&wrapped);
+        let s = RotationSplit::new(&continuous, h).unwrap();
         prop_assert_eq!(s.winding, m);
         prop_assert!((s.rate - rate).abs() < 1e-12);
-        // The oscillation is periodic: its first sample matches the closing one.
-        let closing = x_c[l] - rate * l as f64 * h;
-        prop_assert!((s.oscillation[0] - x_c[0] - (closing - x_c[l] + rate * l as f64 * h)).abs() < 1e-9);
+        // The oscillation is periodic: its first sample matches the closing one, the closing sample
+        // of the segment less the rotation over the segment.
+        let closing = continuous[l] - s.rate * l as f64 * h;
+        prop_assert!(
+            (s.oscillation[0] - closing).abs() < 1e-9,
+            "first {} closing {}",
+            s.oscillation[0],
+            closing
+        );
     }
 }

@@ -245,6 +245,87 @@ impl Hat {
         -PI + TAU * i as f64 / self.nodes as f64
     }
 
+    /// The coefficients `c` of the L2 projection of a function `f` onto the hats: the curve
+    /// `Σ_i c_i hat_i(x)` closest to `f` in the mean square over the circle (for instance the best
+    /// that a hat model can do on a true curve, to which an identified curve is compared).
+    ///
+    /// They solve the Gram system `M c = b` with `M_ij = ∫ hat_i hat_j` and `b_i = ∫ f hat_i` over
+    /// `[−π, π)`, both integrals by the midpoint rule on `points` evenly spaced points
+    /// `x_s = −π + 2π (s + ½) / points`. `M` is symmetric positive definite once every interval
+    /// between nodes holds two points, so `points` must be at least `2 N`; it is solved by Gaussian
+    /// elimination without pivoting. A function already in the span of the hats is returned
+    /// exactly (to rounding), and the residual `f − Σ c_i hat_i` is orthogonal to every hat in
+    /// the quadrature's inner product.
+    ///
+    /// # Errors
+    /// [`BasisError::TooSmall`] if `points < 2 N`; [`BasisError::NonFinite`] if `f` is NaN or
+    /// infinite at a quadrature point (`index` is the point).
+    ///
+    /// # Example
+    ///
+    /// ```
+    /// use hb_basis::{Basis, Hat};
+    ///
+    /// let hat = Hat::new(8)?;
+    /// // sin x is not piecewise linear: its projection is a hat curve near it...
+    /// let c = hat.project(4096, f64::sin)?;
+    /// let mut phi = vec![0.0; hat.len()];
+    /// hat.eval(1.0, &mut phi);
+    /// let fit: f64 = phi.iter().zip(&c).map(|(p, c)| p * c).sum();
+    /// assert!((fit - 1f64.sin()).abs() < 0.05);
+    /// // ...while a hat curve projects onto itself.
+    /// let c = hat.project(4096, |x| {
+    ///     hat.eval(x, &mut phi);
+    ///     2.0 * phi[3] - phi[5]
+    /// })?;
+    /// assert!((c[3] - 2.0).abs() < 1e-12 && (c[5] + 1.0).abs() < 1e-12 && c[0].abs() < 1e-12);
+    /// # Ok::<(), hb_basis::BasisError>(())
+    /// ```
+    pub fn project(&self, points: usize, mut f: impl FnMut(f64) -> f64) -> Result<Vec<f64>, BasisError> {
+        let n = self.nodes;
+        if points < 2 * n {
+            return Err(BasisError::TooSmall {
+                name: "quadrature points of a hat projection",
+                value: points,
+                min: 2 * n,
+            });
+        }
+        let mut gram = vec![0.0; n * n];
+        let mut b = vec![0.0; n];
+        for s in 0..points {
+            let x = -PI + TAU * (s as f64 + 0.5) / points as f64;
+            let fx = f(x);
+            if !fx.is_finite() {
+                return Err(BasisError::NonFinite { index: s, value: fx });
+            }
+            // Only two hats are non-zero at x: hat_i = 1 − frac and hat_{i+1} = frac.
+            let (i, frac) = self.locate(x);
+            let pair = [(i, 1.0 - frac), ((i + 1) % n, frac)];
+            for &(r, phi_r) in &pair {
+                b[r] += phi_r * fx;
+                for &(c, phi_c) in &pair {
+                    gram[r * n + c] += phi_r * phi_c;
+                }
+            }
+        }
+        // Forward elimination; the pivots of a symmetric positive definite matrix are positive.
+        for c in 0..n {
+            for r in c + 1..n {
+                let factor = gram[r * n + c] / gram[c * n + c];
+                for k in c..n {
+                    gram[r * n + k] -= factor * gram[c * n + k];
+                }
+                b[r] -= factor * b[c];
+            }
+        }
+        let mut coefficients = vec![0.0; n];
+        for r in (0..n).rev() {
+            let s: f64 = (r + 1..n).map(|k| gram[r * n + k] * coefficients[k]).sum();
+            coefficients[r] = (b[r] - s) / gram[r * n + r];
+        }
+        Ok(coefficients)
+    }
+
     /// The interval containing `x`: the left node `i`, and the fraction `s ∈ [0, 1]` of the way
     /// to node `i + 1 (mod N)`.
     #[inline]

@@ -1,6 +1,6 @@
 //! Invariants of the bases and accuracy of the planned Fourier coefficients.
 use hb_basis::{
-    Basis, BasisKind, Domain, FourierPlan, FourierPlanner, Harmonic, Hat, Polynomial, Spectrum,
+    Basis, BasisError, BasisKind, Domain, FourierPlan, FourierPlanner, Harmonic, Hat, Polynomial, Spectrum,
     coefficients_from_bin,
 };
 use proptest::prelude::*;
@@ -140,6 +140,83 @@ fn bases_round_trip_through_serde() {
     // Sizes are validated when read.
     assert!(serde_json::from_str::<BasisKind>(r#"{"hat":{"nodes":2}}"#).is_err());
     assert!(serde_json::from_str::<BasisKind>(r#"{"harmonic":{"order":0}}"#).is_err());
+}
+
+/// `Σ c_i hat_i(x)`.
+fn hat_curve(hat: &Hat, c: &[f64], x: f64) -> f64 {
+    let mut phi = vec![0.0; hat.len()];
+    hat.eval(x, &mut phi);
+    phi.iter().zip(c).map(|(p, c)| p * c).sum()
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    /// A curve already in the span of the hats is its own projection.
+    #[test]
+    fn hat_projection_of_a_hat_curve_is_exact(
+        c in prop::collection::vec(-5.0..5.0f64, 3..40),
+        extra in 0usize..500,
+    ) {
+        let hat = Hat::new(c.len()).unwrap();
+        let points = 2 * c.len() + extra;
+        let got = hat.project(points, |x| hat_curve(&hat, &c, x)).unwrap();
+        for (i, (g, w)) in got.iter().zip(&c).enumerate() {
+            prop_assert!((g - w).abs() < 1e-11, "c[{}] = {} against {}", i, g, w);
+        }
+    }
+
+    /// The residual of a projection is orthogonal to every hat in the quadrature's inner product,
+    /// and no other hat curve, the interpolant at the nodes among them, is closer in that norm.
+    #[test]
+    fn hat_projection_residual_is_orthogonal_to_every_hat(
+        nodes in 3usize..30,
+        extra in 0usize..2000,
+        a in -2.0..2.0f64,
+        k in 1u32..6,
+        phase in -PI..PI,
+    ) {
+        let hat = Hat::new(nodes).unwrap();
+        let points = 2 * nodes + extra;
+        let f = |x: f64| a * (f64::from(k) * x + phase).sin() + (x.cos() - 0.3).exp();
+        let c = hat.project(points, f).unwrap();
+        let grid: Vec<f64> = (0..points).map(|s| -PI + TAU * (s as f64 + 0.5) / points as f64).collect();
+        let residual: Vec<f64> = grid.iter().map(|&x| f(x) - hat_curve(&hat, &c, x)).collect();
+        let scale: f64 = grid.iter().map(|&x| f(x).abs()).sum();
+        let mut phi = vec![0.0; nodes];
+        for j in 0..nodes {
+            let dot: f64 = grid
+                .iter()
+                .zip(&residual)
+                .map(|(&x, r)| {
+                    hat.eval(x, &mut phi);
+                    r * phi[j]
+                })
+                .sum();
+            prop_assert!(dot.abs() <= 1e-12 * scale, "hat {}: {} (scale {})", j, dot, scale);
+        }
+        let norm = |coef: &[f64]| -> f64 { grid.iter().map(|&x| (f(x) - hat_curve(&hat, coef, x)).powi(2)).sum() };
+        let interpolant: Vec<f64> = (0..nodes).map(|i| f(hat.node(i))).collect();
+        prop_assert!(norm(&c) <= norm(&interpolant) * (1.0 + 1e-12));
+    }
+}
+
+#[test]
+fn hat_projection_needs_two_points_per_interval_and_a_finite_function() {
+    let hat = Hat::new(8).unwrap();
+    assert!(matches!(
+        hat.project(15, f64::sin),
+        Err(BasisError::TooSmall {
+            value: 15,
+            min: 16,
+            ..
+        })
+    ));
+    assert!(hat.project(16, f64::sin).is_ok());
+    assert!(matches!(
+        hat.project(100, |x| if x > 1.0 { f64::NAN } else { x }),
+        Err(BasisError::NonFinite { .. })
+    ));
 }
 
 fn all_bases() -> Vec<Box<dyn Basis>> {

@@ -13,48 +13,15 @@ use std::f64::consts::{PI, TAU};
 
 use hb_basis::{Basis, Harmonic, Hat};
 use hb_solve::{Harmonics, IdentifiedModel, IdentifyParams, QrSolver, SampleClock, identify};
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
+use pendulum_sim::observe::{Encoder, NormalDraw};
 use upo_search::{CloseReturns, Domain, OrbitSource, Segment};
 
 #[path = "../tests/common/mod.rs"]
 mod common;
 use common::{read_dataset, truth};
 
-/// Coefficients of the L2 projection of `f` onto the hat space (Gram system on a fine grid).
-fn hat_projection(hat: &Hat, f: impl Fn(f64) -> f64) -> Vec<f64> {
-    let n = hat.len();
-    let grid = 4096;
-    let mut g = vec![0.0; n * n];
-    let mut b = vec![0.0; n];
-    let mut phi = vec![0.0; n];
-    for s in 0..grid {
-        let x = -PI + TAU * (s as f64 + 0.5) / grid as f64;
-        hat.eval(x, &mut phi);
-        for i in 0..n {
-            b[i] += phi[i] * f(x);
-            for j in 0..n {
-                g[i * n + j] += phi[i] * phi[j];
-            }
-        }
-    }
-    // Gaussian elimination on the small symmetric positive definite Gram matrix.
-    for c in 0..n {
-        for r in c + 1..n {
-            let f = g[r * n + c] / g[c * n + c];
-            for k in c..n {
-                g[r * n + k] -= f * g[c * n + k];
-            }
-            b[r] -= f * b[c];
-        }
-    }
-    let mut x = vec![0.0; n];
-    for r in (0..n).rev() {
-        let s: f64 = (r + 1..n).map(|k| g[r * n + k] * x[k]).sum();
-        x[r] = (b[r] - s) / g[r * n + r];
-    }
-    x
-}
+/// Quadrature points of the L2 projections of the true curves onto the hats.
+const PROJECTION_POINTS: usize = 4096;
 
 /// RMS over the circle of the difference between the model's curve and the projected curve.
 fn curve_rms(hat: &Hat, model: &IdentifiedModel<Hat>, which: usize, reference: &[f64]) -> f64 {
@@ -101,17 +68,6 @@ fn worst(m: &IdentifiedModel<Harmonic>, truth: &IdentifiedModel<Harmonic>) -> (S
         )
 }
 
-/// Seeded Gaussian noise by Box-Muller.
-fn noisy(x: &[f64], sigma: f64, seed: u64) -> Vec<f64> {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    x.iter()
-        .map(|&v| {
-            let (u1, u2): (f64, f64) = (rng.random_range(f64::EPSILON..1.0), rng.random());
-            circle_signal::wrap(v + sigma * (-2.0 * u1.ln()).sqrt() * (TAU * u2).cos())
-        })
-        .collect()
-}
-
 fn label(h: Harmonics) -> String {
     match h {
         Harmonics::Fixed(m) => format!("M = {m}"),
@@ -130,8 +86,8 @@ fn main() -> Result<(), Box<dyn Error>> {
     let hat = Hat::new(8)?;
     let k1 = Harmonic::new(1)?;
     let truth = truth();
-    let q_ref = hat_projection(&hat, |x| truth.autonomous(x));
-    let p_ref = hat_projection(&hat, |x| truth.parametric(x).1);
+    let q_ref = hat.project(PROJECTION_POINTS, |x| truth.autonomous(x))?;
+    let p_ref = hat.project(PROJECTION_POINTS, |x| truth.parametric(x).1)?;
     let params = |h: Harmonics| IdentifyParams::builder(clock).harmonics(h).build();
 
     let policies: Vec<Harmonics> = [1usize, 2, 3, 6, 12, 24]
@@ -214,7 +170,11 @@ fn main() -> Result<(), Box<dyn Error>> {
     let noisy_sets: Vec<(Vec<f64>, Vec<Segment>)> = sigmas
         .iter()
         .map(|&s| {
-            let xn = noisy(&x, s, 7);
+            // Box-Muller, the draw the table in docs/identification.md was made with.
+            let xn = Encoder::seeded(7)
+                .with_noise(s)?
+                .with_draw(NormalDraw::BoxMuller)
+                .observe(&x);
             let sg = segments(&xn, 0.03)?;
             Ok((xn, sg))
         })

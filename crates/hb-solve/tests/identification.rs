@@ -608,21 +608,8 @@ fn paper_dataset_harmonic_basis() {
     }
 }
 
-/// Coefficients of the L2 projection of `f` onto the hat space (normal equations of a fine grid).
-fn hat_projection(hat: &Hat, f: impl Fn(f64) -> f64) -> Vec<f64> {
-    let n = hat.len();
-    let grid = 4096;
-    let a = Mat::from_fn(grid, n, |s, i| {
-        let mut phi = vec![0.0; n];
-        hat.eval(-PI + TAU * (s as f64 + 0.5) / grid as f64, &mut phi);
-        phi[i]
-    });
-    let b = Col::from_fn(grid, |s| f(-PI + TAU * (s as f64 + 0.5) / grid as f64));
-    QrSolver::default()
-        .solve(a.as_ref(), b.as_ref())
-        .unwrap()
-        .solution
-}
+/// Quadrature points of the L2 projections of the true curves onto the hats.
+const PROJECTION_POINTS: usize = 4096;
 
 #[test]
 fn paper_dataset_hat_basis() {
@@ -647,8 +634,8 @@ fn paper_dataset_hat_basis() {
         m.damping()
     );
     // The true curves: q(x) = (1/r²) sin x, p(x) = −f cos x (and n(x) = 0).
-    let q_ref = hat_projection(&hat, |x| truth.autonomous(x));
-    let p_ref = hat_projection(&hat, |x| truth.parametric(x).1);
+    let q_ref = hat.project(PROJECTION_POINTS, |x| truth.autonomous(x)).unwrap();
+    let p_ref = hat.project(PROJECTION_POINTS, |x| truth.parametric(x).1).unwrap();
     let (mut dq, mut dp, mut dn) = (0.0, 0.0, 0.0);
     let grid = 1000;
     let mut phi = vec![0.0; 8];

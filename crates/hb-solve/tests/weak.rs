@@ -1,16 +1,13 @@
 //! The weak form, the bootstrap and the noise correction: exact manufactured cases, the paper's
 //! data set, determinism, and the effect of the correction on a noisy simulated record.
-use circle_signal::wrap;
 use hb_basis::{BasisKind, Domain, Harmonic, Hat, Polynomial};
 use hb_solve::{
     BootstrapParams, Forcing, Harmonics, IdentifiedModel, IdentifyParams, ModelForm, NoiseCorrection,
     QrSolver, ResampleBlock, SampleClock, SolveError, SvdSolver, WeakForm, assemble, assemble_weak,
     bootstrap, estimate_noise_sigma, identify, identify_from_source,
 };
+use pendulum_sim::observe::Encoder;
 use pendulum_sim::{Pendulum, SimulationConfig, Tolerances, simulate};
-use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, Normal};
 use upo_search::{CloseReturns, OrbitSource, Windows};
 
 mod common;
@@ -24,10 +21,9 @@ fn max_error<B: hb_basis::Basis>(m: &IdentifiedModel<B>) -> f64 {
         .fold(0.0, f64::max)
 }
 
+/// What an encoder with Gaussian noise of `sigma` rad and seed `seed` reports of `x`.
 fn with_noise(x: &[f64], sigma: f64, seed: u64) -> Vec<f64> {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let noise = Normal::new(0.0, sigma).unwrap();
-    x.iter().map(|&v| wrap(v + noise.sample(&mut rng))).collect()
+    Encoder::seeded(seed).with_noise(sigma).unwrap().observe(x)
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -4,6 +4,36 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
+/// Errors of writing a result file.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum OutputError {
+    /// The path names a folder, not a file.
+    #[error("--out {} is a folder; give a file name", .0.display())]
+    IsAFolder(PathBuf),
+    /// The folder the file would be written into does not exist.
+    #[error("the folder {} of --out does not exist", .0.display())]
+    NoSuchFolder(PathBuf),
+    /// No temporary file could be created in the folder.
+    #[error("cannot create a file in {}", folder.display())]
+    Create {
+        /// The folder.
+        folder: PathBuf,
+        /// Why.
+        #[source]
+        source: std::io::Error,
+    },
+    /// Writing the file, or renaming it into place, failed.
+    #[error("cannot write {}", path.display())]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: std::io::Error,
+    },
+}
+
 /// Temporary files being written; removed by [`remove_partial_files`] on an interrupt.
 static PARTIAL: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
 
@@ -17,29 +47,31 @@ pub fn remove_partial_files() {
     }
 }
 
-fn track(path: &Path, add: bool) {
+/// Registers a temporary file for [`remove_partial_files`].
+fn track(path: &Path) {
     if let Ok(mut files) = PARTIAL.lock() {
-        if add {
-            files.push(path.to_owned());
-        } else {
-            files.retain(|f| f != path);
-        }
+        files.push(path.to_owned());
     }
 }
 
-use anyhow::{Context, bail};
+/// Forgets a temporary file that was renamed into place or removed.
+fn untrack(path: &Path) {
+    if let Ok(mut files) = PARTIAL.lock() {
+        files.retain(|f| f != path);
+    }
+}
 
 /// Checks that the folder `path` would be written into exists, before any work is done.
-pub fn check_output_path(path: &Path) -> anyhow::Result<()> {
+pub fn check_output_path(path: &Path) -> Result<(), OutputError> {
     if path.is_dir() {
-        bail!("--out {} is a folder; give a file name", path.display());
+        return Err(OutputError::IsAFolder(path.to_owned()));
     }
     let parent = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
     };
     if !parent.is_dir() {
-        bail!("the folder {} of --out does not exist", parent.display());
+        return Err(OutputError::NoSuchFolder(parent.to_owned()));
     }
     Ok(())
 }
@@ -49,7 +81,7 @@ pub fn check_output_path(path: &Path) -> anyhow::Result<()> {
 pub fn write_atomically(
     path: &Path,
     write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
-) -> anyhow::Result<()> {
+) -> Result<(), OutputError> {
     check_output_path(path)?;
     let parent = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
@@ -65,20 +97,58 @@ pub fn write_atomically(
     }
     let mut tmp = builder
         .tempfile_in(parent)
-        .with_context(|| format!("cannot create a file in {}", parent.display()))?;
+        .map_err(|source| OutputError::Create {
+            folder: parent.to_owned(),
+            source,
+        })?;
     let tmp_path = tmp.path().to_owned();
-    track(&tmp_path, true);
-    let result = (|| -> anyhow::Result<()> {
+    track(&tmp_path);
+    let result = (|| -> std::io::Result<()> {
         {
             let mut buf = std::io::BufWriter::new(tmp.as_file_mut());
-            write(&mut buf).with_context(|| format!("cannot write {}", path.display()))?;
-            buf.flush()
-                .with_context(|| format!("cannot write {}", path.display()))?;
+            write(&mut buf)?;
+            buf.flush()?;
         }
-        tmp.persist(path)
-            .with_context(|| format!("cannot write {}", path.display()))?;
+        tmp.persist(path).map_err(|e| e.error)?;
         Ok(())
     })();
-    track(&tmp_path, false);
-    result
+    untrack(&tmp_path);
+    result.map_err(|source| OutputError::Write {
+        path: path.to_owned(),
+        source,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn errors_name_what_went_wrong_and_leave_no_file() {
+        let dir = tempfile::tempdir().unwrap();
+        assert!(matches!(
+            check_output_path(dir.path()),
+            Err(OutputError::IsAFolder(p)) if p == dir.path()
+        ));
+        let missing = dir.path().join("no/such/file.csv");
+        assert!(matches!(
+            write_atomically(&missing, |_| Ok(())),
+            Err(OutputError::NoSuchFolder(p)) if p == dir.path().join("no/such")
+        ));
+        let target = dir.path().join("file.csv");
+        let failed = write_atomically(&target, |w| {
+            w.write_all(b"half")?;
+            Err(std::io::Error::other("disk full"))
+        });
+        match failed {
+            Err(OutputError::Write { path, source }) => {
+                assert_eq!(path, target);
+                assert_eq!(source.to_string(), "disk full");
+            }
+            other => panic!("{other:?}"),
+        }
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+        write_atomically(&target, |w| w.write_all(b"whole")).unwrap();
+        assert_eq!(std::fs::read(&target).unwrap(), b"whole");
+    }
 }

@@ -1,12 +1,29 @@
 //! Small plotting helpers on plotters: every figure of the reports (`hbid report`, `cargo xtask
 //! reproduce`) is a scatter or a set of lines.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-use anyhow::{Context, anyhow};
 use plotters::prelude::*;
 /// Colours of series, re-exported so that users of these helpers need no plotters of their own.
 pub use plotters::style::RGBColor;
+
+/// Errors of drawing a figure.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum PlotError {
+    /// The plotting backend failed to draw the figure or to write its file.
+    #[error("drawing {}", path.display())]
+    Draw {
+        /// The figure's file.
+        path: PathBuf,
+        /// The backend's error.
+        #[source]
+        source: Box<dyn std::error::Error + Send + Sync>,
+    },
+}
+
+/// A backend's error, boxed.
+type BackendError = Box<dyn std::error::Error + Send + Sync>;
 
 /// One series of a figure.
 #[derive(Debug)]
@@ -82,24 +99,27 @@ fn split_line(points: &[(f64, f64)], threshold: f64) -> Vec<Vec<(f64, f64)>> {
 
 impl Figure<'_> {
     /// Draws the figure into `path` (`.png` or `.svg`, by extension), 900×650 pixels.
-    pub fn save(&self, path: &Path) -> anyhow::Result<()> {
+    pub fn save(&self, path: &Path) -> Result<(), PlotError> {
         let svg = path.extension().is_some_and(|e| e == "svg");
-        if svg {
-            let root = SVGBackend::new(path, (900, 650)).into_drawing_area();
-            self.draw(root)
-                .with_context(|| format!("drawing {}", path.display()))
+        let drawn = if svg {
+            self.draw(SVGBackend::new(path, (900, 650)).into_drawing_area())
         } else {
-            let root = BitMapBackend::new(path, (900, 650)).into_drawing_area();
-            self.draw(root)
-                .with_context(|| format!("drawing {}", path.display()))
-        }
+            self.draw(BitMapBackend::new(path, (900, 650)).into_drawing_area())
+        };
+        drawn.map_err(|source| PlotError::Draw {
+            path: path.to_owned(),
+            source,
+        })
     }
 
-    fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, plotters::coord::Shift>) -> anyhow::Result<()>
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: DrawingArea<DB, plotters::coord::Shift>,
+    ) -> Result<(), BackendError>
     where
         DB::ErrorType: 'static,
     {
-        let err = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow!("{e:?}");
+        let err = |e: DrawingAreaErrorKind<DB::ErrorType>| -> BackendError { Box::new(e) };
         root.fill(&WHITE).map_err(err)?;
         let (x0, x1) = self.x_range.unwrap_or_else(|| extent(&self.series, |p| p.0));
         let (y0, y1) = self.y_range.unwrap_or_else(|| extent(&self.series, |p| p.1));
@@ -170,4 +190,35 @@ pub const INK: RGBColor = RGBColor(0, 0, 0);
 /// Adds a figure (file name, caption) to a report's list.
 pub fn add_figure(figures: &mut Vec<(String, String)>, name: impl Into<String>, caption: impl Into<String>) {
     figures.push((name.into(), caption.into()));
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_figure_that_cannot_be_written_is_an_error_naming_its_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("no/such/figure.svg");
+        let figure = Figure {
+            title: "t",
+            x_label: "x",
+            y_label: "y",
+            series: vec![Series {
+                label: "",
+                points: vec![(0.0, 0.0), (1.0, 1.0)],
+                style: Style::Dots(2),
+                color: BLUE,
+            }],
+            x_range: None,
+            y_range: None,
+        };
+        match figure.save(&path) {
+            Err(PlotError::Draw { path: p, .. }) => assert_eq!(p, path),
+            other => panic!("{other:?}"),
+        }
+        let written = dir.path().join("figure.svg");
+        figure.save(&written).unwrap();
+        assert!(std::fs::metadata(&written).unwrap().len() > 0);
+    }
 }

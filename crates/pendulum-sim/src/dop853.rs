@@ -13,11 +13,36 @@ pub trait OdeSystem<const N: usize> {
 }
 
 /// Error tolerances of the adaptive step: a component's local error is held below
-/// `atol + rtol · |y|` (in the mixed 5th/3rd-order norm of DOP853).
+/// `atol + rtol · |y|` (in the mixed 5th/3rd-order norm of DOP853). Deserialising validates as
+/// [`Tolerances::new`] does.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(try_from = "TolerancesRaw", into = "TolerancesRaw")]
 pub struct Tolerances {
     rtol: f64,
     atol: f64,
+}
+
+/// The serialised form of [`Tolerances`].
+#[derive(serde::Serialize, serde::Deserialize)]
+struct TolerancesRaw {
+    rtol: f64,
+    atol: f64,
+}
+
+impl TryFrom<TolerancesRaw> for Tolerances {
+    type Error = SimError;
+    fn try_from(raw: TolerancesRaw) -> Result<Self, SimError> {
+        Self::new(raw.rtol, raw.atol)
+    }
+}
+
+impl From<Tolerances> for TolerancesRaw {
+    fn from(t: Tolerances) -> Self {
+        Self {
+            rtol: t.rtol,
+            atol: t.atol,
+        }
+    }
 }
 
 impl Tolerances {

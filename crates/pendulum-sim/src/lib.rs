@@ -19,7 +19,8 @@
 //!   `(δx, δv)' = (δv, ∂F/∂x δx + ∂F/∂v δv)`, renormalised every forcing period;
 //! - validation of identified models: [`periodic_orbits`] of the stroboscopic map by Newton
 //!   shooting (with Floquet multipliers), [`section_energy_distance`] between Poincaré sections,
-//!   and the [`whirling_fraction`].
+//!   and the [`whirling_fraction`];
+//! - [`observe`]: what an encoder reports of the simulated angle (seeded noise, then the wrap).
 //!
 //! # Example
 //!
@@ -41,6 +42,7 @@
 
 mod dop853;
 mod error;
+pub mod observe;
 mod simulate;
 mod system;
 mod tableau;

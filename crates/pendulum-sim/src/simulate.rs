@@ -39,7 +39,10 @@ impl<S: SecondOrderSystem> OdeSystem<4> for Tangent<S> {
 /// `n_0 = transient_periods · P`, `T` is the forcing period and `P` the samples per period; the
 /// integration starts at `t = 0` from the initial state. So with `phase = 0` the first sample is at
 /// `t = transient_periods · T`, at the forcing's phase zero.
+///
+/// Deserialising validates every field as the `with_*` setters do.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(try_from = "SimulationConfigRaw", into = "SimulationConfigRaw")]
 pub struct SimulationConfig {
     samples: usize,
     samples_per_period: usize,
@@ -48,6 +51,46 @@ pub struct SimulationConfig {
     forcing_period: f64,
     phase: f64,
     tolerances: Tolerances,
+}
+
+/// The serialised form of [`SimulationConfig`].
+#[derive(serde::Serialize, serde::Deserialize)]
+struct SimulationConfigRaw {
+    samples: usize,
+    samples_per_period: usize,
+    transient_periods: usize,
+    initial: [f64; 2],
+    forcing_period: f64,
+    phase: f64,
+    tolerances: Tolerances,
+}
+
+impl TryFrom<SimulationConfigRaw> for SimulationConfig {
+    type Error = SimError;
+    fn try_from(raw: SimulationConfigRaw) -> Result<Self, SimError> {
+        Ok(Self::paper()
+            .with_samples(raw.samples)?
+            .with_samples_per_period(raw.samples_per_period)?
+            .with_transient_periods(raw.transient_periods)
+            .with_initial(raw.initial[0], raw.initial[1])?
+            .with_forcing_period(raw.forcing_period)?
+            .with_phase(raw.phase)?
+            .with_tolerances(raw.tolerances))
+    }
+}
+
+impl From<SimulationConfig> for SimulationConfigRaw {
+    fn from(c: SimulationConfig) -> Self {
+        Self {
+            samples: c.samples,
+            samples_per_period: c.samples_per_period,
+            transient_periods: c.transient_periods,
+            initial: c.initial,
+            forcing_period: c.forcing_period,
+            phase: c.phase,
+            tolerances: c.tolerances,
+        }
+    }
 }
 
 fn invalid(name: &'static str, value: f64, why: &'static str) -> SimError {
@@ -268,13 +311,50 @@ pub fn poincare_section<S: SecondOrderSystem>(
 }
 
 /// Settings of a largest-Lyapunov-exponent estimate by tangent-linear integration.
+///
+/// Deserialising validates every field as the `with_*` setters do.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(try_from = "LyapunovConfigRaw", into = "LyapunovConfigRaw")]
 pub struct LyapunovConfig {
     transient_periods: usize,
     periods: usize,
     initial: [f64; 2],
     forcing_period: f64,
     tolerances: Tolerances,
+}
+
+/// The serialised form of [`LyapunovConfig`].
+#[derive(serde::Serialize, serde::Deserialize)]
+struct LyapunovConfigRaw {
+    transient_periods: usize,
+    periods: usize,
+    initial: [f64; 2],
+    forcing_period: f64,
+    tolerances: Tolerances,
+}
+
+impl TryFrom<LyapunovConfigRaw> for LyapunovConfig {
+    type Error = SimError;
+    fn try_from(raw: LyapunovConfigRaw) -> Result<Self, SimError> {
+        Ok(Self::default()
+            .with_transient_periods(raw.transient_periods)
+            .with_periods(raw.periods)?
+            .with_initial(raw.initial[0], raw.initial[1])?
+            .with_forcing_period(raw.forcing_period)?
+            .with_tolerances(raw.tolerances))
+    }
+}
+
+impl From<LyapunovConfig> for LyapunovConfigRaw {
+    fn from(c: LyapunovConfig) -> Self {
+        Self {
+            transient_periods: c.transient_periods,
+            periods: c.periods,
+            initial: c.initial,
+            forcing_period: c.forcing_period,
+            tolerances: c.tolerances,
+        }
+    }
 }
 
 impl Default for LyapunovConfig {
@@ -325,6 +405,14 @@ impl LyapunovConfig {
     pub fn with_tolerances(mut self, tolerances: Tolerances) -> Self {
         self.tolerances = tolerances;
         self
+    }
+    /// The initial state.
+    pub(crate) fn initial(&self) -> [f64; 2] {
+        self.initial
+    }
+    /// The forcing period.
+    pub(crate) fn forcing_period(&self) -> f64 {
+        self.forcing_period
     }
 }
 

@@ -29,13 +29,41 @@ impl<S: SecondOrderSystem + ?Sized> SecondOrderSystem for &S {
 ///
 /// `x'' + c x' + (1/r²) sin x − f sin(t) cos x = 0`.
 ///
-/// Construct with [`Pendulum::new`] (validated) or [`Pendulum::paper`].
+/// Construct with [`Pendulum::new`] (validated) or [`Pendulum::paper`]. Serialised as `f`, `c`
+/// and `r` only; deserialising validates them as [`Pendulum::new`] does.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "PendulumRaw", into = "PendulumRaw")]
 pub struct Pendulum {
     f: f64,
     c: f64,
     r: f64,
+    /// `1/r²`, cached for the right-hand side; derived from `r`, so never serialised.
     inv_r2: f64,
+}
+
+/// The serialised form of [`Pendulum`].
+#[derive(Serialize, Deserialize)]
+struct PendulumRaw {
+    f: f64,
+    c: f64,
+    r: f64,
+}
+
+impl TryFrom<PendulumRaw> for Pendulum {
+    type Error = SimError;
+    fn try_from(raw: PendulumRaw) -> Result<Self, SimError> {
+        Self::new(raw.f, raw.c, raw.r)
+    }
+}
+
+impl From<Pendulum> for PendulumRaw {
+    fn from(p: Pendulum) -> Self {
+        Self {
+            f: p.f,
+            c: p.c,
+            r: p.r,
+        }
+    }
 }
 
 impl Pendulum {

@@ -76,7 +76,11 @@ pub enum Seeds {
 
 /// Settings of the search for periodic orbits of the stroboscopic map by Newton shooting from a
 /// grid of seeds.
+///
+/// Deserialising validates every field as the `with_*` setters do; the phase must lie in
+/// `[0, 1)`, the Newton tolerance be positive and finite, and the iterations at least 1.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(try_from = "ShootingConfigRaw", into = "ShootingConfigRaw")]
 pub struct ShootingConfig {
     forcing_period: f64,
     phase: f64,
@@ -86,6 +90,73 @@ pub struct ShootingConfig {
     tolerances: Tolerances,
     newton_tolerance: f64,
     max_iterations: usize,
+}
+
+/// The serialised form of [`ShootingConfig`].
+#[derive(serde::Serialize, serde::Deserialize)]
+struct ShootingConfigRaw {
+    forcing_period: f64,
+    phase: f64,
+    periods: usize,
+    seeds: Seeds,
+    space: Domain,
+    tolerances: Tolerances,
+    newton_tolerance: f64,
+    max_iterations: usize,
+}
+
+impl TryFrom<ShootingConfigRaw> for ShootingConfig {
+    type Error = SimError;
+    fn try_from(raw: ShootingConfigRaw) -> Result<Self, SimError> {
+        if !(0.0..1.0).contains(&raw.phase) {
+            return Err(invalid("phase", raw.phase, "must lie in [0, 1)"));
+        }
+        if !(raw.newton_tolerance.is_finite() && raw.newton_tolerance > 0.0) {
+            return Err(invalid(
+                "newton tolerance",
+                raw.newton_tolerance,
+                "must be positive and finite",
+            ));
+        }
+        if raw.max_iterations == 0 {
+            return Err(invalid("max iterations", 0.0, "must be at least 1"));
+        }
+        let config = Self::default()
+            .with_forcing_period(raw.forcing_period)?
+            .with_periods(raw.periods)?
+            .with_space(raw.space)
+            .with_tolerances(raw.tolerances);
+        let config = match raw.seeds {
+            Seeds::Grid {
+                nx,
+                nv,
+                x_range,
+                v_range,
+            } => config.with_seeds(nx, nv, x_range, v_range)?,
+            Seeds::Points(points) => config.with_seed_points(points)?,
+        };
+        Ok(Self {
+            phase: raw.phase,
+            newton_tolerance: raw.newton_tolerance,
+            max_iterations: raw.max_iterations,
+            ..config
+        })
+    }
+}
+
+impl From<ShootingConfig> for ShootingConfigRaw {
+    fn from(c: ShootingConfig) -> Self {
+        Self {
+            forcing_period: c.forcing_period,
+            phase: c.phase,
+            periods: c.periods,
+            seeds: c.seeds,
+            space: c.space,
+            tolerances: c.tolerances,
+            newton_tolerance: c.newton_tolerance,
+            max_iterations: c.max_iterations,
+        }
+    }
 }
 
 impl Default for ShootingConfig {
@@ -360,12 +431,69 @@ pub fn energy_distance<const D: usize>(a: &[[f64; D]], b: &[[f64; D]]) -> Option
 }
 
 /// Settings of [`check_model`]: what is measured of a system to compare it with another.
+///
+/// Deserialising validates each part, that the parts share one forcing period and that the
+/// section and the Lyapunov run start from one state, as [`CheckConfig::new`] and the `with_*`
+/// setters ensure.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(try_from = "CheckConfigRaw", into = "CheckConfigRaw")]
 pub struct CheckConfig {
     section: SimulationConfig,
     lyapunov: LyapunovConfig,
     shooting: ShootingConfig,
     max_seeds: usize,
+}
+
+/// The serialised form of [`CheckConfig`]; each part validates itself when deserialised.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct CheckConfigRaw {
+    section: SimulationConfig,
+    lyapunov: LyapunovConfig,
+    shooting: ShootingConfig,
+    max_seeds: usize,
+}
+
+impl TryFrom<CheckConfigRaw> for CheckConfig {
+    type Error = SimError;
+    fn try_from(raw: CheckConfigRaw) -> Result<Self, SimError> {
+        let period = raw.section.forcing_period();
+        for other in [raw.lyapunov.forcing_period(), raw.shooting.forcing_period] {
+            if other != period {
+                return Err(invalid(
+                    "forcing period",
+                    other,
+                    "must be the same for the section, the Lyapunov exponent and the orbit search",
+                ));
+            }
+        }
+        let [x0, v0] = raw.section.initial();
+        if raw.lyapunov.initial() != [x0, v0] {
+            return Err(invalid(
+                "initial state",
+                raw.lyapunov.initial()[0],
+                "must be the same for the section and the Lyapunov exponent",
+            ));
+        }
+        let max_seeds = raw.max_seeds;
+        Self {
+            section: raw.section,
+            lyapunov: raw.lyapunov,
+            shooting: raw.shooting,
+            max_seeds,
+        }
+        .with_max_seeds(max_seeds)
+    }
+}
+
+impl From<CheckConfig> for CheckConfigRaw {
+    fn from(c: CheckConfig) -> Self {
+        Self {
+            section: c.section,
+            lyapunov: c.lyapunov,
+            shooting: c.shooting,
+            max_seeds: c.max_seeds,
+        }
+    }
 }
 
 impl CheckConfig {

@@ -314,7 +314,7 @@ pub fn save_model(model: &IdentifiedModel, path: &std::path::Path) -> anyhow::Re
     } else {
         model.to_bytes()?
     };
-    crate::output::write_atomically(path, |w| w.write_all(&bytes))
+    crate::output::write_atomically(path, |w| w.write_all(&bytes)).map_err(Into::into)
 }
 
 /// The JSON report of an identification.

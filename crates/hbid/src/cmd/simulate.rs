@@ -3,12 +3,11 @@
 use std::io::Write;
 use std::path::PathBuf;
 
-use anyhow::{Context, bail};
+use anyhow::Context;
 use clap::Args;
 use npyz::WriterBuilder;
+use pendulum_sim::observe::Encoder;
 use pendulum_sim::{Pendulum, SimulationConfig, Tolerances, simulate_with_progress};
-use rand::SeedableRng;
-use rand_distr::{Distribution, Normal};
 
 use crate::progress::Progress;
 
@@ -66,21 +65,17 @@ pub fn run(args: &SimulateArgs, quiet: bool) -> anyhow::Result<()> {
         .with_transient_periods(args.transient_periods)
         .with_initial(args.theta0, args.omega0)?
         .with_tolerances(Tolerances::relative(args.rtol)?);
-    let noise = match args.noise {
+    let encoder = match args.noise {
         None => None,
-        Some(s) if s.is_finite() && s >= 0.0 => Some(Normal::new(0.0, s).context("--noise")?),
-        Some(s) => bail!("invalid --noise {s}: the standard deviation must be finite and >= 0"),
+        Some(s) => Some(Encoder::seeded(args.seed).with_noise(s).context("--noise")?),
     };
     crate::output::check_output_path(&args.out)?;
 
     let bar = Progress::new("simulate", args.samples as u64, quiet);
     let mut traj = simulate_with_progress(&pendulum, &config, |done, _| bar.set(done as u64))?;
     bar.finish();
-    if let Some(normal) = noise {
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(args.seed);
-        for x in &mut traj.theta {
-            *x += normal.sample(&mut rng);
-        }
+    if let Some(encoder) = encoder {
+        traj.theta = encoder.observe_continuous(&traj.theta);
     }
     let wrap = !args.unwrapped;
     let npy = args
@@ -99,7 +94,8 @@ pub fn run(args: &SimulateArgs, quiet: bool) -> anyhow::Result<()> {
                 writer.extend([*t, x, *v])?;
             }
             writer.finish()
-        });
+        })
+        .map_err(Into::into);
     }
     crate::output::write_atomically(&args.out, |w: &mut dyn Write| {
         writeln!(w, "t,theta,omega")?;
@@ -109,4 +105,5 @@ pub fn run(args: &SimulateArgs, quiet: bool) -> anyhow::Result<()> {
         }
         Ok(())
     })
+    .map_err(Into::into)
 }

@@ -1,0 +1,151 @@
+//! Deserialising a validated type runs its validation: an invalid value is rejected, a valid one
+//! round-trips.
+use pendulum_sim::{
+    CheckConfig, Domain, LyapunovConfig, Pendulum, ShootingConfig, SimulationConfig, Tolerances,
+};
+use serde::Serialize;
+use serde::de::DeserializeOwned;
+use serde_json::{Value, json};
+
+/// `value` survives a JSON round trip unchanged.
+fn round_trips<T: Serialize + DeserializeOwned + PartialEq + std::fmt::Debug>(value: &T) {
+    let text = serde_json::to_string(value).unwrap();
+    let back: T = serde_json::from_str(&text).unwrap();
+    assert_eq!(&back, value, "{text}");
+}
+
+/// The JSON of `value` with the field at `path` (object keys, outermost first) replaced by `new`
+/// is rejected, and the message says why.
+fn rejects<T: Serialize + DeserializeOwned + std::fmt::Debug>(
+    value: &T,
+    path: &[&str],
+    new: Value,
+    why: &str,
+) {
+    let mut json = serde_json::to_value(value).unwrap();
+    let mut field = &mut json;
+    for key in path {
+        field = field
+            .get_mut(*key)
+            .unwrap_or_else(|| panic!("no field {key} in {path:?}"));
+    }
+    *field = new;
+    let err = serde_json::from_value::<T>(json.clone()).expect_err(&format!("accepted {json}"));
+    assert!(err.to_string().contains(why), "{err}");
+}
+
+#[test]
+fn pendulum() {
+    let p = Pendulum::new(1.2, -0.1, 0.9).unwrap();
+    round_trips(&p);
+    round_trips(&Pendulum::paper());
+    // The cached 1/r² is not part of the serialised form, so it cannot contradict r.
+    assert_eq!(
+        serde_json::to_value(p).unwrap(),
+        json!({"f": 1.2, "c": -0.1, "r": 0.9})
+    );
+    let stale: Pendulum =
+        serde_json::from_value(json!({"f": 1.2, "c": -0.1, "r": 0.9, "inv_r2": 5.0})).unwrap();
+    assert_eq!(stale, p);
+    rejects(&p, &["r"], json!(0.0), "invalid r");
+}
+
+#[test]
+fn tolerances() {
+    let t = Tolerances::new(1e-9, 0.0).unwrap();
+    round_trips(&t);
+    rejects(&t, &["rtol"], json!(0.0), "invalid rtol");
+    rejects(&t, &["rtol"], json!(1.0), "invalid rtol");
+    rejects(&t, &["atol"], json!(-1e-12), "invalid atol");
+}
+
+#[test]
+fn simulation_config() {
+    let c = SimulationConfig::paper()
+        .with_samples(100)
+        .unwrap()
+        .with_phase(0.25)
+        .unwrap()
+        .with_initial(0.3, -0.2)
+        .unwrap();
+    round_trips(&c);
+    rejects(&c, &["samples"], json!(0), "invalid samples");
+    rejects(
+        &c,
+        &["samples_per_period"],
+        json!(0),
+        "invalid samples per period",
+    );
+    rejects(&c, &["forcing_period"], json!(-1.0), "invalid forcing period");
+    rejects(&c, &["phase"], json!(1.0), "invalid phase");
+    rejects(&c, &["tolerances", "rtol"], json!(2.0), "invalid rtol");
+}
+
+#[test]
+fn lyapunov_config() {
+    let c = LyapunovConfig::default().with_periods(50).unwrap();
+    round_trips(&c);
+    rejects(&c, &["periods"], json!(0), "invalid periods");
+    rejects(&c, &["forcing_period"], json!(0.0), "invalid forcing period");
+}
+
+#[test]
+fn shooting_config() {
+    let grid = ShootingConfig::default()
+        .with_periods(2)
+        .unwrap()
+        .with_seeds(3, 4, (-1.0, 1.0), (-2.0, 2.0))
+        .unwrap()
+        .with_space(Domain::Line);
+    round_trips(&grid);
+    let points = ShootingConfig::default()
+        .with_seed_points(vec![[0.1, 0.2], [-0.3, 0.4]])
+        .unwrap();
+    round_trips(&points);
+    rejects(&grid, &["periods"], json!(0), "invalid periods");
+    rejects(&grid, &["forcing_period"], json!(0.0), "invalid forcing period");
+    rejects(&grid, &["phase"], json!(-0.5), "invalid phase");
+    rejects(
+        &grid,
+        &["newton_tolerance"],
+        json!(0.0),
+        "invalid newton tolerance",
+    );
+    rejects(&grid, &["max_iterations"], json!(0), "invalid max iterations");
+    rejects(&grid, &["seeds", "Grid", "nx"], json!(0), "invalid seeds");
+    rejects(
+        &grid,
+        &["seeds", "Grid", "x_range"],
+        json!([1.0, -1.0]),
+        "invalid seed range",
+    );
+    rejects(&points, &["seeds", "Points"], json!([]), "invalid seeds");
+}
+
+#[test]
+fn check_config() {
+    let c = CheckConfig::new(2.0, Domain::Circle, 40, 30)
+        .unwrap()
+        .with_initial(0.5, 0.1)
+        .unwrap()
+        .with_max_seeds(8)
+        .unwrap();
+    round_trips(&c);
+    rejects(&c, &["max_seeds"], json!(0), "invalid seeds");
+    rejects(&c, &["section", "samples"], json!(0), "invalid samples");
+    rejects(&c, &["lyapunov", "periods"], json!(0), "invalid periods");
+    rejects(&c, &["shooting", "periods"], json!(0), "invalid periods");
+    // Each part valid, but not the same system: the constructor never builds that.
+    rejects(
+        &c,
+        &["shooting", "forcing_period"],
+        json!(3.0),
+        "must be the same",
+    );
+    rejects(
+        &c,
+        &["lyapunov", "initial"],
+        json!([0.0, 0.0]),
+        "must be the same",
+    );
+}
