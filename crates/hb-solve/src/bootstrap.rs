@@ -32,11 +32,34 @@ pub enum ResampleBlock {
 
 /// Parameters of [`bootstrap`]; build with [`BootstrapParams::builder`], which validates.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "BootstrapParamsRaw")]
 pub struct BootstrapParams {
     resamples: usize,
     level: f64,
     seed: u64,
     block: ResampleBlock,
+}
+
+/// The serialised form of [`BootstrapParams`], built through its builder on reading.
+#[derive(Debug, Clone, Copy, Deserialize)]
+struct BootstrapParamsRaw {
+    resamples: usize,
+    level: f64,
+    seed: u64,
+    block: ResampleBlock,
+}
+
+impl TryFrom<BootstrapParamsRaw> for BootstrapParams {
+    type Error = SolveError;
+
+    fn try_from(raw: BootstrapParamsRaw) -> Result<Self, SolveError> {
+        BootstrapParams::builder()
+            .resamples(raw.resamples)
+            .level(raw.level)
+            .seed(raw.seed)
+            .block(raw.block)
+            .build()
+    }
 }
 
 /// Builder of [`BootstrapParams`].

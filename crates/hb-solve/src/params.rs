@@ -11,7 +11,7 @@ use crate::SolveError;
 /// Harmonic `j` of a period-`k` orbit has `j / k` times the forcing frequency. Harmonics at or above
 /// the Nyquist frequency of the segment (`j >= L/2` for `L = kP` samples) are never used.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
+#[serde(rename_all = "snake_case", try_from = "HarmonicsRaw")]
 #[non_exhaustive]
 pub enum Harmonics {
     /// `j = 1..=M` for every orbit, whatever its period (the paper's fixed `M`).
@@ -53,6 +53,26 @@ impl Harmonics {
             Self::ForcingCap(c) => (c * period as f64 + 1e-9).floor() as usize,
         };
         m.min(below_nyquist)
+    }
+}
+
+/// The serialised form of [`Harmonics`], validated on reading.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(rename_all = "snake_case")]
+enum HarmonicsRaw {
+    Fixed(usize),
+    ForcingCap(f64),
+}
+
+impl TryFrom<HarmonicsRaw> for Harmonics {
+    type Error = SolveError;
+
+    fn try_from(raw: HarmonicsRaw) -> Result<Self, SolveError> {
+        match raw {
+            HarmonicsRaw::Fixed(m) => Self::Fixed(m),
+            HarmonicsRaw::ForcingCap(c) => Self::ForcingCap(c),
+        }
+        .validate()
     }
 }
 
@@ -226,7 +246,7 @@ impl ModelForm {
 /// with another basis, or on the line, identification fails with
 /// [`SolveError::NoiseCorrectionUnavailable`] rather than correct wrongly.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
+#[serde(rename_all = "snake_case", try_from = "NoiseCorrectionRaw")]
 #[non_exhaustive]
 pub enum NoiseCorrection {
     /// No correction (the default).
@@ -239,6 +259,28 @@ pub enum NoiseCorrection {
     },
     /// `σ` is estimated from the record's highest frequencies ([`crate::estimate_noise_sigma`]).
     Estimated,
+}
+
+/// The serialised form of [`NoiseCorrection`], validated on reading.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(rename_all = "snake_case")]
+enum NoiseCorrectionRaw {
+    None,
+    Given { sigma: f64 },
+    Estimated,
+}
+
+impl TryFrom<NoiseCorrectionRaw> for NoiseCorrection {
+    type Error = SolveError;
+
+    fn try_from(raw: NoiseCorrectionRaw) -> Result<Self, SolveError> {
+        match raw {
+            NoiseCorrectionRaw::None => Self::None,
+            NoiseCorrectionRaw::Given { sigma } => Self::Given { sigma },
+            NoiseCorrectionRaw::Estimated => Self::Estimated,
+        }
+        .validate()
+    }
 }
 
 impl NoiseCorrection {
@@ -261,12 +303,35 @@ impl NoiseCorrection {
 ///
 /// Build with [`IdentifyParams::builder`]; [`IdentifyParamsBuilder::build`] validates.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "IdentifyParamsRaw")]
 pub struct IdentifyParams {
     clock: SampleClock,
     harmonics: Harmonics,
     form: ModelForm,
     #[serde(default)]
     noise: NoiseCorrection,
+}
+
+/// The serialised form of [`IdentifyParams`], built through its builder on reading.
+#[derive(Debug, Clone, Copy, Deserialize)]
+struct IdentifyParamsRaw {
+    clock: SampleClock,
+    harmonics: Harmonics,
+    form: ModelForm,
+    #[serde(default)]
+    noise: NoiseCorrection,
+}
+
+impl TryFrom<IdentifyParamsRaw> for IdentifyParams {
+    type Error = SolveError;
+
+    fn try_from(raw: IdentifyParamsRaw) -> Result<Self, SolveError> {
+        IdentifyParams::builder(raw.clock)
+            .harmonics(raw.harmonics)
+            .form(raw.form)
+            .noise_correction(raw.noise)
+            .build()
+    }
 }
 
 /// Builder of [`IdentifyParams`].
@@ -410,5 +475,32 @@ mod tests {
             .build()
             .unwrap();
         assert_eq!(params.noise_correction(), noise);
+    }
+
+    #[test]
+    fn deserialising_validates() {
+        let h: Harmonics = serde_json::from_str(r#"{"forcing_cap":2.0}"#).unwrap();
+        assert_eq!(h, Harmonics::ForcingCap(2.0));
+        for bad in [r#"{"fixed":0}"#, r#"{"forcing_cap":0.5}"#] {
+            assert!(serde_json::from_str::<Harmonics>(bad).is_err(), "{bad}");
+        }
+        assert!(serde_json::from_str::<NoiseCorrection>(r#"{"given":{"sigma":-1.0}}"#).is_err());
+        assert_eq!(
+            serde_json::from_str::<NoiseCorrection>(r#""estimated""#).unwrap(),
+            NoiseCorrection::Estimated
+        );
+        assert!(serde_json::from_str::<crate::WeakForm>(r#"{"window_order":1}"#).is_err());
+        let b = crate::BootstrapParams::builder().resamples(100).build().unwrap();
+        let json = serde_json::to_string(&b).unwrap();
+        assert_eq!(serde_json::from_str::<crate::BootstrapParams>(&json).unwrap(), b);
+        let bad = json.replace("0.95", "1.5");
+        assert!(bad != json && serde_json::from_str::<crate::BootstrapParams>(&bad).is_err());
+        let p = IdentifyParams::builder(SampleClock::nondimensional(25).unwrap())
+            .build()
+            .unwrap();
+        let json = serde_json::to_string(&p).unwrap();
+        assert_eq!(serde_json::from_str::<IdentifyParams>(&json).unwrap(), p);
+        let bad = json.replace(r#""forcing_cap":3.0"#, r#""forcing_cap":0.0"#);
+        assert!(bad != json && serde_json::from_str::<IdentifyParams>(&bad).is_err());
     }
 }

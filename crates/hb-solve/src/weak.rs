@@ -41,8 +41,23 @@ use crate::{Block, Forcing, Harmonics, IdentifyParams, LinearSystem, SolveError}
 /// concentrates the window on its middle, so that fewer samples carry weight. The default `p = 4`
 /// is measured in `docs/identification.md`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(try_from = "WeakFormRaw")]
 pub struct WeakForm {
     window_order: u32,
+}
+
+/// The serialised form of [`WeakForm`], validated on reading.
+#[derive(Debug, Clone, Copy, Deserialize)]
+struct WeakFormRaw {
+    window_order: u32,
+}
+
+impl TryFrom<WeakFormRaw> for WeakForm {
+    type Error = SolveError;
+
+    fn try_from(raw: WeakFormRaw) -> Result<Self, SolveError> {
+        Self::new(raw.window_order)
+    }
 }
 
 impl Default for WeakForm {
