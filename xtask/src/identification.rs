@@ -5,12 +5,9 @@ use std::f64::consts::{PI, TAU};
 use std::fmt::Write as _;
 use std::path::Path;
 
-use hb_basis::{Basis, BasisKind, Harmonic, Hat};
-use hb_solve::{IdentifiedModel, IdentifyParams, QrSolver, SampleClock, WeakForm, identify};
-use pendulum_sim::{
-    CheckConfig, Domain, ModelCheck, Pendulum, SecondOrderSystem, check_model, section_energy_distance,
-};
-use upo_search::Segment;
+use hb_basis::{Basis, Harmonic, Hat};
+use hb_solve::IdentifiedModel;
+use pendulum_sim::{ModelCheck, Pendulum, section_energy_distance};
 
 use hbid::plot::{BLUE, Figure, GREY, ORANGE, RED, Series, Style};
 
@@ -36,70 +33,6 @@ pub struct Identified {
     pub label: &'static str,
     pub file: &'static str,
     pub model: IdentifiedModel,
-}
-
-/// Identifies the harmonic (K = 1) and 8-hat models from the close-return segments.
-pub fn identify_upo(x: &[f64], t0: f64, segments: &[Segment]) -> anyhow::Result<Vec<Identified>> {
-    let clock = SampleClock::nondimensional(25)?.with_start_time(t0)?;
-    let params = IdentifyParams::builder(clock).build()?;
-    let mut out = Vec::new();
-    for (label, file, basis) in [
-        (
-            "harmonic K = 1, UPOs",
-            "model_harmonic_upo.json",
-            BasisKind::from(Harmonic::new(1)?),
-        ),
-        (
-            "8 hats, UPOs",
-            "model_hat8_upo.json",
-            BasisKind::from(Hat::new(8)?),
-        ),
-    ] {
-        let model = identify(
-            basis,
-            x,
-            segments,
-            &params,
-            &hb_solve::HarmonicBalance,
-            &QrSolver::default(),
-        )?;
-        out.push(Identified { label, file, model });
-    }
-    Ok(out)
-}
-
-/// Identifies the harmonic (K = 1) and 8-hat models by the weak form on plain windows (the
-/// defaults: two forcing periods stepped by one).
-pub fn identify_windowed(x: &[f64], t0: f64) -> anyhow::Result<Vec<Identified>> {
-    let clock = SampleClock::nondimensional(25)?.with_start_time(t0)?;
-    let params = IdentifyParams::builder(clock)
-        .harmonics(WeakForm::DEFAULT_HARMONICS)
-        .build()?;
-    let windows = upo_search::Windows::new(&upo_search::SampleClock::nondimensional(25)?)?.windows(x)?;
-    let mut out = Vec::new();
-    for (label, file, basis) in [
-        (
-            "harmonic K = 1, windowed",
-            "model_harmonic_windowed.json",
-            BasisKind::from(Harmonic::new(1)?),
-        ),
-        (
-            "8 hats, windowed",
-            "model_hat8_windowed.json",
-            BasisKind::from(Hat::new(8)?),
-        ),
-    ] {
-        let model = identify(
-            basis,
-            x,
-            &windows,
-            &params,
-            &WeakForm::default(),
-            &QrSolver::default(),
-        )?;
-        out.push(Identified { label, file, model });
-    }
-    Ok(out)
 }
 
 /// Table I: the paper, the truth, and each harmonic-basis model side by side.
@@ -266,21 +199,6 @@ pub fn hat_curves(
 pub struct Validation {
     pub label: String,
     pub check: ModelCheck,
-}
-
-pub fn validate<S: SecondOrderSystem + Sync>(
-    label: &str,
-    system: &S,
-    points: usize,
-    lyapunov_periods: usize,
-    initial: (f64, f64),
-) -> anyhow::Result<Validation> {
-    let cfg = CheckConfig::new(TAU, Domain::Circle, points, lyapunov_periods)?
-        .with_initial(initial.0, initial.1)?;
-    Ok(Validation {
-        label: label.to_owned(),
-        check: check_model(system, &cfg)?,
-    })
 }
 
 /// The validation table and figure 8.

@@ -6,15 +6,18 @@ use std::time::{Duration, Instant};
 
 use anyhow::Context;
 use circle_signal::wrap;
-use indicatif::{ProgressBar, ProgressStyle};
-use pendulum_sim::{Pendulum, SimulationConfig, simulate};
-
-use circle_signal::{RotationSplit, unwrap};
-use upo_search::{Catalogue, CloseReturns, Segment};
-
-use crate::identification::{
-    hat_curves, identify_upo, identify_windowed, table_one, validate, validation_section,
+use hb_basis::{BasisKind, Harmonic, Hat};
+use hbid::pipeline::{
+    Embedded, InitialState, Method, ModelSpec, Pipeline, PipelineOptions, Record, RecordComparison, Stage,
+    ValidationOptions,
 };
+use indicatif::{ProgressBar, ProgressStyle};
+use pendulum_sim::{Domain, Pendulum, SimulationConfig, simulate};
+
+use circle_signal::{RotationSplit, SampleClock, unwrap};
+use upo_search::{Catalogue, Segment};
+
+use crate::identification::{Identified, Validation, hat_curves, table_one, validation_section};
 use hbid::plot::{BLUE, Figure, GREY, ORANGE, RED, Series, Style};
 
 /// Sizes of a run.
@@ -42,28 +45,95 @@ impl Plan {
     }
 }
 
+/// The identified models of the report: label, file, method and basis, in the pipeline's order
+/// (the harmonic basis K = 1 and 8 hats, on the close-return orbits and on plain windows).
+fn models() -> anyhow::Result<[(&'static str, &'static str, Method, BasisKind); 4]> {
+    let (harmonic, hat) = (BasisKind::from(Harmonic::new(1)?), BasisKind::from(Hat::new(8)?));
+    Ok([
+        (
+            "harmonic K = 1, UPOs",
+            "model_harmonic_upo.json",
+            Method::Upo,
+            harmonic,
+        ),
+        ("8 hats, UPOs", "model_hat8_upo.json", Method::Upo, hat),
+        (
+            "harmonic K = 1, windowed",
+            "model_harmonic_windowed.json",
+            Method::Windowed,
+            harmonic,
+        ),
+        (
+            "8 hats, windowed",
+            "model_hat8_windowed.json",
+            Method::Windowed,
+            hat,
+        ),
+    ])
+}
+
 /// Wall time of each stage, for the report.
 #[derive(Default)]
-struct Timings(Vec<(&'static str, Duration)>);
+struct Timings {
+    done: Vec<(&'static str, Duration)>,
+    current: Option<(&'static str, Instant, ProgressBar)>,
+}
 
 impl Timings {
-    /// Runs `work` as a stage with a spinner on stderr and records its wall time.
-    fn stage<T>(
-        &mut self,
-        name: &'static str,
-        work: impl FnOnce(&ProgressBar) -> anyhow::Result<T>,
-    ) -> anyhow::Result<T> {
+    /// Ends the current stage, if any, and starts `name` with a spinner on stderr (nothing if
+    /// `name` is already running).
+    fn start(&mut self, name: &'static str) {
+        if self
+            .current
+            .as_ref()
+            .is_some_and(|(current, ..)| *current == name)
+        {
+            return;
+        }
+        self.end();
         let bar = ProgressBar::new_spinner();
         bar.set_style(ProgressStyle::with_template("{spinner} {msg} ({elapsed})").expect("valid template"));
         bar.set_message(name);
         bar.enable_steady_tick(Duration::from_millis(120));
-        let start = Instant::now();
-        let out = work(&bar).with_context(|| format!("stage '{name}'"))?;
-        let took = start.elapsed();
-        bar.finish_and_clear();
-        eprintln!("{name:<28} {:>8.3} s", took.as_secs_f64());
-        self.0.push((name, took));
-        Ok(out)
+        self.current = Some((name, Instant::now(), bar));
+    }
+
+    /// Ends the current stage and records its wall time.
+    fn end(&mut self) {
+        if let Some((name, start, bar)) = self.current.take() {
+            let took = start.elapsed();
+            bar.finish_and_clear();
+            eprintln!("{name:<28} {:>8.3} s", took.as_secs_f64());
+            self.done.push((name, took));
+        }
+    }
+
+    /// Ends the current stage with the outcome of its work: an error names the stage.
+    fn finish<T, E>(&mut self, outcome: Result<T, E>) -> anyhow::Result<T>
+    where
+        anyhow::Error: From<E>,
+    {
+        match outcome {
+            Ok(value) => {
+                self.end();
+                Ok(value)
+            }
+            Err(e) => {
+                let name = self.current.take().map_or("", |(name, ..)| name);
+                Err(anyhow::Error::from(e).context(format!("stage '{name}'")))
+            }
+        }
+    }
+
+    /// Runs `work` as a stage and records its wall time.
+    fn stage<T>(
+        &mut self,
+        name: &'static str,
+        work: impl FnOnce() -> anyhow::Result<T>,
+    ) -> anyhow::Result<T> {
+        self.start(name);
+        let outcome = work();
+        self.finish(outcome)
     }
 }
 
@@ -77,51 +147,85 @@ pub fn run(out: &Path, quick: bool) -> anyhow::Result<()> {
 
     // 1. The data set, as hbid's defaults make it.
     let config = SimulationConfig::paper().with_samples(plan.samples)?;
-    let trajectory = times.stage("simulate data set", |_| Ok(simulate(&pendulum, &config)?))?;
+    let trajectory = times.stage("simulate data set", || Ok(simulate(&pendulum, &config)?))?;
     let x = trajectory.wrapped();
 
+    // 2. The pipeline with the paper's settings: the delay from the AMI (16 boxes), the dimension
+    // by false nearest neighbours in both metrics, close returns at e = 3 %, periods 1..16,
+    // d = 2; every model measured from θ = 0.1, θ' = 0 like the true pendulum below.
+    let clock = SampleClock::nondimensional(25)?.with_start_time(trajectory.t[0])?;
+    let validation = ValidationOptions::default()
+        .with_section_points(plan.section_points)?
+        .with_lyapunov_periods(plan.lyapunov_periods)?
+        .with_initial(InitialState::Given { x: 0.1, v: 0.0 })?
+        .with_record_comparison(RecordComparison::None)?;
+    let specs = models()?;
+    let options = PipelineOptions {
+        embed: hbid::pipeline::EmbedOptions::default().with_compared_metric(Domain::Line),
+        models: specs
+            .iter()
+            .map(|&(_, _, method, basis)| ModelSpec::new(method, basis))
+            .collect(),
+        validation,
+        ..PipelineOptions::default()
+    };
+    let pipeline = Pipeline::new(Record::new(&x, clock, Domain::Circle)?, options)?;
+
     // 3. Delay and embedding dimension (paper section 3.1), both metrics.
-    let embed = times.stage("AMI and false nearest neighbours", |_| embed_stage(&x))?;
+    let embed = times.stage("AMI and false nearest neighbours", || Ok(pipeline.embed()?))?;
     let delay = embed.delay;
 
-    // 4. Unstable periodic orbits by close returns (paper section 3.2): e = 3 %, periods 1..16, d = 2.
-    let search = CloseReturns::builder(&upo_search::SampleClock::nondimensional(25)?, delay)
-        .tolerance(0.03)
-        .max_period(16)
-        .dimension(2)
-        .build()?;
-    let catalogue = times.stage("UPO search (close returns)", |_| Ok(search.catalogue(&x)?))?;
+    // 4. Unstable periodic orbits by close returns (paper section 3.2), and the plain windows.
+    let segments = times.stage("UPO search (close returns)", || Ok(pipeline.segments(&embed)?))?;
+    let catalogue = &segments.catalogue;
 
-    // 5. Identification by harmonic balance on the UPOs (paper section 4.2).
-    let segments: Vec<Segment> = catalogue.segments().to_vec();
-    let mut models = times.stage("identification (UPOs)", |_| {
-        identify_upo(&x, trajectory.t[0], &segments)
-    })?;
-    // ... and by the weak form on plain windows, beside it.
-    models.extend(times.stage("identification (windowed)", |_| {
-        identify_windowed(&x, trajectory.t[0])
-    })?);
+    // 5. Identification by harmonic balance on the UPOs (paper section 4.2), and by the weak
+    // form on plain windows beside it.
+    let identified = pipeline.identify(&segments, |stage| {
+        if let Stage::Identify { method, .. } = stage {
+            times.start(match method {
+                Method::Upo => "identification (UPOs)",
+                Method::Windowed => "identification (windowed)",
+            });
+        }
+    });
+    let identified = times.finish(identified)?;
 
     // 6. Validation: every model measured as the truth is (paper section 5, and numbers).
-    let (points, lyap) = (plan.section_points, plan.lyapunov_periods);
-    let truth = times.stage("validation: truth", |_| {
-        validate("true pendulum", &pendulum, points, lyap, (0.1, 0.0))
+    let truth = times.stage("validation: truth", || {
+        Ok(Validation {
+            label: "true pendulum".to_owned(),
+            check: validation.check(&pendulum, pipeline.record())?,
+        })
     })?;
-    let floor = times.stage("validation: floor", |_| {
-        validate(
-            "true pendulum, another initial state",
-            &pendulum,
-            points,
-            lyap,
-            (1.0, 0.5),
-        )
+    let floor = times.stage("validation: floor", || {
+        Ok(Validation {
+            label: "true pendulum, another initial state".to_owned(),
+            check: validation
+                .with_initial(InitialState::Given { x: 1.0, v: 0.5 })?
+                .check(&pendulum, pipeline.record())?,
+        })
     })?;
-    let checks = times.stage("validation: models", |_| {
-        models
-            .iter()
-            .map(|m| validate(m.label, &m.model, points, lyap, (0.1, 0.0)))
-            .collect::<anyhow::Result<Vec<_>>>()
+    let measured = times.stage("validation: models", || {
+        Ok(pipeline.validate(&embed, &identified, |_| {})?)
     })?;
+    let models: Vec<Identified> = specs
+        .iter()
+        .zip(identified)
+        .map(|(&(label, file, ..), id)| Identified {
+            label,
+            file,
+            model: id.model,
+        })
+        .collect();
+    let checks: Vec<Validation> = models
+        .iter()
+        .zip(measured.models)
+        .map(|(m, v)| Validation {
+            label: m.label.to_owned(),
+            check: v.check,
+        })
+        .collect();
     for m in &models {
         let path = out.join(m.file);
         std::fs::write(&path, m.model.to_json()?)
@@ -129,8 +233,8 @@ pub fn run(out: &Path, quick: bool) -> anyhow::Result<()> {
     }
 
     // Figures.
-    times.stage("figures", |_| {
-        orbit_figures(out, &x, &catalogue, delay, &mut figures)?;
+    times.stage("figures", || {
+        orbit_figures(out, &x, catalogue, delay, &mut figures)?;
         embed_figures(out, &embed, &mut figures)?;
         let phase_plane: Vec<(f64, f64)> = x.iter().zip(&x[delay..]).map(|(&a, &b)| (a, b)).collect();
         let name = "fig2a_reconstructed_phase_plane.png";
@@ -226,7 +330,7 @@ pub fn run(out: &Path, quick: bool) -> anyhow::Result<()> {
         plan.samples
     )?;
     embed_section(&mut report, &embed)?;
-    upo_section(&mut report, &catalogue, search.absolute_tolerance(&x)?)?;
+    upo_section(&mut report, catalogue, catalogue.tolerance())?;
     table_one(
         &mut report,
         &models
@@ -260,10 +364,10 @@ pub fn run(out: &Path, quick: bool) -> anyhow::Result<()> {
     }
     writeln!(report, "## Wall time of each stage\n")?;
     writeln!(report, "| stage | seconds |\n| --- | --- |")?;
-    for (name, took) in &times.0 {
+    for (name, took) in &times.done {
         writeln!(report, "| {name} | {:.3} |", took.as_secs_f64())?;
     }
-    let total: f64 = times.0.iter().map(|(_, d)| d.as_secs_f64()).sum();
+    let total: f64 = times.done.iter().map(|(_, d)| d.as_secs_f64()).sum();
     writeln!(report, "| total | {total:.3} |")?;
     let path = out.join("README.md");
     std::fs::write(&path, report).with_context(|| format!("cannot write {}", path.display()))?;
@@ -452,36 +556,8 @@ fn orbit_figures(
     Ok(())
 }
 
-/// What the embedding stage found.
-struct EmbedResult {
-    delay: usize,
-    ami: Vec<f64>,
-    fnn_circle: embedding::FnnResult,
-    fnn_linear: embedding::FnnResult,
-}
-
-fn embed_stage(x: &[f64]) -> anyhow::Result<EmbedResult> {
-    use embedding::{AmiParams, Domain, FnnParams, average_mutual_information, false_nearest_neighbours};
-    let ami = average_mutual_information(
-        x,
-        &AmiParams::new(Domain::Circle).with_bins(16)?.with_max_lag(40)?,
-    )?;
-    let delay = ami.delay()?;
-    let fnn = |metric| -> anyhow::Result<_> {
-        Ok(false_nearest_neighbours(
-            x,
-            &FnnParams::new(metric, delay)?.with_max_dim(8)?,
-        )?)
-    };
-    Ok(EmbedResult {
-        delay,
-        ami: ami.values,
-        fnn_circle: fnn(Domain::Circle)?,
-        fnn_linear: fnn(Domain::Line)?,
-    })
-}
-
-fn embed_section(report: &mut String, e: &EmbedResult) -> anyhow::Result<()> {
+fn embed_section(report: &mut String, e: &Embedded) -> anyhow::Result<()> {
+    let linear = linear_fnn(e)?;
     writeln!(report, "## Delay and embedding dimension\n")?;
     let dims = |r: &embedding::FnnResult| r.minimum_dimension().map_or("none".to_owned(), |d| d.to_string());
     writeln!(report, "| quantity | paper | this run |\n| --- | --- | --- |")?;
@@ -493,15 +569,15 @@ fn embed_section(report: &mut String, e: &EmbedResult) -> anyhow::Result<()> {
     writeln!(
         report,
         "| embedding dimension (false neighbours < {}) | 4 | {} (circle metric), {} (linear metric) |\n",
-        e.fnn_circle.fraction_threshold,
-        dims(&e.fnn_circle),
-        dims(&e.fnn_linear)
+        e.fnn.fraction_threshold,
+        dims(&e.fnn),
+        dims(linear)
     )?;
     writeln!(
         report,
         "| d | false fraction, circle metric | false fraction, linear metric |\n| --- | --- | --- |"
     )?;
-    for (c, l) in e.fnn_circle.levels.iter().zip(&e.fnn_linear.levels) {
+    for (c, l) in e.fnn.levels.iter().zip(&linear.levels) {
         writeln!(
             report,
             "| {} | {:.4} | {:.4} |",
@@ -514,11 +590,20 @@ fn embed_section(report: &mut String, e: &EmbedResult) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn embed_figures(out: &Path, e: &EmbedResult, figures: &mut Vec<(String, String)>) -> anyhow::Result<()> {
+/// False nearest neighbours with the linear metric, asked of the pipeline beside the circle's.
+fn linear_fnn(e: &Embedded) -> anyhow::Result<&embedding::FnnResult> {
+    e.fnn_compared
+        .as_ref()
+        .context("the pipeline was asked for the linear metric's false nearest neighbours")
+}
+
+fn embed_figures(out: &Path, e: &Embedded, figures: &mut Vec<(String, String)>) -> anyhow::Result<()> {
+    let linear = linear_fnn(e)?;
     let name = "fig3_mutual_information.png";
     // Lags 0 and 1 are the entropy and near it, far above the rest: the frame starts at lag 2.
     let curve: Vec<(f64, f64)> = e
         .ami
+        .values
         .iter()
         .enumerate()
         .skip(2)
@@ -539,13 +624,13 @@ fn embed_figures(out: &Path, e: &EmbedResult, figures: &mut Vec<(String, String)
             },
             Series {
                 label: "first minimum",
-                points: vec![(e.delay as f64, e.ami[e.delay])],
+                points: vec![(e.delay as f64, e.ami.values[e.delay])],
                 style: Style::Dots(6),
                 color: RED,
             },
         ],
         x_range: None,
-        y_range: Some((0.0, 1.05 * e.ami.get(2).copied().unwrap_or(1.0))),
+        y_range: Some((0.0, 1.05 * e.ami.values.get(2).copied().unwrap_or(1.0))),
     }
     .save(&out.join(name))?;
     hbid::plot::add_figure(
@@ -564,7 +649,7 @@ fn embed_figures(out: &Path, e: &EmbedResult, figures: &mut Vec<(String, String)
         series: vec![
             Series {
                 label: "circle metric",
-                points: pts(&e.fnn_circle),
+                points: pts(&e.fnn),
                 style: Style::Line {
                     break_above: f64::INFINITY,
                 },
@@ -572,7 +657,7 @@ fn embed_figures(out: &Path, e: &EmbedResult, figures: &mut Vec<(String, String)
             },
             Series {
                 label: "linear metric",
-                points: pts(&e.fnn_linear),
+                points: pts(linear),
                 style: Style::Line {
                     break_above: f64::INFINITY,
                 },

@@ -1,8 +1,10 @@
 //! The `hbid` command line: identify the equation of motion of a forced oscillator from a
 //! measured record, and the input and output plumbing the subcommands share.
 //!
-//! This library half exists so that the readers can be tested and fuzzed on their own; the
-//! binary `hbid` is the user-facing part.
+//! This library half holds what the binary `hbid` (the user-facing part) and `cargo xtask` share
+//! and what must be tested on its own: the readers ([`input`], tested and fuzzed on their own),
+//! the whole analysis of a record from its samples to validated models ([`pipeline`]: no printing,
+//! no files), atomic output files ([`output`]) and the figures ([`plot`]).
 //!
 //! # Example
 //!
@@ -16,4 +18,5 @@
 
 pub mod input;
 pub mod output;
+pub mod pipeline;
 pub mod plot;

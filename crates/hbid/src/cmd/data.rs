@@ -9,6 +9,7 @@ use clap::Args;
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use embedding::AmiParams;
 use hbid::input::{Column, InputError, ReadOptions, Role, UniformRecord, read_path};
+use hbid::pipeline::{Record, SearchOptions};
 
 /// The command-line values of a [`Domain`]: `circle` or `line` (`linear` too where `also_linear`,
 /// the name classic embedding tools give plain differences).
@@ -67,6 +68,11 @@ impl Data {
             self.clock.step(),
             self.p
         )
+    }
+
+    /// The record as the pipeline takes it.
+    pub fn record(&self) -> anyhow::Result<Record<'_>> {
+        Ok(Record::new(&self.x, self.clock, self.domain)?)
     }
 }
 
@@ -157,14 +163,17 @@ pub struct SearchArgs {
 }
 
 impl SearchArgs {
+    /// The search's options, validated.
+    pub fn options(&self) -> anyhow::Result<SearchOptions> {
+        Ok(SearchOptions::default()
+            .with_tolerance(self.tolerance)?
+            .with_max_period(self.max_period)?
+            .with_dimension(self.dim)?)
+    }
+
     /// The close-return search on `data` with `delay`, validated.
     pub fn close_returns(&self, data: &Data, delay: usize) -> anyhow::Result<upo_search::CloseReturns> {
-        Ok(upo_search::CloseReturns::builder(&data.clock, delay)
-            .tolerance(self.tolerance)
-            .max_period(self.max_period)
-            .dimension(self.dim)
-            .domain(data.domain)
-            .build()?)
+        Ok(self.options()?.close_returns(&data.record()?, delay)?)
     }
 
     /// The delay: the one given, or the first minimum of the AMI. The search's options are checked

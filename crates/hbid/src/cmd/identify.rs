@@ -7,37 +7,15 @@ use circle_signal::{Domain, Segment};
 use clap::{Args, ValueEnum};
 use hb_basis::{BasisKind, Harmonic, Hat, Polynomial};
 use hb_solve::{
-    Assembly, Bootstrap, BootstrapParams, Forcing, HarmonicBalance, Harmonics, IdentifiedModel,
-    IdentifyParams, LstsqSolver, ModelForm, NoiseCorrection, QrSolver, SvdSolver, WeakForm, bootstrap_fit,
-    build_system,
+    BootstrapParams, Forcing, Harmonics, IdentifiedModel, LstsqSolver, ModelForm, NoiseCorrection, QrSolver,
+    SvdSolver, WeakForm,
 };
+use hbid::pipeline::{Identification, ModelSpec, Setup, WindowOptions};
 use upo_search::Windows;
 
+pub use hbid::pipeline::Method;
+
 use super::data::{Data, InputArgs, SearchArgs};
-
-/// Identification method.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum Method {
-    /// The paper's: harmonic balance over unstable periodic orbits found by close returns.
-    Upo,
-    /// The weak form: harmonic balance of the windowed equation over plain windows of the record.
-    Windowed,
-}
-
-impl Method {
-    /// The assembly of the method: the one place the command line turns a method into rows.
-    pub fn assembly(self, weak: WeakForm) -> Box<dyn Assembly> {
-        match self {
-            Method::Upo => Box::new(HarmonicBalance),
-            Method::Windowed => Box::new(weak),
-        }
-    }
-
-    /// The name used in reports and JSON (the assembly's).
-    pub fn name(self) -> &'static str {
-        self.assembly(WeakForm::default()).name()
-    }
-}
 
 /// Least-squares solver.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -129,65 +107,26 @@ pub fn parse_basis(text: &str) -> anyhow::Result<BasisKind> {
     Ok(basis)
 }
 
-/// Everything but the data: basis, parameters and solver, checked before any work.
-pub struct Setup {
-    pub basis: BasisKind,
-    pub basis_name: String,
-    pub params: IdentifyParams,
-    pub solver: Box<dyn LstsqSolver>,
-    pub bootstrap: Option<BootstrapParams>,
-    pub assembly: Box<dyn Assembly>,
-}
-
-/// An identified model with its bootstrap intervals.
-pub struct Identification {
-    pub model: IdentifiedModel,
-    pub intervals: Option<Bootstrap>,
-}
-
-impl Setup {
-    /// Assembles the rows of the method over `segments`, solves, and bootstraps.
-    pub fn identify(&self, x: &[f64], segments: &[Segment]) -> anyhow::Result<Identification> {
-        self.identify_in_stages(x, segments, |_| {})
-    }
-
-    /// [`Setup::identify`], calling `stage` with the name of each stage as it starts.
-    pub fn identify_in_stages(
-        &self,
-        x: &[f64],
-        segments: &[Segment],
-        mut stage: impl FnMut(&'static str),
-    ) -> anyhow::Result<Identification> {
-        stage("assemble");
-        let system = build_system(&self.basis, x, segments, &self.params, self.assembly.as_ref())?;
-        stage("solve");
-        let solver = self.solver.as_ref();
-        let fit = system.solve(solver)?;
-        let model = IdentifiedModel::from_fit(self.basis, &self.params, &system, &fit, solver.name())?;
-        let intervals = match &self.bootstrap {
-            Some(b) => {
-                stage("bootstrap");
-                Some(bootstrap_fit(&system, &fit, solver, b)?)
-            }
-            None => None,
-        };
-        Ok(Identification { model, intervals })
-    }
-}
-
 impl IdentifyArgs {
+    /// The setup of the chosen method on `data`, every option checked.
     pub fn setup(&self, data: &Data) -> anyhow::Result<Setup> {
-        self.setup_for(data, self.method)
+        Ok(self.spec(data.domain, self.method)?.setup(&data.clock)?)
     }
 
-    /// [`IdentifyArgs::setup`] for a method other than the one chosen on the command line.
-    pub fn setup_for(&self, data: &Data, method: Method) -> anyhow::Result<Setup> {
-        let basis_name = self.basis.clone().unwrap_or_else(|| match data.domain {
+    /// The basis as named on the command line (default: harmonic:1 on the circle, poly:3 on the
+    /// line), for the outputs.
+    pub fn basis_name(&self, domain: Domain) -> String {
+        self.basis.clone().unwrap_or_else(|| match domain {
             Domain::Circle => "harmonic:1".to_owned(),
             Domain::Line => "poly:3".to_owned(),
-        });
-        let basis = parse_basis(&basis_name)?;
-        let forcing = match self.forcing.unwrap_or(match data.domain {
+        })
+    }
+
+    /// What these options ask to identify by `method` (which may differ from the one chosen on the
+    /// command line) on a record in `domain`.
+    pub fn spec(&self, domain: Domain, method: Method) -> anyhow::Result<ModelSpec> {
+        let basis = parse_basis(&self.basis_name(domain))?;
+        let forcing = match self.forcing.unwrap_or(match domain {
             Domain::Circle => ForcingArg::None,
             Domain::Line => ForcingArg::Identified,
         }) {
@@ -198,12 +137,14 @@ impl IdentifyArgs {
         if self.no_parametric {
             form = form.without_parametric_terms();
         }
-        let assembly = method.assembly(WeakForm::new(self.window_order)?);
-        let harmonics = match self.harmonics {
+        let mut spec = ModelSpec::new(method, basis)
+            .with_form(form)
+            .with_weak_form(WeakForm::new(self.window_order)?);
+        match self.harmonics {
             Some(0) => bail!("--harmonics must be at least 1"),
-            Some(m) => Harmonics::Fixed(m),
-            None => assembly.default_harmonics(),
-        };
+            Some(m) => spec = spec.with_harmonics(Harmonics::Fixed(m))?,
+            None => {}
+        }
         let noise = match self.noise_sigma.as_deref() {
             None => NoiseCorrection::None,
             Some("auto") => NoiseCorrection::Estimated,
@@ -213,48 +154,37 @@ impl IdentifyArgs {
                     .map_err(|_| anyhow::anyhow!("--noise-sigma '{text}': a number of radians or auto"))?,
             },
         };
-        let params = IdentifyParams::builder(data.clock)
-            .form(form)
-            .harmonics(harmonics)
-            .noise_correction(noise)
-            .build()?;
         let solver: Box<dyn LstsqSolver> = match self.solver {
             SolverArg::Qr => Box::new(QrSolver::default()),
             SolverArg::Svd => Box::new(SvdSolver::default()),
         };
-        if self.window_periods == 0 {
-            bail!("--window-periods must be at least 1");
-        }
-        let bootstrap = if self.bootstrap == 0 {
-            None
-        } else {
-            Some(
+        spec = spec.with_noise_correction(noise).with_solver(solver);
+        self.windows()?;
+        if self.bootstrap > 0 {
+            spec = spec.with_bootstrap(
                 BootstrapParams::builder()
                     .resamples(self.bootstrap)
                     .level(self.level)
                     .seed(self.seed)
                     .build()?,
-            )
-        };
-        Ok(Setup {
-            basis,
-            basis_name,
-            params,
-            solver,
-            bootstrap,
-            assembly,
-        })
+            );
+        }
+        Ok(spec)
+    }
+
+    /// The options of the windowed method's windows.
+    pub fn windows(&self) -> anyhow::Result<WindowOptions> {
+        if self.window_periods == 0 {
+            bail!("--window-periods must be at least 1");
+        }
+        Ok(WindowOptions::default().with_periods(self.window_periods)?)
     }
 
     /// The segments of the chosen method: close returns (with the delay) or plain windows.
     pub fn segments(&self, data: &Data, delay: usize, method: Method) -> anyhow::Result<Vec<Segment>> {
         Ok(match method {
             Method::Upo => self.search.close_returns(data, delay)?.search(&data.x)?,
-            Method::Windowed => Windows::builder(&data.clock)
-                .periods(self.window_periods)
-                .domain(data.domain)
-                .build()?
-                .windows(&data.x)?,
+            Method::Windowed => self.windows()?.windows(&data.record()?)?.windows(&data.x)?,
         })
     }
 }
@@ -289,19 +219,20 @@ pub fn run(args: &IdentifyArgs, quiet: bool, timings: bool) -> anyhow::Result<()
         ),
     };
     let id = setup
-        .identify_in_stages(&data.x, &segments, |name| stages.start(name))
+        .identify_with_progress(&data.x, &segments, |step| stages.start(step.name()))
         .with_context(|| found)?;
     stages.finish();
     if let Some(path) = &args.save_model {
         save_model(&id.model, path)?;
     }
+    let basis_name = args.basis_name(data.domain);
     if args.json {
         println!(
             "{}",
-            serde_json::to_string_pretty(&json(&id, args.method.name(), &setup.basis_name))?
+            serde_json::to_string_pretty(&json(&id, args.method.name(), &basis_name))?
         );
     } else {
-        print_table(&id, args.method.name(), &setup.basis_name);
+        print_table(&id, args.method.name(), &basis_name);
     }
     Ok(())
 }

@@ -6,15 +6,16 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use clap::Args;
-use embedding::{AmiParams, FnnParams, FnnResult, false_nearest_neighbours};
-use hbid::plot::{BLUE, Figure, GREY, ORANGE, RED, Series, Style, add_figure};
-use pendulum_sim::{
-    CheckConfig, Domain, ModelCheck, SimulationConfig, check_model, energy_distance, simulate,
+use embedding::EmbeddingError;
+use hbid::pipeline::{
+    EmbedOptions, Identification, InitialState, Outcome, Pipeline, PipelineError, PipelineOptions,
+    RecordComparison, Stage, Validation, ValidationOptions,
 };
-use upo_search::Catalogue;
+use hbid::plot::{BLUE, Figure, GREY, ORANGE, RED, Series, Style, add_figure};
+use pendulum_sim::Domain;
 
-use super::data::{Data, ami};
-use super::identify::{Identification, IdentifyArgs, Method, json};
+use super::data::Data;
+use super::identify::{IdentifyArgs, Method, json};
 use crate::progress::Progress;
 
 /// Options of `hbid report`.
@@ -30,50 +31,14 @@ pub struct ReportArgs {
     pub validation_periods: usize,
 }
 
+/// The methods of the report, in its order.
+const METHODS: [Method; 2] = [Method::Upo, Method::Windowed];
+
 /// One method's identification and its checks.
-struct MethodResult {
+struct MethodResult<'a> {
     method: Method,
-    basis: String,
-    ident: Identification,
-    check: ModelCheck,
-    /// The model's delay-coordinate section and its energy distance to the record's.
-    section: Vec<(f64, f64)>,
-    distance: Option<f64>,
-}
-
-/// What the report shows of the record itself.
-struct RecordFacts<'a> {
-    data: &'a Data,
-    ami: Vec<f64>,
-    delay: usize,
-    fnn: FnnResult,
-    catalogue: Catalogue,
-    section: Vec<(f64, f64)>,
-    floor: Option<f64>,
-}
-
-/// Delay-coordinate section of a wrapped or linear record: `(x_n, x_{n+delay})` at the samples
-/// `n ≡ offset (mod P)`, and its embedding for the energy distance (`(cos, sin)` of each angle, or
-/// the raw pair on the line).
-fn delay_section(
-    x: &[f64],
-    p: usize,
-    offset: usize,
-    delay: usize,
-    domain: Domain,
-) -> (Vec<(f64, f64)>, Vec<[f64; 4]>) {
-    let pairs: Vec<(f64, f64)> = (offset..x.len().saturating_sub(delay))
-        .step_by(p.max(1))
-        .map(|n| (x[n], x[n + delay]))
-        .collect();
-    let embedded = pairs
-        .iter()
-        .map(|&(a, b)| match domain {
-            Domain::Circle => [a.cos(), a.sin(), b.cos(), b.sin()],
-            Domain::Line => [a, b, 0.0, 0.0],
-        })
-        .collect();
-    (pairs, embedded)
+    ident: &'a Identification,
+    validation: &'a Validation,
 }
 
 /// The report's figures need a folder; checked before any work.
@@ -84,6 +49,53 @@ pub fn check_out(path: &Path) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// The pipeline's options from the command line's (the models' first, as `hbid identify`
+/// checks them).
+fn options(args: &ReportArgs, data: &Data) -> anyhow::Result<PipelineOptions> {
+    let id = &args.identify;
+    let models = METHODS
+        .iter()
+        .map(|&method| id.spec(data.domain, method))
+        .collect::<anyhow::Result<_>>()?;
+    let mut embed = EmbedOptions::default();
+    if let Some(delay) = id.search.delay {
+        embed = embed.with_delay(delay)?;
+    }
+    let periods = args.validation_periods;
+    Ok(PipelineOptions {
+        embed,
+        search: id.search.options()?,
+        windows: id.windows()?,
+        models,
+        validation: ValidationOptions::default()
+            .with_section_points(periods)?
+            .with_lyapunov_periods(periods)?
+            .with_initial(InitialState::FirstSample)?
+            .with_record_comparison(RecordComparison::DelaySection { periods })?,
+    })
+}
+
+/// The spinner's name of a stage.
+fn stage_name(stage: Stage) -> String {
+    match stage {
+        Stage::Embed => "embed".to_owned(),
+        Stage::Segments => "orbits".to_owned(),
+        Stage::Identify { method, .. } => format!("identify ({method})"),
+        Stage::Validate { method, .. } => format!("validate ({method})"),
+        _ => "report".to_owned(),
+    }
+}
+
+/// A pipeline error, with the options that fix it where the library cannot know them.
+fn naming_options(error: PipelineError) -> anyhow::Error {
+    match error {
+        PipelineError::Embedding(EmbeddingError::NoFirstMinimum { .. }) => {
+            anyhow::Error::new(error).context("choose the delay with --delay, or raise --max-lag")
+        }
+        error => error.into(),
+    }
+}
+
 pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
     if args.validation_periods < 10 {
         anyhow::bail!(
@@ -92,89 +104,43 @@ pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
         );
     }
     std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
-    let id = &args.identify;
-    let stage = |name: &str| Progress::spinner(name, quiet);
 
-    let bar = stage("read");
-    let data = id.input.load()?;
-    // Check every option before the work.
-    id.setup_for(&data, Method::Upo)?;
+    let bar = Progress::spinner("read", quiet);
+    let data = args.identify.input.load()?;
+    // Every option is checked before the work.
+    let pipeline = Pipeline::new(data.record()?, options(args, &data)?)?;
     bar.finish();
 
-    let bar = stage("embed");
-    let metric = data.domain;
-    let (ami, ami_delay) = ami(&data.x, &AmiParams::new(metric))?;
-    let delay = id.search.delay.unwrap_or(ami_delay);
-    let fnn = false_nearest_neighbours(&data.x, &FnnParams::new(metric, delay)?.with_max_dim(8)?)?;
-    bar.finish();
-
-    let bar = stage("orbits");
-    let catalogue = id.search.close_returns(&data, delay)?.catalogue(&data.x)?;
-    bar.finish();
-
-    // The record's own section at the forcing's phase 0 (t0 + offset·dt ≡ 0 mod T), and the
-    // distance between its two halves: what one attractor gives.
-    let t_period = id.input.forcing_period;
-    let offset =
-        ((-data.clock.start_time()).rem_euclid(t_period) / data.clock.step()).round() as usize % data.p;
-    let (section, embedded) = delay_section(&data.x, data.p, offset, delay, data.domain);
-    let half = embedded.len() / 2;
-    let floor = energy_distance(&embedded[..half], &embedded[half..]);
-
-    let space = data.domain;
-    let x0 = data.x[0];
-    let mut results = Vec::new();
-    for method in [Method::Upo, Method::Windowed] {
-        let bar = stage(&format!("identify ({})", method.name()));
-        let setup = id.setup_for(&data, method)?;
-        let segments = id.segments(&data, delay, method)?;
-        let ident = setup
-            .identify(&data.x, &segments)
-            .with_context(|| format!("{} segments ({})", segments.len(), method.name()))?;
-        bar.finish();
-
-        let bar = stage(&format!("validate ({})", method.name()));
-        let cfg = CheckConfig::new(t_period, space, args.validation_periods, args.validation_periods)?
-            .with_initial(x0, 0.0)?;
-        let check = check_model(&ident.model, &cfg)?;
-        // The model sampled like the record, for a section in the same delay coordinates.
-        let sim_cfg = SimulationConfig::paper()
-            .with_forcing_period(t_period)?
-            .with_samples_per_period(data.p)?
-            .with_samples((args.validation_periods * data.p).min(data.x.len().max(50 * data.p)))?
-            .with_initial(x0, 0.0)?;
-        let sim = simulate(&ident.model, &sim_cfg)?;
-        let sim_x = match data.domain {
-            Domain::Circle => sim.wrapped(),
-            Domain::Line => sim.theta,
-        };
-        let (model_section, model_embedded) = delay_section(&sim_x, data.p, 0, delay, data.domain);
-        let distance = energy_distance(&embedded, &model_embedded);
-        bar.finish();
-        results.push(MethodResult {
-            method,
-            basis: setup.basis_name,
-            ident,
-            check,
-            section: model_section,
-            distance,
-        });
-    }
-    let facts = RecordFacts {
-        data: &data,
-        ami: ami.values,
-        delay,
-        fnn,
-        catalogue,
-        section,
-        floor,
-    };
-    write_report(args, &facts, &results)
+    let mut bar: Option<Progress> = None;
+    let outcome = pipeline.run(|stage| {
+        drop(bar.take());
+        bar = Some(Progress::spinner(&stage_name(stage), quiet));
+    });
+    drop(bar);
+    write_report(args, &data, &outcome.map_err(naming_options)?)
 }
 
-fn write_report(args: &ReportArgs, f: &RecordFacts<'_>, results: &[MethodResult]) -> anyhow::Result<()> {
+fn write_report(args: &ReportArgs, data: &Data, outcome: &Outcome) -> anyhow::Result<()> {
     let out = &args.out;
-    let (data, delay) = (f.data, f.delay);
+    let embedded = &outcome.embedded;
+    let (delay, fnn, ami) = (embedded.delay, &embedded.fnn, &embedded.ami.values);
+    let catalogue = &outcome.segments.catalogue;
+    let basis = args.identify.basis_name(data.domain);
+    let results: Vec<MethodResult<'_>> = METHODS
+        .iter()
+        .zip(&outcome.models)
+        .zip(&outcome.validation.models)
+        .map(|((&method, ident), validation)| MethodResult {
+            method,
+            ident,
+            validation,
+        })
+        .collect();
+    let (section, floor) = outcome
+        .validation
+        .record
+        .as_ref()
+        .map_or((&[][..], None), |s| (&s.points[..], s.distance));
     let mut r = String::new();
     let mut figures: Vec<(String, String)> = Vec::new();
     writeln!(
@@ -194,26 +160,25 @@ fn write_report(args: &ReportArgs, f: &RecordFacts<'_>, results: &[MethodResult]
         r,
         "Delay (first minimum of the average mutual information, 16 boxes): **{delay}** samples."
     )?;
-    match f.fnn.minimum_dimension() {
+    match fnn.minimum_dimension() {
         Some(d) => writeln!(
             r,
             "Embedding dimension (false nearest neighbours below {}): **{d}**.\n",
-            f.fnn.fraction_threshold
+            fnn.fraction_threshold
         )?,
         None => writeln!(
             r,
             "No embedding dimension up to {} brings false neighbours below {}.\n",
-            f.fnn.levels.len(),
-            f.fnn.fraction_threshold
+            fnn.levels.len(),
+            fnn.fraction_threshold
         )?,
     }
     writeln!(r, "| d | false neighbours |\n| --- | --- |")?;
-    for l in &f.fnn.levels {
+    for l in &fnn.levels {
         writeln!(r, "| {} | {:.4} |", l.dim, l.fraction())?;
     }
     writeln!(r)?;
-    let ami_pts: Vec<(f64, f64)> = f
-        .ami
+    let ami_pts: Vec<(f64, f64)> = ami
         .iter()
         .enumerate()
         .skip(1)
@@ -234,7 +199,7 @@ fn write_report(args: &ReportArgs, f: &RecordFacts<'_>, results: &[MethodResult]
             },
             Series {
                 label: "delay",
-                points: vec![(delay as f64, f.ami.get(delay).copied().unwrap_or(0.0))],
+                points: vec![(delay as f64, ami.get(delay).copied().unwrap_or(0.0))],
                 style: Style::Dots(6),
                 color: RED,
             },
@@ -254,12 +219,7 @@ fn write_report(args: &ReportArgs, f: &RecordFacts<'_>, results: &[MethodResult]
         y_label: "fraction",
         series: vec![Series {
             label: "",
-            points: f
-                .fnn
-                .levels
-                .iter()
-                .map(|l| (l.dim as f64, l.fraction()))
-                .collect(),
+            points: fnn.levels.iter().map(|l| (l.dim as f64, l.fraction())).collect(),
             style: Style::Line {
                 break_above: f64::INFINITY,
             },
@@ -280,17 +240,17 @@ fn write_report(args: &ReportArgs, f: &RecordFacts<'_>, results: &[MethodResult]
         r,
         "Tolerance {} of the span (ε = {:.4}), delay vectors of dimension {}.\n",
         args.identify.search.tolerance,
-        f.catalogue.tolerance(),
+        catalogue.tolerance(),
         args.identify.search.dim
     )?;
     writeln!(r, "| period | segments | distinct orbits |\n| --- | --- | --- |")?;
-    for c in f.catalogue.counts() {
+    for c in catalogue.counts() {
         writeln!(r, "| {} | {} | {} |", c.period, c.segments, c.orbits)?;
     }
     writeln!(r)?;
 
-    for res in results {
-        let j = json(&res.ident, res.method.name(), &res.basis);
+    for res in &results {
+        let j = json(res.ident, res.method.name(), &basis);
         let how = match res.method {
             Method::Upo => "harmonic balance on the orbits above, the paper's method",
             Method::Windowed => "the weak form on plain windows of the record",
@@ -299,7 +259,7 @@ fn write_report(args: &ReportArgs, f: &RecordFacts<'_>, results: &[MethodResult]
             r,
             "## Identified model: {} ({how}), basis {}\n",
             res.method.name(),
-            res.basis
+            basis
         )?;
         writeln!(
             r,
@@ -344,16 +304,17 @@ fn write_report(args: &ReportArgs, f: &RecordFacts<'_>, results: &[MethodResult]
         "Energy distance between the record's section and the model's, in delay coordinates at the forcing's phase \
          0; the floor is the distance between the two halves of the record ({}): a distance of that order means the \
          model's attractor cannot be told from the record's with this many points.\n",
-        fmt(f.floor)
+        fmt(floor)
     )?;
     writeln!(
         r,
         "| model | energy distance to the record | largest Lyapunov exponent (per unit time) | whirling fraction | \
          period-1 orbits at phase 0: x (winding) |\n| --- | --- | --- | --- | --- |"
     )?;
-    for res in results {
-        let orbits: Vec<String> = res
-            .check
+    for res in &results {
+        let check = &res.validation.check;
+        let distance = res.validation.section.as_ref().and_then(|s| s.distance);
+        let orbits: Vec<String> = check
             .orbits
             .iter()
             .map(|o| format!("{:.4} ({})", o.x, o.winding))
@@ -362,10 +323,10 @@ fn write_report(args: &ReportArgs, f: &RecordFacts<'_>, results: &[MethodResult]
             r,
             "| {} | {} | {:.4} ± {:.4} | {:.3} | {} |",
             res.method.name(),
-            fmt(res.distance),
-            res.check.lyapunov.per_unit_time,
-            res.check.lyapunov.standard_error,
-            res.check.whirling,
+            fmt(distance),
+            check.lyapunov.per_unit_time,
+            check.lyapunov.standard_error,
+            check.whirling,
             if orbits.is_empty() {
                 "none found".to_owned()
             } else {
@@ -383,14 +344,14 @@ fn write_report(args: &ReportArgs, f: &RecordFacts<'_>, results: &[MethodResult]
     let mut panels = vec![(
         "section_record.png".to_owned(),
         "Record".to_owned(),
-        &f.section[..],
+        section,
         GREY,
     )];
     for (res, color) in results.iter().zip([ORANGE, BLUE]) {
         panels.push((
             format!("section_model_{}.png", res.method.name()),
             format!("Model ({})", res.method.name()),
-            &res.section[..],
+            res.validation.section.as_ref().map_or(&[][..], |s| &s.points[..]),
             color,
         ));
     }

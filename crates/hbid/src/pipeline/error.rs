@@ -1,0 +1,42 @@
+//! The one error type of the pipeline: the stage crates' errors, and what only the pipeline knows.
+
+use super::Method;
+
+/// Everything that can go wrong between a record and its validated models.
+///
+/// The stages' own errors pass through unchanged (their text is the stage's); an identification
+/// that fails also says which method and how many segments it had.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum PipelineError {
+    /// The record's clock does not cut it into whole forcing periods, or a segment does not fit.
+    #[error(transparent)]
+    Clock(#[from] circle_signal::CircleError),
+    /// The delay or the embedding dimension (average mutual information, false nearest
+    /// neighbours), or their options.
+    #[error(transparent)]
+    Embedding(#[from] embedding::EmbeddingError),
+    /// The close-return search or the windows, or their options.
+    #[error(transparent)]
+    Orbits(#[from] upo_search::UpoError),
+    /// The identification parameters.
+    #[error(transparent)]
+    Solve(#[from] hb_solve::SolveError),
+    /// The simulation of a model, or the validation's options.
+    #[error(transparent)]
+    Simulation(#[from] pendulum_sim::SimError),
+    /// An identification failed (too few segments, a rank-deficient system, ...).
+    #[error("{segments} segments ({method})")]
+    Identification {
+        /// The method.
+        method: Method,
+        /// The segments it had.
+        segments: usize,
+        /// Why it failed.
+        #[source]
+        source: hb_solve::SolveError,
+    },
+    /// The record has no samples.
+    #[error("the record has no samples")]
+    EmptyRecord,
+}

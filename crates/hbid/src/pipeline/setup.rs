@@ -1,0 +1,345 @@
+//! One identification: a method, a basis and the settings of the fit, checked against the record's
+//! clock, and the model it gives.
+
+use std::fmt;
+
+use circle_signal::{SampleClock, Segment};
+use hb_basis::BasisKind;
+use hb_solve::{
+    Assembly, Bootstrap, BootstrapParams, HarmonicBalance, Harmonics, IdentifiedModel, IdentifyParams,
+    LstsqSolver, ModelForm, NoiseCorrection, QrSolver, SolveError, WeakForm, bootstrap_fit, build_system,
+};
+
+use super::PipelineError;
+
+/// Identification method: where the segments come from and how they become equations.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, clap::ValueEnum)]
+pub enum Method {
+    /// The paper's: harmonic balance over unstable periodic orbits found by close returns.
+    Upo,
+    /// The weak form: harmonic balance of the windowed equation over plain windows of the record.
+    Windowed,
+}
+
+impl Method {
+    /// The assembly of the method: the one place a method turns into rows
+    /// ([`HarmonicBalance`] on orbits, `weak` on windows).
+    pub fn assembly(self, weak: WeakForm) -> Box<dyn Assembly> {
+        match self {
+            Method::Upo => Box::new(HarmonicBalance),
+            Method::Windowed => Box::new(weak),
+        }
+    }
+
+    /// The name used in reports and JSON (the assembly's): `upo` or `windowed`.
+    pub fn name(self) -> &'static str {
+        self.assembly(WeakForm::default()).name()
+    }
+}
+
+impl fmt::Display for Method {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// One step of an identification, reported as it starts (see [`Setup::identify_with_progress`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum IdentifyStep {
+    /// Assembling the stacked system of every segment (noise correction included).
+    Assemble,
+    /// Solving it by least squares.
+    Solve,
+    /// The bootstrap over segments, when asked for.
+    Bootstrap,
+}
+
+impl IdentifyStep {
+    /// A short name for progress displays and timings: `assemble`, `solve`, `bootstrap`.
+    pub fn name(self) -> &'static str {
+        match self {
+            IdentifyStep::Assemble => "assemble",
+            IdentifyStep::Solve => "solve",
+            IdentifyStep::Bootstrap => "bootstrap",
+        }
+    }
+}
+
+/// What to identify: a method and a basis, and the settings of the fit. It becomes a [`Setup`]
+/// against the record's clock ([`ModelSpec::setup`]), where the combination is checked.
+///
+/// Defaults: the paper's form ([`ModelForm::parametric`]: damping, autonomous and parametric
+/// terms, no external forcing), the method's own harmonics per segment
+/// ([`Assembly::default_harmonics`]), no noise correction, column-pivoted QR, no bootstrap, and
+/// the default weak form ([`WeakForm::default`], used by [`Method::Windowed`] only).
+#[derive(Debug)]
+pub struct ModelSpec {
+    method: Method,
+    basis: BasisKind,
+    form: ModelForm,
+    harmonics: Option<Harmonics>,
+    noise: NoiseCorrection,
+    solver: Box<dyn LstsqSolver>,
+    bootstrap: Option<BootstrapParams>,
+    weak: WeakForm,
+}
+
+impl ModelSpec {
+    /// A model on `basis` identified by `method`, with the defaults above.
+    pub fn new(method: Method, basis: BasisKind) -> Self {
+        Self {
+            method,
+            basis,
+            form: ModelForm::parametric(),
+            harmonics: None,
+            noise: NoiseCorrection::None,
+            solver: Box::new(QrSolver::default()),
+            bootstrap: None,
+            weak: WeakForm::default(),
+        }
+    }
+
+    /// The terms of the model.
+    pub fn with_form(mut self, form: ModelForm) -> Self {
+        self.form = form;
+        self
+    }
+
+    /// Harmonics per segment instead of the method's default (checked: `M >= 1`, or a cap `>= 1`).
+    pub fn with_harmonics(mut self, harmonics: Harmonics) -> Result<Self, PipelineError> {
+        self.harmonics = Some(harmonics.validate()?);
+        Ok(self)
+    }
+
+    /// The correction of the bias of Gaussian noise on the angle (checked with the rest of the
+    /// parameters by [`ModelSpec::setup`]).
+    pub fn with_noise_correction(mut self, noise: NoiseCorrection) -> Self {
+        self.noise = noise;
+        self
+    }
+
+    /// The least-squares solver.
+    pub fn with_solver(mut self, solver: Box<dyn LstsqSolver>) -> Self {
+        self.solver = solver;
+        self
+    }
+
+    /// Bootstrap intervals for every coefficient.
+    pub fn with_bootstrap(mut self, bootstrap: BootstrapParams) -> Self {
+        self.bootstrap = Some(bootstrap);
+        self
+    }
+
+    /// The weak form's window (for [`Method::Windowed`]).
+    pub fn with_weak_form(mut self, weak: WeakForm) -> Self {
+        self.weak = weak;
+        self
+    }
+
+    /// The method.
+    pub fn method(&self) -> Method {
+        self.method
+    }
+
+    /// The setup on the record's `clock`: the identification parameters are built and checked.
+    pub fn setup(self, clock: &SampleClock) -> Result<Setup, PipelineError> {
+        let assembly = self.method.assembly(self.weak);
+        let harmonics = self.harmonics.unwrap_or_else(|| assembly.default_harmonics());
+        let params = IdentifyParams::builder(*clock)
+            .form(self.form)
+            .harmonics(harmonics)
+            .noise_correction(self.noise)
+            .build()?;
+        Ok(Setup {
+            method: self.method,
+            basis: self.basis,
+            params,
+            solver: self.solver,
+            bootstrap: self.bootstrap,
+            assembly,
+        })
+    }
+}
+
+/// Everything but the data: basis, parameters, assembly and solver, checked before any work.
+#[derive(Debug)]
+pub struct Setup {
+    method: Method,
+    basis: BasisKind,
+    params: IdentifyParams,
+    solver: Box<dyn LstsqSolver>,
+    bootstrap: Option<BootstrapParams>,
+    assembly: Box<dyn Assembly>,
+}
+
+/// An identified model with its bootstrap intervals.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Identification {
+    /// The model, with its fit summary.
+    pub model: IdentifiedModel,
+    /// The bootstrap intervals of its coefficients, when asked for.
+    pub intervals: Option<Bootstrap>,
+}
+
+impl Setup {
+    /// The method.
+    pub fn method(&self) -> Method {
+        self.method
+    }
+
+    /// The basis of the unknown functions.
+    pub fn basis(&self) -> BasisKind {
+        self.basis
+    }
+
+    /// The identification parameters (clock, form, harmonics, noise correction).
+    pub fn params(&self) -> &IdentifyParams {
+        &self.params
+    }
+
+    /// The bootstrap's parameters, if intervals are asked for.
+    pub fn bootstrap(&self) -> Option<&BootstrapParams> {
+        self.bootstrap.as_ref()
+    }
+
+    /// Assembles the rows of the method over `segments` of `signal` ([`build_system`]), solves,
+    /// and bootstraps.
+    pub fn identify(&self, signal: &[f64], segments: &[Segment]) -> Result<Identification, SolveError> {
+        self.identify_with_progress(signal, segments, |_| {})
+    }
+
+    /// [`Setup::identify`], calling `progress` with each step as it starts.
+    pub fn identify_with_progress(
+        &self,
+        signal: &[f64],
+        segments: &[Segment],
+        mut progress: impl FnMut(IdentifyStep),
+    ) -> Result<Identification, SolveError> {
+        progress(IdentifyStep::Assemble);
+        let system = build_system(
+            &self.basis,
+            signal,
+            segments,
+            &self.params,
+            self.assembly.as_ref(),
+        )?;
+        progress(IdentifyStep::Solve);
+        let solver = self.solver.as_ref();
+        let fit = system.solve(solver)?;
+        let model = IdentifiedModel::from_fit(self.basis, &self.params, &system, &fit, solver.name())?;
+        let intervals = match &self.bootstrap {
+            Some(b) => {
+                progress(IdentifyStep::Bootstrap);
+                Some(bootstrap_fit(&system, &fit, solver, b)?)
+            }
+            None => None,
+        };
+        Ok(Identification { model, intervals })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use hb_basis::{Harmonic, Hat};
+    use hb_solve::{SvdSolver, identify};
+    use pendulum_sim::{Pendulum, SimulationConfig, simulate};
+    use upo_search::{CloseReturns, Windows};
+
+    use super::*;
+
+    fn record() -> (Vec<f64>, SampleClock) {
+        let config = SimulationConfig::paper().with_samples(4_000).unwrap();
+        let trajectory = simulate(&Pendulum::paper(), &config).unwrap();
+        let clock = SampleClock::nondimensional(25)
+            .unwrap()
+            .with_start_time(trajectory.t[0])
+            .unwrap();
+        (trajectory.wrapped(), clock)
+    }
+
+    #[test]
+    fn a_setup_identifies_exactly_as_hb_solve_does() {
+        let (x, clock) = record();
+        let orbits = CloseReturns::new(&clock, 5).unwrap().search(&x).unwrap();
+        let windows = Windows::new(&clock).unwrap().windows(&x).unwrap();
+        for (method, segments) in [(Method::Upo, &orbits), (Method::Windowed, &windows)] {
+            for basis in [
+                BasisKind::from(Harmonic::new(1).unwrap()),
+                BasisKind::from(Hat::new(8).unwrap()),
+            ] {
+                let ours = ModelSpec::new(method, basis)
+                    .setup(&clock)
+                    .unwrap()
+                    .identify(&x, segments)
+                    .unwrap();
+                let assembly = method.assembly(WeakForm::default());
+                let params = IdentifyParams::builder(clock)
+                    .harmonics(assembly.default_harmonics())
+                    .build()
+                    .unwrap();
+                let theirs = identify(
+                    basis,
+                    &x,
+                    segments,
+                    &params,
+                    assembly.as_ref(),
+                    &QrSolver::default(),
+                )
+                .unwrap();
+                assert_eq!(ours.model, theirs, "{method} {basis}");
+                assert!(ours.intervals.is_none());
+            }
+        }
+    }
+
+    #[test]
+    fn steps_are_reported_in_order_and_the_bootstrap_only_when_asked() {
+        let (x, clock) = record();
+        let orbits = CloseReturns::new(&clock, 5).unwrap().search(&x).unwrap();
+        let basis = BasisKind::from(Harmonic::new(1).unwrap());
+        let mut steps = Vec::new();
+        let plain = ModelSpec::new(Method::Upo, basis).setup(&clock).unwrap();
+        plain
+            .identify_with_progress(&x, &orbits, |s| steps.push(s))
+            .unwrap();
+        assert_eq!(steps, [IdentifyStep::Assemble, IdentifyStep::Solve]);
+        steps.clear();
+        let bootstrap = BootstrapParams::builder().resamples(50).build().unwrap();
+        let with = ModelSpec::new(Method::Upo, basis)
+            .with_solver(Box::new(SvdSolver::default()))
+            .with_bootstrap(bootstrap)
+            .setup(&clock)
+            .unwrap();
+        let id = with
+            .identify_with_progress(&x, &orbits, |s| steps.push(s))
+            .unwrap();
+        assert_eq!(
+            steps,
+            [
+                IdentifyStep::Assemble,
+                IdentifyStep::Solve,
+                IdentifyStep::Bootstrap
+            ]
+        );
+        assert_eq!(id.intervals.unwrap().resamples, 50);
+        assert_eq!(id.model.summary().unwrap().solver, "svd");
+    }
+
+    #[test]
+    fn bad_settings_fail_when_set_or_on_the_clock() {
+        let basis = BasisKind::from(Harmonic::new(1).unwrap());
+        assert!(matches!(
+            ModelSpec::new(Method::Upo, basis).with_harmonics(Harmonics::Fixed(0)),
+            Err(PipelineError::Solve(_))
+        ));
+        let spec =
+            ModelSpec::new(Method::Upo, basis).with_noise_correction(NoiseCorrection::Given { sigma: -1.0 });
+        assert!(matches!(
+            spec.setup(&SampleClock::nondimensional(25).unwrap()),
+            Err(PipelineError::Solve(_))
+        ));
+        assert_eq!(Method::Upo.to_string(), "upo");
+        assert_eq!(Method::Windowed.name(), "windowed");
+    }
+}
