@@ -94,6 +94,7 @@ mod tests {
     fn distances() {
         assert_eq!(Domain::Line.distance(3.0, -3.0), 6.0);
         assert!((Domain::Circle.distance(3.0, -3.0) - (TAU - 6.0)).abs() < 1e-15);
+        assert_eq!(Domain::Circle.distance(0.5, 0.5 + 2.0 * TAU), 0.0);
         assert_eq!(Domain::Circle.vector_distance(&[0.0, 1.0], &[0.5, 1.25]), 0.5);
         assert_eq!(Domain::Line.vector_distance(&[0.0, 1.0], &[0.5, 3.0]), 2.0);
     }

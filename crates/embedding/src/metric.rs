@@ -78,12 +78,6 @@ pub fn spread(domain: Domain, x: &[f64]) -> f64 {
 mod tests {
     use super::*;
 
-    #[test]
-    fn distances() {
-        assert_eq!(Domain::Line.distance(3.0, -3.0), 6.0);
-        assert!((Domain::Circle.distance(3.0, -3.0) - (TAU - 6.0)).abs() < 1e-15);
-        assert_eq!(Domain::Circle.distance(0.5, 0.5 + 2.0 * TAU), 0.0);
-    }
 
     #[test]
     fn tree_coordinates_are_in_the_box() {
