@@ -78,7 +78,6 @@ pub fn spread(domain: Domain, x: &[f64]) -> f64 {
 mod tests {
     use super::*;
 
-
     #[test]
     fn tree_coordinates_are_in_the_box() {
         for v in [-PI, -1e-300, -1e-17, 0.0, PI, 3.0 * PI, -7.0, 1e6] {
