@@ -5,6 +5,7 @@ use crate::metric::{AnyCircle, Distance, Line, WrappedCircle};
 use crate::{Domain, OrbitSource, SampleClock, Segment, UpoError};
 use rayon::prelude::*;
 use std::f64::consts::{PI, TAU};
+use std::ops::Range;
 
 /// Close-return search for unstable periodic orbits (paper section 3.2), validated parameters.
 ///
@@ -202,13 +203,109 @@ impl CloseReturns {
         })
     }
 
-    /// Validates the record and finds the absolute tolerance.
-    fn scan_input(&self, signal: &[f64]) -> Result<InputScan, UpoError> {
-        let needed = self.needed_len(self.max_period).ok_or(UpoError::InvalidCount {
+    /// The close-return segments of a record in pieces: `pieces` are the ranges of `signal` that
+    /// hold samples (sorted, disjoint; what lies between them, such as the NaN of a gap, is never
+    /// read), and no segment spans the space between two. Pieces too short for the longest period
+    /// are skipped; the tolerance is relative to the span of all pieces together. Segment starts
+    /// index `signal`; the order is by period, then start.
+    ///
+    /// Errors as [`search`](Self::search) does when no piece is long enough (naming the longest),
+    /// and on pieces out of order or out of bounds.
+    pub fn search_pieces(&self, signal: &[f64], pieces: &[Range<usize>]) -> Result<Vec<Segment>, UpoError> {
+        let input = self.pieces_input(signal, pieces)?;
+        Ok(match (self.domain, input.within_pi) {
+            (Domain::Circle, true) => self.scan_pieces(signal, pieces, input.tolerance, WrappedCircle)?,
+            (Domain::Circle, false) => self.scan_pieces(signal, pieces, input.tolerance, AnyCircle)?,
+            (Domain::Line, _) => self.scan_pieces(signal, pieces, input.tolerance, Line)?,
+        })
+    }
+
+    /// [`search_pieces`](Self::search_pieces) and the catalogue of distinct orbits among its
+    /// segments: an orbit met in two pieces is one orbit.
+    pub fn catalogue_pieces(&self, signal: &[f64], pieces: &[Range<usize>]) -> Result<Catalogue, UpoError> {
+        let input = self.pieces_input(signal, pieces)?;
+        let (p, k_max, eps) = (self.samples_per_period, self.max_period, input.tolerance);
+        Ok(match (self.domain, input.within_pi) {
+            (Domain::Circle, true) => group(
+                signal,
+                self.scan_pieces(signal, pieces, eps, WrappedCircle)?,
+                p,
+                k_max,
+                eps,
+                WrappedCircle,
+            ),
+            (Domain::Circle, false) => group(
+                signal,
+                self.scan_pieces(signal, pieces, eps, AnyCircle)?,
+                p,
+                k_max,
+                eps,
+                AnyCircle,
+            ),
+            (Domain::Line, _) => group(
+                signal,
+                self.scan_pieces(signal, pieces, eps, Line)?,
+                p,
+                k_max,
+                eps,
+                Line,
+            ),
+        })
+    }
+
+    /// Every piece long enough scanned on its own, the segments moved to the record's indices and
+    /// sorted by period, then start.
+    fn scan_pieces<D: Distance>(
+        &self,
+        signal: &[f64],
+        pieces: &[Range<usize>],
+        eps: f64,
+        dist: D,
+    ) -> Result<Vec<Segment>, UpoError> {
+        let needed = self.needed()?;
+        let mut segments = Vec::new();
+        for piece in pieces.iter().filter(|r| r.len() >= needed) {
+            for s in self.scan(&signal[piece.clone()], eps, dist) {
+                segments.push(Segment::new(
+                    piece.start + s.start(),
+                    s.period(),
+                    &self.clock,
+                    s.error(),
+                    signal.len(),
+                )?);
+            }
+        }
+        segments.sort_by_key(|s| (s.period(), s.start()));
+        Ok(segments)
+    }
+
+    /// Validates the pieces and finds the absolute tolerance over all of them.
+    fn pieces_input(&self, signal: &[f64], pieces: &[Range<usize>]) -> Result<InputScan, UpoError> {
+        crate::check_pieces(signal.len(), pieces)?;
+        let needed = self.needed()?;
+        let longest = pieces.iter().map(Range::len).max().unwrap_or(0);
+        if longest < needed {
+            return Err(UpoError::TooShort {
+                len: longest,
+                needed,
+                period: self.max_period,
+            });
+        }
+        self.span(pieces.iter().flat_map(|r| r.clone().map(|i| (i, signal[i]))))
+    }
+
+    /// Samples the longest period needs, `k_max P + (d − 1) Td + 1`.
+    fn needed(&self) -> Result<usize, UpoError> {
+        self.needed_len(self.max_period).ok_or(UpoError::InvalidCount {
             name: "max_period",
             value: self.max_period,
             why: "k_max P + (d - 1) Td overflows",
-        })?;
+        })
+    }
+
+    /// Validates the record and finds the absolute tolerance.
+    fn scan_input(&self, signal: &[f64]) -> Result<InputScan, UpoError> {
+        let needed = self.needed()?;
         if signal.len() < needed {
             return Err(UpoError::TooShort {
                 len: signal.len(),
@@ -216,8 +313,13 @@ impl CloseReturns {
                 period: self.max_period,
             });
         }
+        self.span(signal.iter().copied().enumerate())
+    }
+
+    /// The tolerance from the span of `samples` (index, value), which must be finite.
+    fn span(&self, samples: impl Iterator<Item = (usize, f64)>) -> Result<InputScan, UpoError> {
         let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-        for (index, &value) in signal.iter().enumerate() {
+        for (index, value) in samples {
             if !value.is_finite() {
                 return Err(UpoError::NonFinite { index, value });
             }
@@ -543,6 +645,59 @@ mod tests {
             lin.search(&[2.0; 40]),
             Err(UpoError::ConstantSignal { value: 2.0 })
         );
+    }
+
+    #[test]
+    fn pieces_are_searched_apart_and_catalogued_together() {
+        // A quasi-random angle with a whirling period-2 orbit laid twice: once in each piece of a
+        // record whose gap is NaN.
+        let p = 10;
+        let orbit: Vec<f64> = (0..2 * p)
+            .map(|i| circle_signal::wrap(PI * i as f64 / p as f64 + 0.3 * (0.7 * i as f64).sin()))
+            .collect();
+        let noise = |n: usize| circle_signal::wrap(1.7 * (n as f64 * 2.399).sin() + n as f64 * 0.61);
+        let mut piece: Vec<f64> = (0..30).map(noise).collect();
+        piece.extend(orbit.iter().chain(&orbit[..5]));
+        piece.extend((100..130).map(noise));
+        // A gap that keeps the phase of the forcing: the orbit is the same orbit in both pieces.
+        let gap = 15;
+        let mut x = piece.clone();
+        x.extend(std::iter::repeat_n(f64::NAN, gap));
+        x.extend(&piece);
+        let second = piece.len() + gap;
+        let pieces = [0..piece.len(), second..x.len()];
+        let s = CloseReturns::builder(&clock(p), 1).max_period(2).build().unwrap();
+        let alone = s.search(&piece).unwrap();
+        assert!(!alone.is_empty());
+        let both = s.search_pieces(&x, &pieces).unwrap();
+        // The same segments, moved into the second piece, sorted by period then start.
+        let mut expected: Vec<(usize, usize)> = alone
+            .iter()
+            .flat_map(|seg| [(seg.period(), seg.start()), (seg.period(), seg.start() + second)])
+            .collect();
+        expected.sort();
+        let found: Vec<(usize, usize)> = both.iter().map(|seg| (seg.period(), seg.start())).collect();
+        assert_eq!(found, expected);
+        // No segment reads the gap; one orbit per distinct orbit of a piece.
+        assert!(both.iter().all(|seg| {
+            pieces
+                .iter()
+                .any(|r| r.contains(&seg.start()) && r.contains(&seg.closing()))
+        }));
+        let one = s.catalogue(&piece).unwrap();
+        let catalogue = s.catalogue_pieces(&x, &pieces).unwrap();
+        assert_eq!(catalogue.orbits().len(), one.orbits().len());
+        assert_eq!(catalogue.segments().len(), 2 * one.segments().len());
+        // Without the pieces, the gap is an error; bad pieces are errors.
+        assert!(matches!(s.search(&x), Err(UpoError::NonFinite { .. })));
+        let (empty, beyond) = (4..4, 0..x.len() + 1);
+        for bad in [&[0..5, 3..9][..], &[0..5, empty], &[beyond]] {
+            assert!(matches!(s.search_pieces(&x, bad), Err(UpoError::BadPiece { .. })));
+        }
+        assert!(matches!(
+            s.search_pieces(&x, &[0..10, 20..30]),
+            Err(UpoError::TooShort { len: 10, .. })
+        ));
     }
 
     #[test]

@@ -35,6 +35,10 @@
 //! (see its docs for the exact rule), so the number of distinct orbits can be compared with the
 //! paper's "about 25 UPOs from period 1 to 16".
 //!
+//! A record with gaps (missing samples) is searched in pieces
+//! ([`CloseReturns::search_pieces`], [`Windows::windows_pieces`]): every segment lies inside one
+//! piece, and an orbit met in several pieces is one orbit of the catalogue.
+//!
 //! # Example
 //!
 //! ```
@@ -74,3 +78,20 @@ pub use circle_signal::{Domain, OrbitSource, SampleClock, Segment};
 pub use close_returns::{CloseReturns, CloseReturnsBuilder};
 pub use error::UpoError;
 pub use windows::{Windows, WindowsBuilder};
+
+/// Checks that `pieces` are non-empty ranges of a record of `len` samples, in order and disjoint.
+fn check_pieces(len: usize, pieces: &[std::ops::Range<usize>]) -> Result<(), UpoError> {
+    let mut end = 0;
+    for (index, piece) in pieces.iter().enumerate() {
+        if piece.start < end || piece.start >= piece.end || piece.end > len {
+            return Err(UpoError::BadPiece {
+                index,
+                start: piece.start,
+                end: piece.end,
+                len,
+            });
+        }
+        end = piece.end;
+    }
+    Ok(())
+}

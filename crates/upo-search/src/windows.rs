@@ -1,5 +1,7 @@
 //! Plain windows of a record: segments that need not be periodic, for the weak form.
 
+use std::ops::Range;
+
 use crate::{Domain, OrbitSource, SampleClock, Segment, UpoError};
 
 /// Windows of `k` forcing periods laid over the whole record, periodic or not.
@@ -101,6 +103,45 @@ impl Windows {
             // Starts 0, s, 2s, .. with start + L <= samples − 1.
             (samples - 1 - l) / self.step + 1
         }
+    }
+
+    /// The windows of a record in pieces: `pieces` are the ranges of `signal` that hold samples
+    /// (sorted, disjoint; what lies between them, such as the NaN of a gap, is never read). Each
+    /// piece is cut on its own, from its first sample, so that no window spans the space between
+    /// two; pieces shorter than a window are skipped. Window starts index `signal`.
+    ///
+    /// Errors when no piece holds a window (naming the longest), a sample of a piece is not
+    /// finite, or the pieces are out of order or out of bounds.
+    pub fn windows_pieces(&self, signal: &[f64], pieces: &[Range<usize>]) -> Result<Vec<Segment>, UpoError> {
+        crate::check_pieces(signal.len(), pieces)?;
+        let l = self.len();
+        let longest = pieces.iter().map(Range::len).max().unwrap_or(0);
+        if longest <= l {
+            return Err(UpoError::TooShort {
+                len: longest,
+                needed: l + 1,
+                period: self.periods,
+            });
+        }
+        let mut segments = Vec::new();
+        for piece in pieces.iter().filter(|r| r.len() > l) {
+            for s in self.windows(&signal[piece.clone()]).map_err(|e| match e {
+                UpoError::NonFinite { index, value } => UpoError::NonFinite {
+                    index: index + piece.start,
+                    value,
+                },
+                e => e,
+            })? {
+                segments.push(Segment::new(
+                    piece.start + s.start(),
+                    s.period(),
+                    &self.clock,
+                    s.error(),
+                    signal.len(),
+                )?);
+            }
+        }
+        Ok(segments)
     }
 
     /// The windows of `signal`.
@@ -212,6 +253,37 @@ mod tests {
 
     fn clock(p: usize) -> SampleClock {
         SampleClock::nondimensional(p).unwrap()
+    }
+
+    #[test]
+    fn windows_of_pieces_stay_inside_them() {
+        let w = Windows::new(&clock(4)).unwrap();
+        let mut x: Vec<f64> = (0..30).map(|n| (n as f64 * 0.3).sin()).collect();
+        x[20..23].fill(f64::NAN);
+        let pieces = [0..20, 23..30, 30..30];
+        assert!(matches!(
+            w.windows_pieces(&x, &pieces),
+            Err(UpoError::BadPiece { index: 2, .. })
+        ));
+        let segs = w.windows_pieces(&x, &pieces[..2]).unwrap();
+        // 12-sample windows and their closing sample: starts 0, 4 in the first piece; the second
+        // (7 samples) holds none.
+        let starts: Vec<usize> = segs.iter().map(Segment::start).collect();
+        assert_eq!(starts, [0, 4]);
+        assert!(segs.iter().all(|s| s.closing() < 20));
+        assert!(matches!(
+            w.windows_pieces(&x, &pieces[1..2]),
+            Err(UpoError::TooShort {
+                len: 7,
+                needed: 13,
+                ..
+            })
+        ));
+        x[3] = f64::NAN;
+        assert!(matches!(
+            w.windows_pieces(&x, &[0..2, 3..20]),
+            Err(UpoError::NonFinite { index: 3, .. })
+        ));
     }
 
     #[test]
