@@ -54,7 +54,7 @@ mod segment;
 
 pub use clock::SampleClock;
 pub use domain::{Domain, UnknownDomain};
-pub use resample::{RESAMPLE_HALF_WIDTH, Resampled, resample_to_whole};
+pub use resample::{RESAMPLE_HALF_WIDTH, Resampled, ResampledPieces, resample_pieces, resample_to_whole};
 pub use segment::{OrbitSource, Segment};
 
 use std::f64::consts::{PI, TAU};
@@ -70,6 +70,18 @@ pub enum CircleError {
         len: usize,
         /// Samples needed.
         needed: usize,
+    },
+    /// The pieces of a record with gaps must be non-empty ranges of it, in order and disjoint.
+    #[error("piece {index} ({start}..{end}) is empty, out of order or beyond the record of {len} samples")]
+    BadPiece {
+        /// Index of the piece.
+        index: usize,
+        /// Its first sample.
+        start: usize,
+        /// One past its last sample.
+        end: usize,
+        /// Samples of the record.
+        len: usize,
     },
     /// A sample is NaN or infinite.
     #[error("sample {index} is not finite ({value})")]

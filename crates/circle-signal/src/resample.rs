@@ -7,6 +7,7 @@
 //! cost are in `docs/identification.md`): every later stage sees an ordinary whole clock.
 
 use std::f64::consts::PI;
+use std::ops::Range;
 
 use crate::{CircleError, Domain, SampleClock, unwrap, wrap};
 
@@ -71,14 +72,116 @@ pub fn resample_to_whole(x: &[f64], clock: &SampleClock, domain: Domain) -> Resu
             needed: 2 * half + 2,
         });
     }
-    let p = clock.samples_per_period().round().max(2.0) as usize;
-    let out_clock = SampleClock::new(clock.forcing_period(), p)?
-        .with_start_time(clock.start_time() + half as f64 * clock.step())?;
-    // Output sample j sits at input position u_j = half + j · ratio.
+    let out_clock = whole_clock(clock)?;
     let ratio = out_clock.step() / clock.step();
     let last = (n - 1 - half) as f64;
     let count = ((last - half as f64) / ratio).floor() as usize + 1;
+    Ok(Resampled {
+        samples: interpolate(x, domain, 0.0, ratio, 0..count),
+        clock: out_clock,
+    })
+}
 
+/// A record with gaps, resampled piece by piece onto one grid (see [`resample_pieces`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ResampledPieces {
+    /// The samples on the output grid, NaN outside the pieces (wrapped into `[−π, π)` on the
+    /// circle).
+    pub samples: Vec<f64>,
+    /// The ranges of `samples` that hold data, in order.
+    pub pieces: Vec<Range<usize>>,
+    /// The output grid: whole `P`, first sample `RESAMPLE_HALF_WIDTH` input steps after the
+    /// record's.
+    pub clock: SampleClock,
+}
+
+/// [`resample_to_whole`] for a record in pieces: `x` on `clock`'s grid holds data in `pieces`
+/// (sorted, disjoint ranges; anything between them, such as the NaN of a gap, is never read). Each
+/// piece is interpolated on its own (no kernel reaches across a gap) onto the one output grid
+/// `t'_m = t_0 + RESAMPLE_HALF_WIDTH · h + m · T / P`, so the output keeps one clock and the drive's
+/// phase at every sample; each piece loses [`RESAMPLE_HALF_WIDTH`] input samples at both ends, and
+/// pieces too short for the kernel are dropped. A whole clock returns the pieces unchanged.
+///
+/// Errors when no piece is long enough for the kernel, a sample of a piece is not finite, or the
+/// pieces are out of order or out of bounds.
+pub fn resample_pieces(
+    x: &[f64],
+    pieces: &[Range<usize>],
+    clock: &SampleClock,
+    domain: Domain,
+) -> Result<ResampledPieces, CircleError> {
+    let mut end = 0;
+    for (index, piece) in pieces.iter().enumerate() {
+        if piece.start < end || piece.start >= piece.end || piece.end > x.len() {
+            return Err(CircleError::BadPiece {
+                index,
+                start: piece.start,
+                end: piece.end,
+                len: x.len(),
+            });
+        }
+        end = piece.end;
+        if let Some((i, &value)) = x[piece.clone()].iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return Err(CircleError::NonFinite {
+                index: piece.start + i,
+                value,
+            });
+        }
+    }
+    if clock.whole_samples_per_period().is_some() {
+        return Ok(ResampledPieces {
+            samples: x.to_vec(),
+            pieces: pieces.to_vec(),
+            clock: *clock,
+        });
+    }
+    let half = RESAMPLE_HALF_WIDTH;
+    let longest = pieces.iter().map(Range::len).max().unwrap_or(0);
+    if longest < 2 * half + 2 {
+        return Err(CircleError::TooShort {
+            len: longest,
+            needed: 2 * half + 2,
+        });
+    }
+    let out_clock = whole_clock(clock)?;
+    let ratio = out_clock.step() / clock.step();
+    let mut samples: Vec<f64> = Vec::new();
+    let mut out_pieces = Vec::new();
+    for piece in pieces.iter().filter(|r| r.len() >= 2 * half + 2) {
+        // Output m sits at input position u_m = half + m · ratio; it needs
+        // piece.start + half <= u_m <= piece.end − 1 − half.
+        let first = (piece.start as f64 / ratio).ceil() as usize;
+        let last = ((piece.end - 1 - 2 * half) as f64 / ratio).floor() as usize;
+        if last < first {
+            continue;
+        }
+        let offset = piece.start as f64;
+        let values = interpolate(&x[piece.clone()], domain, offset, ratio, first..last + 1);
+        samples.resize(first, f64::NAN);
+        samples.extend(values);
+        out_pieces.push(first..last + 1);
+    }
+    Ok(ResampledPieces {
+        samples,
+        pieces: out_pieces,
+        clock: out_clock,
+    })
+}
+
+/// The output clock of a resampling: `P = round(T / h)` (at least 2), the first sample
+/// [`RESAMPLE_HALF_WIDTH`] input steps after the record's.
+fn whole_clock(clock: &SampleClock) -> Result<SampleClock, CircleError> {
+    let p = clock.samples_per_period().round().max(2.0) as usize;
+    SampleClock::new(clock.forcing_period(), p)?
+        .with_start_time(clock.start_time() + RESAMPLE_HALF_WIDTH as f64 * clock.step())
+}
+
+/// The Kaiser-windowed sinc interpolation of `x` (finite, at least `2 · half + 2` samples; its
+/// first sample at input position `offset`) at the positions `half + m · ratio` for `m` in
+/// `outputs`, all of which must keep the kernel inside `x`.
+fn interpolate(x: &[f64], domain: Domain, offset: f64, ratio: f64, outputs: Range<usize>) -> Vec<f64> {
+    let half = RESAMPLE_HALF_WIDTH;
+    let n = x.len();
     let mut y = match domain {
         Domain::Circle => unwrap(x),
         Domain::Line => x.to_vec(),
@@ -90,9 +193,10 @@ pub fn resample_to_whole(x: &[f64], clock: &SampleClock, domain: Domain) -> Resu
     let fc = CUTOFF * ratio.recip().min(1.0);
     let norm = bessel_i0(KAISER_BETA);
     let mut weights = vec![0.0; 2 * half];
-    let samples = (0..count)
+    outputs
         .map(|j| {
-            let u = half as f64 + j as f64 * ratio;
+            // Position in `x`, clamped against rounding at the ends of the range.
+            let u = (half as f64 + j as f64 * ratio - offset).clamp((half - 1) as f64, (n - 1 - half) as f64);
             let base = u.floor() as usize;
             let first = base + 1 - half;
             let mut total = 0.0;
@@ -118,11 +222,7 @@ pub fn resample_to_whole(x: &[f64], clock: &SampleClock, domain: Domain) -> Resu
                 Domain::Line => value,
             }
         })
-        .collect();
-    Ok(Resampled {
-        samples,
-        clock: out_clock,
-    })
+        .collect()
 }
 
 /// `sin(πz) / (πz)`.
@@ -180,6 +280,60 @@ mod tests {
         let end = r.clock.time(r.samples.len() - 1);
         assert!(end <= clock.time(4000 - 1 - RESAMPLE_HALF_WIDTH) + 1e-9);
         assert!(end + r.clock.step() > clock.time(4000 - 1 - RESAMPLE_HALF_WIDTH) - 1e-9);
+    }
+
+    #[test]
+    // Lists of one piece are what is meant here, not ranges to collect.
+    #[allow(clippy::single_range_in_vec_init)]
+    fn pieces_share_one_grid_and_match_the_whole_record() {
+        // A record with a gap of 500 samples resampled in pieces: every output sample equals the
+        // resampling of the whole (gapless) record at the same time, within the kernel's accuracy,
+        // and the gap (plus the kernel's reach) holds NaN.
+        let clock = SampleClock::from_step(TAU, TAU / 97.3).unwrap();
+        let f = |t: f64| t + 0.7 * (t + 0.3).sin() + 0.2 * (3.0 * t).cos();
+        let n = 6000;
+        let full: Vec<f64> = (0..n).map(|i| wrap(f(clock.time(i)))).collect();
+        let whole = resample_to_whole(&full, &clock, Domain::Circle).unwrap();
+        let mut x = full.clone();
+        x[2000..2500].fill(f64::NAN);
+        let pieces = [0..2000, 2500..n];
+        let r = resample_pieces(&x, &pieces, &clock, Domain::Circle).unwrap();
+        assert_eq!(r.clock, whole.clock);
+        assert_eq!(r.pieces.len(), 2);
+        assert_eq!(r.pieces[0].start, 0);
+        for (m, &v) in r.samples.iter().enumerate() {
+            let inside = r.pieces.iter().any(|p| p.contains(&m));
+            assert_eq!(v.is_nan(), !inside, "{m}");
+            if inside {
+                assert!(crate::circle_distance(v, f(r.clock.time(m))) < 1e-7, "{m}");
+            }
+        }
+        // Each piece keeps its samples but the kernel's reach at both ends.
+        let t = |i: usize| clock.time(i);
+        let (a, b) = (&r.pieces[0], &r.pieces[1]);
+        assert!(r.clock.time(a.end - 1) <= t(2000 - 1 - RESAMPLE_HALF_WIDTH) + 1e-9);
+        assert!(r.clock.time(a.end) > t(2000 - 1 - RESAMPLE_HALF_WIDTH) - 1e-9);
+        assert!(r.clock.time(b.start) >= t(2500 + RESAMPLE_HALF_WIDTH) - 1e-9);
+        assert!(r.clock.time(b.start - 1) < t(2500 + RESAMPLE_HALF_WIDTH) + 1e-9);
+        assert_eq!(r.samples.len(), b.end);
+        // A piece too short for the kernel is dropped; bad pieces are errors.
+        let r = resample_pieces(&x, &[0..2000, 2500..2600], &clock, Domain::Circle).unwrap();
+        assert_eq!(r.pieces.len(), 1);
+        assert!(matches!(
+            resample_pieces(&x, &[0..100], &clock, Domain::Circle),
+            Err(CircleError::TooShort { len: 100, .. })
+        ));
+        assert!(matches!(
+            resample_pieces(&x, &[0..2001], &clock, Domain::Circle),
+            Err(CircleError::NonFinite { index: 2000, .. })
+        ));
+        let (empty, beyond) = (5..5, 0..n + 1);
+        for bad in [&[0..10, 5..20][..], &[empty], &[beyond]] {
+            assert!(matches!(
+                resample_pieces(&x, bad, &clock, Domain::Circle),
+                Err(CircleError::BadPiece { .. })
+            ));
+        }
     }
 
     #[test]
