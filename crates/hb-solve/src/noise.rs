@@ -149,7 +149,23 @@ pub(crate) fn column_factors<B: Basis + ?Sized>(
     Ok(factors)
 }
 
-/// Applies the params' [`NoiseCorrection`] to an assembled system of `basis` on `signal`.
+/// The longest run of finite samples of `signal` (the first of the longest; empty if none).
+fn longest_finite_run(signal: &[f64]) -> &[f64] {
+    let mut best = 0..0;
+    let mut start = 0;
+    for (i, v) in signal.iter().enumerate() {
+        if !v.is_finite() {
+            start = i + 1;
+        } else if i + 1 - start > best.len() {
+            best = start..i + 1;
+        }
+    }
+    &signal[best]
+}
+
+/// Applies the params' [`NoiseCorrection`] to an assembled system of `basis` on `signal`. An
+/// estimated `σ` of a record with gaps (NaN between its pieces, which the segments never reach)
+/// comes from its longest piece.
 pub fn correct_noise<B: Basis + ?Sized>(
     basis: &B,
     signal: &[f64],
@@ -159,7 +175,7 @@ pub fn correct_noise<B: Basis + ?Sized>(
     let sigma = match params.noise_correction() {
         NoiseCorrection::None => return Ok(()),
         NoiseCorrection::Given { sigma } => sigma,
-        NoiseCorrection::Estimated => estimate_noise_sigma(signal, basis.domain())?,
+        NoiseCorrection::Estimated => estimate_noise_sigma(longest_finite_run(signal), basis.domain())?,
     };
     for (c, factor) in column_factors(basis, params, sigma)?.into_iter().enumerate() {
         if !factor.is_finite() {
@@ -221,6 +237,15 @@ mod tests {
                 circle_signal::wrap(x + noise.sample(&mut rng))
             })
             .collect()
+    }
+
+    #[test]
+    fn the_longest_finite_run() {
+        let nan = f64::NAN;
+        assert_eq!(longest_finite_run(&[1.0, nan, 2.0, 3.0, nan, 4.0]), &[2.0, 3.0]);
+        assert_eq!(longest_finite_run(&[1.0, 2.0, nan, 3.0, 4.0]), &[1.0, 2.0]);
+        assert_eq!(longest_finite_run(&[nan, f64::INFINITY]), &[] as &[f64]);
+        assert_eq!(longest_finite_run(&[5.0]), &[5.0]);
     }
 
     #[test]

@@ -69,6 +69,8 @@ mod setup;
 pub use error::PipelineError;
 pub use setup::{Identification, IdentifyStep, Method, ModelSpec, Setup};
 
+use std::ops::Range;
+
 use circle_signal::{Domain, SampleClock, Segment};
 use embedding::{
     AmiCurve, AmiParams, FnnParams, FnnResult, average_mutual_information, false_nearest_neighbours,
@@ -79,10 +81,17 @@ use pendulum_sim::{
 };
 use upo_search::{Catalogue, CloseReturns, Windows};
 
-/// A record ready for the pipeline: its samples, its clock and what the samples are.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// A record ready for the pipeline: its samples, its clock and what the samples are, and, for a
+/// record with gaps, the pieces that hold data.
+///
+/// A record with gaps keeps one clock: its samples lie on one grid, the missing ones NaN, and its
+/// pieces are the ranges that hold data. Every stage respects them: the delay and the embedding
+/// dimension come from the longest piece, orbits and windows are searched in each piece (none spans
+/// a gap), and the record's own section in the validation takes its points from every piece.
+#[derive(Debug, Clone, PartialEq)]
 pub struct Record<'a> {
     samples: &'a [f64],
+    pieces: Vec<Range<usize>>,
     clock: SampleClock,
     domain: Domain,
     samples_per_period: usize,
@@ -92,21 +101,77 @@ impl<'a> Record<'a> {
     /// `samples` (not empty; on the circle, wrapped into `[−π, π)`) taken on `clock`, whose forcing
     /// period must be a whole number `P` of samples, in `domain`.
     pub fn new(samples: &'a [f64], clock: SampleClock, domain: Domain) -> Result<Self, PipelineError> {
+        Self::with_pieces(samples, vec![0..samples.len()], clock, domain)
+    }
+
+    /// A record with gaps: `samples` on `clock`'s grid hold data in `pieces` (non-empty ranges, in
+    /// order and disjoint, every sample in them finite); what lies between the pieces is never read.
+    pub fn with_pieces(
+        samples: &'a [f64],
+        pieces: Vec<Range<usize>>,
+        clock: SampleClock,
+        domain: Domain,
+    ) -> Result<Self, PipelineError> {
         let samples_per_period = clock.require_whole()?;
-        if samples.is_empty() {
+        if samples.is_empty() || pieces.is_empty() {
             return Err(PipelineError::EmptyRecord);
+        }
+        let mut end = 0;
+        for (index, piece) in pieces.iter().enumerate() {
+            if piece.start < end || piece.start >= piece.end || piece.end > samples.len() {
+                return Err(PipelineError::Clock(circle_signal::CircleError::BadPiece {
+                    index,
+                    start: piece.start,
+                    end: piece.end,
+                    len: samples.len(),
+                }));
+            }
+            end = piece.end;
+            if let Some((i, &value)) = samples[piece.clone()]
+                .iter()
+                .enumerate()
+                .find(|(_, v)| !v.is_finite())
+            {
+                return Err(PipelineError::Clock(circle_signal::CircleError::NonFinite {
+                    index: piece.start + i,
+                    value,
+                }));
+            }
         }
         Ok(Self {
             samples,
+            pieces,
             clock,
             domain,
             samples_per_period,
         })
     }
 
-    /// The samples.
+    /// The samples (NaN in the gaps between pieces).
     pub fn samples(&self) -> &'a [f64] {
         self.samples
+    }
+
+    /// The ranges of the samples that hold data: one for a record without gaps.
+    pub fn pieces(&self) -> &[Range<usize>] {
+        &self.pieces
+    }
+
+    /// The longest piece (the first of the longest), on which the delay and the embedding
+    /// dimension are found.
+    pub fn longest_piece(&self) -> &'a [f64] {
+        let longest = self
+            .pieces
+            .iter()
+            .rev()
+            .max_by_key(|r| r.len())
+            .expect("a record has a piece");
+        &self.samples[longest.clone()]
+    }
+
+    /// The first sample that holds data.
+    pub fn first_sample(&self) -> f64 {
+        self.samples[self.pieces[0].start]
     }
 
     /// The clock: forcing period, sample step, time of the first sample.
@@ -128,13 +193,14 @@ impl<'a> Record<'a> {
 /// Options of the delay and embedding stage, checked when set.
 ///
 /// Defaults: the delay is the first minimum of the average mutual information over 16 equal
-/// boxes and lags up to 40; false nearest neighbours up to dimension 8 in the record's own metric,
+/// boxes and lags up to two forcing periods (at least [`AmiParams::DEFAULT_MAX_LAG`]), so that the
+/// search reaches as far in time at any sampling rate; false nearest neighbours up to dimension 8 in the record's own metric,
 /// and in no other.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct EmbedOptions {
     delay: Option<usize>,
     bins: usize,
-    max_lag: usize,
+    max_lag: Option<usize>,
     max_dim: usize,
     compared_metric: Option<Domain>,
 }
@@ -144,7 +210,7 @@ impl Default for EmbedOptions {
         Self {
             delay: None,
             bins: AmiParams::DEFAULT_BINS,
-            max_lag: AmiParams::DEFAULT_MAX_LAG,
+            max_lag: None,
             max_dim: FnnParams::DEFAULT_MAX_DIM,
             compared_metric: None,
         }
@@ -153,7 +219,7 @@ impl Default for EmbedOptions {
 
 impl EmbedOptions {
     /// A given delay `>= 1` in samples for every later stage. The mutual information is still
-    /// computed, and must still have a first minimum.
+    /// computed (for its figure), but need not have a first minimum.
     pub fn with_delay(mut self, delay: usize) -> Result<Self, PipelineError> {
         FnnParams::new(Domain::Circle, delay)?;
         self.delay = Some(delay);
@@ -167,10 +233,11 @@ impl EmbedOptions {
         Ok(self)
     }
 
-    /// Largest lag `>= 1` of the mutual information (shorter than the record).
+    /// Largest lag `>= 1` of the mutual information (shorter than the record) instead of the
+    /// default two forcing periods.
     pub fn with_max_lag(mut self, max_lag: usize) -> Result<Self, PipelineError> {
         AmiParams::new(Domain::Circle).with_max_lag(max_lag)?;
-        self.max_lag = max_lag;
+        self.max_lag = Some(max_lag);
         Ok(self)
     }
 
@@ -193,10 +260,17 @@ impl EmbedOptions {
         self.delay
     }
 
-    fn ami_params(&self, metric: Domain) -> Result<AmiParams, PipelineError> {
+    /// The largest lag of the mutual information on a record of `samples_per_period`: the one
+    /// given, or two forcing periods (at least [`AmiParams::DEFAULT_MAX_LAG`]).
+    pub fn max_lag(&self, samples_per_period: usize) -> usize {
+        self.max_lag
+            .unwrap_or_else(|| (2 * samples_per_period).max(AmiParams::DEFAULT_MAX_LAG))
+    }
+
+    fn ami_params(&self, metric: Domain, samples_per_period: usize) -> Result<AmiParams, PipelineError> {
         Ok(AmiParams::new(metric)
             .with_bins(self.bins)?
-            .with_max_lag(self.max_lag)?)
+            .with_max_lag(self.max_lag(samples_per_period))?)
     }
 
     fn fnn_params(&self, metric: Domain, delay: usize) -> Result<FnnParams, PipelineError> {
@@ -419,7 +493,7 @@ impl ValidationOptions {
 
     fn initial_state(&self, record: &Record<'_>) -> (f64, f64) {
         match self.initial {
-            InitialState::FirstSample => (record.samples[0], 0.0),
+            InitialState::FirstSample => (record.first_sample(), 0.0),
             InitialState::Given { x, v } => (x, v),
         }
     }
@@ -633,10 +707,13 @@ impl<'a> Pipeline<'a> {
 
     /// The average mutual information and the delay, and false nearest neighbours with it.
     pub fn embed(&self) -> Result<Embedded, PipelineError> {
-        let (x, metric) = (self.record.samples, self.record.domain);
-        let ami = average_mutual_information(x, &self.embed.ami_params(metric)?)?;
-        let first_minimum = ami.delay()?;
-        let delay = self.embed.delay.unwrap_or(first_minimum);
+        let (x, metric) = (self.record.longest_piece(), self.record.domain);
+        let params = self.embed.ami_params(metric, self.record.samples_per_period)?;
+        let ami = average_mutual_information(x, &params)?;
+        let delay = match self.embed.delay {
+            Some(delay) => delay,
+            None => ami.delay()?,
+        };
         let fnn = false_nearest_neighbours(x, &self.embed.fnn_params(metric, delay)?)?;
         let fnn_compared = match self.embed.compared_metric {
             Some(other) => Some(false_nearest_neighbours(
@@ -655,13 +732,13 @@ impl<'a> Pipeline<'a> {
 
     /// The close-return catalogue with the delay found, and the windows if a model needs them.
     pub fn segments(&self, embedded: &Embedded) -> Result<Segments, PipelineError> {
-        let x = self.record.samples;
+        let (x, pieces) = (self.record.samples, self.record.pieces());
         let catalogue = self
             .search
             .close_returns(&self.record, embedded.delay)?
-            .catalogue(x)?;
+            .catalogue_pieces(x, pieces)?;
         let windows = if self.setups.iter().any(|s| s.method() == Method::Windowed) {
-            Some(self.windows.windows(x)?)
+            Some(self.windows.windows_pieces(x, pieces)?)
         } else {
             None
         };
@@ -757,7 +834,7 @@ impl<'a> Pipeline<'a> {
 }
 
 /// Delay-coordinate section of a wrapped or linear record: `(x_n, x_{n+delay})` at the samples
-/// `n ≡ offset (mod P)`, and its embedding for the energy distance (`(cos, sin)` of each angle, or
+/// `n ≡ offset (mod P)` where both are finite, and its embedding for the energy distance (`(cos, sin)` of each angle, or
 /// the raw pair on the line).
 fn delay_section(
     x: &[f64],
@@ -769,6 +846,8 @@ fn delay_section(
     let pairs: Vec<(f64, f64)> = (offset..x.len().saturating_sub(delay))
         .step_by(p.max(1))
         .map(|n| (x[n], x[n + delay]))
+        // The gaps of a record in pieces are NaN: a pair that reaches into one is no point.
+        .filter(|(a, b)| a.is_finite() && b.is_finite())
         .collect();
     let embedded = pairs
         .iter()
@@ -804,6 +883,79 @@ mod tests {
         ));
         let record = Record::new(&[0.0; 10], clock(), Domain::Line).unwrap();
         assert_eq!(record.samples_per_period(), 25);
+    }
+
+    #[test]
+    fn a_record_with_gaps_is_identified_from_its_pieces() {
+        let config = SimulationConfig::paper().with_samples(4_000).unwrap();
+        let trajectory = simulate(&pendulum_sim::Pendulum::paper(), &config).unwrap();
+        let clock = clock().with_start_time(trajectory.t[0]).unwrap();
+        let mut x = trajectory.wrapped();
+        // A gap that is not a whole number of forcing periods: the drive's phase must come from the
+        // one clock.
+        x[1_510..1_617].fill(f64::NAN);
+        let pieces = vec![0..1_510, 1_617..4_000];
+        assert!(matches!(
+            Record::with_pieces(&x, vec![0..1_511], clock, Domain::Circle),
+            Err(PipelineError::Clock(circle_signal::CircleError::NonFinite {
+                index: 1_510,
+                ..
+            }))
+        ));
+        assert!(matches!(
+            Record::with_pieces(&x, vec![0..10, 5..20], clock, Domain::Circle),
+            Err(PipelineError::Clock(circle_signal::CircleError::BadPiece {
+                index: 1,
+                ..
+            }))
+        ));
+        let record = Record::with_pieces(&x, pieces.clone(), clock, Domain::Circle).unwrap();
+        assert_eq!(record.longest_piece().len(), 2_383);
+        let basis = BasisKind::from(hb_basis::Harmonic::new(1).unwrap());
+        let options = PipelineOptions {
+            models: vec![
+                ModelSpec::new(Method::Windowed, basis),
+                ModelSpec::new(Method::Upo, basis),
+            ],
+            validation: ValidationOptions::default()
+                .with_section_points(20)
+                .unwrap()
+                .with_lyapunov_periods(20)
+                .unwrap()
+                .with_record_comparison(RecordComparison::DelaySection { periods: 40 })
+                .unwrap(),
+            ..PipelineOptions::default()
+        };
+        let outcome = Pipeline::new(record, options).unwrap().run(|_| {}).unwrap();
+        for method in [Method::Windowed, Method::Upo] {
+            let segments = outcome.segments.of(method);
+            assert!(!segments.is_empty());
+            for s in segments {
+                assert!(
+                    pieces
+                        .iter()
+                        .any(|r| r.contains(&s.start()) && r.contains(&s.closing())),
+                    "{method}: {}..={}",
+                    s.start(),
+                    s.closing()
+                );
+            }
+        }
+        let weak = &outcome.models[0].model;
+        let truth = [
+            ("x'", 0.03),
+            ("sin(x)", 1.0 / (0.8333f64 * 0.8333)),
+            ("sin(t)*cos(x)", -1.52),
+        ];
+        for (name, value) in truth {
+            let found = weak.coefficient(name).unwrap().value;
+            assert!(
+                (found - value).abs() < 1e-5 * value.abs(),
+                "{name}: {found} vs {value}"
+            );
+        }
+        let section = outcome.validation.record.unwrap();
+        assert!(section.points.iter().all(|(a, b)| a.is_finite() && b.is_finite()));
     }
 
     #[test]
@@ -866,7 +1018,7 @@ mod tests {
         let basis = BasisKind::from(Harmonic::new(1).unwrap());
         let record = Record::new(&x, clock(), Domain::Circle).unwrap();
         let pipeline = Pipeline::new(
-            record,
+            record.clone(),
             PipelineOptions {
                 search: SearchOptions::default().with_tolerance(1e-9).unwrap(),
                 models: vec![ModelSpec::new(Method::Upo, basis)],
