@@ -101,7 +101,12 @@ impl<'a> Record<'a> {
     /// `samples` (not empty; on the circle, wrapped into `[−π, π)`) taken on `clock`, whose forcing
     /// period must be a whole number `P` of samples, in `domain`.
     pub fn new(samples: &'a [f64], clock: SampleClock, domain: Domain) -> Result<Self, PipelineError> {
-        Self::with_pieces(samples, vec![0..samples.len()], clock, domain)
+        Self::with_pieces(
+            samples,
+            std::iter::once(0..samples.len()).collect(),
+            clock,
+            domain,
+        )
     }
 
     /// A record with gaps: `samples` on `clock`'s grid hold data in `pieces` (non-empty ranges, in
@@ -896,7 +901,7 @@ mod tests {
         x[1_510..1_617].fill(f64::NAN);
         let pieces = vec![0..1_510, 1_617..4_000];
         assert!(matches!(
-            Record::with_pieces(&x, vec![0..1_511], clock, Domain::Circle),
+            Record::with_pieces(&x, std::iter::once(0..1_511).collect(), clock, Domain::Circle),
             Err(PipelineError::Clock(circle_signal::CircleError::NonFinite {
                 index: 1_510,
                 ..
