@@ -49,11 +49,13 @@
 
 mod clock;
 mod domain;
+mod oscillation;
 mod resample;
 mod segment;
 
 pub use clock::SampleClock;
 pub use domain::{Domain, UnknownDomain};
+pub use oscillation::oscillation_period;
 pub use resample::{RESAMPLE_HALF_WIDTH, Resampled, ResampledPieces, resample_pieces, resample_to_whole};
 pub use segment::{OrbitSource, Segment};
 
@@ -70,6 +72,17 @@ pub enum CircleError {
         len: usize,
         /// Samples needed.
         needed: usize,
+    },
+    /// A record without a drive must oscillate for its period to be measured.
+    #[error(
+        "the record of {len} samples crosses its trend upward {crossings} times: at least two are needed to \
+         measure its period of oscillation"
+    )]
+    NoOscillation {
+        /// Samples of the record.
+        len: usize,
+        /// Upward crossings found.
+        crossings: usize,
     },
     /// The pieces of a record with gaps must be non-empty ranges of it, in order and disjoint.
     #[error("piece {index} ({start}..{end}) is empty, out of order or beyond the record of {len} samples")]
