@@ -280,7 +280,16 @@ fn bad_files_name_the_problem() {
             "t,theta\n0,1\n0.25,1\n0.2,1\n",
             "does not increase",
         ),
-        ("uneven.csv", "t,theta\n0,1\n0.25,1\n0.6,1\n", "uniform"),
+        (
+            "glitch.csv",
+            "t,theta\n0,1\n0.25,1\n0.6,1\n0.75,1\n1,1\n",
+            "line 4: time 0.6 does not fit the grid",
+        ),
+        (
+            "mixed.csv",
+            "t,theta\n0,1\n0.25;1\n",
+            "line 3: cells separated by semicolons",
+        ),
         (
             "short.csv",
             "t,theta\n0,1\n0.25132741228718347,1\n0.5026548245743669,1\n",
@@ -294,6 +303,85 @@ fn bad_files_name_the_problem() {
     let garbage = dir.join("garbage.bin");
     std::fs::write(&garbage, [0u8, 159, 146, 150, 255, 0, 1, 2]).unwrap();
     assert_clean_failure(&hbid(&["upos", garbage.to_str().unwrap()]), "line");
+}
+
+/// The paper's data set as `(t, theta)` rows.
+fn paper_rows() -> Vec<(String, String)> {
+    std::fs::read_to_string(paper_dataset())
+        .unwrap()
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.starts_with('t'))
+        .map(|l| {
+            let (t, theta) = l.split_once(',').unwrap();
+            (t.to_owned(), theta.to_owned())
+        })
+        .collect()
+}
+
+#[test]
+fn reads_records_as_acquisition_programs_write_them() {
+    let dir = scratch("daq");
+    let rows = paper_rows();
+    let reference = hbid(&["embed", &paper_dataset(), "--json", "--max-dim", "4"]);
+    assert!(reference.status.success());
+    let spaced: String = std::iter::once("   t        theta\n".to_owned())
+        .chain(rows.iter().map(|(t, x)| format!("  {t}  \t {x}\n")))
+        .collect();
+    // No header, the angle first, tabs.
+    let swapped: String = rows.iter().map(|(t, x)| format!("{x}\t{t}\n")).collect();
+    for (name, text) in [("spaced.txt", spaced), ("swapped.tsv", swapped)] {
+        let path = dir.join(name);
+        std::fs::write(&path, text).unwrap();
+        let out = hbid(&["embed", path.to_str().unwrap(), "--json", "--max-dim", "4"]);
+        assert!(
+            out.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert_eq!(out.stdout, reference.stdout, "{name}");
+        assert!(
+            out.stderr.is_empty(),
+            "{name}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+}
+
+#[test]
+fn a_time_stamp_glitch_is_named_and_repaired() {
+    let dir = scratch("glitch");
+    let mut rows = paper_rows();
+    // Sample 1000, on line 1001 of a file with a header: a third of a step late.
+    let t: f64 = rows[999].0.parse().unwrap();
+    let late = t + std::f64::consts::TAU / 25.0 / 3.0;
+    rows[999].0 = late.to_string();
+    let text: String = std::iter::once("t,theta\n".to_owned())
+        .chain(rows.iter().map(|(t, x)| format!("{t},{x}\n")))
+        .collect();
+    let path = dir.join("glitch.csv");
+    std::fs::write(&path, text).unwrap();
+    let path = path.to_str().unwrap();
+    let out = hbid(&["embed", path, "--json", "--max-dim", "4"]);
+    assert_clean_failure(&out, "line 1001: time");
+    assert_clean_failure(&out, "run with --repair");
+    let repaired = hbid(&["embed", path, "--json", "--max-dim", "4", "--repair"]);
+    assert!(
+        repaired.status.success(),
+        "{}",
+        String::from_utf8_lossy(&repaired.stderr)
+    );
+    let note = String::from_utf8_lossy(&repaired.stderr);
+    let now: f64 = note
+        .trim()
+        .strip_prefix(&format!(
+            "note: line 1001: time {late} replaced by its grid time "
+        ))
+        .unwrap_or_else(|| panic!("{note}"))
+        .parse()
+        .unwrap();
+    assert!((now - t).abs() < 1e-9, "{now} vs {t}");
+    let reference = hbid(&["embed", &paper_dataset(), "--json", "--max-dim", "4"]);
+    assert_eq!(repaired.stdout, reference.stdout);
 }
 
 #[test]

@@ -1,6 +1,6 @@
 //! Loading a record the way every analysis subcommand does.
 
-use std::f64::consts::TAU;
+use std::f64::consts::{PI, TAU};
 use std::path::PathBuf;
 
 use anyhow::Context;
@@ -8,7 +8,9 @@ use circle_signal::{Domain, SampleClock};
 use clap::Args;
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use embedding::AmiParams;
-use hbid::input::{Column, InputError, ReadOptions, Role, UniformRecord, read_path};
+use hbid::input::{
+    AngleRange, Column, GridOptions, GridRecord, InputError, ReadOptions, Role, angle_range, read_path,
+};
 use hbid::pipeline::{Record, SearchOptions};
 
 /// The command-line values of a [`Domain`]: `circle` or `line` (`linear` too where `also_linear`,
@@ -25,7 +27,7 @@ pub fn domain_parser(also_linear: bool) -> impl TypedValueParser<Value = Domain>
 /// The input options shared by the analysis subcommands.
 #[derive(Debug, Args)]
 pub struct InputArgs {
-    /// The record: CSV (header with columns t and theta, or headerless time,angle) or .npy; `-` reads standard input.
+    /// The record: text (cells separated by commas, semicolons, spaces or tabs; header with columns t and theta, or headerless time and angle in either order) or .npy; `-` reads standard input.
     pub file: PathBuf,
     /// Time column, by header name or 1-based position.
     #[arg(long, value_name = "NAME|N")]
@@ -36,6 +38,10 @@ pub struct InputArgs {
     /// Sampling step, for records without a time column (the first sample is at t = 0).
     #[arg(long, allow_hyphen_values = true)]
     pub dt: Option<f64>,
+    /// Fix isolated time-stamp glitches (a stamp off the grid, repeated or going backwards, between
+    /// two that fit) and encoder spikes, and list each fix on stderr.
+    #[arg(long)]
+    pub repair: bool,
     /// Forcing period in the time unit of the data (2π for the paper's non-dimensional time).
     #[arg(long, default_value_t = TAU, allow_hyphen_values = true)]
     pub forcing_period: f64,
@@ -88,21 +94,47 @@ impl InputArgs {
         let record = read_path(&self.file, &options)
             .map_err(naming_options)
             .with_context(|| format!("{}", self.file.display()))?;
-        let mut uniform = UniformRecord::new(record).with_context(|| format!("{}", self.file.display()))?;
-        let p = uniform
+        let grid = GridRecord::fit(record, &GridOptions { repair: self.repair })
+            .map_err(naming_options)
+            .with_context(|| format!("{}", self.file.display()))?;
+        for r in &grid.repaired {
+            eprintln!(
+                "note: {}: time {} replaced by its grid time {}",
+                r.at, r.was, r.now
+            );
+        }
+        if let [first, second, ..] = &grid.pieces[..] {
+            let end = first.first + first.samples.len();
+            anyhow::bail!(
+                "{}: the time stamps have {} gap(s) (missing samples; the first: {} samples after t = {}); records with gaps cannot be analysed yet",
+                self.file.display(),
+                grid.pieces.len() - 1,
+                second.first - end,
+                grid.t0 + (end - 1) as f64 * grid.dt,
+            );
+        }
+        let p = grid
             .samples_per_period(self.forcing_period)
             .map_err(naming_options)?;
-        let clock = SampleClock::new(self.forcing_period, p)?.with_start_time(uniform.t0)?;
-        if self.signal == Domain::Circle && uniform.outside_circle() {
-            eprintln!("note: values outside [-π, π): read as an unwrapped angle and wrapped");
-            for v in &mut uniform.x {
+        let clock = SampleClock::new(self.forcing_period, p)?.with_start_time(grid.t0)?;
+        let mut x = grid
+            .pieces
+            .into_iter()
+            .next()
+            .map(|p| p.samples)
+            .unwrap_or_default();
+        if self.signal == Domain::Circle && x.iter().any(|v| !(-PI..PI).contains(v)) {
+            if angle_range(&x) == AngleRange::Unwrapped {
+                eprintln!("note: values outside [-π, π): read as an unwrapped angle and wrapped");
+            }
+            for v in &mut x {
                 *v = circle_signal::wrap(*v);
             }
         }
         Ok(Data {
             clock,
             p,
-            x: uniform.x,
+            x,
             domain: self.signal,
         })
     }
@@ -140,6 +172,8 @@ fn naming_options(error: InputError) -> anyhow::Error {
             role: Role::Angle, ..
         } => "; choose one with --angle-col",
         InputError::BadForcingPeriod { .. } => " (--forcing-period)",
+        InputError::TimeGlitch { isolated: true, .. } => "; run with --repair to fix isolated glitches",
+        InputError::TimeGlitch { isolated: false, .. } | InputError::TimeUnresolved { .. } => " with --dt",
         _ => return error.into(),
     };
     WithOptions { error, options }.into()
@@ -202,6 +236,14 @@ mod tests {
 
     #[test]
     fn input_errors_name_the_options_that_fix_them() {
+        let glitch = |isolated| InputError::TimeGlitch {
+            at: hbid::input::Location::Line(7),
+            t: 1.5,
+            fault: hbid::input::StampFault::OffGrid,
+            expected: 1.25,
+            dt: 0.25,
+            isolated,
+        };
         let missing = |role| InputError::MissingColumn {
             role,
             wanted: Column::Position(3),
@@ -215,6 +257,16 @@ mod tests {
             (missing(Role::Time), "--time-col"),
             (missing(Role::Angle), "--angle-col"),
             (InputError::BadForcingPeriod { period: -1.0 }, "--forcing-period"),
+            (glitch(true), "run with --repair to fix isolated glitches"),
+            (glitch(false), "give its step with --dt"),
+            (
+                InputError::TimeUnresolved {
+                    off: 900,
+                    total: 1000,
+                    decimals: Some(3),
+                },
+                "give its step with --dt",
+            ),
         ] {
             let text = error.to_string();
             let named = format!("{:#}", naming_options(error));

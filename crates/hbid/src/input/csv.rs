@@ -1,54 +1,74 @@
-//! CSV text: comments, an optional header, columns by name or position.
+//! Text records: comments, an optional header, cells separated by commas, semicolons or white
+//! space, columns by name or position.
 
-use std::path::PathBuf;
+use super::{Column, Columns, InputError, Location, ReadOptions, Record, Role, Separator, Times, grid};
 
-use csv::StringRecord;
-
-use super::{Column, Columns, InputError, Location, ReadOptions, Record, Role, Times, grid};
-
-/// Reads CSV text; the options are assumed valid.
-pub(super) fn read(bytes: &[u8], options: &ReadOptions) -> Result<Record, InputError> {
-    let mut reader = csv::ReaderBuilder::new()
-        .comment(Some(b'#'))
-        .has_headers(false)
-        .flexible(false)
-        .trim(csv::Trim::All)
-        .from_reader(bytes);
-    let mut row = StringRecord::new();
-    if !next_row(&mut reader, &mut row)? {
+/// Reads text; the options are assumed valid.
+pub(super) fn read<'a>(bytes: &'a [u8], options: &ReadOptions) -> Result<Record, InputError> {
+    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+    let mut lines = Lines { bytes, line: 0 };
+    let Some((first_line, first)) = lines.next_row()? else {
         return Err(InputError::Empty);
-    }
-    let first = row.clone();
-    let header = first.iter().any(|c| c.parse::<f64>().is_err()).then_some(&first);
-    let names: Option<Vec<&str>> = header.map(|h| h.iter().collect());
-    let Columns { time, angle } = options.columns(names.as_deref(), first.len())?;
-    let field = |role, index| Field { index, role, header };
+    };
+    let separator = match Separator::of(first) {
+        Some(s) => s,
+        // A single cell: any separator splits it into itself.
+        None => Separator::Whitespace,
+    };
+    let mut first_cells = Vec::new();
+    separator.split(first, &mut first_cells);
+    let width = first_cells.len();
+    let is_header = first_cells.iter().any(|c| number(c, separator).is_none());
+    let header = is_header.then_some(&first_cells[..]);
+    let columns = options.columns(header, width)?;
+    let Columns { time, angle, .. } = columns;
+    let field = |role, index| Field {
+        index,
+        // Until the data decide which column is the time, neither is called one.
+        role: if columns.order_from_data {
+            Role::Angle
+        } else {
+            role
+        },
+        header,
+        separator,
+    };
     let (time_field, angle_field) = (
         time.column().map(|i| field(Role::Time, i)),
         field(Role::Angle, angle),
     );
 
     let mut record = Record::default();
-    let mut lines = Vec::new();
-    let mut counter = LineCounter {
-        bytes,
-        pos: 0,
-        line: 1,
-    };
-    let mut push = |row: &StringRecord| -> Result<(), InputError> {
-        let line = row.position().map_or(0, |p| counter.line_at(p.byte()));
-        if let Some(time) = &time_field {
-            record.t.push(time.value(row, line)?);
+    let mut numbers = Vec::new();
+    let mut cells: Vec<&'a str> = Vec::with_capacity(width);
+    let mut push = |line: u64, text: &'a str, cells: &mut Vec<&'a str>| -> Result<(), InputError> {
+        if let Some(found) = Separator::of(text).filter(|&s| s != separator && width > 1) {
+            return Err(InputError::MixedSeparators {
+                line,
+                expected: separator,
+                found,
+            });
         }
-        record.theta.push(angle_field.value(row, line)?);
-        lines.push(line);
+        separator.split(text, cells);
+        if cells.len() != width {
+            return Err(InputError::Ragged {
+                line,
+                expected: width,
+                found: cells.len(),
+            });
+        }
+        if let Some(time) = &time_field {
+            record.t.push(time.value(cells, line)?);
+        }
+        record.theta.push(angle_field.value(cells, line)?);
+        numbers.push(line);
         Ok(())
     };
     if header.is_none() {
-        push(&first)?;
+        push(first_line, first, &mut cells)?;
     }
-    while next_row(&mut reader, &mut row)? {
-        push(&row)?;
+    while let Some((line, text)) = lines.next_row()? {
+        push(line, text, &mut cells)?;
     }
     if record.theta.is_empty() {
         return Err(InputError::NoData);
@@ -56,50 +76,89 @@ pub(super) fn read(bytes: &[u8], options: &ReadOptions) -> Result<Record, InputE
     if let Times::Step(dt) = time {
         record.t = grid(record.theta.len(), dt);
     }
-    record.lines = Some(lines);
+    record.lines = Some(numbers);
+    if columns.order_from_data {
+        super::order_from_data(&mut record);
+    }
     Ok(record)
 }
 
-/// The next row that is not blank, into `row`; false at the end of the input.
-fn next_row(reader: &mut csv::Reader<&[u8]>, row: &mut StringRecord) -> Result<bool, InputError> {
-    loop {
-        match reader.read_record(row) {
-            Ok(true) if row.len() == 1 && row[0].is_empty() => continue,
-            Ok(more) => return Ok(more),
-            Err(e) => return Err(csv_error(e)),
+/// The rows of a text: lines that are neither blank nor comments, with their line numbers.
+struct Lines<'a> {
+    /// What is left to read.
+    bytes: &'a [u8],
+    /// The number of the last line read, counted from 1.
+    line: u64,
+}
+
+impl<'a> Lines<'a> {
+    /// The next row, trimmed, with its line number; `None` at the end.
+    fn next_row(&mut self) -> Result<Option<(u64, &'a str)>, InputError> {
+        while !self.bytes.is_empty() {
+            let end = self.bytes.iter().position(|&b| b == b'\n');
+            let (raw, rest) = match end {
+                Some(e) => (&self.bytes[..e], &self.bytes[e + 1..]),
+                None => (self.bytes, &self.bytes[self.bytes.len()..]),
+            };
+            self.bytes = rest;
+            self.line += 1;
+            let text = std::str::from_utf8(raw).map_err(|source| InputError::Malformed {
+                line: self.line,
+                source,
+            })?;
+            let text = text.trim();
+            if !(text.is_empty() || text.starts_with('#')) {
+                return Ok(Some((self.line, text)));
+            }
+        }
+        Ok(None)
+    }
+}
+
+impl Separator {
+    /// The separator of a trimmed row: semicolons when it holds one (commas are then decimal
+    /// commas), else commas when it holds one, else white space when it holds any; `None` for a
+    /// single cell.
+    fn of(text: &str) -> Option<Self> {
+        if text.contains(';') {
+            Some(Separator::Semicolon)
+        } else if text.contains(',') {
+            Some(Separator::Comma)
+        } else if text.contains([' ', '\t']) {
+            Some(Separator::Whitespace)
+        } else {
+            None
+        }
+    }
+
+    /// The cells of a trimmed row into `cells`, each trimmed and without enclosing double quotes.
+    fn split<'a>(self, text: &'a str, cells: &mut Vec<&'a str>) {
+        fn clean(c: &str) -> &str {
+            let c = c.trim();
+            c.strip_prefix('"')
+                .and_then(|c| c.strip_suffix('"'))
+                .map_or(c, str::trim)
+        }
+        cells.clear();
+        match self {
+            Separator::Comma => cells.extend(text.split(',').map(clean)),
+            Separator::Semicolon => cells.extend(text.split(';').map(clean)),
+            Separator::Whitespace => {
+                cells.extend(text.split([' ', '\t']).filter(|c| !c.is_empty()).map(clean))
+            }
         }
     }
 }
 
-/// Physical line numbers (comment lines included, which the CSV parser does not count) from
-/// byte offsets that only move forward.
-struct LineCounter<'a> {
-    bytes: &'a [u8],
-    pos: usize,
-    line: u64,
-}
-
-impl LineCounter<'_> {
-    fn line_at(&mut self, byte: u64) -> u64 {
-        let target = (byte as usize).min(self.bytes.len());
-        if target > self.pos {
-            self.line += self.bytes[self.pos..target]
-                .iter()
-                .filter(|&&b| b == b'\n')
-                .count() as u64;
-            self.pos = target;
+/// The number in a cell, if it is one: a decimal comma is accepted where semicolons separate
+/// the cells.
+fn number(cell: &str, separator: Separator) -> Option<f64> {
+    match cell.parse() {
+        Ok(v) => Some(v),
+        Err(_) if separator == Separator::Semicolon && cell.contains(',') => {
+            cell.replacen(',', ".", 1).parse().ok()
         }
-        // The parser's record position may point at comment or blank lines skipped before it.
-        while self.pos < self.bytes.len() && matches!(self.bytes[self.pos], b'#' | b'\n' | b'\r') {
-            match self.bytes[self.pos..].iter().position(|&b| b == b'\n') {
-                Some(nl) => {
-                    self.pos += nl + 1;
-                    self.line += 1;
-                }
-                None => break,
-            }
-        }
-        self.line
+        Err(_) => None,
     }
 }
 
@@ -107,14 +166,15 @@ impl LineCounter<'_> {
 struct Field<'a> {
     index: usize,
     role: Role,
-    header: Option<&'a StringRecord>,
+    header: Option<&'a [&'a str]>,
+    separator: Separator,
 }
 
 impl Field<'_> {
-    /// The finite number in this column of `row`, which is on `line`.
-    fn value(&self, row: &StringRecord, line: u64) -> Result<f64, InputError> {
-        let text = &row[self.index];
-        let value: f64 = text.parse().map_err(|_| InputError::NotANumber {
+    /// The finite number in this column of the row's `cells`, which is on `line`.
+    fn value(&self, cells: &[&str], line: u64) -> Result<f64, InputError> {
+        let text = cells[self.index];
+        let value = number(text, self.separator).ok_or_else(|| InputError::NotANumber {
             line,
             column: self.column(),
             value: text.chars().take(40).collect(),
@@ -138,28 +198,6 @@ impl Field<'_> {
     }
 }
 
-fn csv_error(e: csv::Error) -> InputError {
-    let line = e.position().map_or(0, |p| p.line());
-    match *e.kind() {
-        csv::ErrorKind::UnequalLengths {
-            expected_len, len, ..
-        } => InputError::Ragged {
-            line,
-            expected: expected_len as usize,
-            found: len as usize,
-        },
-        // Not from text in memory, but the parser reads any source.
-        csv::ErrorKind::Io(_) => match e.into_kind() {
-            csv::ErrorKind::Io(source) => InputError::Io {
-                path: PathBuf::from("<input>"),
-                source,
-            },
-            _ => unreachable!("the kind was Io"),
-        },
-        _ => InputError::Malformed { line, source: e },
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::super::*;
@@ -180,6 +218,68 @@ mod tests {
         assert_eq!(r.lines, Some(vec![3, 5]));
         let r = read("theta, t\n1,2\n").unwrap();
         assert_eq!((r.t[0], r.theta[0]), (2.0, 1.0));
+        // Windows line ends, a byte-order mark, quoted names, blank lines.
+        let r = read("\u{feff}\"t\",\"theta\"\r\n\r\n0,1\r\n0.5,2\r\n").unwrap();
+        assert_eq!(
+            (r.t, r.theta, r.lines),
+            (vec![0.0, 0.5], vec![1.0, 2.0], Some(vec![3, 4]))
+        );
+    }
+
+    #[test]
+    fn whitespace_semicolons_and_tabs_separate_cells() {
+        let expected = (vec![0.0, 0.5, 1.0], vec![0.1, -0.2, 0.3]);
+        for text in [
+            "t theta\n0 0.1\n0.5 -0.2\n1 0.3\n",
+            "   t    theta  \n  0   0.1\n0.5     -0.2   \n 1 0.3 \n",
+            "t\ttheta\n0\t0.1\n0.5\t-0.2\n1\t0.3\n",
+            "t \t theta\n0\t\t0.1\n0.5 \t-0.2\n1 0.3\n",
+            "t;theta\n0;0.1\n0.5;-0.2\n1;0.3\n",
+            "t ; theta\n0; 0,1\n0,5 ;-0,2\n1;0.3\n",
+            "0 0.1\n0.5 -0.2\n1 0.3\n",
+            "0;0.1\n0.5;-0.2\n1;0.3\n",
+        ] {
+            let r = read(text).unwrap_or_else(|e| panic!("{text:?}: {e}"));
+            assert_eq!((r.t, r.theta), expected, "{text:?}");
+        }
+        // A single column with the step: white space around it is no separator.
+        let step = ReadOptions {
+            dt: Some(0.5),
+            ..Default::default()
+        };
+        assert_eq!(with("  1.5\n2.5  \n", step).unwrap().theta, vec![1.5, 2.5]);
+    }
+
+    #[test]
+    fn mixed_separators_name_the_line() {
+        for (text, line, expected, found) in [
+            ("0,1\n1,2\n2 3\n", 3, Separator::Comma, Separator::Whitespace),
+            (
+                "t theta\n0 1\n1;2\n",
+                3,
+                Separator::Whitespace,
+                Separator::Semicolon,
+            ),
+            (
+                "t;theta\n0;1\n# c\n1,2\n",
+                4,
+                Separator::Semicolon,
+                Separator::Comma,
+            ),
+            ("0\t1\n1\t2\n2,3\n", 3, Separator::Whitespace, Separator::Comma),
+        ] {
+            match read(text) {
+                Err(e @ InputError::MixedSeparators { .. }) => {
+                    assert_eq!(
+                        e.to_string(),
+                        format!(
+                            "line {line}: cells separated by {found} where the first row uses {expected}"
+                        ),
+                    );
+                }
+                other => panic!("{text:?}: {other:?}"),
+            }
+        }
     }
 
     #[test]
@@ -196,7 +296,7 @@ mod tests {
         let opts = ReadOptions {
             time: Some("time".parse().unwrap()),
             angle: Some("3".parse().unwrap()),
-            dt: None,
+            ..Default::default()
         };
         let r = with("time,x,angle\n0,9,1\n1,9,2\n", opts).unwrap();
         assert_eq!(r.theta, vec![1.0, 2.0]);
@@ -205,9 +305,62 @@ mod tests {
         let both = ReadOptions {
             time: Some(Column::Position(1)),
             dt: Some(1.0),
-            angle: None,
+            ..Default::default()
         };
         assert!(matches!(with("1,2\n", both), Err(InputError::TimeTwice)));
+    }
+
+    #[test]
+    fn default_value_columns() {
+        // theta first, then x, then angle; else the only column besides the time.
+        for (header, expected) in [
+            ("t,x,theta", 3.0),
+            ("angle,t,x", 3.0),
+            ("angle,t,y", 1.0),
+            ("t,position", 2.0),
+            ("volts,t", 1.0),
+        ] {
+            // Row 1 holds each column's position.
+            let width = header.split(',').count();
+            let row: Vec<String> = (1..=width).map(|c| c.to_string()).collect();
+            let text = format!("{header}\n{}\n", row.join(","));
+            let r = read(&text).unwrap_or_else(|e| panic!("{header}: {e}"));
+            assert_eq!(r.theta[0], expected, "{header}");
+        }
+        // Three columns and none of the names: nothing to guess.
+        assert!(matches!(
+            read("t,a,b\n0,1,2\n"),
+            Err(InputError::MissingColumn {
+                role: Role::Angle,
+                ..
+            })
+        ));
+        // An explicit choice still wins.
+        let chosen = ReadOptions {
+            angle: Some(Column::Name("a".into())),
+            ..Default::default()
+        };
+        assert_eq!(with("t,a,x\n0,1,2\n", chosen).unwrap().theta, vec![1.0]);
+    }
+
+    #[test]
+    fn headerless_columns_in_either_order() {
+        let n = 50;
+        let dt = 1.0 / 2048.0;
+        let angle = |i: usize| 2.5 * (i as f64 * 0.3).sin();
+        let time_first: String = (0..n)
+            .map(|i| format!("{:.4} {:.6}\n", 3.0 + i as f64 * dt, angle(i)))
+            .collect();
+        let angle_first: String = (0..n)
+            .map(|i| format!("{:.6}\t{:.4}\n", angle(i), 3.0 + i as f64 * dt))
+            .collect();
+        let a = read(&time_first).unwrap();
+        let b = read(&angle_first).unwrap();
+        assert_eq!((&a.t, &a.theta), (&b.t, &b.theta));
+        assert!((a.t[1] - a.t[0] - dt).abs() < 1e-4 && (a.theta[1] - angle(1)).abs() < 1e-6);
+        // A value column as uniform as the time leaves the default: column 1 is the time.
+        let ramps: String = (0..n).map(|i| format!("{} {}\n", 2 * i, i)).collect();
+        assert_eq!(read(&ramps).unwrap().t[1], 2.0);
     }
 
     #[test]
@@ -240,6 +393,11 @@ mod tests {
             }) => {}
             other => panic!("{other:?}"),
         }
+        // A decimal comma only where semicolons separate the cells.
+        assert!(matches!(
+            read("t theta\n0 1,5\n"),
+            Err(InputError::MixedSeparators { .. })
+        ));
         assert!(read_bytes(&[0xff, 0xfe, 0x00, 0x01], &ReadOptions::default()).is_err());
     }
 
@@ -248,7 +406,7 @@ mod tests {
         let named = ReadOptions {
             time: Some(Column::Name("time".into())),
             angle: Some(Column::Name("angle".into())),
-            dt: None,
+            ..Default::default()
         };
         let unnamed = ReadOptions::default();
         for (text, options, role, line, says) in [
@@ -266,7 +424,9 @@ mod tests {
                 3,
                 "a value is inf",
             ),
-            ("0,1\n-inf,2\n", &unnamed, Role::Time, 2, "the time is -inf"),
+            ("0,1,2\n-inf,2,3\n", &unnamed, Role::Time, 2, "the time is -inf"),
+            // Two unnamed columns: which is the time is not known yet.
+            ("0,1\n-inf,2\n", &unnamed, Role::Angle, 2, "a value is -inf"),
         ] {
             match read_bytes(text.as_bytes(), options) {
                 Err(e @ InputError::NonFinite { role: r, at, .. })
@@ -298,7 +458,7 @@ mod tests {
     }
 
     #[test]
-    fn binary_data_keeps_the_parser_complaint() {
+    fn binary_data_is_named() {
         match read_bytes(&[b'1', b',', 0xff, 0xfe, b'\n'], &ReadOptions::default()) {
             Err(e @ InputError::Malformed { line: 1, .. }) => {
                 assert!(e.to_string().contains("binary data"), "{e}");
@@ -319,10 +479,13 @@ mod tests {
         }
 
         #[test]
-        fn csv_round_trips_numbers(values in proptest::collection::vec(-1e6..1e6f64, 1..50)) {
-            let mut text = String::from("t,theta\n");
+        fn csv_round_trips_numbers(
+            values in proptest::collection::vec(-1e6..1e6f64, 1..50),
+            separator in proptest::sample::select(vec![",", ";", " ", "\t", "  \t "]),
+        ) {
+            let mut text = format!("t{separator}theta\n");
             for (i, v) in values.iter().enumerate() {
-                text.push_str(&format!("{i},{v}\n"));
+                text.push_str(&format!("{i}{separator}{v}\n"));
             }
             let r = read_bytes(text.as_bytes(), &ReadOptions::default()).unwrap();
             proptest::prop_assert_eq!(r.theta, values);

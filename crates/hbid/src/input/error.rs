@@ -6,7 +6,7 @@
 use std::fmt;
 use std::path::PathBuf;
 
-use super::{Column, Role};
+use super::{Column, Role, Separator};
 
 /// Where in the input a value is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -110,14 +110,24 @@ pub enum InputError {
         /// Cells in this row.
         found: usize,
     },
-    /// The bytes are not CSV text.
-    #[error("line {line}: not CSV text{}", binary_hint(.source))]
+    /// A row whose cells are separated otherwise than the first row's.
+    #[error("line {line}: cells separated by {found} where the first row uses {expected}")]
+    MixedSeparators {
+        /// Line number.
+        line: u64,
+        /// The separator of the first row.
+        expected: Separator,
+        /// The separator of this row.
+        found: Separator,
+    },
+    /// The bytes are not text.
+    #[error("line {line}: not text (not UTF-8: binary data?)")]
     Malformed {
         /// Line number.
         line: u64,
-        /// The parser's complaint.
+        /// Why the bytes are not UTF-8.
         #[source]
-        source: csv::Error,
+        source: std::str::Utf8Error,
     },
     /// An `.npy` file that cannot be read.
     #[error("not a readable .npy array: {why}")]
@@ -133,7 +143,7 @@ pub enum InputError {
         /// Samples needed.
         needed: usize,
     },
-    /// Time does not increase.
+    /// Time decreases in most steps.
     #[error("{at}: time {t} does not increase (previous sample at {previous})")]
     TimeNotIncreasing {
         /// Where.
@@ -143,17 +153,43 @@ pub enum InputError {
         /// The previous time.
         previous: f64,
     },
-    /// A time step differs from the mean step by more than 1e-6 relative.
+    /// A time stamp that goes backwards, repeats the previous one or does not fit the grid of the
+    /// others, and is not repaired: either repair was not asked for, or the glitch is not
+    /// isolated.
     #[error(
-        "{at}: time step {step} differs from the record's mean step {mean} (more than 1e-6 relative): resample to a uniform grid first"
+        "{at}: time {t} {fault}; on the grid of step {} this sample is at {}: {}",
+        Rounded(*.dt),
+        Rounded(*.expected),
+        glitch_advice(*.isolated)
     )]
-    NonUniform {
+    TimeGlitch {
         /// Where.
         at: Location,
-        /// The step.
-        step: f64,
-        /// The mean step.
-        mean: f64,
+        /// The time stamp.
+        t: f64,
+        /// What is wrong with it.
+        fault: StampFault,
+        /// The time of the sample on the grid, counted from its nearest good neighbour.
+        expected: f64,
+        /// The grid's step.
+        dt: f64,
+        /// Whether the neighbours on both sides fit the grid one step away, so that repair would
+        /// replace this stamp by its grid time.
+        isolated: bool,
+    },
+    /// So many time stamps are off the grid or repeated that they cannot be glitches: the stamps
+    /// do not resolve the samples (printed with too few decimals, or jittering).
+    #[error(
+        "{off} of {total} time stamps are off the grid of the others or repeat the previous one{}: they do not resolve the samples; if the sampling is uniform, give its step",
+        printed_hint(*.decimals)
+    )]
+    TimeUnresolved {
+        /// Stamps off the grid or repeating the previous one.
+        off: usize,
+        /// Stamps in the record.
+        total: usize,
+        /// The decimals the stamps are written with, when they are all written with at most 9.
+        decimals: Option<u32>,
     },
     /// A forcing period that is not positive and finite.
     #[error("the forcing period {period} must be positive and finite")]
@@ -200,6 +236,7 @@ impl InputError {
             | InputError::NotANumber { .. }
             | InputError::NonFinite { .. }
             | InputError::Ragged { .. }
+            | InputError::MixedSeparators { .. }
             | InputError::Malformed { .. }
             | InputError::Npy { .. } => true,
             InputError::Io { .. }
@@ -209,7 +246,8 @@ impl InputError {
             | InputError::TimeTwice
             | InputError::TooFewSamples { .. }
             | InputError::TimeNotIncreasing { .. }
-            | InputError::NonUniform { .. }
+            | InputError::TimeGlitch { .. }
+            | InputError::TimeUnresolved { .. }
             | InputError::BadForcingPeriod { .. }
             | InputError::NotWholeSamples { .. } => false,
         }
@@ -225,12 +263,55 @@ fn columns_found(found: &[String], width: usize, wanted: &Column) -> String {
     }
 }
 
-/// What the parser's complaint means for a user, for [`InputError::Malformed`].
-fn binary_hint(source: &csv::Error) -> &'static str {
-    match source.kind() {
-        csv::ErrorKind::Utf8 { .. } => " (not UTF-8 text: binary data?)",
-        _ => "",
+/// What is wrong with a time stamp.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum StampFault {
+    /// It is earlier than the previous stamp.
+    Backwards {
+        /// The previous stamp.
+        previous: f64,
+    },
+    /// It is the previous stamp again.
+    Repeated,
+    /// It is off the grid of the others, or on it but out of place.
+    OffGrid,
+}
+
+impl fmt::Display for StampFault {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            StampFault::Backwards { previous } => {
+                write!(f, "does not increase (previous sample at {previous})")
+            }
+            StampFault::Repeated => f.write_str("repeats the previous stamp"),
+            StampFault::OffGrid => f.write_str("does not fit the grid of the others"),
+        }
     }
+}
+
+/// A computed number, written to 9 significant digits (the shortest text that reads back as
+/// the rounded value).
+struct Rounded(f64);
+
+impl fmt::Display for Rounded {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let rounded: f64 = format!("{:.8e}", self.0).parse().unwrap_or(self.0);
+        write!(f, "{rounded}")
+    }
+}
+
+/// What to do about a glitch, for [`InputError::TimeGlitch`].
+fn glitch_advice(isolated: bool) -> &'static str {
+    if isolated {
+        "an isolated glitch, which can be repaired"
+    } else {
+        "not an isolated glitch (a neighbour is off the grid too, or samples are missing beside it), so it cannot be repaired; correct the time stamps, or, if the sampling is uniform, give its step"
+    }
+}
+
+/// The decimals of the stamps, for [`InputError::TimeUnresolved`].
+fn printed_hint(decimals: Option<u32>) -> String {
+    decimals.map_or_else(String::new, |k| format!(" (they are written with {k} decimals)"))
 }
 
 #[cfg(test)]

@@ -1,28 +1,81 @@
-//! Reading records: CSV text or NumPy `.npy`, from a file or standard input, and the checks a
-//! record must pass before identification (uniform time steps, a whole number of samples per
-//! forcing period).
+//! Reading records: text or NumPy `.npy`, from a file or standard input, and the checks a
+//! record must pass before identification (time stamps on a uniform grid, a whole number of
+//! samples per forcing period).
 //!
-//! CSV: `#` starts a comment line; the first non-comment row is a header when any of its cells is
-//! not a number. Columns are picked by name or by 1-based position ([`Column`]); the defaults are
-//! the columns named `t` and `theta`, or, without a header, column 1 (time) and column 2 (angle).
-//! With `dt` given there is no time column: sample n is at `n · dt` and the angle defaults to
-//! column 1.
+//! # Text
 //!
-//! `.npy` (recognised by its magic bytes): a 1-D array is the angle (it needs `dt`); a 2-D array
-//! holds samples in rows and channels in columns, picked by position like CSV columns. Element
-//! types f8, f4, i8, i4 and i2 are read (integers, e.g. raw encoder counts, convert exactly).
+//! - Lines are rows; blank lines and lines starting with `#` are skipped (line numbers in errors
+//!   count them). A UTF-8 byte-order mark and Windows line ends are accepted.
+//! - Cells are separated by commas, by semicolons, or by runs of spaces and tabs (leading and
+//!   trailing white space is ignored). The separator is that of the first row: semicolons if it
+//!   holds one, else commas if it holds one, else white space. Every later row must use the same
+//!   one ([`InputError::MixedSeparators`] names the first that does not). Where semicolons
+//!   separate the cells, a decimal comma (`0,5`) is read as a decimal point. A cell may be
+//!   enclosed in double quotes.
+//! - The first row is a header when any of its cells is not a number.
+//!
+//! # Columns
+//!
+//! Columns are picked by name or by 1-based position ([`Column`]). By default:
+//!
+//! - with a header, the time is the column `t` and the value (angle or displacement) the first of
+//!   `theta`, `x`, `angle` ([`VALUE_NAMES`]), or else the only column besides the time;
+//! - without a header, column 1 is the time and column 2 the value, except for exactly two
+//!   columns with nothing chosen: then the data decide which is the time, in either order. The
+//!   time is the column whose steps are positive and nearly uniform: median step positive,
+//!   relative spread of the steps (median of `|step − median|` over the median) at most 0.5 and
+//!   less than a tenth of the other column's. If exactly one column passes it is the time; if
+//!   both or neither do, column 1 is. (Give the columns to be sure.) `.npy` 2-D arrays follow
+//!   the same rule.
+//! - With a sampling step `dt` there is no time column: sample n is at `n · dt` and the value
+//!   defaults to column 1 (or, with a header, by name as above, or the only column).
+//!
+//! # `.npy`
+//!
+//! Recognised by its magic bytes: a 1-D array is the value (it needs `dt`); a 2-D array holds
+//! samples in rows and channels in columns, picked by position like text columns. Element types
+//! f8, f4, i8, i4 and i2 are read (integers, e.g. raw encoder counts, convert exactly).
+//!
+//! # Angles
+//!
+//! [`angle_range`] tells a wrapped angle from an unwrapped one: values within `[−π, π]` are
+//! wrapped; within `[0, 2π]`, as encoders count, a wrapped angle too (read by wrapping into
+//! `[−π, π)`); anything else is an unwrapped angle. Each bound allows a printing tolerance: the
+//! larger of 1e-5 and half a unit in the last decimal the values are written with, so that π
+//! printed as `3.141593` or `3.142` is not taken for an unwrapped angle.
+//!
+//! # Time stamps
+//!
+//! [`GridRecord::fit`] fits the stamps to a grid `t0 + n · dt`: the step from the median step,
+//! refined on runs of single steps, then least squares on the stamps that fit (see the `uniform`
+//! module for the steps). A stamp fits when it is within [`GRID_TOLERANCE`] (a quarter of a step)
+//! of its grid time: enough for stamps printed with a resolution of up to half a step (4 decimals
+//! at 2048 Hz are off by a tenth of a step), and a quarter of a step is three quarters from any
+//! other grid time, so the index of a stamp that fits is never in doubt. The fitted `t0` and `dt`
+//! are the record's; the stamps themselves are not used further.
+//!
+//! - Gaps: a step of about `k · dt` (`k ≥ 2`) landing back on the grid means missing samples;
+//!   the record is split there into [`Piece`]s, each with the grid index of its first sample.
+//! - Glitches: a stamp that goes backwards, repeats the previous one or does not fit the grid is
+//!   an error ([`InputError::TimeGlitch`], naming its line) unless it is isolated (the neighbours
+//!   on both sides fit, one grid step away from it) and repair is asked for
+//!   ([`GridOptions::repair`]): then it is replaced by its grid time and listed in
+//!   [`GridRecord::repaired`]. Two glitches side by side, or one beside a gap, stay errors.
+//! - Stamps that do not resolve the samples (more than 5% of them, and at least 3, off the grid
+//!   or repeated: printed with too few decimals, or jittering) are
+//!   [`InputError::TimeUnresolved`]: give the sampling step instead.
+//! - With a sampling step given, the grid is exact and there is one piece.
 //!
 //! This module holds the record, the options and the entry points; `csv` and `npy` are the two
-//! readers, `uniform` the checks before identification and `error` what can go wrong
-//! ([`InputError`]).
+//! readers, `uniform` the grid fit and `error` what can go wrong ([`InputError`]).
 
 mod csv;
 mod error;
 mod npy;
 mod uniform;
 
-pub use error::{InputError, Location};
-pub use uniform::{UNIFORM_TOLERANCE, UniformRecord};
+pub use error::{InputError, Location, StampFault};
+pub use uniform::{GRID_TOLERANCE, GridOptions, GridRecord, Piece, TimeRepair};
 
 use std::io::Read;
 use std::path::{Path, PathBuf};
@@ -77,9 +130,11 @@ impl std::fmt::Display for Column {
 /// How to read a record.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct ReadOptions {
-    /// The time column (default: `t`, or column 1 without a header).
+    /// The time column (default: `t`, or column 1 without a header; two unnamed columns in
+    /// either order, see the module docs).
     pub time: Option<Column>,
-    /// The angle column (default: `theta`, or column 2 without a header; column 1 with `dt`).
+    /// The angle (or displacement) column (default: `theta`, `x` or `angle`, or column 2 without
+    /// a header; column 1 with `dt`).
     pub angle: Option<Column>,
     /// A fixed sampling step instead of a time column.
     pub dt: Option<f64>,
@@ -103,36 +158,111 @@ impl ReadOptions {
     /// the header's names (`None` without a header, as always for `.npy`) and the number of
     /// columns. The options are assumed valid ([`ReadOptions::validate`]).
     ///
-    /// A column chosen in the options is found by name or position. The defaults are the columns
-    /// named `t` and `theta` with a header, positions 1 and 2 without. With a sampling step there
-    /// is no time column and the angle defaults to position 1 (still `theta` with a header). A
-    /// single unnamed column with neither a sampling step nor a time column is an angle whose
-    /// step is missing.
+    /// A column chosen in the options is found by name or position. Otherwise:
+    ///
+    /// - the time is the column named `t` with a header, and without one the first column that
+    ///   is not the chosen angle;
+    /// - the angle is, with a header, the first of the columns named [`VALUE_NAMES`] (`theta`,
+    ///   `x`, `angle`) that is not the time, or else the only column besides the time; without a
+    ///   header, the first column that is not the time.
+    ///
+    /// With a sampling step there is no time column. A single unnamed column with neither a
+    /// sampling step nor a time column is an angle whose step is missing. Two unnamed columns
+    /// with nothing chosen are read as time then angle, and the data then decide which is which
+    /// ([`Columns::order_from_data`]).
     pub(crate) fn columns(&self, names: Option<&[&str]>, width: usize) -> Result<Columns, InputError> {
-        let default = |role: Role| match (names, role, self.dt) {
-            (Some(_), Role::Time, _) => Column::Name("t".to_owned()),
-            (Some(_), Role::Angle, _) => Column::Name("theta".to_owned()),
-            (None, Role::Time, _) | (None, Role::Angle, Some(_)) => Column::Position(1),
-            (None, Role::Angle, None) => Column::Position(2),
-        };
-        let chosen = |role: Role| {
-            let wanted = match role {
-                Role::Time => &self.time,
-                Role::Angle => &self.angle,
-            };
-            let wanted = wanted.clone().unwrap_or_else(|| default(role));
-            find(role, wanted, names, width)
-        };
+        if self.dt.is_none() && names.is_none() && width == 1 && self.time.is_none() {
+            return Err(InputError::NeedStep);
+        }
         let time = match self.dt {
             Some(dt) => Times::Step(dt),
-            None if names.is_none() && width == 1 && self.time.is_none() => {
-                return Err(InputError::NeedStep);
+            None => {
+                let wanted = match (&self.time, names) {
+                    (Some(chosen), _) => chosen.clone(),
+                    (None, Some(_)) => Column::Name("t".to_owned()),
+                    (None, None) => {
+                        let taken = match &self.angle {
+                            Some(Column::Position(p)) => Some(p - 1),
+                            _ => None,
+                        };
+                        Column::Position(first_free(taken) + 1)
+                    }
+                };
+                Times::Column(find(Role::Time, wanted, names, width)?)
             }
-            None => Times::Column(chosen(Role::Time)?),
         };
+        let angle = match (&self.angle, names) {
+            (Some(chosen), _) => find(Role::Angle, chosen.clone(), names, width)?,
+            (None, None) => find(
+                Role::Angle,
+                Column::Position(first_free(time.column()) + 1),
+                names,
+                width,
+            )?,
+            (None, Some(names)) => {
+                default_value(names, time.column()).ok_or_else(|| InputError::MissingColumn {
+                    role: Role::Angle,
+                    wanted: Column::Name(VALUE_NAMES[0].to_owned()),
+                    found: names.iter().map(|&c| c.to_owned()).collect(),
+                    width,
+                })?
+            }
+        };
+        let order_from_data =
+            names.is_none() && width == 2 && self.time.is_none() && self.angle.is_none() && self.dt.is_none();
         Ok(Columns {
             time,
-            angle: chosen(Role::Angle)?,
+            angle,
+            order_from_data,
+        })
+    }
+}
+
+/// The names a value (angle or displacement) column goes by when none is chosen, in order of
+/// preference.
+pub const VALUE_NAMES: [&str; 3] = ["theta", "x", "angle"];
+
+/// The first column that is not `taken` (which may be past the last column: then it is missing).
+fn first_free(taken: Option<usize>) -> usize {
+    match taken {
+        Some(0) => 1,
+        _ => 0,
+    }
+}
+
+/// The default value column among a header's `names`: the first of [`VALUE_NAMES`] that is not
+/// the time column, or else the only column that is not the time column.
+fn default_value(names: &[&str], time: Option<usize>) -> Option<usize> {
+    let not_time = |i: &usize| Some(*i) != time;
+    VALUE_NAMES
+        .iter()
+        .find_map(|v| names.iter().position(|c| c == v).filter(not_time))
+        .or_else(|| {
+            let mut others = (0..names.len()).filter(not_time);
+            match (others.next(), others.next()) {
+                (Some(only), None) => Some(only),
+                _ => None,
+            }
+        })
+}
+
+/// How the cells of a text row are separated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Separator {
+    /// Commas.
+    Comma,
+    /// Semicolons (commas inside cells are then decimal commas).
+    Semicolon,
+    /// Runs of spaces and tabs.
+    Whitespace,
+}
+
+impl std::fmt::Display for Separator {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Separator::Comma => "commas",
+            Separator::Semicolon => "semicolons",
+            Separator::Whitespace => "spaces or tabs",
         })
     }
 }
@@ -162,6 +292,9 @@ pub(crate) struct Columns {
     pub(crate) time: Times,
     /// The angle column.
     pub(crate) angle: usize,
+    /// Two unnamed columns and nothing chosen: `time` and `angle` are columns 1 and 2 as read,
+    /// and [`order_from_data`] swaps them when the data say the second is the time.
+    pub(crate) order_from_data: bool,
 }
 
 /// Where the sample times come from.
@@ -252,6 +385,116 @@ fn grid(n: usize, dt: f64) -> Vec<f64> {
     (0..n).map(|i| i as f64 * dt).collect()
 }
 
+/// Largest relative spread of a column's steps (see [`step_spread`]) for it to be read as the
+/// time: beyond it the stamps could not fit a grid within [`GRID_TOLERANCE`] anyway.
+const TIME_SPREAD_LIMIT: f64 = 2.0 * GRID_TOLERANCE;
+
+/// Spreads below this are rounding in floating point and count as this.
+const SPREAD_FLOOR: f64 = 1e-9;
+
+/// How many steps, from the start, decide which of two unnamed columns is the time.
+const ORDER_STEPS: usize = 100_000;
+
+/// Decides which of two unnamed columns, read as time then angle, is the time, and swaps them
+/// if it is the second.
+///
+/// A column is the time when its median step `m` is positive, the relative spread of its steps
+/// (the median of `|step − m|`, over `m`) is at most [`TIME_SPREAD_LIMIT`], and that spread is
+/// less than a tenth of the other column's (spreads below 1e-9 count as 1e-9). If exactly one
+/// column is the time by this rule, it is; otherwise (both or neither) the first column is the
+/// time, as in any headerless record. Medians ignore gaps and glitches in the time stamps; the
+/// first 100 000 steps decide.
+fn order_from_data(record: &mut Record) {
+    let spread = |x: &[f64]| step_spread(&x[..x.len().min(ORDER_STEPS + 1)]);
+    let (first, second) = (spread(&record.t), spread(&record.theta));
+    let is_time = |own: Option<f64>, other: Option<f64>| match own {
+        Some(s) if s <= TIME_SPREAD_LIMIT => {
+            s.max(SPREAD_FLOOR) < other.map_or(f64::INFINITY, |o| o.max(SPREAD_FLOOR)) / 10.0
+        }
+        _ => false,
+    };
+    if is_time(second, first) && !is_time(first, second) {
+        std::mem::swap(&mut record.t, &mut record.theta);
+    }
+}
+
+/// The relative spread of the steps of `x`: the median of `|step − m|` over `m`, where `m` is
+/// the median step; `None` when `m` is not positive (or there is no step).
+fn step_spread(x: &[f64]) -> Option<f64> {
+    let mut steps: Vec<f64> = x.windows(2).map(|w| w[1] - w[0]).collect();
+    let m = median(&mut steps)?;
+    if m.is_nan() || m <= 0.0 {
+        return None;
+    }
+    for s in &mut steps {
+        *s = (*s - m).abs();
+    }
+    Some(median(&mut steps)? / m)
+}
+
+/// The median of `values` (the upper middle one for an even count), reordering them; `None` when
+/// empty.
+fn median(values: &mut [f64]) -> Option<f64> {
+    if values.is_empty() {
+        return None;
+    }
+    let mid = values.len() / 2;
+    let (_, m, _) = values.select_nth_unstable_by(mid, f64::total_cmp);
+    Some(*m)
+}
+
+/// Where the values of an angle column lie, as an encoder or a program may write them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AngleRange {
+    /// Within `[−π, π)`: wrapped already.
+    Wrapped,
+    /// Within `[0, 2π)`, as most encoders count: a wrapped angle, read by wrapping into
+    /// `[−π, π)`.
+    FromZero,
+    /// Anything else: an unwrapped angle (or a displacement), which wrapping reads on the circle.
+    Unwrapped,
+}
+
+/// Where the values of an angle column lie: [`AngleRange::Wrapped`] within `[−π, π]`,
+/// [`AngleRange::FromZero`] within `[0, 2π]`, else [`AngleRange::Unwrapped`].
+///
+/// Each bound is widened by a printing tolerance, so that a value that only rounds past it
+/// (`3.141593`, π to 6 decimals; `6.283186`) is not taken for an unwrapped angle: the larger of
+/// [`ANGLE_PRINT_TOLERANCE`] and half a unit in the last decimal of the values, when they all
+/// have at most 9 decimals (half of 0.001 for values printed to 3 decimals).
+pub fn angle_range(x: &[f64]) -> AngleRange {
+    use std::f64::consts::{PI, TAU};
+    let (lo, hi) = x.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
+        (lo.min(v), hi.max(v))
+    });
+    let tolerance = printed_decimals(x).map_or(ANGLE_PRINT_TOLERANCE, |k| {
+        (0.5 * 10f64.powi(-(k as i32))).max(ANGLE_PRINT_TOLERANCE)
+    });
+    if x.is_empty() || (lo >= -PI - tolerance && hi <= PI + tolerance) {
+        AngleRange::Wrapped
+    } else if lo >= -tolerance && hi <= TAU + tolerance {
+        AngleRange::FromZero
+    } else {
+        AngleRange::Unwrapped
+    }
+}
+
+/// The least printing tolerance of [`angle_range`], in radians: values that far past a bound
+/// (and rounding of 4 or more decimals) still count as within it.
+pub const ANGLE_PRINT_TOLERANCE: f64 = 1e-5;
+
+/// The fewest decimals (at most 9) that write every value of `x`, if any: the values are then
+/// multiples of `10^−k` up to floating-point rounding.
+fn printed_decimals(x: &[f64]) -> Option<u32> {
+    (0..=9u32).find(|&k| {
+        let scale = 10f64.powi(k as i32);
+        x.iter().all(|&v| {
+            let scaled = v * scale;
+            (scaled - scaled.round()).abs() <= 1e-9 + 1e-12 * scaled.abs()
+        })
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -268,7 +511,11 @@ mod tests {
     #[test]
     fn one_column_policy() {
         let header = Some(&["x", "theta", "t"][..]);
-        let at = |time, angle| Columns { time, angle };
+        let at = |time, angle| Columns {
+            time,
+            angle,
+            order_from_data: false,
+        };
         let none = options(None, None, None);
         assert_eq!(none.columns(header, 3).unwrap(), at(Times::Column(2), 1));
         assert_eq!(none.columns(None, 3).unwrap(), at(Times::Column(0), 1));
@@ -278,6 +525,45 @@ mod tests {
         assert_eq!(step.columns(None, 1).unwrap(), at(Times::Step(0.5), 0));
         let chosen = options(Some("3"), Some("x"), None);
         assert_eq!(chosen.columns(header, 3).unwrap(), at(Times::Column(2), 0));
+        // Headerless: time and angle are the first columns not taken by the other.
+        assert_eq!(
+            options(None, Some("1"), None).columns(None, 3).unwrap(),
+            at(Times::Column(1), 0)
+        );
+        assert_eq!(
+            options(Some("2"), None, None).columns(None, 3).unwrap(),
+            at(Times::Column(1), 0)
+        );
+        // Two unnamed columns, nothing chosen: the data decide.
+        assert_eq!(
+            none.columns(None, 2).unwrap(),
+            Columns {
+                order_from_data: true,
+                ..at(Times::Column(0), 1)
+            }
+        );
+        assert!(
+            !options(None, Some("2"), None)
+                .columns(None, 2)
+                .unwrap()
+                .order_from_data
+        );
+        // A header without the value names: the only other column, else none.
+        assert_eq!(
+            none.columns(Some(&["t", "pos"][..]), 2).unwrap(),
+            at(Times::Column(0), 1)
+        );
+        assert_eq!(
+            step.columns(Some(&["pos"][..]), 1).unwrap(),
+            at(Times::Step(0.5), 0)
+        );
+        assert!(matches!(
+            step.columns(Some(&["a", "b"][..]), 2),
+            Err(InputError::MissingColumn {
+                role: Role::Angle,
+                ..
+            })
+        ));
         // A single unnamed column needs a step; with a header the defaults are names.
         assert!(matches!(none.columns(None, 1), Err(InputError::NeedStep)));
         assert!(matches!(
@@ -339,6 +625,69 @@ mod tests {
                 other => panic!("{options:?}, {width} columns: {other:?}"),
             }
         }
+    }
+
+    #[test]
+    fn two_unnamed_columns_in_either_order_in_both_readers() {
+        let n = 200;
+        let dt = 1.0 / 2048.0;
+        let time: Vec<f64> = (0..n).map(|i| 100.0 + i as f64 * dt).collect();
+        let angle: Vec<f64> = (0..n).map(|i| 3.0 * (i as f64 * 0.05).cos()).collect();
+        let npy = |a: &[f64], b: &[f64]| {
+            let payload: Vec<u8> = a
+                .iter()
+                .zip(b)
+                .flat_map(|(x, y)| [x.to_le_bytes(), y.to_le_bytes()])
+                .flatten()
+                .collect();
+            npy::npy_bytes("<f8", &format!("({n}, 2)"), false, &payload)
+        };
+        let text =
+            |a: &[f64], b: &[f64]| -> String { a.iter().zip(b).map(|(x, y)| format!("{x} {y}\n")).collect() };
+        for bytes in [
+            npy(&time, &angle),
+            npy(&angle, &time),
+            text(&time, &angle).into_bytes(),
+            text(&angle, &time).into_bytes(),
+        ] {
+            let r = read_bytes(&bytes, &ReadOptions::default()).unwrap();
+            assert_eq!((&r.t, &r.theta), (&time, &angle));
+        }
+        // Chosen columns are taken as they are.
+        let chosen = options(Some("2"), Some("1"), None);
+        let r = read_bytes(&npy(&time, &angle), &chosen).unwrap();
+        assert_eq!((&r.t, &r.theta), (&angle, &time));
+        // A time column with a gap and a glitch is still the time.
+        let mut stamps = time.clone();
+        stamps.drain(50..60);
+        stamps[100] += 0.4 * dt;
+        let r = read_bytes(text(&angle[..190], &stamps).as_bytes(), &ReadOptions::default()).unwrap();
+        assert_eq!(r.t, stamps);
+    }
+
+    #[test]
+    #[expect(clippy::approx_constant, reason = "π and 2π as printed")]
+    fn angle_ranges_allow_printing() {
+        use std::f64::consts::{PI, TAU};
+        let wrapped: Vec<f64> = (0..100).map(|i| -PI + i as f64 * TAU / 100.0).collect();
+        let from_zero: Vec<f64> = wrapped.iter().map(|v| v + PI).collect();
+        assert_eq!(angle_range(&wrapped), AngleRange::Wrapped);
+        assert_eq!(angle_range(&from_zero), AngleRange::FromZero);
+        assert_eq!(angle_range(&[0.0, 1.0, 6.283186]), AngleRange::FromZero);
+        assert_eq!(angle_range(&[-3.141593, 0.0, 3.141593]), AngleRange::Wrapped);
+        // Three decimals: half of 0.001 is allowed.
+        assert_eq!(angle_range(&[-3.142, 0.5, 3.142]), AngleRange::Wrapped);
+        assert_eq!(angle_range(&[0.0, 6.283]), AngleRange::FromZero);
+        assert_eq!(angle_range(&[0.0, 6.284]), AngleRange::Unwrapped);
+        // Past the tolerance: unwrapped.
+        assert_eq!(angle_range(&[0.0, 3.1416926535]), AngleRange::FromZero);
+        assert_eq!(angle_range(&[-0.1, 3.2]), AngleRange::Unwrapped);
+        assert_eq!(angle_range(&[0.0, 6.2832853071]), AngleRange::Unwrapped);
+        assert_eq!(angle_range(&[0.0, 6.29]), AngleRange::Unwrapped);
+        assert_eq!(angle_range(&[-3.2, 0.0]), AngleRange::Unwrapped);
+        assert_eq!(angle_range(&[]), AngleRange::Wrapped);
+        assert_eq!(printed_decimals(&[0.25, 1.5, -3.125]), Some(3));
+        assert_eq!(printed_decimals(&[PI]), None);
     }
 
     #[test]

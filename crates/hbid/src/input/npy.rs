@@ -2,7 +2,7 @@
 
 use std::io::Read;
 
-use super::{Columns, InputError, Location, ReadOptions, Record, Role, Times, grid};
+use super::{InputError, Location, ReadOptions, Record, Role, Times, grid};
 
 fn npy_error(why: impl std::fmt::Display) -> InputError {
     InputError::Npy { why: why.to_string() }
@@ -55,18 +55,28 @@ fn npy_values(npy: npyz::NpyFile<&[u8]>) -> Result<Vec<f64>, InputError> {
 /// Reads an `.npy` array; the options are assumed valid.
 pub(super) fn read(bytes: &[u8], options: &ReadOptions) -> Result<Record, InputError> {
     let array = Array::open(bytes)?;
-    let Columns { time, angle } = options.columns(None, array.cols)?;
-    let theta = array.column(angle);
-    let t = match time {
+    let columns = options.columns(None, array.cols)?;
+    let theta = array.column(columns.angle);
+    let t = match columns.time {
         Times::Column(c) => array.column(c),
         Times::Step(dt) => grid(array.rows, dt),
     };
-    check_finite(&t, &theta)?;
-    Ok(Record {
+    // Until the data decide which column is the time, neither is called one.
+    let time_role = if columns.order_from_data {
+        Role::Angle
+    } else {
+        Role::Time
+    };
+    check_finite(&t, time_role, &theta)?;
+    let mut record = Record {
         t,
         theta,
         lines: None,
-    })
+    };
+    if columns.order_from_data {
+        super::order_from_data(&mut record);
+    }
+    Ok(record)
 }
 
 /// An array as a matrix: samples in rows, channels in columns (a 1-D array is one column).
@@ -161,10 +171,11 @@ fn matrix_shape(shape: &[u64]) -> Result<(usize, usize), InputError> {
     }
 }
 
-/// Checks that every time and value is finite, naming the first sample that is not.
-fn check_finite(t: &[f64], theta: &[f64]) -> Result<(), InputError> {
+/// Checks that every time (read as `time_role`) and value is finite, naming the first sample
+/// that is not.
+fn check_finite(t: &[f64], time_role: Role, theta: &[f64]) -> Result<(), InputError> {
     for (i, (&ti, &xi)) in t.iter().zip(theta).enumerate() {
-        for (role, value) in [(Role::Time, ti), (Role::Angle, xi)] {
+        for (role, value) in [(time_role, ti), (Role::Angle, xi)] {
             if !value.is_finite() {
                 return Err(InputError::NonFinite {
                     at: Location::Sample(i + 1),
