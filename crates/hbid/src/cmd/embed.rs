@@ -11,9 +11,9 @@ use super::data::{InputArgs, ami, domain_parser};
 pub struct EmbedArgs {
     #[command(flatten)]
     pub input: InputArgs,
-    /// Largest lag of the average mutual information.
-    #[arg(long, default_value_t = 40)]
-    pub max_lag: usize,
+    /// Largest lag of the average mutual information (default: two forcing periods, at least 40).
+    #[arg(long)]
+    pub max_lag: Option<usize>,
     /// Equal boxes of the mutual-information histogram.
     #[arg(long, default_value_t = 16)]
     pub bins: usize,
@@ -42,16 +42,19 @@ pub fn run(args: &EmbedArgs, quiet: bool) -> anyhow::Result<()> {
     let bar = crate::progress::Progress::spinner("embed", quiet);
     let data = args.input.load()?;
     let metric = args.metric.unwrap_or(data.domain);
+    let max_lag = args
+        .max_lag
+        .unwrap_or_else(|| hbid::pipeline::EmbedOptions::default().max_lag(data.p));
     let (curve, delay) = ami(
-        &data.x,
+        data.longest(),
         &AmiParams::new(metric)
             .with_bins(args.bins)?
-            .with_max_lag(args.max_lag)?,
+            .with_max_lag(max_lag)?,
     )?;
     let params = FnnParams::new(metric, delay)?
         .with_max_dim(args.max_dim)?
         .with_theiler_window(args.theiler);
-    let fnn = false_nearest_neighbours(&data.x, &params)?;
+    let fnn = false_nearest_neighbours(data.longest(), &params)?;
     bar.finish();
     if args.json {
         println!("{}", serde_json::to_string(&json(&curve, delay, &fnn))?);

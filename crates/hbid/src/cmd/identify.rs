@@ -15,7 +15,34 @@ use upo_search::Windows;
 
 pub use hbid::pipeline::Method;
 
-use super::data::{Data, InputArgs, SearchArgs};
+use super::data::{Data, DriveFound, DriveSpec, InputArgs, SearchArgs};
+
+/// A line on how the record's clock was found, when it was not simply given: the drive's
+/// estimate with its uncertainty, or the free oscillation's period; and the resampling.
+pub fn drive_note(data: &Data) -> Option<String> {
+    let mut notes = Vec::new();
+    match &data.drive {
+        DriveFound::Given => {}
+        DriveFound::Estimated(e) => notes.push(format!(
+            "note: forcing period estimated from the record: {:.9} ± {:.2e} (frequency {:.9} ± {:.2e})",
+            e.period,
+            e.period_uncertainty,
+            e.frequency(),
+            e.frequency_uncertainty()
+        )),
+        DriveFound::Free { samples } => notes.push(format!(
+            "note: no drive: windows in periods of the free oscillation, {samples:.2} samples on average ({} used)",
+            data.p
+        )),
+    }
+    if let Some(from) = data.resampled_from {
+        notes.push(format!(
+            "note: {from:.6} samples per forcing period: resampled (band-limited) to {}",
+            data.p
+        ));
+    }
+    (!notes.is_empty()).then(|| notes.join("\n"))
+}
 
 /// Least-squares solver.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -110,7 +137,25 @@ pub fn parse_basis(text: &str) -> anyhow::Result<BasisKind> {
 impl IdentifyArgs {
     /// The setup of the chosen method on `data`, every option checked.
     pub fn setup(&self, data: &Data) -> anyhow::Result<Setup> {
-        Ok(self.spec(data.domain, self.method)?.setup(&data.clock)?)
+        Ok(self.spec(data, self.method)?.setup(&data.clock)?)
+    }
+
+    /// Whether `--forcing none` was asked for: with no forcing period or frequency given either,
+    /// the record is a free oscillation.
+    pub fn free(&self) -> bool {
+        self.forcing == Some(ForcingArg::None)
+    }
+
+    /// Reads the record with these options' drive, showing the estimate of the drive (if any) on
+    /// `progress`.
+    pub fn load(&self, progress: &mut dyn FnMut(usize, usize)) -> anyhow::Result<Data> {
+        let drive = self.input.drive(self.free())?;
+        if drive == DriveSpec::Free && self.method == Method::Upo {
+            bail!(
+                "--forcing none without a forcing period is a free oscillation, which has no periodic orbits: use --method windowed"
+            );
+        }
+        self.input.load_with(drive, progress)
     }
 
     /// The basis as named on the command line (default: harmonic:1 on the circle, poly:3 on the
@@ -123,8 +168,9 @@ impl IdentifyArgs {
     }
 
     /// What these options ask to identify by `method` (which may differ from the one chosen on the
-    /// command line) on a record in `domain`.
-    pub fn spec(&self, domain: Domain, method: Method) -> anyhow::Result<ModelSpec> {
+    /// command line) on `data`: a free oscillation has no drive terms at all.
+    pub fn spec(&self, data: &Data, method: Method) -> anyhow::Result<ModelSpec> {
+        let domain = data.domain;
         let basis = parse_basis(&self.basis_name(domain))?;
         let forcing = match self.forcing.unwrap_or(match domain {
             Domain::Circle => ForcingArg::None,
@@ -134,7 +180,8 @@ impl IdentifyArgs {
             ForcingArg::Identified => Forcing::Identified,
         };
         let mut form = ModelForm::parametric().with_forcing(forcing);
-        if self.no_parametric {
+        let free = matches!(data.drive, DriveFound::Free { .. });
+        if self.no_parametric || free {
             form = form.without_parametric_terms();
         }
         let mut spec = ModelSpec::new(method, basis)
@@ -183,8 +230,14 @@ impl IdentifyArgs {
     /// The segments of the chosen method: close returns (with the delay) or plain windows.
     pub fn segments(&self, data: &Data, delay: usize, method: Method) -> anyhow::Result<Vec<Segment>> {
         Ok(match method {
-            Method::Upo => self.search.close_returns(data, delay)?.search(&data.x)?,
-            Method::Windowed => self.windows()?.windows(&data.record()?)?.windows(&data.x)?,
+            Method::Upo => self
+                .search
+                .close_returns(data, delay)?
+                .search_pieces(&data.x, &data.pieces)?,
+            Method::Windowed => self
+                .windows()?
+                .windows(&data.record()?)?
+                .windows_pieces(&data.x, &data.pieces)?,
         })
     }
 }
@@ -195,7 +248,10 @@ pub fn run(args: &IdentifyArgs, quiet: bool, timings: bool) -> anyhow::Result<()
         crate::output::check_output_path(path).context("--save-model")?;
     }
     stages.start("read");
-    let data = args.input.load()?;
+    let data = args.load(&mut |_, _| {})?;
+    if let Some(note) = drive_note(&data) {
+        eprintln!("{note}");
+    }
     let setup = args.setup(&data)?;
     let delay = match args.method {
         Method::Upo => {
@@ -213,9 +269,10 @@ pub fn run(args: &IdentifyArgs, quiet: bool, timings: bool) -> anyhow::Result<()
             args.search.tolerance
         ),
         Method::Windowed => format!(
-            "{} windows of {} forcing periods",
+            "{} windows of {} {} periods",
             segments.len(),
-            args.window_periods
+            args.window_periods,
+            if matches!(data.drive, DriveFound::Free { .. }) { "oscillation" } else { "forcing" }
         ),
     };
     let id = setup

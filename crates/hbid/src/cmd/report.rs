@@ -14,7 +14,7 @@ use hbid::pipeline::{
 use hbid::plot::{BLUE, Figure, GREY, ORANGE, RED, Series, Style, add_figure};
 use pendulum_sim::Domain;
 
-use super::data::Data;
+use super::data::{Data, DriveSpec};
 use super::identify::{IdentifyArgs, Method, json};
 use crate::progress::Progress;
 
@@ -55,7 +55,7 @@ fn options(args: &ReportArgs, data: &Data) -> anyhow::Result<PipelineOptions> {
     let id = &args.identify;
     let models = METHODS
         .iter()
-        .map(|&method| id.spec(data.domain, method))
+        .map(|&method| id.spec(data, method))
         .collect::<anyhow::Result<_>>()?;
     let mut embed = EmbedOptions::default();
     if let Some(delay) = id.search.delay {
@@ -106,7 +106,17 @@ pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
     std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
 
     let bar = Progress::spinner("read", quiet);
-    let data = args.identify.input.load()?;
+    let drive = args.identify.input.drive(args.identify.free())?;
+    if drive == DriveSpec::Free {
+        anyhow::bail!(
+            "--forcing none without a forcing period is a free oscillation: it has no orbits or Poincaré section to report; \
+             identify it with hbid identify --method windowed --forcing none"
+        );
+    }
+    let data = args.identify.input.load_with(drive, &mut |_, _| {})?;
+    if let Some(note) = super::identify::drive_note(&data) {
+        eprintln!("{note}");
+    }
     // Every option is checked before the work.
     let pipeline = Pipeline::new(data.record()?, options(args, &data)?)?;
     bar.finish();
@@ -152,8 +162,13 @@ fn write_report(args: &ReportArgs, data: &Data, outcome: &Outcome) -> anyhow::Re
         r,
         "{}; forcing period {}.\n",
         data.summary(),
-        args.identify.input.forcing_period
+        data.clock.forcing_period()
     )?;
+    if let Some(note) = super::identify::drive_note(data) {
+        for line in note.lines() {
+            writeln!(r, "{}\n", line.trim_start_matches("note: "))?;
+        }
+    }
 
     writeln!(r, "## Delay and embedding\n")?;
     writeln!(

@@ -24,13 +24,13 @@ pub fn run(args: &UposArgs, quiet: bool) -> anyhow::Result<()> {
     let data = args.input.load()?;
     let delay = args.search.delay(&data)?;
     let search = args.search.close_returns(&data, delay)?;
-    let catalogue = search.catalogue(&data.x)?;
+    let catalogue = search.catalogue_pieces(&data.x, &data.pieces)?;
     bar.finish();
     if args.json {
         println!("{}", serde_json::to_string(&json(&catalogue))?);
     } else {
         println!("{}", data.summary());
-        print_table(&catalogue, delay, search.absolute_tolerance(&data.x)?);
+        print_table(&catalogue, delay, catalogue.tolerance());
     }
     Ok(())
 }
