@@ -2,7 +2,9 @@
 //!
 //! ```text
 //! cargo run --release -p hb-solve --example drive_frequency            # accuracy and time
-//! cargo run --release -p hb-solve --example drive_frequency -- honesty # spread against uncertainty
+//! cargo run --release -p hb-solve --example drive_frequency -- honesty [rig] # spread against uncertainty
+//! cargo run --release -p hb-solve --example drive_frequency -- contrast # noise, ranges without the truth
+//! cargo run --release -p hb-solve --example drive_frequency -- costs    # settings, 10^6 samples, resampling
 //! ```
 //!
 //! The paper's pendulum is simulated (DOP853, `rtol = 1e-10`): the paper's record (30000 samples at
@@ -10,8 +12,11 @@
 //! (490.196 samples per period, time in seconds: the non-dimensional time relabelled by
 //! `T / 2π`), each exact and through a 4096-count encoder. The search range is 0.5 to 2 times the
 //! truth, and the default range (from the spectrum) is tried too. `honesty` estimates the period
-//! of 40 seeded records with σ = 0.01 rad of noise on the angle and compares the spread of the
-//! estimates with the reported uncertainties.
+//! of 40 seeded records with σ = 0.01 rad of noise on the angle (the paper's record, or with `rig`
+//! 90 periods at 490.196 samples per period) and compares the spread of the estimates with the
+//! reported uncertainties. `contrast` shows the winner's contrast with noise and with ranges that
+//! miss the truth; `costs` the evaluations and time of other settings of the search, on records up
+//! to a million samples, beside the time of one resampling of the record.
 #![allow(clippy::print_stdout)]
 
 use std::error::Error;
@@ -57,7 +62,15 @@ fn estimate(
     if let Some(range) = range {
         builder = builder.range(range);
     }
-    let search = builder.build()?;
+    estimate_with(x, step, t0, &builder.build()?)
+}
+
+fn estimate_with(
+    x: &[f64],
+    step: f64,
+    t0: f64,
+    search: &DriveSearch,
+) -> Result<(DriveEstimate, f64), Box<dyn Error>> {
     let basis = Harmonic::new(1)?;
     let start = Instant::now();
     let found = estimate_forcing_period(
@@ -65,7 +78,7 @@ fn estimate(
         step,
         t0,
         Domain::Circle,
-        &search,
+        search,
         &basis,
         &ModelForm::parametric(),
         |_, _| {},
@@ -117,16 +130,6 @@ fn accuracy() -> Result<(), Box<dyn Error>> {
                 }
             }
         }
-        // The alternative the scan does not take: resampling onto a whole grid per candidate.
-        let x: Vec<f64> = theta.iter().map(|&v| wrap(v)).collect();
-        let clock = SampleClock::from_step(period * 1.0123, step)?;
-        let start = Instant::now();
-        let resampled = resample_to_whole(&x, &clock, Domain::Circle)?;
-        println!(
-            "\n{label}: one resampling of the record onto a whole grid ({} samples) takes {:.3} s\n",
-            resampled.samples.len(),
-            start.elapsed().as_secs_f64()
-        );
     }
     Ok(())
 }
@@ -212,8 +215,66 @@ fn contrast() -> Result<(), Box<dyn Error>> {
     Ok(())
 }
 
+/// Evaluations and time of the search's settings, and of a record of a million samples.
+fn costs() -> Result<(), Box<dyn Error>> {
+    let rig_ratio = 500.0 / 1.02;
+    let rig = 1.0 / 1.02;
+    println!("| record | setting | estimate / truth − 1 | evaluations | time (s) |");
+    println!("| --- | --- | --- | --- | --- |");
+    for (label, period, dt, samples) in [
+        ("paper, 30000 at 25/period", TAU, TAU / 25.0, 30_000),
+        (
+            "490.196/period, 300 periods",
+            rig,
+            TAU / rig_ratio,
+            (300.0 * rig_ratio) as usize,
+        ),
+        (
+            "490.196/period, 2040 periods (10^6 samples)",
+            rig,
+            TAU / rig_ratio,
+            1_000_000,
+        ),
+    ] {
+        let (t0, step, theta) = record(period, dt, samples)?;
+        let x: Vec<f64> = theta.iter().map(|&v| wrap(v)).collect();
+        let range = PeriodRange::periods(0.5 * period, 2.0 * period)?;
+        let base = || DriveSearch::builder().range(range);
+        let settings = [
+            (
+                "defaults (growth 4, 3 survivors, 4 points per basin)",
+                base().build()?,
+            ),
+            ("growth 2", base().growth(2).build()?),
+            ("1 survivor", base().survivors(1).build()?),
+            ("2 points per basin", base().points_per_basin(2).build()?),
+            ("scan over 8 periods", base().scan_periods(8).build()?),
+        ];
+        for (name, search) in settings {
+            match estimate_with(&x, step, t0, &search) {
+                Ok((found, seconds)) => println!(
+                    "| {label} | {name} | {:+.2e} | {} | {seconds:.3} |",
+                    found.period / period - 1.0,
+                    found.evaluations
+                ),
+                Err(e) => println!("| {label} | {name} | error: {e} | | |"),
+            }
+        }
+        let clock = SampleClock::from_step(period * 1.0123, step)?;
+        let start = Instant::now();
+        let resampled = resample_to_whole(&x, &clock, Domain::Circle)?;
+        println!(
+            "| {label} | one resampling onto a whole grid ({} samples) | | | {:.3} |",
+            resampled.samples.len(),
+            start.elapsed().as_secs_f64()
+        );
+    }
+    Ok(())
+}
+
 fn main() -> Result<(), Box<dyn Error>> {
     match std::env::args().nth(1).as_deref() {
+        Some("costs") => costs(),
         Some("contrast") => contrast(),
         Some("honesty") => honesty(std::env::args().nth(2).as_deref() == Some("rig")),
         _ => accuracy(),
