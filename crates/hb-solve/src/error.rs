@@ -164,6 +164,70 @@ pub enum SolveError {
         /// Failures tolerated.
         allowed: usize,
     },
+    /// The model form has no term with the drive, so its residual does not depend on the forcing
+    /// period.
+    #[error(
+        "the model form has no drive term (no parametric terms, no external forcing): the forcing period \
+         cannot be estimated from its residual"
+    )]
+    NoDriveTerm,
+    /// The record's domain is not the basis' domain.
+    #[error("the record is on the {record} but the basis on the {basis}")]
+    DomainMismatch {
+        /// The record's domain.
+        record: Domain,
+        /// The basis' domain.
+        basis: Domain,
+    },
+    /// A range of forcing periods the record cannot resolve.
+    #[error(
+        "forcing period range {shortest}..{longest} does not fit the record: candidate periods must lie in \
+         {min_period}..{max_period} (at least 4 samples per period, and the record must span the window \
+         length plus 3 periods of the longest)"
+    )]
+    DriveRangeUnfit {
+        /// Shortest period asked for.
+        shortest: f64,
+        /// Longest period asked for.
+        longest: f64,
+        /// Shortest period the record resolves.
+        min_period: f64,
+        /// Longest period the record holds.
+        max_period: f64,
+    },
+    /// The best forcing period lies on an end of the range searched: the drive is probably outside.
+    #[error(
+        "the weak form's residual is smallest at the {edge}-period end of the range searched (period {period} \
+         in {shortest}..{longest}, normalised residual {residual:.3e}): the forcing period is probably outside \
+         the range; widen it"
+    )]
+    DrivePeriodAtRangeEdge {
+        /// The period at the end.
+        period: f64,
+        /// Shortest period of the range.
+        shortest: f64,
+        /// Longest period of the range.
+        longest: f64,
+        /// `short` or `long`.
+        edge: &'static str,
+        /// Its normalised residual.
+        residual: f64,
+    },
+    /// No period of the range explains the record much better than a typical candidate: the best
+    /// one's residual is not far enough below the scan's median.
+    #[error(
+        "no forcing period in the range explains the record: the best, {period}, leaves a normalised \
+         residual of {residual:.3e} against a typical {typical:.3e} over the range; the drive is probably \
+         outside the range (or the model form has no term for it)"
+    )]
+    DrivePeriodNotFound {
+        /// The best period found.
+        period: f64,
+        /// Its normalised residual on the whole record.
+        residual: f64,
+        /// The median normalised residual of the scan.
+        typical: f64,
+    },
     /// The SVD did not converge.
     #[error("the singular value decomposition did not converge")]
     SvdNoConvergence,

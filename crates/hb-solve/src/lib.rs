@@ -101,6 +101,7 @@
 mod assemble;
 mod bootstrap;
 mod differences;
+mod drive;
 mod error;
 mod lstsq;
 mod method;
@@ -116,6 +117,10 @@ pub use bootstrap::{
     bootstrap, bootstrap_fit,
 };
 pub use differences::FiniteDifferences;
+pub use drive::{
+    DriveEstimate, DriveSearch, DriveSearchBuilder, MIN_SAMPLES_PER_PERIOD, PeriodRange, RangeSource,
+    RefinedCandidate, ScanPoint, dominant_period, estimate_forcing_period,
+};
 pub use error::SolveError;
 pub use lstsq::{LstsqFit, LstsqSolver, QrSolver, RankTolerance, SvdSolver};
 pub use method::{Assembly, HarmonicBalance};

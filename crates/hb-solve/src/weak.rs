@@ -101,7 +101,7 @@ impl WeakForm {
     /// The test functions of a segment of `len` samples (and the closing one) with `harmonics`
     /// harmonics and sample step `h`: `2M + 1` rows of `len + 1` values of `ψ`, `ψ'` and `ψ''`,
     /// each multiplied by its trapezoid weight.
-    fn tables(&self, len: usize, harmonics: usize, h: f64, forcing_frequency: f64) -> Tables {
+    pub(crate) fn tables(&self, len: usize, harmonics: usize, h: f64, forcing_frequency: f64) -> Tables {
         let p = self.window_order as i32;
         let pf = f64::from(self.window_order);
         let samples = len + 1;
@@ -161,17 +161,17 @@ impl WeakForm {
 
 /// Weighted test functions of one segment shape, row-major (`rows × samples`).
 #[derive(Debug)]
-struct Tables {
-    samples: usize,
-    psi: Vec<f64>,
-    dpsi: Vec<f64>,
-    ddpsi: Vec<f64>,
+pub(crate) struct Tables {
+    pub(crate) samples: usize,
+    pub(crate) psi: Vec<f64>,
+    pub(crate) dpsi: Vec<f64>,
+    pub(crate) ddpsi: Vec<f64>,
     /// `(cos, sin)(W n h)`: the forcing's phase advance from the window's first sample.
     turn: Vec<(f64, f64)>,
 }
 
 impl Tables {
-    fn row<'a>(&self, table: &'a [f64], r: usize) -> &'a [f64] {
+    pub(crate) fn row<'a>(&self, table: &'a [f64], r: usize) -> &'a [f64] {
         &table[r * self.samples..(r + 1) * self.samples]
     }
 }
@@ -189,7 +189,7 @@ struct Workspace {
 
 /// `Σ a_i b_i` (slices of equal length) in the vectors of `simd`, two partial sums.
 #[inline(always)]
-fn dot<S: pulp::Simd>(simd: S, a: &[f64], b: &[f64]) -> f64 {
+pub(crate) fn dot<S: pulp::Simd>(simd: S, a: &[f64], b: &[f64]) -> f64 {
     let (a_head, a_tail) = S::as_simd_f64s(a);
     let (b_head, b_tail) = S::as_simd_f64s(b);
     let (mut acc0, mut acc1) = (simd.splat_f64s(0.0), simd.splat_f64s(0.0));
