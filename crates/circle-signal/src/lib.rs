@@ -51,11 +51,13 @@ mod clock;
 mod domain;
 mod resample;
 mod segment;
+mod spikes;
 
 pub use clock::SampleClock;
 pub use domain::{Domain, UnknownDomain};
 pub use resample::{RESAMPLE_HALF_WIDTH, Resampled, resample_to_whole};
 pub use segment::{OrbitSource, Segment};
+pub use spikes::{Spike, SpikeParams, Spikes, find_and_repair_spikes, find_spikes, repair_spikes};
 
 use std::f64::consts::{PI, TAU};
 
@@ -99,6 +101,14 @@ pub enum CircleError {
         len: usize,
         /// Samples in the record.
         record: usize,
+    },
+    /// A record is not as long as the one an operation was prepared for.
+    #[error("record of {found} samples where {expected} were expected")]
+    LengthMismatch {
+        /// Samples expected.
+        expected: usize,
+        /// Samples given.
+        found: usize,
     },
     /// A parameter is out of range.
     #[error("invalid {name}: {value} ({why})")]
