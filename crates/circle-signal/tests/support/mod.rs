@@ -259,3 +259,17 @@ pub fn run(clean: &[f64], spikes: &[Injected], params: &circle_signal::SpikePara
         unwrap_gap_spiked: gap(&spiked),
     }
 }
+
+/// The largest residual `|Δ⁴x / 6|` of the centred cubic prediction over a continuous
+/// (unwrapped) record: what the smooth motion alone puts into the search's residuals.
+pub fn smooth_residual_max(continuous: &[f64]) -> f64 {
+    continuous
+        .windows(5)
+        .map(|w| ((w[0] - 4.0 * w[1] + 6.0 * w[2] - 4.0 * w[3] + w[4]) / 6.0).abs())
+        .fold(0.0, f64::max)
+}
+
+/// [`smooth_residual_max`] of `motion` without noise or rounding.
+pub fn motion_residual_max(motion: Motion, per_period: f64, n: usize) -> f64 {
+    smooth_residual_max(&Record::new(motion, per_period, n, 0.0, false, 0).continuous)
+}
