@@ -15,6 +15,9 @@
 //! - [`RotationSplit`]: the split of a period-k segment into a constant rotation `w_ck τ` and an
 //!   oscillation `x_var` (paper section 2, `x_ck = w_ck t + x_var,k`), needed before a whirling
 //!   orbit can be expanded in a Fourier series.
+//! - [`find_spikes`] / [`repair_spikes`]: isolated spikes (an encoder's bit errors), each sample
+//!   tested against the cubic through its four neighbours on the circle or the line with a robust
+//!   local scale, and replaced by that prediction, so that no spike is unwrapped into a false turn.
 //!
 //! It also holds the vocabulary every later stage shares, so that each is defined once:
 //!
@@ -52,12 +55,14 @@ mod domain;
 mod oscillation;
 mod resample;
 mod segment;
+mod spikes;
 
 pub use clock::SampleClock;
 pub use domain::{Domain, UnknownDomain};
 pub use oscillation::oscillation_period;
 pub use resample::{RESAMPLE_HALF_WIDTH, Resampled, ResampledPieces, resample_pieces, resample_to_whole};
 pub use segment::{OrbitSource, Segment};
+pub use spikes::{Spike, SpikeParams, Spikes, find_and_repair_spikes, find_spikes, repair_spikes};
 
 use std::f64::consts::{PI, TAU};
 
@@ -124,6 +129,14 @@ pub enum CircleError {
         len: usize,
         /// Samples in the record.
         record: usize,
+    },
+    /// A record is not as long as the one an operation was prepared for.
+    #[error("record of {found} samples where {expected} were expected")]
+    LengthMismatch {
+        /// Samples expected.
+        expected: usize,
+        /// Samples given.
+        found: usize,
     },
     /// A parameter is out of range.
     #[error("invalid {name}: {value} ({why})")]
