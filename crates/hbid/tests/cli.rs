@@ -205,7 +205,8 @@ fn embed_json_on_the_paper_data_set() {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["delay"], 5);
-    assert_eq!(v["ami"].as_array().unwrap().len(), 41);
+    // Lags 0 to two forcing periods (25 samples each).
+    assert_eq!(v["ami"].as_array().unwrap().len(), 51);
     let fnn: Vec<f64> = v["fnn"]
         .as_array()
         .unwrap()
@@ -258,7 +259,18 @@ fn analysis_options_are_checked() {
         (vec!["upos", &data, "--tolerance", "0.5"], "tolerance"),
         (vec!["upos", &data, "--max-period", "0"], "max_period"),
         (vec!["upos", &data, "--forcing-period", "-1"], "forcing-period"),
-        (vec!["upos", &data, "--forcing-period", "6.3"], "nearest: 25"),
+        (
+            vec!["upos", &data, "--forcing-frequency", "0"],
+            "forcing-frequency",
+        ),
+        (
+            vec!["upos", &data, "--forcing-period", "auto:2..x"],
+            "'x' is not a number",
+        ),
+        (
+            vec!["upos", &data, "--forcing-period", "auto:3"],
+            "expected auto or auto:a..b",
+        ),
         (vec!["upos", "/no/such/file.csv"], "no/such/file.csv"),
         (vec!["upos", "/tmp"], "folder"),
     ] {

@@ -5,12 +5,14 @@ use std::ops::Range;
 use std::path::PathBuf;
 
 use anyhow::Context;
-use circle_signal::{Domain, SampleClock, resample_pieces};
-use hb_basis::{BasisKind, Harmonic, Polynomial};
-use hb_solve::{DriveEstimate, DriveSearch, Forcing, ModelForm, PeriodRange, estimate_forcing_period};
+use circle_signal::{
+    Domain, SampleClock, Spike, SpikeParams, find_and_repair_spikes, find_spikes, resample_pieces,
+};
 use clap::Args;
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use embedding::AmiParams;
+use hb_basis::{BasisKind, Harmonic, Polynomial};
+use hb_solve::{DriveEstimate, DriveSearch, Forcing, ModelForm, PeriodRange, estimate_forcing_period};
 use hbid::input::{
     AngleRange, Column, GridOptions, GridRecord, InputError, ReadOptions, Role, angle_range, read_path,
 };
@@ -48,11 +50,16 @@ pub struct InputArgs {
     /// Forcing period in the time unit of the data, any number of sampling steps (default 2π, the
     /// paper's non-dimensional time); `auto` or `auto:A..B` estimates it from the record (within
     /// periods A to B).
-    #[arg(long, value_name = "T|auto[:A..B]", conflicts_with = "forcing_frequency")]
+    #[arg(
+        long,
+        value_name = "T|auto[:A..B]",
+        conflicts_with = "forcing_frequency",
+        allow_hyphen_values = true
+    )]
     pub forcing_period: Option<String>,
     /// Forcing frequency in cycles per time unit of the data (Hz for time in seconds), instead of
     /// the period; `auto` or `auto:A..B` estimates it from the record (within frequencies A to B).
-    #[arg(long, value_name = "HZ|auto[:A..B]")]
+    #[arg(long, value_name = "HZ|auto[:A..B]", allow_hyphen_values = true)]
     pub forcing_frequency: Option<String>,
     /// An angle on the circle (wrapped into [-π, π), unwrapped per orbit, circle metric) or a
     /// displacement on the line (no wrapping, plain differences): circle or line.
@@ -88,7 +95,11 @@ pub enum DriveFound {
 /// Parses `T`, `auto` or `auto:A..B` of `--forcing-period` (or of `--forcing-frequency` when
 /// `frequency`).
 pub fn parse_drive(text: &str, frequency: bool) -> anyhow::Result<DriveSpec> {
-    let option = if frequency { "--forcing-frequency" } else { "--forcing-period" };
+    let option = if frequency {
+        "--forcing-frequency"
+    } else {
+        "--forcing-period"
+    };
     let number = |s: &str| -> anyhow::Result<f64> {
         let v: f64 = s
             .trim()
@@ -177,7 +188,12 @@ impl Data {
 
     /// The record as the pipeline takes it.
     pub fn record(&self) -> anyhow::Result<Record<'_>> {
-        Ok(Record::with_pieces(&self.x, self.pieces.clone(), self.clock, self.domain)?)
+        Ok(Record::with_pieces(
+            &self.x,
+            self.pieces.clone(),
+            self.clock,
+            self.domain,
+        )?)
     }
 }
 
@@ -202,7 +218,11 @@ impl InputArgs {
     /// Reads, checks and (on the circle) wraps the record; finds its clock by `drive`, resampling
     /// it onto a whole number of samples per forcing period when needed. `progress` follows the
     /// estimate of the drive, if any.
-    pub fn load_with(&self, drive: DriveSpec, progress: &mut dyn FnMut(usize, usize)) -> anyhow::Result<Data> {
+    pub fn load_with(
+        &self,
+        drive: DriveSpec,
+        progress: &mut dyn FnMut(usize, usize),
+    ) -> anyhow::Result<Data> {
         let column = |s: &Option<String>| s.as_deref().map(str::parse::<Column>).transpose();
         let options = ReadOptions {
             time: column(&self.time_col)?,
@@ -217,7 +237,10 @@ impl InputArgs {
             .map_err(naming_options)
             .with_context(|| name.clone())?;
         for r in &grid.repaired {
-            eprintln!("note: {}: time {} replaced by its grid time {}", r.at, r.was, r.now);
+            eprintln!(
+                "note: {}: time {} replaced by its grid time {}",
+                r.at, r.was, r.now
+            );
         }
         let (t0, dt) = (grid.t0, grid.dt);
         // One grid for every piece, NaN in the gaps.
@@ -249,7 +272,13 @@ impl InputArgs {
                 }
             }
         }
-        let longest = pieces.iter().rev().max_by_key(|r| r.len()).cloned().unwrap_or(0..0);
+        self.spikes(&mut x, &pieces)?;
+        let longest = pieces
+            .iter()
+            .rev()
+            .max_by_key(|r| r.len())
+            .cloned()
+            .unwrap_or(0..0);
         let (period, found) = match drive {
             DriveSpec::Period(t) => (t, DriveFound::Given),
             DriveSpec::Free => {
@@ -309,6 +338,51 @@ impl InputArgs {
             drive: found,
             resampled_from,
         })
+    }
+}
+
+impl InputArgs {
+    /// Finds the isolated spikes (bit errors) of every piece; with `--repair` replaces them and
+    /// lists them, without it warns with their count. Pieces too short for the test are left as
+    /// they are.
+    fn spikes(&self, x: &mut [f64], pieces: &[Range<usize>]) -> anyhow::Result<()> {
+        let params = SpikeParams::default();
+        let mut found: Vec<Spike> = Vec::new();
+        for r in pieces.iter().filter(|r| r.len() >= SpikeParams::MIN_SAMPLES) {
+            let piece = &mut x[r.clone()];
+            let spikes = if self.repair {
+                find_and_repair_spikes(piece, self.signal, &params)?
+            } else {
+                find_spikes(piece, self.signal, &params)?
+            };
+            found.extend(spikes.iter().map(|s| Spike {
+                index: s.index + r.start,
+                ..*s
+            }));
+        }
+        if found.is_empty() {
+            return Ok(());
+        }
+        let list: Vec<String> = found
+            .iter()
+            .take(5)
+            .map(|s| format!("sample {} ({:+.4})", s.index + 1, s.size))
+            .collect();
+        let more = if found.len() > 5 { ", ..." } else { "" };
+        if self.repair {
+            eprintln!(
+                "note: {} isolated spike(s) replaced by the local prediction: {}{more}",
+                found.len(),
+                list.join(", ")
+            );
+        } else {
+            eprintln!(
+                "warning: {} isolated spike(s) (bit errors?) in the record: {}{more}; run with --repair to replace them",
+                found.len(),
+                list.join(", ")
+            );
+        }
+        Ok(())
     }
 }
 
@@ -399,7 +473,11 @@ impl SearchArgs {
             Some(d) => d,
             None => {
                 let max_lag = EmbedOptions::default().max_lag(data.p);
-                ami(data.longest(), &AmiParams::new(data.domain).with_max_lag(max_lag)?)?.1
+                ami(
+                    data.longest(),
+                    &AmiParams::new(data.domain).with_max_lag(max_lag)?,
+                )?
+                .1
             }
         })
     }

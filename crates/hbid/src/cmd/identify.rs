@@ -272,7 +272,11 @@ pub fn run(args: &IdentifyArgs, quiet: bool, timings: bool) -> anyhow::Result<()
             "{} windows of {} {} periods",
             segments.len(),
             args.window_periods,
-            if matches!(data.drive, DriveFound::Free { .. }) { "oscillation" } else { "forcing" }
+            if matches!(data.drive, DriveFound::Free { .. }) {
+                "oscillation"
+            } else {
+                "forcing"
+            }
         ),
     };
     let id = setup
