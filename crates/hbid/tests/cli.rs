@@ -763,3 +763,456 @@ fn simulate_writes_npy_that_identify_reads_like_the_csv() {
         );
     }
 }
+
+/// `hbid simulate` with `args` into `dir/name`; panics with stderr if it fails.
+fn simulated(dir: &Path, name: &str, args: &[&str]) -> PathBuf {
+    let path = dir.join(name);
+    let mut all = vec!["simulate", "--quiet"];
+    all.extend(args);
+    all.extend(["--out", path.to_str().unwrap()]);
+    let out = hbid(&all);
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    path
+}
+
+/// Without the rig options the record is what it always was: the same bytes as with every new
+/// option at its default, the header `t,theta,omega`, numbers printed in their shortest
+/// round-trip form, the first stamp after the transient, and equal seeds giving equal records.
+#[test]
+fn simulate_default_layout_is_unchanged() {
+    let dir = scratch("default-layout");
+    let base = [
+        "--samples",
+        "300",
+        "--transient-periods",
+        "5",
+        "--noise",
+        "0.05",
+        "--seed",
+        "7",
+    ];
+    let plain = simulated(&dir, "plain.csv", &base);
+    let mut explicit = base.to_vec();
+    explicit.extend([
+        "--system",
+        "pendulum",
+        "--forcing",
+        "drive",
+        "--time-origin",
+        "drive",
+        "--phase",
+        "0",
+        "--f",
+        "1.52",
+        "--c",
+        "0.03",
+        "--r",
+        "0.8333",
+        "--samples-per-period",
+        "25",
+    ]);
+    let spelled = simulated(&dir, "spelled.csv", &explicit);
+    let again = simulated(&dir, "again.csv", &base);
+    let text = std::fs::read_to_string(&plain).unwrap();
+    assert_eq!(text, std::fs::read_to_string(&spelled).unwrap());
+    assert_eq!(text, std::fs::read_to_string(&again).unwrap());
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("t,theta,omega"));
+    for line in lines.clone() {
+        for cell in line.split(',') {
+            let v: f64 = cell.parse().unwrap();
+            assert_eq!(v.to_string(), cell, "not the shortest form: {line}");
+        }
+    }
+    assert_eq!(lines.count(), 300);
+    let (_, rows) = read_rows(&plain);
+    assert!((rows[0][0] - 5.0 * std::f64::consts::TAU).abs() < 1e-12);
+}
+
+/// A 500 Hz record of a 1.02 Hz drive by a 4096-count encoder: stamps to the given decimals, every
+/// angle on the count grid, duration × rate rows; raw counts are the same readings as integers.
+#[test]
+fn simulate_a_500_hz_rig_with_a_4096_count_encoder() {
+    let dir = scratch("rig");
+    let rig = [
+        "--drive-frequency",
+        "1.02",
+        "--sample-rate",
+        "500",
+        "--counts",
+        "4096",
+        "--duration",
+        "20",
+        "--time-decimals",
+        "3",
+        "--decimals",
+        "7",
+        "--time-origin",
+        "first-sample",
+        "--zero-offset",
+        "0.25",
+        "--transient-periods",
+        "20",
+    ];
+    let radians = simulated(&dir, "rig.csv", &rig);
+    let text = std::fs::read_to_string(&radians).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines[0], "t,theta,omega");
+    assert_eq!(lines.len() - 1, 10_000);
+    let q = std::f64::consts::TAU / 4096.0;
+    let pi = std::f64::consts::PI;
+    for (n, line) in lines[1..].iter().enumerate() {
+        let cells: Vec<&str> = line.split(',').collect();
+        assert_eq!(cells[0].split_once('.').unwrap().1.len(), 3, "{line}");
+        assert_eq!(cells[1].split_once('.').unwrap().1.len(), 7, "{line}");
+        let t: f64 = cells[0].parse().unwrap();
+        assert!((t - n as f64 * 0.002).abs() < 1e-9, "{line}");
+        let theta: f64 = cells[1].parse().unwrap();
+        assert!((-pi..pi).contains(&theta), "{line}");
+        // Seven decimals hold the count's angle to 5e-8 rad, 3.3e-5 of a count.
+        let k = theta / q;
+        assert!((k - k.round()).abs() < 4e-5, "{line}: {k} counts");
+    }
+    let mut raw = rig.to_vec();
+    raw.push("--raw-counts");
+    let counts = simulated(&dir, "counts.csv", &raw);
+    let text = std::fs::read_to_string(&counts).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("t,count,omega"));
+    let (_, angles) = read_rows(&radians);
+    let mut seen = std::collections::BTreeSet::new();
+    for (line, row) in lines.zip(&angles) {
+        let k: u32 = line.split(',').nth(1).unwrap().parse().expect("an integer count");
+        assert!(k < 4096);
+        seen.insert(k);
+        assert!(
+            circle_signal::circle_distance(f64::from(k) * q, row[1]) < 1e-6,
+            "{line}"
+        );
+    }
+    // The .npy holds the numbers the CSV's reader gets, decimals and counts included.
+    for args in [rig.to_vec(), raw.clone()] {
+        let csv = read_rows(&simulated(&dir, "same.csv", &args)).1;
+        let bytes = std::fs::read(simulated(&dir, "same.npy", &args)).unwrap();
+        let start = 10 + usize::from(u16::from_le_bytes([bytes[8], bytes[9]]));
+        let values: Vec<f64> = bytes[start..]
+            .chunks_exact(8)
+            .map(|b| f64::from_le_bytes(b.try_into().unwrap()))
+            .collect();
+        assert_eq!(values, csv.concat());
+    }
+    // A whirling pendulum goes all the way round.
+    let (lo, hi) = (*seen.first().unwrap(), *seen.last().unwrap());
+    assert!(lo < 64 && hi >= 4032, "counts {lo} to {hi}");
+}
+
+/// The truth file is the equation `hbid identify` recovers from the record, term for term, in
+/// the record's seconds, with a drive phase and an encoder offset: for the pendulum and for the
+/// Duffing oscillator.
+#[test]
+fn simulate_truth_is_what_identify_recovers() {
+    let dir = scratch("truth");
+    let cases = [
+        (
+            vec![
+                "--drive-frequency",
+                "1.02",
+                "--zero-offset",
+                "0.3",
+                "--phase",
+                "1.0",
+            ],
+            vec!["--forcing-period", "0.9803921568627451"],
+        ),
+        (
+            vec![
+                "--system",
+                "duffing",
+                "--drive-frequency",
+                "6.5",
+                "--phase",
+                "0.7",
+                "--transient-periods",
+                "100",
+            ],
+            vec![
+                "--forcing-period",
+                "0.15384615384615385",
+                "--signal",
+                "line",
+                "--angle-col",
+                "x",
+            ],
+        ),
+    ];
+    for (i, (sim, id)) in cases.into_iter().enumerate() {
+        let truth_path = dir.join(format!("truth{i}.json"));
+        let mut args = sim.clone();
+        args.extend([
+            "--samples-per-period",
+            "50",
+            "--samples",
+            "40000",
+            "--time-origin",
+            "first-sample",
+            "--rtol",
+            "1e-12",
+            "--truth",
+            truth_path.to_str().unwrap(),
+        ]);
+        let record = simulated(&dir, &format!("record{i}.csv"), &args);
+        let truth: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&truth_path).unwrap()).unwrap();
+        let mut all = vec!["identify", record.to_str().unwrap()];
+        all.extend(id);
+        all.extend(["--method", "windowed", "--bootstrap", "0", "--json"]);
+        let out = hbid(&all);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let found: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let (want, got) = (
+            truth["coefficients"].as_object().unwrap(),
+            found["coefficients"].as_object().unwrap(),
+        );
+        let names = |m: &serde_json::Map<String, serde_json::Value>| {
+            m.keys().cloned().collect::<std::collections::BTreeSet<_>>()
+        };
+        assert_eq!(names(want), names(got), "{sim:?}");
+        assert_eq!(truth["identify"]["basis"], found["basis"]);
+        let scale = want
+            .values()
+            .map(|v| v.as_f64().unwrap().abs())
+            .fold(0.0, f64::max);
+        let worst = want
+            .iter()
+            .map(|(n, v)| (v.as_f64().unwrap() - got[n].as_f64().unwrap()).abs())
+            .fold(0.0, f64::max);
+        // Measured: 1.5e-7 (pendulum, scale 56) and 7e-6 (Duffing, scale 1668).
+        assert!(
+            worst < 1e-6 * scale,
+            "{sim:?}: largest error {worst:e} of {scale}"
+        );
+        // A drive phase and an offset show as the rotated terms.
+        let nonzero = want.values().filter(|v| v.as_f64().unwrap() != 0.0).count();
+        assert_eq!(nonzero, if i == 0 { 7 } else { 5 }, "{want:?}");
+    }
+}
+
+#[test]
+fn simulate_rig_options_combine_or_fail_cleanly() {
+    let dir = scratch("rig-bad");
+    let target = dir.join("never.csv");
+    let truth = dir.join("never.json");
+    let t = target.to_str().unwrap();
+    for (args, mentions) in [
+        (vec!["--bit-errors", "0.01"], "--bit-errors needs --counts"),
+        (vec!["--counts", "4096", "--bit-errors", "-0.1"], "bit error rate"),
+        (vec!["--counts", "512", "--bit-errors", "0.1"], "1024"),
+        (
+            vec!["--drive-frequency", "1.02", "--sample-rate", "0"],
+            "--sample-rate",
+        ),
+        (vec!["--drive-frequency", "0"], "drive frequency"),
+        (vec!["--sample-rate", "500"], "needs --drive-frequency"),
+        (
+            vec![
+                "--drive-frequency",
+                "1",
+                "--sample-rate",
+                "500",
+                "--samples-per-period",
+                "50",
+            ],
+            "give one",
+        ),
+        (vec!["--samples", "100", "--duration", "2"], "--duration both set"),
+        (vec!["--duration", "-1"], "--duration"),
+        (vec!["--duration", "0.1"], "shorter than one sample step"),
+        (vec!["--raw-counts"], "--raw-counts needs --counts"),
+        (
+            vec!["--counts", "64", "--raw-counts", "--unwrapped"],
+            "--unwrapped",
+        ),
+        (vec!["--counts", "1"], "counts per turn"),
+        (vec!["--zero-offset", "inf"], "zero offset"),
+        (vec!["--system", "duffing", "--counts", "4096"], "pendulum only"),
+        (vec!["--system", "duffing", "--r", "1"], "--r"),
+        (vec!["--a", "-1"], "--system duffing"),
+        (vec!["--forcing", "none", "--f", "1"], "--forcing none"),
+        (vec!["--gaps", "3"], "k:len"),
+        (vec!["--gaps", "3:0"], "gap length"),
+        (vec!["--gaps", "100:100", "--samples", "1000"], "too few"),
+        (
+            vec![
+                "--drive-frequency",
+                "1.02",
+                "--sample-rate",
+                "500",
+                "--time-decimals",
+                "2",
+            ],
+            "--time-decimals 2",
+        ),
+        (vec!["--phase", "nan"], "--phase"),
+        (vec!["--angle-range", "positive", "--unwrapped"], "--angle-range"),
+    ] {
+        let mut all = vec!["simulate", "--samples", "1000"];
+        if args.contains(&"--samples") || args.contains(&"--duration") {
+            all.truncate(1);
+        }
+        all.extend(args.iter().copied());
+        all.extend(["--truth", truth.to_str().unwrap(), "--out", t]);
+        assert_clean_failure(&hbid(&all), &mentions.to_lowercase());
+        assert!(!target.exists() && !truth.exists(), "{args:?} left a file");
+    }
+    let folder = dir.join("sub");
+    std::fs::create_dir(&folder).unwrap();
+    assert_clean_failure(
+        &hbid(&["simulate", "--truth", folder.to_str().unwrap(), "--out", t]),
+        "folder",
+    );
+    assert!(!target.exists());
+    std::fs::remove_dir(&folder).unwrap();
+    assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0);
+}
+
+/// Bit errors are spikes of 64 to 512 counts on a few samples, the same for a seed; gaps remove
+/// runs of samples; the positive range holds the same angles in [0, 2π).
+#[test]
+fn simulate_bit_errors_gaps_and_ranges() {
+    let dir = scratch("rig-effects");
+    let base = [
+        "--samples",
+        "20000",
+        "--transient-periods",
+        "5",
+        "--counts",
+        "4096",
+        "--raw-counts",
+    ];
+    let clean = read_rows(&simulated(&dir, "clean.csv", &base)).1;
+    let mut flipped_args = base.to_vec();
+    flipped_args.extend(["--bit-errors", "0.01", "--seed", "4"]);
+    let flipped = read_rows(&simulated(&dir, "flipped.csv", &flipped_args)).1;
+    assert_eq!(
+        flipped,
+        read_rows(&simulated(&dir, "flipped2.csv", &flipped_args)).1
+    );
+    let mut hits = 0;
+    for (a, b) in clean.iter().zip(&flipped) {
+        assert_eq!((a[0], a[2]), (b[0], b[2]), "time and velocity untouched");
+        if a[1] != b[1] {
+            hits += 1;
+            let d = (b[1] - a[1]).rem_euclid(4096.0);
+            let d = d.min(4096.0 - d);
+            assert!([64.0, 128.0, 256.0, 512.0].contains(&d), "spike of {d} counts");
+        }
+    }
+    // Binomial(20000, 0.01): 200 ± 14.
+    assert!((130..270).contains(&hits), "{hits} bit errors");
+
+    let gapped = read_rows(&simulated(
+        &dir,
+        "gapped.csv",
+        &[
+            "--samples",
+            "2000",
+            "--transient-periods",
+            "5",
+            "--gaps",
+            "3:50",
+            "--seed",
+            "9",
+        ],
+    ))
+    .1;
+    assert_eq!(gapped.len(), 1850);
+    let h = std::f64::consts::TAU / 25.0;
+    let jumps: Vec<f64> = gapped
+        .windows(2)
+        .map(|w| (w[1][0] - w[0][0]) / h)
+        .filter(|s| (s - 1.0).abs() > 1e-6)
+        .collect();
+    assert_eq!(jumps.len(), 3, "{jumps:?}");
+    assert!(jumps.iter().all(|s| (s - 51.0).abs() < 1e-6), "{jumps:?}");
+
+    let signed = read_rows(&simulated(
+        &dir,
+        "signed.csv",
+        &["--samples", "3000", "--transient-periods", "5"],
+    ))
+    .1;
+    let positive = read_rows(&simulated(
+        &dir,
+        "positive.csv",
+        &[
+            "--samples",
+            "3000",
+            "--transient-periods",
+            "5",
+            "--angle-range",
+            "positive",
+        ],
+    ))
+    .1;
+    let tau = std::f64::consts::TAU;
+    assert!(positive.iter().all(|r| (0.0..tau).contains(&r[1])));
+    assert!(positive.iter().any(|r| r[1] > std::f64::consts::PI));
+    for (s, p) in signed.iter().zip(&positive) {
+        assert!(circle_signal::circle_distance(s[1], p[1]) < 1e-12);
+    }
+}
+
+/// A free decay starts at once (no transient), loses amplitude, and its truth has no drive; the
+/// Duffing oscillator writes t,x,v and visits both wells.
+#[test]
+fn simulate_free_decay_and_duffing() {
+    let dir = scratch("decay");
+    let truth = dir.join("decay.json");
+    let decay = read_rows(&simulated(
+        &dir,
+        "decay.csv",
+        &[
+            "--forcing",
+            "none",
+            "--theta0",
+            "2.5",
+            "--drive-frequency",
+            "1.02",
+            "--samples",
+            "5000",
+            "--truth",
+            truth.to_str().unwrap(),
+        ],
+    ))
+    .1;
+    assert_eq!(decay[0][0], 0.0);
+    assert!((decay[0][1] - 2.5).abs() < 1e-12);
+    let amplitude = |rows: &[Vec<f64>]| rows.iter().map(|r| r[1].abs()).fold(0.0, f64::max);
+    let (first, last) = (amplitude(&decay[..500]), amplitude(&decay[4500..]));
+    assert!(last < 0.8 * first, "amplitude {first} -> {last}");
+    let t: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&truth).unwrap()).unwrap();
+    let w = std::f64::consts::TAU * 1.02;
+    let c = &t["coefficients"];
+    assert_eq!(c["sin(t)*cos(x)"], 0.0);
+    assert!((c["x'"].as_f64().unwrap() - 0.03 * w).abs() < 1e-12);
+    assert!((c["sin(x)"].as_f64().unwrap() - w * w / (0.8333 * 0.8333)).abs() < 1e-9);
+    assert_eq!(t["forcing"], "none");
+
+    let duffing = simulated(
+        &dir,
+        "duffing.csv",
+        &["--system", "duffing", "--samples", "20000"],
+    );
+    let text = std::fs::read_to_string(&duffing).unwrap();
+    assert!(text.starts_with("t,x,v\n"));
+    let rows = read_rows(&duffing).1;
+    let left = rows.iter().filter(|r| r[1] < 0.0).count();
+    assert!(
+        left > 2000 && left < 18_000,
+        "{left} of 20000 samples in the left well"
+    );
+}

@@ -1,19 +1,44 @@
 //! What an encoder reports of a simulated angle: the observation model between a [`Trajectory`]
 //! and a record.
 //!
-//! An [`Encoder`] adds seeded Gaussian noise of standard deviation `σ` to the angle and reports it
-//! modulo 2π, `x_n = wrap(θ_n + ε_n)` with `ε_n ~ N(0, σ²)` independent; a `σ` of zero is an
-//! ideal encoder. Every seeded noisy record of the workspace (the command line's `simulate`, the
-//! accuracy studies, the tests) is made here, so one seed and stream give one record everywhere.
-//! The rest of a real encoder's behaviour belongs here too when it is modelled: its resolution in
-//! counts per turn, its zero offset, and bit errors.
+//! An [`Encoder`] turns the true angle `θ_n` of each sample into what a rig's encoder reports, in
+//! this order:
+//!
+//! 1. **zero offset** `o` ([`Encoder::with_zero_offset`]): the encoder's zero is `o` radians from
+//!    the pendulum's bottom, so it sees `θ_n − o`;
+//! 2. **noise** `σ` ([`Encoder::with_noise`]): seeded Gaussian noise, `θ_n − o + ε_n` with
+//!    `ε_n ~ N(0, σ²)` independent;
+//! 3. **counts per turn** `N` ([`Encoder::with_counts`]): the angle is quantised to the nearest
+//!    whole count, `k_n = round((θ_n − o + ε_n) · N / 2π)`, an error of at most half a count
+//!    (`π / N` radians);
+//! 4. **bit errors** at rate `p` ([`Encoder::with_bit_errors`], counts needed): each sample
+//!    independently, with probability `p`, gets a spike `k_n ± 2^b` counts, the sign `+` or `−`
+//!    equally likely and `b` drawn uniformly from [`Encoder::BIT_ERROR_BITS`] = {6, 7, 8, 9}
+//!    (a flipped bit of a binary count: 64 to 512 counts);
+//! 5. **the report**: the count modulo `N`, in `[0, N)` ([`Encoder::observe_counts`]), or the angle
+//!    `k · 2π / N` in the encoder's [`AngleRange`], `[−π, π)` by default or `[0, 2π)`
+//!    ([`Encoder::observe`]); [`Encoder::observe_continuous`] keeps every turn (a multi-turn
+//!    encoder, or a displacement on the line).
+//!
+//! Without counts steps 3 and 4 are skipped and the angle `θ_n − o + ε_n` is reported wrapped
+//! into the range: `x_n = wrap(θ_n + ε_n)` for an encoder with only noise, and an ideal encoder
+//! (`σ = 0`, the default) only wraps. Every seeded noisy record of the workspace (the command
+//! line's `simulate`, the accuracy studies, the tests) is made here, so one seed and stream give
+//! one record everywhere.
 //!
 //! The noise is drawn from ChaCha8 (`rand_chacha`) seeded by [`SeedableRng::seed_from_u64`], one
 //! normal number per sample in sample order, so a shorter record gets the first samples' noise of a
-//! longer one with the same seed and stream.
+//! longer one with the same seed and stream. The bit errors are drawn from the same seed and
+//! stream starting at word `2^66` (far beyond any record's noise), in sample order: a uniform
+//! number for whether the sample is hit, then, if it is, the bit and the sign. So adding bit errors
+//! does not change the noise, and a shorter record gets the first samples' errors of a longer one.
+//!
+//! [`Gaps`] says which samples a data acquisition drops: `K` gaps of `L` samples each at seeded
+//! random places.
 //!
 //! [`Trajectory`]: crate::Trajectory
 
+use std::collections::BTreeSet;
 use std::f64::consts::TAU;
 
 use rand::{Rng, SeedableRng};
@@ -21,6 +46,11 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 
 use crate::SimError;
+
+/// Where the bit errors' draws start in the encoder's ChaCha8 stream, in 32-bit words.
+const BIT_ERROR_WORD: u128 = 1 << 66;
+/// Where the gaps' draws start in ChaCha8 stream 0 of their seed, in 32-bit words.
+const GAPS_WORD: u128 = 1 << 67;
 
 /// How a standard normal number is drawn from the uniform stream.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
@@ -35,7 +65,32 @@ pub enum NormalDraw {
     BoxMuller,
 }
 
-/// A model of an angle encoder: seeded Gaussian noise on the angle, reported modulo 2π.
+/// The interval an encoder reports a wrapped angle in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum AngleRange {
+    /// `[−π, π)`: zero at the encoder's zero, negative on one side.
+    #[default]
+    Signed,
+    /// `[0, 2π)`: the count times `2π / N`, as an incremental encoder's counter reads.
+    Positive,
+}
+
+impl AngleRange {
+    /// `x` (radians, finite) moved by whole turns into the range.
+    pub fn wrap(self, x: f64) -> f64 {
+        match self {
+            Self::Signed => circle_signal::wrap(x),
+            Self::Positive => {
+                let r = x.rem_euclid(TAU);
+                // A tiny negative x rounds up to 2π itself.
+                if r >= TAU { 0.0 } else { r }
+            }
+        }
+    }
+}
+
+/// A model of an angle encoder: zero offset, seeded Gaussian noise, counts per turn, seeded bit
+/// errors, the angle reported in a range.
 ///
 /// Built by [`Encoder::seeded`] (an ideal encoder) and the validating setters; see the
 /// [module documentation](self) for the model.
@@ -56,6 +111,10 @@ pub enum NormalDraw {
 /// // Without noise the encoder only wraps.
 /// let ideal = Encoder::seeded(7).observe(&[4.0]);
 /// assert!((ideal[0] - (4.0 - std::f64::consts::TAU)).abs() < 1e-15);
+/// // A 4096-count encoder whose zero is 0.1 rad from the bottom, with rare bit errors.
+/// let rig = Encoder::seeded(7).with_counts(4096)?.with_zero_offset(0.1)?.with_bit_errors(1e-3)?;
+/// let counts = rig.observe_counts(&theta).expect("counts are set");
+/// assert!(counts.iter().all(|&k| k < 4096));
 /// # Ok::<(), pendulum_sim::SimError>(())
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -64,17 +123,33 @@ pub struct Encoder {
     seed: u64,
     stream: u64,
     draw: NormalDraw,
+    counts: Option<u32>,
+    offset: f64,
+    bit_error_rate: f64,
+    range: AngleRange,
 }
 
 impl Encoder {
-    /// An ideal encoder (no noise) whose noise, once set, is drawn from ChaCha8 seeded with
-    /// `seed`, stream 0, by [`NormalDraw::Ziggurat`].
+    /// The bits a bit error flips: a spike of `±2^b` counts, `b` drawn uniformly from these.
+    pub const BIT_ERROR_BITS: [u32; 4] = [6, 7, 8, 9];
+
+    /// The fewest counts per turn bit errors are modelled with: `2 · 2^9`, so that the largest
+    /// spike is at most half a turn and is seen at its size.
+    pub const BIT_ERROR_MIN_COUNTS: u32 = 1024;
+
+    /// An ideal encoder (no noise, no offset, no quantisation, no bit errors, angles in
+    /// `[−π, π)`) whose random effects, once set, are drawn from ChaCha8 seeded with `seed`,
+    /// stream 0, the noise by [`NormalDraw::Ziggurat`].
     pub fn seeded(seed: u64) -> Self {
         Self {
             sigma: 0.0,
             seed,
             stream: 0,
             draw: NormalDraw::Ziggurat,
+            counts: None,
+            offset: 0.0,
+            bit_error_rate: 0.0,
+            range: AngleRange::Signed,
         }
     }
 
@@ -91,8 +166,8 @@ impl Encoder {
         Ok(self)
     }
 
-    /// The ChaCha8 stream of the seed the noise is drawn from (`0` by default): independent
-    /// noise for several records made from one seed.
+    /// The ChaCha8 stream of the seed the noise and bit errors are drawn from (`0` by default):
+    /// independent records from one seed.
     pub fn with_stream(mut self, stream: u64) -> Self {
         self.stream = stream;
         self
@@ -101,6 +176,81 @@ impl Encoder {
     /// How the normal numbers are drawn ([`NormalDraw::Ziggurat`] by default).
     pub fn with_draw(mut self, draw: NormalDraw) -> Self {
         self.draw = draw;
+        self
+    }
+
+    /// `counts` counts per turn (at least 2; at least [`Self::BIT_ERROR_MIN_COUNTS`] when bit
+    /// errors are set): the angle is reported to the nearest count.
+    pub fn with_counts(mut self, counts: u32) -> Result<Self, SimError> {
+        if counts < 2 {
+            return Err(SimError::InvalidParameter {
+                name: "counts per turn",
+                value: f64::from(counts),
+                why: "must be at least 2",
+            });
+        }
+        if self.bit_error_rate > 0.0 && counts < Self::BIT_ERROR_MIN_COUNTS {
+            return Err(SimError::InvalidParameter {
+                name: "counts per turn",
+                value: f64::from(counts),
+                why: "must be at least 1024 with bit errors (spikes of up to 512 counts)",
+            });
+        }
+        self.counts = Some(counts);
+        Ok(self)
+    }
+
+    /// The encoder's zero is `offset` radians (finite) from the angle's zero: it reports
+    /// `θ − offset`.
+    pub fn with_zero_offset(mut self, offset: f64) -> Result<Self, SimError> {
+        if !offset.is_finite() {
+            return Err(SimError::InvalidParameter {
+                name: "zero offset",
+                value: offset,
+                why: "must be finite",
+            });
+        }
+        self.offset = offset;
+        Ok(self)
+    }
+
+    /// Bit errors: each sample, with probability `rate` (in `[0, 1]`), gets a spike of `±2^b`
+    /// counts, `b` from [`Self::BIT_ERROR_BITS`]. A positive rate needs the counts per turn set
+    /// first ([`with_counts`](Self::with_counts), at least [`Self::BIT_ERROR_MIN_COUNTS`]).
+    pub fn with_bit_errors(mut self, rate: f64) -> Result<Self, SimError> {
+        if !(0.0..=1.0).contains(&rate) {
+            return Err(SimError::InvalidParameter {
+                name: "bit error rate",
+                value: rate,
+                why: "must lie in [0, 1]",
+            });
+        }
+        if rate > 0.0 {
+            match self.counts {
+                None => {
+                    return Err(SimError::InvalidParameter {
+                        name: "bit error rate",
+                        value: rate,
+                        why: "needs the encoder's counts per turn: bit errors are errors of the count",
+                    });
+                }
+                Some(n) if n < Self::BIT_ERROR_MIN_COUNTS => {
+                    return Err(SimError::InvalidParameter {
+                        name: "counts per turn",
+                        value: f64::from(n),
+                        why: "must be at least 1024 with bit errors (spikes of up to 512 counts)",
+                    });
+                }
+                Some(_) => {}
+            }
+        }
+        self.bit_error_rate = rate;
+        Ok(self)
+    }
+
+    /// The interval the wrapped angle is reported in ([`AngleRange::Signed`] by default).
+    pub fn with_range(mut self, range: AngleRange) -> Self {
+        self.range = range;
         self
     }
 
@@ -116,34 +266,245 @@ impl Encoder {
     pub fn stream(&self) -> u64 {
         self.stream
     }
-
-    /// What the encoder reports of the angle `theta`: `wrap(θ_n + ε_n)`, in `[−π, π)`.
-    pub fn observe(&self, theta: &[f64]) -> Vec<f64> {
-        let mut x = self.observe_continuous(theta);
-        for v in &mut x {
-            *v = circle_signal::wrap(*v);
-        }
-        x
+    /// Counts per turn, if the angle is quantised.
+    pub fn counts(&self) -> Option<u32> {
+        self.counts
+    }
+    /// The zero offset in radians.
+    pub fn zero_offset(&self) -> f64 {
+        self.offset
+    }
+    /// The probability of a bit error per sample.
+    pub fn bit_error_rate(&self) -> f64 {
+        self.bit_error_rate
+    }
+    /// The interval of the reported angle.
+    pub fn range(&self) -> AngleRange {
+        self.range
     }
 
-    /// The angle `theta` with the encoder's noise, `θ_n + ε_n`, not wrapped: a record of the
-    /// continuous angle (or of a displacement on the line). Its wrap is [`Encoder::observe`].
+    /// What the encoder reports of the angle `theta`: the count's angle `k · 2π / N` (with
+    /// counts) or the angle itself, wrapped into the encoder's range (`[−π, π)` by default).
+    pub fn observe(&self, theta: &[f64]) -> Vec<f64> {
+        match self.counts {
+            None => self
+                .readings(theta)
+                .into_iter()
+                .map(|v| self.range.wrap(v))
+                .collect(),
+            Some(n) => {
+                let n = i64::from(n);
+                self.turn_counts(theta)
+                    .into_iter()
+                    .map(|k| {
+                        let k = k.rem_euclid(n);
+                        let k = match self.range {
+                            AngleRange::Positive => k,
+                            AngleRange::Signed if 2 * k >= n => k - n,
+                            AngleRange::Signed => k,
+                        };
+                        TAU * k as f64 / n as f64
+                    })
+                    .collect()
+            }
+        }
+    }
+
+    /// The angle as the encoder sees it, not wrapped: `θ_n − o + ε_n`, or with counts the whole
+    /// count over every turn times `2π / N` (a multi-turn encoder). A record of the continuous
+    /// angle (or, without counts and offset, of a displacement on the line with noise). Its wrap
+    /// into the range is [`Encoder::observe`].
     pub fn observe_continuous(&self, theta: &[f64]) -> Vec<f64> {
+        match self.counts {
+            None => self.readings(theta),
+            Some(n) => self
+                .turn_counts(theta)
+                .into_iter()
+                .map(|k| TAU * k as f64 / f64::from(n))
+                .collect(),
+        }
+    }
+
+    /// The counts the encoder reports, in `[0, N)`; `None` when the encoder has no counts per
+    /// turn.
+    pub fn observe_counts(&self, theta: &[f64]) -> Option<Vec<u32>> {
+        let n = i64::from(self.counts?);
+        Some(
+            self.turn_counts(theta)
+                .into_iter()
+                .map(|k| u32::try_from(k.rem_euclid(n)).expect("a count modulo a u32 fits a u32"))
+                .collect(),
+        )
+    }
+
+    /// The whole counts over every turn, bit errors included. Needs counts.
+    fn turn_counts(&self, theta: &[f64]) -> Vec<i64> {
+        let n = self.counts.expect("called with counts only");
+        let per_radian = f64::from(n) / TAU;
+        let mut k: Vec<i64> = self
+            .readings(theta)
+            .into_iter()
+            .map(|v| (v * per_radian).round() as i64)
+            .collect();
+        if self.bit_error_rate > 0.0 {
+            let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
+            rng.set_stream(self.stream);
+            rng.set_word_pos(BIT_ERROR_WORD);
+            for count in &mut k {
+                if rng.random::<f64>() < self.bit_error_rate {
+                    let bit = Self::BIT_ERROR_BITS[rng.random_range(0..Self::BIT_ERROR_BITS.len())];
+                    let spike = 1i64 << bit;
+                    *count += if rng.random::<bool>() { spike } else { -spike };
+                }
+            }
+        }
+        k
+    }
+
+    /// `θ_n − o + ε_n`: the offset, then the noise.
+    fn readings(&self, theta: &[f64]) -> Vec<f64> {
         let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
         rng.set_stream(self.stream);
+        let offset = self.offset;
         match self.draw {
             NormalDraw::Ziggurat => {
                 let normal = Normal::new(0.0, self.sigma).expect("sigma checked finite and >= 0");
-                theta.iter().map(|&v| v + normal.sample(&mut rng)).collect()
+                theta
+                    .iter()
+                    .map(|&v| (v - offset) + normal.sample(&mut rng))
+                    .collect()
             }
             NormalDraw::BoxMuller => theta
                 .iter()
                 .map(|&v| {
                     let (u1, u2): (f64, f64) = (rng.random_range(f64::EPSILON..1.0), rng.random());
-                    v + self.sigma * (-2.0 * u1.ln()).sqrt() * (TAU * u2).cos()
+                    (v - offset) + self.sigma * (-2.0 * u1.ln()).sqrt() * (TAU * u2).cos()
                 })
                 .collect(),
         }
+    }
+}
+
+/// Samples a data acquisition drops: `count` gaps of `length` consecutive samples each, at
+/// seeded random places.
+///
+/// The gaps are placed uniformly at random among all placements that keep at least one sample
+/// before the first gap, between any two gaps and after the last (so the record keeps its first
+/// and last samples and no two gaps merge): with `M = samples − count · length` kept samples, the
+/// gaps fall after `count` distinct kept samples drawn uniformly from the first `M − 1` (Floyd's
+/// algorithm on ChaCha8 seeded with the seed, stream 0, from word `2^67`, so that the gaps are
+/// independent of an encoder's noise and bit errors from the same seed).
+///
+/// ```
+/// use pendulum_sim::observe::Gaps;
+///
+/// let gaps = Gaps::new(3, 10)?.seeded(5);
+/// let kept = gaps.kept(1000)?;
+/// assert_eq!(kept.iter().filter(|&&k| !k).count(), 30);
+/// assert!(kept[0] && kept[999]);
+/// # Ok::<(), pendulum_sim::SimError>(())
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Gaps {
+    count: usize,
+    length: usize,
+    seed: u64,
+}
+
+impl Gaps {
+    /// `count >= 1` gaps of `length >= 1` samples, seed 0.
+    pub fn new(count: usize, length: usize) -> Result<Self, SimError> {
+        if count == 0 {
+            return Err(SimError::InvalidParameter {
+                name: "number of gaps",
+                value: 0.0,
+                why: "must be at least 1",
+            });
+        }
+        if length == 0 {
+            return Err(SimError::InvalidParameter {
+                name: "gap length",
+                value: 0.0,
+                why: "must be at least 1 sample",
+            });
+        }
+        Ok(Self {
+            count,
+            length,
+            seed: 0,
+        })
+    }
+
+    /// The seed of the places.
+    pub fn seeded(mut self, seed: u64) -> Self {
+        self.seed = seed;
+        self
+    }
+
+    /// Number of gaps.
+    pub fn count(&self) -> usize {
+        self.count
+    }
+    /// Samples per gap.
+    pub fn length(&self) -> usize {
+        self.length
+    }
+    /// The seed.
+    pub fn seed(&self) -> u64 {
+        self.seed
+    }
+
+    /// The fewest samples a record needs for these gaps: `count · (length + 1) + 1`, or `None`
+    /// if that overflows.
+    pub fn min_samples(&self) -> Option<usize> {
+        self.count
+            .checked_mul(self.length.checked_add(1)?)?
+            .checked_add(1)
+    }
+
+    /// The first dropped sample of each gap, in increasing order, for a record of `samples`.
+    ///
+    /// Errors: fewer samples than [`min_samples`](Self::min_samples).
+    pub fn starts(&self, samples: usize) -> Result<Vec<usize>, SimError> {
+        match self.min_samples() {
+            Some(min) if samples >= min => {}
+            _ => {
+                return Err(SimError::InvalidParameter {
+                    name: "samples",
+                    value: samples as f64,
+                    why: "too few for the gaps: need count × (length + 1) + 1",
+                });
+            }
+        }
+        let kept = samples - self.count * self.length;
+        // Floyd: `count` distinct values of 0 .. kept − 1, each the index of the kept sample a gap
+        // follows, minus one.
+        let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
+        rng.set_word_pos(GAPS_WORD);
+        let range = kept - 1;
+        let mut chosen = BTreeSet::new();
+        for j in range - self.count..range {
+            let t = rng.random_range(0..=j);
+            if !chosen.insert(t) {
+                chosen.insert(j);
+            }
+        }
+        Ok(chosen
+            .into_iter()
+            .enumerate()
+            .map(|(i, after)| after + 1 + i * self.length)
+            .collect())
+    }
+
+    /// Which of `samples` samples are kept (`false` inside a gap).
+    ///
+    /// Errors: fewer samples than [`min_samples`](Self::min_samples).
+    pub fn kept(&self, samples: usize) -> Result<Vec<bool>, SimError> {
+        let mut kept = vec![true; samples];
+        for start in self.starts(samples)? {
+            kept[start..start + self.length].fill(false);
+        }
+        Ok(kept)
     }
 }
 
@@ -187,5 +548,256 @@ mod tests {
             assert!((sd - 0.05).abs() < 0.002, "{draw:?}: sd {sd}");
             assert_ne!(n, e.with_stream(1).observe_continuous(&zeros));
         }
+    }
+
+    /// A slowly turning angle over many turns, both signs.
+    fn whirl(n: usize) -> Vec<f64> {
+        (0..n)
+            .map(|i| -40.0 + 0.0137 * i as f64 + 0.3 * (0.01 * i as f64).sin())
+            .collect()
+    }
+
+    #[test]
+    fn encoder_settings_are_checked() {
+        let e = Encoder::seeded(1);
+        assert!(e.with_counts(0).is_err() && e.with_counts(1).is_err());
+        assert_eq!(e.with_counts(2).unwrap().counts(), Some(2));
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            assert!(e.with_zero_offset(bad).is_err());
+        }
+        let counted = e.with_counts(4096).unwrap();
+        for bad in [-0.1, 1.5, f64::NAN, f64::INFINITY] {
+            assert!(counted.with_bit_errors(bad).is_err(), "{bad}");
+        }
+        // Bit errors are errors of the count: none without counts, nor with too few.
+        assert!(e.with_bit_errors(0.01).is_err());
+        assert!(e.with_counts(1000).unwrap().with_bit_errors(0.01).is_err());
+        let flipping = counted.with_bit_errors(0.01).unwrap();
+        assert!(flipping.with_counts(512).is_err());
+        assert_eq!(flipping.with_counts(1024).unwrap().counts(), Some(1024));
+        // A zero rate needs nothing.
+        assert_eq!(e.with_bit_errors(0.0).unwrap().bit_error_rate(), 0.0);
+    }
+
+    /// The reported angle is on the count grid, at most half a count from the true angle.
+    #[test]
+    fn quantisation_error_is_at_most_half_a_count() {
+        let theta = whirl(20_000);
+        for n in [2u32, 360, 4096, 10_000] {
+            let e = Encoder::seeded(0).with_counts(n).unwrap();
+            let q = TAU / f64::from(n);
+            let continuous = e.observe_continuous(&theta);
+            let mut worst: f64 = 0.0;
+            for (c, t) in continuous.iter().zip(&theta) {
+                worst = worst.max((c - t).abs());
+                let k = c / q;
+                assert!((k - k.round()).abs() < 1e-6, "{n}: {c} is not on the grid");
+            }
+            assert!(
+                worst <= 0.5 * q * (1.0 + 1e-9),
+                "{n}: {worst} > half a count {}",
+                0.5 * q
+            );
+            // Finer than half a count is not what a coarse encoder gives: the error uses the count.
+            assert!(worst > 0.4 * q, "{n}: {worst}");
+            let wrapped = e.observe(&theta);
+            let counts = e.observe_counts(&theta).unwrap();
+            for ((w, k), c) in wrapped.iter().zip(&counts).zip(&continuous) {
+                assert!(*k < n);
+                assert!((-std::f64::consts::PI..std::f64::consts::PI).contains(w));
+                assert!(circle_signal::circle_distance(*w, *c) < 1e-9);
+                assert!(circle_signal::circle_distance(*w, q * f64::from(*k)) < 1e-12);
+            }
+        }
+        assert_eq!(Encoder::seeded(0).observe_counts(&theta), None);
+    }
+
+    #[test]
+    fn zero_offset_is_subtracted_before_quantising() {
+        let theta = whirl(5_000);
+        let o = 0.377;
+        let plain = Encoder::seeded(0).with_zero_offset(o).unwrap();
+        let want: Vec<f64> = theta.iter().map(|t| circle_signal::wrap(t - o)).collect();
+        assert_eq!(plain.observe(&theta), want);
+        let n = 4096;
+        let counted = plain.with_counts(n).unwrap();
+        let per_radian = f64::from(n) / TAU;
+        let want: Vec<u32> = theta
+            .iter()
+            .map(|t| (((t - o) * per_radian).round() as i64).rem_euclid(i64::from(n)) as u32)
+            .collect();
+        assert_eq!(counted.observe_counts(&theta).unwrap(), want);
+        // The encoder reads 0 where the angle equals the offset.
+        assert_eq!(counted.observe_counts(&[o, o + TAU]).unwrap(), [0, 0]);
+    }
+
+    #[test]
+    fn ranges_hold_the_same_angle() {
+        let theta = whirl(5_000);
+        for e in [
+            Encoder::seeded(3).with_noise(0.02).unwrap(),
+            Encoder::seeded(3).with_counts(4096).unwrap(),
+        ] {
+            let signed = e.observe(&theta);
+            let positive = e.with_range(AngleRange::Positive).observe(&theta);
+            for (s, p) in signed.iter().zip(&positive) {
+                assert!((-std::f64::consts::PI..std::f64::consts::PI).contains(s));
+                assert!((0.0..TAU).contains(p));
+                let d = p - s;
+                assert!(d.abs() < 1e-12 || (d - TAU).abs() < 1e-12, "{s} {p}");
+            }
+        }
+        assert_eq!(AngleRange::Positive.wrap(-1e-18), 0.0);
+        assert_eq!(AngleRange::Positive.wrap(-TAU), 0.0);
+    }
+
+    /// Samples hit by a bit error, and the spike in counts of each.
+    fn spikes(clean: &[u32], hit: &[u32], n: u32) -> Vec<(usize, i64)> {
+        let n = i64::from(n);
+        clean
+            .iter()
+            .zip(hit)
+            .enumerate()
+            .filter(|(_, (a, b))| a != b)
+            .map(|(i, (&a, &b))| {
+                let d = (i64::from(b) - i64::from(a)).rem_euclid(n);
+                (i, if 2 * d > n { d - n } else { d })
+            })
+            .collect()
+    }
+
+    #[test]
+    fn bit_errors_have_the_rate_and_the_sizes_documented() {
+        let theta = whirl(100_000);
+        let n = 4096;
+        let rate = 0.01;
+        let clean = Encoder::seeded(21)
+            .with_noise(0.01)
+            .unwrap()
+            .with_counts(n)
+            .unwrap();
+        let flipping = clean.with_bit_errors(rate).unwrap();
+        let hits = spikes(
+            &clean.observe_counts(&theta).unwrap(),
+            &flipping.observe_counts(&theta).unwrap(),
+            n,
+        );
+        // Binomial(100000, 0.01): mean 1000, standard deviation 31.5; 5 standard deviations.
+        let samples = theta.len() as f64;
+        let (mean, sd) = (samples * rate, (samples * rate * (1.0 - rate)).sqrt());
+        assert!(
+            (hits.len() as f64 - mean).abs() < 5.0 * sd,
+            "{} hits, expected {mean} ± {sd}",
+            hits.len()
+        );
+        let sizes: Vec<i64> = Encoder::BIT_ERROR_BITS.iter().map(|b| 1i64 << b).collect();
+        for &(i, d) in &hits {
+            assert!(sizes.contains(&d.abs()), "sample {i}: spike of {d} counts");
+        }
+        // Each size and each sign about equally often (a quarter and a half of the hits).
+        for size in &sizes {
+            let k = hits.iter().filter(|(_, d)| d.abs() == *size).count() as f64;
+            let p = 0.25;
+            let sd = (hits.len() as f64 * p * (1.0 - p)).sqrt();
+            assert!((k - p * hits.len() as f64).abs() < 5.0 * sd, "size {size}: {k}");
+        }
+        let up = hits.iter().filter(|(_, d)| *d > 0).count() as f64;
+        let sd = (hits.len() as f64 * 0.25).sqrt();
+        assert!((up - 0.5 * hits.len() as f64).abs() < 5.0 * sd, "{up} up");
+        // The same seed gives the same errors; another seed or stream others; a shorter record
+        // the first ones.
+        assert_eq!(flipping.observe(&theta), flipping.observe(&theta));
+        let other = Encoder::seeded(22)
+            .with_noise(0.01)
+            .unwrap()
+            .with_counts(n)
+            .unwrap();
+        let other_hits = spikes(
+            &other.observe_counts(&theta).unwrap(),
+            &other
+                .with_bit_errors(rate)
+                .unwrap()
+                .observe_counts(&theta)
+                .unwrap(),
+            n,
+        );
+        assert_ne!(hits, other_hits);
+        let streamed = clean.with_stream(4);
+        let stream_hits = spikes(
+            &streamed.observe_counts(&theta).unwrap(),
+            &streamed
+                .with_bit_errors(rate)
+                .unwrap()
+                .observe_counts(&theta)
+                .unwrap(),
+            n,
+        );
+        assert_ne!(hits, stream_hits);
+        let short = spikes(
+            &clean.observe_counts(&theta[..30_000]).unwrap(),
+            &flipping.observe_counts(&theta[..30_000]).unwrap(),
+            n,
+        );
+        let first: Vec<(usize, i64)> = hits.iter().copied().filter(|(i, _)| *i < 30_000).collect();
+        assert_eq!(short, first);
+    }
+
+    /// Counts, offsets and bit errors leave the noise as it was: the existing records stay.
+    #[test]
+    fn encoder_effects_keep_the_noise() {
+        let theta = whirl(3_000);
+        let noisy = Encoder::seeded(9).with_noise(0.03).unwrap();
+        let reference = noisy.observe_continuous(&theta);
+        let shifted = noisy.with_zero_offset(0.2).unwrap().observe_continuous(&theta);
+        for (a, b) in reference.iter().zip(&shifted) {
+            assert!((a - 0.2 - b).abs() < 1e-12);
+        }
+        let n = 1 << 16;
+        let fine = noisy.with_counts(n).unwrap().with_bit_errors(0.0).unwrap();
+        let q = TAU / f64::from(n);
+        for (a, b) in reference.iter().zip(fine.observe_continuous(&theta)) {
+            assert!((a - b).abs() <= 0.5 * q * (1.0 + 1e-9));
+        }
+    }
+
+    #[test]
+    fn gaps_are_where_documented() {
+        assert!(Gaps::new(0, 5).is_err() && Gaps::new(2, 0).is_err());
+        let g = Gaps::new(4, 25).unwrap().seeded(3);
+        assert_eq!(g.min_samples(), Some(105));
+        assert!(g.kept(104).is_err());
+        assert_eq!(Gaps::new(usize::MAX, 2).unwrap().min_samples(), None);
+        assert!(Gaps::new(usize::MAX, 2).unwrap().kept(10).is_err());
+        for samples in [105, 106, 1_000, 50_000] {
+            let kept = g.kept(samples).unwrap();
+            assert_eq!(kept.len(), samples);
+            assert_eq!(kept.iter().filter(|&&k| !k).count(), 100);
+            assert!(kept[0] && kept[samples - 1]);
+            // Four separate runs of exactly 25 dropped samples.
+            let starts = g.starts(samples).unwrap();
+            assert_eq!(starts.len(), 4);
+            for w in starts.windows(2) {
+                assert!(w[1] > w[0] + 25, "{starts:?}");
+            }
+            for &s in &starts {
+                assert!(kept[s - 1] && kept[s + 25] && kept[s..s + 25].iter().all(|k| !k));
+            }
+            assert_eq!(g.kept(samples).unwrap(), kept);
+        }
+        // At the fewest samples there is one placement only.
+        let tight = Gaps::new(3, 2).unwrap().seeded(77).kept(10).unwrap();
+        let t = true;
+        let f = false;
+        assert_eq!(tight, [t, f, f, t, f, f, t, f, f, t]);
+        assert_ne!(g.starts(50_000).unwrap(), g.seeded(4).starts(50_000).unwrap());
+        // One gap: its start is uniform over 1 ..= 989 (mean 495, sd 285.5) across seeds.
+        let one = Gaps::new(1, 10).unwrap();
+        let seeds = 400;
+        let mean = (0..seeds)
+            .map(|s| one.seeded(s).starts(1_000).unwrap()[0] as f64)
+            .sum::<f64>()
+            / seeds as f64;
+        let sd = 285.5 / (seeds as f64).sqrt();
+        assert!((mean - 495.0).abs() < 5.0 * sd, "mean start {mean}");
     }
 }

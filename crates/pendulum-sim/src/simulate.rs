@@ -40,12 +40,18 @@ impl<S: SecondOrderSystem> OdeSystem<4> for Tangent<S> {
 /// integration starts at `t = 0` from the initial state. So with `phase = 0` the first sample is at
 /// `t = transient_periods · T`, at the forcing's phase zero.
 ///
+/// With a sample step `h` instead ([`with_sample_step`](Self::with_sample_step)), any ratio `T / h`,
+/// whole or not (a 1.02 Hz drive sampled at 500 Hz), sample `n = 0 .. samples` is at
+/// `t_n = t_0 + n · h` with `t_0 = phase · T + transient_periods · T`, again by multiplication.
+///
 /// Deserialising validates every field as the `with_*` setters do.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(try_from = "SimulationConfigRaw", into = "SimulationConfigRaw")]
 pub struct SimulationConfig {
     samples: usize,
     samples_per_period: usize,
+    /// A sample step that overrides `T / P`, for any ratio of forcing period to step.
+    sample_step: Option<f64>,
     transient_periods: usize,
     initial: [f64; 2],
     forcing_period: f64,
@@ -53,11 +59,13 @@ pub struct SimulationConfig {
     tolerances: Tolerances,
 }
 
-/// The serialised form of [`SimulationConfig`].
+/// The serialised form of [`SimulationConfig`] (`sample_step` absent or `null` for the whole grid).
 #[derive(serde::Serialize, serde::Deserialize)]
 struct SimulationConfigRaw {
     samples: usize,
     samples_per_period: usize,
+    #[serde(default)]
+    sample_step: Option<f64>,
     transient_periods: usize,
     initial: [f64; 2],
     forcing_period: f64,
@@ -68,14 +76,18 @@ struct SimulationConfigRaw {
 impl TryFrom<SimulationConfigRaw> for SimulationConfig {
     type Error = SimError;
     fn try_from(raw: SimulationConfigRaw) -> Result<Self, SimError> {
-        Ok(Self::paper()
+        let config = Self::paper()
             .with_samples(raw.samples)?
             .with_samples_per_period(raw.samples_per_period)?
             .with_transient_periods(raw.transient_periods)
             .with_initial(raw.initial[0], raw.initial[1])?
             .with_forcing_period(raw.forcing_period)?
             .with_phase(raw.phase)?
-            .with_tolerances(raw.tolerances))
+            .with_tolerances(raw.tolerances);
+        match raw.sample_step {
+            Some(h) => config.with_sample_step(h),
+            None => Ok(config),
+        }
     }
 }
 
@@ -84,6 +96,7 @@ impl From<SimulationConfig> for SimulationConfigRaw {
         Self {
             samples: c.samples,
             samples_per_period: c.samples_per_period,
+            sample_step: c.sample_step,
             transient_periods: c.transient_periods,
             initial: c.initial,
             forcing_period: c.forcing_period,
@@ -119,6 +132,7 @@ impl SimulationConfig {
         Self {
             samples: 30_000,
             samples_per_period: 25,
+            sample_step: None,
             transient_periods: 200,
             initial: [0.1, 0.0],
             forcing_period: TAU,
@@ -136,12 +150,39 @@ impl SimulationConfig {
         Ok(self)
     }
 
-    /// Samples per forcing period `P` (`>= 1`).
+    /// Samples per forcing period `P` (`>= 1`): the sample step is `T / P` (this replaces a step
+    /// set by [`with_sample_step`](Self::with_sample_step)).
     pub fn with_samples_per_period(mut self, p: usize) -> Result<Self, SimError> {
         if p == 0 {
             return Err(invalid("samples per period", 0.0, "must be at least 1"));
         }
         self.samples_per_period = p;
+        self.sample_step = None;
+        Ok(self)
+    }
+
+    /// Samples every `h` (positive and finite, in the system's time unit), whatever the ratio of
+    /// the forcing period to `h`: sample `n` is at `t_0 + n · h`, `t_0 = (phase + transient
+    /// periods) · T`. Replaces the whole grid `T / P` until
+    /// [`with_samples_per_period`](Self::with_samples_per_period) is called again.
+    ///
+    /// ```
+    /// use pendulum_sim::{simulate, Pendulum, SimulationConfig};
+    /// // 2π / 0.3 = 20.94... samples per forcing period.
+    /// let cfg = SimulationConfig::paper()
+    ///     .with_sample_step(0.3)?
+    ///     .with_transient_periods(1)
+    ///     .with_samples(50)?;
+    /// let traj = simulate(&Pendulum::paper(), &cfg)?;
+    /// assert_eq!(traj.t[10], std::f64::consts::TAU + 10.0 * 0.3);
+    /// assert_eq!(cfg.whole_samples_per_period(), None);
+    /// # Ok::<(), pendulum_sim::SimError>(())
+    /// ```
+    pub fn with_sample_step(mut self, h: f64) -> Result<Self, SimError> {
+        if !(h.is_finite() && h > 0.0) {
+            return Err(invalid("sample step", h, "must be positive and finite"));
+        }
+        self.sample_step = Some(h);
         Ok(self)
     }
 
@@ -188,9 +229,18 @@ impl SimulationConfig {
     pub fn samples(&self) -> usize {
         self.samples
     }
-    /// Samples per forcing period.
+    /// Samples per forcing period `P` of the whole grid (not used while a sample step is set).
     pub fn samples_per_period(&self) -> usize {
         self.samples_per_period
+    }
+    /// `Some(P)` when samples are taken on the whole grid `T / P`, `None` when a sample step is
+    /// set.
+    pub fn whole_samples_per_period(&self) -> Option<usize> {
+        self.sample_step.is_none().then_some(self.samples_per_period)
+    }
+    /// Phase of the sampling grid as a fraction of the forcing period.
+    pub fn phase(&self) -> f64 {
+        self.phase
     }
     /// Transient periods dropped.
     pub fn transient_periods(&self) -> usize {
@@ -208,11 +258,30 @@ impl SimulationConfig {
     pub fn tolerances(&self) -> Tolerances {
         self.tolerances
     }
-    /// Sampling step `T / P`.
+    /// Sampling step: the step set by [`with_sample_step`](Self::with_sample_step), or `T / P`.
     pub fn sample_step(&self) -> f64 {
-        self.forcing_period / self.samples_per_period as f64
+        match self.sample_step {
+            Some(h) => h,
+            None => self.forcing_period / self.samples_per_period as f64,
+        }
     }
-    /// Time of sample `n` counted from the start of the integration (the transient included).
+    /// Time of the kept sample `n` (`n = 0` is the first sample after the transient), computed
+    /// by one multiplication from the start of the integration at `t = 0`.
+    pub fn sample_time(&self, n: usize) -> f64 {
+        match self.sample_step {
+            Some(h) => self.first_sample_time() + n as f64 * h,
+            None => self.grid_time(self.transient_periods * self.samples_per_period + n),
+        }
+    }
+    /// Time of the first kept sample.
+    fn first_sample_time(&self) -> f64 {
+        match self.sample_step {
+            Some(_) => (self.phase + self.transient_periods as f64) * self.forcing_period,
+            None => self.grid_time(self.transient_periods * self.samples_per_period),
+        }
+    }
+    /// Time of sample `n` of the whole grid counted from the start of the integration (the
+    /// transient included).
     fn grid_time(&self, n: usize) -> f64 {
         self.phase * self.forcing_period + n as f64 * self.forcing_period / self.samples_per_period as f64
     }
@@ -271,15 +340,14 @@ pub fn simulate_with_progress<S: SecondOrderSystem>(
         omega: Vec::with_capacity(config.samples),
     };
     let mut ode = Dop853::new(FirstOrder(system), 0.0, config.initial, config.tolerances)?;
-    let n0 = config.transient_periods * config.samples_per_period;
-    let t_first = config.grid_time(n0);
+    let t_first = config.first_sample_time();
     let report_every = (config.samples / 100).max(1);
     progress(0, config.samples);
     // No stop at the end of the transient: the step sequence then depends only on the end time,
     // so runs that differ only in their output grid follow the same numerical trajectory.
     ode.sample_grid(t_first, config.sample_step(), config.samples, |n, _, y| {
         // Absolute grid time computed from the absolute index: no drift over long records.
-        traj.t.push(config.grid_time(n0 + n));
+        traj.t.push(config.sample_time(n));
         traj.theta.push(y[0]);
         traj.omega.push(y[1]);
         if (n + 1) % report_every == 0 {
@@ -291,7 +359,7 @@ pub fn simulate_with_progress<S: SecondOrderSystem>(
 }
 
 /// The stroboscopic (Poincaré) section: the state once per forcing period, at the phase of
-/// `config` (the samples-per-period setting is ignored). Returns `(x, x')` pairs with `x` as
+/// `config` (the samples-per-period and sample-step settings are ignored). Returns `(x, x')` pairs with `x` as
 /// integrated (continuous); wrap it for display on the circle.
 pub fn poincare_section<S: SecondOrderSystem>(
     system: &S,
@@ -299,6 +367,7 @@ pub fn poincare_section<S: SecondOrderSystem>(
 ) -> Result<Vec<[f64; 2]>, SimError> {
     let strobe = SimulationConfig {
         samples_per_period: 1,
+        sample_step: None,
         ..config.clone()
     };
     let traj = simulate(system, &strobe)?;
@@ -483,4 +552,209 @@ pub fn largest_lyapunov<S: SecondOrderSystem>(
         time,
         standard_error,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{Duffing, Pendulum};
+
+    /// The classic fourth-order Runge–Kutta method with a fixed step, from `(0, y0)` to each of
+    /// `times` (increasing), landing exactly on each: an integrator independent of DOP853.
+    fn rk4<S: SecondOrderSystem>(system: &S, y0: [f64; 2], times: &[f64], max_step: f64) -> Vec<[f64; 2]> {
+        let f = |t: f64, y: [f64; 2]| [y[1], system.acceleration(t, y[0], y[1])];
+        let mut t = 0.0;
+        let mut y = y0;
+        let mut out = Vec::with_capacity(times.len());
+        for &target in times {
+            let steps = ((target - t) / max_step).ceil().max(1.0) as usize;
+            let dt = (target - t) / steps as f64;
+            for i in 0..steps {
+                let ti = t + i as f64 * dt;
+                let k1 = f(ti, y);
+                let k2 = f(ti + 0.5 * dt, [y[0] + 0.5 * dt * k1[0], y[1] + 0.5 * dt * k1[1]]);
+                let k3 = f(ti + 0.5 * dt, [y[0] + 0.5 * dt * k2[0], y[1] + 0.5 * dt * k2[1]]);
+                let k4 = f(ti + dt, [y[0] + dt * k3[0], y[1] + dt * k3[1]]);
+                for j in 0..2 {
+                    y[j] += dt / 6.0 * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j]);
+                }
+            }
+            t = target;
+            out.push(y);
+        }
+        out
+    }
+
+    #[test]
+    fn sample_step_is_checked_and_replaced_by_a_whole_grid() {
+        let c = SimulationConfig::paper();
+        for bad in [0.0, -0.1, f64::NAN, f64::INFINITY] {
+            assert!(c.clone().with_sample_step(bad).is_err(), "{bad}");
+        }
+        let stepped = c.clone().with_sample_step(0.3).unwrap();
+        assert_eq!(stepped.sample_step(), 0.3);
+        assert_eq!(stepped.whole_samples_per_period(), None);
+        let whole = stepped.with_samples_per_period(25).unwrap();
+        assert_eq!(whole.whole_samples_per_period(), Some(25));
+        assert_eq!(whole, SimulationConfig::paper());
+    }
+
+    /// A step of 2T/25 (12.5 samples per period, not whole) samples every other point of the
+    /// 25-per-period grid: the same values there.
+    #[test]
+    fn a_non_whole_grid_agrees_with_the_whole_grid_where_they_meet() {
+        let tol = Tolerances::relative(1e-12).unwrap();
+        let base = SimulationConfig::paper()
+            .with_transient_periods(20)
+            .with_phase(0.3)
+            .unwrap()
+            .with_tolerances(tol);
+        let n = 1500;
+        let whole = simulate(&Pendulum::paper(), &base.clone().with_samples(2 * n - 1).unwrap()).unwrap();
+        let stepped_config = base
+            .with_sample_step(2.0 * TAU / 25.0)
+            .unwrap()
+            .with_samples(n)
+            .unwrap();
+        let stepped = simulate(&Pendulum::paper(), &stepped_config).unwrap();
+        assert_eq!(stepped.len(), n);
+        let mut worst: f64 = 0.0;
+        for i in 0..n {
+            let t = stepped.t[i];
+            assert!((t - whole.t[2 * i]).abs() <= 1e-13 * t, "time of sample {i}");
+            assert_eq!(t, stepped_config.sample_time(i));
+            assert_eq!(t, (0.3 + 20.0) * TAU + i as f64 * (2.0 * TAU / 25.0));
+            worst = worst
+                .max((stepped.theta[i] - whole.theta[2 * i]).abs())
+                .max((stepped.omega[i] - whole.omega[2 * i]).abs());
+        }
+        // One integration, interpolated at times that differ by rounding only.
+        assert!(worst < 1e-11, "largest difference {worst:e}");
+    }
+
+    /// Samples on a non-whole grid (2π / 0.3 = 20.94 per period) are the solution at their times,
+    /// as an independent fixed-step RK4 integration gives it.
+    #[test]
+    fn a_non_whole_grid_is_the_solution_at_its_times() {
+        let h = 0.3;
+        let config = SimulationConfig::paper()
+            .with_sample_step(h)
+            .unwrap()
+            .with_transient_periods(1)
+            .with_phase(0.1)
+            .unwrap()
+            .with_samples(80)
+            .unwrap()
+            .with_initial(0.4, -0.2)
+            .unwrap()
+            .with_tolerances(Tolerances::relative(1e-12).unwrap());
+        for system in [&Pendulum::paper() as &dyn SecondOrderSystem, &Duffing::two_well()] {
+            let traj = simulate(&system, &config).unwrap();
+            let fine = rk4(&system, [0.4, -0.2], &traj.t, 2e-4);
+            let coarse = rk4(&system, [0.4, -0.2], &traj.t, 4e-4);
+            let mut worst: f64 = 0.0;
+            let mut rk4_error: f64 = 0.0;
+            for (i, (a, b)) in fine.iter().zip(&coarse).enumerate() {
+                worst = worst
+                    .max((traj.theta[i] - a[0]).abs())
+                    .max((traj.omega[i] - a[1]).abs());
+                rk4_error = rk4_error.max((a[0] - b[0]).abs()).max((a[1] - b[1]).abs());
+            }
+            // RK4's own error at the finer step is about 1/15 of the two steps' difference.
+            assert!(rk4_error < 1e-9, "RK4 is not a reference here: {rk4_error:e}");
+            assert!(worst < 1e-8, "largest difference from RK4 {worst:e}");
+        }
+    }
+
+    /// The poincaré section ignores the sample step.
+    #[test]
+    fn poincare_section_ignores_the_sample_step() {
+        let c = SimulationConfig::paper()
+            .with_samples(10)
+            .unwrap()
+            .with_transient_periods(3);
+        let a = poincare_section(&Pendulum::paper(), &c).unwrap();
+        let b = poincare_section(&Pendulum::paper(), &c.with_sample_step(0.123).unwrap()).unwrap();
+        assert_eq!(a, b);
+    }
+
+    /// Along a solution of the Duffing oscillator the energy changes by the work of damping and
+    /// drive: `E(t) − E(t_0) = ∫ (−c v² + f cos(s) v) ds` (Simpson's rule on the samples).
+    #[test]
+    fn duffing_energy_balance() {
+        let d = Duffing::two_well();
+        let h = 0.01;
+        let config = SimulationConfig::paper()
+            .with_sample_step(h)
+            .unwrap()
+            .with_transient_periods(0)
+            .with_samples(20_001)
+            .unwrap()
+            .with_tolerances(Tolerances::relative(1e-12).unwrap());
+        let traj = simulate(&d, &config).unwrap();
+        let power: Vec<f64> = traj
+            .t
+            .iter()
+            .zip(&traj.omega)
+            .map(|(&t, &v)| -d.c() * v * v + d.f() * t.cos() * v)
+            .collect();
+        let mut worst: f64 = 0.0;
+        let mut work = 0.0;
+        let e0 = d.energy(traj.theta[0], traj.omega[0]);
+        for k in (2..traj.len()).step_by(2) {
+            work += h / 3.0 * (power[k - 2] + 4.0 * power[k - 1] + power[k]);
+            let de = d.energy(traj.theta[k], traj.omega[k]) - e0;
+            worst = worst.max((de - work).abs());
+        }
+        assert!(worst < 1e-7, "energy balance off by {worst:e}");
+        // A wrong sign of the drive breaks the balance by far more.
+        let wrong: f64 = (2..traj.len())
+            .step_by(2)
+            .map(|k| {
+                h / 3.0
+                    * [k - 2, k - 1, k]
+                        .iter()
+                        .zip([1.0, 4.0, 1.0])
+                        .map(|(&i, w)| w * 2.0 * d.f() * traj.t[i].cos() * traj.omega[i])
+                        .sum::<f64>()
+            })
+            .map(f64::abs)
+            .sum();
+        assert!(wrong > 1e3 * worst);
+    }
+
+    /// The two-well set is chaotic and crosses between the wells: a positive largest Lyapunov
+    /// exponent, and many irregular crossings of `x = 0` that visit both wells.
+    #[test]
+    fn two_well_duffing_is_chaotic_and_crosses_wells() {
+        let d = Duffing::two_well();
+        let lyap = largest_lyapunov(
+            &d,
+            &LyapunovConfig::default().with_periods(1000).unwrap(),
+            |_, _| {},
+        )
+        .unwrap();
+        assert!(
+            lyap.per_unit_time > 5.0 * lyap.standard_error && lyap.per_unit_time > 0.05,
+            "{lyap:?}"
+        );
+        let section = poincare_section(
+            &d,
+            &SimulationConfig::paper()
+                .with_samples(1000)
+                .unwrap()
+                .with_transient_periods(100),
+        )
+        .unwrap();
+        let left = section.iter().filter(|p| p[0] < 0.0).count();
+        assert!(
+            (200..800).contains(&left),
+            "{left} of 1000 section points in the left well"
+        );
+        let switches = section
+            .windows(2)
+            .filter(|w| (w[0][0] < 0.0) != (w[1][0] < 0.0))
+            .count();
+        assert!(switches > 100, "{switches} well changes in 1000 periods");
+    }
 }

@@ -137,6 +137,117 @@ impl SecondOrderSystem for Pendulum {
     }
 }
 
+/// The two-well Duffing oscillator in non-dimensional time (drive period `2π`):
+///
+/// `x'' + c x' + a x + b x³ = f cos(t)`.
+///
+/// With `a < 0 < b` the potential `a x²/2 + b x⁴/4` has two wells at `x = ±√(−a/b)` and a hump at
+/// `x = 0`; [`Duffing::TWO_WELL`] (`c = 0.25`, `a = −1`, `b = 1`, `f = 0.3`, Guckenheimer & Holmes,
+/// *Nonlinear Oscillations*, section 2.2, after Moon & Holmes' buckled beam) moves chaotically
+/// between them. The drive stands on the right-hand side: in the identification's form
+/// `x'' + Σ c_i g_i = 0` its term `cos(t)` has the coefficient `−f`.
+///
+/// Construct with [`Duffing::new`] (validated) or [`Duffing::two_well`]. Serialised as `c`, `a`,
+/// `b` and `f`; deserialising validates them as [`Duffing::new`] does.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "DuffingRaw", into = "DuffingRaw")]
+pub struct Duffing {
+    c: f64,
+    a: f64,
+    b: f64,
+    f: f64,
+}
+
+/// The serialised form of [`Duffing`].
+#[derive(Serialize, Deserialize)]
+struct DuffingRaw {
+    c: f64,
+    a: f64,
+    b: f64,
+    f: f64,
+}
+
+impl TryFrom<DuffingRaw> for Duffing {
+    type Error = SimError;
+    fn try_from(raw: DuffingRaw) -> Result<Self, SimError> {
+        Self::new(raw.c, raw.a, raw.b, raw.f)
+    }
+}
+
+impl From<Duffing> for DuffingRaw {
+    fn from(d: Duffing) -> Self {
+        Self {
+            c: d.c,
+            a: d.a,
+            b: d.b,
+            f: d.f,
+        }
+    }
+}
+
+impl Duffing {
+    /// The classic chaotic two-well set `(c, a, b, f) = (0.25, −1, 1, 0.3)`.
+    pub const TWO_WELL: (f64, f64, f64, f64) = (0.25, -1.0, 1.0, 0.3);
+
+    /// `x'' + c x' + a x + b x³ = f cos(t)`, the parameters in the order of the equation.
+    ///
+    /// Every parameter must be finite; either sign is accepted (`a < 0 < b` gives two wells, `b < 0`
+    /// a softening spring whose solutions may escape to infinity, which the integrator reports).
+    pub fn new(c: f64, a: f64, b: f64, f: f64) -> Result<Self, SimError> {
+        for (name, value) in [("c", c), ("a", a), ("b", b), ("f", f)] {
+            if !value.is_finite() {
+                return Err(SimError::InvalidParameter {
+                    name,
+                    value,
+                    why: "must be finite",
+                });
+            }
+        }
+        Ok(Self { c, a, b, f })
+    }
+
+    /// The chaotic two-well oscillator [`Duffing::TWO_WELL`].
+    pub fn two_well() -> Self {
+        let (c, a, b, f) = Self::TWO_WELL;
+        Self { c, a, b, f }
+    }
+
+    /// Damping `c`.
+    pub fn c(&self) -> f64 {
+        self.c
+    }
+    /// Linear stiffness `a` (negative for two wells).
+    pub fn a(&self) -> f64 {
+        self.a
+    }
+    /// Cubic stiffness `b`.
+    pub fn b(&self) -> f64 {
+        self.b
+    }
+    /// Drive amplitude `f`.
+    pub fn f(&self) -> f64 {
+        self.f
+    }
+
+    /// The energy `E = v²/2 + a x²/2 + b x⁴/4` of the undamped, undriven oscillator; along a
+    /// solution `dE/dt = −c v² + f cos(t) v`.
+    pub fn energy(&self, x: f64, v: f64) -> f64 {
+        0.5 * v * v + 0.5 * self.a * x * x + 0.25 * self.b * x.powi(4)
+    }
+}
+
+impl SecondOrderSystem for Duffing {
+    #[inline]
+    fn acceleration(&self, t: f64, x: f64, v: f64) -> f64 {
+        self.f * t.cos() - self.c * v - self.a * x - self.b * x * x * x
+    }
+
+    #[inline]
+    fn jacobian(&self, _t: f64, x: f64, _v: f64) -> [f64; 2] {
+        [-self.a - 3.0 * self.b * x * x, -self.c]
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -158,5 +269,34 @@ mod tests {
         let dv = (p.acceleration(t, x, v + e) - p.acceleration(t, x, v - e)) / (2.0 * e);
         let [jx, jv] = p.jacobian(t, x, v);
         assert!((jx - dx).abs() < 1e-8 && (jv - dv).abs() < 1e-8);
+    }
+
+    #[test]
+    fn duffing_rejects_bad_parameters_and_has_the_right_jacobian() {
+        assert!(Duffing::new(f64::NAN, -1.0, 1.0, 0.3).is_err());
+        assert!(Duffing::new(0.25, f64::INFINITY, 1.0, 0.3).is_err());
+        assert!(Duffing::new(0.25, -1.0, f64::NEG_INFINITY, 0.3).is_err());
+        assert!(Duffing::new(0.25, -1.0, 1.0, f64::NAN).is_err());
+        assert_eq!(Duffing::new(0.25, -1.0, 1.0, 0.3).unwrap(), Duffing::two_well());
+        let d = Duffing::new(0.15, -1.3, 0.7, 0.4).unwrap();
+        let (t, x, v) = (0.7, 1.3, -0.4);
+        let e = 1e-6;
+        let dx = (d.acceleration(t, x + e, v) - d.acceleration(t, x - e, v)) / (2.0 * e);
+        let dv = (d.acceleration(t, x, v + e) - d.acceleration(t, x, v - e)) / (2.0 * e);
+        let [jx, jv] = d.jacobian(t, x, v);
+        assert!(
+            (jx - dx).abs() < 1e-8 && (jv - dv).abs() < 1e-8,
+            "{jx} {dx} {jv} {dv}"
+        );
+        // The drive is +f cos(t) on the right-hand side: at rest at the origin the acceleration is
+        // the drive itself.
+        assert_eq!(d.acceleration(0.0, 0.0, 0.0), 0.4);
+    }
+
+    #[test]
+    fn duffing_serde_round_trips() {
+        let d = Duffing::two_well();
+        let json = serde_json::to_string(&d).unwrap();
+        assert_eq!(serde_json::from_str::<Duffing>(&json).unwrap(), d);
     }
 }

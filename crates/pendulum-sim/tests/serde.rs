@@ -1,7 +1,7 @@
 //! Deserialising a validated type runs its validation: an invalid value is rejected, a valid one
 //! round-trips.
 use pendulum_sim::{
-    CheckConfig, Domain, LyapunovConfig, Pendulum, ShootingConfig, SimulationConfig, Tolerances,
+    CheckConfig, Domain, Duffing, LyapunovConfig, Pendulum, ShootingConfig, SimulationConfig, Tolerances,
 };
 use serde::Serialize;
 use serde::de::DeserializeOwned;
@@ -79,6 +79,25 @@ fn simulation_config() {
     rejects(&c, &["forcing_period"], json!(-1.0), "invalid forcing period");
     rejects(&c, &["phase"], json!(1.0), "invalid phase");
     rejects(&c, &["tolerances", "rtol"], json!(2.0), "invalid rtol");
+    // A non-whole sample step round-trips and is checked; a config without the field (written
+    // before steps existed) reads as the whole grid.
+    let stepped = c.clone().with_sample_step(0.002).unwrap();
+    round_trips(&stepped);
+    rejects(&stepped, &["sample_step"], json!(-0.002), "invalid sample step");
+    rejects(&stepped, &["sample_step"], json!(0.0), "invalid sample step");
+    let mut old = serde_json::to_value(&c).unwrap();
+    old.as_object_mut().unwrap().remove("sample_step");
+    assert_eq!(serde_json::from_value::<SimulationConfig>(old).unwrap(), c);
+}
+
+#[test]
+fn duffing() {
+    let d = Duffing::new(0.15, -1.0, 1.0, 0.3).unwrap();
+    round_trips(&d);
+    assert_eq!(
+        serde_json::to_value(d).unwrap(),
+        json!({"c": 0.15, "a": -1.0, "b": 1.0, "f": 0.3})
+    );
 }
 
 #[test]
