@@ -161,7 +161,7 @@ pub struct SimulateArgs {
     /// Print the time stamps with N decimals (as a data acquisition does).
     #[arg(long, value_name = "N", help_heading = OUTPUT)]
     time_decimals: Option<usize>,
-    /// Print the angle (or displacement) and velocity with N decimals.
+    /// Print the angle (or displacement) and velocity with N decimals (counts stay whole).
     #[arg(long, value_name = "N", help_heading = OUTPUT)]
     decimals: Option<usize>,
     /// Also write the true equation as JSON: its coefficients in the identification's form and
