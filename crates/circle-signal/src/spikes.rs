@@ -71,8 +71,9 @@ impl SpikeParams {
     /// on the line).
     pub const DEFAULT_FLOOR_FRACTION: f64 = 1e-6;
 
-    /// Shortest record the test takes: the one-sided predictions of the first three samples are
-    /// told apart by the residuals of samples 3 and 4, which need samples 0 to 6.
+    /// Shortest record the test takes: a spike among the first five samples (which the
+    /// one-sided predictions of samples 0 and 1 both hold) is located by the residuals up to
+    /// sample 6.
     pub const MIN_SAMPLES: usize = 7;
 
     /// The defaults: threshold [`DEFAULT_THRESHOLD`](Self::DEFAULT_THRESHOLD), floor a
@@ -362,7 +363,8 @@ impl<'a> IntoIterator for &'a Spikes {
 /// first sample `i` that exceeds, the spike is one of the samples `i`'s prediction spans (`i − 2
 /// ..= i + 2` inside, `0 ..= 4` at the start). Each of those that exceeds is replaced in turn by
 /// its prediction, and the one whose replacement leaves the smallest sum of `(|r_m| / g_m)²` over
-/// the samples within two of that span is flagged: the spike itself, whose removal clears every
+/// the samples within two of that span (and the first or last two samples, whose predictions
+/// reach four samples in) is flagged: the spike itself, whose removal clears every
 /// neighbour's residual, also where the smooth motion's residual is a sizeable part of the spike
 /// (a plain "largest residual" rule picks a neighbour there, whose residual is `2/3` of the
 /// spike's plus the motion's). The flagged sample is replaced by its prediction at once, the sweep
