@@ -165,7 +165,8 @@ fn write_report(args: &ReportArgs, data: &Data, outcome: &Outcome) -> anyhow::Re
         data.clock.forcing_period()
     )?;
     if let Some(note) = super::identify::drive_note(data) {
-        for line in note.lines() {
+        // The summary above already says whether the record was resampled.
+        for line in note.lines().filter(|l| !l.contains("resampled")) {
             writeln!(r, "{}\n", line.trim_start_matches("note: "))?;
         }
     }
