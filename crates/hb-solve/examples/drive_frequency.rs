@@ -260,6 +260,20 @@ fn costs() -> Result<(), Box<dyn Error>> {
                 Err(e) => println!("| {label} | {name} | error: {e} | | |"),
             }
         }
+        let noisy = Encoder::seeded(11).with_noise(0.01)?.observe(&theta);
+        for (name, search) in [
+            ("σ = 0.01 rad, defaults", base().build()?),
+            ("σ = 0.01 rad, growth 2", base().growth(2).build()?),
+            ("σ = 0.01 rad, 1 survivor", base().survivors(1).build()?),
+        ] {
+            let (found, seconds) = estimate_with(&noisy, step, t0, &search)?;
+            println!(
+                "| {label} | {name} | {:+.2e} ± {:.1e} | {} | {seconds:.3} |",
+                found.period / period - 1.0,
+                found.relative_uncertainty(),
+                found.evaluations
+            );
+        }
         let clock = SampleClock::from_step(period * 1.0123, step)?;
         let start = Instant::now();
         let resampled = resample_to_whole(&x, &clock, Domain::Circle)?;

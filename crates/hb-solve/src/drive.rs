@@ -767,7 +767,7 @@ pub fn estimate_forcing_period<B: Basis + ?Sized>(
     check_form(domain, &form)?;
     check_finite(x)?;
     let k = search.window_periods;
-    // At least this many windows of the longest candidate in the record.
+    // At least this many periods of the longest candidate in the record.
     let min_periods = k + 3;
     let duration = x.len().saturating_sub(1) as f64 * step;
     let (min_period, max_period) = (MIN_SAMPLES_PER_PERIOD * step, duration / min_periods as f64);
@@ -872,15 +872,11 @@ pub fn estimate_forcing_period<B: Basis + ?Sized>(
     let bounds = (TAU / range.longest, TAU / range.shortest);
     let mut stretch = n0;
     loop {
-        for s in &mut live {
+        for s in live.iter_mut().filter(|s| !s.whole) {
             let whole = stretch * s.period * 2.0 > duration;
             let design = problem.design(common, (!whole).then_some(stretch * s.period))?;
-            let tolerance = if whole {
-                search.tolerance
-            } else {
-                // Far inside the next stage's basin.
-                (1e-3 / design.periods(s.period, step)).max(search.tolerance)
-            };
+            // Far inside the next stage's basin (the winner is polished to the tolerance below).
+            let tolerance = (1e-3 / design.periods(s.period, step)).max(search.tolerance);
             let (eval, evaluations) =
                 problem.refine(&design, TAU / s.period, bounds, tolerance, search.max_iterations)?;
             meter.add(evaluations, 0, &mut progress);
@@ -935,7 +931,7 @@ pub fn estimate_forcing_period<B: Basis + ?Sized>(
     } else {
         1.0
     };
-    if !(contrast <= search.max_contrast) {
+    if contrast.is_nan() || contrast > search.max_contrast {
         // A truth just outside the range shows as the scan's best candidate on its end, with a
         // contrast of its own.
         let first = scan
@@ -1422,7 +1418,8 @@ impl Problem {
         let tol = RankTolerance::Auto.value(rows, p);
         for j in 0..p {
             let norm = (0..=j).map(|i| r[(i, j)] * r[(i, j)]).sum::<f64>().sqrt();
-            if !(r[(j, j)].abs() > tol * norm) {
+            let diagonal = r[(j, j)].abs();
+            if diagonal.is_nan() || diagonal <= tol * norm {
                 return Err(SolveError::RankDeficient {
                     rank: j,
                     unknowns: p,
