@@ -25,7 +25,7 @@ use std::time::Instant;
 
 use circle_signal::{Domain, SampleClock, resample_to_whole, wrap};
 use hb_basis::Harmonic;
-use hb_solve::{DriveEstimate, DriveSearch, ModelForm, PeriodRange, estimate_forcing_period};
+use hb_solve::{DriveEstimate, DriveSearch, ModelForm, PeriodRange, RangeSource, estimate_forcing_period};
 use pendulum_sim::observe::Encoder;
 use pendulum_sim::{Dop853, FirstOrder, Pendulum, Tolerances};
 
@@ -119,7 +119,16 @@ fn accuracy() -> Result<(), Box<dyn Error>> {
             ] {
                 match estimate(&x, step, t0, range) {
                     Ok((found, seconds)) => println!(
-                        "| {label} | {angle} | {name} | {:+.2e} | {:.2e}, {:.2e} | {:.1e} | {} | {seconds:.3} |",
+                        "| {label} | {angle} | {name}{} | {:+.2e} | {:.2e}, {:.2e} | {:.1e} | {} | {seconds:.3} |",
+                        match found.range_source {
+                            RangeSource::Spectrum { dominant_period } => format!(
+                                " ({:.3}..{:.3} T, T_p = {:.3} T)",
+                                found.range.shortest() / period,
+                                found.range.longest() / period,
+                                dominant_period / period
+                            ),
+                            _ => String::new(),
+                        },
                         found.period / period - 1.0,
                         found.relative_uncertainty(),
                         found.period_uncertainty_iid / found.period,

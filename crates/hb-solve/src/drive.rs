@@ -300,7 +300,7 @@ impl DriveSearch {
     /// Default ratio of normalised residuals beyond which a survivor is dropped.
     pub const DEFAULT_PRUNE_RATIO: f64 = 100.0;
     /// Default relative tolerance on the period of the last refinement.
-    pub const DEFAULT_TOLERANCE: f64 = 1e-10;
+    pub const DEFAULT_TOLERANCE: f64 = 1e-12;
     /// Default largest number of Gauss–Newton steps per stage.
     pub const DEFAULT_MAX_ITERATIONS: usize = 30;
     /// Default largest [`DriveEstimate::contrast`] accepted. On the paper's record (30000
@@ -313,8 +313,9 @@ impl DriveSearch {
     /// Without a range, the search spans the record's dominant spectral period `T_p` divided by
     /// the first factor to `T_p` times the second: a response at the drive's frequency, or at a
     /// subharmonic of order 2 to 4 (period-2 to period-4 motion), or at twice the drive's
-    /// frequency, is then covered; see [`dominant_period`].
-    pub const DEFAULT_RANGE_FACTORS: (f64, f64) = (4.0, 2.0);
+    /// frequency, is then covered with a margin for the peak's own error; see
+    /// [`dominant_period`].
+    pub const DEFAULT_RANGE_FACTORS: (f64, f64) = (4.5, 2.5);
 
     /// A builder with the defaults.
     pub fn builder() -> DriveSearchBuilder {
