@@ -703,8 +703,8 @@ pub fn dominant_period(x: &[f64], step: f64, domain: Domain, min_periods: usize)
 /// `x` holds the samples (a wrapped or unwrapped angle on the circle, a displacement on the line),
 /// `step` the sample step `h` and `start_time` the time of sample 0 (`t_n = t_0 + n h`), in the
 /// record's own time unit; `domain` must be the basis' domain. `progress(done, total)` is called
-/// after each batch of evaluations; `total` may grow as the refinement proceeds, and `done` never
-/// exceeds it.
+/// after each batch of evaluations: `done` evaluations so far, never more than `total`, an estimate
+/// revised as the refinement proceeds; the last call is `(evaluations, evaluations)`.
 ///
 /// The pipeline's model is [`hb_basis::Harmonic`] of order 1 with [`ModelForm::parametric`] on the
 /// circle, and a polynomial with an identified forcing on the line. The form must have a drive term
