@@ -25,7 +25,7 @@ use std::time::Instant;
 
 use circle_signal::{Domain, SampleClock, resample_to_whole, wrap};
 use hb_basis::Harmonic;
-use hb_solve::{DriveEstimate, DriveSearch, ModelForm, PeriodRange, estimate_forcing_period};
+use hb_solve::{DriveEstimate, DriveSearch, ModelForm, PeriodRange, RangeSource, estimate_forcing_period};
 use pendulum_sim::observe::Encoder;
 use pendulum_sim::{Dop853, FirstOrder, Pendulum, Tolerances};
 
@@ -119,7 +119,16 @@ fn accuracy() -> Result<(), Box<dyn Error>> {
             ] {
                 match estimate(&x, step, t0, range) {
                     Ok((found, seconds)) => println!(
-                        "| {label} | {angle} | {name} | {:+.2e} | {:.2e}, {:.2e} | {:.1e} | {} | {seconds:.3} |",
+                        "| {label} | {angle} | {name}{} | {:+.2e} | {:.2e}, {:.2e} | {:.1e} | {} | {seconds:.3} |",
+                        match found.range_source {
+                            RangeSource::Spectrum { dominant_period } => format!(
+                                " ({:.3}..{:.3} T, T_p = {:.3} T)",
+                                found.range.shortest() / period,
+                                found.range.longest() / period,
+                                dominant_period / period
+                            ),
+                            _ => String::new(),
+                        },
                         found.period / period - 1.0,
                         found.relative_uncertainty(),
                         found.period_uncertainty_iid / found.period,
@@ -259,6 +268,20 @@ fn costs() -> Result<(), Box<dyn Error>> {
                 ),
                 Err(e) => println!("| {label} | {name} | error: {e} | | |"),
             }
+        }
+        let noisy = Encoder::seeded(11).with_noise(0.01)?.observe(&theta);
+        for (name, search) in [
+            ("σ = 0.01 rad, defaults", base().build()?),
+            ("σ = 0.01 rad, growth 2", base().growth(2).build()?),
+            ("σ = 0.01 rad, 1 survivor", base().survivors(1).build()?),
+        ] {
+            let (found, seconds) = estimate_with(&noisy, step, t0, &search)?;
+            println!(
+                "| {label} | {name} | {:+.2e} ± {:.1e} | {} | {seconds:.3} |",
+                found.period / period - 1.0,
+                found.relative_uncertainty(),
+                found.evaluations
+            );
         }
         let clock = SampleClock::from_step(period * 1.0123, step)?;
         let start = Instant::now();

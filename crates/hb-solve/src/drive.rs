@@ -300,7 +300,7 @@ impl DriveSearch {
     /// Default ratio of normalised residuals beyond which a survivor is dropped.
     pub const DEFAULT_PRUNE_RATIO: f64 = 100.0;
     /// Default relative tolerance on the period of the last refinement.
-    pub const DEFAULT_TOLERANCE: f64 = 1e-10;
+    pub const DEFAULT_TOLERANCE: f64 = 1e-12;
     /// Default largest number of Gauss–Newton steps per stage.
     pub const DEFAULT_MAX_ITERATIONS: usize = 30;
     /// Default largest [`DriveEstimate::contrast`] accepted. On the paper's record (30000
@@ -313,8 +313,9 @@ impl DriveSearch {
     /// Without a range, the search spans the record's dominant spectral period `T_p` divided by
     /// the first factor to `T_p` times the second: a response at the drive's frequency, or at a
     /// subharmonic of order 2 to 4 (period-2 to period-4 motion), or at twice the drive's
-    /// frequency, is then covered; see [`dominant_period`].
-    pub const DEFAULT_RANGE_FACTORS: (f64, f64) = (4.0, 2.0);
+    /// frequency, is then covered with a margin for the peak's own error; see
+    /// [`dominant_period`].
+    pub const DEFAULT_RANGE_FACTORS: (f64, f64) = (4.5, 2.5);
 
     /// A builder with the defaults.
     pub fn builder() -> DriveSearchBuilder {
@@ -702,8 +703,8 @@ pub fn dominant_period(x: &[f64], step: f64, domain: Domain, min_periods: usize)
 /// `x` holds the samples (a wrapped or unwrapped angle on the circle, a displacement on the line),
 /// `step` the sample step `h` and `start_time` the time of sample 0 (`t_n = t_0 + n h`), in the
 /// record's own time unit; `domain` must be the basis' domain. `progress(done, total)` is called
-/// after each batch of evaluations; `total` may grow as the refinement proceeds, and `done` never
-/// exceeds it.
+/// after each batch of evaluations: `done` evaluations so far, never more than `total`, an estimate
+/// revised as the refinement proceeds; the last call is `(evaluations, evaluations)`.
 ///
 /// The pipeline's model is [`hb_basis::Harmonic`] of order 1 with [`ModelForm::parametric`] on the
 /// circle, and a polynomial with an identified forcing on the line. The form must have a drive term
@@ -767,7 +768,7 @@ pub fn estimate_forcing_period<B: Basis + ?Sized>(
     check_form(domain, &form)?;
     check_finite(x)?;
     let k = search.window_periods;
-    // At least this many windows of the longest candidate in the record.
+    // At least this many periods of the longest candidate in the record.
     let min_periods = k + 3;
     let duration = x.len().saturating_sub(1) as f64 * step;
     let (min_period, max_period) = (MIN_SAMPLES_PER_PERIOD * step, duration / min_periods as f64);
@@ -872,15 +873,11 @@ pub fn estimate_forcing_period<B: Basis + ?Sized>(
     let bounds = (TAU / range.longest, TAU / range.shortest);
     let mut stretch = n0;
     loop {
-        for s in &mut live {
+        for s in live.iter_mut().filter(|s| !s.whole) {
             let whole = stretch * s.period * 2.0 > duration;
             let design = problem.design(common, (!whole).then_some(stretch * s.period))?;
-            let tolerance = if whole {
-                search.tolerance
-            } else {
-                // Far inside the next stage's basin.
-                (1e-3 / design.periods(s.period, step)).max(search.tolerance)
-            };
+            // Far inside the next stage's basin (the winner is polished to the tolerance below).
+            let tolerance = (1e-3 / design.periods(s.period, step)).max(search.tolerance);
             let (eval, evaluations) =
                 problem.refine(&design, TAU / s.period, bounds, tolerance, search.max_iterations)?;
             meter.add(evaluations, 0, &mut progress);
@@ -935,7 +932,7 @@ pub fn estimate_forcing_period<B: Basis + ?Sized>(
     } else {
         1.0
     };
-    if !(contrast <= search.max_contrast) {
+    if contrast.is_nan() || contrast > search.max_contrast {
         // A truth just outside the range shows as the scan's best candidate on its end, with a
         // contrast of its own.
         let first = scan
@@ -1422,7 +1419,8 @@ impl Problem {
         let tol = RankTolerance::Auto.value(rows, p);
         for j in 0..p {
             let norm = (0..=j).map(|i| r[(i, j)] * r[(i, j)]).sum::<f64>().sqrt();
-            if !(r[(j, j)].abs() > tol * norm) {
+            let diagonal = r[(j, j)].abs();
+            if diagonal.is_nan() || diagonal <= tol * norm {
                 return Err(SolveError::RankDeficient {
                     rank: j,
                     unknowns: p,

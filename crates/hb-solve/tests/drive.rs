@@ -280,3 +280,37 @@ fn bad_input_is_refused() {
         Err(SolveError::NonFiniteRecordSample { index: 77, .. })
     ));
 }
+
+/// A known forcing (moved to the right-hand side, no drive column): the linear oscillator
+/// `x'' + 0.1 x' + 2 x = cos(W t)` with a decaying free oscillation, on a basis chosen at run time.
+#[test]
+fn known_forcing_and_a_basis_chosen_at_run_time() {
+    let period = 1.37;
+    let (w, h) = (TAU / period, period / 61.3);
+    let d = (2.0 - w * w).powi(2) + (0.1 * w).powi(2);
+    let (a, b) = ((2.0 - w * w) / d, 0.1 * w / d);
+    let s = (2.0f64 - 0.0025).sqrt();
+    let t0 = 12.5;
+    let x: Vec<f64> = (0..8000)
+        .map(|n| {
+            let t = t0 + n as f64 * h;
+            a * (w * t).cos() + b * (w * t).sin() + (-0.05 * t).exp() * (s * t).cos()
+        })
+        .collect();
+    let basis: Box<dyn hb_basis::Basis> =
+        Box::new(hb_basis::BasisKind::Polynomial(Polynomial::new(1).unwrap()));
+    let form = ModelForm::externally_forced(Forcing::Known { cos: -1.0, sin: 0.0 });
+    let found = estimate_forcing_period(
+        &x,
+        h,
+        t0,
+        Domain::Line,
+        &search(period, 0.6, 1.8),
+        basis.as_ref(),
+        &form,
+        |_, _| {},
+    )
+    .unwrap();
+    let e = relative_error(&found, period);
+    assert!(e.abs() < 1e-8, "{e:e}");
+}
