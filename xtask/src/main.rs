@@ -5,6 +5,7 @@
 
 mod accuracy;
 mod identification;
+mod real_records;
 mod reproduce;
 mod scale;
 
@@ -60,6 +61,16 @@ enum Command {
         #[arg(long, default_value_t = 3)]
         repeats: usize,
     },
+    /// Records shaped like real rigs' (`hbid simulate`), each identified by one `hbid identify`
+    /// command with the truth beside the result; writes a Markdown report.
+    RealRecords {
+        /// The report.
+        #[arg(long, default_value = "docs/real-records.md")]
+        out: PathBuf,
+        /// Where the simulated records are written.
+        #[arg(long, default_value = "target/real-records")]
+        data: PathBuf,
+    },
 }
 
 /// How this xtask was built, for the generated pages that report wall times: `cargo xtask` runs
@@ -83,6 +94,7 @@ fn main() -> std::process::ExitCode {
             sizes,
             repeats,
         } => scale::run(&out, &data, &sizes, repeats),
+        Command::RealRecords { out, data } => real_records::run(&out, &data),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

@@ -67,7 +67,7 @@ pub fn run(out: &Path, data: &Path, sizes: &[usize], repeats: usize) -> anyhow::
 
 /// Builds the release `hbid` (whatever profile this xtask was built in: `cargo xtask` uses the
 /// test profile) and returns its path, `<target>/release/hbid`.
-fn build_hbid() -> anyhow::Result<PathBuf> {
+pub(crate) fn build_hbid() -> anyhow::Result<PathBuf> {
     let status = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
         .args(["build", "--release", "-p", "hbid"])
         .status()
