@@ -1216,3 +1216,148 @@ fn simulate_free_decay_and_duffing() {
         "{left} of 20000 samples in the left well"
     );
 }
+
+/// The largest error of an identification against a truth file, relative to each nonzero true
+/// coefficient (and to the largest one for the terms whose truth is zero; a term left out of the
+/// model counts as zero).
+fn worst_relative_error(truth: &Path, identified: &[u8]) -> f64 {
+    let truth: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(truth).unwrap()).unwrap();
+    let found: serde_json::Value = serde_json::from_slice(identified).unwrap();
+    let want = truth["coefficients"].as_object().unwrap();
+    let scale = want
+        .values()
+        .map(|v| v.as_f64().unwrap().abs())
+        .fold(0.0, f64::max);
+    want.iter()
+        .map(|(name, v)| {
+            let v = v.as_f64().unwrap();
+            match found["coefficients"][name].as_f64() {
+                Some(got) => (got - v).abs() / if v == 0.0 { scale } else { v.abs() },
+                // A term left out of the model is right only if its truth is zero.
+                None if v == 0.0 => 0.0,
+                None => f64::INFINITY,
+            }
+        })
+        .fold(0.0, f64::max)
+}
+
+/// Records as rigs write them (a sampling rate in no whole ratio to the drive, stamps to 1 ms,
+/// encoder counts, faults, no drive) identified by one command each, without preprocessing.
+#[test]
+fn rig_records_are_identified_without_preprocessing() {
+    let dir = scratch("rigs");
+    let rig = [
+        "--drive-frequency",
+        "1.02",
+        "--sample-rate",
+        "500",
+        "--counts",
+        "4096",
+        "--duration",
+        "120",
+        "--time-origin",
+        "first-sample",
+        "--time-decimals",
+        "3",
+    ];
+    let identify = |record: &Path, options: &[&str]| {
+        let mut all = vec!["identify", record.to_str().unwrap(), "--method", "windowed"];
+        all.extend(options);
+        all.extend(["--bootstrap", "0", "--json"]);
+        let out = hbid(&all);
+        assert!(
+            out.status.success(),
+            "{options:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        out
+    };
+    let truth = dir.join("plain.json");
+    let mut args = rig.to_vec();
+    args.extend(["--truth", truth.to_str().unwrap()]);
+    let plain = simulated(&dir, "plain.csv", &args);
+    // 490.196 samples per forcing period, resampled once at the input.
+    let out = identify(&plain, &["--forcing-frequency", "1.02"]);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("resampled"));
+    let worst = worst_relative_error(&truth, &out.stdout);
+    assert!(worst < 1e-4, "known drive: {worst:e}");
+    // The drive estimated from the record.
+    let out = identify(&plain, &["--forcing-frequency", "auto:0.5..2"]);
+    let note = String::from_utf8_lossy(&out.stderr).into_owned();
+    let estimate: f64 = note
+        .split("(frequency ")
+        .nth(1)
+        .and_then(|s| s.split_whitespace().next())
+        .and_then(|s| s.parse().ok())
+        .unwrap_or_else(|| panic!("no estimate in: {note}"));
+    assert!((estimate / 1.02 - 1.0).abs() < 1e-5, "{estimate}");
+    assert!(worst_relative_error(&truth, &out.stdout) < 1e-4);
+
+    // Encoder zero away from the bottom, angles in [0, 2π), bit errors and gaps.
+    let truth = dir.join("faulty.json");
+    let mut args = rig.to_vec();
+    args.extend([
+        "--zero-offset",
+        "0.7",
+        "--phase",
+        "1.3",
+        "--angle-range",
+        "positive",
+        "--bit-errors",
+        "2e-4",
+        "--gaps",
+        "2:150",
+        "--seed",
+        "3",
+        "--truth",
+        truth.to_str().unwrap(),
+    ]);
+    let faulty = simulated(&dir, "faulty.csv", &args);
+    let warned = identify(&faulty, &["--forcing-frequency", "1.02"]);
+    let text = String::from_utf8_lossy(&warned.stderr).into_owned();
+    assert!(text.contains("2 gap(s)") && text.contains("3 pieces"), "{text}");
+    assert!(text.contains("spike(s)") && text.contains("--repair"), "{text}");
+    assert!(!text.contains("unwrapped angle"), "{text}");
+    let repaired = identify(&faulty, &["--forcing-frequency", "1.02", "--repair"]);
+    let text = String::from_utf8_lossy(&repaired.stderr).into_owned();
+    assert!(text.contains("replaced by the local prediction"), "{text}");
+    let (before, after) = (
+        worst_relative_error(&truth, &warned.stdout),
+        worst_relative_error(&truth, &repaired.stdout),
+    );
+    assert!(after < 1e-4 && after < before, "{before:e} -> {after:e}");
+
+    // A free decay: no drive, windows in periods of the free oscillation.
+    let truth = dir.join("free.json");
+    let free = simulated(
+        &dir,
+        "free.csv",
+        &[
+            "--forcing",
+            "none",
+            "--drive-frequency",
+            "1.02",
+            "--sample-rate",
+            "500",
+            "--counts",
+            "4096",
+            "--theta0",
+            "0",
+            "--omega0",
+            "20",
+            "--duration",
+            "60",
+            "--time-origin",
+            "first-sample",
+            "--truth",
+            truth.to_str().unwrap(),
+        ],
+    );
+    let out = identify(&free, &["--forcing", "none"]);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no drive"));
+    let found: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(found["coefficients"].as_object().unwrap().len(), 3, "{found}");
+    assert!(worst_relative_error(&truth, &out.stdout) < 1e-3);
+    let upo = hbid(&["identify", free.to_str().unwrap(), "--forcing", "none"]);
+    assert_clean_failure(&upo, "no periodic orbits");
+}
