@@ -66,6 +66,39 @@ pub use spikes::{Spike, SpikeParams, Spikes, find_and_repair_spikes, find_spikes
 
 use std::f64::consts::{PI, TAU};
 
+/// Checks the pieces of a record with gaps: non-empty ranges of `x`, in order and disjoint, every
+/// sample in them finite (what lies between them, such as the NaN of a gap, is not read).
+///
+/// ```
+/// use circle_signal::{CircleError, check_pieces};
+///
+/// let x = [0.1, 0.2, f64::NAN, 0.4, 0.5];
+/// assert!(check_pieces(&x, &[0..2, 3..5]).is_ok());
+/// assert!(matches!(check_pieces(&x, &[0..3]), Err(CircleError::NonFinite { index: 2, .. })));
+/// assert!(matches!(check_pieces(&x, &[3..5, 0..2]), Err(CircleError::BadPiece { index: 1, .. })));
+/// ```
+pub fn check_pieces(x: &[f64], pieces: &[std::ops::Range<usize>]) -> Result<(), CircleError> {
+    let mut end = 0;
+    for (index, piece) in pieces.iter().enumerate() {
+        if piece.start < end || piece.start >= piece.end || piece.end > x.len() {
+            return Err(CircleError::BadPiece {
+                index,
+                start: piece.start,
+                end: piece.end,
+                len: x.len(),
+            });
+        }
+        end = piece.end;
+        if let Some((i, &value)) = x[piece.clone()].iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return Err(CircleError::NonFinite {
+                index: piece.start + i,
+                value,
+            });
+        }
+    }
+    Ok(())
+}
+
 /// Errors of this crate.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]

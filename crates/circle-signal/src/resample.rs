@@ -110,24 +110,7 @@ pub fn resample_pieces(
     clock: &SampleClock,
     domain: Domain,
 ) -> Result<ResampledPieces, CircleError> {
-    let mut end = 0;
-    for (index, piece) in pieces.iter().enumerate() {
-        if piece.start < end || piece.start >= piece.end || piece.end > x.len() {
-            return Err(CircleError::BadPiece {
-                index,
-                start: piece.start,
-                end: piece.end,
-                len: x.len(),
-            });
-        }
-        end = piece.end;
-        if let Some((i, &value)) = x[piece.clone()].iter().enumerate().find(|(_, v)| !v.is_finite()) {
-            return Err(CircleError::NonFinite {
-                index: piece.start + i,
-                value,
-            });
-        }
-    }
+    crate::check_pieces(x, pieces)?;
     if clock.whole_samples_per_period().is_some() {
         return Ok(ResampledPieces {
             samples: x.to_vec(),

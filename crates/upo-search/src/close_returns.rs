@@ -281,7 +281,7 @@ impl CloseReturns {
 
     /// Validates the pieces and finds the absolute tolerance over all of them.
     fn pieces_input(&self, signal: &[f64], pieces: &[Range<usize>]) -> Result<InputScan, UpoError> {
-        crate::check_pieces(signal.len(), pieces)?;
+        crate::check_pieces(signal, pieces)?;
         let needed = self.needed()?;
         let longest = pieces.iter().map(Range::len).max().unwrap_or(0);
         if longest < needed {
@@ -692,7 +692,10 @@ mod tests {
         assert!(matches!(s.search(&x), Err(UpoError::NonFinite { .. })));
         let (empty, beyond) = (4..4, 0..x.len() + 1);
         for bad in [&[0..5, 3..9][..], &[0..5, empty], &[beyond]] {
-            assert!(matches!(s.search_pieces(&x, bad), Err(UpoError::BadPiece { .. })));
+            assert!(matches!(
+                s.search_pieces(&x, bad),
+                Err(UpoError::Clock(circle_signal::CircleError::BadPiece { .. }))
+            ));
         }
         assert!(matches!(
             s.search_pieces(&x, &[0..10, 20..30]),

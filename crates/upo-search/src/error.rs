@@ -50,16 +50,4 @@ pub enum UpoError {
         /// The constant value.
         value: f64,
     },
-    /// The pieces of a record with gaps must be non-empty ranges of it, in order and disjoint.
-    #[error("piece {index} ({start}..{end}) is empty, out of order or beyond the record of {len} samples")]
-    BadPiece {
-        /// Index of the piece.
-        index: usize,
-        /// Its first sample.
-        start: usize,
-        /// One past its last sample.
-        end: usize,
-        /// Samples of the record.
-        len: usize,
-    },
 }

@@ -79,19 +79,11 @@ pub use close_returns::{CloseReturns, CloseReturnsBuilder};
 pub use error::UpoError;
 pub use windows::{Windows, WindowsBuilder};
 
-/// Checks that `pieces` are non-empty ranges of a record of `len` samples, in order and disjoint.
-fn check_pieces(len: usize, pieces: &[std::ops::Range<usize>]) -> Result<(), UpoError> {
-    let mut end = 0;
-    for (index, piece) in pieces.iter().enumerate() {
-        if piece.start < end || piece.start >= piece.end || piece.end > len {
-            return Err(UpoError::BadPiece {
-                index,
-                start: piece.start,
-                end: piece.end,
-                len,
-            });
-        }
-        end = piece.end;
-    }
-    Ok(())
+/// Checks the pieces of a record with gaps ([`circle_signal::check_pieces`]); a non-finite sample
+/// is this crate's [`UpoError::NonFinite`], as for a record without gaps.
+fn check_pieces(signal: &[f64], pieces: &[std::ops::Range<usize>]) -> Result<(), UpoError> {
+    circle_signal::check_pieces(signal, pieces).map_err(|e| match e {
+        circle_signal::CircleError::NonFinite { index, value } => UpoError::NonFinite { index, value },
+        e => UpoError::Clock(e),
+    })
 }

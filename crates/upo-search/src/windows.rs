@@ -113,7 +113,7 @@ impl Windows {
     /// Errors when no piece holds a window (naming the longest), a sample of a piece is not
     /// finite, or the pieces are out of order or out of bounds.
     pub fn windows_pieces(&self, signal: &[f64], pieces: &[Range<usize>]) -> Result<Vec<Segment>, UpoError> {
-        crate::check_pieces(signal.len(), pieces)?;
+        crate::check_pieces(signal, pieces)?;
         let l = self.len();
         let longest = pieces.iter().map(Range::len).max().unwrap_or(0);
         if longest <= l {
@@ -125,13 +125,7 @@ impl Windows {
         }
         let mut segments = Vec::new();
         for piece in pieces.iter().filter(|r| r.len() > l) {
-            for s in self.windows(&signal[piece.clone()]).map_err(|e| match e {
-                UpoError::NonFinite { index, value } => UpoError::NonFinite {
-                    index: index + piece.start,
-                    value,
-                },
-                e => e,
-            })? {
+            for s in self.windows(&signal[piece.clone()])? {
                 segments.push(Segment::new(
                     piece.start + s.start(),
                     s.period(),
@@ -263,7 +257,10 @@ mod tests {
         let pieces = [0..20, 23..30, 30..30];
         assert!(matches!(
             w.windows_pieces(&x, &pieces),
-            Err(UpoError::BadPiece { index: 2, .. })
+            Err(UpoError::Clock(circle_signal::CircleError::BadPiece {
+                index: 2,
+                ..
+            }))
         ));
         let segs = w.windows_pieces(&x, &pieces[..2]).unwrap();
         // 12-sample windows and their closing sample: starts 0, 4 in the first piece; the second

@@ -121,28 +121,7 @@ impl<'a> Record<'a> {
         if samples.is_empty() || pieces.is_empty() {
             return Err(PipelineError::EmptyRecord);
         }
-        let mut end = 0;
-        for (index, piece) in pieces.iter().enumerate() {
-            if piece.start < end || piece.start >= piece.end || piece.end > samples.len() {
-                return Err(PipelineError::Clock(circle_signal::CircleError::BadPiece {
-                    index,
-                    start: piece.start,
-                    end: piece.end,
-                    len: samples.len(),
-                }));
-            }
-            end = piece.end;
-            if let Some((i, &value)) = samples[piece.clone()]
-                .iter()
-                .enumerate()
-                .find(|(_, v)| !v.is_finite())
-            {
-                return Err(PipelineError::Clock(circle_signal::CircleError::NonFinite {
-                    index: piece.start + i,
-                    value,
-                }));
-            }
-        }
+        circle_signal::check_pieces(samples, &pieces)?;
         Ok(Self {
             samples,
             pieces,
