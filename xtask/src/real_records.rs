@@ -13,7 +13,8 @@ use anyhow::{Context, bail};
 struct Rig {
     name: &'static str,
     what: &'static str,
-    simulate: &'static [&'static str],
+    /// `hbid simulate`'s options, in parts joined in order (a rig built on another shares its parts).
+    simulate: &'static [&'static [&'static str]],
     identify: &'static [&'static str],
     /// Rewrites the record as another acquisition program would write it (after simulation).
     rewrite: Option<fn(&str) -> String>,
@@ -40,21 +41,21 @@ fn rigs() -> Vec<Rig> {
         Rig {
             name: "pendulum-500hz",
             what: "base-excited pendulum (the paper's parameters), 500 Hz, 1.02 Hz drive (490.196 samples per period), 4096-count encoder, stamps to 1 ms, 300 s",
-            simulate: PENDULUM,
+            simulate: &[PENDULUM],
             identify: &["--method", "windowed", "--forcing-frequency", "1.02"],
             rewrite: None,
         },
         Rig {
             name: "pendulum-500hz-upo",
             what: "the same record, by the paper's method (close returns)",
-            simulate: PENDULUM,
+            simulate: &[PENDULUM],
             identify: &["--forcing-frequency", "1.02"],
             rewrite: None,
         },
         Rig {
             name: "pendulum-unknown-drive",
             what: "the same record, the drive frequency estimated (searched from 0.5 to 2 Hz)",
-            simulate: PENDULUM,
+            simulate: &[PENDULUM],
             identify: &["--method", "windowed", "--forcing-frequency", "auto:0.5..2"],
             rewrite: None,
         },
@@ -62,30 +63,21 @@ fn rigs() -> Vec<Rig> {
             name: "pendulum-faulty",
             what: "the same rig with the encoder's zero 0.7 rad from the bottom, angles in [0, 2π), the record starting at drive phase 1.3, bit errors (rate 1e-4, ±64..512 counts) and 3 gaps of 200 samples",
             simulate: &[
-                "--drive-frequency",
-                "1.02",
-                "--sample-rate",
-                "500",
-                "--counts",
-                "4096",
-                "--duration",
-                "300",
-                "--time-origin",
-                "first-sample",
-                "--time-decimals",
-                "3",
-                "--zero-offset",
-                "0.7",
-                "--phase",
-                "1.3",
-                "--angle-range",
-                "positive",
-                "--bit-errors",
-                "1e-4",
-                "--gaps",
-                "3:200",
-                "--seed",
-                "5",
+                PENDULUM,
+                &[
+                    "--zero-offset",
+                    "0.7",
+                    "--phase",
+                    "1.3",
+                    "--angle-range",
+                    "positive",
+                    "--bit-errors",
+                    "1e-4",
+                    "--gaps",
+                    "3:200",
+                    "--seed",
+                    "5",
+                ],
             ],
             identify: &["--method", "windowed", "--forcing-frequency", "1.02", "--repair"],
             rewrite: None,
@@ -93,14 +85,14 @@ fn rigs() -> Vec<Rig> {
         Rig {
             name: "pendulum-headerless",
             what: "the first record written as a DAQ might: no header, angle first, time second, separated by spaces",
-            simulate: PENDULUM,
+            simulate: &[PENDULUM],
             identify: &["--method", "windowed", "--forcing-frequency", "1.02"],
             rewrite: Some(headerless_swapped),
         },
         Rig {
             name: "duffing-2048hz",
             what: "two-well Duffing oscillator (c = 0.25, a = −1, b = 1, f = 0.3), 2048 Hz, 6.5 Hz shaker (315.08 samples per period), stamps to 0.1 ms, displacement to 6 decimals, 120 s",
-            simulate: &[
+            simulate: &[&[
                 "--system",
                 "duffing",
                 "--drive-frequency",
@@ -115,7 +107,7 @@ fn rigs() -> Vec<Rig> {
                 "4",
                 "--decimals",
                 "6",
-            ],
+            ]],
             identify: &[
                 "--signal",
                 "line",
@@ -129,7 +121,7 @@ fn rigs() -> Vec<Rig> {
         Rig {
             name: "free-decay",
             what: "the pendulum with its drive off, started whirling (5 turns) then swinging down, 500 Hz, 4096 counts, 60 s",
-            simulate: &[
+            simulate: &[&[
                 "--forcing",
                 "none",
                 "--drive-frequency",
@@ -146,7 +138,7 @@ fn rigs() -> Vec<Rig> {
                 "60",
                 "--time-origin",
                 "first-sample",
-            ],
+            ]],
             identify: &["--method", "windowed", "--forcing", "none"],
             rewrite: None,
         },
@@ -206,7 +198,8 @@ pub fn run(out: &Path, data: &Path) -> anyhow::Result<()> {
         let record: PathBuf = data.join(format!("{}.csv", rig.name));
         let truth_path = data.join(format!("{}.truth.json", rig.name));
         let mut simulate: Vec<String> = vec!["simulate".into()];
-        simulate.extend(rig.simulate.iter().map(|s| s.to_string()));
+        let options: Vec<&str> = rig.simulate.concat();
+        simulate.extend(options.iter().map(|s| s.to_string()));
         simulate.extend([
             "--truth".into(),
             truth_path.display().to_string(),
@@ -254,7 +247,7 @@ pub fn run(out: &Path, data: &Path) -> anyhow::Result<()> {
         writeln!(
             report,
             "```\nhbid simulate {}\nhbid identify {file_name} {}\n```\n",
-            rig.simulate.join(" "),
+            options.join(" "),
             rig.identify.join(" ")
         )?;
         for line in stderr.lines().filter(|l| !l.trim().is_empty()) {

@@ -66,6 +66,23 @@ pub use spikes::{Spike, SpikeParams, Spikes, find_and_repair_spikes, find_spikes
 
 use std::f64::consts::{PI, TAU};
 
+/// The longest of the pieces of a record with gaps (the first of the longest; `0..0` for none):
+/// the piece that whole-record measurements (the delay, the embedding, a free oscillation's period,
+/// the drive's estimate) are taken on.
+///
+/// ```
+/// assert_eq!(circle_signal::longest_piece(&[0..5, 8..13, 20..22]), 0..5);
+/// assert_eq!(circle_signal::longest_piece(&[]), 0..0);
+/// ```
+pub fn longest_piece(pieces: &[std::ops::Range<usize>]) -> std::ops::Range<usize> {
+    pieces
+        .iter()
+        .rev()
+        .max_by_key(|r| r.len())
+        .cloned()
+        .unwrap_or(0..0)
+}
+
 /// Checks the pieces of a record with gaps: non-empty ranges of `x`, in order and disjoint, every
 /// sample in them finite (what lies between them, such as the NaN of a gap, is not read).
 ///

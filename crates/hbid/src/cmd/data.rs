@@ -176,14 +176,7 @@ impl Data {
 
     /// The longest piece (the whole record without gaps).
     pub fn longest(&self) -> &[f64] {
-        let r = self
-            .pieces
-            .iter()
-            .rev()
-            .max_by_key(|r| r.len())
-            .cloned()
-            .unwrap_or(0..0);
-        &self.x[r]
+        &self.x[circle_signal::longest_piece(&self.pieces)]
     }
 
     /// The record as the pipeline takes it.
@@ -273,12 +266,7 @@ impl InputArgs {
             }
         }
         self.spikes(&mut x, &pieces)?;
-        let longest = pieces
-            .iter()
-            .rev()
-            .max_by_key(|r| r.len())
-            .cloned()
-            .unwrap_or(0..0);
+        let longest = circle_signal::longest_piece(&pieces);
         let (period, found) = match drive {
             DriveSpec::Period(t) => (t, DriveFound::Given),
             DriveSpec::Free => {

@@ -197,20 +197,6 @@ pub enum InputError {
         /// The period given.
         period: f64,
     },
-    /// The forcing period is not a whole number of samples.
-    #[error(
-        "the forcing period {period} is {ratio} sampling steps of {dt}, not a whole number (nearest: {nearest}); the method needs a whole number of samples per forcing period"
-    )]
-    NotWholeSamples {
-        /// Forcing period.
-        period: f64,
-        /// Sampling step.
-        dt: f64,
-        /// Their ratio.
-        ratio: f64,
-        /// The nearest whole number.
-        nearest: u64,
-    },
 }
 
 impl Role {
@@ -248,8 +234,7 @@ impl InputError {
             | InputError::TimeNotIncreasing { .. }
             | InputError::TimeGlitch { .. }
             | InputError::TimeUnresolved { .. }
-            | InputError::BadForcingPeriod { .. }
-            | InputError::NotWholeSamples { .. } => false,
+            | InputError::BadForcingPeriod { .. } => false,
         }
     }
 }

@@ -1,6 +1,6 @@
 //! Reading records: text or NumPy `.npy`, from a file or standard input, and the checks a
-//! record must pass before identification (time stamps on a uniform grid, a whole number of
-//! samples per forcing period).
+//! record must pass before identification (time stamps on a uniform grid, with gaps split into
+//! pieces).
 //!
 //! # Text
 //!

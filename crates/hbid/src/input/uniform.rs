@@ -1,6 +1,7 @@
 //! The checks a record must pass before identification: time stamps on a uniform grid
 //! `t0 + n · dt` (each within [`GRID_TOLERANCE`] of its grid time), split into pieces at gaps,
-//! isolated glitches repaired on request; a whole number of samples per forcing period.
+//! isolated glitches repaired on request. (The forcing period need not be a whole number of
+//! steps: the command line resamples the record once, `circle_signal::resample_pieces`.)
 //!
 //! The grid is fitted in four steps, each robust to what the previous one could not see:
 //!
@@ -27,9 +28,6 @@ use super::{InputError, Location, Record, StampFault, median, printed_decimals};
 /// a resolution up to half a step (a DAQ at 2048 Hz printing 4 decimals is off by up to a tenth
 /// of a step) plus the jitter of a clock.
 pub const GRID_TOLERANCE: f64 = 0.25;
-
-/// Largest relative distance of the forcing period from a whole number of steps.
-const WHOLE_TOLERANCE: f64 = 1e-6;
 
 /// More stamps than this fraction of the record (and at least [`UNRESOLVED_MIN`]) off the grid
 /// or repeated are not glitches: the stamps do not resolve the samples.
@@ -245,27 +243,6 @@ impl GridRecord {
     /// The number of samples in all pieces.
     pub fn sample_count(&self) -> usize {
         self.pieces.iter().map(|p| p.samples.len()).sum()
-    }
-
-    /// The number of samples per forcing period `T / dt`, which must be a whole number within
-    /// 1e-6 relative.
-    pub fn samples_per_period(&self, forcing_period: f64) -> Result<usize, InputError> {
-        if !(forcing_period.is_finite() && forcing_period > 0.0) {
-            return Err(InputError::BadForcingPeriod {
-                period: forcing_period,
-            });
-        }
-        let ratio = forcing_period / self.dt;
-        let nearest = ratio.round();
-        if nearest < 1.0 || (ratio - nearest).abs() > WHOLE_TOLERANCE * ratio {
-            return Err(InputError::NotWholeSamples {
-                period: forcing_period,
-                dt: self.dt,
-                ratio,
-                nearest: nearest.max(0.0) as u64,
-            });
-        }
-        Ok(nearest as usize)
     }
 }
 
@@ -601,18 +578,6 @@ mod tests {
         assert_eq!(u.sample_count(), 100);
         assert!(matches!(fit(vec![0.0]), Err(InputError::TooFewSamples { .. })));
         assert_eq!(fit(vec![3.0, 3.5]).unwrap().dt, 0.5);
-    }
-
-    #[test]
-    fn samples_per_period_is_checked() {
-        let u = fit((0..100).map(|n| n as f64 * 0.04).collect()).unwrap();
-        assert_eq!(u.samples_per_period(1.0).unwrap(), 25);
-        match u.samples_per_period(1.01) {
-            Err(InputError::NotWholeSamples { nearest: 25, .. }) => {}
-            other => panic!("{other:?}"),
-        }
-        assert!(u.samples_per_period(-1.0).is_err());
-        assert!(u.samples_per_period(0.01).is_err());
     }
 
     /// The bound on the error of a least-squares step from stamps at grid indices `indices`,

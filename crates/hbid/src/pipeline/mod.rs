@@ -144,13 +144,7 @@ impl<'a> Record<'a> {
     /// The longest piece (the first of the longest), on which the delay and the embedding
     /// dimension are found.
     pub fn longest_piece(&self) -> &'a [f64] {
-        let longest = self
-            .pieces
-            .iter()
-            .rev()
-            .max_by_key(|r| r.len())
-            .expect("a record has a piece");
-        &self.samples[longest.clone()]
+        &self.samples[circle_signal::longest_piece(&self.pieces)]
     }
 
     /// The first sample that holds data.
