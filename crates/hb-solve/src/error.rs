@@ -164,6 +164,15 @@ pub enum SolveError {
         /// Failures tolerated.
         allowed: usize,
     },
+    /// Model selection: with a fold of segments held out, the candidate library is not determined.
+    #[error(
+        "model selection: the candidate library is not determined by the data with one of {folds} folds of \
+         segments held out; some candidates are (nearly) combinations of others: remove them, or use a longer record"
+    )]
+    SelectionUndetermined {
+        /// Folds used.
+        folds: usize,
+    },
     /// The model form has no term with the drive, so its residual does not depend on the forcing
     /// period.
     #[error(

@@ -110,6 +110,12 @@ impl LinearSystem {
             .map_or(&[][..], |c| c.as_slice())
     }
 
+    /// The matrix, for tests that build a degenerate system.
+    #[cfg(test)]
+    pub(crate) fn matrix_mut_for_tests(&mut self) -> faer::MatMut<'_, f64> {
+        self.matrix.as_mut()
+    }
+
     /// Multiplies column `c` by `factor` (the noise correction).
     pub(crate) fn scale_column(&mut self, c: usize, factor: f64) {
         self.matrix.col_mut(c).iter_mut().for_each(|v| *v *= factor);

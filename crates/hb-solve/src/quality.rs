@@ -1,0 +1,234 @@
+//! Goodness of fit: how much of the balanced acceleration a model explains, and where the rest is.
+//!
+//! Every row of a harmonic-balance or weak-form system balances one frequency `j Ω = (j / k) W`
+//! of one segment: the right-hand side is the acceleration's part at that frequency (eq. 15:
+//! `(jΩ)² u_j`; weak form: `−∫ψ_j'' x`), and the row's residual is what the model leaves of it.
+//! [`fit_quality`] sums them:
+//!
+//! - `explained = 1 − ‖A c − β‖² / ‖β‖²`, the fraction of the (windowed) acceleration's power the
+//!   model accounts for, in `[0, 1]`;
+//! - the residual's spectrum: residual and right-hand side RMS per balanced frequency, in drive
+//!   harmonics `j / k`. A drive term the model lacks (a harmonic of the drive in the forcing, a
+//!   wrong drive frequency) leaves its power at whole drive harmonics, where it shows as a line
+//!   above the residual at the frequencies around it: [`FitQuality::peaks`].
+
+use serde::{Deserialize, Serialize};
+
+use crate::{LinearSystem, SolveError};
+
+/// The residual at one balanced frequency, over all segments.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ResidualLine {
+    /// The frequency in drive harmonics `j / k` (0: the mean equation).
+    pub harmonic: f64,
+    /// RMS of the residual over the rows at this frequency.
+    pub residual_rms: f64,
+    /// RMS of the right-hand side over the same rows.
+    pub rhs_rms: f64,
+    /// Rows at this frequency.
+    pub rows: usize,
+}
+
+/// How well a model fits its system; see the module docs.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FitQuality {
+    /// The fraction of the right-hand side's power the model explains, in `[0, 1]`.
+    pub explained: f64,
+    /// The residual per balanced frequency, by increasing frequency (empty for a system whose
+    /// rows are not balanced harmonics, e.g. finite differences).
+    pub spectrum: Vec<ResidualLine>,
+}
+
+/// When a fit explains less than this fraction of the acceleration, the model likely lacks
+/// terms or the drive frequency is wrong. See `docs/identification.md` for the measurements.
+pub const EXPLAINED_WARNING: f64 = 0.99;
+
+/// A whole drive harmonic whose residual RMS is this many times the median of the residual at
+/// the other frequencies between the neighbouring whole harmonics is a peak.
+pub const PEAK_RATIO: f64 = 4.0;
+
+impl FitQuality {
+    /// The whole drive harmonics `h >= 1` at which the residual stands out: its RMS at `h` is at
+    /// least [`PEAK_RATIO`] times the median RMS of the residual at the fractional frequencies in
+    /// `(h − 1, h + 1)` (needs at least 2 of them, i.e. segments of at least three drive periods).
+    pub fn peaks(&self) -> Vec<u32> {
+        let whole = |f: f64| (f - f.round()).abs() < 1e-9;
+        self.spectrum
+            .iter()
+            .filter(|l| l.harmonic >= 0.5 && whole(l.harmonic))
+            .filter_map(|l| {
+                let h = l.harmonic.round();
+                let mut around: Vec<f64> = self
+                    .spectrum
+                    .iter()
+                    .filter(|o| !whole(o.harmonic) && (o.harmonic - h).abs() < 1.0)
+                    .map(|o| o.residual_rms)
+                    .collect();
+                if around.len() < 2 {
+                    return None;
+                }
+                around.sort_by(f64::total_cmp);
+                let median = around[around.len() / 2];
+                (l.residual_rms >= PEAK_RATIO * median && l.residual_rms > 0.0).then_some(h as u32)
+            })
+            .collect()
+    }
+
+    /// A warning for a fit that explains too little or leaves a peak at a drive harmonic; `None`
+    /// for a good fit.
+    pub fn warning(&self) -> Option<String> {
+        let peaks = self.peaks();
+        let mut says = Vec::new();
+        if self.explained < EXPLAINED_WARNING {
+            says.push(format!(
+                "the model explains only {:.1} % of the acceleration",
+                100.0 * self.explained
+            ));
+        }
+        if !peaks.is_empty() {
+            let list: Vec<String> = peaks.iter().map(|h| h.to_string()).collect();
+            says.push(format!(
+                "the residual peaks at drive harmonic(s) {}",
+                list.join(", ")
+            ));
+        }
+        (!says.is_empty()).then(|| {
+            format!(
+                "{}: likely missing terms or a wrong drive frequency",
+                says.join(" and ")
+            )
+        })
+    }
+}
+
+/// The goodness of fit of coefficients `solution` (in `system`'s column order) on `system`.
+pub fn fit_quality(system: &LinearSystem, solution: &[f64]) -> Result<FitQuality, SolveError> {
+    let (a, b) = (system.matrix(), system.rhs());
+    if solution.len() != a.ncols() {
+        return Err(SolveError::ModelMismatch {
+            expected: system.names().to_vec(),
+            found: (0..solution.len()).map(|i| format!("value {i}")).collect(),
+        });
+    }
+    let residual: Vec<f64> = (0..a.nrows())
+        .map(|r| (0..a.ncols()).map(|c| a[(r, c)] * solution[c]).sum::<f64>() - b[r])
+        .collect();
+    let rss: f64 = residual.iter().map(|v| v * v).sum();
+    let power: f64 = b.iter().map(|v| v * v).sum();
+    let explained = if power > 0.0 {
+        (1.0 - rss / power).clamp(0.0, 1.0)
+    } else {
+        1.0
+    };
+
+    // Rows grouped by the reduced fraction j / k.
+    let mut lines: Vec<((usize, usize), f64, f64, usize)> = Vec::new();
+    for block in system.blocks() {
+        if block.harmonics == 0 || block.rows != 2 * block.harmonics + 1 {
+            continue;
+        }
+        let k = block.segment.period();
+        for r in 0..block.rows {
+            let j = r.div_ceil(2);
+            let g = gcd(j, k);
+            let key = if j == 0 { (0, 1) } else { (j / g, k / g) };
+            let row = block.first_row + r;
+            let (res, rhs) = (residual[row], b[row]);
+            match lines.iter_mut().find(|l| l.0 == key) {
+                Some(l) => {
+                    l.1 += res * res;
+                    l.2 += rhs * rhs;
+                    l.3 += 1;
+                }
+                None => lines.push((key, res * res, rhs * rhs, 1)),
+            }
+        }
+    }
+    let mut spectrum: Vec<ResidualLine> = lines
+        .into_iter()
+        .map(|((j, k), res, rhs, n)| ResidualLine {
+            harmonic: j as f64 / k as f64,
+            residual_rms: (res / n as f64).sqrt(),
+            rhs_rms: (rhs / n as f64).sqrt(),
+            rows: n,
+        })
+        .collect();
+    spectrum.sort_by(|x, y| x.harmonic.total_cmp(&y.harmonic));
+    Ok(FitQuality { explained, spectrum })
+}
+
+fn gcd(a: usize, b: usize) -> usize {
+    if b == 0 { a.max(1) } else { gcd(b, a % b) }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Block;
+    use circle_signal::{SampleClock, Segment};
+    use faer::{Col, Mat};
+
+    /// Segments of `k = 3` periods with `M = 6` harmonics (13 rows each); two columns; the
+    /// right-hand side is their combination plus `extra` on the rows of drive harmonic 2
+    /// (`j = 6`) and a small ripple elsewhere.
+    fn system(extra: f64) -> LinearSystem {
+        let n = 40;
+        let rows = 13 * n;
+        let a = Mat::from_fn(rows, 2, |i, j| ((i * (j + 3)) as f64 * 0.7).sin());
+        let b = Col::from_fn(rows, |i| {
+            let r = i % 13;
+            let ripple = 1e-3 * ((i as f64) * 1.3).cos();
+            let missing = if r == 11 || r == 12 {
+                extra * (i as f64).cos()
+            } else {
+                0.0
+            };
+            a[(i, 0)] - 0.5 * a[(i, 1)] + ripple + missing
+        });
+        let clock = SampleClock::nondimensional(25).unwrap();
+        let blocks = (0..n)
+            .map(|s| Block {
+                segment: Segment::new(25 * s, 3, &clock, 0.0, usize::MAX).unwrap(),
+                first_row: 13 * s,
+                rows: 13,
+                harmonics: 6,
+                winding: 0,
+                rotation_rate: 0.0,
+            })
+            .collect();
+        LinearSystem::from_parts(a, b, vec!["p".into(), "q".into()], blocks)
+    }
+
+    #[test]
+    fn explained_is_one_minus_the_unexplained_power() {
+        let s = system(0.0);
+        let q = fit_quality(&s, &[1.0, -0.5]).unwrap();
+        assert!(q.explained > 0.999 && q.explained < 1.0, "{}", q.explained);
+        let zero = fit_quality(&s, &[0.0, 0.0]).unwrap();
+        assert_eq!(zero.explained, 0.0);
+        // 7 frequencies: 0, 1/3, 2/3, 1, 4/3, 5/3, 2.
+        let f: Vec<f64> = q.spectrum.iter().map(|l| l.harmonic).collect();
+        assert_eq!(f.len(), 7);
+        assert!((f[3] - 1.0).abs() < 1e-12 && (f[6] - 2.0).abs() < 1e-12);
+        assert_eq!(q.spectrum.iter().map(|l| l.rows).sum::<usize>(), s.rows());
+        assert!(q.warning().is_none(), "{:?}", q.warning());
+    }
+
+    #[test]
+    fn a_missing_drive_harmonic_is_a_peak() {
+        let q = fit_quality(&system(0.05), &[1.0, -0.5]).unwrap();
+        assert_eq!(q.peaks(), [2]);
+        let w = q.warning().unwrap();
+        assert!(w.contains("drive harmonic(s) 2"), "{w}");
+        let clean = fit_quality(&system(0.0), &[1.0, -0.5]).unwrap();
+        assert!(clean.peaks().is_empty());
+    }
+
+    #[test]
+    fn a_poor_fit_warns() {
+        let q = fit_quality(&system(0.0), &[0.5, 0.0]).unwrap();
+        assert!(q.explained < EXPLAINED_WARNING);
+        assert!(q.warning().unwrap().contains("likely missing terms"));
+        assert!(fit_quality(&system(0.0), &[1.0]).is_err());
+    }
+}
