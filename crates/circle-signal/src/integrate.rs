@@ -203,7 +203,7 @@ mod tests {
         let a: Vec<f64> = (0..n)
             .map(|i| -t(i).sin() - 1.587 * (2.3 * t(i)).cos() - 0.02)
             .collect();
-        let all = [0..n];
+        let all: Vec<Range<usize>> = std::iter::once(0..n).collect();
         for (y, what, degree) in [(&v, Measured::Velocity, 1), (&a, Measured::Acceleration, 2)] {
             let got = displacement(y, h, what, &all).unwrap();
             let mut want = x.clone();
@@ -225,7 +225,7 @@ mod tests {
         assert!(cumulative_integral(&[1.0, 2.0, 3.0], 0.1).is_err());
         assert!(cumulative_integral(&[1.0, 2.0, f64::NAN, 3.0], 0.1).is_err());
         assert!(cumulative_integral(&[1.0; 5], 0.0).is_err());
-        let bad_piece = [3..2];
+        let bad_piece: Vec<Range<usize>> = std::iter::once(Range { start: 3, end: 2 }).collect();
         assert!(displacement(&[0.0; 8], 0.1, Measured::Velocity, &bad_piece).is_err());
         let short = [0..3, 4..8];
         assert!(matches!(
