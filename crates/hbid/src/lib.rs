@@ -4,7 +4,8 @@
 //! This library half holds what the binary `hbid` (the user-facing part) and `cargo xtask` share
 //! and what must be tested on its own: the readers ([`input`], tested and fuzzed on their own),
 //! the whole analysis of a record from its samples to validated models ([`pipeline`]: no printing,
-//! no files), atomic output files ([`output`]) and the figures ([`plot`]).
+//! no files), the preparation of a read record for it ([`prepare`]: grid, wrap, spikes, drive,
+//! resampling), the JSON of the results ([`json`]), atomic output files ([`output`]) and the figures ([`plot`]).
 //!
 //! # Example
 //!
@@ -17,6 +18,8 @@
 #![deny(missing_docs)]
 
 pub mod input;
+pub mod json;
 pub mod output;
 pub mod pipeline;
 pub mod plot;
+pub mod prepare;

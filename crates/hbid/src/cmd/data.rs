@@ -1,22 +1,19 @@
 //! Loading a record the way every analysis subcommand does.
 
-use std::f64::consts::{PI, TAU};
-use std::ops::Range;
+use std::f64::consts::TAU;
 use std::path::PathBuf;
 
 use anyhow::Context;
-use circle_signal::{
-    Domain, SampleClock, Spike, SpikeParams, find_and_repair_spikes, find_spikes, resample_pieces,
-};
+use circle_signal::Domain;
 use clap::Args;
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use embedding::AmiParams;
-use hb_basis::{BasisKind, Harmonic, Polynomial};
-use hb_solve::{DriveEstimate, DriveSearch, Forcing, ModelForm, PeriodRange, estimate_forcing_period};
-use hbid::input::{
-    AngleRange, Column, GridOptions, GridRecord, InputError, ReadOptions, Role, angle_range, read_path,
-};
-use hbid::pipeline::{EmbedOptions, Record, SearchOptions};
+use hb_solve::PeriodRange;
+use hbid::input::{Column, InputError, ReadOptions, Role, read_path};
+use hbid::pipeline::{EmbedOptions, SearchOptions};
+use hbid::prepare::{Note, PrepareError, PrepareOptions, condition};
+
+pub use hbid::prepare::{Data, DriveFound, DriveSpec};
 
 /// The command-line values of a [`Domain`]: `circle` or `line` (`linear` too where `also_linear`,
 /// the name classic embedding tools give plain differences).
@@ -67,31 +64,6 @@ pub struct InputArgs {
     pub signal: Domain,
 }
 
-/// What drives the record, as the command line gives it.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum DriveSpec {
-    /// A known forcing period.
-    Period(f64),
-    /// A forcing period to estimate from the record, within this range if given.
-    Auto(Option<PeriodRange>),
-    /// No drive: a free oscillation, whose mean period is the unit of the windows.
-    Free,
-}
-
-/// Where a record's time unit for the analysis came from.
-#[derive(Debug, Clone, PartialEq)]
-pub enum DriveFound {
-    /// The forcing period given.
-    Given,
-    /// Estimated from the record.
-    Estimated(Box<DriveEstimate>),
-    /// No drive: the mean period of the free oscillation, in samples.
-    Free {
-        /// The measured mean period, in samples (the clock's period is its nearest whole number).
-        samples: f64,
-    },
-}
-
 /// Parses `T`, `auto` or `auto:A..B` of `--forcing-period` (or of `--forcing-frequency` when
 /// `frequency`).
 pub fn parse_drive(text: &str, frequency: bool) -> anyhow::Result<DriveSpec> {
@@ -132,64 +104,6 @@ pub fn parse_drive(text: &str, frequency: bool) -> anyhow::Result<DriveSpec> {
     Ok(DriveSpec::Period(if frequency { 1.0 / v } else { v }))
 }
 
-/// A record ready for analysis.
-#[derive(Debug)]
-pub struct Data {
-    /// The record's clock: forcing period, step `T / P`, time of the first sample.
-    pub clock: SampleClock,
-    /// Samples per forcing period `P`.
-    pub p: usize,
-    /// The samples (wrapped into [-π, π) for a signal on the circle; NaN in the gaps).
-    pub x: Vec<f64>,
-    /// The ranges of `x` that hold data: one without gaps.
-    pub pieces: Vec<Range<usize>>,
-    /// What the samples are.
-    pub domain: Domain,
-    /// Where the forcing period came from.
-    pub drive: DriveFound,
-    /// The samples per forcing period of the record as read, when it was resampled to `p`.
-    pub resampled_from: Option<f64>,
-}
-
-impl Data {
-    /// One line describing the record, for the readable outputs.
-    pub fn summary(&self) -> String {
-        let samples: usize = self.pieces.iter().map(Range::len).sum();
-        let mut line = format!(
-            "{samples} samples from t = {} in steps of {} ({} per {})",
-            self.clock.start_time(),
-            self.clock.step(),
-            self.p,
-            match self.drive {
-                DriveFound::Free { .. } => "oscillation period",
-                _ => "forcing period",
-            }
-        );
-        if let Some(from) = self.resampled_from {
-            line.push_str(&format!(", resampled from {from:.6} per period"));
-        }
-        if self.pieces.len() > 1 {
-            line.push_str(&format!(", in {} pieces (gaps)", self.pieces.len()));
-        }
-        line
-    }
-
-    /// The longest piece (the whole record without gaps).
-    pub fn longest(&self) -> &[f64] {
-        &self.x[circle_signal::longest_piece(&self.pieces)]
-    }
-
-    /// The record as the pipeline takes it.
-    pub fn record(&self) -> anyhow::Result<Record<'_>> {
-        Ok(Record::with_pieces(
-            &self.x,
-            self.pieces.clone(),
-            self.clock,
-            self.domain,
-        )?)
-    }
-}
-
 impl InputArgs {
     /// The drive of the record: the forcing period or frequency given (default 2π), its estimate,
     /// or none when `free` (asked for with `--forcing none`) and neither is given.
@@ -226,160 +140,37 @@ impl InputArgs {
         let record = read_path(&self.file, &options)
             .map_err(naming_options)
             .with_context(|| name.clone())?;
-        let grid = GridRecord::fit(record, &GridOptions { repair: self.repair })
-            .map_err(naming_options)
-            .with_context(|| name.clone())?;
-        for r in &grid.repaired {
-            eprintln!(
-                "note: {}: time {} replaced by its grid time {}",
-                r.at, r.was, r.now
-            );
-        }
-        let (t0, dt) = (grid.t0, grid.dt);
-        // One grid for every piece, NaN in the gaps.
-        let mut x: Vec<f64> = Vec::new();
-        let mut pieces = Vec::with_capacity(grid.pieces.len());
-        for piece in grid.pieces {
-            x.resize(piece.first, f64::NAN);
-            pieces.push(piece.first..piece.first + piece.samples.len());
-            x.extend(piece.samples);
-        }
-        if pieces.len() > 1 {
-            let missing = x.len() - pieces.iter().map(Range::len).sum::<usize>();
-            eprintln!(
-                "note: {} gap(s) in the time stamps ({missing} samples missing): the record is analysed in {} pieces",
-                pieces.len() - 1,
-                pieces.len()
-            );
-        }
-        if self.signal == Domain::Circle {
-            let present: Vec<f64> = pieces.iter().flat_map(|r| x[r.clone()].iter().copied()).collect();
-            if present.iter().any(|v| !(-PI..PI).contains(v)) {
-                if angle_range(&present) == AngleRange::Unwrapped {
-                    eprintln!("note: values outside [-π, π): read as an unwrapped angle and wrapped");
-                }
-                for r in &pieces {
-                    for v in &mut x[r.clone()] {
-                        *v = circle_signal::wrap(*v);
-                    }
-                }
-            }
-        }
-        self.spikes(&mut x, &pieces)?;
-        let longest = circle_signal::longest_piece(&pieces);
-        let (period, found) = match drive {
-            DriveSpec::Period(t) => (t, DriveFound::Given),
-            DriveSpec::Free => {
-                let samples = circle_signal::oscillation_period(&x[longest.clone()], self.signal)
-                    .context("--forcing none: the period of the free oscillation")?;
-                let whole = samples.round().max(2.0);
-                (whole * dt, DriveFound::Free { samples })
-            }
-            DriveSpec::Auto(range) => {
-                let mut search = DriveSearch::builder();
-                if let Some(range) = range {
-                    search = search.range(range);
-                }
-                let search = search.build()?;
-                let basis = default_basis(self.signal);
-                let form = match self.signal {
-                    Domain::Circle => ModelForm::parametric(),
-                    Domain::Line => ModelForm::parametric().with_forcing(Forcing::Identified),
-                };
-                let piece_t0 = t0 + longest.start as f64 * dt;
-                let estimate = estimate_forcing_period(
-                    &x[longest.clone()],
-                    dt,
-                    piece_t0,
-                    self.signal,
-                    &search,
-                    &basis,
-                    &form,
-                    &mut *progress,
-                )
-                .context("estimating the forcing period")?;
-                (estimate.period, DriveFound::Estimated(Box::new(estimate)))
-            }
-        };
-        if !(period.is_finite() && period > 0.0) {
-            return Err(naming_options(InputError::BadForcingPeriod { period }));
-        }
-        let clock = SampleClock::from_step(period, dt)
-            .map_err(anyhow::Error::from)
-            .and_then(|c| Ok(c.with_start_time(t0)?))
-            .context("--forcing-period")?;
-        let (clock, x, pieces, resampled_from) = match clock.whole_samples_per_period() {
-            Some(_) => (clock, x, pieces, None),
-            None => {
-                let r = resample_pieces(&x, &pieces, &clock, self.signal)
-                    .context("resampling onto a whole number of samples per forcing period")?;
-                (r.clock, r.samples, r.pieces, Some(clock.samples_per_period()))
-            }
-        };
-        let p = clock.require_whole()?;
-        Ok(Data {
-            clock,
-            p,
-            x,
-            pieces,
-            domain: self.signal,
-            drive: found,
-            resampled_from,
-        })
+        let options = PrepareOptions::new(self.signal).with_repair(self.repair);
+        let grid = condition(record, &options, &mut print_note).map_err(|e| match e {
+            PrepareError::Input(e) => naming_options(e).context(name.clone()),
+            e => e.into(),
+        })?;
+        grid.with_drive(drive, progress).map_err(naming_drive_options)
     }
 }
 
-impl InputArgs {
-    /// Finds the isolated spikes (bit errors) of every piece; with `--repair` replaces them and
-    /// lists them, without it warns with their count. Pieces too short for the test are left as
-    /// they are.
-    fn spikes(&self, x: &mut [f64], pieces: &[Range<usize>]) -> anyhow::Result<()> {
-        let params = SpikeParams::default();
-        let mut found: Vec<Spike> = Vec::new();
-        for r in pieces.iter().filter(|r| r.len() >= SpikeParams::MIN_SAMPLES) {
-            let piece = &mut x[r.clone()];
-            let spikes = if self.repair {
-                find_and_repair_spikes(piece, self.signal, &params)?
-            } else {
-                find_spikes(piece, self.signal, &params)?
-            };
-            found.extend(spikes.iter().map(|s| Spike {
-                index: s.index + r.start,
-                ..*s
-            }));
-        }
-        if found.is_empty() {
-            return Ok(());
-        }
-        let list: Vec<String> = found
-            .iter()
-            .take(5)
-            .map(|s| format!("sample {} ({:+.4})", s.index + 1, s.size))
-            .collect();
-        let more = if found.len() > 5 { ", ..." } else { "" };
-        if self.repair {
-            eprintln!(
-                "note: {} isolated spike(s) replaced by the local prediction: {}{more}",
-                found.len(),
-                list.join(", ")
-            );
-        } else {
-            eprintln!(
-                "warning: {} isolated spike(s) (bit errors?) in the record: {}{more}; run with --repair to replace them",
-                found.len(),
-                list.join(", ")
-            );
-        }
-        Ok(())
+/// Prints a note on the record as the command line shows it.
+fn print_note(note: &Note) {
+    if note.is_warning() {
+        eprintln!("warning: {note}; run with --repair to replace them");
+    } else {
+        eprintln!("note: {note}");
     }
 }
 
-/// The basis of the unknown functions when none is chosen: harmonic:1 on the circle, poly:3 on
-/// the line.
-pub fn default_basis(domain: Domain) -> BasisKind {
-    match domain {
-        Domain::Circle => BasisKind::from(Harmonic::new(1).expect("order 1 is valid")),
-        Domain::Line => BasisKind::from(Polynomial::new(3).expect("degree 3 is valid")),
+/// An error of the drive or the clock, naming the options that set what it is about.
+fn naming_drive_options(error: PrepareError) -> anyhow::Error {
+    match error {
+        PrepareError::Input(e) => naming_options(e),
+        PrepareError::FreePeriod(e) => {
+            anyhow::Error::new(e).context("--forcing none: the period of the free oscillation")
+        }
+        PrepareError::DriveEstimate(e) => anyhow::Error::new(e).context("estimating the forcing period"),
+        PrepareError::Clock(e) => anyhow::Error::new(e).context("--forcing-period"),
+        PrepareError::Resample(e) => {
+            anyhow::Error::new(e).context("resampling onto a whole number of samples per forcing period")
+        }
+        e => e.into(),
     }
 }
 

@@ -57,21 +57,15 @@ pub fn run(args: &EmbedArgs, quiet: bool) -> anyhow::Result<()> {
     let fnn = false_nearest_neighbours(data.longest(), &params)?;
     bar.finish();
     if args.json {
-        println!("{}", serde_json::to_string(&json(&curve, delay, &fnn))?);
+        println!(
+            "{}",
+            serde_json::to_string(&hbid::json::embedding(&curve, delay, &fnn))?
+        );
     } else {
         println!("{}", data.summary());
         print_table(&curve, delay, &fnn, metric);
     }
     Ok(())
-}
-
-fn json(curve: &AmiCurve, delay: usize, fnn: &FnnResult) -> serde_json::Value {
-    serde_json::json!({
-        "delay": delay,
-        "ami": curve.values,
-        "fnn": fnn.levels.iter().map(|l| l.fraction()).collect::<Vec<_>>(),
-        "embedding_dimension": fnn.minimum_dimension(),
-    })
 }
 
 fn print_table(curve: &AmiCurve, delay: usize, fnn: &FnnResult, metric: Domain) {

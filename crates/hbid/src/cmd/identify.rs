@@ -290,7 +290,7 @@ pub fn run(args: &IdentifyArgs, quiet: bool, timings: bool) -> anyhow::Result<()
     if args.json {
         println!(
             "{}",
-            serde_json::to_string_pretty(&json(&id, args.method.name(), &basis_name))?
+            serde_json::to_string_pretty(&hbid::json::identification(&id, args.method.name(), &basis_name))?
         );
     } else {
         print_table(&id, args.method.name(), &basis_name);
@@ -307,40 +307,6 @@ pub fn save_model(model: &IdentifiedModel, path: &std::path::Path) -> anyhow::Re
         model.to_bytes()?
     };
     crate::output::write_atomically(path, |w| w.write_all(&bytes)).map_err(Into::into)
-}
-
-/// The JSON report of an identification.
-pub fn json(id: &Identification, method: &str, basis: &str) -> serde_json::Value {
-    let model = &id.model;
-    let intervals: Option<serde_json::Map<String, serde_json::Value>> = id.intervals.as_ref().map(|b| {
-        b.intervals
-            .iter()
-            .map(|i| (i.name.clone(), serde_json::json!([i.lower, i.upper])))
-            .collect()
-    });
-    let values: serde_json::Map<String, serde_json::Value> = model
-        .coefficients()
-        .iter()
-        .map(|c| (c.name.clone(), c.value.into()))
-        .collect();
-    let errors: serde_json::Map<String, serde_json::Value> = model
-        .coefficients()
-        .iter()
-        .map(|c| (c.name.clone(), c.std_error.into()))
-        .collect();
-    let summary = model.summary();
-    serde_json::json!({
-        "method": method,
-        "basis": basis,
-        "coefficients": values,
-        "std_errors": errors,
-        "orbits_used": summary.map(|s| s.segments),
-        "rows": summary.map(|s| s.rows),
-        "condition_number": summary.map(|s| s.condition),
-        "residual_rms": summary.map(|s| s.residual_rms),
-        "intervals": intervals,
-        "interval_level": id.intervals.as_ref().map(|b| b.level),
-    })
 }
 
 fn print_table(id: &Identification, method: &str, basis: &str) {

@@ -15,7 +15,7 @@ use hbid::plot::{BLUE, Figure, GREY, ORANGE, RED, Series, Style, add_figure};
 use pendulum_sim::Domain;
 
 use super::data::{Data, DriveSpec};
-use super::identify::{IdentifyArgs, Method, json};
+use super::identify::{IdentifyArgs, Method};
 use crate::progress::Progress;
 
 /// Options of `hbid report`.
@@ -266,7 +266,7 @@ fn write_report(args: &ReportArgs, data: &Data, outcome: &Outcome) -> anyhow::Re
     writeln!(r)?;
 
     for res in &results {
-        let j = json(res.ident, res.method.name(), &basis);
+        let j = hbid::json::identification(res.ident, res.method.name(), &basis);
         let how = match res.method {
             Method::Upo => "harmonic balance on the orbits above, the paper's method",
             Method::Windowed => "the weak form on plain windows of the record",

@@ -1,7 +1,5 @@
 //! `hbid upos`: unstable periodic orbits by close returns.
 
-use std::collections::BTreeMap;
-
 use clap::Args;
 use upo_search::Catalogue;
 
@@ -27,30 +25,12 @@ pub fn run(args: &UposArgs, quiet: bool) -> anyhow::Result<()> {
     let catalogue = search.catalogue_pieces(&data.x, &data.pieces)?;
     bar.finish();
     if args.json {
-        println!("{}", serde_json::to_string(&json(&catalogue))?);
+        println!("{}", serde_json::to_string(&hbid::json::orbits(&catalogue))?);
     } else {
         println!("{}", data.summary());
         print_table(&catalogue, delay, catalogue.tolerance());
     }
     Ok(())
-}
-
-fn json(catalogue: &Catalogue) -> serde_json::Value {
-    let counts = catalogue.counts();
-    let by_period: BTreeMap<String, usize> = counts
-        .iter()
-        .map(|c| (c.period.to_string(), c.segments))
-        .collect();
-    let distinct: BTreeMap<String, usize> = counts.iter().map(|c| (c.period.to_string(), c.orbits)).collect();
-    serde_json::json!({
-        "segments": catalogue.segments().len(),
-        "by_period": by_period,
-        "distinct_orbits": catalogue.orbits().len(),
-        "distinct_by_period": distinct,
-        "orbits": catalogue.segments().iter().map(|s| serde_json::json!({
-            "period": s.period(), "start": s.start(), "error": s.error(),
-        })).collect::<Vec<_>>(),
-    })
 }
 
 fn print_table(catalogue: &Catalogue, delay: usize, epsilon: f64) {

@@ -1,0 +1,73 @@
+//! The JSON of the results, as the command line prints it with `--json` (and the Python package's
+//! `to_json`): one definition for every front end.
+
+use std::collections::BTreeMap;
+
+use embedding::{AmiCurve, FnnResult};
+use upo_search::Catalogue;
+
+use crate::pipeline::Identification;
+
+/// The JSON of an identification, as `hbid identify --json` prints it: `method` and `basis` as
+/// named on the command line.
+pub fn identification(id: &Identification, method: &str, basis: &str) -> serde_json::Value {
+    let model = &id.model;
+    let intervals: Option<serde_json::Map<String, serde_json::Value>> = id.intervals.as_ref().map(|b| {
+        b.intervals
+            .iter()
+            .map(|i| (i.name.clone(), serde_json::json!([i.lower, i.upper])))
+            .collect()
+    });
+    let values: serde_json::Map<String, serde_json::Value> = model
+        .coefficients()
+        .iter()
+        .map(|c| (c.name.clone(), c.value.into()))
+        .collect();
+    let errors: serde_json::Map<String, serde_json::Value> = model
+        .coefficients()
+        .iter()
+        .map(|c| (c.name.clone(), c.std_error.into()))
+        .collect();
+    let summary = model.summary();
+    serde_json::json!({
+        "method": method,
+        "basis": basis,
+        "coefficients": values,
+        "std_errors": errors,
+        "orbits_used": summary.map(|s| s.segments),
+        "rows": summary.map(|s| s.rows),
+        "condition_number": summary.map(|s| s.condition),
+        "residual_rms": summary.map(|s| s.residual_rms),
+        "intervals": intervals,
+        "interval_level": id.intervals.as_ref().map(|b| b.level),
+    })
+}
+
+/// The JSON of the delay and the embedding dimension, as `hbid embed --json` prints it.
+pub fn embedding(curve: &AmiCurve, delay: usize, fnn: &FnnResult) -> serde_json::Value {
+    serde_json::json!({
+        "delay": delay,
+        "ami": curve.values,
+        "fnn": fnn.levels.iter().map(|l| l.fraction()).collect::<Vec<_>>(),
+        "embedding_dimension": fnn.minimum_dimension(),
+    })
+}
+
+/// The JSON of the orbits found by close returns, as `hbid upos --json` prints it.
+pub fn orbits(catalogue: &Catalogue) -> serde_json::Value {
+    let counts = catalogue.counts();
+    let by_period: BTreeMap<String, usize> = counts
+        .iter()
+        .map(|c| (c.period.to_string(), c.segments))
+        .collect();
+    let distinct: BTreeMap<String, usize> = counts.iter().map(|c| (c.period.to_string(), c.orbits)).collect();
+    serde_json::json!({
+        "segments": catalogue.segments().len(),
+        "by_period": by_period,
+        "distinct_orbits": catalogue.orbits().len(),
+        "distinct_by_period": distinct,
+        "orbits": catalogue.segments().iter().map(|s| serde_json::json!({
+            "period": s.period(), "start": s.start(), "error": s.error(),
+        })).collect::<Vec<_>>(),
+    })
+}

@@ -1,0 +1,447 @@
+//! A record made ready for analysis, the one way every front end does it: time stamps fitted to a
+//! grid (pieces on one grid, NaN in the gaps), wrapped on the circle, encoder spikes found (and
+//! repaired on request), the drive given, estimated ([`hb_solve::estimate_forcing_period`]) or
+//! absent (a free oscillation, [`circle_signal::oscillation_period`]), and the record resampled
+//! once onto a whole number of samples per forcing period when needed.
+//!
+//! Two steps, so that a front end can show a record before it knows the drive: [`condition`]
+//! (read record to [`GridData`]) and [`GridData::with_drive`] (to [`Data`], the record as every
+//! stage takes it). Nothing here prints: what was done to the record is reported as [`Note`]s,
+//! through a callback as each happens and kept in the result.
+//!
+//! # Example
+//!
+//! ```
+//! use circle_signal::Domain;
+//! use hbid::input::Record;
+//! use hbid::prepare::{DriveSpec, PrepareOptions, condition};
+//!
+//! // 8 samples per forcing period of 2 time units, with a gap of 3 samples.
+//! let t: Vec<f64> = (0..80).chain(83..160).map(|n| n as f64 * 0.25).collect();
+//! let theta = t.iter().map(|t| (std::f64::consts::PI * t).sin()).collect();
+//! let record = Record { t, theta, lines: None };
+//! let grid = condition(record, &PrepareOptions::new(Domain::Circle), &mut |_| {})?;
+//! assert_eq!(grid.pieces, [0..80, 83..160]);
+//! let data = grid.with_drive(DriveSpec::Period(2.0), &mut |_, _| {})?;
+//! assert_eq!(data.p, 8);
+//! # Ok::<(), hbid::prepare::PrepareError>(())
+//! ```
+
+use std::f64::consts::PI;
+use std::fmt;
+use std::ops::Range;
+
+use circle_signal::{
+    CircleError, Domain, SampleClock, Spike, SpikeParams, find_and_repair_spikes, find_spikes,
+    resample_pieces,
+};
+use hb_basis::{BasisKind, Harmonic, Polynomial};
+use hb_solve::{
+    DriveEstimate, DriveSearch, Forcing, ModelForm, PeriodRange, SolveError, estimate_forcing_period,
+};
+
+use crate::input::{
+    AngleRange, GridOptions, GridRecord, InputError, Record as InputRecord, TimeRepair, angle_range,
+};
+use crate::pipeline::{PipelineError, Record};
+
+/// What drives the record.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum DriveSpec {
+    /// A known forcing period.
+    Period(f64),
+    /// A forcing period to estimate from the record, within this range if given.
+    Auto(Option<PeriodRange>),
+    /// No drive: a free oscillation, whose mean period is the unit of the windows.
+    Free,
+}
+
+/// Where a record's time unit for the analysis came from.
+#[derive(Debug, Clone, PartialEq)]
+pub enum DriveFound {
+    /// The forcing period given.
+    Given,
+    /// Estimated from the record.
+    Estimated(Box<DriveEstimate>),
+    /// No drive: the mean period of the free oscillation, in samples.
+    Free {
+        /// The measured mean period, in samples (the clock's period is its nearest whole number).
+        samples: f64,
+    },
+}
+
+/// How to condition a record.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PrepareOptions {
+    /// An angle on the circle (wrapped into `[-π, π)`) or a displacement on the line.
+    pub signal: Domain,
+    /// Replace isolated time-stamp glitches by their grid time and isolated encoder spikes by the
+    /// local prediction (without it, a glitch is an error and spikes are only reported).
+    pub repair: bool,
+}
+
+impl PrepareOptions {
+    /// A record of `signal`, nothing repaired.
+    pub fn new(signal: Domain) -> Self {
+        Self {
+            signal,
+            repair: false,
+        }
+    }
+
+    /// With repairs (see [`PrepareOptions::repair`]).
+    pub fn with_repair(mut self, repair: bool) -> Self {
+        self.repair = repair;
+        self
+    }
+}
+
+/// Something done to a record, or found in it, on the way to the analysis.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Note {
+    /// A time stamp replaced by its grid time.
+    TimeRepaired(TimeRepair),
+    /// Gaps in the time stamps: the record is analysed in pieces.
+    Gaps {
+        /// The gaps.
+        gaps: usize,
+        /// Samples missing in them.
+        missing: usize,
+    },
+    /// Values outside `[-π, π)` read as an unwrapped angle, and wrapped.
+    Wrapped,
+    /// Isolated spikes (bit errors) found in the record, replaced when `repaired`.
+    Spikes {
+        /// The spikes, indices in the record's grid.
+        found: Vec<Spike>,
+        /// Whether they were replaced by the local prediction.
+        repaired: bool,
+    },
+}
+
+impl Note {
+    /// Whether the note is a warning (spikes left in the record), not a plain note.
+    pub fn is_warning(&self) -> bool {
+        matches!(self, Note::Spikes { repaired: false, .. })
+    }
+}
+
+/// The text of the note, without its `note:` or `warning:` and without the options of a front
+/// end (a front end adds how to repair the spikes it warns about).
+impl fmt::Display for Note {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Note::TimeRepaired(r) => {
+                write!(f, "{}: time {} replaced by its grid time {}", r.at, r.was, r.now)
+            }
+            Note::Gaps { gaps, missing } => write!(
+                f,
+                "{gaps} gap(s) in the time stamps ({missing} samples missing): the record is analysed in {} pieces",
+                gaps + 1
+            ),
+            Note::Wrapped => f.write_str("values outside [-π, π): read as an unwrapped angle and wrapped"),
+            Note::Spikes { found, repaired } => {
+                let list: Vec<String> = found
+                    .iter()
+                    .take(5)
+                    .map(|s| format!("sample {} ({:+.4})", s.index + 1, s.size))
+                    .collect();
+                let more = if found.len() > 5 { ", ..." } else { "" };
+                if *repaired {
+                    write!(
+                        f,
+                        "{} isolated spike(s) replaced by the local prediction: {}{more}",
+                        found.len(),
+                        list.join(", ")
+                    )
+                } else {
+                    write!(
+                        f,
+                        "{} isolated spike(s) (bit errors?) in the record: {}{more}",
+                        found.len(),
+                        list.join(", ")
+                    )
+                }
+            }
+        }
+    }
+}
+
+/// What can go wrong on the way from a read record to [`Data`]. The texts name no option of a
+/// front end; a front end adds them.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum PrepareError {
+    /// The time stamps (grid fit, glitches) or the forcing period.
+    #[error(transparent)]
+    Input(#[from] InputError),
+    /// The spike test of a piece.
+    #[error(transparent)]
+    Spikes(CircleError),
+    /// The period of a free oscillation could not be measured.
+    #[error("the period of the free oscillation")]
+    FreePeriod(#[source] CircleError),
+    /// The drive search's options.
+    #[error(transparent)]
+    DriveSearch(SolveError),
+    /// The forcing period could not be estimated.
+    #[error("estimating the forcing period")]
+    DriveEstimate(#[source] SolveError),
+    /// No clock with this forcing period and step.
+    #[error("the forcing period")]
+    Clock(#[source] CircleError),
+    /// The resampling onto whole periods failed.
+    #[error("resampling onto a whole number of samples per forcing period")]
+    Resample(#[source] CircleError),
+    /// The clock is not whole after resampling.
+    #[error(transparent)]
+    Whole(CircleError),
+}
+
+/// A record on its grid `t0 + n · dt`: read, fitted, wrapped (on the circle), spikes found.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GridData {
+    /// The time of sample 0.
+    pub t0: f64,
+    /// The sampling step.
+    pub dt: f64,
+    /// The samples on the grid (NaN in the gaps).
+    pub x: Vec<f64>,
+    /// The ranges of `x` that hold data: one without gaps.
+    pub pieces: Vec<Range<usize>>,
+    /// What the samples are.
+    pub domain: Domain,
+    /// What was done to the record or found in it, in order.
+    pub notes: Vec<Note>,
+}
+
+/// A record ready for analysis.
+#[derive(Debug)]
+pub struct Data {
+    /// The record's clock: forcing period, step `T / P`, time of the first sample.
+    pub clock: SampleClock,
+    /// Samples per forcing period `P`.
+    pub p: usize,
+    /// The samples (wrapped into [-π, π) for a signal on the circle; NaN in the gaps).
+    pub x: Vec<f64>,
+    /// The ranges of `x` that hold data: one without gaps.
+    pub pieces: Vec<Range<usize>>,
+    /// What the samples are.
+    pub domain: Domain,
+    /// Where the forcing period came from.
+    pub drive: DriveFound,
+    /// The samples per forcing period of the record as read, when it was resampled to `p`.
+    pub resampled_from: Option<f64>,
+}
+
+impl Data {
+    /// One line describing the record, for the readable outputs.
+    pub fn summary(&self) -> String {
+        let samples: usize = self.pieces.iter().map(Range::len).sum();
+        let mut line = format!(
+            "{samples} samples from t = {} in steps of {} ({} per {})",
+            self.clock.start_time(),
+            self.clock.step(),
+            self.p,
+            match self.drive {
+                DriveFound::Free { .. } => "oscillation period",
+                _ => "forcing period",
+            }
+        );
+        if let Some(from) = self.resampled_from {
+            line.push_str(&format!(", resampled from {from:.6} per period"));
+        }
+        if self.pieces.len() > 1 {
+            line.push_str(&format!(", in {} pieces (gaps)", self.pieces.len()));
+        }
+        line
+    }
+
+    /// The longest piece (the whole record without gaps).
+    pub fn longest(&self) -> &[f64] {
+        &self.x[circle_signal::longest_piece(&self.pieces)]
+    }
+
+    /// The record as the pipeline takes it.
+    pub fn record(&self) -> Result<Record<'_>, PipelineError> {
+        Record::with_pieces(&self.x, self.pieces.clone(), self.clock, self.domain)
+    }
+}
+
+/// Fits the record's time stamps to a grid (pieces on one grid, NaN in the gaps), wraps it (on the
+/// circle) and finds its spikes, repairing glitches and spikes when asked; `notes` hears of each
+/// thing done or found as it happens.
+pub fn condition(
+    record: InputRecord,
+    options: &PrepareOptions,
+    notes: &mut dyn FnMut(&Note),
+) -> Result<GridData, PrepareError> {
+    let mut kept = Vec::new();
+    let mut note = |n: Note| {
+        notes(&n);
+        kept.push(n);
+    };
+    let grid = GridRecord::fit(
+        record,
+        &GridOptions {
+            repair: options.repair,
+        },
+    )?;
+    for r in &grid.repaired {
+        note(Note::TimeRepaired(*r));
+    }
+    let (t0, dt) = (grid.t0, grid.dt);
+    // One grid for every piece, NaN in the gaps.
+    let mut x: Vec<f64> = Vec::new();
+    let mut pieces = Vec::with_capacity(grid.pieces.len());
+    for piece in grid.pieces {
+        x.resize(piece.first, f64::NAN);
+        pieces.push(piece.first..piece.first + piece.samples.len());
+        x.extend(piece.samples);
+    }
+    if pieces.len() > 1 {
+        let missing = x.len() - pieces.iter().map(Range::len).sum::<usize>();
+        note(Note::Gaps {
+            gaps: pieces.len() - 1,
+            missing,
+        });
+    }
+    if options.signal == Domain::Circle {
+        let present: Vec<f64> = pieces.iter().flat_map(|r| x[r.clone()].iter().copied()).collect();
+        if present.iter().any(|v| !(-PI..PI).contains(v)) {
+            if angle_range(&present) == AngleRange::Unwrapped {
+                note(Note::Wrapped);
+            }
+            for r in &pieces {
+                for v in &mut x[r.clone()] {
+                    *v = circle_signal::wrap(*v);
+                }
+            }
+        }
+    }
+    if let Some(spikes) = spikes(&mut x, &pieces, options)? {
+        note(spikes);
+    }
+    Ok(GridData {
+        t0,
+        dt,
+        x,
+        pieces,
+        domain: options.signal,
+        notes: kept,
+    })
+}
+
+/// Finds the isolated spikes (bit errors) of every piece, replacing them when asked. Pieces too
+/// short for the test are left as they are.
+fn spikes(
+    x: &mut [f64],
+    pieces: &[Range<usize>],
+    options: &PrepareOptions,
+) -> Result<Option<Note>, PrepareError> {
+    let params = SpikeParams::default();
+    let mut found: Vec<Spike> = Vec::new();
+    for r in pieces.iter().filter(|r| r.len() >= SpikeParams::MIN_SAMPLES) {
+        let piece = &mut x[r.clone()];
+        let spikes = if options.repair {
+            find_and_repair_spikes(piece, options.signal, &params)
+        } else {
+            find_spikes(piece, options.signal, &params)
+        }
+        .map_err(PrepareError::Spikes)?;
+        found.extend(spikes.iter().map(|s| Spike {
+            index: s.index + r.start,
+            ..*s
+        }));
+    }
+    Ok((!found.is_empty()).then_some(Note::Spikes {
+        found,
+        repaired: options.repair,
+    }))
+}
+
+impl GridData {
+    /// The record's clock found by `drive`, the record resampled onto a whole number of samples
+    /// per forcing period when needed. `progress` follows the estimate of the drive, if any.
+    pub fn with_drive(
+        self,
+        drive: DriveSpec,
+        progress: &mut dyn FnMut(usize, usize),
+    ) -> Result<Data, PrepareError> {
+        let GridData {
+            t0,
+            dt,
+            x,
+            pieces,
+            domain,
+            ..
+        } = self;
+        let longest = circle_signal::longest_piece(&pieces);
+        let (period, found) = match drive {
+            DriveSpec::Period(t) => (t, DriveFound::Given),
+            DriveSpec::Free => {
+                let samples = circle_signal::oscillation_period(&x[longest.clone()], domain)
+                    .map_err(PrepareError::FreePeriod)?;
+                let whole = samples.round().max(2.0);
+                (whole * dt, DriveFound::Free { samples })
+            }
+            DriveSpec::Auto(range) => {
+                let mut search = DriveSearch::builder();
+                if let Some(range) = range {
+                    search = search.range(range);
+                }
+                let search = search.build().map_err(PrepareError::DriveSearch)?;
+                let basis = default_basis(domain);
+                let form = match domain {
+                    Domain::Circle => ModelForm::parametric(),
+                    Domain::Line => ModelForm::parametric().with_forcing(Forcing::Identified),
+                };
+                let piece_t0 = t0 + longest.start as f64 * dt;
+                let estimate = estimate_forcing_period(
+                    &x[longest.clone()],
+                    dt,
+                    piece_t0,
+                    domain,
+                    &search,
+                    &basis,
+                    &form,
+                    &mut *progress,
+                )
+                .map_err(PrepareError::DriveEstimate)?;
+                (estimate.period, DriveFound::Estimated(Box::new(estimate)))
+            }
+        };
+        if !(period.is_finite() && period > 0.0) {
+            return Err(InputError::BadForcingPeriod { period }.into());
+        }
+        let clock = SampleClock::from_step(period, dt)
+            .and_then(|c| c.with_start_time(t0))
+            .map_err(PrepareError::Clock)?;
+        let (clock, x, pieces, resampled_from) = match clock.whole_samples_per_period() {
+            Some(_) => (clock, x, pieces, None),
+            None => {
+                let r = resample_pieces(&x, &pieces, &clock, domain).map_err(PrepareError::Resample)?;
+                (r.clock, r.samples, r.pieces, Some(clock.samples_per_period()))
+            }
+        };
+        let p = clock.require_whole().map_err(PrepareError::Whole)?;
+        Ok(Data {
+            clock,
+            p,
+            x,
+            pieces,
+            domain,
+            drive: found,
+            resampled_from,
+        })
+    }
+}
+
+/// The basis of the unknown functions when none is chosen: harmonic:1 on the circle, poly:3 on
+/// the line.
+pub fn default_basis(domain: Domain) -> BasisKind {
+    match domain {
+        Domain::Circle => BasisKind::from(Harmonic::new(1).expect("order 1 is valid")),
+        Domain::Line => BasisKind::from(Polynomial::new(3).expect("degree 3 is valid")),
+    }
+}
