@@ -2,16 +2,19 @@
 //! displacement.
 //!
 //! Laser vibrometers measure velocity, accelerometers acceleration. Integrating them gives the
-//! displacement up to unknown constants and a sensor's bias: a velocity record gives
-//! `x − x₀ + b t` (`b` the sensor's bias), an acceleration record `x − x₀ − v₀ t + b t² / 2`.
-//! [`displacement`] integrates the record once or twice and removes the least-squares
-//! polynomial of those unknowns (degree 1 for velocity, 2 for acceleration) from the result,
-//! piece by piece. What is left is `x` less its own least-squares polynomial of that degree,
-//! which for a bounded oscillation over many periods is a small, slow error (measured in
-//! `docs/real-records.md`), plus the drift of the integrated sensor noise (a random walk for a
-//! velocity record, an integrated one for acceleration). A constant offset of `x` remains
-//! unknown: a model on the line absorbs it with a constant term and its polynomial terms
-//! (`(x + C)³` is a cubic in `x`).
+//! displacement up to unknown constants: a velocity record gives `x − x₀`, an acceleration record
+//! `x − x₀ − v₀ t`. [`displacement`] integrates the record once or twice and removes, piece by
+//! piece, the least-squares polynomial of those unknowns from the result: the mean for a velocity
+//! record, the linear trend for an acceleration record.
+//!
+//! What is left is `x` less its mean (velocity), which a model on the line absorbs with a constant
+//! term and its polynomial terms (`(x + C)³` is a cubic in `x`), or `x` less its least-squares
+//! linear trend (acceleration): the trend of the true displacement over the record is removed with
+//! `v₀`, an error that is small for an oscillation about one equilibrium and large for one that
+//! hops between wells (measured in `docs/real-records.md`). The integrated sensor noise drifts (a
+//! random walk for a velocity record, an integrated one for acceleration), and a sensor's bias `b`
+//! integrates into a ramp `b t` (velocity) or a parabola `b t² / 2` (acceleration): remove a known
+//! bias before.
 //!
 //! Integration is the cumulative sixth-order rule on the samples ([`cumulative_integral`]): the
 //! error of a sinusoid's integral is below `1e-6` of its amplitude from 25 samples per period,
@@ -31,6 +34,16 @@ pub enum Measured {
     Velocity,
     /// Its second derivative (an accelerometer).
     Acceleration,
+}
+
+impl std::fmt::Display for Measured {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Measured::Displacement => "displacement",
+            Measured::Velocity => "velocity",
+            Measured::Acceleration => "acceleration",
+        })
+    }
 }
 
 /// The cumulative integral `I_n = ∫_{t_0}^{t_n} y` of samples `y` at step `h`, `I_0 = 0`, by
@@ -103,8 +116,8 @@ fn remove_trend(v: &mut [f64], degree: usize) {
     }
 }
 
-/// The displacement less its least-squares polynomial of degree 1 (velocity) or 2
-/// (acceleration) from a record of what `measured` says, at step `h`, piece by
+/// The displacement less its mean (velocity) or its least-squares linear trend (acceleration)
+/// from a record of what `measured` says, at step `h`, piece by
 /// piece (each range of `pieces` is integrated on its own; samples outside them, e.g. the NaN
 /// of gaps, are copied as they are). See the module docs for what is removed and why.
 pub fn displacement(
@@ -136,7 +149,7 @@ pub fn displacement(
             })?;
         }
         if integrations > 0 {
-            remove_trend(&mut v, integrations);
+            remove_trend(&mut v, integrations - 1);
         }
         out[piece.clone()].copy_from_slice(&v);
     }
@@ -187,8 +200,8 @@ mod tests {
         }
     }
 
-    /// x = 0.7 + sin(t) + 0.3 cos(2.3 t): from its velocity or acceleration, each with a sensor
-    /// bias, the displacement less its own least-squares polynomial.
+    /// x = 0.7 + sin(t) + 0.3 cos(2.3 t): from its velocity, the displacement less its mean; from
+    /// its acceleration, less its least-squares linear trend.
     #[test]
     fn displacement_from_velocity_and_acceleration() {
         let h = std::f64::consts::TAU / 200.0;
@@ -197,14 +210,10 @@ mod tests {
         let x: Vec<f64> = (0..n)
             .map(|i| 0.7 + t(i).sin() + 0.3 * (2.3 * t(i)).cos())
             .collect();
-        let v: Vec<f64> = (0..n)
-            .map(|i| t(i).cos() - 0.69 * (2.3 * t(i)).sin() + 0.05)
-            .collect();
-        let a: Vec<f64> = (0..n)
-            .map(|i| -t(i).sin() - 1.587 * (2.3 * t(i)).cos() - 0.02)
-            .collect();
+        let v: Vec<f64> = (0..n).map(|i| t(i).cos() - 0.69 * (2.3 * t(i)).sin()).collect();
+        let a: Vec<f64> = (0..n).map(|i| -t(i).sin() - 1.587 * (2.3 * t(i)).cos()).collect();
         let all: Vec<Range<usize>> = std::iter::once(0..n).collect();
-        for (y, what, degree) in [(&v, Measured::Velocity, 1), (&a, Measured::Acceleration, 2)] {
+        for (y, what, degree) in [(&v, Measured::Velocity, 0), (&a, Measured::Acceleration, 1)] {
             let got = displacement(y, h, what, &all).unwrap();
             let mut want = x.clone();
             remove_trend(&mut want, degree);

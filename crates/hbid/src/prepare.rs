@@ -32,7 +32,7 @@ use std::fmt;
 use std::ops::Range;
 
 use circle_signal::{
-    CircleError, Domain, SampleClock, Spike, SpikeParams, find_and_repair_spikes, find_spikes,
+    CircleError, Domain, Measured, SampleClock, Spike, SpikeParams, find_and_repair_spikes, find_spikes,
     resample_pieces,
 };
 use hb_basis::{BasisKind, Harmonic, Polynomial};
@@ -78,6 +78,9 @@ pub struct PrepareOptions {
     /// Replace isolated time-stamp glitches by their grid time and isolated encoder spikes by the
     /// local prediction (without it, a glitch is an error and spikes are only reported).
     pub repair: bool,
+    /// What the sensor measured: the displacement itself, or its velocity or acceleration (on the
+    /// line only), integrated to the displacement by [`circle_signal::displacement`].
+    pub measured: Measured,
 }
 
 impl PrepareOptions {
@@ -86,7 +89,15 @@ impl PrepareOptions {
         Self {
             signal,
             repair: false,
+            measured: Measured::Displacement,
         }
+    }
+
+    /// A record of the velocity or acceleration of the displacement (see
+    /// [`PrepareOptions::measured`]).
+    pub fn with_measured(mut self, measured: Measured) -> Self {
+        self.measured = measured;
+        self
     }
 
     /// With repairs (see [`PrepareOptions::repair`]).
@@ -110,6 +121,8 @@ pub enum Note {
     },
     /// Values outside `[-π, π)` read as an unwrapped angle, and wrapped.
     Wrapped,
+    /// A velocity or acceleration record integrated to the displacement.
+    Integrated(Measured),
     /// Isolated spikes (bit errors) found in the record, replaced when `repaired`.
     Spikes {
         /// The spikes, indices in the record's grid.
@@ -140,6 +153,17 @@ impl fmt::Display for Note {
                 gaps + 1
             ),
             Note::Wrapped => f.write_str("values outside [-π, π): read as an unwrapped angle and wrapped"),
+            Note::Integrated(measured) => {
+                let (what, removed) = match measured {
+                    Measured::Acceleration => ("an acceleration", "least-squares linear trend"),
+                    _ => ("a velocity", "mean"),
+                };
+                write!(
+                    f,
+                    "{what} record integrated to the displacement less its {removed}; the model's constant and \
+                     polynomial terms absorb the unknown offset"
+                )
+            }
             Note::Spikes { found, repaired } => {
                 let list: Vec<String> = found
                     .iter()
@@ -178,6 +202,12 @@ pub enum PrepareError {
     /// The spike test of a piece.
     #[error(transparent)]
     Spikes(CircleError),
+    /// A velocity or acceleration record of an angle on the circle.
+    #[error("a {0} record is integrated to a displacement on the line; an angle's {0} is not supported")]
+    MeasuredOnCircle(Measured),
+    /// The integration of a velocity or acceleration record.
+    #[error("integrating the record to the displacement")]
+    Integrate(#[source] CircleError),
     /// The period of a free oscillation could not be measured.
     #[error("the period of the free oscillation")]
     FreePeriod(#[source] CircleError),
@@ -321,6 +351,14 @@ pub fn condition(
     }
     if let Some(spikes) = spikes(&mut x, &pieces, options)? {
         note(spikes);
+    }
+    if options.measured != Measured::Displacement {
+        if options.signal == Domain::Circle {
+            return Err(PrepareError::MeasuredOnCircle(options.measured));
+        }
+        x = circle_signal::displacement(&x, dt, options.measured, &pieces)
+            .map_err(PrepareError::Integrate)?;
+        note(Note::Integrated(options.measured));
     }
     Ok(GridData {
         t0,

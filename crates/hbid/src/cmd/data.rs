@@ -4,7 +4,7 @@ use std::f64::consts::TAU;
 use std::path::PathBuf;
 
 use anyhow::Context;
-use circle_signal::Domain;
+use circle_signal::{Domain, Measured};
 use clap::Args;
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use embedding::AmiParams;
@@ -62,6 +62,33 @@ pub struct InputArgs {
     /// displacement on the line (no wrapping, plain differences): circle or line.
     #[arg(long, default_value = "circle", value_parser = domain_parser(false))]
     pub signal: Domain,
+    /// What the sensor measured, on the line: the displacement, or its velocity (a laser
+    /// vibrometer) or acceleration (an accelerometer), integrated here to the displacement less
+    /// its mean (velocity) or least-squares linear trend (acceleration); the model then needs a
+    /// constant term (`1`) for the unknown offset.
+    #[arg(long, value_enum, default_value_t = MeasuredArg::Displacement)]
+    pub measured: MeasuredArg,
+}
+
+/// What the sensor measured.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum MeasuredArg {
+    /// The displacement (or angle).
+    Displacement,
+    /// Its velocity.
+    Velocity,
+    /// Its acceleration.
+    Acceleration,
+}
+
+impl From<MeasuredArg> for Measured {
+    fn from(m: MeasuredArg) -> Self {
+        match m {
+            MeasuredArg::Displacement => Measured::Displacement,
+            MeasuredArg::Velocity => Measured::Velocity,
+            MeasuredArg::Acceleration => Measured::Acceleration,
+        }
+    }
 }
 
 /// Parses `T`, `auto` or `auto:A..B` of `--forcing-period` (or of `--forcing-frequency` when
@@ -140,9 +167,15 @@ impl InputArgs {
         let record = read_path(&self.file, &options)
             .map_err(naming_options)
             .with_context(|| name.clone())?;
-        let options = PrepareOptions::new(self.signal).with_repair(self.repair);
+        let options = PrepareOptions::new(self.signal)
+            .with_repair(self.repair)
+            .with_measured(self.measured.into());
         let grid = condition(record, &options, &mut print_note).map_err(|e| match e {
             PrepareError::Input(e) => naming_options(e).context(name.clone()),
+            e @ PrepareError::MeasuredOnCircle(_) => anyhow::Error::new(e).context(format!(
+                "--measured {} needs --signal line",
+                Measured::from(self.measured)
+            )),
             e => e.into(),
         })?;
         grid.with_drive(drive, progress).map_err(naming_drive_options)
