@@ -34,6 +34,8 @@ pub struct ResidualLine {
 pub struct FitQuality {
     /// The fraction of the right-hand side's power the model explains, in `[0, 1]`.
     pub explained: f64,
+    /// `‖A c − β‖² / ‖β‖²`, the fraction left (without the rounding of `1 − explained` near 1).
+    pub unexplained: f64,
     /// The residual per balanced frequency, by increasing frequency (empty for a system whose
     /// rows are not balanced harmonics, e.g. finite differences).
     pub spectrum: Vec<ResidualLine>,
@@ -115,11 +117,8 @@ pub fn fit_quality(system: &LinearSystem, solution: &[f64]) -> Result<FitQuality
         .collect();
     let rss: f64 = residual.iter().map(|v| v * v).sum();
     let power: f64 = b.iter().map(|v| v * v).sum();
-    let explained = if power > 0.0 {
-        (1.0 - rss / power).clamp(0.0, 1.0)
-    } else {
-        1.0
-    };
+    let unexplained = if power > 0.0 { rss / power } else { 0.0 };
+    let explained = (1.0 - unexplained).clamp(0.0, 1.0);
 
     // Rows grouped by the reduced fraction j / k.
     let mut lines: Vec<((usize, usize), f64, f64, usize)> = Vec::new();
@@ -154,7 +153,11 @@ pub fn fit_quality(system: &LinearSystem, solution: &[f64]) -> Result<FitQuality
         })
         .collect();
     spectrum.sort_by(|x, y| x.harmonic.total_cmp(&y.harmonic));
-    Ok(FitQuality { explained, spectrum })
+    Ok(FitQuality {
+        explained,
+        unexplained,
+        spectrum,
+    })
 }
 
 fn gcd(a: usize, b: usize) -> usize {

@@ -40,6 +40,13 @@ pub fn identification(id: &Identification, method: &str, basis: &str) -> serde_j
         "residual_rms": summary.map(|s| s.residual_rms),
         "intervals": intervals,
         "interval_level": id.intervals.as_ref().map(|b| b.level),
+        "explained": id.quality.explained,
+        "unexplained": id.quality.unexplained,
+        "residual_spectrum": id.quality.spectrum.iter().map(|l| serde_json::json!({
+            "harmonic": l.harmonic, "residual_rms": l.residual_rms, "rhs_rms": l.rhs_rms, "rows": l.rows,
+        })).collect::<Vec<_>>(),
+        "residual_peaks": id.quality.peaks(),
+        "warning": id.quality.warning(),
     })
 }
 

@@ -287,6 +287,9 @@ pub fn run(args: &IdentifyArgs, quiet: bool, timings: bool) -> anyhow::Result<()
         save_model(&id.model, path)?;
     }
     let basis_name = args.basis_name(data.domain);
+    if let Some(w) = id.quality.warning() {
+        eprintln!("warning: {w}");
+    }
     if args.json {
         println!(
             "{}",
@@ -322,6 +325,10 @@ fn print_table(id: &Identification, method: &str, basis: &str) {
             s.condition, s.residual_rms
         );
     }
+    println!(
+        "explained {:.6} of the balanced acceleration (unexplained {:.2e})",
+        id.quality.explained, id.quality.unexplained
+    );
     println!();
     match &id.intervals {
         Some(b) => {

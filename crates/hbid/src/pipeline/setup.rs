@@ -6,8 +6,9 @@ use std::fmt;
 use circle_signal::{SampleClock, Segment};
 use hb_basis::BasisKind;
 use hb_solve::{
-    Assembly, Bootstrap, BootstrapParams, HarmonicBalance, Harmonics, IdentifiedModel, IdentifyParams,
-    LstsqSolver, ModelForm, NoiseCorrection, QrSolver, SolveError, WeakForm, bootstrap_fit, build_system,
+    Assembly, Bootstrap, BootstrapParams, FitQuality, HarmonicBalance, Harmonics, IdentifiedModel,
+    IdentifyParams, LstsqSolver, ModelForm, NoiseCorrection, QrSolver, SolveError, WeakForm, bootstrap_fit,
+    build_system, fit_quality,
 };
 
 use super::PipelineError;
@@ -180,6 +181,9 @@ pub struct Identification {
     pub model: IdentifiedModel,
     /// The bootstrap intervals of its coefficients, when asked for.
     pub intervals: Option<Bootstrap>,
+    /// How well it fits: the fraction of the balanced acceleration it explains and the residual
+    /// by frequency ([`hb_solve::fit_quality`]).
+    pub quality: FitQuality,
 }
 
 impl Setup {
@@ -228,6 +232,7 @@ impl Setup {
         let solver = self.solver.as_ref();
         let fit = system.solve(solver)?;
         let model = IdentifiedModel::from_fit(self.basis, &self.params, &system, &fit, solver.name())?;
+        let quality = fit_quality(&system, &fit.solution)?;
         let intervals = match &self.bootstrap {
             Some(b) => {
                 progress(IdentifyStep::Bootstrap);
@@ -235,7 +240,11 @@ impl Setup {
             }
             None => None,
         };
-        Ok(Identification { model, intervals })
+        Ok(Identification {
+            model,
+            intervals,
+            quality,
+        })
     }
 }
 
