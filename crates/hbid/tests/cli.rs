@@ -1361,3 +1361,53 @@ fn rig_records_are_identified_without_preprocessing() {
     let upo = hbid(&["identify", free.to_str().unwrap(), "--forcing", "none"]);
     assert_clean_failure(&upo, "no periodic orbits");
 }
+
+/// The fit's measure on the line: the right model explains the windowed acceleration to
+/// rounding; without its forcing the same record warns, and in the JSON `explained` says how
+/// little.
+#[test]
+fn a_model_without_its_drive_is_told_by_its_fit() {
+    let dir = scratch("fit-quality");
+    let record = duffing_record(&dir);
+    let period = (std::f64::consts::TAU / 1.2).to_string();
+    let run = |forcing: &str| {
+        let out = hbid(&[
+            "identify",
+            record.to_str().unwrap(),
+            "--signal",
+            "line",
+            "--method",
+            "windowed",
+            "--forcing-period",
+            &period,
+            "--forcing",
+            forcing,
+            "--json",
+            "--quiet",
+        ]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        (v, String::from_utf8_lossy(&out.stderr).into_owned())
+    };
+    let (good, err) = run("identified");
+    assert!(
+        good["unexplained"].as_f64().unwrap() < 1e-9,
+        "{}",
+        good["unexplained"]
+    );
+    assert!(good["warning"].is_null() && !err.contains("warning"), "{err}");
+    assert_eq!(good["residual_spectrum"].as_array().unwrap().len(), 7);
+    let (bad, err) = run("none");
+    let explained = bad["explained"].as_f64().unwrap();
+    assert!(explained < 0.99, "{explained}");
+    assert!(err.contains("likely missing terms"), "{err}");
+}
+
+/// `--measured` is for the line: an angle's velocity is refused before anything runs.
+#[test]
+fn measured_velocity_needs_the_line() {
+    let dir = scratch("measured");
+    let record = duffing_record(&dir);
+    let out = hbid(&["identify", record.to_str().unwrap(), "--measured", "velocity"]);
+    assert_clean_failure(&out, "needs --signal line");
+}
