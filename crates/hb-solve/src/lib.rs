@@ -131,7 +131,9 @@ pub use noise::{NOISE_BAND_START, NOISE_ESTIMATE_MIN_LEN, correct_noise, estimat
 pub use params::{
     Forcing, Harmonics, IdentifyParams, IdentifyParamsBuilder, ModelForm, NoiseCorrection, SampleClock,
 };
-pub use quality::{EXPLAINED_WARNING, FitQuality, PEAK_RATIO, ResidualLine, fit_quality};
+pub use quality::{
+    EXPLAINED_WARNING_ORBITS, EXPLAINED_WARNING_WINDOWS, FitQuality, ResidualLine, fit_quality,
+};
 pub use select::{DroppedTerm, SelectParams, Selection, SelectionStep, select_terms};
 pub use system::{Block, LinearSystem};
 pub use terms::{DriveFactor, PositionFactor, Term, VelocityFactor, columns, term_names};

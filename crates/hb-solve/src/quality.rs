@@ -8,9 +8,11 @@
 //! - `explained = 1 − ‖A c − β‖² / ‖β‖²`, the fraction of the (windowed) acceleration's power the
 //!   model accounts for, in `[0, 1]`;
 //! - the residual's spectrum: residual and right-hand side RMS per balanced frequency, in drive
-//!   harmonics `j / k`. A drive term the model lacks (a harmonic of the drive in the forcing, a
-//!   wrong drive frequency) leaves its power at whole drive harmonics, where it shows as a line
-//!   above the residual at the frequencies around it: [`FitQuality::peaks`].
+//!   harmonics `j / k`, to look at. A rule that calls a whole harmonic whose residual stands out
+//!   of its neighbours a missing drive term was tried and is not used: the weak form's windows
+//!   spread a line over about a drive harmonic, and the rows of close returns at whole harmonics
+//!   carry more residual than their neighbours even for the right model (the paper's data set
+//!   would have been warned of lines at 1, 2 and 3).
 
 use serde::{Deserialize, Serialize};
 
@@ -41,63 +43,25 @@ pub struct FitQuality {
     pub spectrum: Vec<ResidualLine>,
 }
 
-/// When a fit explains less than this fraction of the acceleration, the model likely lacks
-/// terms or the drive frequency is wrong. See `docs/identification.md` for the measurements.
-pub const EXPLAINED_WARNING: f64 = 0.99;
+/// Below this explained fraction a weak-form (or finite-difference) fit likely lacks terms or
+/// has a wrong drive frequency: the right model leaves only noise and rounding (the paper's data
+/// set: 3e-12 unexplained; without its drive term, 31 % unexplained; a Duffing oscillator without
+/// its forcing, 6 %).
+pub const EXPLAINED_WARNING_WINDOWS: f64 = 0.99;
 
-/// A whole drive harmonic whose residual RMS is this many times the median of the residual at
-/// the other frequencies between the neighbouring whole harmonics is a peak.
-pub const PEAK_RATIO: f64 = 4.0;
+/// The same for the paper's method on close returns, whose orbits do not quite close: the right
+/// model leaves 0.5 % of the paper's data set unexplained and 4 % of a chaotic Duffing record at
+/// 100 samples per period (against 10 % without its forcing), so the measure tells less there.
+pub const EXPLAINED_WARNING_ORBITS: f64 = 0.9;
 
 impl FitQuality {
-    /// The whole drive harmonics `h >= 1` at which the residual stands out: its RMS at `h` is at
-    /// least [`PEAK_RATIO`] times the median RMS of the residual at the fractional frequencies in
-    /// `(h − 1, h + 1)` (needs at least 2 of them, i.e. segments of at least three drive periods).
-    pub fn peaks(&self) -> Vec<u32> {
-        let whole = |f: f64| (f - f.round()).abs() < 1e-9;
-        self.spectrum
-            .iter()
-            .filter(|l| l.harmonic >= 0.5 && whole(l.harmonic))
-            .filter_map(|l| {
-                let h = l.harmonic.round();
-                let mut around: Vec<f64> = self
-                    .spectrum
-                    .iter()
-                    .filter(|o| !whole(o.harmonic) && (o.harmonic - h).abs() < 1.0)
-                    .map(|o| o.residual_rms)
-                    .collect();
-                if around.len() < 2 {
-                    return None;
-                }
-                around.sort_by(f64::total_cmp);
-                let median = around[around.len() / 2];
-                (l.residual_rms >= PEAK_RATIO * median && l.residual_rms > 0.0).then_some(h as u32)
-            })
-            .collect()
-    }
-
-    /// A warning for a fit that explains too little or leaves a peak at a drive harmonic; `None`
-    /// for a good fit.
-    pub fn warning(&self) -> Option<String> {
-        let peaks = self.peaks();
-        let mut says = Vec::new();
-        if self.explained < EXPLAINED_WARNING {
-            says.push(format!(
-                "the model explains only {:.1} % of the acceleration",
-                100.0 * self.explained
-            ));
-        }
-        if !peaks.is_empty() {
-            let list: Vec<String> = peaks.iter().map(|h| h.to_string()).collect();
-            says.push(format!(
-                "the residual peaks at drive harmonic(s) {}",
-                list.join(", ")
-            ));
-        }
-        (!says.is_empty()).then(|| {
+    /// A warning for a fit that explains less than `threshold` of the balanced acceleration
+    /// ([`EXPLAINED_WARNING_WINDOWS`], [`EXPLAINED_WARNING_ORBITS`]); `None` otherwise.
+    pub fn warning(&self, threshold: f64) -> Option<String> {
+        (self.explained < threshold).then(|| {
             format!(
-                "{}: likely missing terms or a wrong drive frequency",
-                says.join(" and ")
+                "the model explains only {:.1} % of the acceleration: likely missing terms or a wrong drive frequency",
+                100.0 * self.explained
             )
         })
     }
@@ -173,7 +137,7 @@ mod tests {
 
     /// Segments of `k = 3` periods with `M = 6` harmonics (13 rows each); two columns; the
     /// right-hand side is their combination plus `extra` on the rows of drive harmonic 2
-    /// (`j = 6`) and a small ripple elsewhere.
+    /// (`j = 6`) and a small ripple.
     fn system(extra: f64) -> LinearSystem {
         let n = 40;
         let rows = 13 * n;
@@ -214,24 +178,16 @@ mod tests {
         assert_eq!(f.len(), 7);
         assert!((f[3] - 1.0).abs() < 1e-12 && (f[6] - 2.0).abs() < 1e-12);
         assert_eq!(q.spectrum.iter().map(|l| l.rows).sum::<usize>(), s.rows());
-        assert!(q.warning().is_none(), "{:?}", q.warning());
-    }
-
-    #[test]
-    fn a_missing_drive_harmonic_is_a_peak() {
-        let q = fit_quality(&system(0.05), &[1.0, -0.5]).unwrap();
-        assert_eq!(q.peaks(), [2]);
-        let w = q.warning().unwrap();
-        assert!(w.contains("drive harmonic(s) 2"), "{w}");
-        let clean = fit_quality(&system(0.0), &[1.0, -0.5]).unwrap();
-        assert!(clean.peaks().is_empty());
+        assert!(q.warning(EXPLAINED_WARNING_WINDOWS).is_none());
     }
 
     #[test]
     fn a_poor_fit_warns() {
         let q = fit_quality(&system(0.0), &[0.5, 0.0]).unwrap();
-        assert!(q.explained < EXPLAINED_WARNING);
-        assert!(q.warning().unwrap().contains("likely missing terms"));
+        assert!(q.explained < EXPLAINED_WARNING_WINDOWS);
+        let w = q.warning(EXPLAINED_WARNING_WINDOWS).unwrap();
+        assert!(w.contains("likely missing terms"), "{w}");
+        assert!(q.warning(q.explained / 2.0).is_none());
         assert!(fit_quality(&system(0.0), &[1.0]).is_err());
     }
 }

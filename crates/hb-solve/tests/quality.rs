@@ -4,7 +4,8 @@ mod common;
 
 use hb_basis::{BasisKind, Harmonic};
 use hb_solve::{
-    IdentifyParams, ModelForm, QrSolver, SelectParams, WeakForm, build_system, fit_quality, select_terms,
+    EXPLAINED_WARNING_WINDOWS, IdentifyParams, ModelForm, QrSolver, SelectParams, WeakForm, build_system,
+    fit_quality, select_terms,
 };
 use upo_search::Windows;
 
@@ -32,11 +33,14 @@ fn the_paper_model_fits_and_a_model_without_the_drive_says_so() {
     };
     let good = quality(ModelForm::parametric());
     assert!(good.explained > 1.0 - 1e-9, "{}", good.explained);
-    assert!(good.peaks().is_empty() && good.warning().is_none());
+    assert!(good.warning(EXPLAINED_WARNING_WINDOWS).is_none());
 
     let bad = quality(ModelForm::parametric().without_parametric_terms());
     assert!(bad.explained < 0.9, "{}", bad.explained);
-    assert!(bad.warning().is_some_and(|w| w.contains("likely missing terms")));
+    assert!(
+        bad.warning(EXPLAINED_WARNING_WINDOWS)
+            .is_some_and(|w| w.contains("likely missing terms"))
+    );
 }
 
 /// From the paper's model plus candidates the pendulum does not have, selection keeps exactly

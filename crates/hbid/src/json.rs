@@ -45,8 +45,7 @@ pub fn identification(id: &Identification, method: &str, basis: &str) -> serde_j
         "residual_spectrum": id.quality.spectrum.iter().map(|l| serde_json::json!({
             "harmonic": l.harmonic, "residual_rms": l.residual_rms, "rhs_rms": l.rhs_rms, "rows": l.rows,
         })).collect::<Vec<_>>(),
-        "residual_peaks": id.quality.peaks(),
-        "warning": id.quality.warning(),
+        "warning": id.warning,
     })
 }
 

@@ -287,7 +287,7 @@ pub fn run(args: &IdentifyArgs, quiet: bool, timings: bool) -> anyhow::Result<()
         save_model(&id.model, path)?;
     }
     let basis_name = args.basis_name(data.domain);
-    if let Some(w) = id.quality.warning() {
+    if let Some(w) = &id.warning {
         eprintln!("warning: {w}");
     }
     if args.json {

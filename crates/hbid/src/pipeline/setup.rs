@@ -6,9 +6,9 @@ use std::fmt;
 use circle_signal::{SampleClock, Segment};
 use hb_basis::BasisKind;
 use hb_solve::{
-    Assembly, Bootstrap, BootstrapParams, FitQuality, HarmonicBalance, Harmonics, IdentifiedModel,
-    IdentifyParams, LstsqSolver, ModelForm, NoiseCorrection, QrSolver, SolveError, WeakForm, bootstrap_fit,
-    build_system, fit_quality,
+    Assembly, Bootstrap, BootstrapParams, EXPLAINED_WARNING_ORBITS, EXPLAINED_WARNING_WINDOWS, FitQuality,
+    HarmonicBalance, Harmonics, IdentifiedModel, IdentifyParams, LstsqSolver, ModelForm, NoiseCorrection,
+    QrSolver, SolveError, WeakForm, bootstrap_fit, build_system, fit_quality,
 };
 
 use super::PipelineError;
@@ -184,6 +184,9 @@ pub struct Identification {
     /// How well it fits: the fraction of the balanced acceleration it explains and the residual
     /// by frequency ([`hb_solve::fit_quality`]).
     pub quality: FitQuality,
+    /// A warning when it explains too little for its method (see
+    /// [`hb_solve::EXPLAINED_WARNING_WINDOWS`] and [`hb_solve::EXPLAINED_WARNING_ORBITS`]).
+    pub warning: Option<String>,
 }
 
 impl Setup {
@@ -233,6 +236,10 @@ impl Setup {
         let fit = system.solve(solver)?;
         let model = IdentifiedModel::from_fit(self.basis, &self.params, &system, &fit, solver.name())?;
         let quality = fit_quality(&system, &fit.solution)?;
+        let warning = quality.warning(match self.method {
+            Method::Upo => EXPLAINED_WARNING_ORBITS,
+            Method::Windowed => EXPLAINED_WARNING_WINDOWS,
+        });
         let intervals = match &self.bootstrap {
             Some(b) => {
                 progress(IdentifyStep::Bootstrap);
@@ -244,6 +251,7 @@ impl Setup {
             model,
             intervals,
             quality,
+            warning,
         })
     }
 }
