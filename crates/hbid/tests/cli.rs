@@ -1411,3 +1411,188 @@ fn measured_velocity_needs_the_line() {
     let out = hbid(&["identify", record.to_str().unwrap(), "--measured", "velocity"]);
     assert_clean_failure(&out, "needs --signal line");
 }
+
+/// The value of a term named as the identification names it (factors joined by `*`, `t` the
+/// drive's phase `wt`, `kt` its k-th harmonic) at `(x, v)`: an independent reading of the names.
+fn term_value(name: &str, wt: f64, x: f64, v: f64) -> f64 {
+    let drive = |f: &str| -> Option<f64> {
+        let (cos, rest) = match (f.strip_prefix("cos("), f.strip_prefix("sin(")) {
+            (Some(rest), _) => (true, rest),
+            (_, Some(rest)) => (false, rest),
+            _ => return None,
+        };
+        let k = rest.strip_suffix("t)")?;
+        let k: f64 = if k.is_empty() { 1.0 } else { k.parse().ok()? };
+        Some(if cos { (k * wt).cos() } else { (k * wt).sin() })
+    };
+    name.split('*')
+        .map(|f| match f {
+            "x'" => v,
+            "|x'|" => v.abs(),
+            "x'^3" => v.powi(3),
+            "sign(x')" => {
+                if v == 0.0 {
+                    0.0
+                } else {
+                    v.signum()
+                }
+            }
+            "x" => x,
+            "x^2" => x * x,
+            "x^3" => x.powi(3),
+            "sin(x)" => x.sin(),
+            "cos(x)" => x.cos(),
+            other => drive(other).unwrap_or_else(|| panic!("unknown factor {other}")),
+        })
+        .product()
+}
+
+/// A rig's friction, drag, cubic damping and drive harmonics reach the truth file, in the
+/// record's seconds, and the record satisfies the equation the file writes (the acceleration
+/// from differences of the written velocity against the terms, away from reversals of the
+/// velocity, where friction jumps): for the pendulum and the Duffing oscillator.
+#[test]
+fn simulate_real_machine_terms_flow_into_the_truth() {
+    let dir = scratch("real-machine");
+    let rig = [
+        "--drive-frequency",
+        "1.02",
+        "--sample-rate",
+        "400",
+        "--duration",
+        "12",
+        "--rtol",
+        "1e-12",
+        "--friction",
+        "0.02",
+        "--drag",
+        "0.01",
+        "--cubic-damping",
+        "0.002",
+        "--drive-harmonic",
+        "2:0.1:0.5",
+        "--drive-harmonic",
+        "3:0.05",
+        "--transient-periods",
+        "20",
+    ];
+    let w = std::f64::consts::TAU * 1.02;
+    for system in ["pendulum", "duffing"] {
+        let truth_path = dir.join(format!("{system}.json"));
+        let mut args = rig.to_vec();
+        args.extend(["--system", system, "--truth", truth_path.to_str().unwrap()]);
+        let record = simulated(&dir, &format!("{system}.csv"), &args);
+        let truth: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&truth_path).unwrap()).unwrap();
+        let coefficients = truth["coefficients"].as_object().unwrap();
+        let c = |name: &str| {
+            coefficients
+                .get(name)
+                .unwrap_or_else(|| panic!("{system}: no {name} in {coefficients:?}"))
+                .as_f64()
+                .unwrap()
+        };
+        assert!((c("sign(x')") - 0.02 * w * w).abs() < 1e-12);
+        assert_eq!(c("x'*|x'|"), 0.01);
+        assert!((c("x'^3") - 0.002 / w).abs() < 1e-15);
+        let extra: Vec<&str> = truth["identify"]["extra_terms"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_str().unwrap())
+            .collect();
+        let (want_extra, drive_2t) = match system {
+            "pendulum" => (
+                vec![
+                    "sign(x')",
+                    "x'*|x'|",
+                    "x'^3",
+                    "cos(2t)*cos(x)",
+                    "sin(2t)*cos(x)",
+                    "cos(2t)*sin(x)",
+                    "sin(2t)*sin(x)",
+                    "cos(3t)*cos(x)",
+                    "sin(3t)*cos(x)",
+                    "cos(3t)*sin(x)",
+                    "sin(3t)*sin(x)",
+                ],
+                // −f ρ W² sin(2t + 0.5) cos x: its sin(2t)*cos(x) part.
+                ("sin(2t)*cos(x)", -1.52 * 0.1 * w * w * 0.5f64.cos()),
+            ),
+            _ => (
+                vec![
+                    "sign(x')", "x'*|x'|", "x'^3", "cos(2t)", "sin(2t)", "cos(3t)", "sin(3t)",
+                ],
+                // −f ρ W² cos(2t + 0.5): its cos(2t) part.
+                ("cos(2t)", -0.3 * 0.1 * w * w * 0.5f64.cos()),
+            ),
+        };
+        assert_eq!(extra, want_extra);
+        assert!((c(drive_2t.0) - drive_2t.1).abs() < 1e-12 * w * w);
+        assert_eq!(truth["parameters"]["losses"]["friction"], 0.02);
+        assert_eq!(truth["parameters"]["drive_harmonics"][1]["k"], 3);
+        assert!(truth["equation"].as_str().unwrap().contains("sign(x')"));
+
+        let (_, rows) = read_rows(&record);
+        let h = 1.0 / 400.0;
+        let (mut worst, mut scale, mut checked): (f64, f64, usize) = (0.0, 0.0, 0);
+        for n in 2..rows.len() - 2 {
+            let v: Vec<f64> = (n - 2..=n + 2).map(|m| rows[m][2]).collect();
+            if !(v.iter().all(|&u| u > 0.0) || v.iter().all(|&u| u < 0.0)) {
+                continue;
+            }
+            let acc = (v[0] - 8.0 * v[1] + 8.0 * v[3] - v[4]) / (12.0 * h);
+            let terms: f64 = coefficients
+                .iter()
+                .map(|(name, value)| {
+                    value.as_f64().unwrap() * term_value(name, w * rows[n][0], rows[n][1], v[2])
+                })
+                .sum();
+            worst = worst.max((acc + terms).abs());
+            scale = scale.max(acc.abs());
+            checked += 1;
+        }
+        assert!(checked > 4_500, "{system}: {checked} samples checked");
+        assert!(worst < 1e-5 * scale, "{system}: residual {worst:e} of {scale:e}");
+    }
+}
+
+#[test]
+fn simulate_real_machine_options_fail_cleanly() {
+    let dir = scratch("real-machine-bad");
+    let target = dir.join("never.csv");
+    let truth = dir.join("never.json");
+    for (args, mentions) in [
+        (vec!["--friction", "-0.1"], "--friction"),
+        (vec!["--friction", "nan"], "friction"),
+        (vec!["--drag", "-1"], "--drag"),
+        (vec!["--cubic-damping", "inf"], "--cubic-damping"),
+        (vec!["--drive-harmonic", "2"], "k:ratio[:phase]"),
+        (vec!["--drive-harmonic", "2:0.1:0:1"], "k:ratio[:phase]"),
+        (vec!["--drive-harmonic", "1:0.1"], "2..=16"),
+        (vec!["--drive-harmonic", "17:0.1"], "2..=16"),
+        (vec!["--drive-harmonic", "x:0.1"], "not a whole number"),
+        (vec!["--drive-harmonic", "2:-0.1"], "ratio"),
+        (vec!["--drive-harmonic", "2:0.1:phase"], "not a number"),
+        (
+            vec!["--drive-harmonic", "2:0.1", "--drive-harmonic", "2:0.2"],
+            "more than once",
+        ),
+        (
+            vec!["--forcing", "none", "--drive-harmonic", "2:0.1"],
+            "--forcing none",
+        ),
+        (vec!["--system", "duffing", "--friction", "-1"], "--friction"),
+    ] {
+        let mut all = vec!["simulate", "--samples", "1000"];
+        all.extend(args.iter().copied());
+        all.extend([
+            "--truth",
+            truth.to_str().unwrap(),
+            "--out",
+            target.to_str().unwrap(),
+        ]);
+        assert_clean_failure(&hbid(&all), &mentions.to_lowercase());
+        assert!(!target.exists() && !truth.exists(), "{args:?} left a file");
+    }
+}

@@ -199,6 +199,34 @@ impl<S: OdeSystem<N>, const N: usize> Dop853<S, N> {
         &self.sys
     }
 
+    /// The system being integrated, to change its mode between steps.
+    pub(crate) fn system_mut(&mut self) -> &mut S {
+        &mut self.sys
+    }
+
+    /// The step size the controller proposes for the next step.
+    pub(crate) fn proposed_step(&self) -> f64 {
+        self.h
+    }
+
+    /// Restarts at `(t, y)` inside the last step (an event located there): the state, the time and
+    /// the right-hand side are replaced, the proposed step size is kept, and no interpolation is
+    /// possible until the next step.
+    pub(crate) fn restart(&mut self, t: f64, y: [f64; N]) -> Result<(), SimError> {
+        if y.iter().any(|v| !v.is_finite()) {
+            return Err(SimError::NonFinite { t });
+        }
+        self.t = t;
+        self.t_old = t;
+        self.y = y;
+        self.y_old = y;
+        self.sys.rhs(t, &self.y, &mut self.f);
+        self.stats.evaluations += 1;
+        self.dense_ready = false;
+        self.h_last = 0.0;
+        Ok(())
+    }
+
     /// Replaces the current state (e.g. after renormalising a tangent vector) and restarts from it;
     /// the step size is kept.
     pub fn set_state(&mut self, y: [f64; N]) -> Result<(), SimError> {

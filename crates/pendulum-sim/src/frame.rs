@@ -23,7 +23,10 @@
 //! terms named as the identification names them, `t` in a term standing for the drive's phase
 //! `rate · t` of the record's time: damping scales with `rate`, stiffness and drive with `rate²`,
 //! a drive phase turns `sin(t)` into `sin(t)` and `cos(t)` parts, and an offset turns `sin(x)`
-//! into `sin(x)` and `cos(x)` parts.
+//! into `sin(x)` and `cos(x)` parts. A rig's [`Losses`](crate::Losses) scale with the power of
+//! the velocity they hold: `μ sign(x')` with `W²` (the sign does not change), `d x'|x'|` not at
+//! all, `c₃ x'^3` with `1/W`; harmonic `k` of the drive is named `cos(kt)`, `sin(kt)` (`2t`,
+//! `3t`, …) and its phase at the record's `t = 0` is `k φ + φ_k`.
 //!
 //! # Example
 //!
@@ -43,7 +46,7 @@
 
 use std::f64::consts::TAU;
 
-use crate::{Duffing, Pendulum, SecondOrderSystem, SimError};
+use crate::{Branch, Duffing, Pendulum, SecondOrderSystem, SimError};
 
 /// How a record's time and coordinate relate to a system's non-dimensional ones:
 /// `τ = rate · t + phase`, `x = θ − offset` (see the [module documentation](self)).
@@ -198,6 +201,29 @@ impl<S: SecondOrderSystem> SecondOrderSystem for InFrame<S> {
         let [jx, jv] = self.system.jacobian(rate * t + phase, x + offset, v / rate);
         [rate * rate * jx, rate * jv]
     }
+
+    fn switches_at_rest(&self) -> bool {
+        self.system.switches_at_rest()
+    }
+
+    /// The branch is the same in both frames: `rate > 0` keeps the sign of the velocity.
+    #[inline]
+    fn acceleration_on(&self, branch: Branch, t: f64, x: f64, v: f64) -> f64 {
+        let RecordFrame { rate, phase, offset } = self.frame;
+        rate * rate
+            * self
+                .system
+                .acceleration_on(branch, rate * t + phase, x + offset, v / rate)
+    }
+
+    #[inline]
+    fn jacobian_on(&self, branch: Branch, t: f64, x: f64, v: f64) -> [f64; 2] {
+        let RecordFrame { rate, phase, offset } = self.frame;
+        let [jx, jv] = self
+            .system
+            .jacobian_on(branch, rate * t + phase, x + offset, v / rate);
+        [rate * rate * jx, rate * jv]
+    }
 }
 
 /// A system whose equation is known: its coefficients in the identification's form.
@@ -217,6 +243,26 @@ fn plain(v: f64) -> f64 {
     v + 0.0
 }
 
+/// The name of harmonic `k` of the drive's phase: `t`, `2t`, `3t`, ...
+fn harmonic(k: u32) -> String {
+    if k == 1 { "t".to_owned() } else { format!("{k}t") }
+}
+
+/// The terms of the [`Losses`](crate::Losses) in a frame of rate `w`, those that are not zero:
+/// `sign(x')` = `μ W²`, `x'*|x'|` = `d` and `x'^3` = `c₃ / W` (the velocity in the record's unit
+/// is `W` times the system's, the acceleration `W²` times).
+fn loss_terms(losses: &crate::Losses, w: f64) -> Vec<(String, f64)> {
+    [
+        ("sign(x')", losses.friction(), losses.friction() * (w * w)),
+        ("x'*|x'|", losses.drag(), losses.drag()),
+        ("x'^3", losses.cubic_damping(), losses.cubic_damping() / w),
+    ]
+    .into_iter()
+    .filter(|&(_, given, _)| given != 0.0)
+    .map(|(name, _, value)| (name.to_owned(), plain(value)))
+    .collect()
+}
+
 impl TrueCoefficients for Pendulum {
     /// The seven terms of the harmonic basis of order 1 with parametric terms, in the
     /// identification's column order: `x'`, `cos(t)*cos(x)`, `sin(t)*cos(x)`, `cos(x)`,
@@ -224,6 +270,12 @@ impl TrueCoefficients for Pendulum {
     /// 0, 0, 0, `1/r²` (bit for bit); in a frame of rate `W`, drive phase `φ` and offset `o`,
     /// `x'` is `c W`, `sin(x)` and `cos(x)` are `(W²/r²)(cos o, sin o)`, and the drive
     /// `−f W² sin(t + φ) cos(x + o)` spreads over the four parametric terms.
+    ///
+    /// Then, for a rig, the losses that are not zero (`sign(x')` = `μ W²`, `x'*|x'|` = `d`,
+    /// `x'^3` = `c₃ / W`) and for each harmonic `k` of the base acceleration with a non-zero
+    /// ratio `ρ_k` the four terms `cos(kt)*cos(x)`, `sin(kt)*cos(x)`, `cos(kt)*sin(x)`,
+    /// `sin(kt)*sin(x)` of `−f ρ_k W² sin(k t + k φ + φ_k) cos(x + o)` (`t` standing for the
+    /// drive's phase `W t`, so the `k`-th harmonic's phase at the record's `t = 0` is `k φ + φ_k`).
     fn coefficients(&self, frame: &RecordFrame) -> Result<Vec<(String, f64)>, SimError> {
         let w = frame.rate;
         let w2 = w * w;
@@ -240,7 +292,20 @@ impl TrueCoefficients for Pendulum {
             ("sin(t)*sin(x)", -drive * cos_phi * sin_o),
             ("sin(x)", stiffness * cos_o),
         ];
-        Ok(terms.iter().map(|&(n, v)| (n.to_owned(), plain(v))).collect())
+        let mut out: Vec<(String, f64)> = terms.iter().map(|&(n, v)| (n.to_owned(), plain(v))).collect();
+        out.extend(loss_terms(self.losses(), w));
+        for h in self.drive_harmonics().iter().filter(|h| h.ratio() != 0.0) {
+            let k = harmonic(h.k());
+            let drive_k = drive * h.ratio();
+            let (sin_psi, cos_psi) = (f64::from(h.k()) * frame.phase + h.phase()).sin_cos();
+            out.extend([
+                (format!("cos({k})*cos(x)"), plain(drive_k * sin_psi * cos_o)),
+                (format!("sin({k})*cos(x)"), plain(drive_k * cos_psi * cos_o)),
+                (format!("cos({k})*sin(x)"), plain(-drive_k * sin_psi * sin_o)),
+                (format!("sin({k})*sin(x)"), plain(-drive_k * cos_psi * sin_o)),
+            ]);
+        }
+        Ok(out)
     }
 }
 
@@ -248,6 +313,10 @@ impl TrueCoefficients for Duffing {
     /// The terms of the polynomial basis that the equation uses: `x'` = `c W`, `x` = `a W²`,
     /// `x^3` = `b W²`, and the drive `−f W² cos(t + φ)` as `cos(t)` = `−f W² cos φ` and
     /// `sin(t)` = `f W² sin φ`; `x^2` and the parametric terms are 0.
+    ///
+    /// Then, for a rig, the losses that are not zero (`sign(x')` = `μ W²`, `x'*|x'|` = `d`,
+    /// `x'^3` = `c₃ / W`) and for each harmonic `k` of the forcing with a non-zero ratio `ρ_k`
+    /// the terms `cos(kt)` = `−f ρ_k W² cos ψ` and `sin(kt)` = `f ρ_k W² sin ψ`, `ψ = k φ + φ_k`.
     ///
     /// Errors: a non-zero offset (a shifted displacement needs a constant term, which the
     /// identification's form has not).
@@ -270,28 +339,63 @@ impl TrueCoefficients for Duffing {
             ("cos(t)", drive * cos_phi),
             ("sin(t)", -drive * sin_phi),
         ];
-        Ok(terms.iter().map(|&(n, v)| (n.to_owned(), plain(v))).collect())
+        let mut out: Vec<(String, f64)> = terms.iter().map(|&(n, v)| (n.to_owned(), plain(v))).collect();
+        out.extend(loss_terms(self.losses(), w));
+        for h in self.drive_harmonics().iter().filter(|h| h.ratio() != 0.0) {
+            let k = harmonic(h.k());
+            let drive_k = drive * h.ratio();
+            let (sin_psi, cos_psi) = (f64::from(h.k()) * frame.phase + h.phase()).sin_cos();
+            out.extend([
+                (format!("cos({k})"), plain(drive_k * cos_psi)),
+                (format!("sin({k})"), plain(-drive_k * sin_psi)),
+            ]);
+        }
+        Ok(out)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{SimulationConfig, Tolerances, simulate};
+    use crate::{DriveHarmonic, DriveHarmonics, Losses, SimulationConfig, Tolerances, simulate};
 
     /// The value of a named term at `(t, x, v)` of the record: `t` in a name is the drive's phase
     /// `rate · t`. An independent reading of the names, term by term.
     fn term(name: &str, wt: f64, x: f64, v: f64) -> f64 {
+        // `cos(kt)` or `sin(kt)` as (is it a cosine, k).
+        let drive = |f: &str| -> Option<(bool, f64)> {
+            let (cos, rest) = match (f.strip_prefix("cos("), f.strip_prefix("sin(")) {
+                (Some(rest), _) => (true, rest),
+                (_, Some(rest)) => (false, rest),
+                _ => return None,
+            };
+            let k = rest.strip_suffix("t)")?;
+            let k = if k.is_empty() { 1.0 } else { k.parse().ok()? };
+            Some((cos, k))
+        };
         let factor = |f: &str| match f {
             "x'" => v,
+            "|x'|" => v.abs(),
+            "x'^3" => v * v * v,
+            "sign(x')" => {
+                if v > 0.0 {
+                    1.0
+                } else if v < 0.0 {
+                    -1.0
+                } else {
+                    0.0
+                }
+            }
             "x" => x,
             "x^2" => x * x,
             "x^3" => x * x * x,
             "sin(x)" => x.sin(),
             "cos(x)" => x.cos(),
-            "sin(t)" => wt.sin(),
-            "cos(t)" => wt.cos(),
-            other => panic!("unknown factor {other}"),
+            other => match drive(other) {
+                Some((true, k)) => (k * wt).cos(),
+                Some((false, k)) => (k * wt).sin(),
+                None => panic!("unknown factor {other}"),
+            },
         };
         name.split('*').map(factor).product()
     }
@@ -366,11 +470,49 @@ mod tests {
         );
     }
 
-    /// The coefficients, read term by term, give the acceleration of the system in the frame.
+    /// A rig's losses and drive harmonics.
+    fn rig_extras() -> (Losses, DriveHarmonics) {
+        let losses = Losses::none()
+            .with_friction(0.04)
+            .unwrap()
+            .with_drag(0.02)
+            .unwrap()
+            .with_cubic_damping(0.003)
+            .unwrap();
+        let harmonics = DriveHarmonics::new(&[
+            DriveHarmonic::new(2, 0.1, 0.7).unwrap(),
+            DriveHarmonic::new(3, 0.05, -2.0).unwrap(),
+        ])
+        .unwrap();
+        (losses, harmonics)
+    }
+
+    /// The coefficients, read term by term, give the acceleration of the system in the frame,
+    /// with and without a rig's losses and drive harmonics.
     #[test]
     fn coefficients_are_the_framed_equation() {
-        let pendulum = Pendulum::new(1.3, 0.07, 0.9).unwrap();
-        let duffing = Duffing::new(0.15, -1.2, 0.8, 0.4).unwrap();
+        let (losses, harmonics) = rig_extras();
+        for (pendulum, duffing) in [
+            (
+                Pendulum::new(1.3, 0.07, 0.9).unwrap(),
+                Duffing::new(0.15, -1.2, 0.8, 0.4).unwrap(),
+            ),
+            (
+                Pendulum::new(1.3, 0.07, 0.9)
+                    .unwrap()
+                    .with_losses(losses)
+                    .with_drive_harmonics(harmonics),
+                Duffing::new(0.15, -1.2, 0.8, 0.4)
+                    .unwrap()
+                    .with_losses(losses)
+                    .with_drive_harmonics(harmonics),
+            ),
+        ] {
+            framed_equation(pendulum, duffing);
+        }
+    }
+
+    fn framed_equation(pendulum: Pendulum, duffing: Duffing) {
         for frame in frames() {
             let rate = frame.rate();
             let p_terms = pendulum.coefficients(&frame).unwrap();
@@ -398,6 +540,57 @@ mod tests {
         }
         let shifted = RecordFrame::nondimensional().with_offset(0.1).unwrap();
         assert!(duffing.coefficients(&shifted).is_err());
+    }
+
+    /// The new terms by name, in seconds with no offset: friction scales with `W²`, drag not at
+    /// all, cubic damping with `1/W`, and the `k`-th harmonic's phase at `t = 0` is `k φ + φ_k`.
+    #[test]
+    fn rig_terms_in_seconds() {
+        let (losses, harmonics) = rig_extras();
+        let frame = RecordFrame::nondimensional()
+            .with_drive_frequency(1.02)
+            .unwrap()
+            .with_phase(0.4)
+            .unwrap();
+        let w = frame.rate();
+        let pendulum = Pendulum::paper()
+            .with_losses(losses)
+            .with_drive_harmonics(harmonics);
+        let got = pendulum.coefficients(&frame).unwrap();
+        let value = |name: &str| {
+            got.iter()
+                .find(|(n, _)| n == name)
+                .unwrap_or_else(|| panic!("no {name} in {got:?}"))
+                .1
+        };
+        assert_eq!(got.len(), 7 + 3 + 8);
+        assert!((value("sign(x')") - 0.04 * w * w).abs() < 1e-14 * w * w);
+        assert_eq!(value("x'*|x'|"), 0.02);
+        assert!((value("x'^3") - 0.003 / w).abs() < 1e-18);
+        let drive2 = -1.52 * 0.1 * w * w;
+        let psi2: f64 = 2.0 * 0.4 + 0.7;
+        assert!((value("cos(2t)*cos(x)") - drive2 * psi2.sin()).abs() < 1e-12);
+        assert!((value("sin(2t)*cos(x)") - drive2 * psi2.cos()).abs() < 1e-12);
+        // No offset: the harmonics have no `sin(x)` parts.
+        assert_eq!(value("cos(2t)*sin(x)"), 0.0);
+        assert_eq!(value("sin(3t)*sin(x)"), 0.0);
+        let duffing = Duffing::two_well()
+            .with_losses(losses)
+            .with_drive_harmonics(harmonics);
+        let got = duffing.coefficients(&frame).unwrap();
+        let value = |name: &str| got.iter().find(|(n, _)| n == name).unwrap().1;
+        let drive3 = -0.3 * 0.05 * w * w;
+        let psi3: f64 = 3.0 * 0.4 - 2.0;
+        assert!((value("cos(3t)") - drive3 * psi3.cos()).abs() < 1e-12);
+        assert!((value("sin(3t)") + drive3 * psi3.sin()).abs() < 1e-12);
+        // Zero losses and harmonics of zero amplitude add no terms.
+        let bare = Pendulum::paper()
+            .with_losses(Losses::none().with_drag(0.0).unwrap())
+            .with_drive_harmonics(DriveHarmonics::new(&[DriveHarmonic::new(2, 0.0, 1.0).unwrap()]).unwrap());
+        assert_eq!(
+            bare.coefficients(&frame).unwrap(),
+            Pendulum::paper().coefficients(&frame).unwrap()
+        );
     }
 
     #[test]
@@ -467,6 +660,64 @@ mod tests {
             assert!((tau.t[n] - rate * record.t[n]).abs() < 1e-9);
             assert!((tau.theta[n] - record.theta[n]).abs() < 1e-7, "sample {n}");
             assert!((rate * tau.omega[n] - record.omega[n]).abs() < 1e-6, "sample {n}");
+        }
+    }
+    /// A rig's record in seconds, with every loss and two drive harmonics, satisfies the
+    /// equation its true coefficients write, at every sample whose neighbours lie on one side of
+    /// `x' = 0` (the acceleration jumps by `2 μ W²` there, which no difference resolves).
+    #[test]
+    fn a_rig_record_in_seconds_satisfies_its_true_equation() {
+        let (losses, harmonics) = rig_extras();
+        let hz = 1.02;
+        let frame = RecordFrame::nondimensional().with_drive_frequency(hz).unwrap();
+        let rate = frame.rate();
+        let fs = 500.0;
+        let config = SimulationConfig::paper()
+            .with_forcing_period(1.0 / hz)
+            .unwrap()
+            .with_sample_step(1.0 / fs)
+            .unwrap()
+            .with_transient_periods(3)
+            .with_samples(3000)
+            .unwrap()
+            .with_tolerances(Tolerances::relative(1e-12).unwrap());
+        for (rig, terms) in [
+            {
+                let p = Pendulum::paper()
+                    .with_losses(losses)
+                    .with_drive_harmonics(harmonics);
+                (
+                    simulate(&InFrame::new(p, frame), &config).unwrap(),
+                    p.coefficients(&frame).unwrap(),
+                )
+            },
+            {
+                let d = Duffing::two_well()
+                    .with_losses(losses)
+                    .with_drive_harmonics(harmonics);
+                (
+                    simulate(&InFrame::new(d, frame), &config).unwrap(),
+                    d.coefficients(&frame).unwrap(),
+                )
+            },
+        ] {
+            let h = 1.0 / fs;
+            let v = &rig.omega;
+            let (mut worst, mut scale, mut checked): (f64, f64, usize) = (0.0, 0.0, 0);
+            for n in 2..rig.len() - 2 {
+                let one_side =
+                    v[n - 2..=n + 2].iter().all(|&w| w > 0.0) || v[n - 2..=n + 2].iter().all(|&w| w < 0.0);
+                if !one_side {
+                    continue;
+                }
+                let acc = (v[n - 2] - 8.0 * v[n - 1] + 8.0 * v[n + 1] - v[n + 2]) / (12.0 * h);
+                let residual = acc - from_terms(&terms, rate, rig.t[n], rig.theta[n], v[n]);
+                worst = worst.max(residual.abs());
+                scale = scale.max(acc.abs());
+                checked += 1;
+            }
+            assert!(checked > 2900, "{checked} samples checked");
+            assert!(worst < 1e-6 * scale, "residual {worst:e} of {scale:e}");
         }
     }
 }

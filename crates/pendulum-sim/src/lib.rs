@@ -26,7 +26,49 @@
 //!   shooting (with Floquet multipliers), [`section_energy_distance`] between Poincaré sections,
 //!   and the [`whirling_fraction`];
 //! - [`observe`]: what an encoder reports of the simulated angle (zero offset, seeded noise,
-//!   counts per turn, bit errors, the wrap) and where a record has gaps.
+//!   counts per turn, bit errors, the wrap) and where a record has gaps;
+//! - a real machine's imperfections ([`Losses`]: dry friction `μ sign(x')`, quadratic drag
+//!   `d x'|x'|`, cubic damping `c₃ x'^3`; [`DriveHarmonics`]: harmonics `k = 2, 3, …` of the
+//!   drive), options of [`Pendulum`] and [`Duffing`] that leave them exactly as they were when
+//!   absent.
+//!
+//! # Dry friction: integrating across `x' = 0`
+//!
+//! `sign(x')` jumps at `x' = 0`, and `|x'|` has a kink there. An adaptive Runge–Kutta method
+//! integrating through the jump loses its order in the step that contains it, and where the
+//! forcing cannot overcome the friction the exact solution stays at rest while the sign
+//! chatters, which no step size control resolves. So a system that declares the switch
+//! ([`SecondOrderSystem::switches_at_rest`]) is integrated by event location, with Filippov's
+//! convention at rest:
+//!
+//! - each side of `x' = 0` on its own smooth branch ([`SecondOrderSystem::acceleration_on`]:
+//!   `sign(x') = ±1`, `|x'| = ±x'`), so DOP853 keeps its order in every step;
+//! - every `x' = 0` located on the step's dense output (the velocity looked at at eight points
+//!   of each step, the zero then bisected to the last bit of the time), the step cut there;
+//! - at `x' = 0` a branch starts only if it accelerates away from rest on its own side
+//!   (`s F_s(t, x, 0) > 0`); if neither does, the body sticks (`x' = 0`, `x` constant,
+//!   exactly) until one does, tested at points no further apart than the step the controller
+//!   proposed when it stopped, the release then bisected on `F` itself;
+//! - the tangent vectors of the Lyapunov exponent and of Newton shooting jump by the saltation
+//!   matrix at each reversal (`diag(1, F_new/F_old)`) and lose their velocity part at a stick.
+//!
+//! A reversal of the velocity that starts and ends within one eighth of a step is not seen.
+//! A smooth system runs through exactly the same steps as before (the paper's numbers are
+//! unchanged bit for bit).
+//!
+//! Accuracy, measured by `cargo run --release -p pendulum-sim --example friction`:
+//!
+//! - the free decay of `x'' + ω² x + μ sign(x') = 0` (ω = 1.3, μ = 0.05, from rest at 1: 17
+//!   swings, each `2μ/ω²` smaller, then at rest) against its closed form: the largest error of
+//!   `x` over 60 time units is 1.6e-6, 3.2e-8, 5.3e-10, 2.8e-12 at rtol 1e-6, 1e-8, 1e-10,
+//!   1e-12 (about 5 rtol), the velocity's 30 % more, and the amplitude lost in 7 cycles is
+//!   `28 μ/ω²` to 4.8e-10 at rtol 1e-10; the final rest position to 5e-10;
+//! - a driven oscillator that sticks for half of the time (`x'' + 0.1 x' + x + 0.45 sign(x')
+//!   = 0.5 cos t`) against the same equation with `tanh(x'/ε)` for `sign(x')`, integrated as a
+//!   smooth stiff system: the difference is 3.6e-5, 4.2e-6, 4.7e-7 for ε = 1e-5, 1e-6, 1e-7,
+//!   converging like `5 ε` to the located solution;
+//! - the chaotic pendulum with `μ = 0.02`, `d = 0.01`, `c₃ = 0.002`, rtol 1e-10 against 1e-13:
+//!   3.4e-10 after 3 forcing periods (the paper's pendulum: 3.3e-9), 3.2e-9 after 10.
 //!
 //! # Example
 //!
@@ -49,8 +91,10 @@
 mod dop853;
 mod error;
 pub mod frame;
+mod machine;
 pub mod observe;
 mod simulate;
+mod switching;
 mod system;
 mod tableau;
 mod validate;
@@ -59,11 +103,12 @@ pub use circle_signal::Domain;
 pub use dop853::{Dop853, OdeSystem, Stats, Tolerances};
 pub use error::SimError;
 pub use frame::{InFrame, RecordFrame, TrueCoefficients};
+pub use machine::{DriveHarmonic, DriveHarmonics, Losses};
 pub use simulate::{
     FirstOrder, LyapunovConfig, LyapunovEstimate, SimulationConfig, Tangent, Trajectory, largest_lyapunov,
     poincare_section, simulate, simulate_with_progress,
 };
-pub use system::{Duffing, Pendulum, SecondOrderSystem};
+pub use system::{Branch, Duffing, Pendulum, SecondOrderSystem};
 pub use validate::{
     CheckConfig, ModelCheck, PeriodicOrbit, Seeds, ShootingConfig, Variational, check_model, energy_distance,
     flow_with_jacobian, periodic_orbits, section_energy_distance, whirling_fraction,

@@ -2,7 +2,8 @@
 
 use std::f64::consts::TAU;
 
-use crate::dop853::{Dop853, OdeSystem, Tolerances};
+use crate::dop853::{OdeSystem, Tolerances};
+use crate::switching::{Flow, OnMode, Switched};
 use crate::{SecondOrderSystem, SimError};
 
 /// A second-order system seen as the first-order system `(x, v)' = (v, F(t, x, v))`.
@@ -13,6 +14,16 @@ impl<S: SecondOrderSystem> OdeSystem<2> for FirstOrder<S> {
     #[inline]
     fn rhs(&self, t: f64, y: &[f64; 2], dy: &mut [f64; 2]) {
         *dy = [y[1], self.0.acceleration(t, y[0], y[1])];
+    }
+}
+
+impl<S: SecondOrderSystem> Switched<2> for FirstOrder<OnMode<S>> {
+    type System = S;
+    fn on_mode(&self) -> &OnMode<S> {
+        &self.0
+    }
+    fn on_mode_mut(&mut self) -> &mut OnMode<S> {
+        &mut self.0
     }
 }
 
@@ -30,6 +41,16 @@ impl<S: SecondOrderSystem> OdeSystem<4> for Tangent<S> {
             y[3],
             jx * y[2] + jv * y[3],
         ];
+    }
+}
+
+impl<S: SecondOrderSystem> Switched<4> for Tangent<OnMode<S>> {
+    type System = S;
+    fn on_mode(&self) -> &OnMode<S> {
+        &self.0
+    }
+    fn on_mode_mut(&mut self) -> &mut OnMode<S> {
+        &mut self.0
     }
 }
 
@@ -339,7 +360,12 @@ pub fn simulate_with_progress<S: SecondOrderSystem>(
         theta: Vec::with_capacity(config.samples),
         omega: Vec::with_capacity(config.samples),
     };
-    let mut ode = Dop853::new(FirstOrder(system), 0.0, config.initial, config.tolerances)?;
+    let mut ode = Flow::new(
+        FirstOrder(OnMode::new(system)),
+        0.0,
+        config.initial,
+        config.tolerances,
+    )?;
     let t_first = config.first_sample_time();
     let report_every = (config.samples / 100).max(1);
     progress(0, config.samples);
@@ -511,12 +537,22 @@ pub fn largest_lyapunov<S: SecondOrderSystem>(
     mut progress: impl FnMut(usize, usize),
 ) -> Result<LyapunovEstimate, SimError> {
     let period = config.forcing_period;
-    let mut ode = Dop853::new(FirstOrder(system), 0.0, config.initial, config.tolerances)?;
+    let mut ode = Flow::new(
+        FirstOrder(OnMode::new(system)),
+        0.0,
+        config.initial,
+        config.tolerances,
+    )?;
     let t_start = config.transient_periods as f64 * period;
     ode.advance_to(t_start)?;
     let [x, v] = *ode.y();
     let s = std::f64::consts::FRAC_1_SQRT_2;
-    let mut tangent = Dop853::new(Tangent(system), t_start, [x, v, s, s], config.tolerances)?;
+    let mut tangent = Flow::new(
+        Tangent(OnMode::new(system)),
+        t_start,
+        [x, v, s, s],
+        config.tolerances,
+    )?;
     let mut logs = Vec::with_capacity(config.periods);
     for p in 1..=config.periods {
         tangent.advance_to(t_start + p as f64 * period)?;

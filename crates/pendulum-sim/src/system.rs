@@ -3,17 +3,84 @@
 use serde::{Deserialize, Serialize};
 
 use crate::SimError;
+use crate::machine::{DriveHarmonics, Losses};
 
 /// A forced second-order oscillator `x'' = F(t, x, x')`.
 ///
 /// Both the true pendulum and every identified model implement this, so they run through the
 /// same integrator, stroboscopic sampler and Lyapunov estimator.
+///
+/// A system whose `F` has terms in `sign(x')` or `|x'|` (dry friction, quadratic drag) says so
+/// with [`switches_at_rest`](Self::switches_at_rest) and gives its two smooth branches
+/// ([`acceleration_on`](Self::acceleration_on), [`jacobian_on`](Self::jacobian_on)): the
+/// integrators of this crate then integrate each side of `x' = 0` on its own branch, locate every
+/// `x' = 0` and decide there whether the motion reverses or sticks (see the crate documentation).
+/// A smooth system needs none of the three.
 pub trait SecondOrderSystem {
-    /// The acceleration `F(t, x, v)`.
+    /// The acceleration `F(t, x, v)` (with `sign(0) = 0` for a term in `sign(x')`).
     fn acceleration(&self, t: f64, x: f64, v: f64) -> f64;
 
-    /// The partial derivatives `[∂F/∂x, ∂F/∂v]` at `(t, x, v)`, for tangent-linear integration.
+    /// The partial derivatives `[∂F/∂x, ∂F/∂v]` at `(t, x, v)`, for tangent-linear integration
+    /// (away from `v = 0` for a system that switches there).
     fn jacobian(&self, t: f64, x: f64, v: f64) -> [f64; 2];
+
+    /// Whether `F` is not smooth at `x' = 0` (default: smooth).
+    fn switches_at_rest(&self) -> bool {
+        false
+    }
+
+    /// `F` on a branch: `sign(x')` taken as the branch's sign and `|x'|` as `sign · x'`, a function
+    /// smooth in `v` that equals `F` on the branch's side of `v = 0`. Default: `F`.
+    fn acceleration_on(&self, branch: Branch, t: f64, x: f64, v: f64) -> f64 {
+        let _ = branch;
+        self.acceleration(t, x, v)
+    }
+
+    /// The partial derivatives of [`acceleration_on`](Self::acceleration_on). Default: the
+    /// [`jacobian`](Self::jacobian).
+    fn jacobian_on(&self, branch: Branch, t: f64, x: f64, v: f64) -> [f64; 2] {
+        let _ = branch;
+        self.jacobian(t, x, v)
+    }
+}
+
+/// A side of `x' = 0`: where the velocity is positive, or negative.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Branch {
+    /// `x' > 0`: `sign(x') = 1`.
+    Forward,
+    /// `x' < 0`: `sign(x') = −1`.
+    Backward,
+}
+
+impl Branch {
+    /// `1` or `−1`.
+    #[inline]
+    pub fn sign(self) -> f64 {
+        match self {
+            Self::Forward => 1.0,
+            Self::Backward => -1.0,
+        }
+    }
+
+    /// The branch of a non-zero velocity; `None` for `v = 0` (or NaN).
+    pub fn of(v: f64) -> Option<Self> {
+        if v > 0.0 {
+            Some(Self::Forward)
+        } else if v < 0.0 {
+            Some(Self::Backward)
+        } else {
+            None
+        }
+    }
+
+    /// The other side.
+    pub fn reversed(self) -> Self {
+        match self {
+            Self::Forward => Self::Backward,
+            Self::Backward => Self::Forward,
+        }
+    }
 }
 
 impl<S: SecondOrderSystem + ?Sized> SecondOrderSystem for &S {
@@ -23,14 +90,30 @@ impl<S: SecondOrderSystem + ?Sized> SecondOrderSystem for &S {
     fn jacobian(&self, t: f64, x: f64, v: f64) -> [f64; 2] {
         (**self).jacobian(t, x, v)
     }
+    fn switches_at_rest(&self) -> bool {
+        (**self).switches_at_rest()
+    }
+    fn acceleration_on(&self, branch: Branch, t: f64, x: f64, v: f64) -> f64 {
+        (**self).acceleration_on(branch, t, x, v)
+    }
+    fn jacobian_on(&self, branch: Branch, t: f64, x: f64, v: f64) -> [f64; 2] {
+        (**self).jacobian_on(branch, t, x, v)
+    }
 }
 
 /// The horizontally base-excited pendulum, paper eq. 1 in non-dimensional time:
 ///
 /// `x'' + c x' + (1/r²) sin x − f sin(t) cos x = 0`.
 ///
+/// A real rig adds [`Losses`] (dry friction, quadratic drag, cubic damping) and
+/// [`DriveHarmonics`] (harmonics of the base acceleration) with [`Pendulum::with_losses`] and
+/// [`Pendulum::with_drive_harmonics`]:
+///
+/// `x'' + c x' + μ sign(x') + d x'|x'| + c₃ x'^3 + (1/r²) sin x − f [sin(t) + Σ ρ_k sin(k t + φ_k)] cos x = 0`.
+///
 /// Construct with [`Pendulum::new`] (validated) or [`Pendulum::paper`]. Serialised as `f`, `c`
-/// and `r` only; deserialising validates them as [`Pendulum::new`] does.
+/// and `r`, with `losses` and `drive_harmonics` only when there are any; deserialising validates
+/// them as the constructors do.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(try_from = "PendulumRaw", into = "PendulumRaw")]
 pub struct Pendulum {
@@ -39,6 +122,8 @@ pub struct Pendulum {
     r: f64,
     /// `1/r²`, cached for the right-hand side; derived from `r`, so never serialised.
     inv_r2: f64,
+    losses: Losses,
+    harmonics: DriveHarmonics,
 }
 
 /// The serialised form of [`Pendulum`].
@@ -47,12 +132,18 @@ struct PendulumRaw {
     f: f64,
     c: f64,
     r: f64,
+    #[serde(default, skip_serializing_if = "Losses::is_none")]
+    losses: Losses,
+    #[serde(default, skip_serializing_if = "DriveHarmonics::is_empty")]
+    drive_harmonics: DriveHarmonics,
 }
 
 impl TryFrom<PendulumRaw> for Pendulum {
     type Error = SimError;
     fn try_from(raw: PendulumRaw) -> Result<Self, SimError> {
-        Self::new(raw.f, raw.c, raw.r)
+        Ok(Self::new(raw.f, raw.c, raw.r)?
+            .with_losses(raw.losses)
+            .with_drive_harmonics(raw.drive_harmonics))
     }
 }
 
@@ -62,6 +153,8 @@ impl From<Pendulum> for PendulumRaw {
             f: p.f,
             c: p.c,
             r: p.r,
+            losses: p.losses,
+            drive_harmonics: p.harmonics,
         }
     }
 }
@@ -95,6 +188,8 @@ impl Pendulum {
             c,
             r,
             inv_r2: 1.0 / (r * r),
+            losses: Losses::none(),
+            harmonics: DriveHarmonics::none(),
         })
     }
 
@@ -106,7 +201,39 @@ impl Pendulum {
             c,
             r,
             inv_r2: 1.0 / (r * r),
+            losses: Losses::none(),
+            harmonics: DriveHarmonics::none(),
         }
+    }
+
+    /// The pendulum with `losses` (validated when built) beside its viscous damping.
+    pub fn with_losses(mut self, losses: Losses) -> Self {
+        self.losses = losses;
+        self
+    }
+
+    /// The pendulum whose base acceleration has the harmonics `harmonics` (validated when built)
+    /// beside its fundamental `sin(t)`; their amplitudes are ratios to `f`.
+    pub fn with_drive_harmonics(mut self, harmonics: DriveHarmonics) -> Self {
+        self.harmonics = harmonics;
+        self
+    }
+
+    /// The losses beyond viscous damping.
+    pub fn losses(&self) -> &Losses {
+        &self.losses
+    }
+
+    /// The harmonics of the base acceleration.
+    pub fn drive_harmonics(&self) -> &DriveHarmonics {
+        &self.harmonics
+    }
+
+    /// The energy `E = v²/2 + (1 − cos x)/r²` of the undamped, undriven pendulum; along a
+    /// solution `dE/dt = −c v² − (μ |v| + d |v|³ + c₃ v⁴) + f a(t) cos(x) v`, `a(t)` the base
+    /// acceleration.
+    pub fn energy(&self, x: f64, v: f64) -> f64 {
+        0.5 * v * v + self.inv_r2 * (1.0 - x.cos())
     }
 
     /// Forcing amplitude `f`.
@@ -123,17 +250,68 @@ impl Pendulum {
     }
 }
 
+impl Pendulum {
+    /// `F` without the [`Losses`]: `−c v − (1/r²) sin x + f a(t) cos x`.
+    #[inline]
+    fn ideal(&self, t: f64, x: f64, v: f64) -> f64 {
+        let (s, c) = x.sin_cos();
+        let a = -self.c * v - self.inv_r2 * s + self.f * t.sin() * c;
+        if self.harmonics.has_terms() {
+            a + self.f * self.harmonics.sin_sum(t) * c
+        } else {
+            a
+        }
+    }
+
+    /// `∂F/∂x`.
+    #[inline]
+    fn stiffness_slope(&self, t: f64, x: f64) -> f64 {
+        let (s, c) = x.sin_cos();
+        let j = -self.inv_r2 * c - self.f * t.sin() * s;
+        if self.harmonics.has_terms() {
+            j - self.f * self.harmonics.sin_sum(t) * s
+        } else {
+            j
+        }
+    }
+}
+
 impl SecondOrderSystem for Pendulum {
     #[inline]
     fn acceleration(&self, t: f64, x: f64, v: f64) -> f64 {
-        let (s, c) = x.sin_cos();
-        -self.c * v - self.inv_r2 * s + self.f * t.sin() * c
+        let a = self.ideal(t, x, v);
+        if self.losses.is_none() {
+            a
+        } else {
+            a - self.losses.force(v)
+        }
     }
 
     #[inline]
-    fn jacobian(&self, t: f64, x: f64, _v: f64) -> [f64; 2] {
-        let (s, c) = x.sin_cos();
-        [-self.inv_r2 * c - self.f * t.sin() * s, -self.c]
+    fn jacobian(&self, t: f64, x: f64, v: f64) -> [f64; 2] {
+        let jv = if self.losses.is_none() {
+            -self.c
+        } else {
+            -self.c - self.losses.force_slope(v)
+        };
+        [self.stiffness_slope(t, x), jv]
+    }
+
+    fn switches_at_rest(&self) -> bool {
+        self.losses.switches_at_rest()
+    }
+
+    #[inline]
+    fn acceleration_on(&self, branch: Branch, t: f64, x: f64, v: f64) -> f64 {
+        self.ideal(t, x, v) - self.losses.force_on(branch, v)
+    }
+
+    #[inline]
+    fn jacobian_on(&self, branch: Branch, t: f64, x: f64, v: f64) -> [f64; 2] {
+        [
+            self.stiffness_slope(t, x),
+            -self.c - self.losses.force_slope_on(branch, v),
+        ]
     }
 }
 
@@ -147,8 +325,14 @@ impl SecondOrderSystem for Pendulum {
 /// between them. The drive stands on the right-hand side: in the identification's form
 /// `x'' + Σ c_i g_i = 0` its term `cos(t)` has the coefficient `−f`.
 ///
+/// A real rig adds [`Losses`] and [`DriveHarmonics`] (harmonics of the forcing) with
+/// [`Duffing::with_losses`] and [`Duffing::with_drive_harmonics`]:
+///
+/// `x'' + c x' + μ sign(x') + d x'|x'| + c₃ x'^3 + a x + b x³ = f [cos(t) + Σ ρ_k cos(k t + φ_k)]`.
+///
 /// Construct with [`Duffing::new`] (validated) or [`Duffing::two_well`]. Serialised as `c`, `a`,
-/// `b` and `f`; deserialising validates them as [`Duffing::new`] does.
+/// `b` and `f`, with `losses` and `drive_harmonics` only when there are any; deserialising
+/// validates them as the constructors do.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(try_from = "DuffingRaw", into = "DuffingRaw")]
 pub struct Duffing {
@@ -156,6 +340,8 @@ pub struct Duffing {
     a: f64,
     b: f64,
     f: f64,
+    losses: Losses,
+    harmonics: DriveHarmonics,
 }
 
 /// The serialised form of [`Duffing`].
@@ -165,12 +351,18 @@ struct DuffingRaw {
     a: f64,
     b: f64,
     f: f64,
+    #[serde(default, skip_serializing_if = "Losses::is_none")]
+    losses: Losses,
+    #[serde(default, skip_serializing_if = "DriveHarmonics::is_empty")]
+    drive_harmonics: DriveHarmonics,
 }
 
 impl TryFrom<DuffingRaw> for Duffing {
     type Error = SimError;
     fn try_from(raw: DuffingRaw) -> Result<Self, SimError> {
-        Self::new(raw.c, raw.a, raw.b, raw.f)
+        Ok(Self::new(raw.c, raw.a, raw.b, raw.f)?
+            .with_losses(raw.losses)
+            .with_drive_harmonics(raw.drive_harmonics))
     }
 }
 
@@ -181,6 +373,8 @@ impl From<Duffing> for DuffingRaw {
             a: d.a,
             b: d.b,
             f: d.f,
+            losses: d.losses,
+            drive_harmonics: d.harmonics,
         }
     }
 }
@@ -203,13 +397,50 @@ impl Duffing {
                 });
             }
         }
-        Ok(Self { c, a, b, f })
+        Ok(Self {
+            c,
+            a,
+            b,
+            f,
+            losses: Losses::none(),
+            harmonics: DriveHarmonics::none(),
+        })
     }
 
     /// The chaotic two-well oscillator [`Duffing::TWO_WELL`].
     pub fn two_well() -> Self {
         let (c, a, b, f) = Self::TWO_WELL;
-        Self { c, a, b, f }
+        Self {
+            c,
+            a,
+            b,
+            f,
+            losses: Losses::none(),
+            harmonics: DriveHarmonics::none(),
+        }
+    }
+
+    /// The oscillator with `losses` (validated when built) beside its viscous damping.
+    pub fn with_losses(mut self, losses: Losses) -> Self {
+        self.losses = losses;
+        self
+    }
+
+    /// The oscillator whose forcing has the harmonics `harmonics` (validated when built) beside
+    /// its fundamental `cos(t)`; their amplitudes are ratios to `f`.
+    pub fn with_drive_harmonics(mut self, harmonics: DriveHarmonics) -> Self {
+        self.harmonics = harmonics;
+        self
+    }
+
+    /// The losses beyond viscous damping.
+    pub fn losses(&self) -> &Losses {
+        &self.losses
+    }
+
+    /// The harmonics of the forcing.
+    pub fn drive_harmonics(&self) -> &DriveHarmonics {
+        &self.harmonics
     }
 
     /// Damping `c`.
@@ -230,21 +461,61 @@ impl Duffing {
     }
 
     /// The energy `E = v²/2 + a x²/2 + b x⁴/4` of the undamped, undriven oscillator; along a
-    /// solution `dE/dt = −c v² + f cos(t) v`.
+    /// solution `dE/dt = −c v² − (μ |v| + d |v|³ + c₃ v⁴) + f [cos(t) + Σ ρ_k cos(k t + φ_k)] v`.
     pub fn energy(&self, x: f64, v: f64) -> f64 {
         0.5 * v * v + 0.5 * self.a * x * x + 0.25 * self.b * x.powi(4)
+    }
+}
+
+impl Duffing {
+    /// `F` without the [`Losses`].
+    #[inline]
+    fn ideal(&self, t: f64, x: f64, v: f64) -> f64 {
+        let a = self.f * t.cos() - self.c * v - self.a * x - self.b * x * x * x;
+        if self.harmonics.has_terms() {
+            a + self.f * self.harmonics.cos_sum(t)
+        } else {
+            a
+        }
     }
 }
 
 impl SecondOrderSystem for Duffing {
     #[inline]
     fn acceleration(&self, t: f64, x: f64, v: f64) -> f64 {
-        self.f * t.cos() - self.c * v - self.a * x - self.b * x * x * x
+        let a = self.ideal(t, x, v);
+        if self.losses.is_none() {
+            a
+        } else {
+            a - self.losses.force(v)
+        }
     }
 
     #[inline]
-    fn jacobian(&self, _t: f64, x: f64, _v: f64) -> [f64; 2] {
-        [-self.a - 3.0 * self.b * x * x, -self.c]
+    fn jacobian(&self, _t: f64, x: f64, v: f64) -> [f64; 2] {
+        let jv = if self.losses.is_none() {
+            -self.c
+        } else {
+            -self.c - self.losses.force_slope(v)
+        };
+        [-self.a - 3.0 * self.b * x * x, jv]
+    }
+
+    fn switches_at_rest(&self) -> bool {
+        self.losses.switches_at_rest()
+    }
+
+    #[inline]
+    fn acceleration_on(&self, branch: Branch, t: f64, x: f64, v: f64) -> f64 {
+        self.ideal(t, x, v) - self.losses.force_on(branch, v)
+    }
+
+    #[inline]
+    fn jacobian_on(&self, branch: Branch, _t: f64, x: f64, v: f64) -> [f64; 2] {
+        [
+            -self.a - 3.0 * self.b * x * x,
+            -self.c - self.losses.force_slope_on(branch, v),
+        ]
     }
 }
 

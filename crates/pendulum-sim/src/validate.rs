@@ -7,8 +7,9 @@ use std::f64::consts::{PI, TAU};
 
 use nalgebra::{Matrix2, Vector2};
 
-use crate::dop853::{Dop853, OdeSystem, Tolerances};
+use crate::dop853::{OdeSystem, Tolerances};
 use crate::simulate::checked_period;
+use crate::switching::{Flow, OnMode, Switched};
 use crate::{
     LyapunovConfig, LyapunovEstimate, SecondOrderSystem, SimError, SimulationConfig, largest_lyapunov,
     poincare_section,
@@ -34,6 +35,16 @@ impl<S: SecondOrderSystem> OdeSystem<6> for Variational<S> {
     }
 }
 
+impl<S: SecondOrderSystem> Switched<6> for Variational<OnMode<S>> {
+    type System = S;
+    fn on_mode(&self) -> &OnMode<S> {
+        &self.0
+    }
+    fn on_mode_mut(&mut self) -> &mut OnMode<S> {
+        &mut self.0
+    }
+}
+
 /// The flow over `duration` from `(x, v)` at `t0`, and its derivative (the monodromy matrix when
 /// `duration` is the period).
 pub fn flow_with_jacobian<S: SecondOrderSystem>(
@@ -43,8 +54,8 @@ pub fn flow_with_jacobian<S: SecondOrderSystem>(
     duration: f64,
     tolerances: Tolerances,
 ) -> Result<([f64; 2], Matrix2<f64>), SimError> {
-    let mut ode = Dop853::new(
-        Variational(system),
+    let mut ode = Flow::new(
+        Variational(OnMode::new(system)),
         t0,
         [state[0], state[1], 1.0, 0.0, 0.0, 1.0],
         tolerances,

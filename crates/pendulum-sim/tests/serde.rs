@@ -1,7 +1,8 @@
 //! Deserialising a validated type runs its validation: an invalid value is rejected, a valid one
 //! round-trips.
 use pendulum_sim::{
-    CheckConfig, Domain, Duffing, LyapunovConfig, Pendulum, ShootingConfig, SimulationConfig, Tolerances,
+    CheckConfig, Domain, DriveHarmonic, DriveHarmonics, Duffing, Losses, LyapunovConfig, Pendulum,
+    ShootingConfig, SimulationConfig, Tolerances,
 };
 use serde::Serialize;
 use serde::de::DeserializeOwned;
@@ -97,6 +98,71 @@ fn duffing() {
     assert_eq!(
         serde_json::to_value(d).unwrap(),
         json!({"c": 0.15, "a": -1.0, "b": 1.0, "f": 0.3})
+    );
+}
+
+/// A rig's losses and drive harmonics.
+fn rig() -> (Losses, DriveHarmonics) {
+    let losses = Losses::none()
+        .with_friction(0.05)
+        .unwrap()
+        .with_drag(0.01)
+        .unwrap()
+        .with_cubic_damping(0.002)
+        .unwrap();
+    let harmonics = DriveHarmonics::new(&[
+        DriveHarmonic::new(3, 0.05, -1.0).unwrap(),
+        DriveHarmonic::new(2, 0.1, 0.5).unwrap(),
+    ])
+    .unwrap();
+    (losses, harmonics)
+}
+
+#[test]
+fn rig_options() {
+    let (losses, harmonics) = rig();
+    round_trips(&losses);
+    round_trips(&harmonics);
+    assert_eq!(
+        serde_json::to_value(losses).unwrap(),
+        json!({"friction": 0.05, "drag": 0.01, "cubic_damping": 0.002})
+    );
+    // Listed by increasing harmonic, the phase optional.
+    assert_eq!(
+        serde_json::to_value(harmonics).unwrap(),
+        json!([{"k": 2, "ratio": 0.1, "phase": 0.5}, {"k": 3, "ratio": 0.05, "phase": -1.0}])
+    );
+    let no_phase: DriveHarmonics = serde_json::from_value(json!([{"k": 4, "ratio": 0.2}])).unwrap();
+    assert_eq!(no_phase.iter().next().unwrap().phase(), 0.0);
+    rejects(&losses, &["friction"], json!(-0.1), "invalid friction");
+    rejects(&losses, &["drag"], json!(-1.0), "invalid drag");
+    rejects(&losses, &["cubic_damping"], json!(-1e-3), "invalid cubic damping");
+    for (bad, why) in [
+        (json!([{"k": 1, "ratio": 0.1}]), "invalid drive harmonic"),
+        (json!([{"k": 17, "ratio": 0.1}]), "invalid drive harmonic"),
+        (json!([{"k": 2, "ratio": -0.1}]), "invalid drive harmonic ratio"),
+        (
+            json!([{"k": 2, "ratio": 0.1}, {"k": 2, "ratio": 0.2}]),
+            "more than once",
+        ),
+    ] {
+        let err = serde_json::from_value::<DriveHarmonics>(bad.clone()).expect_err(&bad.to_string());
+        assert!(err.to_string().contains(why), "{err}");
+    }
+    // A system with options round-trips and checks them; without, its form is unchanged.
+    let p = Pendulum::paper()
+        .with_losses(losses)
+        .with_drive_harmonics(harmonics);
+    round_trips(&p);
+    rejects(&p, &["losses", "friction"], json!(-1.0), "invalid friction");
+    let d = Duffing::two_well()
+        .with_losses(losses)
+        .with_drive_harmonics(harmonics);
+    round_trips(&d);
+    rejects(&d, &["losses", "drag"], json!(-0.5), "invalid drag");
+    assert_eq!(
+        serde_json::to_value(Pendulum::paper().with_losses(Losses::none())).unwrap(),
+        json!({"f": 1.52, "c": 0.03, "r": 0.8333})
     );
 }
 

@@ -15,8 +15,8 @@ use hb_solve::{Forcing, ModelForm};
 use npyz::WriterBuilder;
 use pendulum_sim::observe::{AngleRange, Encoder, Gaps};
 use pendulum_sim::{
-    Duffing, InFrame, Pendulum, RecordFrame, SecondOrderSystem, SimulationConfig, Tolerances, Trajectory,
-    TrueCoefficients, simulate_with_progress,
+    DriveHarmonic, DriveHarmonics, Duffing, InFrame, Losses, Pendulum, RecordFrame, SecondOrderSystem,
+    SimulationConfig, Tolerances, Trajectory, TrueCoefficients, simulate_with_progress,
 };
 use serde::Serialize;
 
@@ -87,6 +87,21 @@ pub struct SimulateArgs {
     /// Duffing: cubic stiffness b [default: 1].
     #[arg(long, allow_hyphen_values = true, help_heading = SYSTEM)]
     b: Option<f64>,
+    /// Dry (Coulomb) friction μ: the term μ sign(x') in the model's time (at rest the body sticks
+    /// while the other forces stay within μ).
+    #[arg(long, value_name = "MU", allow_hyphen_values = true, help_heading = SYSTEM)]
+    friction: Option<f64>,
+    /// Quadratic (air) drag d: the term d x'|x'| in the model's time.
+    #[arg(long, value_name = "D", allow_hyphen_values = true, help_heading = SYSTEM)]
+    drag: Option<f64>,
+    /// Cubic damping c3: the term c3 x'^3 in the model's time.
+    #[arg(long, value_name = "C", allow_hyphen_values = true, help_heading = SYSTEM)]
+    cubic_damping: Option<f64>,
+    /// A harmonic of the drive, K:RATIO[:PHASE] (repeatable): harmonic K (2 to 16) with amplitude
+    /// RATIO times f and phase PHASE radians [default: 0], added to the pendulum's base acceleration
+    /// sin(t) as RATIO sin(K t + PHASE), or to the Duffing forcing cos(t) as RATIO cos(K t + PHASE).
+    #[arg(long, value_name = "K:RATIO[:PHASE]", help_heading = SYSTEM)]
+    drive_harmonic: Vec<String>,
     /// `drive`, or `none` for a free decay (f = 0; the time unit stays the one --drive-frequency sets).
     #[arg(long, value_enum, default_value_t = DriveArg::Drive, help_heading = SYSTEM)]
     forcing: DriveArg,
@@ -192,13 +207,19 @@ impl System {
             DriveArg::Drive => args.f.unwrap_or(default),
             DriveArg::None => 0.0,
         };
+        let losses = losses(args)?;
+        let harmonics = drive_harmonics(args)?;
         Ok(match args.system {
             SystemArg::Pendulum => {
                 if args.a.is_some() || args.b.is_some() {
                     bail!("--a and --b are the Duffing oscillator's stiffnesses (--system duffing)");
                 }
                 let (f, c, r) = Pendulum::PAPER;
-                Self::Pendulum(Pendulum::new(drive(f), args.c.unwrap_or(c), args.r.unwrap_or(r))?)
+                Self::Pendulum(
+                    Pendulum::new(drive(f), args.c.unwrap_or(c), args.r.unwrap_or(r))?
+                        .with_losses(losses)
+                        .with_drive_harmonics(harmonics),
+                )
             }
             SystemArg::Duffing => {
                 if args.r.is_some() {
@@ -217,12 +238,16 @@ impl System {
                     );
                 }
                 let (c, a, b, f) = Duffing::TWO_WELL;
-                Self::Duffing(Duffing::new(
-                    args.c.unwrap_or(c),
-                    args.a.unwrap_or(a),
-                    args.b.unwrap_or(b),
-                    drive(f),
-                )?)
+                Self::Duffing(
+                    Duffing::new(
+                        args.c.unwrap_or(c),
+                        args.a.unwrap_or(a),
+                        args.b.unwrap_or(b),
+                        drive(f),
+                    )?
+                    .with_losses(losses)
+                    .with_drive_harmonics(harmonics),
+                )
             }
         })
     }
@@ -233,6 +258,84 @@ impl System {
             Self::Duffing(_) => "duffing",
         }
     }
+
+    /// The equation in the model's own time, with the rig's terms that are present.
+    fn equation(&self) -> String {
+        let (losses, harmonics) = match self {
+            Self::Pendulum(p) => (*p.losses(), *p.drive_harmonics()),
+            Self::Duffing(d) => (*d.losses(), *d.drive_harmonics()),
+        };
+        let mut dissipation = String::from("c x'");
+        for (present, term) in [
+            (losses.friction() != 0.0, " + mu sign(x')"),
+            (losses.drag() != 0.0, " + d x'|x'|"),
+            (losses.cubic_damping() != 0.0, " + c3 x'^3"),
+        ] {
+            if present {
+                dissipation.push_str(term);
+            }
+        }
+        let with_harmonics = !harmonics.is_none();
+        match (self, with_harmonics) {
+            (Self::Pendulum(_), false) => format!("x'' + {dissipation} + (1/r^2) sin x - f sin(t) cos x = 0"),
+            (Self::Pendulum(_), true) => format!(
+                "x'' + {dissipation} + (1/r^2) sin x - f [sin(t) + sum_k ratio_k sin(k t + phase_k)] cos x = 0"
+            ),
+            (Self::Duffing(_), false) => format!("x'' + {dissipation} + a x + b x^3 = f cos(t)"),
+            (Self::Duffing(_), true) => {
+                format!("x'' + {dissipation} + a x + b x^3 = f [cos(t) + sum_k ratio_k cos(k t + phase_k)]")
+            }
+        }
+    }
+}
+
+/// The losses of the options, each checked.
+fn losses(args: &SimulateArgs) -> anyhow::Result<Losses> {
+    let mut losses = Losses::none();
+    if let Some(mu) = args.friction {
+        losses = losses.with_friction(mu).context("--friction")?;
+    }
+    if let Some(d) = args.drag {
+        losses = losses.with_drag(d).context("--drag")?;
+    }
+    if let Some(c3) = args.cubic_damping {
+        losses = losses.with_cubic_damping(c3).context("--cubic-damping")?;
+    }
+    Ok(losses)
+}
+
+/// The harmonics of the drive, from every `--drive-harmonic K:RATIO[:PHASE]`.
+fn drive_harmonics(args: &SimulateArgs) -> anyhow::Result<DriveHarmonics> {
+    if args.forcing == DriveArg::None && !args.drive_harmonic.is_empty() {
+        bail!("--drive-harmonic is a harmonic of the drive: not with --forcing none");
+    }
+    let list = args
+        .drive_harmonic
+        .iter()
+        .map(|text| parse_harmonic(text))
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    DriveHarmonics::new(&list).context("--drive-harmonic")
+}
+
+/// `K:RATIO[:PHASE]`.
+fn parse_harmonic(text: &str) -> anyhow::Result<DriveHarmonic> {
+    let parts: Vec<&str> = text.split(':').map(str::trim).collect();
+    if !(2..=3).contains(&parts.len()) {
+        bail!("--drive-harmonic '{text}': expected K:RATIO[:PHASE], e.g. 2:0.1 or 3:0.05:1.2");
+    }
+    let k = parts[0]
+        .parse::<u32>()
+        .map_err(|_| anyhow::anyhow!("--drive-harmonic '{text}': '{}' is not a whole number", parts[0]))?;
+    let number = |s: &str| {
+        s.parse::<f64>()
+            .map_err(|_| anyhow::anyhow!("--drive-harmonic '{text}': '{s}' is not a number"))
+    };
+    let ratio = number(parts[1])?;
+    let phase = match parts.get(2) {
+        Some(p) => number(p)?,
+        None => 0.0,
+    };
+    DriveHarmonic::new(k, ratio, phase).with_context(|| format!("--drive-harmonic '{text}'"))
 }
 
 /// The record's time: its frame relative to the model's, and the sampling.
@@ -597,7 +700,7 @@ struct Truth {
     version: u32,
     system: &'static str,
     /// The equation in the model's own time, and its parameters.
-    equation: &'static str,
+    equation: String,
     parameters: serde_json::Value,
     forcing: &'static str,
     /// How `hbid identify` reads the record by default: signal, basis, forcing terms, column.
@@ -639,6 +742,9 @@ struct IdentifyHint {
     basis: &'static str,
     forcing: &'static str,
     angle_column: &'static str,
+    /// Terms of the true equation beyond the layout of `basis` and `forcing` (a rig's losses and
+    /// drive harmonics), listed after it in `coefficients`.
+    extra_terms: Vec<String>,
 }
 
 #[derive(Debug, Serialize)]
@@ -675,17 +781,17 @@ fn truth(
         TimeOriginArg::FirstSample => timing.first_phase,
     };
     let frame = timing.frame.with_phase(at_zero)?.with_offset(offset)?;
-    let (known, layout, equation, parameters, hint) = match system {
+    let (known, layout, parameters, mut hint) = match system {
         System::Pendulum(p) => (
             p.coefficients(&frame)?,
             hb_solve::term_names(&Harmonic::new(1)?, &ModelForm::parametric()),
-            "x'' + c x' + (1/r^2) sin x - f sin(t) cos x = 0",
             serde_json::to_value(p)?,
             IdentifyHint {
                 signal: "circle",
                 basis: "harmonic:1",
                 forcing: "none",
                 angle_column: columns[1],
+                extra_terms: Vec::new(),
             },
         ),
         System::Duffing(d) => (
@@ -694,26 +800,28 @@ fn truth(
                 &Polynomial::new(3)?,
                 &ModelForm::parametric().with_forcing(Forcing::Identified),
             ),
-            "x'' + c x' + a x + b x^3 = f cos(t)",
             serde_json::to_value(d)?,
             IdentifyHint {
                 signal: "line",
                 basis: "poly:3",
                 forcing: "identified",
                 angle_column: columns[1],
+                extra_terms: Vec::new(),
             },
         ),
     };
-    if let Some((name, _)) = known.iter().find(|(n, _)| !layout.contains(n)) {
-        bail!("the true term {name} is not in the identification's layout {layout:?}");
-    }
-    let coefficients = layout
-        .into_iter()
+    // Every term of the layout, then the rig's terms beyond it in the order of the equation.
+    let mut coefficients: Vec<(String, f64)> = layout
+        .iter()
         .map(|name| {
-            let value = known.iter().find(|(n, _)| *n == name).map_or(0.0, |(_, v)| *v);
-            (name, value)
+            let value = known.iter().find(|(n, _)| n == name).map_or(0.0, |(_, v)| *v);
+            (name.clone(), value)
         })
         .collect();
+    for (name, value) in known.into_iter().filter(|(n, _)| !layout.contains(n)) {
+        hint.extra_terms.push(name.clone());
+        coefficients.push((name, value));
+    }
     let config = &timing.config;
     let step = config.sample_step();
     let first_sample_time = match args.time_origin {
@@ -751,7 +859,7 @@ fn truth(
         format: "hbid-truth",
         version: 1,
         system: system.name(),
-        equation,
+        equation: system.equation(),
         parameters,
         forcing: match args.forcing {
             DriveArg::Drive => "drive",
