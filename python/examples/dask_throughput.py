@@ -1,0 +1,99 @@
+"""The cost of a Dask sweep: its throughput on a LocalCluster against a Rust loop over the same
+identifications on a rayon pool, on the same machine.
+
+    python python/examples/dask_throughput.py [--workers 2] [--repeats 3]
+
+The cases are the grid of python/tests/test_dask.py (10 noise levels x 20 seeds; 500 samples and
+50 bootstrap resamples each), each `simulate(samples, noise, seed)` then `identify(x, t=t,
+bootstrap, seed)`. Four timings, the best of `--repeats` each:
+
+- rust:   the cases on a rayon pool of `--workers` threads, in the extension, without Python;
+- dask:   the cases as tasks on LocalCluster(n_workers=--workers, threads_per_worker=1), results
+          (Identification objects) gathered to the client;
+- rust/1 and python/1: one thread, Rust alone and the Python loop, to tell the cost of the Python
+          layer from the cost of Dask.
+
+Every Dask result is checked against the Rust loop's JSON for the same case. Build the package
+in release (`pip install ./python`) before timing.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+
+import hbid
+from hbid import _hbid
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import dask_sweep  # noqa: E402
+
+NOISE = [0.001, 0.002, 0.003, 0.005, 0.007, 0.01, 0.015, 0.02, 0.03, 0.05]
+SEEDS = range(20)
+SAMPLES = 500
+BOOTSTRAP = 50
+
+
+def best(repeats: int, run) -> float:
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        run()
+        times.append(time.perf_counter() - start)
+    return min(times)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--repeats", type=int, default=3)
+    args = parser.parse_args()
+
+    from dask.distributed import Client, LocalCluster
+    import cloudpickle
+
+    cloudpickle.register_pickle_by_value(dask_sweep)
+    cases = [(n, s) for n in NOISE for s in SEEDS]
+    n = len(cases)
+
+    reference = _hbid.rayon_sweep(cases, samples=SAMPLES, bootstrap=BOOTSTRAP, threads=args.workers)
+    rust = best(args.repeats, lambda: _hbid.rayon_sweep(cases, samples=SAMPLES, bootstrap=BOOTSTRAP, threads=args.workers))
+    rust1 = best(args.repeats, lambda: _hbid.rayon_sweep(cases, samples=SAMPLES, bootstrap=BOOTSTRAP, threads=1))
+    python1 = best(args.repeats, lambda: [dask_sweep.case(a, b, SAMPLES, BOOTSTRAP) for a, b in cases])
+
+    cluster = LocalCluster(n_workers=args.workers, threads_per_worker=1, processes=True, dashboard_address=None)
+    with cluster, Client(cluster) as client:
+        def sweep():
+            futures = client.map(
+                dask_sweep.case, [a for a, _ in cases], [b for _, b in cases],
+                samples=SAMPLES, bootstrap=BOOTSTRAP, pure=False,
+            )
+            return dict(client.gather(futures))
+
+        results = sweep()  # warm: workers import hbid and receive the function
+        dask = best(args.repeats, sweep)
+    for (case, expected) in zip(cases, reference):
+        if json.loads(results[case].to_json()) != json.loads(expected):
+            raise SystemExit(f"case {case}: Dask and the Rust loop differ")
+
+    print(f"{n} identifications ({SAMPLES} samples, {BOOTSTRAP} bootstrap resamples each), best of {args.repeats}")
+    print(f"{'':<34} {'seconds':>8} {'per second':>11}")
+    rows = [
+        (f"rust, rayon, {args.workers} threads", rust),
+        (f"dask, LocalCluster, {args.workers} workers", dask),
+        ("rust, 1 thread", rust1),
+        ("python loop, 1 thread", python1),
+    ]
+    for name, seconds in rows:
+        print(f"{name:<34} {seconds:>8.3f} {n / seconds:>11.1f}")
+    print(f"dask / rayon throughput: {rust / dask:.1%}")
+    print(f"python loop / rust, 1 thread: {rust1 / python1:.1%}")
+    print(f"rayon speed-up on {args.workers} threads: {rust1 / rust:.2f}")
+    print("results identical: every case's JSON")
+
+
+if __name__ == "__main__":
+    main()
