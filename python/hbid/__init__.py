@@ -259,7 +259,8 @@ def _drive(value: Drive, name: str) -> Union[float, str, None]:
 # Simulation
 
 
-class Simulation(NamedTuple):
+@dataclass(frozen=True, eq=False)
+class Simulation:
     """A simulated record: ``t, x, v = hbid.simulate()`` unpacks it.
 
     ``x`` is the angle as the encoder reports it (wrapped unless ``unwrapped=True``; counts with
@@ -269,15 +270,25 @@ class Simulation(NamedTuple):
     """
 
     t: np.ndarray
+    """The time stamps."""
     x: np.ndarray
+    """The angle (or displacement, or counts) as recorded."""
     v: np.ndarray
+    """The velocity, in the record's time unit."""
     columns: Tuple[str, str, str]
+    """The columns ``hbid simulate`` would write (``t,theta,omega``, ``t,count,omega``, ``t,x,v``)."""
     truth: Dict[str, float]
+    """The true coefficients, keyed by the identification's term names."""
     forcing_period: float
+    """The drive's period in the record's time unit."""
     sample_step: float
+    """The sampling step."""
 
-    def __iter__(self) -> Iterator[np.ndarray]:  # type: ignore[override]
+    def __iter__(self) -> Iterator[np.ndarray]:
         return iter((self.t, self.x, self.v))
+
+    def __len__(self) -> int:
+        return len(self.t)
 
 
 def simulate(
@@ -867,7 +878,8 @@ class Orbit(NamedTuple):
     start: int
     """Its first sample."""
     error: float
-    """The close-return distance, a fraction of the data's span."""
+    """The close-return distance (the largest over the compared delay vectors), in the
+    signal's unit: at most the search's tolerance."""
 
 
 @dataclass(frozen=True)
@@ -875,7 +887,8 @@ class Orbits:
     """Unstable periodic orbits found by close returns, as ``hbid upos`` finds them.
 
     ``segments`` are the passages found; ``orbit_of_segment[i]`` the distinct orbit segment
-    ``i`` belongs to.
+    ``i`` belongs to; ``tolerance`` the close-return distance allowed, in the signal's unit (the
+    fraction asked for times the data's span, 2 pi for an angle).
     """
 
     segments: List[Orbit]

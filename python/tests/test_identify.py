@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import pickle
+import re
 import subprocess
 import threading
 import time
@@ -33,7 +34,7 @@ def test_identifies_the_pendulum_from_arrays(pendulum):
     assert result.samples_per_period == 25 and result.resampled_from is None
     assert result.segments > 100
     assert result.equation.startswith("x'' ") and result.equation.endswith(" = 0")
-    assert "- 1.52*sin(t)*cos(x)" in result.equation
+    assert re.search(r" - 1\.5[12]\d*\*sin\(t\)\*cos\(x\)", result.equation), result.equation
     assert result.condition_number > 1 and result.residual_rms >= 0
 
 
@@ -60,7 +61,7 @@ def test_to_json_is_the_cli_json(pendulum):
 )
 def test_same_json_as_the_command_line(tmp_path, pendulum, cli, options, args):
     path = tmp_path / "r.csv"
-    np.savetxt(path, np.c_[pendulum.t, pendulum.x], delimiter=",", header="t,theta", comments="", fmt="%r")
+    np.savetxt(path, np.c_[pendulum.t, pendulum.x], delimiter=",", header="t,theta", comments="", fmt="%.17g")
     out = subprocess.run([str(cli), "--quiet", "identify", str(path), "--json", *args], capture_output=True, text=True, check=True)
     ours = hbid.identify(hbid.read(path), **options)
     assert json.loads(ours.to_json()) == json.loads(out.stdout)
@@ -109,7 +110,7 @@ def test_same_seed_same_result_and_seeds_differ(pendulum):
 
 
 def test_results_pickle(pendulum):
-    result = hbid.identify(pendulum.x, t=pendulum.t, bootstrap=20)
+    result = hbid.identify(pendulum.x, t=pendulum.t, bootstrap=40)
     back = pickle.loads(pickle.dumps(result))
     assert back == result
     assert back.model.coefficients == result.coefficients
@@ -173,7 +174,7 @@ def test_terms_select_and_explained_are_not_there_yet(pendulum):
         ({"method": "fast"}, hbid.OptionsError, "method='fast'"),
         ({"basis": "spline:3"}, hbid.OptionsError, "unknown basis 'spline'"),
         ({"basis": "hat:x"}, hbid.OptionsError, "'x' is not a whole number"),
-        ({"level": 1.5}, hbid.OptionsError, "level"),
+        ({"level": 1.5, "bootstrap": 100}, hbid.OptionsError, "level"),
         ({"window_periods": 0}, hbid.OptionsError, "window_periods must be at least 1"),
         ({"harmonics": 0}, hbid.OptionsError, "harmonics must be at least 1"),
         ({"solver": "lu"}, hbid.OptionsError, "solver='lu'"),
@@ -183,12 +184,12 @@ def test_terms_select_and_explained_are_not_there_yet(pendulum):
         ({"forcing": "none", "method": "upo"}, hbid.OptionsError, "use method='windowed'"),
         ({"noise_sigma": "lots"}, hbid.OptionsError, "noise_sigma"),
         ({"signal": "sphere"}, hbid.OptionsError, "signal='sphere'"),
-        ({"window_periods": 1000}, hbid.IdentificationError, "windows"),
+        ({"window_periods": 1000}, hbid.IdentificationError, "too short for period 1000"),
     ],
 )
 def test_bad_options_raise_clear_errors(pendulum, kwargs, error, message):
     with pytest.raises(error, match=message):
-        hbid.identify(pendulum.x, t=pendulum.t, bootstrap=0, **kwargs)
+        hbid.identify(pendulum.x, t=pendulum.t, **{"bootstrap": 0, **kwargs})
 
 
 def test_bad_samples_raise_clear_errors(pendulum):
@@ -196,7 +197,7 @@ def test_bad_samples_raise_clear_errors(pendulum):
         hbid.identify(np.zeros((10, 2)), dt=0.1)
     with pytest.raises(hbid.OptionsError, match="not an array of numbers"):
         hbid.identify(["a", "b"], dt=0.1)
-    with pytest.raises(hbid.OptionsError, match="t or dt"):
+    with pytest.raises(hbid.OptionsError, match="the time stamps t or the sampling step dt"):
         hbid.identify(pendulum.x)
     with pytest.raises(hbid.OptionsError, match="one time per sample"):
         hbid.identify(pendulum.x, t=pendulum.t[:-1])

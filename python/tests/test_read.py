@@ -14,7 +14,7 @@ def write_csv(path, t, x, header="t,theta"):
     with open(path, "w") as f:
         f.write(header + "\n")
         for ti, xi in zip(t, x):
-            f.write(f"{ti!r},{xi!r}\n")
+            f.write(f"{float(ti)!r},{float(xi)!r}\n")
     return path
 
 
@@ -36,7 +36,7 @@ def test_reads_npy_with_a_step(tmp_path, pendulum):
     np.save(path, pendulum.x)
     record = hbid.read(path, dt=0.25)
     np.testing.assert_array_equal(record.x, pendulum.x)
-    assert (record.t0, record.dt) == (0.0, 0.25)
+    assert record.t0 == pytest.approx(0.0, abs=1e-12) and record.dt == pytest.approx(0.25, rel=1e-12)
     with pytest.raises(hbid.InputError, match="give its sampling step with dt="):
         hbid.read(path)
 
@@ -99,7 +99,7 @@ def test_columns_by_name_and_position(tmp_path, pendulum):
     with open(path, "w") as f:
         f.write("time;angle;other\n")
         for ti, xi in zip(pendulum.t[:200], pendulum.x[:200]):
-            f.write(f"{ti!r};{xi!r};1\n")
+            f.write(f"{float(ti)!r};{float(xi)!r};1\n")
     by_name = hbid.read(path, time_col="time", angle_col="angle")
     by_position = hbid.read(path, time_col=1, angle_col=2)
     np.testing.assert_array_equal(by_name.x, by_position.x)

@@ -145,7 +145,7 @@ impl IdentifyOptions {
         let solver: Box<dyn LstsqSolver> = match self.solver.as_str() {
             "qr" => Box::new(QrSolver::default()),
             "svd" => Box::new(SvdSolver::default()),
-            other => return Err(bad(format!("solver={other:?}: expected 'qr' or 'svd'"))),
+            other => return Err(bad(format!("solver='{other}': expected 'qr' or 'svd'"))),
         };
         spec = spec
             .with_noise_correction(options::noise(self.noise_sigma.clone())?)
@@ -173,7 +173,7 @@ impl IdentifyOptions {
             }),
             Some("none") => Ok(Forcing::None),
             Some("identified") => Ok(Forcing::Identified),
-            Some(other) => Err(bad(format!("forcing={other:?}: expected 'none' or 'identified'"))),
+            Some(other) => Err(bad(format!("forcing='{other}': expected 'none' or 'identified'"))),
         }
     }
 }

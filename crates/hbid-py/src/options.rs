@@ -41,7 +41,7 @@ pub fn domain(name: &str, argument: &str, also_linear: bool) -> Result<Domain, F
         "line" => Ok(Domain::Line),
         "linear" if also_linear => Ok(Domain::Line),
         other => Err(bad(format!(
-            "{argument}={other:?}: expected 'circle' or 'line'{}",
+            "{argument}='{other}': expected 'circle' or 'line'{}",
             if also_linear { " (or 'linear')" } else { "" }
         ))),
     }
@@ -52,7 +52,7 @@ pub fn method(name: &str) -> Result<Method, Failure> {
     match name {
         "windowed" => Ok(Method::Windowed),
         "upo" => Ok(Method::Upo),
-        other => Err(bad(format!("method={other:?}: expected 'windowed' or 'upo'"))),
+        other => Err(bad(format!("method='{other}': expected 'windowed' or 'upo'"))),
     }
 }
 
@@ -60,19 +60,19 @@ pub fn method(name: &str) -> Result<Method, Failure> {
 pub fn basis(text: &str) -> Result<BasisKind, Failure> {
     let (kind, n) = text
         .split_once(':')
-        .ok_or_else(|| bad(format!("basis={text:?}: expected harmonic:K, hat:N or poly:D")))?;
+        .ok_or_else(|| bad(format!("basis='{text}': expected harmonic:K, hat:N or poly:D")))?;
     let n: usize = n
         .trim()
         .parse()
-        .map_err(|_| bad(format!("basis={text:?}: '{n}' is not a whole number")))?;
-    let options = |e: hb_basis::BasisError| (Kind::Options, format!("basis={text:?}: {e}"));
+        .map_err(|_| bad(format!("basis='{text}': '{n}' is not a whole number")))?;
+    let options = |e: hb_basis::BasisError| (Kind::Options, format!("basis='{text}': {e}"));
     Ok(match kind.trim() {
         "harmonic" => BasisKind::from(Harmonic::new(n).map_err(options)?),
         "hat" => BasisKind::from(Hat::new(n).map_err(options)?),
         "poly" => BasisKind::from(Polynomial::new(n).map_err(options)?),
         other => {
             return Err(bad(format!(
-                "basis={text:?}: unknown basis '{other}' (harmonic, hat or poly)"
+                "basis='{text}': unknown basis '{other}' (harmonic, hat or poly)"
             )));
         }
     })
@@ -94,7 +94,7 @@ pub fn noise(value: Option<NumberOrText>) -> Result<NoiseCorrection, Failure> {
         Some(NumberOrText::Number(sigma)) => NoiseCorrection::Given { sigma },
         Some(NumberOrText::Text(t)) => match t.trim().parse() {
             Ok(sigma) => NoiseCorrection::Given { sigma },
-            Err(_) => return Err(bad(format!("noise_sigma={t:?}: a number of radians or 'auto'"))),
+            Err(_) => return Err(bad(format!("noise_sigma='{t}': a number of radians or 'auto'"))),
         },
     })
 }
@@ -137,7 +137,7 @@ fn one_drive(value: NumberOrText, frequency: bool) -> Result<DriveSpec, Failure>
         }
         NumberOrText::Text(t) => t,
     };
-    let shown = format!("{text:?}");
+    let shown = format!("'{text}'");
     let number = |s: &str| -> Result<f64, Failure> {
         let v: f64 = s
             .trim()

@@ -14,16 +14,10 @@ use pyo3::types::{PyDict, PyList};
 use crate::errors::Kind;
 use crate::options::{Failure, bad, fail};
 
-/// A record's samples on its grid, as Python hands them back (from a `Record` of `read`).
+/// A record's grid as Python hands it back (from a `Record` of `read`): the time of sample 0,
+/// the sampling step and the ranges of samples that hold data, `(start, stop)`.
 #[derive(Debug, Clone, FromPyObject)]
-pub struct Grid {
-    /// Time of sample 0.
-    pub t0: f64,
-    /// Sampling step.
-    pub dt: f64,
-    /// The ranges of samples that hold data, `(start, stop)`.
-    pub pieces: Vec<(usize, usize)>,
-}
+pub struct Grid(pub f64, pub f64, pub Vec<(usize, usize)>);
 
 /// Where a record comes from: samples with their time stamps or step, or samples already on
 /// their grid.
@@ -148,17 +142,17 @@ pub fn grid_data(source: Source<'_>, signal: Domain) -> Result<GridData, Failure
             condition(record, &options, &mut |_| {}).map_err(prepare_failure)
         }
         Source::Grid { x, grid } => {
-            let pieces: Vec<Range<usize>> = grid.pieces.iter().map(|&(a, b)| a..b).collect();
+            let Grid(t0, dt, pieces) = grid;
+            let pieces: Vec<Range<usize>> = pieces.iter().map(|&(a, b)| a..b).collect();
             circle_signal::check_pieces(x, &pieces).map_err(fail(Kind::Input))?;
-            if !(grid.dt.is_finite() && grid.dt > 0.0 && grid.t0.is_finite()) {
+            if !(dt.is_finite() && dt > 0.0 && t0.is_finite()) {
                 return Err(bad(format!(
-                    "a record's grid needs a finite t0 and a positive step (t0 = {}, dt = {})",
-                    grid.t0, grid.dt
+                    "a record's grid needs a finite t0 and a positive step (t0 = {t0}, dt = {dt})"
                 )));
             }
             Ok(GridData {
-                t0: grid.t0,
-                dt: grid.dt,
+                t0,
+                dt,
                 x: x.to_vec(),
                 pieces,
                 domain: signal,

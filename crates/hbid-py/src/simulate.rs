@@ -101,7 +101,7 @@ impl Rig {
         match self.forcing.as_str() {
             "drive" => Ok(true),
             "none" => Ok(false),
-            other => Err(bad(format!("forcing={other:?}: expected 'drive' or 'none'"))),
+            other => Err(bad(format!("forcing='{other}': expected 'drive' or 'none'"))),
         }
     }
 
@@ -151,7 +151,7 @@ impl Rig {
                     .map_err(fail(Kind::Options))?,
                 )
             }
-            other => return Err(bad(format!("system={other:?}: expected 'pendulum' or 'duffing'"))),
+            other => return Err(bad(format!("system='{other}': expected 'pendulum' or 'duffing'"))),
         })
     }
 
@@ -210,7 +210,7 @@ impl Rig {
             "first-sample" | "first_sample" => true,
             other => {
                 return Err(bad(format!(
-                    "time_origin={other:?}: expected 'drive' or 'first-sample'"
+                    "time_origin='{other}': expected 'drive' or 'first-sample'"
                 )));
             }
         };
@@ -250,7 +250,7 @@ impl Rig {
             Some("positive") => true,
             Some(other) => {
                 return Err(bad(format!(
-                    "angle_range={other:?}: expected 'signed' or 'positive'"
+                    "angle_range='{other}': expected 'signed' or 'positive'"
                 )));
             }
         };
