@@ -10,8 +10,9 @@ bootstrap, seed)`. Four timings, the best of `--repeats` each:
 - rust:   the cases on a rayon pool of `--workers` threads, in the extension, without Python;
 - dask:   the cases as tasks on LocalCluster(n_workers=--workers, threads_per_worker=1), results
           (Identification objects) gathered to the client;
-- rust/1 and python/1: one thread, Rust alone and the Python loop, to tell the cost of the Python
-          layer from the cost of Dask.
+- rust/1 and python/1: Rust alone on a pool of one thread, and the Python loop in this process
+          (whose library calls use rayon's global pool), to tell the cost of the Python layer from
+          the cost of Dask.
 
 Every Dask result is checked against the Rust loop's JSON for the same case. Build the package
 in release (`pip install ./python`) before timing.
@@ -59,12 +60,17 @@ def main() -> None:
     cases = [(n, s) for n in NOISE for s in SEEDS]
     n = len(cases)
 
-    reference = _hbid.rayon_sweep(cases, samples=SAMPLES, bootstrap=BOOTSTRAP, threads=args.workers)
-    rust = best(args.repeats, lambda: _hbid.rayon_sweep(cases, samples=SAMPLES, bootstrap=BOOTSTRAP, threads=args.workers))
-    rust1 = best(args.repeats, lambda: _hbid.rayon_sweep(cases, samples=SAMPLES, bootstrap=BOOTSTRAP, threads=1))
-    python1 = best(args.repeats, lambda: [dask_sweep.case(a, b, SAMPLES, BOOTSTRAP) for a, b in cases])
+    def rust(threads: int):
+        return lambda: _hbid.rayon_sweep(cases, samples=SAMPLES, bootstrap=BOOTSTRAP, threads=threads)
 
-    cluster = LocalCluster(n_workers=args.workers, threads_per_worker=1, processes=True, dashboard_address=None)
+    reference = rust(args.workers)()
+
+    # Each worker runs one task at a time; RAYON_NUM_THREADS=1 also keeps the library's own
+    # parallel loops (assembly, bootstrap) on that one thread, as docs/python.md recommends.
+    cluster = LocalCluster(
+        n_workers=args.workers, threads_per_worker=1, processes=True, dashboard_address=None,
+        env={"RAYON_NUM_THREADS": "1"},
+    )
     with cluster, Client(cluster) as client:
         def sweep():
             futures = client.map(
@@ -74,7 +80,14 @@ def main() -> None:
             return dict(client.gather(futures))
 
         results = sweep()  # warm: workers import hbid and receive the function
-        dask = best(args.repeats, sweep)
+        # interleaved, so that a change of the machine's load touches both alike
+        timings = {"rust": [], "dask": [], "rust1": [], "python1": []}
+        for _ in range(args.repeats):
+            timings["rust"].append(best(1, rust(args.workers)))
+            timings["dask"].append(best(1, sweep))
+            timings["rust1"].append(best(1, rust(1)))
+            timings["python1"].append(best(1, lambda: [dask_sweep.case(a, b, SAMPLES, BOOTSTRAP) for a, b in cases]))
+    rust, dask, rust1, python1 = (min(timings[k]) for k in ("rust", "dask", "rust1", "python1"))
     for (case, expected) in zip(cases, reference):
         if json.loads(results[case].to_json()) != json.loads(expected):
             raise SystemExit(f"case {case}: Dask and the Rust loop differ")
@@ -85,12 +98,11 @@ def main() -> None:
         (f"rust, rayon, {args.workers} threads", rust),
         (f"dask, LocalCluster, {args.workers} workers", dask),
         ("rust, 1 thread", rust1),
-        ("python loop, 1 thread", python1),
+        ("python loop (global rayon pool)", python1),
     ]
     for name, seconds in rows:
         print(f"{name:<34} {seconds:>8.3f} {n / seconds:>11.1f}")
     print(f"dask / rayon throughput: {rust / dask:.1%}")
-    print(f"python loop / rust, 1 thread: {rust1 / python1:.1%}")
     print(f"rayon speed-up on {args.workers} threads: {rust1 / rust:.2f}")
     print("results identical: every case's JSON")
 
