@@ -501,7 +501,7 @@ class Model:
             samples: samples kept.
             x0: initial position.
             v0: initial velocity.
-            samples_per_period: samples per forcing period (default: the record's).
+            samples_per_period: samples per forcing period (default: the record's, from the fit).
             transient_periods: forcing periods integrated and dropped first.
             rtol: relative tolerance of the integrator.
             wrapped: on the circle, the angle wrapped into ``[-pi, pi)``.

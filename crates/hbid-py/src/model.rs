@@ -120,7 +120,8 @@ pub fn model_load<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, Py
 }
 
 /// Simulates a model from `(x0, v0)` at the record's time: `samples` samples, `samples_per_period`
-/// per forcing period (default: the record's, from the fit), after `transient_periods`.
+/// per forcing period (default: the record's, from the fit; required for a model without one),
+/// after `transient_periods`.
 #[pyfunction]
 #[pyo3(signature = (model, *, samples, x0=0.1, v0=0.0, samples_per_period=None, transient_periods=0, rtol=1e-10, wrapped=true))]
 #[allow(clippy::too_many_arguments)]
@@ -140,7 +141,12 @@ pub fn model_simulate<'py>(
     let period = std::f64::consts::TAU / w;
     let p = samples_per_period
         .or_else(|| model.summary().and_then(|s| s.clock.whole_samples_per_period()))
-        .unwrap_or(25);
+        .ok_or_else(|| {
+            crate::errors::raise(
+                Kind::Options,
+                "samples_per_period: the model has no record to take it from; give it",
+            )
+        })?;
     let config = SimulationConfig::paper()
         .with_forcing_period(period)
         .and_then(|c| c.with_samples_per_period(p))
