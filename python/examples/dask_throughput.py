@@ -10,6 +10,8 @@ bootstrap, seed)`. Four timings, the best of `--repeats` each:
 - rust:   the cases on a rayon pool of `--workers` threads, in the extension, without Python;
 - dask:   the cases as tasks on LocalCluster(n_workers=--workers, threads_per_worker=1), results
           (Identification objects) gathered to the client;
+- empty:  as many Dask tasks that do nothing but return as many bytes as an Identification
+          pickles to: Dask's own cost per task;
 - rust/1 and python/1: Rust alone on a pool of one thread, and the Python loop in this process
           (whose library calls use rayon's global pool), to tell the cost of the Python layer from
           the cost of Dask.
@@ -23,6 +25,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import pickle
 import sys
 import time
 
@@ -36,6 +39,12 @@ NOISE = [0.001, 0.002, 0.003, 0.005, 0.007, 0.01, 0.015, 0.02, 0.03, 0.05]
 SEEDS = range(20)
 SAMPLES = 500
 BOOTSTRAP = 50
+
+
+def empty_task(i: int, size: int) -> bytes:
+    """A task that does nothing and returns as many bytes as an Identification pickles to: the
+    cost of Dask itself (scheduling, messages, pickling) per task."""
+    return bytes(size)
 
 
 def best(repeats: int, run) -> float:
@@ -81,13 +90,20 @@ def main() -> None:
 
         results = sweep()  # warm: workers import hbid and receive the function
         # interleaved, so that a change of the machine's load touches both alike
-        timings = {"rust": [], "dask": [], "rust1": [], "python1": []}
+        size = len(pickle.dumps(results[cases[0]]))
+
+        def empty():
+            futures = client.map(empty_task, range(n), size=size, pure=False)
+            return client.gather(futures)
+
+        timings = {"rust": [], "dask": [], "rust1": [], "python1": [], "empty": []}
         for _ in range(args.repeats):
             timings["rust"].append(best(1, rust(args.workers)))
             timings["dask"].append(best(1, sweep))
             timings["rust1"].append(best(1, rust(1)))
             timings["python1"].append(best(1, lambda: [dask_sweep.case(a, b, SAMPLES, BOOTSTRAP) for a, b in cases]))
-    rust, dask, rust1, python1 = (min(timings[k]) for k in ("rust", "dask", "rust1", "python1"))
+            timings["empty"].append(best(1, empty))
+    rust, dask, rust1, python1, empty_s = (min(timings[k]) for k in ("rust", "dask", "rust1", "python1", "empty"))
     for (case, expected) in zip(cases, reference):
         if json.loads(results[case].to_json()) != json.loads(expected):
             raise SystemExit(f"case {case}: Dask and the Rust loop differ")
@@ -99,6 +115,7 @@ def main() -> None:
         (f"dask, LocalCluster, {args.workers} workers", dask),
         ("rust, 1 thread", rust1),
         ("python loop (global rayon pool)", python1),
+        (f"dask, {n} empty tasks ({size} B results)", empty_s),
     ]
     for name, seconds in rows:
         print(f"{name:<34} {seconds:>8.3f} {n / seconds:>11.1f}")
