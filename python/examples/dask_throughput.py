@@ -9,7 +9,8 @@ bootstrap, seed)`. Four timings, the best of `--repeats` each:
 
 - rust:   the cases on a rayon pool of `--workers` threads, in the extension, without Python;
 - dask:   the cases as tasks on LocalCluster(n_workers=--workers, threads_per_worker=1), results
-          (Identification objects) gathered to the client;
+          (Identification objects) gathered to the client: one case per task, and `--batch` cases
+          per task;
 - empty:  as many Dask tasks that do nothing but return as many bytes as an Identification
           pickles to: Dask's own cost per task;
 - rust/1 and python/1: Rust alone on a pool of one thread, and the Python loop in this process
@@ -60,6 +61,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--batch", type=int, default=4, help="cases per task of the batched sweep")
     args = parser.parse_args()
 
     from dask.distributed import Client, LocalCluster
@@ -88,7 +90,16 @@ def main() -> None:
             )
             return dict(client.gather(futures))
 
+        def batched():
+            futures = client.map(
+                dask_sweep.batch, dask_sweep.batches(cases, args.batch),
+                samples=SAMPLES, bootstrap=BOOTSTRAP, pure=False,
+            )
+            return dict(pair for rows in client.gather(futures) for pair in rows)
+
         results = sweep()  # warm: workers import hbid and receive the function
+        if batched() != results:
+            raise SystemExit("batched and per-case tasks differ")
         # interleaved, so that a change of the machine's load touches both alike
         size = len(pickle.dumps(results[cases[0]]))
 
@@ -96,30 +107,34 @@ def main() -> None:
             futures = client.map(empty_task, range(n), size=size, pure=False)
             return client.gather(futures)
 
-        timings = {"rust": [], "dask": [], "rust1": [], "python1": [], "empty": []}
+        timings = {"rust": [], "dask": [], "batched": [], "rust1": [], "python1": [], "empty": []}
         for _ in range(args.repeats):
             timings["rust"].append(best(1, rust(args.workers)))
             timings["dask"].append(best(1, sweep))
+            timings["batched"].append(best(1, batched))
             timings["rust1"].append(best(1, rust(1)))
             timings["python1"].append(best(1, lambda: [dask_sweep.case(a, b, SAMPLES, BOOTSTRAP) for a, b in cases]))
             timings["empty"].append(best(1, empty))
-    rust, dask, rust1, python1, empty_s = (min(timings[k]) for k in ("rust", "dask", "rust1", "python1", "empty"))
+    rust, dask, batched_s, rust1, python1, empty_s = (
+        min(timings[k]) for k in ("rust", "dask", "batched", "rust1", "python1", "empty")
+    )
     for (case, expected) in zip(cases, reference):
         if json.loads(results[case].to_json()) != json.loads(expected):
             raise SystemExit(f"case {case}: Dask and the Rust loop differ")
 
     print(f"{n} identifications ({SAMPLES} samples, {BOOTSTRAP} bootstrap resamples each), best of {args.repeats}")
-    print(f"{'':<34} {'seconds':>8} {'per second':>11}")
+    print(f"{'':<40} {'seconds':>8} {'per second':>11}")
     rows = [
         (f"rust, rayon, {args.workers} threads", rust),
         (f"dask, LocalCluster, {args.workers} workers", dask),
+        (f"dask, batches of {args.batch} cases", batched_s),
         ("rust, 1 thread", rust1),
         ("python loop (global rayon pool)", python1),
         (f"dask, {n} empty tasks ({size} B results)", empty_s),
     ]
     for name, seconds in rows:
-        print(f"{name:<34} {seconds:>8.3f} {n / seconds:>11.1f}")
-    print(f"dask / rayon throughput: {rust / dask:.1%}")
+        print(f"{name:<40} {seconds:>8.3f} {n / seconds:>11.1f}")
+    print(f"dask / rayon throughput: {rust / dask:.1%} (a case per task), {rust / batched_s:.1%} (batches of {args.batch})")
     print(f"rayon speed-up on {args.workers} threads: {rust1 / rust:.2f}")
     print("results identical: every case's JSON")
 
