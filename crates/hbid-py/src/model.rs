@@ -1,0 +1,171 @@
+//! Identified models: their coefficients, saved and loaded as `hbid identify --save-model` does,
+//! and simulated by `pendulum_sim`. A model crosses into Python as its compact bytes
+//! ([`IdentifiedModel::to_bytes`]), so that it pickles as it is.
+
+use std::io::Write;
+use std::path::PathBuf;
+
+use circle_signal::Domain;
+use hb_solve::{IdentifiedModel, MODEL_MAGIC};
+use numpy::PyArray1;
+use pendulum_sim::{SimulationConfig, Tolerances, simulate};
+use pyo3::prelude::*;
+use pyo3::types::{PyBytes, PyDict};
+
+use crate::errors::{Kind, OrRaise};
+use crate::record::domain_name;
+
+/// Three arrays: time, position, velocity.
+type Arrays3<'py> = (
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
+);
+
+fn decode(bytes: &[u8]) -> PyResult<IdentifiedModel> {
+    IdentifiedModel::from_bytes(bytes).or_raise(Kind::Model)
+}
+
+/// The coefficients, basis, signal, forcing frequency and fit summary of a model.
+#[pyfunction]
+pub fn model_info<'py>(py: Python<'py>, model: &[u8]) -> PyResult<Bound<'py, PyDict>> {
+    let model = decode(model)?;
+    let out = PyDict::new(py);
+    out.set_item(
+        "coefficients",
+        model
+            .coefficients()
+            .iter()
+            .map(|c| (c.name.clone(), c.value, c.std_error))
+            .collect::<Vec<_>>(),
+    )?;
+    out.set_item("basis", model.basis().to_string())?;
+    out.set_item("signal", domain_name(model.domain()))?;
+    out.set_item("forcing_frequency", model.forcing_frequency())?;
+    match model.summary() {
+        Some(s) => {
+            let summary = PyDict::new(py);
+            summary.set_item("solver", &s.solver)?;
+            summary.set_item("rows", s.rows)?;
+            summary.set_item("unknowns", s.unknowns)?;
+            summary.set_item("segments", s.segments)?;
+            summary.set_item("whirling_segments", s.whirling_segments)?;
+            summary.set_item("condition_number", s.condition)?;
+            summary.set_item("residual_rms", s.residual_rms)?;
+            summary.set_item("forcing_period", s.clock.forcing_period())?;
+            summary.set_item("sample_step", s.clock.step())?;
+            out.set_item("summary", summary)?;
+        }
+        None => out.set_item("summary", py.None())?,
+    }
+    Ok(out)
+}
+
+/// The model as JSON (the file `--save-model model.json` writes).
+#[pyfunction]
+pub fn model_json(model: &[u8]) -> PyResult<String> {
+    decode(model)?.to_json().or_raise(Kind::Model)
+}
+
+/// A model read from JSON text (`model.json`).
+#[pyfunction]
+pub fn model_from_json<'py>(py: Python<'py>, text: &str) -> PyResult<Bound<'py, PyBytes>> {
+    let model: IdentifiedModel = IdentifiedModel::from_json(text).or_raise(Kind::Model)?;
+    Ok(PyBytes::new(py, &model.to_bytes().or_raise(Kind::Model)?))
+}
+
+/// Saves a model: JSON if the name ends in `.json`, compact binary otherwise, atomically.
+#[pyfunction]
+pub fn model_save(py: Python<'_>, model: &[u8], path: PathBuf) -> PyResult<()> {
+    let model = decode(model)?;
+    let json = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("json"));
+    let bytes = if json {
+        model.to_json().or_raise(Kind::Model)?.into_bytes()
+    } else {
+        model.to_bytes().or_raise(Kind::Model)?
+    };
+    py.detach(|| hbid::output::write_atomically(&path, |w: &mut dyn Write| w.write_all(&bytes)))
+        .map_err(|e| {
+            crate::errors::raise(
+                Kind::Model,
+                format!("{}: {}", path.display(), crate::errors::chain(&e)),
+            )
+        })
+}
+
+/// Loads a model saved by `model_save` or `hbid identify --save-model` (JSON or binary).
+#[pyfunction]
+pub fn model_load<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyBytes>> {
+    let bytes = py
+        .detach(|| std::fs::read(&path))
+        .map_err(|e| crate::errors::raise(Kind::Model, format!("{}: {e}", path.display())))?;
+    let named = |e: hb_solve::SolveError| {
+        crate::errors::raise(
+            Kind::Model,
+            format!("{}: {}", path.display(), crate::errors::chain(&e)),
+        )
+    };
+    let model: IdentifiedModel = if bytes.starts_with(&MODEL_MAGIC) {
+        IdentifiedModel::from_bytes(&bytes).map_err(named)?
+    } else {
+        let text = String::from_utf8(bytes).map_err(|_| {
+            crate::errors::raise(
+                Kind::Model,
+                format!("{}: neither a binary model nor JSON text", path.display()),
+            )
+        })?;
+        IdentifiedModel::from_json(&text).map_err(named)?
+    };
+    Ok(PyBytes::new(py, &model.to_bytes().or_raise(Kind::Model)?))
+}
+
+/// Simulates a model from `(x0, v0)` at the record's time: `samples` samples, `samples_per_period`
+/// per forcing period (default: the record's, from the fit; required for a model without one),
+/// after `transient_periods`.
+#[pyfunction]
+#[pyo3(signature = (model, *, samples, x0=0.1, v0=0.0, samples_per_period=None, transient_periods=0, rtol=1e-10, wrapped=true))]
+#[allow(clippy::too_many_arguments)]
+pub fn model_simulate<'py>(
+    py: Python<'py>,
+    model: &[u8],
+    samples: usize,
+    x0: f64,
+    v0: f64,
+    samples_per_period: Option<usize>,
+    transient_periods: usize,
+    rtol: f64,
+    wrapped: bool,
+) -> PyResult<Arrays3<'py>> {
+    let model = decode(model)?;
+    let w = model.forcing_frequency();
+    let period = std::f64::consts::TAU / w;
+    let p = samples_per_period
+        .or_else(|| model.summary().and_then(|s| s.clock.whole_samples_per_period()))
+        .ok_or_else(|| {
+            crate::errors::raise(
+                Kind::Options,
+                "samples_per_period: the model has no record to take it from; give it",
+            )
+        })?;
+    let config = SimulationConfig::paper()
+        .with_forcing_period(period)
+        .and_then(|c| c.with_samples_per_period(p))
+        .and_then(|c| c.with_samples(samples))
+        .and_then(|c| c.with_initial(x0, v0))
+        .and_then(|c| Ok(c.with_tolerances(Tolerances::relative(rtol)?)))
+        .map(|c| c.with_transient_periods(transient_periods))
+        .or_raise(Kind::Options)?;
+    let trajectory = py
+        .detach(|| simulate(&model, &config))
+        .or_raise(Kind::Simulation)?;
+    let x = if wrapped && model.domain() == Domain::Circle {
+        trajectory.wrapped()
+    } else {
+        trajectory.theta
+    };
+    Ok((
+        PyArray1::from_vec(py, trajectory.t),
+        PyArray1::from_vec(py, x),
+        PyArray1::from_vec(py, trajectory.omega),
+    ))
+}

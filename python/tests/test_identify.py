@@ -1,0 +1,218 @@
+"""hbid.identify: the command line's identification from arrays or records, its results, its
+model, and clear errors."""
+
+from __future__ import annotations
+
+import json
+import pickle
+import re
+import subprocess
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import hbid
+
+TRUE = {"x'": 0.03, "sin(x)": 1.0 / 0.8333**2, "sin(t)*cos(x)": -1.52}
+
+
+def test_identifies_the_pendulum_from_arrays(pendulum):
+    result = hbid.identify(pendulum.x, t=pendulum.t, bootstrap=200)
+    for name, value in TRUE.items():
+        assert result.coefficients[name] == pytest.approx(value, abs=1e-4), name
+        lo, hi = result.intervals[name]
+        assert lo <= result.coefficients[name] <= hi
+    assert set(result.coefficients) == set(result.std_errors) == set(result.intervals)
+    assert set(result.coefficients) == set(pendulum.truth)
+    for name, value in pendulum.truth.items():
+        assert result.coefficients[name] == pytest.approx(value, abs=1e-4), name
+    assert result.method == "windowed" and result.basis == "harmonic:1"
+    assert result.interval_level == 0.95 and result.resamples == 200
+    assert result.drive == "given" and result.forcing_period == pytest.approx(2 * np.pi)
+    assert result.samples_per_period == 25 and result.resampled_from is None
+    assert result.segments > 100
+    assert result.equation.startswith("x'' ") and result.equation.endswith(" = 0")
+    assert re.search(r" - 1\.5[12]\d*\*sin\(t\)\*cos\(x\)", result.equation), result.equation
+    assert result.condition_number > 1 and result.residual_rms >= 0
+
+
+def test_to_json_is_the_cli_json(pendulum):
+    result = hbid.identify(pendulum.x, t=pendulum.t, bootstrap=50, seed=3)
+    j = json.loads(result.to_json())
+    assert set(j) == {
+        "method", "basis", "coefficients", "std_errors", "orbits_used", "rows",
+        "condition_number", "residual_rms", "intervals", "interval_level",
+    }
+    assert j["coefficients"] == result.coefficients
+    assert j["std_errors"] == result.std_errors
+    assert {k: tuple(v) for k, v in j["intervals"].items()} == result.intervals
+    assert j["orbits_used"] == result.segments
+
+
+@pytest.mark.parametrize(
+    "options, args",
+    [
+        ({}, ["--method", "windowed"]),
+        ({"method": "upo", "bootstrap": 100, "seed": 5}, ["--method", "upo", "--bootstrap", "100", "--seed", "5"]),
+        ({"basis": "hat:8", "bootstrap": 0}, ["--method", "windowed", "--basis", "hat:8", "--bootstrap", "0"]),
+    ],
+)
+def test_same_json_as_the_command_line(tmp_path, pendulum, cli, options, args):
+    path = tmp_path / "r.csv"
+    np.savetxt(path, np.c_[pendulum.t, pendulum.x], delimiter=",", header="t,theta", comments="", fmt="%.17g")
+    out = subprocess.run([str(cli), "--quiet", "identify", str(path), "--json", *args], capture_output=True, text=True, check=True)
+    ours = hbid.identify(hbid.read(path), **options)
+    assert json.loads(ours.to_json()) == json.loads(out.stdout)
+
+
+def test_the_paper_data_set_in_a_few_lines(paper_csv):
+    record = hbid.read(paper_csv)
+    result = hbid.identify(record, bootstrap=100)
+    assert result.coefficients["sin(t)*cos(x)"] == pytest.approx(-1.52, abs=1e-3)
+    assert result.coefficients["x'"] == pytest.approx(0.03, abs=1e-3)
+    upo = hbid.identify(record, method="upo", bootstrap=0)
+    assert upo.delay is not None and upo.segments > 10
+    assert upo.coefficients["sin(t)*cos(x)"] == pytest.approx(-1.52, abs=0.05)
+
+
+def test_a_record_in_seconds_with_an_estimated_drive():
+    sim = hbid.simulate(drive_frequency=1.02, sample_rate=50, duration=150, noise=0.001, seed=1)
+    known = hbid.identify(sim.x, t=sim.t, forcing_frequency=1.02, bootstrap=0)
+    assert known.resampled_from == pytest.approx(50 / 1.02, rel=1e-9)
+    assert known.coefficients["sin(t)*cos(x)"] == pytest.approx(sim.truth["sin(t)*cos(x)"], rel=0.02)
+    auto = hbid.identify(sim.x, t=sim.t, forcing_frequency="auto:0.5..2", bootstrap=0)
+    assert auto.drive == "estimated"
+    assert auto.forcing_period == pytest.approx(1 / 1.02, rel=1e-4)
+    assert 0 < auto.forcing_period_uncertainty < 1e-3
+
+
+def test_a_free_decay_and_a_displacement():
+    decay = hbid.simulate(forcing="none", x0=1.0, samples=3000)
+    free = hbid.identify(decay.x, t=decay.t, forcing="none", bootstrap=0)
+    assert free.drive == "free"
+    assert not any("t)" in name for name in free.coefficients)
+    duffing = hbid.simulate(system="duffing", samples=4000)
+    line = hbid.identify(duffing.x, t=duffing.t, signal="line", bootstrap=0)
+    assert line.basis == "poly:3" and line.signal == "line"
+    for name, value in duffing.truth.items():
+        assert line.coefficients[name] == pytest.approx(value, abs=1e-3), name
+
+
+def test_same_seed_same_result_and_seeds_differ(pendulum):
+    x = pendulum.x + np.random.default_rng(0).normal(0, 0.01, len(pendulum.x))
+    a = hbid.identify(x, t=pendulum.t, bootstrap=100, seed=1)
+    b = hbid.identify(x, t=pendulum.t, bootstrap=100, seed=1)
+    c = hbid.identify(x, t=pendulum.t, bootstrap=100, seed=2)
+    assert a == b
+    assert a.coefficients == c.coefficients and a.intervals != c.intervals
+
+
+def test_results_pickle(pendulum):
+    result = hbid.identify(pendulum.x, t=pendulum.t, bootstrap=40)
+    back = pickle.loads(pickle.dumps(result))
+    assert back == result
+    assert back.model.coefficients == result.coefficients
+
+
+def test_the_model_saves_loads_and_simulates(tmp_path, pendulum):
+    model = hbid.identify(pendulum.x, t=pendulum.t, bootstrap=0).model
+    assert model.coefficients == pytest.approx(pendulum.truth, abs=1e-4)
+    assert model.signal == "circle" and model.forcing_period == pytest.approx(2 * np.pi)
+    for name in ("m.json", "m.bin"):
+        model.save(tmp_path / name)
+        assert hbid.Model.load(tmp_path / name) == model
+    assert json.loads((tmp_path / "m.json").read_text())["format"] == "hbid-model"
+    assert hbid.Model.from_json(model.to_json()) == model
+    t, x, v = model.simulate(500, x0=0.1, transient_periods=10)
+    assert len(t) == len(x) == len(v) == 500
+    assert t[1] - t[0] == pytest.approx(2 * np.pi / 25)
+    assert x.min() >= -np.pi and x.max() < np.pi and np.isfinite(v).all()
+    (tmp_path / "junk.bin").write_bytes(b"HBIDMODL" + b"\x00" * 5)
+    with pytest.raises(hbid.ModelError):
+        hbid.Model.load(tmp_path / "junk.bin")
+    with pytest.raises(hbid.ModelError, match="missing.json"):
+        hbid.Model.load(tmp_path / "missing.json")
+
+
+def test_the_interpreter_runs_while_rust_works():
+    sim = hbid.simulate(samples=30000)
+    done = threading.Event()
+    calls = []
+
+    def work():
+        start = time.perf_counter()
+        while time.perf_counter() - start < 0.5:
+            hbid.identify(sim.x, t=sim.t, bootstrap=1000)
+            calls.append(1)
+        done.set()
+
+    thread = threading.Thread(target=work)
+    thread.start()
+    ticks = 0
+    while not done.is_set():
+        ticks += 1
+        time.sleep(0.001)
+    thread.join()
+    # Were the lock held through each identification, this loop could tick only between them.
+    assert ticks > 3 * len(calls), (ticks, len(calls))
+
+
+def test_terms_select_and_explained_are_not_there_yet(pendulum):
+    with pytest.raises(hbid.NotSupportedError, match="terms=") as e:
+        hbid.identify(pendulum.x, t=pendulum.t, terms=["x'", "sin(x)"])
+    assert isinstance(e.value, NotImplementedError)
+    with pytest.raises(hbid.NotSupportedError, match="select=True"):
+        hbid.identify(pendulum.x, t=pendulum.t, select=True)
+    result = hbid.identify(pendulum.x, t=pendulum.t, bootstrap=0)
+    with pytest.raises(hbid.NotSupportedError, match="explained"):
+        result.explained
+
+
+@pytest.mark.parametrize(
+    "kwargs, error, message",
+    [
+        ({"method": "fast"}, hbid.OptionsError, "method='fast'"),
+        ({"basis": "spline:3"}, hbid.OptionsError, "unknown basis 'spline'"),
+        ({"basis": "hat:x"}, hbid.OptionsError, "'x' is not a whole number"),
+        ({"level": 1.5, "bootstrap": 100}, hbid.OptionsError, "level"),
+        ({"window_periods": 0}, hbid.OptionsError, "window_periods must be at least 1"),
+        ({"harmonics": 0}, hbid.OptionsError, "harmonics must be at least 1"),
+        ({"solver": "lu"}, hbid.OptionsError, "solver='lu'"),
+        ({"forcing_period": -1.0}, hbid.OptionsError, "must be positive and finite"),
+        ({"forcing_period": "auto:3"}, hbid.OptionsError, "auto:A..B"),
+        ({"forcing_period": 6.0, "forcing_frequency": 0.2}, hbid.OptionsError, "not both"),
+        ({"forcing": "none", "method": "upo"}, hbid.OptionsError, "use method='windowed'"),
+        ({"noise_sigma": "lots"}, hbid.OptionsError, "noise_sigma"),
+        ({"signal": "sphere"}, hbid.OptionsError, "signal='sphere'"),
+        ({"window_periods": 1000}, hbid.IdentificationError, "too short for period 1000"),
+    ],
+)
+def test_bad_options_raise_clear_errors(pendulum, kwargs, error, message):
+    with pytest.raises(error, match=message):
+        hbid.identify(pendulum.x, t=pendulum.t, **{"bootstrap": 0, **kwargs})
+
+
+def test_bad_samples_raise_clear_errors(pendulum):
+    with pytest.raises(hbid.OptionsError, match="one-dimensional"):
+        hbid.identify(np.zeros((10, 2)), dt=0.1)
+    with pytest.raises(hbid.OptionsError, match="not an array of numbers"):
+        hbid.identify(["a", "b"], dt=0.1)
+    with pytest.raises(hbid.OptionsError, match="the time stamps t or the sampling step dt"):
+        hbid.identify(pendulum.x)
+    with pytest.raises(hbid.OptionsError, match="one time per sample"):
+        hbid.identify(pendulum.x, t=pendulum.t[:-1])
+    x = pendulum.x.copy()
+    x[7] = np.nan
+    with pytest.raises(hbid.InputError, match="sample 8: a value is NaN"):
+        hbid.identify(x, t=pendulum.t)
+    with pytest.raises(hbid.InputError, match="at least 2"):
+        hbid.identify([0.1], dt=0.1)
+    with pytest.raises(hbid.HbidError):
+        hbid.identify(pendulum.x[:40], t=pendulum.t[:40], bootstrap=0)
+    with pytest.raises(hbid.InputError, match=r"\(dt=\)"):
+        hbid.identify(pendulum.x, dt=0.0)
+    # a strided view is accepted (copied once into a contiguous array)
+    strided = hbid.identify(pendulum.x[::1], t=pendulum.t, bootstrap=0)
+    assert strided.segments > 0

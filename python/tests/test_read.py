@@ -1,0 +1,151 @@
+"""hbid.read: files as the command line reads them, with repairs, gaps and clear errors."""
+
+from __future__ import annotations
+
+import pickle
+
+import numpy as np
+import pytest
+
+import hbid
+
+
+def write_csv(path, t, x, header="t,theta"):
+    with open(path, "w") as f:
+        f.write(header + "\n")
+        for ti, xi in zip(t, x):
+            f.write(f"{float(ti)!r},{float(xi)!r}\n")
+    return path
+
+
+def test_reads_a_csv_onto_its_grid(tmp_path, pendulum):
+    path = write_csv(tmp_path / "r.csv", pendulum.t, pendulum.x)
+    record = hbid.read(path)
+    assert isinstance(record.x, np.ndarray) and record.x.dtype == np.float64
+    np.testing.assert_array_equal(record.x, pendulum.x)
+    assert record.pieces == [(0, len(pendulum.x))]
+    assert record.dt == pytest.approx(2 * np.pi / 25, rel=1e-12)
+    assert record.t0 == pytest.approx(pendulum.t[0], abs=1e-9)
+    np.testing.assert_allclose(record.t, pendulum.t, rtol=0, atol=1e-9)
+    assert record.notes == [] and record.time_repairs == [] and record.spikes == []
+    assert record.signal == "circle" and record.path == str(path)
+
+
+def test_reads_npy_with_a_step(tmp_path, pendulum):
+    path = tmp_path / "x.npy"
+    np.save(path, pendulum.x)
+    record = hbid.read(path, dt=0.25)
+    np.testing.assert_array_equal(record.x, pendulum.x)
+    assert record.t0 == pytest.approx(0.0, abs=1e-12) and record.dt == pytest.approx(0.25, rel=1e-12)
+    with pytest.raises(hbid.InputError, match="give its sampling step with dt="):
+        hbid.read(path)
+
+
+def test_gaps_become_pieces_and_notes(tmp_path, pendulum):
+    keep = np.r_[0:1000, 1010:3000]
+    path = write_csv(tmp_path / "gap.csv", pendulum.t[keep], pendulum.x[keep])
+    record = hbid.read(path)
+    assert record.pieces == [(0, 1000), (1010, 3000)]
+    assert np.isnan(record.x[1000:1010]).all()
+    assert record.samples == 2990 and len(record) == 3000
+    assert record.notes == [
+        "1 gap(s) in the time stamps (10 samples missing): the record is analysed in 2 pieces"
+    ]
+
+
+def test_a_glitch_is_an_error_unless_repaired(tmp_path, pendulum):
+    t = pendulum.t.copy()
+    t[500] += 0.4 * (t[1] - t[0])
+    path = write_csv(tmp_path / "glitch.csv", t, pendulum.x)
+    with pytest.raises(hbid.InputError, match="line 502: time .* pass repair=True") as e:
+        hbid.read(path)
+    assert isinstance(e.value, ValueError)
+    record = hbid.read(path, repair=True)
+    assert record.repaired
+    assert len(record.time_repairs) == 1
+    where, was, now = record.time_repairs[0]
+    assert where == "line 502" and was == t[500]
+    assert now == pytest.approx(pendulum.t[500], abs=1e-9)
+    assert record.notes[0].startswith("line 502: time ")
+
+
+def test_spikes_warn_and_are_replaced_with_repair(tmp_path, pendulum):
+    x = pendulum.x.copy()
+    x[1234] = hbid_wrap(x[1234] + 1.0)
+    path = write_csv(tmp_path / "spike.csv", pendulum.t, x)
+    with pytest.warns(hbid.HbidWarning, match="repair=True"):
+        record = hbid.read(path)
+    assert [s[0] for s in record.spikes] == [1234] and record.spikes[0][2] is False
+    assert record.x[1234] == x[1234]
+    fixed = hbid.read(path, repair=True)
+    assert fixed.spikes[0][:1] == (1234,) and fixed.spikes[0][2] is True
+    assert abs(fixed.x[1234] - pendulum.x[1234]) < 0.05
+
+
+def hbid_wrap(v):
+    return (v + np.pi) % (2 * np.pi) - np.pi
+
+
+def test_unwrapped_angles_are_wrapped(tmp_path, pendulum):
+    t, x, v = hbid.simulate(samples=500, unwrapped=True)
+    assert np.abs(x).max() > np.pi
+    record = hbid.read(write_csv(tmp_path / "u.csv", t, x))
+    assert record.notes == ["values outside [-π, π): read as an unwrapped angle and wrapped"]
+    assert record.x.min() >= -np.pi and record.x.max() < np.pi
+
+
+def test_columns_by_name_and_position(tmp_path, pendulum):
+    path = tmp_path / "cols.csv"
+    with open(path, "w") as f:
+        f.write("time;angle;other\n")
+        for ti, xi in zip(pendulum.t[:200], pendulum.x[:200]):
+            f.write(f"{float(ti)!r};{float(xi)!r};1\n")
+    by_name = hbid.read(path, time_col="time", angle_col="angle")
+    by_position = hbid.read(path, time_col=1, angle_col=2)
+    np.testing.assert_array_equal(by_name.x, by_position.x)
+    with pytest.raises(hbid.InputError, match="choose one with time_col="):
+        hbid.read(path)
+    with pytest.raises(hbid.InputError, match="no angle column 7"):
+        hbid.read(path, time_col=1, angle_col=7)
+    with pytest.raises(hbid.OptionsError):
+        hbid.read(path, time_col=1.5)
+
+
+@pytest.mark.parametrize(
+    "content, message",
+    [
+        ("t,theta\n0,0.1\n1,abc\n", "line 3: 'abc' in column 'theta' is not a number"),
+        ("t,theta\n0,0.1\n", "1 samples: at least 2 are needed"),
+        ("", "empty"),
+        ("t,theta\n0,0.1\n1,0.2,3\n", "line 3: 3 cells where the first row has 2"),
+    ],
+)
+def test_bad_files_raise_input_errors_with_the_cli_messages(tmp_path, content, message):
+    path = tmp_path / "bad.csv"
+    path.write_text(content)
+    with pytest.raises(hbid.InputError, match=message):
+        hbid.read(path)
+
+
+def test_missing_file_folder_and_bad_options(tmp_path):
+    with pytest.raises(hbid.InputError, match="nope.csv"):
+        hbid.read(tmp_path / "nope.csv")
+    with pytest.raises(hbid.InputError, match="folder"):
+        hbid.read(tmp_path)
+    with pytest.raises(hbid.OptionsError, match="signal='ring'"):
+        hbid.read(tmp_path / "x.csv", signal="ring")
+    with pytest.raises(hbid.InputError, match=r"\(dt=\)"):
+        hbid.read(tmp_path / "x.csv", dt=-1.0)
+
+
+def test_records_pickle(tmp_path, pendulum):
+    record = hbid.read(write_csv(tmp_path / "r.csv", pendulum.t[:300], pendulum.x[:300]))
+    back = pickle.loads(pickle.dumps(record))
+    np.testing.assert_array_equal(back.x, record.x)
+    assert (back.t0, back.dt, back.pieces, back.notes) == (record.t0, record.dt, record.pieces, record.notes)
+
+
+def test_the_paper_data_set(paper_csv):
+    record = hbid.read(paper_csv)
+    assert record.samples == 30000 and record.pieces == [(0, 30000)]
+    assert record.dt == pytest.approx(2 * np.pi / 25, rel=1e-9)
