@@ -72,6 +72,8 @@
 mod csv;
 mod error;
 mod npy;
+#[cfg(test)]
+mod proptests;
 mod uniform;
 
 pub use error::{InputError, Location, StampFault};
