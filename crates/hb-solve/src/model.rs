@@ -188,6 +188,16 @@ impl<B: Basis> IdentifiedModel<B> {
                 why: "must be positive and finite",
             });
         }
+        // Every basis function has a column of its own besides the damping's: a basis with as
+        // many functions as there are coefficients cannot match them, and its names (one string
+        // per function, whatever size a file claims) are not listed.
+        if basis.len() >= coefficients.len() {
+            return Err(SolveError::InvalidParameter {
+                name: "basis size",
+                value: basis.len() as f64,
+                why: "must be less than the number of coefficients (one per basis function, and the damping)",
+            });
+        }
         let names = basis.names();
         let terms = columns(names.len(), &form);
         let expected: Vec<String> = terms.iter().map(|t| t.name(&names)).collect();
@@ -520,6 +530,7 @@ impl<B: Basis + DeserializeOwned> IdentifiedModel<B> {
             for (name, v) in [
                 ("fit condition", fit.condition),
                 ("fit residual_rms", fit.residual_rms),
+                ("fit residual_variance", fit.residual_variance),
             ] {
                 // The condition number may legitimately be infinite only for a rank-deficient
                 // system, which never becomes a model.
@@ -685,6 +696,79 @@ mod tests {
         ));
         let json = m.to_json().unwrap().replace("\"value\": 0.03", "\"value\": NaN");
         assert!(IdentifiedModel::<BasisKind>::from_json(&json).is_err());
+    }
+
+    /// The paper's pendulum with a fit summary whose residual variance is `variance`.
+    fn fitted(variance: f64) -> IdentifiedModel<BasisKind> {
+        let m = pendulum();
+        let summary = FitSummary {
+            solver: "qr".to_owned(),
+            harmonics: Harmonics::DEFAULT,
+            clock: SampleClock::new(std::f64::consts::TAU, 25).unwrap(),
+            rows: 100,
+            unknowns: 7,
+            segments: 3,
+            whirling_segments: 0,
+            condition: 10.0,
+            residual_rms: 1e-3,
+            residual_variance: variance,
+        };
+        IdentifiedModel::from_parts(
+            *m.basis(),
+            *m.form(),
+            m.forcing_frequency(),
+            m.coefficients().to_vec(),
+            Some(summary),
+        )
+        .unwrap()
+    }
+
+    /// A binary model whose fit has a non-finite residual variance (found by the fuzz target
+    /// `model_bytes`): JSON cannot hold it, so it loaded but could not be saved as JSON and read
+    /// back. Now it does not load.
+    #[test]
+    fn a_non_finite_residual_variance_does_not_load() {
+        let good = fitted(1e-6);
+        assert_eq!(
+            IdentifiedModel::<BasisKind>::from_bytes(&good.to_bytes().unwrap()).unwrap(),
+            good
+        );
+        for variance in [f64::NAN, f64::INFINITY] {
+            let bytes = fitted(variance).to_bytes().unwrap();
+            assert!(matches!(
+                IdentifiedModel::<BasisKind>::from_bytes(&bytes),
+                Err(SolveError::NonFiniteModelValue { ref name }) if name == "fit residual_variance"
+            ));
+        }
+    }
+
+    /// A file may claim a basis of any size: it is refused from the number of coefficients,
+    /// before a name is made for each of its functions.
+    #[test]
+    fn a_basis_larger_than_the_coefficients_is_refused_before_naming_it() {
+        let json = pendulum().to_json().unwrap();
+        let huge = "\"order\": 1000000000000000";
+        for json in [
+            json.replace("\"order\": 1", huge),
+            json.replace("\"order\": 1", "\"order\": 4"),
+            json.replace("{\n      \"order\": 1\n    }", "{\"nodes\": 1000000000000000}")
+                .replace("\"harmonic\"", "\"hat\""),
+        ] {
+            assert!(
+                json.contains("000000000000000") || json.contains("\"order\": 4"),
+                "{json}"
+            );
+            match IdentifiedModel::<BasisKind>::from_json(&json) {
+                Err(
+                    e @ SolveError::InvalidParameter {
+                        name: "basis size", ..
+                    },
+                ) => {
+                    assert!(e.to_string().contains("coefficients"), "{e}");
+                }
+                other => panic!("{other:?}"),
+            }
+        }
     }
 
     #[test]

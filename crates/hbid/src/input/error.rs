@@ -191,6 +191,15 @@ pub enum InputError {
         /// The decimals the stamps are written with, when they are all written with at most 9.
         decimals: Option<u32>,
     },
+    /// Time stamps so far apart that the times of their grid overflow (stamps near the largest
+    /// floating-point numbers).
+    #[error("{at}: time {t} is too far from the first stamps: the times of the grid overflow")]
+    TimeOverflow {
+        /// Where: the last sample.
+        at: Location,
+        /// Its time stamp.
+        t: f64,
+    },
     /// A forcing period that is not positive and finite.
     #[error("the forcing period {period} must be positive and finite")]
     BadForcingPeriod {
@@ -234,6 +243,7 @@ impl InputError {
             | InputError::TimeNotIncreasing { .. }
             | InputError::TimeGlitch { .. }
             | InputError::TimeUnresolved { .. }
+            | InputError::TimeOverflow { .. }
             | InputError::BadForcingPeriod { .. } => false,
         }
     }

@@ -72,6 +72,8 @@
 mod csv;
 mod error;
 mod npy;
+#[cfg(test)]
+mod proptests;
 mod uniform;
 
 pub use error::{InputError, Location, StampFault};
@@ -141,8 +143,16 @@ pub struct ReadOptions {
 }
 
 impl ReadOptions {
-    /// Checks the options on their own.
+    /// Checks the options on their own: a step positive and finite, not both a step and a time
+    /// column, positions counted from 1.
     pub fn validate(&self) -> Result<(), InputError> {
+        for column in [&self.time, &self.angle] {
+            if let Some(Column::Position(0)) = column {
+                return Err(InputError::BadColumn {
+                    given: "0".to_owned(),
+                });
+            }
+        }
         if let Some(dt) = self.dt {
             if !(dt.is_finite() && dt > 0.0) {
                 return Err(InputError::BadStep { dt });
@@ -699,5 +709,33 @@ mod tests {
         ));
         let both = options(Some("1"), None, Some(1.0));
         assert!(matches!(read_bytes(b"1,2\n", &both), Err(InputError::TimeTwice)));
+        // Position 0 (which no column option parses to) is refused like the text "0", before
+        // the column policy counts back from it (found by the fuzz target `text_options`: it
+        // underflowed for headerless text).
+        for zero in [
+            ReadOptions {
+                angle: Some(Column::Position(0)),
+                ..Default::default()
+            },
+            ReadOptions {
+                time: Some(Column::Position(0)),
+                ..Default::default()
+            },
+            ReadOptions {
+                angle: Some(Column::Position(0)),
+                dt: Some(0.5),
+                ..Default::default()
+            },
+        ] {
+            for bytes in [
+                &b"0,1\n1,2\n2,3\n"[..],
+                &npy::npy_bytes("<f8", "(1, 2)", false, &[0; 16]),
+            ] {
+                match read_bytes(bytes, &zero) {
+                    Err(e @ InputError::BadColumn { .. }) => assert!(e.to_string().starts_with("'0'"), "{e}"),
+                    other => panic!("{zero:?}: {other:?}"),
+                }
+            }
+        }
     }
 }

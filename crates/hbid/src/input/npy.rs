@@ -100,6 +100,7 @@ impl<'a> Array<'a> {
     /// Reads the header, checks it against the payload, and converts the elements unless they are
     /// little-endian f8.
     fn open(bytes: &'a [u8]) -> Result<Self, InputError> {
+        check_header(bytes)?;
         let mut probe = bytes;
         npyz::NpyHeader::from_reader(&mut probe).map_err(npy_error)?;
         let payload = &bytes[bytes.len() - probe.len()..];
@@ -142,6 +143,64 @@ impl<'a> Array<'a> {
             Elements::Converted(values) => values[i],
         }
     }
+}
+
+/// Deepest nesting of brackets in a header that [`check_header`] lets through: a plain array's
+/// header is a dictionary holding a tuple (2 deep); structured element types nest deeper but are
+/// not read here anyway.
+const MAX_HEADER_DEPTH: usize = 4;
+
+/// Checks a header before it is parsed: the file must hold as many bytes as its first bytes
+/// announce (a 16-bit length for format 1, 32-bit for formats 2 and 3; a reader allocates what it
+/// says), and brackets may not nest deeper than [`MAX_HEADER_DEPTH`] (the parser of the header's
+/// Python literal takes time exponential in the depth: 20 brackets take seconds).
+fn check_header(bytes: &[u8]) -> Result<(), InputError> {
+    // The magic (6 bytes) and the version (2) come first.
+    let (size, length) = match bytes.get(6..8) {
+        Some([1, 0]) => (
+            2,
+            bytes
+                .get(8..10)
+                .map(|b| u64::from(u16::from_le_bytes([b[0], b[1]]))),
+        ),
+        Some([2 | 3, 0]) => (
+            4,
+            bytes
+                .get(8..12)
+                .map(|b| u64::from(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))),
+        ),
+        Some(&[major, minor]) => {
+            return Err(npy_error(format!(
+                "format version {major}.{minor} is not supported"
+            )));
+        }
+        _ => return Err(npy_error("the file ends inside the format version")),
+    };
+    let length = length.ok_or_else(|| npy_error("the file ends inside the header length"))?;
+    let header = &bytes[8 + size..];
+    if length > header.len() as u64 {
+        return Err(npy_error(format!(
+            "the header announces {length} bytes but the file holds {} after the header length",
+            header.len()
+        )));
+    }
+    let (mut depth, mut deepest) = (0usize, 0usize);
+    for &b in &header[..length as usize] {
+        match b {
+            b'(' | b'[' | b'{' => {
+                depth += 1;
+                deepest = deepest.max(depth);
+            }
+            b')' | b']' | b'}' => depth = depth.saturating_sub(1),
+            _ => {}
+        }
+    }
+    if deepest > MAX_HEADER_DEPTH {
+        return Err(npy_error(format!(
+            "the header nests brackets {deepest} deep; a plain array's header needs at most {MAX_HEADER_DEPTH}"
+        )));
+    }
+    Ok(())
 }
 
 /// Checks that the payload holds the elements the header announces, before anything the header
@@ -277,6 +336,58 @@ mod tests {
             }
             other => panic!("{other:?}"),
         }
+    }
+
+    /// A header length beyond the file (a reader would allocate it: 4 GiB for format 2) is an
+    /// error before anything is allocated; so are versions and files cut short.
+    #[test]
+    fn header_lengths_beyond_the_file_are_refused() {
+        // The input the fuzz target `npy` found: format 2.0, header length 0xfffffffe.
+        let mut found = b"\x93NUMPY\x02\x00\xfe\xff\xff\xff{'descr': '".to_vec();
+        found.extend_from_slice(&[b' '; 40]);
+        for (bytes, says) in [
+            (found, "announces 4294967294 bytes"),
+            (b"\x93NUMPY\x01\x00\x40\x00{}".to_vec(), "announces 64 bytes"),
+            (b"\x93NUMPY\x04\x00\x00\x00".to_vec(), "version 4.0"),
+            (b"\x93NUMPY\x01".to_vec(), "inside the format version"),
+            (b"\x93NUMPY\x03\x00\x01\x00".to_vec(), "inside the header length"),
+        ] {
+            match read_bytes(&bytes, &ReadOptions::default()) {
+                Err(e @ InputError::Npy { .. }) => assert!(e.to_string().contains(says), "{e}"),
+                other => panic!("{bytes:?}: {other:?}"),
+            }
+        }
+        // Brackets nested 22 deep in the shape (found by the fuzz target `npy`: the header's
+        // parser took more than 10 s); within the limit, brackets in a string are only a bad element
+        // type.
+        let mut deep =
+            b"\x93NUMPY\x01\x00\x76\x00{'descr': '<i4', 'fortran_order': False, 'shape': (2, ".to_vec();
+        deep.extend_from_slice(&[b'['; 22]);
+        deep.resize(10 + 0x76 - 1, b' ');
+        deep.push(b'\n');
+        deep.extend_from_slice(&[0; 16]);
+        let start = std::time::Instant::now();
+        match read_bytes(&deep, &ReadOptions::default()) {
+            Err(e @ InputError::Npy { .. }) => assert!(e.to_string().contains("24 deep"), "{e}"),
+            other => panic!("{other:?}"),
+        }
+        assert!(start.elapsed().as_secs_f64() < 1.0, "{:?}", start.elapsed());
+        let strange = npy_bytes("<f8[[", "(2,)", false, &[0; 16]);
+        match read_bytes(&strange, &ReadOptions::default()) {
+            Err(e @ InputError::Npy { .. }) => assert!(!e.to_string().contains("deep"), "{e}"),
+            other => panic!("{other:?}"),
+        }
+        // Format 2 with a header that fits reads as format 1 does.
+        let f8: Vec<u8> = [0.0f64, 1.0, 0.5, 2.0]
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        let mut v2 = npy_bytes("<f8", "(2, 2)", false, &f8);
+        let length = u16::from_le_bytes([v2[8], v2[9]]);
+        v2[6] = 2;
+        v2.splice(8..10, u32::from(length).to_le_bytes());
+        let r = read_bytes(&v2, &ReadOptions::default()).unwrap();
+        assert_eq!((r.t, r.theta), (vec![0.0, 0.5], vec![1.0, 2.0]));
     }
 
     proptest::proptest! {

@@ -157,6 +157,19 @@ impl GridRecord {
             return Err(unresolved(n));
         }
 
+        // Grid times increase with the index: those of every stamp's index (and of the indices
+        // next to them, where glitches are repaired) are finite when the extreme ones are.
+        let (lowest, highest) = (0..n).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), i| {
+            let k = line.locate(tau(i)).0;
+            (lo.min(k), hi.max(k))
+        });
+        if !(origin + line.at(lowest - 1.0)).is_finite() || !(origin + line.at(highest + 1.0)).is_finite() {
+            return Err(InputError::TimeOverflow {
+                at: at(n - 1),
+                t: t[n - 1],
+            });
+        }
+
         let judged = judge(&t, |i| line.locate(tau(i)));
         if judged.good == 0
             || (judged.unresolved >= UNRESOLVED_MIN
@@ -771,6 +784,29 @@ mod tests {
         let u = repair(t).unwrap();
         assert_eq!((u.pieces.len(), u.repaired[0].at), (1, Location::Line(12)));
         assert!((u.repaired[0].now - 10.0 / 64.0).abs() < 1e-12);
+    }
+
+    /// Stamps near the largest floating-point numbers: a grid was fitted, but the repaired time
+    /// of the middle stamp overflowed (found by the fuzz target `grid_fit`).
+    #[test]
+    fn stamps_whose_grid_overflows_are_refused() {
+        let t = vec![
+            -1.2089666594180364e308,
+            4.104138993080699e-207,
+            -1.1843625389819756e308,
+        ];
+        for options in [GridOptions::default(), GridOptions { repair: true }] {
+            match GridRecord::fit(record(t.clone()), &options) {
+                Err(e @ InputError::TimeOverflow { .. }) => {
+                    assert!(e.to_string().starts_with("line 4: time -118436253898"), "{e}")
+                }
+                other => panic!("{options:?}: {other:?}"),
+            }
+        }
+        // Large stamps whose grid stays finite fit.
+        let large: Vec<f64> = (0..10).map(|i| 1e307 + f64::from(i) * 1e305).collect();
+        let u = fit(large).unwrap();
+        assert!((u.dt / 1e305 - 1.0).abs() < 1e-12 && (u.t0 / 1e307 - 1.0).abs() < 1e-12);
     }
 
     #[test]
