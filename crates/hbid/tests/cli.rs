@@ -1596,3 +1596,59 @@ fn simulate_real_machine_options_fail_cleanly() {
         assert!(!target.exists() && !truth.exists(), "{args:?} left a file");
     }
 }
+
+/// `hbid report` measures each model's valid prediction time from the record's own states: a line
+/// per model, every window in `prediction.json`, and a figure.
+#[test]
+fn report_measures_the_valid_prediction_time() {
+    let dir = scratch("report-prediction");
+    let record = simulated(&dir, "record.csv", &["--samples", "8000"]);
+    let out_dir = dir.join("rep");
+    let out = hbid(&[
+        "report",
+        record.to_str().unwrap(),
+        "--out",
+        out_dir.to_str().unwrap(),
+        "--validation-periods",
+        "100",
+        "--bootstrap",
+        "0",
+        "--quiet",
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = std::fs::read_to_string(out_dir.join("README.md")).unwrap();
+    assert!(text.contains("## How long do the models predict the record?"));
+    assert!(
+        text.contains("| upo |") && text.contains("| windowed |"),
+        "{text}"
+    );
+    assert!(std::fs::metadata(out_dir.join("prediction.png")).unwrap().len() > 100);
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out_dir.join("prediction.json")).unwrap()).unwrap();
+    // 10 % of the spread of a whirling pendulum's angle, nearly 2π.
+    let tolerance = json["tolerance"].as_f64().unwrap();
+    assert!((0.6..=0.6284).contains(&tolerance), "{tolerance}");
+    let period = json["forcing_period"].as_f64().unwrap();
+    let models = json["models"].as_array().unwrap();
+    assert_eq!(models.len(), 2);
+    for model in models {
+        let windows = model["windows"].as_array().unwrap();
+        assert_eq!(windows.len(), 32);
+        let mut times: Vec<f64> = windows
+            .iter()
+            .map(|w| w["valid_time"].as_f64().unwrap() / period)
+            .collect();
+        assert!(
+            times.iter().all(|&t| (0.0..=40.0 + 1e-9).contains(&t)),
+            "{times:?}"
+        );
+        times.sort_by(f64::total_cmp);
+        let median = model["periods"]["median"].as_f64().unwrap();
+        assert!((median - 0.5 * (times[15] + times[16])).abs() < 1e-9);
+        // A model of the chaotic pendulum follows it for more than a period, and not forever.
+        assert!(median > 1.0 && median < 40.0, "{median}");
+        let lyapunov = model["lyapunov_per_unit_time"].as_f64().unwrap();
+        let in_lyapunov = model["lyapunov_times"]["median"].as_f64().unwrap();
+        assert!((in_lyapunov - median * period * lyapunov).abs() < 1e-9 * in_lyapunov);
+    }
+}

@@ -29,6 +29,23 @@ pub enum SimError {
         /// The budget.
         steps: usize,
     },
+    /// No state can be estimated at a sample of a record: it is missing, or too few samples
+    /// around it are there for the local fit.
+    #[error("no state at sample {index}: the local fit needs the sample and {needed} samples around it")]
+    NoStateEstimate {
+        /// The sample.
+        index: usize,
+        /// Samples the fit needs.
+        needed: usize,
+    },
+    /// A record too short for what was asked of it.
+    #[error("the record has {len} samples; at least {needed} are needed")]
+    RecordTooShort {
+        /// Its samples.
+        len: usize,
+        /// The samples needed.
+        needed: usize,
+    },
     /// The right-hand side or the solution became NaN or infinite.
     #[error("the solution is not finite at t = {t}")]
     NonFinite {

@@ -25,6 +25,8 @@
 //! - validation of identified models: [`periodic_orbits`] of the stroboscopic map by Newton
 //!   shooting (with Floquet multipliers), [`section_energy_distance`] between Poincaré sections,
 //!   and the [`whirling_fraction`];
+//! - validation that needs no true equation ([`prediction`]): the [`valid_prediction_times`] of a
+//!   model started from a record's own state, and the [`decay_envelope`] of a free decay;
 //! - [`observe`]: what an encoder reports of the simulated angle (zero offset, seeded noise,
 //!   counts per turn, bit errors, the wrap) and where a record has gaps;
 //! - a real machine's imperfections ([`Losses`]: dry friction `μ sign(x')`, quadratic drag
@@ -93,6 +95,7 @@ mod error;
 pub mod frame;
 mod machine;
 pub mod observe;
+pub mod prediction;
 mod simulate;
 mod switching;
 mod system;
@@ -104,6 +107,10 @@ pub use dop853::{Dop853, OdeSystem, Stats, Tolerances};
 pub use error::SimError;
 pub use frame::{InFrame, RecordFrame, TrueCoefficients};
 pub use machine::{DriveHarmonic, DriveHarmonics, Losses};
+pub use prediction::{
+    DecayEnvelope, PredictionConfig, PredictionRecord, PredictionTimes, TimeSummary, WindowPrediction,
+    decay_envelope, estimate_state, predict_window, prediction_starts, valid_prediction_times,
+};
 pub use simulate::{
     FirstOrder, LyapunovConfig, LyapunovEstimate, SimulationConfig, Tangent, Trajectory, largest_lyapunov,
     poincare_section, simulate, simulate_with_progress,

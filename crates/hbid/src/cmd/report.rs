@@ -9,7 +9,7 @@ use clap::Args;
 use embedding::EmbeddingError;
 use hbid::pipeline::{
     EmbedOptions, Identification, InitialState, Outcome, Pipeline, PipelineError, PipelineOptions,
-    RecordComparison, Stage, Validation, ValidationOptions,
+    PredictionOptions, RecordComparison, Stage, Validation, ValidationOptions,
 };
 use hbid::plot::{BLUE, Figure, GREY, ORANGE, RED, Series, Style, add_figure};
 use pendulum_sim::Domain;
@@ -72,6 +72,7 @@ fn options(args: &ReportArgs, data: &Data) -> anyhow::Result<PipelineOptions> {
             .with_lyapunov_periods(periods)?
             .with_initial(InitialState::FirstSample)?
             .with_record_comparison(RecordComparison::DelaySection { periods })?,
+        prediction: PredictionOptions::default(),
     })
 }
 
@@ -351,6 +352,7 @@ fn write_report(args: &ReportArgs, data: &Data, outcome: &Outcome) -> anyhow::Re
         )?;
     }
     writeln!(r)?;
+    prediction_section(&mut r, &mut figures, out, &results)?;
 
     let (range, label) = match data.domain {
         Domain::Circle => (Some((-std::f64::consts::PI, std::f64::consts::PI)), "x (wrapped)"),
@@ -400,5 +402,104 @@ fn write_report(args: &ReportArgs, data: &Data, outcome: &Outcome) -> anyhow::Re
     let path = out.join("README.md");
     crate::output::write_atomically(&path, |w| w.write_all(r.as_bytes()))?;
     eprintln!("report written to {}", path.display());
+    Ok(())
+}
+
+/// The valid prediction time of each model: a table, `prediction.json` and a figure of every
+/// window.
+fn prediction_section(
+    r: &mut String,
+    figures: &mut Vec<(String, String)>,
+    out: &Path,
+    results: &[MethodResult<'_>],
+) -> anyhow::Result<()> {
+    let measured: Vec<(&MethodResult<'_>, &pendulum_sim::PredictionTimes)> = results
+        .iter()
+        .filter_map(|res| res.validation.prediction.as_ref().map(|p| (res, p)))
+        .collect();
+    let Some((_, first)) = measured.first() else {
+        return Ok(());
+    };
+    writeln!(r, "## How long do the models predict the record?\n")?;
+    writeln!(
+        r,
+        "From the record's own state at {} samples spread over it (x and x' from a least-squares polynomial of \
+         degree 4 through the samples within a twelfth of a forcing period), each model is integrated until it \
+         leaves the record by more than {:.4} (10 % of the record's spread): its valid prediction time. A window \
+         that reaches its horizon (40 forcing periods), the record's end or a gap first counts at that length \
+         (a lower bound). The identification used the whole record, so these windows are not held out from it. \
+         Lyapunov times use each model's own exponent.\n",
+        first.windows.len(),
+        first.tolerance
+    )?;
+    writeln!(
+        r,
+        "| model | median (forcing periods) | quartiles | median (Lyapunov times) | windows reaching the end |\n\
+         | --- | --- | --- | --- | --- |"
+    )?;
+    let mut json = Vec::new();
+    let mut series = Vec::new();
+    for ((res, times), color) in measured.iter().zip([ORANGE, BLUE]) {
+        let Some(periods) = times.in_periods() else {
+            continue;
+        };
+        let lyapunov = times.in_lyapunov_times();
+        let bound = if periods.median_is_lower_bound() {
+            "≥ "
+        } else {
+            ""
+        };
+        writeln!(
+            r,
+            "| {} | {bound}{:.2} | {:.2} – {:.2} | {} | {} of {} |",
+            res.method.name(),
+            periods.median,
+            periods.lower_quartile,
+            periods.upper_quartile,
+            lyapunov.map_or("n/a".to_owned(), |l| format!("{bound}{:.2}", l.median)),
+            periods.censored,
+            periods.windows
+        )?;
+        json.push(serde_json::json!({
+            "method": res.method.name(),
+            "periods": periods,
+            "lyapunov_times": lyapunov,
+            "lyapunov_per_unit_time": times.lyapunov,
+            "windows": times.windows,
+        }));
+        let period = times.forcing_period;
+        series.push(Series {
+            label: res.method.name(),
+            points: times
+                .windows
+                .iter()
+                .map(|w| (w.start_time / period, w.valid_time / period))
+                .collect(),
+            style: Style::Dots(3),
+            color,
+        });
+    }
+    writeln!(r)?;
+    let text = serde_json::to_string_pretty(&serde_json::json!({
+        "tolerance": first.tolerance,
+        "forcing_period": first.forcing_period,
+        "models": json,
+    }))?;
+    crate::output::write_atomically(&out.join("prediction.json"), |w| writeln!(w, "{text}"))?;
+    writeln!(r, "Each window's valid time is in `prediction.json`.\n")?;
+    Figure {
+        title: "Valid prediction time of each window",
+        x_label: "window start (forcing periods)",
+        y_label: "valid time (forcing periods)",
+        series,
+        x_range: None,
+        y_range: None,
+    }
+    .save(&out.join("prediction.png"))?;
+    add_figure(
+        figures,
+        "prediction.png",
+        "Valid prediction time against the window's start, each model started from the record's own state.",
+    );
     Ok(())
 }

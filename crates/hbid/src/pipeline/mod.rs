@@ -19,7 +19,8 @@
 //!    method's [`hb_solve::Assembly`], least squares and the bootstrap ([`Setup`]);
 //! 4. [`Pipeline::validate`]: each model simulated and measured by
 //!    [`pendulum_sim::check_model`], and compared with the record in delay coordinates
-//!    ([`ValidationOptions`]).
+//!    ([`ValidationOptions`]) and by its valid prediction time from the record's own states
+//!    ([`PredictionOptions`]).
 //!
 //! # Example
 //!
@@ -64,9 +65,11 @@
 //! ```
 
 mod error;
+mod prediction;
 mod setup;
 
 pub use error::PipelineError;
+pub use prediction::PredictionOptions;
 pub use setup::{Identification, IdentifyStep, Method, ModelSpec, Setup};
 
 use std::ops::Range;
@@ -76,8 +79,8 @@ use embedding::{
     AmiCurve, AmiParams, FnnParams, FnnResult, average_mutual_information, false_nearest_neighbours,
 };
 use pendulum_sim::{
-    CheckConfig, LyapunovConfig, ModelCheck, SecondOrderSystem, SimulationConfig, check_model,
-    energy_distance, simulate,
+    CheckConfig, LyapunovConfig, ModelCheck, PredictionTimes, SecondOrderSystem, SimulationConfig,
+    check_model, energy_distance, simulate,
 };
 use upo_search::{Catalogue, CloseReturns, Windows};
 
@@ -519,6 +522,8 @@ pub struct PipelineOptions {
     pub models: Vec<ModelSpec>,
     /// The validation of every model.
     pub validation: ValidationOptions,
+    /// The valid prediction time of every model on windows of the record (default: measured).
+    pub prediction: PredictionOptions,
 }
 
 /// The stage that starts, as reported to the pipeline's progress callback.
@@ -596,6 +601,9 @@ pub struct Validation {
     pub check: ModelCheck,
     /// The comparison with the record, if asked for.
     pub section: Option<DelaySection>,
+    /// The valid prediction time on windows of the record, in Lyapunov times of the model's own
+    /// exponent too, if asked for.
+    pub prediction: Option<PredictionTimes>,
 }
 
 /// What the validation measured: the record's own section and each model.
@@ -629,6 +637,7 @@ pub struct Pipeline<'a> {
     windows: Windows,
     setups: Vec<Setup>,
     validation: ValidationOptions,
+    prediction: PredictionOptions,
 }
 
 impl<'a> Pipeline<'a> {
@@ -647,6 +656,7 @@ impl<'a> Pipeline<'a> {
         let windows = options.windows.windows(&record)?;
         options.validation.check_config(&record)?;
         options.validation.comparison_config(&record)?;
+        options.prediction.check(&record)?;
         Ok(Self {
             record,
             embed: options.embed,
@@ -654,6 +664,7 @@ impl<'a> Pipeline<'a> {
             windows,
             setups,
             validation: options.validation,
+            prediction: options.prediction,
         })
     }
 
@@ -799,9 +810,13 @@ impl<'a> Pipeline<'a> {
                 }
                 _ => None,
             };
+            let prediction =
+                self.prediction
+                    .measure(&ident.model, record, Some(measured.lyapunov.per_unit_time))?;
             validations.push(Validation {
                 check: measured,
                 section,
+                prediction,
             });
         }
         Ok(Validations {
