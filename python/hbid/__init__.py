@@ -609,16 +609,14 @@ class Identification:
         return _equation(self.coefficients)
 
     @property
-    def explained(self) -> Dict[str, float]:
-        """The share of the motion each term explains.
+    def explained(self) -> float:
+        """The fraction of the balanced acceleration the model explains, in [0, 1]."""
+        return _json.loads(self.json_text)["explained"]
 
-        Raises:
-            NotSupportedError: the library does not compute it yet.
-        """
-        raise NotSupportedError(
-            "explained: the share of the motion each term explains is not computed by the "
-            "library yet (it comes with the selection of terms)"
-        )
+    @property
+    def warning(self) -> Optional[str]:
+        """The command line's warning when the model explains too little, else None."""
+        return _json.loads(self.json_text)["warning"]
 
     @property
     def condition_number(self) -> float:
