@@ -50,6 +50,26 @@ pub trait Basis: fmt::Debug + Send + Sync {
     /// # Panics
     /// If `out.len() < self.len()`.
     fn eval_deriv(&self, x: f64, out: &mut [f64]);
+
+    /// Writes an antiderivative `Φ_i` of every function into `out[..len()]` (`dΦ_i/dx = φ_i`), at
+    /// any real `x`, which is **not** wrapped: on the circle a function with a nonzero mean has an
+    /// antiderivative that grows with the unwrapped angle, `Φ_i(x + 2π) = Φ_i(x) + ∫_{−π}^{π} φ_i`.
+    /// The constant of integration is the basis' choice (what uses `Φ` takes its differences).
+    ///
+    /// Terms linear in the velocity need it: `φ(x) x'` is the time derivative of `Φ(x)`, so the
+    /// weak form integrates it by parts exactly, `∫ ψ φ(x) x' = −∫ ψ' Φ(x)`.
+    ///
+    /// The provided implementation integrates [`eval`](Basis::eval) by 8-point Gauss–Legendre
+    /// quadrature on panels of at most `2π/32` (on the circle, from `−π` to the wrapped `x`, plus
+    /// the whole turns) or `1/8` (on the line, from 0, at most 4096 panels); it allocates, and is
+    /// exact to rounding only for functions smooth on each panel. The bases of this crate override
+    /// it with closed forms.
+    ///
+    /// # Panics
+    /// If `out.len() < self.len()`.
+    fn eval_antiderivative(&self, x: f64, out: &mut [f64]) {
+        quadrature_antiderivative(self, x, out)
+    }
 }
 
 impl<B: Basis + ?Sized> Basis for &B {
@@ -67,6 +87,9 @@ impl<B: Basis + ?Sized> Basis for &B {
     }
     fn eval_deriv(&self, x: f64, out: &mut [f64]) {
         (**self).eval_deriv(x, out)
+    }
+    fn eval_antiderivative(&self, x: f64, out: &mut [f64]) {
+        (**self).eval_antiderivative(x, out)
     }
 }
 
@@ -86,6 +109,9 @@ impl<B: Basis + ?Sized> Basis for Box<B> {
     fn eval_deriv(&self, x: f64, out: &mut [f64]) {
         (**self).eval_deriv(x, out)
     }
+    fn eval_antiderivative(&self, x: f64, out: &mut [f64]) {
+        (**self).eval_antiderivative(x, out)
+    }
 }
 
 fn check_len(out: &[f64], n: usize) {
@@ -94,6 +120,73 @@ fn check_len(out: &[f64], n: usize) {
         "output buffer of {} for a basis of {n} functions",
         out.len()
     );
+}
+
+/// Nodes and weights of 8-point Gauss–Legendre quadrature on `[−1, 1]`.
+const GAUSS_8: [(f64, f64); 8] = [
+    (-0.960_289_856_497_536_3, 0.101_228_536_290_376_26),
+    (-0.796_666_477_413_626_7, 0.222_381_034_453_374_47),
+    (-0.525_532_409_916_329, 0.313_706_645_877_887_3),
+    (-0.183_434_642_495_649_8, 0.362_683_783_378_362),
+    (0.183_434_642_495_649_8, 0.362_683_783_378_362),
+    (0.525_532_409_916_329, 0.313_706_645_877_887_3),
+    (0.796_666_477_413_626_7, 0.222_381_034_453_374_47),
+    (0.960_289_856_497_536_3, 0.101_228_536_290_376_26),
+];
+
+/// `∫_a^b φ_i` for every `i` into `out` (added to what is there), by [`GAUSS_8`] on `panels`
+/// equal panels.
+fn add_integral<B: Basis + ?Sized>(
+    basis: &B,
+    a: f64,
+    b: f64,
+    panels: usize,
+    phi: &mut [f64],
+    out: &mut [f64],
+) {
+    let n = basis.len();
+    let width = (b - a) / panels as f64;
+    for p in 0..panels {
+        let mid = a + (p as f64 + 0.5) * width;
+        for &(node, weight) in &GAUSS_8 {
+            basis.eval(mid + 0.5 * width * node, phi);
+            for (o, &v) in out[..n].iter_mut().zip(phi.iter()) {
+                *o += 0.5 * width * weight * v;
+            }
+        }
+    }
+}
+
+/// The provided [`Basis::eval_antiderivative`]: quadrature of [`Basis::eval`].
+fn quadrature_antiderivative<B: Basis + ?Sized>(basis: &B, x: f64, out: &mut [f64]) {
+    let n = basis.len();
+    check_len(out, n);
+    out[..n].fill(0.0);
+    if !x.is_finite() {
+        out[..n].fill(f64::NAN);
+        return;
+    }
+    let mut phi = vec![0.0; n];
+    match basis.domain() {
+        Domain::Circle => {
+            let panel = TAU / 32.0;
+            let base = wrap(x);
+            let turns = ((x - base) / TAU).round();
+            if turns != 0.0 {
+                let mut turn = vec![0.0; n];
+                add_integral(basis, -PI, PI, 32, &mut phi, &mut turn);
+                for (o, t) in out[..n].iter_mut().zip(&turn) {
+                    *o = turns * t;
+                }
+            }
+            let panels = (((base + PI) / panel).ceil() as usize).max(1);
+            add_integral(basis, -PI, base, panels, &mut phi, out);
+        }
+        Domain::Line => {
+            let panels = ((x.abs() * 8.0).ceil() as usize).clamp(1, 4096);
+            add_integral(basis, 0.0, x, panels, &mut phi, out);
+        }
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -185,6 +278,20 @@ impl Basis for Harmonic {
             let kf = (k + 1) as f64;
             out[2 * k] = -kf * s;
             out[2 * k + 1] = kf * c;
+            (c, s) = (c * c1 - s * s1, s * c1 + c * s1);
+        }
+    }
+
+    /// `sin(kx)/k` for `cos(kx)` and `−cos(kx)/k` for `sin(kx)`: periodic, since the functions
+    /// have mean zero.
+    fn eval_antiderivative(&self, x: f64, out: &mut [f64]) {
+        check_len(out, self.len());
+        let (s1, c1) = x.sin_cos();
+        let (mut c, mut s) = (c1, s1);
+        for k in 0..self.order {
+            let kf = (k + 1) as f64;
+            out[2 * k] = s / kf;
+            out[2 * k + 1] = -c / kf;
             (c, s) = (c * c1 - s * s1, s * c1 + c * s1);
         }
     }
@@ -372,6 +479,40 @@ impl Basis for Hat {
         out[i] = -slope;
         out[(i + 1) % self.nodes] = slope;
     }
+
+    /// `∫_{−π}^{x} hat_i` for `x` in `[−π, π)`, plus `2π/N` (the integral of every hat over a
+    /// turn) for each whole turn of `x` from there.
+    fn eval_antiderivative(&self, x: f64, out: &mut [f64]) {
+        let n = self.nodes;
+        check_len(out, n);
+        if !x.is_finite() {
+            out[..n].fill(f64::NAN);
+            return;
+        }
+        let d = TAU / n as f64;
+        let base = wrap(x);
+        let turns = ((x - base) / TAU).round();
+        let (j, s) = self.locate(base);
+        for (i, o) in out[..n].iter_mut().enumerate() {
+            // Whole intervals m < j: hat_i falls over interval i and rises over interval i − 1
+            // (interval N − 1 for hat0, which lies after every j).
+            let mut v = 0.0;
+            if i < j {
+                v += 0.5 * d;
+            }
+            if i >= 1 && i - 1 < j {
+                v += 0.5 * d;
+            }
+            // The part of interval j up to the fraction s.
+            if j == i {
+                v += d * (s - 0.5 * s * s);
+            }
+            if (j + 1) % n == i {
+                v += 0.5 * d * s * s;
+            }
+            *o = turns * d + v;
+        }
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -457,6 +598,16 @@ impl Basis for Polynomial {
             p *= x;
         }
     }
+
+    /// `x^(n+1) / (n+1)` for `x^n`.
+    fn eval_antiderivative(&self, x: f64, out: &mut [f64]) {
+        check_len(out, self.degree);
+        let mut p = x * x;
+        for (i, o) in out[..self.degree].iter_mut().enumerate() {
+            *o = p / (i + 2) as f64;
+            p *= x;
+        }
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -531,6 +682,9 @@ impl Basis for BasisKind {
     fn eval_deriv(&self, x: f64, out: &mut [f64]) {
         self.inner().eval_deriv(x, out)
     }
+    fn eval_antiderivative(&self, x: f64, out: &mut [f64]) {
+        self.inner().eval_antiderivative(x, out)
+    }
 }
 
 #[cfg(test)]
@@ -601,6 +755,94 @@ mod tests {
         assert!(v.iter().any(|x| x.is_nan()));
         Hat::new(8).unwrap().eval_deriv(f64::INFINITY, &mut v);
         assert!(v.iter().any(|x| x.is_nan()));
+    }
+
+    /// A basis that evaluates like `inner` but keeps the provided (quadrature) antiderivative.
+    #[derive(Debug)]
+    struct Plain<B>(B);
+
+    impl<B: Basis> Basis for Plain<B> {
+        fn len(&self) -> usize {
+            self.0.len()
+        }
+        fn name(&self, i: usize) -> Option<String> {
+            self.0.name(i)
+        }
+        fn domain(&self) -> Domain {
+            self.0.domain()
+        }
+        fn eval(&self, x: f64, out: &mut [f64]) {
+            self.0.eval(x, out)
+        }
+        fn eval_deriv(&self, x: f64, out: &mut [f64]) {
+            self.0.eval_deriv(x, out)
+        }
+    }
+
+    /// `Φ(b) − Φ(a)` against `∫_a^b φ` by the midpoint rule on fine steps, and the growth of a
+    /// circle basis over whole turns.
+    fn check_antiderivative(basis: &dyn Basis, points: &[f64], tol: f64) {
+        let n = basis.len();
+        let (mut fa, mut fb, mut phi) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        for w in points.windows(2) {
+            let (a, b) = (w[0], w[1]);
+            basis.eval_antiderivative(a, &mut fa);
+            basis.eval_antiderivative(b, &mut fb);
+            let steps = 20_000;
+            let hstep = (b - a) / steps as f64;
+            let mut sum = vec![0.0; n];
+            for s in 0..steps {
+                basis.eval(a + (s as f64 + 0.5) * hstep, &mut phi);
+                for (acc, p) in sum.iter_mut().zip(&phi) {
+                    *acc += p * hstep;
+                }
+            }
+            for i in 0..n {
+                let got = fb[i] - fa[i];
+                assert!(
+                    (got - sum[i]).abs() < tol,
+                    "{basis:?} function {i} on [{a}, {b}]: {got} against {}",
+                    sum[i]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn antiderivatives_integrate_the_functions() {
+        // Points that cross ±π and whole turns, on the unwrapped angle.
+        let circle = [-9.7, -4.0, -3.1, 0.3, 2.9, 3.5, 7.0, 13.3];
+        let line = [-2.5, -0.7, 0.0, 0.4, 1.9];
+        let hat = Hat::new(7).unwrap();
+        let bases: Vec<(Box<dyn Basis>, &[f64])> = vec![
+            (Box::new(Harmonic::new(3).unwrap()), &circle),
+            (Box::new(hat), &circle),
+            (Box::new(Polynomial::new(4).unwrap()), &line),
+            (Box::new(Plain(Harmonic::new(2).unwrap())), &circle),
+            (Box::new(Plain(Polynomial::new(3).unwrap())), &line),
+        ];
+        for (basis, points) in &bases {
+            check_antiderivative(basis.as_ref(), points, 1e-7);
+        }
+        // A hat's antiderivative grows by 2π/N per turn; a harmonic's does not grow.
+        let mut a = vec![0.0; 7];
+        let mut b = vec![0.0; 7];
+        hat.eval_antiderivative(0.4, &mut a);
+        hat.eval_antiderivative(0.4 + 3.0 * TAU, &mut b);
+        for i in 0..7 {
+            assert!((b[i] - a[i] - 3.0 * TAU / 7.0).abs() < 1e-12);
+        }
+        // Through a BasisKind and a reference, the closed form is used.
+        let (mut c, mut q) = (vec![0.0; 7], vec![0.0; 7]);
+        let kind = BasisKind::from(hat);
+        kind.eval_antiderivative(1.0, &mut q);
+        hat.eval_antiderivative(1.0, &mut c);
+        assert_eq!(c, q);
+        Basis::eval_antiderivative(&&kind, 1.0, &mut q);
+        assert_eq!(c, q);
+        let mut nan = vec![0.0; 7];
+        hat.eval_antiderivative(f64::NAN, &mut nan);
+        assert!(nan.iter().all(|v| v.is_nan()));
     }
 
     #[test]

@@ -11,7 +11,7 @@ use std::fmt;
 use std::sync::Arc;
 
 use realfft::num_complex::Complex;
-use realfft::{RealFftPlanner, RealToComplex};
+use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
 
 use crate::BasisError;
 
@@ -108,6 +108,8 @@ pub struct FourierPlan {
     input: Vec<f64>,
     bins: Vec<Complex64>,
     scratch: Vec<Complex64>,
+    /// The inverse transform and its scratch, planned on the first [`FourierPlan::derivative`].
+    inverse: Option<(Arc<dyn ComplexToReal<f64>>, Vec<Complex64>)>,
 }
 
 impl fmt::Debug for FourierPlan {
@@ -141,6 +143,7 @@ impl FourierPlan {
             input,
             bins,
             scratch,
+            inverse: None,
         })
     }
 
@@ -185,6 +188,51 @@ impl FourierPlan {
             bins: &self.bins,
             len,
         })
+    }
+
+    /// The derivative, with respect to the sample index `n`, of the trigonometric interpolant of
+    /// `signal` (`L` finite samples) truncated to harmonics `1..=cutoff`, at every sample:
+    ///
+    /// `out_n = Σ_{j=1}^{cutoff} (2πj/L) (b_j cos(2πjn/L) − a_j sin(2πjn/L))`
+    ///
+    /// (divide by the sample step for a time derivative). `cutoff` is lowered to `(L − 1) / 2`
+    /// when above: the Nyquist harmonic of an even length has no derivative the samples
+    /// determine. Exact (to rounding) for a trigonometric polynomial of degree at most `cutoff`;
+    /// one forward and one inverse real FFT (the inverse planned on first use).
+    pub fn derivative(&mut self, signal: &[f64], cutoff: usize, out: &mut [f64]) -> Result<(), BasisError> {
+        let len = self.len();
+        if out.len() != len {
+            return Err(BasisError::LengthMismatch {
+                what: "derivative output",
+                expected: len,
+                found: out.len(),
+            });
+        }
+        self.transform(signal)?;
+        let cutoff = cutoff.min((len - 1) / 2);
+        let step = std::f64::consts::TAU / len as f64;
+        for (j, bin) in self.bins.iter_mut().enumerate() {
+            *bin = if (1..=cutoff).contains(&j) {
+                // i ω_j S_j, and 1/L for the inverse transform.
+                let w = step * j as f64 / len as f64;
+                Complex64::new(-w * bin.im, w * bin.re)
+            } else {
+                Complex64::new(0.0, 0.0)
+            };
+        }
+        let (inverse, scratch) = self.inverse.get_or_insert_with(|| {
+            let inverse = RealFftPlanner::<f64>::new().plan_fft_inverse(len);
+            let scratch = inverse.make_scratch_vec();
+            (inverse, scratch)
+        });
+        // The bins were made by the forward plan of the same length, and bins 0 and L/2 are zero.
+        inverse
+            .process_with_scratch(&mut self.bins, out, scratch)
+            .map_err(|_| BasisError::LengthMismatch {
+                what: "inverse FFT buffers",
+                expected: len,
+                found: out.len(),
+            })
     }
 
     /// The coefficients `a_0 ..= a_M` into `a` and `b_0 ..= b_M` into `b` (`M = a.len() − 1`, at
@@ -331,6 +379,40 @@ mod tests {
                 ..
             })
         ));
+    }
+
+    #[test]
+    fn derivative_of_a_trigonometric_polynomial() {
+        for l in [24, 25] {
+            let w = TAU / l as f64;
+            let s: Vec<f64> = (0..l)
+                .map(|n| {
+                    let t = w * n as f64;
+                    0.5 + 2.0 * (3.0 * t).cos() - 1.5 * (5.0 * t).sin() + 0.25 * (9.0 * t).cos()
+                })
+                .collect();
+            let mut plan = FourierPlan::new(l).unwrap();
+            let mut d = vec![0.0; l];
+            plan.derivative(&s, 11, &mut d).unwrap();
+            // Truncated at 5: the 9th harmonic is left out.
+            let mut d5 = vec![0.0; l];
+            plan.derivative(&s, 5, &mut d5).unwrap();
+            for n in 0..l {
+                let t = w * n as f64;
+                let full =
+                    -6.0 * w * (3.0 * t).sin() - 7.5 * w * (5.0 * t).cos() - 2.25 * w * (9.0 * t).sin();
+                assert!(
+                    (d[n] - full).abs() < 1e-13,
+                    "L {l}, n {n}: {} against {full}",
+                    d[n]
+                );
+                assert!((d5[n] - full - 2.25 * w * (9.0 * t).sin()).abs() < 1e-13);
+            }
+            // The plan still transforms after an inverse.
+            let (a, _) = fourier_coefficients(&s, 3).unwrap();
+            assert!((a[3] - 2.0).abs() < 1e-13);
+            assert!(plan.derivative(&s, 3, &mut d[..l - 1]).is_err());
+        }
     }
 
     #[test]

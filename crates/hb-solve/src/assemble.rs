@@ -1,12 +1,15 @@
 //! Assembly of the harmonic-balance equations (paper eqs. 15-16).
 
+use std::f64::consts::TAU;
+
 use circle_signal::{RotationSplit, Segment, unwrap_into, wrap};
-use faer::{Col, Mat};
-use hb_basis::{Basis, Complex64, Domain, FourierPlanner, coefficients_from_bin};
+use faer::{Col, Mat, MatMut};
+use hb_basis::{Basis, Complex64, Domain, FourierPlan, FourierPlanner, coefficients_from_bin};
 use rayon::prelude::*;
 
 use crate::system::{Layout, RowJob, layout, split_rows};
-use crate::terms::Column;
+use crate::terms::{Column, DriveFactor, PositionFactor, Term, VelocityFactor};
+use crate::velocity::{Series, VelocityTrend, cell_sign, velocity_into};
 use crate::{Block, Forcing, IdentifyParams, LinearSystem, SolveError};
 
 /// Per-worker buffers, reused over segments.
@@ -20,6 +23,19 @@ struct Workspace {
     table: Vec<f64>,
     u: Vec<f64>,
     v: Vec<f64>,
+    /// Buffers of the general terms.
+    general: GeneralBuffers,
+}
+
+/// Buffers of the terms outside the paper's families.
+#[derive(Debug, Clone, Default)]
+struct GeneralBuffers {
+    /// The samples of one term.
+    g: Vec<f64>,
+    /// The velocity at every sample, when a term is nonlinear in it.
+    xdot: Vec<f64>,
+    /// The segment less its trend.
+    detrended: Vec<f64>,
 }
 
 /// Segments whose starts lie within this many samples share one table of the basis.
@@ -48,6 +64,54 @@ struct Shared<'a, B: ?Sized> {
     params: &'a IdentifyParams,
     columns: &'a [Column],
     domain: Domain,
+    /// The basis functions' names.
+    names: &'a [String],
+    /// Per basis function: whether a column takes its spectrum.
+    used: Vec<bool>,
+    /// Per basis function: the columns of it times a drive harmonic `k >= 2` (shift theorem).
+    shifted: Vec<Vec<(usize, DriveFactor)>>,
+    /// The other general columns.
+    others: Vec<(usize, Term)>,
+}
+
+impl<'a, B: Basis + ?Sized> Shared<'a, B> {
+    fn new(
+        basis: &'a B,
+        signal: &'a [f64],
+        params: &'a IdentifyParams,
+        columns: &'a [Column],
+        domain: Domain,
+        names: &'a [String],
+    ) -> Self {
+        let n = names.len();
+        let mut used = vec![false; n];
+        let mut shifted = vec![Vec::new(); n];
+        let mut others = Vec::new();
+        for (c, &column) in columns.iter().enumerate() {
+            match column {
+                Column::Auto(i) | Column::CosT(i) | Column::SinT(i) => used[i] = true,
+                Column::Product(t) => match (t.position, t.velocity) {
+                    (PositionFactor::Basis(i), VelocityFactor::One) => {
+                        used[i] = true;
+                        shifted[i].push((c, t.drive));
+                    }
+                    _ => others.push((c, t)),
+                },
+                _ => {}
+            }
+        }
+        Self {
+            basis,
+            signal,
+            params,
+            columns,
+            domain,
+            names,
+            used,
+            shifted,
+            others,
+        }
+    }
 }
 
 /// Assembles the stacked system (paper eq. 16) of `segments` of `signal` for a model on `basis`.
@@ -87,14 +151,9 @@ pub(crate) fn harmonic_rows<B: Basis + ?Sized>(
         table: Vec::new(),
         u: Vec::new(),
         v: Vec::new(),
+        general: GeneralBuffers::default(),
     };
-    let shared = Shared {
-        basis,
-        signal,
-        params,
-        columns,
-        domain,
-    };
+    let shared = Shared::new(basis, signal, params, columns, domain, names);
 
     let mut matrix = Mat::<f64>::zeros(rows, cols);
     let mut rhs = vec![0.0; rows];
@@ -254,7 +313,7 @@ fn fill_block<B: Basis + ?Sized>(
                     a[(2 * j, c)] = bj;
                 }
             }
-            Column::CosT(_) | Column::SinT(_) | Column::Auto(_) => {}
+            Column::CosT(_) | Column::SinT(_) | Column::Auto(_) | Column::Product(_) => {}
         }
     }
     if let (Forcing::Known { cos, sin }, Some((rc, rs))) = (form.forcing(), forcing_rows) {
@@ -263,7 +322,7 @@ fn fill_block<B: Basis + ?Sized>(
     }
 
     // Basis terms: one transform per function, the modulated ones by the shift theorem.
-    for i in 0..n_fn {
+    for i in (0..n_fn).filter(|&i| sh.used[i]) {
         let row = phi.row(i, l);
         if row.iter().any(|v| !v.is_finite()) {
             let term = sh.basis.name(i).unwrap_or_default();
@@ -299,6 +358,38 @@ fn fill_block<B: Basis + ?Sized>(
                 put(sin_t, j, sb);
             }
         }
+        // Higher drive harmonics q: a shift by q k bins and the phase q W t_start.
+        for &(c, drive) in &sh.shifted[i] {
+            let q = drive.harmonic() as usize;
+            let phasor = Complex64::from_polar(1.0, q as f64 * theta0);
+            for j in 0..=m {
+                let (cb, sb) = spec.modulated_bins(j as isize, (q * k) as isize, phasor);
+                let bin = match drive {
+                    DriveFactor::Sin(_) => sb,
+                    DriveFactor::Cos(_) => cb,
+                    DriveFactor::One => spec.bins()[j],
+                };
+                put(Some(c), j, bin);
+            }
+        }
+    }
+
+    if !sh.others.is_empty() {
+        let view = SegmentView {
+            index,
+            start: seg.start(),
+            raw,
+            cont: match sh.domain {
+                Domain::Circle => &ws.unwrapped,
+                Domain::Line => raw,
+            },
+            osc,
+            theta0,
+            k,
+            m,
+            h: clock.step(),
+        };
+        general_columns(plan, &mut ws.general, sh, phi, &view, a.as_mut())?;
     }
 
     let bad_row = (0..a.nrows()).find(|&r| !b[r].is_finite() || (0..cols).any(|c| !a[(r, c)].is_finite()));
@@ -317,4 +408,136 @@ fn fill_block<B: Basis + ?Sized>(
         winding,
         rotation_rate: rate,
     })
+}
+
+/// One segment as the general terms see it.
+struct SegmentView<'a> {
+    index: usize,
+    start: usize,
+    /// The samples and the closing one, as recorded.
+    raw: &'a [f64],
+    /// The continuous displacement (unwrapped on the circle), `L + 1` samples.
+    cont: &'a [f64],
+    /// The oscillation (the continuous displacement less the rotation), `L` samples.
+    osc: &'a [f64],
+    /// The drive's phase `W t` at the first sample.
+    theta0: f64,
+    /// Period in forcing periods.
+    k: usize,
+    /// Harmonics balanced.
+    m: usize,
+    /// Sample step.
+    h: f64,
+}
+
+impl SegmentView<'_> {
+    /// A drive factor at sample `n`: the phase `q (θ0 + 2π k n / L)`, reduced exactly.
+    fn drive(&self, d: DriveFactor, n: usize) -> f64 {
+        let l = self.osc.len();
+        let phase = |q: u32| {
+            let q = q as usize;
+            q as f64 * self.theta0 + TAU * ((q * self.k % l) * n % l) as f64 / l as f64
+        };
+        match d {
+            DriveFactor::One => 1.0,
+            DriveFactor::Cos(q) => phase(q).cos(),
+            DriveFactor::Sin(q) => phase(q).sin(),
+        }
+    }
+}
+
+/// Writes the balance of harmonics `0..=m` of the DFT bins `bin(j)` of one column into column `c`.
+fn put_bins(a: &mut MatMut<'_, f64>, c: usize, m: usize, len: usize, bin: impl Fn(usize) -> Complex64) {
+    for j in 0..=m {
+        let (aj, bj) = coefficients_from_bin(bin(j), j, len);
+        if j == 0 {
+            a[(0, c)] = aj / 2.0;
+        } else {
+            a[(2 * j - 1, c)] = aj;
+            a[(2 * j, c)] = bj;
+        }
+    }
+}
+
+/// The columns of the terms outside the paper's families (but the basis functions times a drive
+/// harmonic, which come from the basis' spectra by the shift theorem):
+///
+/// - a drive factor alone: its Fourier coefficients in closed form (harmonic `q k` only);
+/// - any other: the DFT of its samples `D(t_n) f(x_n) v(x'_n)`, with `x'_n` from the orbit's
+///   Fourier series up to the params' velocity harmonics ([`crate::velocity_series`] with
+///   [`VelocityTrend::Line`]: the rotation plus the derivative of the oscillation's series, as the
+///   damping column's `jΩ` times the oscillation's coefficients), and `sign(x')` averaged over
+///   each sample's cell with `x'` linear between samples (so that its jumps fall where the
+///   velocity crosses zero, not on the nearest sample).
+fn general_columns<B: Basis + ?Sized>(
+    plan: &mut FourierPlan,
+    buf: &mut GeneralBuffers,
+    sh: &Shared<'_, B>,
+    phi: Rows<'_>,
+    seg: &SegmentView<'_>,
+    mut a: MatMut<'_, f64>,
+) -> Result<(), SolveError> {
+    let l = seg.osc.len();
+    let (m, k) = (seg.m, seg.k);
+    if sh.others.iter().any(|(_, t)| t.velocity != VelocityFactor::One) {
+        let cutoff = sh.params.velocity_harmonics().count(k, l);
+        velocity_into(
+            plan,
+            seg.cont,
+            Series {
+                periods: k,
+                harmonics: cutoff,
+                step: seg.h,
+                trend: VelocityTrend::Line,
+            },
+            &mut buf.detrended,
+            &mut buf.xdot,
+        )?;
+    }
+    let not_finite = |term: &Term| SolveError::NonFiniteTerm {
+        segment: seg.index,
+        start: seg.start,
+        term: term.name(sh.names),
+    };
+    for &(c, term) in &sh.others {
+        match (term.position, term.velocity) {
+            (PositionFactor::One, VelocityFactor::One) => match term.drive {
+                DriveFactor::One => a[(0, c)] = 1.0,
+                DriveFactor::Cos(q) | DriveFactor::Sin(q) => {
+                    let j = q as usize * k;
+                    if j <= m {
+                        let (sq, cq) = (f64::from(q) * seg.theta0).sin_cos();
+                        let (ca, cb) = match term.drive {
+                            DriveFactor::Cos(_) => (cq, -sq),
+                            _ => (sq, cq),
+                        };
+                        a[(2 * j - 1, c)] = ca;
+                        a[(2 * j, c)] = cb;
+                    }
+                }
+            },
+            (position, velocity) => {
+                buf.g.clear();
+                buf.g.extend((0..l).map(|n| {
+                    let f = match position {
+                        PositionFactor::One => 1.0,
+                        PositionFactor::Basis(i) => phi.row(i, l)[n],
+                        PositionFactor::Linear => seg.raw[n],
+                    };
+                    let v = match velocity {
+                        VelocityFactor::One => 1.0,
+                        VelocityFactor::Sign => cell_sign(&buf.xdot, n, true),
+                        _ => velocity.eval(buf.xdot[n]),
+                    };
+                    seg.drive(term.drive, n) * f * v
+                }));
+                if buf.g.iter().any(|v| !v.is_finite()) {
+                    return Err(not_finite(&term));
+                }
+                let spec = plan.transform(&buf.g)?;
+                put_bins(&mut a, c, m, l, |j| spec.bins()[j]);
+            }
+        }
+    }
+    Ok(())
 }

@@ -5,7 +5,7 @@ use faer::{Col, Mat};
 use hb_basis::{Basis, Domain};
 
 use crate::system::{Layout, layout};
-use crate::terms::Column;
+use crate::terms::{Column, PositionFactor};
 use crate::{Assembly, Block, Forcing, Harmonics, IdentifyParams, LinearSystem, SolveError};
 
 /// The equation of motion at every sample, with `x'` and `x''` from fourth-order central
@@ -13,7 +13,7 @@ use crate::{Assembly, Block, Forcing, Harmonics, IdentifyParams, LinearSystem, S
 /// harmonic-balance methods are measured against (`docs/accuracy.md`).
 ///
 /// On a segment of `L` samples and its closing one, sample `n` gives the row
-/// `Σ_i λ_i g_i(x_n, x'_n, t_n) = −x''_n` for every `n` of `start .. start + L` whose stencil
+/// `Σ_i λ_i g_i(x_n, x'_n, t_n) = −x''_n` (any term: its factors evaluated at the sample) for every `n` of `start .. start + L` whose stencil
 /// `n − 2 ..= n + 2` lies in the record, with
 /// `x'_n = (−x_{n+2} + 8 x_{n+1} − 8 x_{n−1} + x_{n−2}) / 12h` and
 /// `x''_n = (−x_{n+2} + 16 x_{n+1} − 30 x_n + 16 x_{n−1} − x_{n−2}) / 12h²`. Differences amplify
@@ -94,6 +94,14 @@ impl Assembly for FiniteDifferences {
                         Column::ForcingCos => c,
                         Column::ForcingSin => s,
                         Column::Stiffness => y[k],
+                        Column::Product(t) => {
+                            let position = match t.position {
+                                PositionFactor::One => 1.0,
+                                PositionFactor::Basis(i) => phi[i],
+                                PositionFactor::Linear => y[k],
+                            };
+                            t.drive.eval(w * clock.time(n)) * position * t.velocity.eval(d1)
+                        }
                     };
                 }
                 rhs[r] = -d2

@@ -764,7 +764,7 @@ pub fn estimate_forcing_period<B: Basis + ?Sized>(
             basis: basis.domain(),
         });
     }
-    let form = form.validate()?;
+    let form = form.clone().validate()?;
     check_form(domain, &form)?;
     check_finite(x)?;
     let k = search.window_periods;
@@ -1153,8 +1153,14 @@ impl Problem {
         search: &DriveSearch,
     ) -> Result<Self, SolveError> {
         let names = basis.names();
-        let terms = columns(names.len(), form);
-        let columns = column_families(&terms, &names)?;
+        let terms = columns(basis, form)?;
+        let columns = column_families(&terms);
+        if let Some(t) = terms.iter().find(|t| !t.column().is_paper()) {
+            return Err(SolveError::TermNotSupported {
+                term: t.name(&names),
+                by: "the forcing period's estimate (damping, basis functions, and the drive's first harmonic times them or alone)",
+            });
+        }
         let drive: Vec<usize> = columns
             .iter()
             .enumerate()
@@ -1303,6 +1309,8 @@ impl Problem {
                     Column::ForcingCos => c,
                     Column::ForcingSin => s,
                     Column::Stiffness => cont[n],
+                    // Refused when the problem is made.
+                    Column::Product(_) => 0.0,
                 };
             }
             for (j, &col) in self.drive.iter().enumerate() {

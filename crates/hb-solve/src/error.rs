@@ -121,17 +121,87 @@ pub enum SolveError {
     #[error("the term `{term}` cannot be used with a basis on the {domain:?} domain: {why}")]
     TermNotAllowed {
         /// The term's name.
-        term: &'static str,
+        term: String,
         /// The basis' domain.
         domain: Domain,
         /// Why.
         why: &'static str,
     },
-    /// A term the identification methods do not balance yet.
-    #[error("the term `{term}` is not supported by the identification methods yet")]
+    /// A term that a computation does not handle.
+    #[error("the term `{term}` is not supported by {by}")]
     TermNotSupported {
         /// The term's name.
         term: String,
+        /// What does not support it.
+        by: &'static str,
+    },
+    /// A list of terms that does not parse.
+    #[error("term list \"{spec}\": at character {at}, expected {expected}; found {found}")]
+    TermSyntax {
+        /// The list as given.
+        spec: String,
+        /// 1-based position of the character where the error is (one past the end at the end).
+        at: usize,
+        /// What was found there.
+        found: String,
+        /// What was expected.
+        expected: &'static str,
+    },
+    /// Factors that do not make a term together.
+    #[error("term list \"{spec}\": the product at character {at} is not a term: {why}")]
+    TermProduct {
+        /// The list as given.
+        spec: String,
+        /// 1-based position of the offending factor.
+        at: usize,
+        /// Why.
+        why: &'static str,
+    },
+    /// A term named twice in a list.
+    #[error("the term `{term}` is named twice (again at character {at} of the list)")]
+    DuplicateTerm {
+        /// The term.
+        term: String,
+        /// Where it appears again (1-based character of its item; for a list built from terms,
+        /// the 1-based index of the term).
+        at: usize,
+    },
+    /// A list of terms with too many of them.
+    #[error("{count} terms are too many (at most {max})")]
+    TooManyTerms {
+        /// Terms asked for.
+        count: usize,
+        /// The most allowed.
+        max: usize,
+    },
+    /// A term whose function of `x` the basis does not have.
+    #[error(
+        "the term `{term}` needs the function {function}, which the basis ({}) does not have; choose a basis \
+         that holds it (e.g. harmonic:2 for cos(2x), poly:3 for x^3, hat:8 for hat7)", basis.join(", ")
+    )]
+    TermNotInBasis {
+        /// The term.
+        term: String,
+        /// Its function of `x`.
+        function: String,
+        /// The basis' functions.
+        basis: Vec<String>,
+    },
+    /// Functions of `x` of two kinds of basis in one list.
+    #[error(
+        "the functions {first} and {second} come from different bases (harmonic, polynomial, hat): one basis holds the functions of a model"
+    )]
+    MixedBases {
+        /// A function of one kind.
+        first: String,
+        /// One of another.
+        second: String,
+    },
+    /// A model form whose parts contradict each other.
+    #[error("invalid model form: {why}")]
+    InvalidForm {
+        /// Why.
+        why: &'static str,
     },
     /// The noise correction cannot be applied to a term of this model.
     #[error("no noise correction for the term `{term}`: {why}")]
@@ -253,11 +323,13 @@ pub enum SolveError {
     #[error("not a saved model: the first bytes are not the model magic number")]
     BadMagic,
     /// A saved model of another format version.
-    #[error("saved model format version {found} is not supported (this build reads version {supported})")]
+    #[error(
+        "saved model format version {found} is not supported (this build reads versions 2 to {supported})"
+    )]
     UnsupportedVersion {
         /// Version in the file.
         found: u32,
-        /// Version this build reads and writes.
+        /// The newest version this build reads, the one it writes.
         supported: u32,
     },
     /// A saved model whose coefficients do not match its basis and form.

@@ -7,7 +7,12 @@
 //! ```
 //!
 //! with a basis `{φ_i}` from `hb-basis` and the terms chosen by a [`ModelForm`] (`k x` and the
-//! external forcing `F` are optional). Over a period-`k` orbit segment of `L = kP` samples, every
+//! external forcing `F` are optional; the parametric terms and the forcing may have the drive's
+//! harmonics `2..H` too). More generally the model is `x'' + Σ_i c_i g_i = 0` with any terms
+//! `g_i`, each the product of a drive factor (`1`, `cos(kt)`, `sin(kt)`), a function of `x` (`1`
+//! or a basis function) and a function of `x'` (`1`, `x'`, `sign(x')`, `x'*|x'|`, `x'^3`), listed
+//! by a [`TermList`] (parsed from text such as `x', sign(x'), {1,cos(t),sin(t)}*{cos(x),sin(x)}`)
+//! and given by [`ModelForm::from_terms`]. Over a period-`k` orbit segment of `L = kP` samples, every
 //! signal is expanded in a Fourier series of the orbit's fundamental `Ω = W / k` (eqs. 7-14); for an
 //! angle on the circle the segment is first unwrapped and split into a constant rotation `w_ck t`
 //! and an oscillation `x_var` (section 2, Figure 1), so `x' = w_ck + Σ ...` (eq. 10) and
@@ -60,7 +65,7 @@
 //! let segment = Segment::new(0, 1, &clock, 0.0, x.len())?;
 //! // The term cos(t) sits on the left with x'': its known coefficient is −1.
 //! let form = ModelForm::externally_forced(Forcing::Known { cos: -1.0, sin: 0.0 });
-//! let params = IdentifyParams::builder(clock).form(form).build()?;
+//! let params = IdentifyParams::builder(clock).form(form.clone()).build()?;
 //! let model = identify(Polynomial::new(1)?, &x, &[segment], &params, &HarmonicBalance, &QrSolver::default())?;
 //! assert!((model.damping() - 0.1).abs() < 1e-12);
 //! assert!((model.coefficient("x").unwrap().value - 2.0).abs() < 1e-12);
@@ -112,6 +117,7 @@ mod quality;
 mod select;
 mod system;
 mod terms;
+mod velocity;
 mod weak;
 
 pub use bootstrap::{
@@ -126,7 +132,9 @@ pub use drive::{
 pub use error::SolveError;
 pub use lstsq::{LstsqFit, LstsqSolver, QrSolver, RankTolerance, SvdSolver};
 pub use method::{Assembly, HarmonicBalance};
-pub use model::{Coefficient, FitSummary, IdentifiedModel, MODEL_FORMAT, MODEL_MAGIC, MODEL_VERSION};
+pub use model::{
+    Coefficient, FitSummary, IdentifiedModel, MODEL_FORMAT, MODEL_MAGIC, MODEL_OLDEST_VERSION, MODEL_VERSION,
+};
 pub use noise::{NOISE_BAND_START, NOISE_ESTIMATE_MIN_LEN, correct_noise, estimate_noise_sigma};
 pub use params::{
     Forcing, Harmonics, IdentifyParams, IdentifyParamsBuilder, ModelForm, NoiseCorrection, SampleClock,
@@ -136,7 +144,11 @@ pub use quality::{
 };
 pub use select::{DroppedTerm, SelectParams, Selection, SelectionStep, select_terms};
 pub use system::{Block, LinearSystem};
-pub use terms::{DriveFactor, PositionFactor, Term, VelocityFactor, columns, term_names};
+pub use terms::{
+    DriveFactor, MAX_DRIVE_HARMONIC, MAX_TERMS, PositionFactor, Term, TermList, TermSpec, VelocityFactor,
+    XFunction, columns, term_names,
+};
+pub use velocity::{VelocityTrend, velocity_series};
 pub use weak::WeakForm;
 
 use circle_signal::{OrbitSource, Segment};

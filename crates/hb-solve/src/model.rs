@@ -9,7 +9,8 @@ use serde::de::{DeserializeOwned, MapAccess, Visitor};
 use serde::ser::SerializeMap;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
-use crate::terms::{Column, DriveFactor, Term, check_form, column_families, columns};
+use crate::params::ModelFormV2;
+use crate::terms::{Column, DriveFactor, PositionFactor, Term, VelocityFactor, column_families, columns};
 use crate::{
     Forcing, Harmonics, IdentifyParams, LinearSystem, LstsqFit, LstsqSolver, ModelForm, SampleClock,
     SolveError,
@@ -52,11 +53,13 @@ pub struct FitSummary {
     pub residual_variance: f64,
 }
 
-/// An identified equation of motion (paper eq. 2 / eq. 6):
+/// An identified equation of motion `x'' + Σ_i c_i g_i(t, x, x') = 0` (paper eq. 2 / eq. 6 for
+/// the presets):
 ///
 /// `x'' = −( c_r x' + k x + Σ_i [q_i + n_i cos(W t) + p_i sin(W t)] φ_i(x) + F_c cos(W t) + F_s sin(W t) )`
 ///
-/// with the terms its [`ModelForm`] has. On the circle the basis is evaluated at `wrap(x)`. It
+/// with the terms its [`ModelForm`] has (any product of a drive factor, a function of `x` and a
+/// function of `x'` for a term list). On the circle the basis is evaluated at `wrap(x)`. It
 /// implements [`SecondOrderSystem`], so it can be simulated and its Lyapunov exponents estimated
 /// with the same code as the true system; `t` is the absolute time of the record's clock.
 ///
@@ -72,15 +75,71 @@ pub struct IdentifiedModel<B = BasisKind> {
     eval: Evaluation,
 }
 
-/// The coefficients arranged for evaluation.
+/// The coefficients arranged for evaluation: the paper's families by basis function (the
+/// arithmetic of every model before general terms, kept so that their simulations do not move by
+/// a rounding), or any terms one by one.
 #[derive(Debug, Clone, PartialEq)]
-struct Evaluation {
+enum Evaluation {
+    Paper(PaperEvaluation),
+    General(GeneralEvaluation),
+}
+
+/// The paper's families.
+#[derive(Debug, Clone, PartialEq)]
+struct PaperEvaluation {
     damping: f64,
     cos_t: Vec<f64>,
     sin_t: Vec<f64>,
     auto: Vec<f64>,
     forcing: (f64, f64),
     stiffness: f64,
+}
+
+/// Any terms: `Σ c D(t) F(x) V(x')` over the columns, and the known forcing.
+#[derive(Debug, Clone, PartialEq)]
+struct GeneralEvaluation {
+    terms: Vec<(f64, Term)>,
+    /// The highest drive harmonic of a term.
+    harmonics: usize,
+    forcing: (f64, f64),
+}
+
+/// The highest drive harmonic is at most [`crate::MAX_DRIVE_HARMONIC`]; this holds `cos(kθ)` and
+/// `sin(kθ)` for `k = 0..=64`.
+const DRIVE_TABLE: usize = 65;
+
+impl GeneralEvaluation {
+    /// `(cos kθ, sin kθ)` for `k = 0..=harmonics`.
+    fn drive_table(&self, phase: f64) -> ([f64; DRIVE_TABLE], [f64; DRIVE_TABLE]) {
+        let (mut c, mut s) = ([0.0; DRIVE_TABLE], [0.0; DRIVE_TABLE]);
+        c[0] = 1.0;
+        for k in 1..=self.harmonics.min(DRIVE_TABLE - 1) {
+            (s[k], c[k]) = (k as f64 * phase).sin_cos();
+        }
+        (c, s)
+    }
+}
+
+/// A drive factor from the table of its harmonics.
+#[inline]
+fn drive_value(d: DriveFactor, c: &[f64; DRIVE_TABLE], s: &[f64; DRIVE_TABLE]) -> f64 {
+    match d {
+        DriveFactor::One => 1.0,
+        DriveFactor::Cos(k) => c[k as usize],
+        DriveFactor::Sin(k) => s[k as usize],
+    }
+}
+
+/// A function of `x` (or its derivative) from the basis' values.
+#[inline]
+fn position_value(p: PositionFactor, phi: &[f64], x: f64, deriv: bool) -> f64 {
+    match (p, deriv) {
+        (PositionFactor::One, false) => 1.0,
+        (PositionFactor::One, true) => 0.0,
+        (PositionFactor::Basis(i), _) => phi[i],
+        (PositionFactor::Linear, false) => x,
+        (PositionFactor::Linear, true) => 1.0,
+    }
 }
 
 /// Bases with at most this many functions are evaluated in a stack buffer (no allocation per call).
@@ -97,7 +156,7 @@ impl<B: Basis> IdentifiedModel<B> {
     ) -> Result<Self, SolveError> {
         let form = form.validate()?;
         let names = basis.names();
-        let layout = columns(names.len(), &form);
+        let layout = columns(&basis, &form)?;
         if values.len() != layout.len() {
             return Err(SolveError::ModelMismatch {
                 expected: layout.iter().map(|t| t.name(&names)).collect(),
@@ -165,7 +224,7 @@ impl<B: Basis> IdentifiedModel<B> {
         };
         Self::from_parts(
             basis,
-            *params.form(),
+            params.form().clone(),
             params.clock().forcing_frequency(),
             coefficients,
             Some(summary),
@@ -180,7 +239,6 @@ impl<B: Basis> IdentifiedModel<B> {
         coefficients: Vec<Coefficient>,
         summary: Option<FitSummary>,
     ) -> Result<Self, SolveError> {
-        check_form(basis.domain(), &form)?;
         if !(forcing_frequency.is_finite() && forcing_frequency > 0.0) {
             return Err(SolveError::InvalidParameter {
                 name: "forcing frequency",
@@ -199,9 +257,9 @@ impl<B: Basis> IdentifiedModel<B> {
             });
         }
         let names = basis.names();
-        let terms = columns(names.len(), &form);
+        let terms = columns(&basis, &form)?;
         let expected: Vec<String> = terms.iter().map(|t| t.name(&names)).collect();
-        let layout = column_families(&terms, &names)?;
+        let layout = column_families(&terms);
         if coefficients.len() != expected.len()
             || coefficients.iter().zip(&expected).any(|(c, e)| &c.name != e)
         {
@@ -216,29 +274,48 @@ impl<B: Basis> IdentifiedModel<B> {
         {
             return Err(SolveError::NonFiniteModelValue { name: c.name.clone() });
         }
-        let n = names.len();
-        let mut eval = Evaluation {
-            damping: 0.0,
-            cos_t: vec![0.0; n],
-            sin_t: vec![0.0; n],
-            auto: vec![0.0; n],
-            forcing: match form.forcing() {
-                Forcing::Known { cos, sin } => (cos, sin),
-                _ => (0.0, 0.0),
-            },
-            stiffness: 0.0,
+        let forcing = match form.forcing() {
+            Forcing::Known { cos, sin } => (cos, sin),
+            _ => (0.0, 0.0),
         };
-        for (&t, c) in layout.iter().zip(&coefficients) {
-            match t {
-                Column::Damping => eval.damping = c.value,
-                Column::CosT(i) => eval.cos_t[i] = c.value,
-                Column::SinT(i) => eval.sin_t[i] = c.value,
-                Column::Auto(i) => eval.auto[i] = c.value,
-                Column::ForcingCos => eval.forcing.0 = c.value,
-                Column::ForcingSin => eval.forcing.1 = c.value,
-                Column::Stiffness => eval.stiffness = c.value,
+        let eval = if layout.iter().all(Column::is_paper) {
+            let n = names.len();
+            let mut eval = PaperEvaluation {
+                damping: 0.0,
+                cos_t: vec![0.0; n],
+                sin_t: vec![0.0; n],
+                auto: vec![0.0; n],
+                forcing,
+                stiffness: 0.0,
+            };
+            for (&t, c) in layout.iter().zip(&coefficients) {
+                match t {
+                    Column::Damping => eval.damping = c.value,
+                    Column::CosT(i) => eval.cos_t[i] = c.value,
+                    Column::SinT(i) => eval.sin_t[i] = c.value,
+                    Column::Auto(i) => eval.auto[i] = c.value,
+                    Column::ForcingCos => eval.forcing.0 = c.value,
+                    Column::ForcingSin => eval.forcing.1 = c.value,
+                    Column::Stiffness => eval.stiffness = c.value,
+                    Column::Product(_) => {}
+                }
             }
-        }
+            Evaluation::Paper(eval)
+        } else {
+            Evaluation::General(GeneralEvaluation {
+                terms: coefficients
+                    .iter()
+                    .map(|c| c.value)
+                    .zip(terms.iter().copied())
+                    .collect(),
+                harmonics: terms
+                    .iter()
+                    .map(|t| t.drive.harmonic() as usize)
+                    .max()
+                    .unwrap_or(0),
+                forcing,
+            })
+        };
         Ok(Self {
             basis,
             form,
@@ -249,9 +326,16 @@ impl<B: Basis> IdentifiedModel<B> {
         })
     }
 
-    /// The damping coefficient `c_r` (term `x'`).
+    /// The damping coefficient `c_r` (term `x'`; 0 when the model has no such term).
     pub fn damping(&self) -> f64 {
-        self.eval.damping
+        match &self.eval {
+            Evaluation::Paper(e) => e.damping,
+            Evaluation::General(e) => e
+                .terms
+                .iter()
+                .find(|(_, t)| *t == Term::DAMPING)
+                .map_or(0.0, |&(c, _)| c),
+        }
     }
 
     /// All identified coefficients, in column order.
@@ -315,19 +399,45 @@ impl<B: Basis> IdentifiedModel<B> {
         f(buf)
     }
 
-    /// The autonomous part `f_anl(x) = k x + Σ_i q_i φ_i(x)` (eq. 2, 5).
+    /// The autonomous part `f_anl(x) = k x + Σ_i q_i φ_i(x)` (eq. 2, 5): every term without a
+    /// drive factor or a function of `x'`.
     pub fn autonomous(&self, x: f64) -> f64 {
         let xe = self.point(x);
-        self.eval.stiffness * xe + self.with_basis(xe, false, |phi| dot(&self.eval.auto, phi))
+        match &self.eval {
+            Evaluation::Paper(e) => e.stiffness * xe + self.with_basis(xe, false, |phi| dot(&e.auto, phi)),
+            Evaluation::General(e) => self.with_basis(xe, false, |phi| {
+                e.terms
+                    .iter()
+                    .filter(|(_, t)| t.drive == DriveFactor::One && t.velocity == VelocityFactor::One)
+                    .map(|&(c, t)| c * position_value(t.position, phi, xe, false))
+                    .sum()
+            }),
+        }
     }
 
     /// The parametric parts `(Σ_i n_i φ_i(x), Σ_i p_i φ_i(x))`, the factors of `cos(W t)` and
-    /// `sin(W t)` (eq. 4 times the forcing).
+    /// `sin(W t)` (eq. 4 times the forcing): the terms of a basis function times the drive's first
+    /// harmonic, without a function of `x'`.
     pub fn parametric(&self, x: f64) -> (f64, f64) {
         let xe = self.point(x);
-        self.with_basis(xe, false, |phi| {
-            (dot(&self.eval.cos_t, phi), dot(&self.eval.sin_t, phi))
-        })
+        match &self.eval {
+            Evaluation::Paper(e) => {
+                self.with_basis(xe, false, |phi| (dot(&e.cos_t, phi), dot(&e.sin_t, phi)))
+            }
+            Evaluation::General(e) => self.with_basis(xe, false, |phi| {
+                let mut out = (0.0, 0.0);
+                for &(c, t) in &e.terms {
+                    if let (PositionFactor::Basis(i), VelocityFactor::One) = (t.position, t.velocity) {
+                        match t.drive {
+                            DriveFactor::Cos(1) => out.0 += c * phi[i],
+                            DriveFactor::Sin(1) => out.1 += c * phi[i],
+                            _ => {}
+                        }
+                    }
+                }
+                out
+            }),
+        }
     }
 }
 
@@ -364,7 +474,7 @@ impl<B: Basis + From<Harmonic>> IdentifiedModel<B> {
         let (cos_x, sin_x) = (0, 1);
         let form = ModelForm::parametric();
         let r = pendulum.r();
-        let values: Vec<f64> = columns(basis.len(), &form)
+        let values: Vec<f64> = columns(&basis, &form)?
             .into_iter()
             .map(|term| match term {
                 Term::DAMPING => pendulum.c(),
@@ -384,30 +494,74 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 impl<B: Basis> SecondOrderSystem for IdentifiedModel<B> {
     #[inline]
     fn acceleration(&self, t: f64, x: f64, v: f64) -> f64 {
-        let (s, c) = (self.forcing_frequency * t).sin_cos();
         let xe = self.point(x);
-        let e = &self.eval;
-        let basis_part = self.with_basis(xe, false, |phi| {
-            phi.iter()
-                .enumerate()
-                .map(|(i, &p)| p * (e.auto[i] + e.cos_t[i] * c + e.sin_t[i] * s))
-                .sum::<f64>()
-        });
-        -(e.damping * v + e.stiffness * xe + basis_part + e.forcing.0 * c + e.forcing.1 * s)
+        match &self.eval {
+            Evaluation::Paper(e) => {
+                let (s, c) = (self.forcing_frequency * t).sin_cos();
+                let basis_part = self.with_basis(xe, false, |phi| {
+                    phi.iter()
+                        .enumerate()
+                        .map(|(i, &p)| p * (e.auto[i] + e.cos_t[i] * c + e.sin_t[i] * s))
+                        .sum::<f64>()
+                });
+                -(e.damping * v + e.stiffness * xe + basis_part + e.forcing.0 * c + e.forcing.1 * s)
+            }
+            Evaluation::General(e) => {
+                let (dc, ds) = e.drive_table(self.forcing_frequency * t);
+                let sum = self.with_basis(xe, false, |phi| {
+                    e.terms
+                        .iter()
+                        .map(|&(coefficient, term)| {
+                            coefficient
+                                * drive_value(term.drive, &dc, &ds)
+                                * position_value(term.position, phi, xe, false)
+                                * term.velocity.eval(v)
+                        })
+                        .sum::<f64>()
+                });
+                -(sum + e.forcing.0 * dc[1] + e.forcing.1 * ds[1])
+            }
+        }
     }
 
     #[inline]
-    fn jacobian(&self, t: f64, x: f64, _v: f64) -> [f64; 2] {
-        let (s, c) = (self.forcing_frequency * t).sin_cos();
+    fn jacobian(&self, t: f64, x: f64, v: f64) -> [f64; 2] {
         let xe = self.point(x);
-        let e = &self.eval;
-        let d = self.with_basis(xe, true, |dphi| {
-            dphi.iter()
-                .enumerate()
-                .map(|(i, &p)| p * (e.auto[i] + e.cos_t[i] * c + e.sin_t[i] * s))
-                .sum::<f64>()
-        });
-        [-(e.stiffness + d), -e.damping]
+        match &self.eval {
+            Evaluation::Paper(e) => {
+                let (s, c) = (self.forcing_frequency * t).sin_cos();
+                let d = self.with_basis(xe, true, |dphi| {
+                    dphi.iter()
+                        .enumerate()
+                        .map(|(i, &p)| p * (e.auto[i] + e.cos_t[i] * c + e.sin_t[i] * s))
+                        .sum::<f64>()
+                });
+                [-(e.stiffness + d), -e.damping]
+            }
+            Evaluation::General(e) => {
+                let (dc, ds) = e.drive_table(self.forcing_frequency * t);
+                let (dx, dv) = self.with_basis(xe, false, |phi| {
+                    self.with_basis(xe, true, |dphi| {
+                        let (mut dx, mut dv) = (0.0, 0.0);
+                        for &(coefficient, term) in &e.terms {
+                            let cd = coefficient * drive_value(term.drive, &dc, &ds);
+                            if term.position != PositionFactor::One {
+                                dx += cd
+                                    * position_value(term.position, dphi, xe, true)
+                                    * term.velocity.eval(v);
+                            }
+                            if term.velocity != VelocityFactor::One {
+                                dv += cd
+                                    * position_value(term.position, phi, xe, false)
+                                    * term.velocity.eval_deriv(v);
+                            }
+                        }
+                        (dx, dv)
+                    })
+                });
+                [-dx, -dv]
+            }
+        }
     }
 }
 
@@ -416,9 +570,13 @@ impl<B: Basis> SecondOrderSystem for IdentifiedModel<B> {
 
 /// Name of the JSON format, written in every saved model.
 pub const MODEL_FORMAT: &str = "hbid-model";
-/// Version of the saved-model format this build reads and writes (2: the clock is written with
-/// an optional whole `samples_per_period` and an optional `step`).
-pub const MODEL_VERSION: u32 = 2;
+/// Version of the saved-model format this build writes (3: the form holds the drive harmonics
+/// `drive_harmonics` and, for a list of terms, `terms`, the list of the terms' names). It reads
+/// version 2 as well (no drive harmonics nor term list: the clock is written with an optional
+/// whole `samples_per_period` and an optional `step`), in JSON and in binary.
+pub const MODEL_VERSION: u32 = 3;
+/// The oldest saved-model format version this build reads.
+pub const MODEL_OLDEST_VERSION: u32 = 2;
 /// First bytes of a binary model.
 pub const MODEL_MAGIC: [u8; 8] = *b"HBIDMODL";
 
@@ -483,20 +641,58 @@ struct ModelRecord<B> {
     fit: Option<FitSummary>,
 }
 
+/// A model saved in binary by format version 2 (its form without drive harmonics or terms).
+#[derive(Deserialize)]
+struct ModelRecordV2<B> {
+    format: String,
+    version: u32,
+    basis: B,
+    form: ModelFormV2,
+    forcing_frequency: f64,
+    coefficients: CoefficientMap,
+    fit: Option<FitSummary>,
+}
+
+impl<B> From<ModelRecordV2<B>> for ModelRecord<B> {
+    fn from(r: ModelRecordV2<B>) -> Self {
+        Self {
+            format: r.format,
+            version: r.version,
+            basis: r.basis,
+            form: r.form.into(),
+            forcing_frequency: r.forcing_frequency,
+            coefficients: r.coefficients,
+            fit: r.fit,
+        }
+    }
+}
+
+/// Whether this build reads format `version`.
+fn check_version(version: u32) -> Result<(), SolveError> {
+    if (MODEL_OLDEST_VERSION..=MODEL_VERSION).contains(&version) {
+        Ok(())
+    } else {
+        Err(SolveError::UnsupportedVersion {
+            found: version,
+            supported: MODEL_VERSION,
+        })
+    }
+}
+
 impl<B: Basis + Clone + Serialize> IdentifiedModel<B> {
     fn record(&self) -> ModelRecord<B> {
         ModelRecord {
             format: MODEL_FORMAT.to_owned(),
             version: MODEL_VERSION,
             basis: self.basis.clone(),
-            form: self.form,
+            form: self.form.clone(),
             forcing_frequency: self.forcing_frequency,
             coefficients: CoefficientMap(self.coefficients.clone()),
             fit: self.summary.clone(),
         }
     }
 
-    /// Pretty JSON: `{"format": "hbid-model", "version": 1, "basis": .., "form": ..,
+    /// Pretty JSON: `{"format": "hbid-model", "version": 3, "basis": .., "form": ..,
     /// "forcing_frequency": .., "coefficients": {"x'": {"value": .., "std_error": ..}, ..}, "fit": ..}`.
     ///
     /// A model on [`BasisKind`] records which basis it uses (`{"hat": {"nodes": 8}}`), so any
@@ -517,12 +713,7 @@ impl<B: Basis + Clone + Serialize> IdentifiedModel<B> {
 
 impl<B: Basis + DeserializeOwned> IdentifiedModel<B> {
     fn from_record(r: ModelRecord<B>) -> Result<Self, SolveError> {
-        if r.version != MODEL_VERSION {
-            return Err(SolveError::UnsupportedVersion {
-                found: r.version,
-                supported: MODEL_VERSION,
-            });
-        }
+        check_version(r.version)?;
         if r.format != MODEL_FORMAT {
             return Err(SolveError::BadMagic);
         }
@@ -562,13 +753,19 @@ impl<B: Basis + DeserializeOwned> IdentifiedModel<B> {
             return Err(SolveError::BadMagic);
         }
         let version = u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]);
-        if version != MODEL_VERSION {
+        check_version(version)?;
+        let record: ModelRecord<B> = if version == 2 {
+            postcard::from_bytes::<ModelRecordV2<B>>(&bytes[12..])?.into()
+        } else {
+            postcard::from_bytes(&bytes[12..])?
+        };
+        if record.version != version {
             return Err(SolveError::UnsupportedVersion {
-                found: version,
+                found: record.version,
                 supported: MODEL_VERSION,
             });
         }
-        Self::from_record(postcard::from_bytes(&bytes[12..])?)
+        Self::from_record(record)
     }
 }
 
@@ -715,7 +912,7 @@ mod tests {
         };
         IdentifiedModel::from_parts(
             *m.basis(),
-            *m.form(),
+            m.form().clone(),
             m.forcing_frequency(),
             m.coefficients().to_vec(),
             Some(summary),
@@ -789,7 +986,7 @@ mod tests {
         ));
         let line: BasisKind = Polynomial::new(1).unwrap().into();
         let form = ModelForm::externally_forced(Forcing::Known { cos: -1.0, sin: 0.0 });
-        let m = IdentifiedModel::new(line, form, 1.0, &[0.1, 2.0]).unwrap();
+        let m = IdentifiedModel::new(line, form.clone(), 1.0, &[0.1, 2.0]).unwrap();
         // x'' = −(0.1 v + 2 x − cos t)
         assert!((m.acceleration(0.3, 0.5, 0.2) - (-(0.02 + 1.0 - 0.3f64.cos()))).abs() < 1e-14);
         assert!(IdentifiedModel::new(line, form, 0.0, &[0.1, 2.0]).is_err());

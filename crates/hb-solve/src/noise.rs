@@ -4,7 +4,7 @@
 use circle_signal::unwrap;
 use hb_basis::{Basis, Domain, FourierPlan};
 
-use crate::terms::{Column, column_families, columns};
+use crate::terms::{Column, PositionFactor, VelocityFactor, column_families, columns};
 use crate::{IdentifyParams, LinearSystem, NoiseCorrection, SolveError};
 
 /// The band of the noise estimate: frequencies from this fraction of the Nyquist frequency up to
@@ -113,15 +113,38 @@ pub(crate) fn column_factors<B: Basis + ?Sized>(
     sigma: f64,
 ) -> Result<Vec<f64>, SolveError> {
     let names = basis.names();
-    let layout = column_families(&columns(names.len(), params.form()), &names)?;
+    let terms = columns(basis, params.form())?;
+    let layout = column_families(&terms);
     let mut orders = vec![None; names.len()];
     let mut factors = Vec::with_capacity(layout.len());
-    for term in layout {
-        let i = match term {
+    for (term, column) in terms.iter().zip(layout) {
+        let i = match column {
             Column::Auto(i) | Column::CosT(i) | Column::SinT(i) => i,
             Column::Damping | Column::ForcingCos | Column::ForcingSin | Column::Stiffness => {
                 factors.push(1.0);
                 continue;
+            }
+            Column::Product(t) => {
+                match t.velocity {
+                    // x' is linear in the data: its noise is independent of that of x at the same
+                    // instant (stationary noise), so E[φ(x + n) (x' + n')] = E[φ(x + n)] x'.
+                    VelocityFactor::One | VelocityFactor::Linear => {}
+                    VelocityFactor::Sign | VelocityFactor::Quadratic | VelocityFactor::Cubic => {
+                        return Err(SolveError::NoiseCorrectionUnavailable {
+                            term: term.name(&names),
+                            why: "the bias of a nonlinear function of x' under noise on the angle depends on \
+                                  the noise of the velocity series, not a rescaling; identify without the \
+                                  correction",
+                        });
+                    }
+                }
+                match t.position {
+                    PositionFactor::Basis(i) => i,
+                    PositionFactor::One | PositionFactor::Linear => {
+                        factors.push(1.0);
+                        continue;
+                    }
+                }
             }
         };
         if basis.domain() != Domain::Circle {

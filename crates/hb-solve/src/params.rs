@@ -5,6 +5,10 @@ use serde::{Deserialize, Serialize};
 pub use circle_signal::SampleClock;
 
 use crate::SolveError;
+use crate::terms::{DriveFactor, MAX_DRIVE_HARMONIC, TermList, VelocityFactor};
+
+/// The default cap of the velocity series, in multiples of the forcing frequency.
+const VELOCITY_CAP: f64 = 16.0;
 
 /// Which harmonics `j` of each orbit give equations (paper eq. 15: `j = 1..M`, plus the mean).
 ///
@@ -105,26 +109,67 @@ pub enum Forcing {
     },
 }
 
-/// The terms of the model, paper eq. 2 specialised as in eq. 6:
+/// The terms of the model: a preset (paper eq. 2 specialised as in eq. 6) or a list of terms.
 ///
-/// `c_r x' + [k x] + Σ_i q_i φ_i(x) + [Σ_i (n_i cos W t + p_i sin W t) φ_i(x)] + [F_c cos W t + F_s sin W t] = −x''`.
+/// The presets are
 ///
-/// The default is the paper's eq. 6 for the pendulum: damping, autonomous and parametric terms, no
-/// external forcing, no separate linear stiffness.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+/// `c_r x' + [k x] + Σ_i q_i φ_i(x) + [Σ_i Σ_k (n_ik cos kW t + p_ik sin kW t) φ_i(x)] + [Σ_k (F_ck cos kW t + F_sk sin kW t)] = −x''`
+///
+/// with the drive harmonics `k = 1..H` (`H = 1` unless [`ModelForm::with_drive_harmonics`]). The
+/// default is the paper's eq. 6 for the pendulum: damping, autonomous and parametric terms, no
+/// external forcing, no separate linear stiffness, `H = 1`.
+///
+/// [`ModelForm::from_terms`] gives the terms instead, in their order, any product of a drive
+/// factor, a function of `x` and a function of `x'` ([`TermList`]); a known forcing
+/// ([`ModelForm::with_forcing`]`(Forcing::Known { .. })`) may be added to a list, the other
+/// preset switches may not (checked when the form is used: [`IdentifyParamsBuilder::build`],
+/// [`crate::IdentifiedModel::new`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(try_from = "ModelFormRaw", into = "ModelFormRaw")]
 pub struct ModelForm {
     parametric: bool,
     forcing: Forcing,
     linear_stiffness: bool,
+    drive_harmonics: u32,
+    terms: Option<TermList>,
 }
 
-/// The serialised form of [`ModelForm`] (the same field names as ever), validated on reading.
-#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+/// The serialised form of [`ModelForm`] (the same field names as ever, and the drive harmonics
+/// and the term list, absent from forms saved before them), validated on reading.
+#[derive(Debug, Clone, Serialize, Deserialize)]
 struct ModelFormRaw {
     parametric: bool,
     forcing: Forcing,
     linear_stiffness: bool,
+    #[serde(default = "one")]
+    drive_harmonics: u32,
+    #[serde(default)]
+    terms: Option<TermList>,
+}
+
+fn one() -> u32 {
+    1
+}
+
+/// [`ModelForm`] as saved by format version 2 (its binary layout), read by
+/// [`crate::IdentifiedModel::from_bytes`].
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+pub(crate) struct ModelFormV2 {
+    parametric: bool,
+    forcing: Forcing,
+    linear_stiffness: bool,
+}
+
+impl From<ModelFormV2> for ModelForm {
+    fn from(v2: ModelFormV2) -> Self {
+        Self {
+            parametric: v2.parametric,
+            forcing: v2.forcing,
+            linear_stiffness: v2.linear_stiffness,
+            drive_harmonics: 1,
+            terms: None,
+        }
+    }
 }
 
 impl From<ModelForm> for ModelFormRaw {
@@ -133,6 +178,8 @@ impl From<ModelForm> for ModelFormRaw {
             parametric: f.parametric,
             forcing: f.forcing,
             linear_stiffness: f.linear_stiffness,
+            drive_harmonics: f.drive_harmonics,
+            terms: f.terms,
         }
     }
 }
@@ -145,6 +192,8 @@ impl TryFrom<ModelFormRaw> for ModelForm {
             parametric: raw.parametric,
             forcing: raw.forcing,
             linear_stiffness: raw.linear_stiffness,
+            drive_harmonics: raw.drive_harmonics,
+            terms: raw.terms,
         }
         .validate()
     }
@@ -163,6 +212,8 @@ impl ModelForm {
             parametric: true,
             forcing: Forcing::None,
             linear_stiffness: false,
+            drive_harmonics: 1,
+            terms: None,
         }
     }
 
@@ -173,6 +224,29 @@ impl ModelForm {
             parametric: false,
             forcing,
             linear_stiffness: false,
+            drive_harmonics: 1,
+            terms: None,
+        }
+    }
+
+    /// The terms of `list`, in its order (no preset term, no external forcing unless a known one
+    /// is added with [`with_forcing`](Self::with_forcing)).
+    ///
+    /// ```
+    /// use hb_solve::{ModelForm, TermList, term_names};
+    ///
+    /// let form = ModelForm::from_terms(TermList::parse("x', sign(x'), {1, sin(t), sin(2t)}*sin(x)")?);
+    /// let names = term_names(&hb_basis::Harmonic::new(1)?, &form);
+    /// assert_eq!(names, ["x'", "sign(x')", "sin(x)", "sin(t)*sin(x)", "sin(2t)*sin(x)"]);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn from_terms(list: TermList) -> Self {
+        Self {
+            parametric: false,
+            forcing: Forcing::None,
+            linear_stiffness: false,
+            drive_harmonics: 1,
+            terms: Some(list),
         }
     }
 
@@ -188,14 +262,22 @@ impl ModelForm {
         self
     }
 
-    /// The same form without the parametric terms `cos(t)*B`, `sin(t)*B`.
+    /// The same form without the parametric terms `cos(kt)*B`, `sin(kt)*B`.
     pub fn without_parametric_terms(mut self) -> Self {
         self.parametric = false;
         self
     }
 
-    /// Whether the parametric terms `cos(t)*B` (`n_i`) and `sin(t)*B` (`p_i`) are in the model,
-    /// for each basis function `B`.
+    /// The same preset with the drive harmonics `k = 1..h`: the parametric terms `cos(kt)*B`,
+    /// `sin(kt)*B` and an identified forcing `cos(kt)`, `sin(kt)` for each (`1 <= h <=`
+    /// [`MAX_DRIVE_HARMONIC`]; a known forcing stays the first harmonic's). `h = 1` is the paper's.
+    pub fn with_drive_harmonics(mut self, h: u32) -> Self {
+        self.drive_harmonics = h;
+        self
+    }
+
+    /// Whether the parametric terms `cos(kt)*B` (`n_i`) and `sin(kt)*B` (`p_i`) are in the preset,
+    /// for each basis function `B` (false for a term list).
     pub fn is_parametric(&self) -> bool {
         self.parametric
     }
@@ -212,6 +294,16 @@ impl ModelForm {
         self.linear_stiffness
     }
 
+    /// The drive harmonics `H` of the preset (1 for a term list, whose terms say their own).
+    pub fn drive_harmonics(&self) -> u32 {
+        self.drive_harmonics
+    }
+
+    /// The list of terms, when the form is one.
+    pub fn terms(&self) -> Option<&TermList> {
+        self.terms.as_ref()
+    }
+
     pub(crate) fn validate(self) -> Result<Self, SolveError> {
         if let Forcing::Known { cos, sin } = self.forcing {
             for (name, value) in [
@@ -225,6 +317,37 @@ impl ModelForm {
                         why: "must be finite",
                     });
                 }
+            }
+        }
+        if !(1..=MAX_DRIVE_HARMONIC).contains(&self.drive_harmonics) {
+            return Err(SolveError::InvalidParameter {
+                name: "drive harmonics H",
+                value: f64::from(self.drive_harmonics),
+                why: "must be between 1 and 64",
+            });
+        }
+        if let Some(list) = &self.terms {
+            let why = if self.parametric {
+                Some("a term list says its parametric terms itself")
+            } else if self.linear_stiffness {
+                Some("a term list says its terms itself (x, the first power, on the polynomial basis)")
+            } else if self.drive_harmonics != 1 {
+                Some("a term list says its drive harmonics itself")
+            } else if self.forcing == Forcing::Identified {
+                Some("a term list says its forcing terms itself (cos(t), sin(t))")
+            } else if matches!(self.forcing, Forcing::Known { .. })
+                && list.terms().iter().any(|t| {
+                    t.function.is_none()
+                        && t.velocity == VelocityFactor::One
+                        && matches!(t.drive, DriveFactor::Cos(1) | DriveFactor::Sin(1))
+                })
+            {
+                Some("a known forcing is cos(t) and sin(t) already; the list names them too")
+            } else {
+                None
+            };
+            if let Some(why) = why {
+                return Err(SolveError::InvalidForm { why });
             }
         }
         Ok(self)
@@ -302,7 +425,7 @@ impl NoiseCorrection {
 /// Everything identification needs besides the basis, the record and the segments.
 ///
 /// Build with [`IdentifyParams::builder`]; [`IdentifyParamsBuilder::build`] validates.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(try_from = "IdentifyParamsRaw")]
 pub struct IdentifyParams {
     clock: SampleClock,
@@ -310,16 +433,24 @@ pub struct IdentifyParams {
     form: ModelForm,
     #[serde(default)]
     noise: NoiseCorrection,
+    #[serde(default = "default_velocity_harmonics")]
+    velocity_harmonics: Harmonics,
+}
+
+fn default_velocity_harmonics() -> Harmonics {
+    IdentifyParams::DEFAULT_VELOCITY_HARMONICS
 }
 
 /// The serialised form of [`IdentifyParams`], built through its builder on reading.
-#[derive(Debug, Clone, Copy, Deserialize)]
+#[derive(Debug, Clone, Deserialize)]
 struct IdentifyParamsRaw {
     clock: SampleClock,
     harmonics: Harmonics,
     form: ModelForm,
     #[serde(default)]
     noise: NoiseCorrection,
+    #[serde(default = "default_velocity_harmonics")]
+    velocity_harmonics: Harmonics,
 }
 
 impl TryFrom<IdentifyParamsRaw> for IdentifyParams {
@@ -330,28 +461,38 @@ impl TryFrom<IdentifyParamsRaw> for IdentifyParams {
             .harmonics(raw.harmonics)
             .form(raw.form)
             .noise_correction(raw.noise)
+            .velocity_harmonics(raw.velocity_harmonics)
             .build()
     }
 }
 
 /// Builder of [`IdentifyParams`].
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct IdentifyParamsBuilder {
     clock: SampleClock,
     harmonics: Harmonics,
     form: ModelForm,
     noise: NoiseCorrection,
+    velocity_harmonics: Harmonics,
 }
 
 impl IdentifyParams {
+    /// The default harmonics of the velocity series, [`Harmonics::ForcingCap`]`(VELOCITY_CAP)`:
+    /// the velocity that the nonlinear functions of `x'` (`sign(x')`, `x'*|x'|`, `x'^3`) are
+    /// evaluated at is the derivative of a segment's Fourier series up to this many times the
+    /// forcing frequency (see `docs/identification.md` for the measurements behind the choice).
+    pub const DEFAULT_VELOCITY_HARMONICS: Harmonics = Harmonics::ForcingCap(VELOCITY_CAP);
+
     /// A builder with the record's clock and the defaults: [`Harmonics::DEFAULT`],
-    /// [`ModelForm::parametric`] and no [`NoiseCorrection`].
+    /// [`ModelForm::parametric`], no [`NoiseCorrection`] and
+    /// [`DEFAULT_VELOCITY_HARMONICS`](Self::DEFAULT_VELOCITY_HARMONICS).
     pub fn builder(clock: SampleClock) -> IdentifyParamsBuilder {
         IdentifyParamsBuilder {
             clock,
             harmonics: Harmonics::DEFAULT,
             form: ModelForm::default(),
             noise: NoiseCorrection::None,
+            velocity_harmonics: Self::DEFAULT_VELOCITY_HARMONICS,
         }
     }
 
@@ -374,6 +515,13 @@ impl IdentifyParams {
     pub fn noise_correction(&self) -> NoiseCorrection {
         self.noise
     }
+
+    /// The harmonics of the velocity series of a segment (see
+    /// [`DEFAULT_VELOCITY_HARMONICS`](Self::DEFAULT_VELOCITY_HARMONICS)); used only by terms
+    /// nonlinear in `x'`.
+    pub fn velocity_harmonics(&self) -> Harmonics {
+        self.velocity_harmonics
+    }
 }
 
 impl IdentifyParamsBuilder {
@@ -395,6 +543,13 @@ impl IdentifyParamsBuilder {
         self
     }
 
+    /// Harmonics of the velocity series for the terms nonlinear in `x'` (default:
+    /// [`IdentifyParams::DEFAULT_VELOCITY_HARMONICS`]).
+    pub fn velocity_harmonics(mut self, harmonics: Harmonics) -> Self {
+        self.velocity_harmonics = harmonics;
+        self
+    }
+
     /// Validates and builds.
     pub fn build(self) -> Result<IdentifyParams, SolveError> {
         Ok(IdentifyParams {
@@ -402,6 +557,7 @@ impl IdentifyParamsBuilder {
             harmonics: self.harmonics.validate()?,
             form: self.form.validate()?,
             noise: self.noise.validate()?,
+            velocity_harmonics: self.velocity_harmonics.validate()?,
         })
     }
 }

@@ -6,7 +6,7 @@ use faer::{Col, ColRef, Mat, MatMut, MatRef};
 use hb_basis::{Basis, Domain};
 use serde::{Deserialize, Serialize};
 
-use crate::terms::{Column, Term, check_form, column_families, columns};
+use crate::terms::{Column, Term, column_families, columns};
 use crate::{IdentifyParams, LstsqFit, LstsqSolver, SolveError};
 
 /// Where one segment's equations sit in the stacked system, and what was found on it.
@@ -170,10 +170,9 @@ pub(crate) fn layout<B: Basis + ?Sized>(
     params: &IdentifyParams,
 ) -> Result<Layout, SolveError> {
     let domain = basis.domain();
-    check_form(domain, params.form())?;
     let names = basis.names();
-    let terms = columns(names.len(), params.form());
-    let columns = column_families(&terms, &names)?;
+    let terms = columns(basis, params.form())?;
+    let columns = column_families(&terms);
     let (counts, rows) = plan_rows(signal, segments, params)?;
     check_enough(segments.len(), rows, terms.len(), params)?;
     Ok(Layout {

@@ -1,19 +1,52 @@
-//! The vocabulary of the model's terms, and the column layout of every system defined once.
+//! The vocabulary of the model's terms, the lists of terms users write, and the column layout of
+//! every system defined once.
 //!
 //! The model is `x'' + Σ_i c_i g_i = 0`, each term `g_i` a product of three factors: a drive
 //! factor (`1`, `cos(kt)`, `sin(kt)` for harmonic `k` of the drive, `t` standing for the drive's
 //! phase `W t`), a function of `x` (`1`, a basis function, or `x` itself) and a function of `x'`
 //! (`1`, `x'`, `sign(x')`, `x'*|x'|`, `x'^3`). A term is named by its factors joined by `*`, drive
-//! factor first: `x'`, `cos(t)*sin(x)`, `sin(2t)*cos(x)`, `cos(3t)`, `x'*|x'|`.
+//! factor first: `x'`, `cos(t)*sin(x)`, `sin(2t)*cos(x)`, `cos(3t)`, `x^2*x'`.
+//!
+//! Two forms of a term: [`Term`] names its function of `x` by its index in a basis (what the
+//! assemblies and the model evaluate); [`TermSpec`] names it by itself ([`XFunction`]: `cos(2x)`,
+//! `x^3`, `hat3`), so that a list of terms ([`TermList`]) can be written, parsed, saved and read
+//! without a basis, and resolved against one ([`TermList::resolve`]).
+//!
+//! # The grammar of a term list ([`TermList::parse`])
+//!
+//! ```text
+//! list    := item (',' item)*
+//! item    := factor ('*' factor)*           a product; braces multiply out
+//! factor  := atom | '{' item (',' item)* '}'
+//! atom    := '1'
+//!          | 'cos(' [n] 't)' | 'sin(' [n] 't)'                    drive harmonic n >= 1
+//!          | 'cos(' [n] 'x)' | 'sin(' [n] 'x)' | 'x' ['^' n] | 'hat' i   a function of x
+//!          | "x'" ['^3'] | "sign(x')" | "|x'|"                      x', x'^3, sign(x'); |x'| only in x'*|x'|
+//! ```
+//!
+//! White space is ignored. A product holds at most one drive factor and one function of `x`, and
+//! its factors in `x'` must make one of `x'`, `sign(x')`, `x'*|x'|` (in either order) or `x'^3`.
+//! `{1,cos(t),sin(t)}*{cos(x),sin(x)}` is the six products `cos(x)`, `sin(x)`, `cos(t)*cos(x)`,
+//! `cos(t)*sin(x)`, `sin(t)*cos(x)`, `sin(t)*sin(x)`, in this order (the leftmost set varies
+//! slowest). Every term may appear once. Printing a list ([`fmt::Display`]) and parsing it again
+//! gives the same list.
 //!
 //! [`columns`] gives the unknowns of a [`ModelForm`] on a basis, in the order every assembly,
 //! solver, bootstrap and saved model uses.
 
 use std::fmt;
+use std::str::FromStr;
 
-use hb_basis::{Basis, Domain};
+use hb_basis::{Basis, BasisKind, Domain, Harmonic, Hat, Polynomial};
+use serde::{Deserialize, Serialize};
 
 use crate::{Forcing, ModelForm, SolveError};
+
+/// The highest drive harmonic a term may name.
+pub const MAX_DRIVE_HARMONIC: u32 = 64;
+
+/// The most terms a list may hold (braces multiply quickly).
+pub const MAX_TERMS: usize = 4096;
 
 /// The drive factor of a term: `1`, `cos(k t)` or `sin(k t)` for harmonic `k >= 1` of the drive.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -24,6 +57,25 @@ pub enum DriveFactor {
     Cos(u32),
     /// `sin(k t)`.
     Sin(u32),
+}
+
+impl DriveFactor {
+    /// The harmonic `k` of the drive (0 for [`DriveFactor::One`]).
+    pub fn harmonic(&self) -> u32 {
+        match *self {
+            Self::One => 0,
+            Self::Cos(k) | Self::Sin(k) => k,
+        }
+    }
+
+    /// The factor at the drive's phase `θ = W t`: `1`, `cos(kθ)` or `sin(kθ)`.
+    pub fn eval(&self, phase: f64) -> f64 {
+        match *self {
+            Self::One => 1.0,
+            Self::Cos(k) => (f64::from(k) * phase).cos(),
+            Self::Sin(k) => (f64::from(k) * phase).sin(),
+        }
+    }
 }
 
 /// The factor in the displacement `x` of a term.
@@ -44,12 +96,63 @@ pub enum VelocityFactor {
     One,
     /// `x'` (viscous damping).
     Linear,
-    /// `sign(x')` (dry, Coulomb friction).
+    /// `sign(x')` (dry, Coulomb friction; `sign(0) = 0`).
     Sign,
     /// `x'*|x'|` (quadratic drag).
     Quadratic,
     /// `x'^3`.
     Cubic,
+}
+
+impl VelocityFactor {
+    /// The factor at velocity `v`.
+    #[inline]
+    pub fn eval(&self, v: f64) -> f64 {
+        match self {
+            Self::One => 1.0,
+            Self::Linear => v,
+            Self::Sign => {
+                if v > 0.0 {
+                    1.0
+                } else if v < 0.0 {
+                    -1.0
+                } else {
+                    // 0 at 0, NaN for NaN.
+                    v * 0.0
+                }
+            }
+            Self::Quadratic => v * v.abs(),
+            Self::Cubic => v * v * v,
+        }
+    }
+
+    /// Its derivative in `v`: `0`, `1`, `0` (away from `v = 0`), `2|v|`, `3v²`.
+    #[inline]
+    pub fn eval_deriv(&self, v: f64) -> f64 {
+        match self {
+            Self::One | Self::Sign => 0.0,
+            Self::Linear => 1.0,
+            Self::Quadratic => 2.0 * v.abs(),
+            Self::Cubic => 3.0 * v * v,
+        }
+    }
+
+    /// Whether the factor is linear in `x'` (`x'` itself), so that a term holding it is the time
+    /// derivative of an antiderivative of the rest.
+    pub fn is_linear(&self) -> bool {
+        *self == Self::Linear
+    }
+
+    /// The factor's name, `None` for [`VelocityFactor::One`].
+    pub fn name(&self) -> Option<&'static str> {
+        match self {
+            Self::One => None,
+            Self::Linear => Some("x'"),
+            Self::Sign => Some("sign(x')"),
+            Self::Quadratic => Some("x'*|x'|"),
+            Self::Cubic => Some("x'^3"),
+        }
+    }
 }
 
 /// One term of the model: the product of a drive factor, a function of `x` and a function of `x'`.
@@ -99,12 +202,12 @@ impl Term {
         TermName { term: self, names }
     }
 
-    /// The column family of the two assemblies, or `None` for a term they do not balance yet.
-    pub(crate) fn column(&self) -> Option<Column> {
+    /// The column family of the assemblies.
+    pub(crate) fn column(&self) -> Column {
         use DriveFactor as D;
         use PositionFactor as X;
         use VelocityFactor as V;
-        Some(match (self.drive, self.position, self.velocity) {
+        match (self.drive, self.position, self.velocity) {
             (D::One, X::One, V::Linear) => Column::Damping,
             (D::Cos(1), X::Basis(i), V::One) => Column::CosT(i),
             (D::Sin(1), X::Basis(i), V::One) => Column::SinT(i),
@@ -112,9 +215,53 @@ impl Term {
             (D::Cos(1), X::One, V::One) => Column::ForcingCos,
             (D::Sin(1), X::One, V::One) => Column::ForcingSin,
             (D::One, X::Linear, V::One) => Column::Stiffness,
-            _ => return None,
-        })
+            _ => Column::Product(*self),
+        }
     }
+}
+
+/// Writes the name of a term from its factors' names, `1` for the empty product.
+fn write_name(
+    f: &mut fmt::Formatter<'_>,
+    drive: DriveFactor,
+    position: Option<&dyn fmt::Display>,
+    velocity: VelocityFactor,
+) -> fmt::Result {
+    let mut first = true;
+    let mut sep = |f: &mut fmt::Formatter<'_>| -> fmt::Result {
+        if !std::mem::take(&mut first) {
+            f.write_str("*")?;
+        }
+        Ok(())
+    };
+    match drive {
+        DriveFactor::One => {}
+        DriveFactor::Cos(k) | DriveFactor::Sin(k) => {
+            sep(f)?;
+            let trig = if matches!(drive, DriveFactor::Cos(_)) {
+                "cos"
+            } else {
+                "sin"
+            };
+            if k == 1 {
+                write!(f, "{trig}(t)")?;
+            } else {
+                write!(f, "{trig}({k}t)")?;
+            }
+        }
+    }
+    if let Some(p) = position {
+        sep(f)?;
+        write!(f, "{p}")?;
+    }
+    if let Some(v) = velocity.name() {
+        sep(f)?;
+        f.write_str(v)?;
+    }
+    if first {
+        f.write_str("1")?;
+    }
+    Ok(())
 }
 
 struct TermName<'a> {
@@ -124,36 +271,699 @@ struct TermName<'a> {
 
 impl fmt::Display for TermName<'_> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let mut parts: Vec<String> = Vec::with_capacity(3);
-        let harmonic = |k: u32| if k == 1 { "t".to_owned() } else { format!("{k}t") };
-        match self.term.drive {
-            DriveFactor::One => {}
-            DriveFactor::Cos(k) => parts.push(format!("cos({})", harmonic(k))),
-            DriveFactor::Sin(k) => parts.push(format!("sin({})", harmonic(k))),
-        }
-        match self.term.position {
-            PositionFactor::One => {}
+        let owned;
+        let position: Option<&dyn fmt::Display> = match self.term.position {
+            PositionFactor::One => None,
             PositionFactor::Basis(i) => {
-                parts.push(self.names.get(i).cloned().unwrap_or_else(|| format!("phi{i}(x)")))
+                owned = self.names.get(i).cloned().unwrap_or_else(|| format!("phi{i}(x)"));
+                Some(&owned)
             }
-            PositionFactor::Linear => parts.push("k*x".to_owned()),
+            PositionFactor::Linear => Some(&"k*x"),
+        };
+        write_name(f, self.term.drive, position, self.term.velocity)
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Terms named without a basis.
+
+/// A function of `x` named by itself, as the bases of `hb-basis` name theirs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum XFunction {
+    /// `cos(kx)`, `k >= 1` (the harmonic basis of order `K >= k`).
+    Cos(u32),
+    /// `sin(kx)`, `k >= 1`.
+    Sin(u32),
+    /// `x^n`, `n >= 1` (the polynomial basis of degree `D >= n`, on the line).
+    Power(u32),
+    /// `hat i`, the hat of node `i` (a hat basis of more than `i` nodes).
+    Hat(u32),
+}
+
+impl XFunction {
+    /// The domain the function belongs to: the circle for `cos`, `sin` and hats, the line for
+    /// powers of `x`.
+    pub fn domain(&self) -> Domain {
+        match self {
+            Self::Power(_) => Domain::Line,
+            _ => Domain::Circle,
         }
-        match self.term.velocity {
-            VelocityFactor::One => {}
-            VelocityFactor::Linear => parts.push("x'".to_owned()),
-            VelocityFactor::Sign => parts.push("sign(x')".to_owned()),
-            VelocityFactor::Quadratic => parts.push("x'*|x'|".to_owned()),
-            VelocityFactor::Cubic => parts.push("x'^3".to_owned()),
-        }
-        if parts.is_empty() {
-            f.write_str("1")
-        } else {
-            f.write_str(&parts.join("*"))
+    }
+
+    /// The smallest basis of `hb-basis` that holds the function.
+    pub fn smallest_basis(&self) -> Result<BasisKind, SolveError> {
+        let n = |v: u32| v as usize;
+        Ok(match *self {
+            Self::Cos(k) | Self::Sin(k) => Harmonic::new(n(k))?.into(),
+            Self::Power(d) => Polynomial::new(n(d))?.into(),
+            Self::Hat(i) => Hat::new((n(i) + 1).max(3))?.into(),
+        })
+    }
+}
+
+impl fmt::Display for XFunction {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Self::Cos(1) => f.write_str("cos(x)"),
+            Self::Sin(1) => f.write_str("sin(x)"),
+            Self::Cos(k) => write!(f, "cos({k}x)"),
+            Self::Sin(k) => write!(f, "sin({k}x)"),
+            Self::Power(1) => f.write_str("x"),
+            Self::Power(n) => write!(f, "x^{n}"),
+            Self::Hat(i) => write!(f, "hat{i}"),
         }
     }
 }
 
-/// The column families the assemblies balance today (paper eq. 6 and an external forcing).
+/// A term with its function of `x` named by itself (`sin(2t)*cos(x)`, `x^2*x'`), independent of
+/// any basis; [`TermList::resolve`] turns it into a [`Term`] of a basis.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct TermSpec {
+    /// The drive factor.
+    pub drive: DriveFactor,
+    /// The function of `x`, if any.
+    pub function: Option<XFunction>,
+    /// The function of `x'`.
+    pub velocity: VelocityFactor,
+}
+
+impl fmt::Display for TermSpec {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let position = self.function.as_ref().map(|x| x as &dyn fmt::Display);
+        write_name(f, self.drive, position, self.velocity)
+    }
+}
+
+impl FromStr for TermSpec {
+    type Err = SolveError;
+
+    /// One term (a product without braces or commas), e.g. `cos(t)*sin(x)`.
+    fn from_str(text: &str) -> Result<Self, SolveError> {
+        let list = TermList::parse(text)?;
+        match list.terms() {
+            [one] => Ok(*one),
+            _ => Err(SolveError::TermSyntax {
+                spec: text.to_owned(),
+                at: text.chars().count() + 1,
+                found: format!("{} terms", list.len()),
+                expected: "one term",
+            }),
+        }
+    }
+}
+
+/// An ordered list of distinct terms named without a basis, as a user writes it: what
+/// [`ModelForm::from_terms`] takes. See the module documentation for the grammar of
+/// [`TermList::parse`].
+///
+/// ```
+/// use hb_solve::TermList;
+///
+/// let terms = TermList::parse("x', sign(x'), x'*|x'|, {1,cos(t),sin(t),cos(2t),sin(2t)}*{cos(x),sin(x)}")?;
+/// assert_eq!(terms.len(), 13);
+/// assert_eq!(terms.names()[3..6], ["cos(x)", "sin(x)", "cos(t)*cos(x)"]);
+/// // The smallest basis that holds every function of x named.
+/// assert_eq!(terms.smallest_basis()?.unwrap().to_string(), "harmonic (K = 1)");
+/// // Printing and parsing again is the identity.
+/// assert_eq!(TermList::parse(&terms.to_string())?, terms);
+/// // Errors say where.
+/// let e = TermList::parse("x', cos(t)*foo").unwrap_err();
+/// assert!(e.to_string().contains("character 12"), "{e}");
+/// # Ok::<(), hb_solve::SolveError>(())
+/// ```
+#[derive(Debug, Clone, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(try_from = "Vec<String>", into = "Vec<String>")]
+pub struct TermList {
+    terms: Vec<TermSpec>,
+}
+
+impl TermList {
+    /// Parses a list of terms (grammar in the module documentation).
+    ///
+    /// Errors: [`SolveError::TermSyntax`] and [`SolveError::TermProduct`] with the position (a
+    /// 1-based character index into `spec`), [`SolveError::DuplicateTerm`],
+    /// [`SolveError::TooManyTerms`], and [`SolveError::InvalidParameter`] for a drive harmonic
+    /// above [`MAX_DRIVE_HARMONIC`].
+    pub fn parse(spec: &str) -> Result<Self, SolveError> {
+        let products = Parser::new(spec).list()?;
+        let mut terms: Vec<TermSpec> = Vec::with_capacity(products.len());
+        for product in products {
+            let term = product.term(spec)?;
+            if terms.contains(&term) {
+                return Err(SolveError::DuplicateTerm {
+                    term: term.to_string(),
+                    at: product.at,
+                });
+            }
+            terms.push(term);
+        }
+        Self::new(terms)
+    }
+
+    /// A list of `terms`: at least one, at most [`MAX_TERMS`], none twice, drive harmonics at most
+    /// [`MAX_DRIVE_HARMONIC`] and every number in a name at least 1 (`x^0`, `cos(0t)` are not
+    /// terms).
+    pub fn new(terms: Vec<TermSpec>) -> Result<Self, SolveError> {
+        if terms.is_empty() {
+            return Err(SolveError::TermSyntax {
+                spec: String::new(),
+                at: 1,
+                found: "nothing".to_owned(),
+                expected: "at least one term",
+            });
+        }
+        if terms.len() > MAX_TERMS {
+            return Err(SolveError::TooManyTerms {
+                count: terms.len(),
+                max: MAX_TERMS,
+            });
+        }
+        for (i, t) in terms.iter().enumerate() {
+            let k = t.drive.harmonic();
+            if k > MAX_DRIVE_HARMONIC || (k == 0 && t.drive != DriveFactor::One) {
+                return Err(SolveError::InvalidParameter {
+                    name: "drive harmonic of a term",
+                    value: f64::from(k),
+                    why: "must be between 1 and 64",
+                });
+            }
+            if let Some(XFunction::Cos(0) | XFunction::Sin(0) | XFunction::Power(0)) = t.function {
+                return Err(SolveError::TermSyntax {
+                    spec: t.to_string(),
+                    at: 1,
+                    found: "0".to_owned(),
+                    expected: "a whole number at least 1",
+                });
+            }
+            if terms[..i].contains(t) {
+                return Err(SolveError::DuplicateTerm {
+                    term: t.to_string(),
+                    at: i + 1,
+                });
+            }
+        }
+        Ok(Self { terms })
+    }
+
+    /// The terms, in order.
+    pub fn terms(&self) -> &[TermSpec] {
+        &self.terms
+    }
+
+    /// Number of terms.
+    pub fn len(&self) -> usize {
+        self.terms.len()
+    }
+
+    /// Never true: a list has at least one term.
+    pub fn is_empty(&self) -> bool {
+        self.terms.is_empty()
+    }
+
+    /// The terms' names, in order.
+    pub fn names(&self) -> Vec<String> {
+        self.terms.iter().map(ToString::to_string).collect()
+    }
+
+    /// The highest drive harmonic named (0 when no term has a drive factor).
+    pub fn drive_harmonics(&self) -> u32 {
+        self.terms.iter().map(|t| t.drive.harmonic()).max().unwrap_or(0)
+    }
+
+    /// The smallest basis of `hb-basis` that holds every function of `x` named: `harmonic:K` for
+    /// `cos(kx)`, `sin(kx)` up to `k = K`, `poly:D` for powers up to `x^D`, `hat:N` for hats up to
+    /// `hat{N−1}` (at least 3); `None` when no term names a function of `x`.
+    ///
+    /// Errors: [`SolveError::MixedBases`] when the functions come from two kinds of basis.
+    pub fn smallest_basis(&self) -> Result<Option<BasisKind>, SolveError> {
+        let mut best: Option<(XFunction, BasisKind)> = None;
+        for f in self.terms.iter().filter_map(|t| t.function) {
+            let basis = f.smallest_basis()?;
+            best = Some(match best {
+                None => (f, basis),
+                Some((g, current)) => {
+                    let larger = match (current, basis) {
+                        (BasisKind::Harmonic(a), BasisKind::Harmonic(b)) => {
+                            (b.order() > a.order()).then_some(basis)
+                        }
+                        (BasisKind::Polynomial(a), BasisKind::Polynomial(b)) => {
+                            (b.degree() > a.degree()).then_some(basis)
+                        }
+                        (BasisKind::Hat(a), BasisKind::Hat(b)) => (b.nodes() > a.nodes()).then_some(basis),
+                        _ => {
+                            return Err(SolveError::MixedBases {
+                                first: g.to_string(),
+                                second: f.to_string(),
+                            });
+                        }
+                    };
+                    match larger {
+                        Some(b) => (f, b),
+                        None => (g, current),
+                    }
+                }
+            });
+        }
+        Ok(best.map(|(_, b)| b))
+    }
+
+    /// Checks that every function of `x` named lives on `domain` (`x^3` is not a function of an
+    /// angle; `cos(x)` and hats are not functions on the line).
+    pub fn check_domain(&self, domain: Domain) -> Result<(), SolveError> {
+        match self
+            .terms
+            .iter()
+            .find(|t| t.function.is_some_and(|f| f.domain() != domain))
+        {
+            Some(t) => Err(SolveError::TermNotAllowed {
+                term: t.to_string(),
+                domain,
+                why: match domain {
+                    Domain::Circle => {
+                        "x is an angle known modulo 2π: functions of it are cos(kx), sin(kx) or hats"
+                    }
+                    Domain::Line => {
+                        "cos(kx), sin(kx) and hats are functions of an angle; on the line use powers of x"
+                    }
+                },
+            }),
+            None => Ok(()),
+        }
+    }
+
+    /// The terms on `basis`: each function of `x` found by its name among the basis' functions.
+    ///
+    /// Errors: [`SolveError::TermNotAllowed`] for a function of another domain than the basis',
+    /// [`SolveError::TermNotInBasis`] for a function the basis lacks.
+    pub fn resolve<B: Basis + ?Sized>(&self, basis: &B) -> Result<Vec<Term>, SolveError> {
+        self.check_domain(basis.domain())?;
+        let names = basis.names();
+        self.terms
+            .iter()
+            .map(|t| {
+                let position = match t.function {
+                    None => PositionFactor::One,
+                    Some(f) => {
+                        let name = f.to_string();
+                        let i = names.iter().position(|n| *n == name).ok_or_else(|| {
+                            SolveError::TermNotInBasis {
+                                term: t.to_string(),
+                                function: name,
+                                basis: names.clone(),
+                            }
+                        })?;
+                        PositionFactor::Basis(i)
+                    }
+                };
+                Ok(Term {
+                    drive: t.drive,
+                    position,
+                    velocity: t.velocity,
+                })
+            })
+            .collect()
+    }
+}
+
+impl fmt::Display for TermList {
+    /// The names joined by `, `: a list [`TermList::parse`] reads back as the same list.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        for (i, t) in self.terms.iter().enumerate() {
+            if i > 0 {
+                f.write_str(", ")?;
+            }
+            write!(f, "{t}")?;
+        }
+        Ok(())
+    }
+}
+
+impl FromStr for TermList {
+    type Err = SolveError;
+
+    fn from_str(spec: &str) -> Result<Self, SolveError> {
+        Self::parse(spec)
+    }
+}
+
+impl From<TermList> for Vec<String> {
+    fn from(list: TermList) -> Self {
+        list.names()
+    }
+}
+
+impl TryFrom<Vec<String>> for TermList {
+    type Error = SolveError;
+
+    /// One name per term, each parsed as one term.
+    fn try_from(names: Vec<String>) -> Result<Self, SolveError> {
+        let terms = names
+            .iter()
+            .map(|n| n.parse::<TermSpec>())
+            .collect::<Result<Vec<_>, _>>()?;
+        Self::new(terms)
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// The parser.
+
+/// One factor as written, before the factors of a product are combined.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Atom {
+    One,
+    Drive(DriveFactor),
+    X(XFunction),
+    /// `x'` to a power (1 or 3).
+    Velocity(u32),
+    /// `|x'|`.
+    Abs,
+    /// `sign(x')`.
+    Sign,
+}
+
+/// A product of atoms (each with its position), and the position of the item it came from.
+#[derive(Debug, Clone)]
+struct Product {
+    atoms: Vec<(Atom, usize)>,
+    at: usize,
+}
+
+impl Product {
+    /// The term of the product.
+    fn term(&self, spec: &str) -> Result<TermSpec, SolveError> {
+        let mut drive: Option<DriveFactor> = None;
+        let mut function: Option<XFunction> = None;
+        let (mut power, mut abs, mut sign, mut first_velocity) = (0u32, 0u32, 0u32, None);
+        let clash = |at: usize, why: &'static str| SolveError::TermProduct {
+            spec: spec.to_owned(),
+            at,
+            why,
+        };
+        for &(atom, at) in &self.atoms {
+            match atom {
+                Atom::One => {}
+                Atom::Drive(d) => {
+                    if drive.replace(d).is_some() {
+                        return Err(clash(at, "a term has at most one drive factor"));
+                    }
+                }
+                Atom::X(f) => {
+                    if function.replace(f).is_some() {
+                        return Err(clash(
+                            at,
+                            "a term has at most one function of x (a product of two is not a basis function)",
+                        ));
+                    }
+                }
+                Atom::Velocity(p) => {
+                    power = power.saturating_add(p);
+                    first_velocity.get_or_insert(at);
+                }
+                Atom::Abs => {
+                    abs += 1;
+                    first_velocity.get_or_insert(at);
+                }
+                Atom::Sign => {
+                    sign += 1;
+                    first_velocity.get_or_insert(at);
+                }
+            }
+        }
+        let velocity = match (power, abs, sign) {
+            (0, 0, 0) => VelocityFactor::One,
+            (1, 0, 0) => VelocityFactor::Linear,
+            (1, 1, 0) => VelocityFactor::Quadratic,
+            (3, 0, 0) => VelocityFactor::Cubic,
+            (0, 0, 1) => VelocityFactor::Sign,
+            _ => {
+                return Err(clash(
+                    first_velocity.unwrap_or(self.at),
+                    "the factors in x' of a term must make one of x', sign(x'), x'*|x'|, x'^3",
+                ));
+            }
+        };
+        Ok(TermSpec {
+            drive: drive.unwrap_or(DriveFactor::One),
+            function,
+            velocity,
+        })
+    }
+}
+
+/// What a factor may be, for the errors.
+const FACTOR: &str =
+    "a factor: 1, cos(kt), sin(kt), cos(kx), sin(kx), x, x^n, hatN, x', x'^3, sign(x'), |x'| or {..}";
+
+/// A recursive-descent parser over the characters of a spec with white space removed (each
+/// character keeps its 1-based position in the spec).
+struct Parser<'a> {
+    spec: &'a str,
+    chars: Vec<(usize, char)>,
+    next: usize,
+    end: usize,
+}
+
+impl<'a> Parser<'a> {
+    fn new(spec: &'a str) -> Self {
+        let chars: Vec<(usize, char)> = spec
+            .chars()
+            .enumerate()
+            .filter(|(_, c)| !c.is_whitespace())
+            .map(|(i, c)| (i + 1, c))
+            .collect();
+        Self {
+            spec,
+            chars,
+            next: 0,
+            end: spec.chars().count() + 1,
+        }
+    }
+
+    fn peek(&self) -> Option<char> {
+        self.chars.get(self.next).map(|&(_, c)| c)
+    }
+
+    /// Position of the next character (one past the end at the end).
+    fn at(&self) -> usize {
+        self.chars.get(self.next).map_or(self.end, |&(at, _)| at)
+    }
+
+    fn error(&self, expected: &'static str) -> SolveError {
+        let found = match self.peek() {
+            None => "the end".to_owned(),
+            Some(_) => {
+                let rest: String = self.chars[self.next..].iter().map(|&(_, c)| c).take(12).collect();
+                format!("'{rest}'")
+            }
+        };
+        SolveError::TermSyntax {
+            spec: self.spec.to_owned(),
+            at: self.at(),
+            found,
+            expected,
+        }
+    }
+
+    /// Consumes `text` if it comes next.
+    fn eat(&mut self, text: &str) -> bool {
+        let n = text.chars().count();
+        let matches = self.next + n <= self.chars.len()
+            && self.chars[self.next..self.next + n]
+                .iter()
+                .map(|&(_, c)| c)
+                .eq(text.chars());
+        if matches {
+            self.next += n;
+        }
+        matches
+    }
+
+    fn expect(&mut self, text: &str, expected: &'static str) -> Result<(), SolveError> {
+        if self.eat(text) {
+            Ok(())
+        } else {
+            Err(self.error(expected))
+        }
+    }
+
+    /// A whole number, if one comes next.
+    fn number(&mut self) -> Result<Option<u32>, SolveError> {
+        let start = self.next;
+        let at = self.at();
+        let mut value: u64 = 0;
+        while let Some(d) = self.peek().and_then(|c| c.to_digit(10)) {
+            value = value * 10 + u64::from(d);
+            if value > u64::from(u32::MAX) {
+                self.next = start;
+                return Err(SolveError::TermSyntax {
+                    spec: self.spec.to_owned(),
+                    at,
+                    found: "a number too large".to_owned(),
+                    expected: "a whole number below 2^32",
+                });
+            }
+            self.next += 1;
+        }
+        Ok((self.next > start).then_some(value as u32))
+    }
+
+    /// A whole number at least 1 (the position of a 0 for the error).
+    fn positive(&mut self, expected: &'static str) -> Result<u32, SolveError> {
+        let at = self.next;
+        match self.number()? {
+            Some(0) => {
+                self.next = at;
+                Err(self.error("a whole number at least 1"))
+            }
+            Some(n) => Ok(n),
+            None => Err(self.error(expected)),
+        }
+    }
+
+    /// `list := item (',' item)*` to the end of the spec.
+    fn list(&mut self) -> Result<Vec<Product>, SolveError> {
+        let mut out = self.item()?;
+        while self.eat(",") {
+            out.extend(self.item()?);
+            if out.len() > MAX_TERMS {
+                return Err(SolveError::TooManyTerms {
+                    count: out.len(),
+                    max: MAX_TERMS,
+                });
+            }
+        }
+        if self.peek().is_some() {
+            return Err(self.error("',' between terms, '*' between factors, or the end"));
+        }
+        Ok(out)
+    }
+
+    /// `item := factor ('*' factor)*`: the products of one item (several with braces).
+    fn item(&mut self) -> Result<Vec<Product>, SolveError> {
+        let at = self.at();
+        let mut out = self.factor()?;
+        while self.eat("*") {
+            let right = self.factor()?;
+            let count = out.len().saturating_mul(right.len());
+            if count > MAX_TERMS {
+                return Err(SolveError::TooManyTerms {
+                    count,
+                    max: MAX_TERMS,
+                });
+            }
+            out = out
+                .iter()
+                .flat_map(|l| {
+                    right.iter().map(move |r| Product {
+                        atoms: l.atoms.iter().chain(&r.atoms).copied().collect(),
+                        at,
+                    })
+                })
+                .collect();
+        }
+        for p in &mut out {
+            p.at = at;
+        }
+        Ok(out)
+    }
+
+    /// `factor := atom | '{' item (',' item)* '}'`.
+    fn factor(&mut self) -> Result<Vec<Product>, SolveError> {
+        if self.eat("{") {
+            let mut out = self.item()?;
+            while self.eat(",") {
+                out.extend(self.item()?);
+                if out.len() > MAX_TERMS {
+                    return Err(SolveError::TooManyTerms {
+                        count: out.len(),
+                        max: MAX_TERMS,
+                    });
+                }
+            }
+            self.expect("}", "',' or '}'")?;
+            return Ok(out);
+        }
+        let at = self.at();
+        let atom = self.atom()?;
+        Ok(vec![Product {
+            atoms: vec![(atom, at)],
+            at,
+        }])
+    }
+
+    fn atom(&mut self) -> Result<Atom, SolveError> {
+        if self.eat("sign(") {
+            self.expect("x')", "x') after sign(")?;
+            return Ok(Atom::Sign);
+        }
+        for (name, cos) in [("cos(", true), ("sin(", false)] {
+            if self.eat(name) {
+                let k = match self.peek() {
+                    Some(c) if c.is_ascii_digit() => self.positive("a harmonic")?,
+                    _ => 1,
+                };
+                let atom = if self.eat("t") {
+                    Atom::Drive(if cos {
+                        DriveFactor::Cos(k)
+                    } else {
+                        DriveFactor::Sin(k)
+                    })
+                } else if self.eat("x") {
+                    Atom::X(if cos { XFunction::Cos(k) } else { XFunction::Sin(k) })
+                } else {
+                    return Err(self.error("t (the drive's phase) or x, as in cos(2t) or sin(x)"));
+                };
+                self.expect(")", "')'")?;
+                return Ok(atom);
+            }
+        }
+        if self.eat("hat") {
+            return match self.number()? {
+                Some(i) => Ok(Atom::X(XFunction::Hat(i))),
+                None => Err(self.error("the hat's node, as in hat3")),
+            };
+        }
+        if self.eat("|x'|") {
+            return Ok(Atom::Abs);
+        }
+        if self.eat("x'") {
+            if self.eat("^") {
+                let at = self.next;
+                return match self.positive("a power of x' (3)")? {
+                    1 => Ok(Atom::Velocity(1)),
+                    3 => Ok(Atom::Velocity(3)),
+                    _ => {
+                        self.next = at;
+                        Err(self.error("3: the powers of x' are x' and x'^3 (x'*|x'| for the even one)"))
+                    }
+                };
+            }
+            return Ok(Atom::Velocity(1));
+        }
+        if self.eat("x") {
+            if self.eat("^") {
+                return Ok(Atom::X(XFunction::Power(self.positive("a power of x")?)));
+            }
+            return Ok(Atom::X(XFunction::Power(1)));
+        }
+        if self.peek() == Some('1') {
+            let at = self.next;
+            if self.number()? == Some(1) {
+                return Ok(Atom::One);
+            }
+            self.next = at;
+            return Err(self.error("1, the only number that is a factor"));
+        }
+        Err(self.error(FACTOR))
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Column layout.
+
+/// The column families of the assemblies: the paper's (eq. 6 and an external forcing at the
+/// drive's first harmonic), each with a fast path, and any other product of factors.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Column {
     /// `c_r`, term `x'`.
@@ -170,24 +980,38 @@ pub(crate) enum Column {
     ForcingSin,
     /// `k`, term `k*x`.
     Stiffness,
+    /// Any other term.
+    Product(Term),
 }
 
-/// The unknowns of a model with `functions` basis functions and `form`, in column order: `x'`;
-/// then for each basis function `B` the terms `cos(t)*B`, `sin(t)*B` (if parametric) and `B` (the
-/// paper's order n, p, q); then `cos(t)`, `sin(t)` (identified forcing) and `k*x` (linear
-/// stiffness).
-pub fn columns(functions: usize, form: &ModelForm) -> Vec<Term> {
+impl Column {
+    /// Whether the column is one of the paper's families (every layout before general terms).
+    pub(crate) fn is_paper(&self) -> bool {
+        !matches!(self, Column::Product(_))
+    }
+}
+
+/// The unknowns of a preset form with `functions` basis functions, in column order: `x'`; then
+/// for each basis function `B` the terms `cos(kt)*B`, `sin(kt)*B` for `k = 1..H` (if parametric)
+/// and `B` (the paper's order n, p, q); then `cos(kt)`, `sin(kt)` for `k = 1..H` (identified
+/// forcing) and `k*x` (linear stiffness).
+fn preset_columns(functions: usize, form: &ModelForm) -> Vec<Term> {
+    let h = form.drive_harmonics();
     let mut t = vec![Term::DAMPING];
     for i in 0..functions {
         if form.is_parametric() {
-            t.push(Term::basis(DriveFactor::Cos(1), i));
-            t.push(Term::basis(DriveFactor::Sin(1), i));
+            for k in 1..=h {
+                t.push(Term::basis(DriveFactor::Cos(k), i));
+                t.push(Term::basis(DriveFactor::Sin(k), i));
+            }
         }
         t.push(Term::basis(DriveFactor::One, i));
     }
     if form.forcing() == Forcing::Identified {
-        t.push(Term::drive(DriveFactor::Cos(1)));
-        t.push(Term::drive(DriveFactor::Sin(1)));
+        for k in 1..=h {
+            t.push(Term::drive(DriveFactor::Cos(k)));
+            t.push(Term::drive(DriveFactor::Sin(k)));
+        }
     }
     if form.has_linear_stiffness() {
         t.push(Term {
@@ -199,36 +1023,53 @@ pub fn columns(functions: usize, form: &ModelForm) -> Vec<Term> {
     t
 }
 
-/// The column families of `terms`, or [`SolveError::TermNotSupported`] for the first term the
-/// assemblies do not balance.
-pub(crate) fn column_families(terms: &[Term], names: &[String]) -> Result<Vec<Column>, SolveError> {
-    terms
-        .iter()
-        .map(|t| {
-            t.column()
-                .ok_or_else(|| SolveError::TermNotSupported { term: t.name(names) })
-        })
-        .collect()
+/// The unknowns of a model on `basis` with `form`, in column order: the form's term list resolved
+/// on the basis ([`TermList::resolve`]), or for a preset form `x'`; then for each basis function
+/// `B` the terms `cos(kt)*B`, `sin(kt)*B` for drive harmonics `k = 1..H` (if parametric) and `B`
+/// (the paper's order n, p, q); then `cos(kt)`, `sin(kt)` (identified forcing) and `k*x` (linear
+/// stiffness). With `H = 1` (the default) this is the paper's layout.
+///
+/// Errors: those of [`TermList::resolve`], and [`SolveError::TermNotAllowed`] for `k*x` on the
+/// circle.
+pub fn columns<B: Basis + ?Sized>(basis: &B, form: &ModelForm) -> Result<Vec<Term>, SolveError> {
+    check_form(basis.domain(), form)?;
+    match form.terms() {
+        Some(list) => list.resolve(basis),
+        None => Ok(preset_columns(basis.len(), form)),
+    }
+}
+
+/// The column families of `terms`.
+pub(crate) fn column_families(terms: &[Term]) -> Vec<Column> {
+    terms.iter().map(Term::column).collect()
 }
 
 /// The names of the unknowns of a model on `basis` with `form`, in column order (see
-/// [`columns`]).
+/// [`columns`]; a term list's own names when it does not resolve on the basis).
 pub fn term_names<B: Basis + ?Sized>(basis: &B, form: &ModelForm) -> Vec<String> {
-    let names = basis.names();
-    columns(names.len(), form)
-        .iter()
-        .map(|t| t.name(&names))
-        .collect()
+    match form.terms() {
+        Some(list) => list.names(),
+        None => {
+            let names = basis.names();
+            preset_columns(names.len(), form)
+                .iter()
+                .map(|t| t.name(&names))
+                .collect()
+        }
+    }
 }
 
 /// Checks that the form's terms exist on the basis' domain.
 pub(crate) fn check_form(domain: Domain, form: &ModelForm) -> Result<(), SolveError> {
     if form.has_linear_stiffness() && domain == Domain::Circle {
         return Err(SolveError::TermNotAllowed {
-            term: "k*x",
+            term: "k*x".to_owned(),
             domain,
             why: "x is an angle known modulo 2π; put sin(x) or hats in the basis instead",
         });
+    }
+    if let Some(list) = form.terms() {
+        list.check_domain(domain)?;
     }
     Ok(())
 }
@@ -259,15 +1100,15 @@ mod tests {
         assert_eq!(show(D::Sin(2), X::Basis(0), V::One), "sin(2t)*cos(x)");
         assert_eq!(show(D::Cos(3), X::One, V::One), "cos(3t)");
         assert_eq!(show(D::One, X::Basis(1), V::Linear), "sin(x)*x'");
+        assert_eq!(show(D::One, X::One, V::One), "1");
     }
 
     #[test]
     fn paper_layout() {
-        let names = vec!["cos(x)".to_owned(), "sin(x)".to_owned()];
-        let got: Vec<String> = columns(2, &ModelForm::parametric())
-            .iter()
-            .map(|t| t.name(&names))
-            .collect();
+        let basis = hb_basis::Harmonic::new(1).unwrap();
+        let names = basis.names();
+        let layout = columns(&basis, &ModelForm::parametric()).unwrap();
+        let got: Vec<String> = layout.iter().map(|t| t.name(&names)).collect();
         assert_eq!(
             got,
             [
@@ -280,15 +1121,245 @@ mod tests {
                 "sin(x)"
             ]
         );
-        assert!(column_families(&columns(2, &ModelForm::parametric()), &names).is_ok());
-        let drag = [Term {
-            drive: DriveFactor::One,
-            position: PositionFactor::One,
-            velocity: VelocityFactor::Quadratic,
-        }];
+        assert!(column_families(&layout).iter().all(Column::is_paper));
+        // Two drive harmonics: cos(2t)*B, sin(2t)*B after cos(t)*B, sin(t)*B, and the forcing.
+        let form = ModelForm::parametric()
+            .with_forcing(Forcing::Identified)
+            .with_drive_harmonics(2);
+        assert_eq!(
+            term_names(&basis, &form),
+            [
+                "x'",
+                "cos(t)*cos(x)",
+                "sin(t)*cos(x)",
+                "cos(2t)*cos(x)",
+                "sin(2t)*cos(x)",
+                "cos(x)",
+                "cos(t)*sin(x)",
+                "sin(t)*sin(x)",
+                "cos(2t)*sin(x)",
+                "sin(2t)*sin(x)",
+                "sin(x)",
+                "cos(t)",
+                "sin(t)",
+                "cos(2t)",
+                "sin(2t)"
+            ]
+        );
+    }
+
+    #[test]
+    fn parses_every_example() {
+        let one = |spec: &str| -> TermSpec { spec.parse().unwrap() };
+        for name in [
+            "x'",
+            "sign(x')",
+            "x'*|x'|",
+            "x'^3",
+            "sin(x)",
+            "cos(2x)",
+            "x^3",
+            "x^2*x'",
+            "cos(t)*sin(x)",
+            "sin(2t)*cos(x)",
+            "cos(3t)",
+            "hat3",
+            "1",
+            "cos(2t)*x*sign(x')",
+        ] {
+            assert_eq!(one(name).to_string(), name);
+        }
+        assert_eq!(
+            one("x'"),
+            TermSpec {
+                drive: DriveFactor::One,
+                function: None,
+                velocity: VelocityFactor::Linear
+            }
+        );
+        assert_eq!(
+            one("x^2*x'"),
+            TermSpec {
+                drive: DriveFactor::One,
+                function: Some(XFunction::Power(2)),
+                velocity: VelocityFactor::Linear
+            }
+        );
+        assert_eq!(
+            one("sin(2t)*cos(x)"),
+            TermSpec {
+                drive: DriveFactor::Sin(2),
+                function: Some(XFunction::Cos(1)),
+                velocity: VelocityFactor::One
+            }
+        );
+        // Other spellings of the same terms: factors in any order, white space, explicit 1s.
+        assert_eq!(one("|x'| * x'"), one("x'*|x'|"));
+        assert_eq!(one("sin(x) * cos( 1t )"), one("cos(t)*sin(x)"));
+        assert_eq!(one("x'^1"), one("x'"));
+        assert_eq!(one("x^1"), one("x"));
+        assert_eq!(one("1*cos(3t)*1"), one("cos(3t)"));
+        assert_eq!(one("x'*x'*x'"), one("x'^3"));
+    }
+
+    #[test]
+    fn braces_multiply_out_in_order() {
+        let list =
+            TermList::parse("x', sign(x'), x'*|x'|, {1,cos(t),sin(t),cos(2t),sin(2t)}*{cos(x),sin(x)}")
+                .unwrap();
+        assert_eq!(
+            list.names(),
+            [
+                "x'",
+                "sign(x')",
+                "x'*|x'|",
+                "cos(x)",
+                "sin(x)",
+                "cos(t)*cos(x)",
+                "cos(t)*sin(x)",
+                "sin(t)*cos(x)",
+                "sin(t)*sin(x)",
+                "cos(2t)*cos(x)",
+                "cos(2t)*sin(x)",
+                "sin(2t)*cos(x)",
+                "sin(2t)*sin(x)"
+            ]
+        );
+        assert_eq!(list.drive_harmonics(), 2);
+        let nested = TermList::parse("{x', {sign(x'), 1}*x^2}*{1, cos(3t)}").unwrap();
+        assert_eq!(
+            nested.to_string(),
+            "x', cos(3t)*x', x^2*sign(x'), cos(3t)*x^2*sign(x'), x^2, cos(3t)*x^2"
+        );
+        // x'*x' is not in the vocabulary: the error is at the product's first factor in x'.
         assert!(matches!(
-            column_families(&drag, &names),
-            Err(SolveError::TermNotSupported { .. })
+            TermList::parse("{x'}*{1, x'}"),
+            Err(SolveError::TermProduct { at: 2, .. })
         ));
+    }
+
+    /// The position of an error: a 1-based character index into the spec.
+    fn error_at(spec: &str) -> usize {
+        match TermList::parse(spec) {
+            Err(SolveError::TermSyntax { at, .. } | SolveError::TermProduct { at, .. }) => at,
+            Err(SolveError::DuplicateTerm { at, .. }) => at,
+            other => panic!("{spec}: {other:?}"),
+        }
+    }
+
+    #[test]
+    fn errors_say_where() {
+        assert_eq!(error_at("x', cos(t)*foo"), 12);
+        assert_eq!(error_at("x', cos(t)*"), 12);
+        assert_eq!(error_at(""), 1);
+        assert_eq!(error_at("x',,sin(x)"), 4);
+        assert_eq!(error_at("cos(2y)"), 6);
+        assert_eq!(error_at("cos(0t)"), 5);
+        assert_eq!(error_at("x^0"), 3);
+        assert_eq!(error_at("x'^2"), 4);
+        assert_eq!(error_at("{x', sin(x)"), 12);
+        assert_eq!(error_at("sin(x) cos(x)"), 8);
+        assert_eq!(error_at("2*sin(x)"), 1);
+        assert_eq!(error_at("sign(x)"), 6);
+        // Products that are not terms: the second factor of a kind.
+        assert_eq!(error_at("cos(t)*sin(2t)"), 8);
+        assert_eq!(error_at("x', sin(x)*cos(x)"), 12);
+        assert_eq!(error_at("sign(x')*x'"), 1);
+        assert_eq!(error_at("|x'|"), 1);
+        // Duplicates: the item where the term comes again.
+        assert_eq!(error_at("x', sin(x), x'"), 13);
+        assert_eq!(error_at("sin(x), {1, cos(t)}*sin(x)"), 9);
+        match TermList::parse("sin(x), sin(x) * 1") {
+            Err(SolveError::DuplicateTerm { term, .. }) => assert_eq!(term, "sin(x)"),
+            other => panic!("{other:?}"),
+        }
+        let message = TermList::parse("x', cos(t)*foo").unwrap_err().to_string();
+        assert!(
+            message.contains("character 12") && message.contains("'foo'"),
+            "{message}"
+        );
+        assert!(matches!(
+            TermList::parse("cos(65t)"),
+            Err(SolveError::InvalidParameter { .. })
+        ));
+        assert!(matches!(
+            TermList::parse("cos(99999999999t)"),
+            Err(SolveError::TermSyntax { at: 5, .. })
+        ));
+        let big = "{1,cos(t),sin(t),cos(2t),sin(2t),cos(3t),sin(3t),cos(4t)}";
+        assert!(matches!(
+            TermList::parse(&format!("{big}*{big}*{big}*{big}*{{1,x}}")),
+            Err(SolveError::TooManyTerms { .. })
+        ));
+    }
+
+    #[test]
+    fn smallest_basis_and_domains() {
+        let basis = |spec: &str| TermList::parse(spec).unwrap().smallest_basis().unwrap();
+        assert_eq!(
+            basis("x', cos(2x)"),
+            Some(hb_basis::Harmonic::new(2).unwrap().into())
+        );
+        assert_eq!(
+            basis("sin(x), cos(t)*sin(3x)"),
+            Some(hb_basis::Harmonic::new(3).unwrap().into())
+        );
+        assert_eq!(basis("x, x^2*x', x^3"), Some(Polynomial::new(3).unwrap().into()));
+        assert_eq!(basis("hat7, hat2"), Some(Hat::new(8).unwrap().into()));
+        assert_eq!(basis("hat0"), Some(Hat::new(3).unwrap().into()));
+        assert_eq!(basis("x', sign(x'), cos(t)"), None);
+        assert!(matches!(
+            TermList::parse("sin(x), x^3").unwrap().smallest_basis(),
+            Err(SolveError::MixedBases { .. })
+        ));
+        let on_line = TermList::parse("x', x^3").unwrap();
+        assert!(on_line.check_domain(Domain::Line).is_ok());
+        assert!(matches!(
+            on_line.check_domain(Domain::Circle),
+            Err(SolveError::TermNotAllowed { ref term, .. }) if term == "x^3"
+        ));
+        // Resolution finds each function by name, and names what the basis lacks.
+        let list = TermList::parse("x', sin(2x)*x', cos(t)*cos(x)").unwrap();
+        let terms = list.resolve(&hb_basis::Harmonic::new(2).unwrap()).unwrap();
+        assert_eq!(terms[1].position, PositionFactor::Basis(3));
+        assert_eq!(terms[2].position, PositionFactor::Basis(0));
+        match list.resolve(&hb_basis::Harmonic::new(1).unwrap()) {
+            Err(SolveError::TermNotInBasis { term, function, .. }) => {
+                assert_eq!((term.as_str(), function.as_str()), ("sin(2x)*x'", "sin(2x)"));
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn lists_serialise_as_names() {
+        let list = TermList::parse("x', {1, cos(2t)}*sin(x)").unwrap();
+        let json = serde_json::to_string(&list).unwrap();
+        assert_eq!(json, r#"["x'","sin(x)","cos(2t)*sin(x)"]"#);
+        assert_eq!(serde_json::from_str::<TermList>(&json).unwrap(), list);
+        for bad in [r#"["x'","x'"]"#, r#"["x', sin(x)"]"#, r#"["foo"]"#, "[]"] {
+            assert!(serde_json::from_str::<TermList>(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn velocity_factors_and_their_derivatives() {
+        for v in [-2.5, -0.3, 0.4, 1.7] {
+            for f in [
+                VelocityFactor::One,
+                VelocityFactor::Linear,
+                VelocityFactor::Sign,
+                VelocityFactor::Quadratic,
+                VelocityFactor::Cubic,
+            ] {
+                let e = 1e-6;
+                let numeric = (f.eval(v + e) - f.eval(v - e)) / (2.0 * e);
+                assert!((numeric - f.eval_deriv(v)).abs() < 1e-6, "{f:?} at {v}");
+            }
+        }
+        assert_eq!(VelocityFactor::Sign.eval(0.0), 0.0);
+        assert_eq!(VelocityFactor::Sign.eval(-3.0), -1.0);
+        assert!(VelocityFactor::Sign.eval(f64::NAN).is_nan());
+        assert_eq!(VelocityFactor::Quadratic.eval(-2.0), -4.0);
     }
 }

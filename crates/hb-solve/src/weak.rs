@@ -6,12 +6,13 @@ use std::f64::consts::{PI, TAU};
 use circle_signal::Segment;
 use circle_signal::{RotationSplit, unwrap_into, wrap};
 use faer::{Col, Mat, MatMut};
-use hb_basis::{Basis, Domain};
+use hb_basis::{Basis, Domain, FourierPlanner};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::system::{Layout, RowJob, layout, split_rows};
-use crate::terms::Column;
+use crate::terms::{Column, DriveFactor, PositionFactor, Term, VelocityFactor};
+use crate::velocity::{Series, VelocityTrend, cell_sign, velocity_into};
 use crate::{Block, Forcing, Harmonics, IdentifyParams, LinearSystem, SolveError};
 
 /// Parameters of the weak form: the order `p` of the window `w(τ) = sin^p(π τ / T_s)`.
@@ -36,6 +37,18 @@ use crate::{Block, Forcing, Harmonics, IdentifyParams, LinearSystem, SolveError}
 /// taken by the trapezoid rule on the samples; since `w` vanishes at the ends with its first
 /// `p − 1` derivatives, the rule converges fast: its error falls as `h^(2⌊p/2⌋)` (the
 /// Euler–Maclaurin terms of `ψ'' x` start there), so even orders are the economical ones.
+///
+/// Any other term of a [`crate::ModelForm`] (a product `D(t) f(x) v(x')`, see [`crate::Term`]):
+///
+/// - linear in `x'`, `D(t) f(x) x'` is the time derivative of `D(t) F(x)` less `D'(t) F(x)`, with
+///   `F` an antiderivative of `f` ([`hb_basis::Basis::eval_antiderivative`], taken along the
+///   unwrapped angle; `x` itself for `f = 1`), so it is integrated by parts exactly:
+///   `∫ ψ D f(x) x' = −∫ (ψ' D + ψ D') F(x)`;
+/// - with `sign(x')`, `x'*|x'|` or `x'^3`: `∫ ψ g` at the velocity of the window's Fourier series
+///   ([`crate::velocity_series`] with [`crate::VelocityTrend::Quintic`], up to the params'
+///   velocity harmonics), `sign(x')` averaged over each sample's cell so that its jumps fall where
+///   the interpolated velocity crosses zero (`docs/identification.md` measures what this costs);
+/// - otherwise `∫ ψ g` of its samples, the drive factor at the samples' absolute time.
 ///
 /// `p >= 2` is needed (`ψ'` must vanish at the ends); larger `p` integrates more accurately but
 /// concentrates the window on its middle, so that fewer samples carry weight. The default `p = 4`
@@ -180,11 +193,35 @@ impl Tables {
 #[derive(Debug, Clone)]
 struct Workspace {
     x: Vec<f64>,
+    /// `x` less its mean: the data of the right-hand side and of the damping column.
+    xc: Vec<f64>,
     phi: Vec<f64>,
-    /// Column-major: one column of `samples` values per unknown (`x` itself for the damping).
+    /// Column-major: one column of `samples` values per unknown (`x` less its mean for the
+    /// damping), then the second factor of each column integrated by parts.
     g: Vec<f64>,
     /// `(cos W t_n, sin W t_n)` at every sample.
     forcing: Vec<(f64, f64)>,
+    /// The antiderivatives of the basis functions at one sample.
+    anti: Vec<f64>,
+    /// The velocity at every sample, when a term is nonlinear in it.
+    xdot: Vec<f64>,
+    /// The window less its trend.
+    detrended: Vec<f64>,
+    /// `(cos kW t_n, sin kW t_n)` of one sample for `k = 0..=` the highest drive harmonic.
+    harmonics: Vec<(f64, f64)>,
+    planner: FourierPlanner,
+}
+
+/// How a column's samples become its entries `A[r, c]`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Mode {
+    /// `Σ ψ_r g_c`.
+    Psi,
+    /// `−Σ ψ'_r g_c`: `g_c` is an antiderivative of the term (the damping: `x`).
+    MinusDpsi,
+    /// `−Σ ψ'_r g_c − Σ ψ_r g_s`: by parts with a drive factor, `g_c = D F` and `g_s = D' F` in
+    /// column `s` of the second block.
+    ByParts(usize),
 }
 
 /// `Σ a_i b_i` (slices of equal length) in the vectors of `simd`, two partial sums.
@@ -206,14 +243,16 @@ pub(crate) fn dot<S: pulp::Simd>(simd: S, a: &[f64], b: &[f64]) -> f64 {
     simd.reduce_sum_f64s(simd.add_f64s(acc0, acc1)) + tail
 }
 
-/// The rows of one window, `A[r, c] = Σ ψ_r g_c` (the damping column `−Σ ψ'_r x`) and
-/// `b[r] = −Σ ψ''_r x`, in the widest SIMD the machine has (chosen at run time: the build itself
-/// targets the x86-64 baseline).
+/// The rows of one window, `A[r, c] = Σ ψ_r g_c` (or `−Σ ψ'_r g_c`, and both parts of a term
+/// integrated by parts with a drive factor, see [`Mode`]) and `b[r] = −Σ ψ''_r x`, in the widest
+/// SIMD the machine has (chosen at run time: the build itself targets the x86-64 baseline).
 struct WindowRows<'a> {
     t: &'a Tables,
-    /// One column of `samples` values per unknown; column 0, the damping term, holds `x − mean`,
-    /// also the data of the right-hand side.
+    /// One column of `samples` values per unknown, then the second parts.
     g: &'a [f64],
+    /// `x` less its mean, the data of the right-hand side.
+    x: &'a [f64],
+    modes: &'a [Mode],
     samples: usize,
     cols: usize,
     a: MatMut<'a, f64>,
@@ -228,17 +267,24 @@ impl pulp::WithSimd for WindowRows<'_> {
         let WindowRows {
             t,
             g,
+            x,
+            modes,
             samples,
             cols,
             mut a,
             b,
         } = self;
-        let x = &g[..samples];
+        let column = |c: usize| &g[c * samples..(c + 1) * samples];
         for (r, br) in b.iter_mut().enumerate() {
             let (psi, dpsi, ddpsi) = (t.row(&t.psi, r), t.row(&t.dpsi, r), t.row(&t.ddpsi, r));
-            a[(r, 0)] = -dot(simd, dpsi, x);
-            for c in 1..cols {
-                a[(r, c)] = dot(simd, psi, &g[c * samples..(c + 1) * samples]);
+            for (c, mode) in modes.iter().enumerate().take(cols) {
+                a[(r, c)] = match *mode {
+                    Mode::Psi => dot(simd, psi, column(c)),
+                    Mode::MinusDpsi => -dot(simd, dpsi, column(c)),
+                    Mode::ByParts(second) => {
+                        -dot(simd, dpsi, column(c)) - dot(simd, psi, column(cols + second))
+                    }
+                };
             }
             *br = -dot(simd, ddpsi, x);
         }
@@ -283,14 +329,38 @@ pub(crate) fn weak_rows<B: Basis + ?Sized>(
     }
     let ws = Workspace {
         x: Vec::with_capacity(max_samples),
+        xc: Vec::with_capacity(max_samples),
         phi: vec![0.0; names.len()],
         g: Vec::with_capacity(cols * max_samples),
         forcing: Vec::with_capacity(max_samples),
+        anti: vec![0.0; names.len()],
+        xdot: Vec::new(),
+        detrended: Vec::new(),
+        harmonics: Vec::new(),
+        planner: FourierPlanner::new(),
     };
 
     let mut matrix = Mat::<f64>::zeros(rows, cols);
     let mut rhs = vec![0.0; rows];
     let jobs = split_rows(matrix.as_mut(), &mut rhs, segments, counts);
+    let mut modes = Vec::with_capacity(cols);
+    let mut second = 0;
+    for column in columns {
+        modes.push(match column {
+            Column::Damping => Mode::MinusDpsi,
+            Column::Product(t) if t.velocity == VelocityFactor::Linear => {
+                if t.drive == DriveFactor::One {
+                    Mode::MinusDpsi
+                } else {
+                    second += 1;
+                    Mode::ByParts(second - 1)
+                }
+            }
+            _ => Mode::Psi,
+        });
+    }
+    let products =
+        |f: &dyn Fn(&Term) -> bool| columns.iter().any(|c| matches!(c, Column::Product(t) if f(t)));
     let shared = Shared {
         basis,
         signal,
@@ -298,6 +368,20 @@ pub(crate) fn weak_rows<B: Basis + ?Sized>(
         columns,
         domain,
         arch: pulp::Arch::new(),
+        modes,
+        second,
+        drive_harmonics: columns
+            .iter()
+            .map(|c| match c {
+                Column::Product(t) => t.drive.harmonic() as usize,
+                _ => 1,
+            })
+            .max()
+            .unwrap_or(1),
+        needs_anti: products(&|t| {
+            t.velocity == VelocityFactor::Linear && matches!(t.position, PositionFactor::Basis(_))
+        }),
+        needs_velocity: products(&|t| !matches!(t.velocity, VelocityFactor::One | VelocityFactor::Linear)),
     };
     let blocks: Vec<Block> = jobs
         .into_par_iter()
@@ -324,6 +408,16 @@ struct Shared<'a, B: ?Sized> {
     domain: Domain,
     /// The machine's SIMD, detected once per assembly.
     arch: pulp::Arch,
+    /// How each column is integrated.
+    modes: Vec<Mode>,
+    /// Columns of the second block (terms integrated by parts with a drive factor).
+    second: usize,
+    /// The highest drive harmonic of a column.
+    drive_harmonics: usize,
+    /// Whether a column needs the antiderivatives of the basis.
+    needs_anti: bool,
+    /// Whether a column needs the velocity at the samples.
+    needs_velocity: bool,
 }
 
 /// Fills one segment's rows; returns its block.
@@ -361,12 +455,32 @@ fn fill_block<B: Basis + ?Sized>(
         }
     };
     let mean = ws.x.iter().sum::<f64>() / samples as f64;
+    ws.xc.clear();
+    ws.xc.extend(ws.x.iter().map(|v| v - mean));
+    if sh.needs_velocity {
+        let cutoff = sh.params.velocity_harmonics().count(seg.period(), seg.len());
+        let plan = ws.planner.plan(seg.len())?;
+        velocity_into(
+            plan,
+            &ws.x,
+            Series {
+                periods: seg.period(),
+                harmonics: cutoff,
+                step: clock.step(),
+                trend: VelocityTrend::Quintic,
+            },
+            &mut ws.detrended,
+            &mut ws.xdot,
+        )?;
+    }
 
     // g: one column of samples per unknown; the forcing at every sample.
+    let width = cols + sh.second;
     ws.g.clear();
-    ws.g.resize(cols * samples, 0.0);
+    ws.g.resize(width * samples, 0.0);
     ws.forcing.clear();
-    let (s0, c0) = (clock.forcing_frequency() * clock.time(seg.start())).sin_cos();
+    let big_w = clock.forcing_frequency();
+    let (s0, c0) = (big_w * clock.time(seg.start())).sin_cos();
     for (n, &xr) in raw.iter().enumerate() {
         let xe = if sh.domain == Domain::Circle { wrap(xr) } else { xr };
         sh.basis.eval(xe, &mut ws.phi);
@@ -381,15 +495,68 @@ fn fill_block<B: Basis + ?Sized>(
         let (cr, sr) = t.turn[n];
         let (c, s) = (c0 * cr - s0 * sr, s0 * cr + c0 * sr);
         ws.forcing.push((c, s));
+        if sh.drive_harmonics > 1 {
+            // cos, sin of k W t_n by the same formulas, k = 0..=H.
+            ws.harmonics.clear();
+            ws.harmonics.push((1.0, 0.0));
+            for q in 1..=sh.drive_harmonics {
+                let (cq, sq) = ws.harmonics[q - 1];
+                ws.harmonics.push((cq * c - sq * s, sq * c + cq * s));
+            }
+        }
+        if sh.needs_anti {
+            sh.basis.eval_antiderivative(ws.x[n], &mut ws.anti);
+        }
         for (col, &column) in sh.columns.iter().enumerate() {
             ws.g[col * samples + n] = match column {
-                Column::Damping => ws.x[n] - mean,
+                Column::Damping => ws.xc[n],
                 Column::Auto(i) => ws.phi[i],
                 Column::CosT(i) => ws.phi[i] * c,
                 Column::SinT(i) => ws.phi[i] * s,
                 Column::ForcingCos => c,
                 Column::ForcingSin => s,
                 Column::Stiffness => xr,
+                Column::Product(term) => {
+                    // The drive factor and its time derivative.
+                    let (d, dd) = match term.drive {
+                        DriveFactor::One => (1.0, 0.0),
+                        DriveFactor::Cos(q) | DriveFactor::Sin(q) => {
+                            let (cq, sq) = if q == 1 { (c, s) } else { ws.harmonics[q as usize] };
+                            let qw = f64::from(q) * big_w;
+                            match term.drive {
+                                DriveFactor::Cos(_) => (cq, -qw * sq),
+                                _ => (sq, qw * cq),
+                            }
+                        }
+                    };
+                    match term.velocity {
+                        VelocityFactor::Linear => {
+                            // By parts: an antiderivative F of the function of x along the window.
+                            let f = match term.position {
+                                PositionFactor::One => ws.xc[n],
+                                PositionFactor::Basis(i) => ws.anti[i],
+                                PositionFactor::Linear => 0.5 * xr * xr,
+                            };
+                            if let Mode::ByParts(second) = sh.modes[col] {
+                                ws.g[(cols + second) * samples + n] = dd * f;
+                            }
+                            d * f
+                        }
+                        velocity => {
+                            let f = match term.position {
+                                PositionFactor::One => 1.0,
+                                PositionFactor::Basis(i) => ws.phi[i],
+                                PositionFactor::Linear => xr,
+                            };
+                            let v = match velocity {
+                                VelocityFactor::One => 1.0,
+                                VelocityFactor::Sign => cell_sign(&ws.xdot, n, false),
+                                _ => velocity.eval(ws.xdot[n]),
+                            };
+                            d * f * v
+                        }
+                    }
+                }
             };
         }
     }
@@ -402,6 +569,8 @@ fn fill_block<B: Basis + ?Sized>(
     sh.arch.dispatch(WindowRows {
         t,
         g: &ws.g,
+        x: &ws.xc,
+        modes: &sh.modes,
         samples,
         cols,
         a: a.as_mut(),

@@ -433,7 +433,7 @@ fn bad_input_never_reaches_the_solver() {
             &hb_solve::HarmonicBalance,
             &QrSolver::default()
         ),
-        Err(SolveError::TermNotAllowed { term: "k*x", .. })
+        Err(SolveError::TermNotAllowed { ref term, .. }) if term == "k*x"
     ));
     // A monomial that overflows is caught with its segment.
     let huge: Vec<f64> = (0..200).map(|n| 1e120 * (n as f64 * 0.3).sin()).collect();
@@ -799,6 +799,73 @@ struct Draw {
     segments: Vec<(f64, bool)>,
     harmonics: usize,
     lambda: Vec<f64>,
+    /// A list of terms instead of the preset: `(drive, function, velocity)` codes, see
+    /// [`general_terms`].
+    general: Option<Vec<(u8, usize, u8)>>,
+}
+
+/// The list of terms of `codes` on `basis`: drive `0` none, `1..=6` `cos(t)`, `sin(t)`, `cos(2t)`,
+/// .., `sin(3t)`; function `0` none, `i` basis function `i − 1` (modulo); velocity `0..5` none,
+/// `x'`, `sign(x')`, `x'*|x'|`, `x'^3`. Repeated terms are dropped.
+fn general_terms(codes: &[(u8, usize, u8)], basis: &BasisKind) -> hb_solve::TermList {
+    let names = basis.names();
+    let mut terms: Vec<hb_solve::TermSpec> = Vec::new();
+    for &(drive, function, velocity) in codes {
+        let mut factors: Vec<String> = Vec::new();
+        if drive > 0 {
+            let q = u32::from(drive).div_ceil(2);
+            let trig = if drive % 2 == 1 { "cos" } else { "sin" };
+            factors.push(format!("{trig}({q}t)"));
+        }
+        let f = function % (names.len() + 1);
+        if f > 0 {
+            factors.push(names[f - 1].clone());
+        }
+        match velocity {
+            1 => factors.push("x'".into()),
+            2 => factors.push("sign(x')".into()),
+            3 => factors.push("x'*|x'|".into()),
+            4 => factors.push("x'^3".into()),
+            _ => {}
+        }
+        let name = if factors.is_empty() {
+            "1".to_owned()
+        } else {
+            factors.join("*")
+        };
+        let term: hb_solve::TermSpec = name.parse().unwrap();
+        if !terms.contains(&term) {
+            terms.push(term);
+        }
+    }
+    hb_solve::TermList::new(terms).unwrap()
+}
+
+/// `codes` with every velocity factor mapped by `f`.
+fn map_velocity(d: &Draw, f: impl Fn(u8) -> u8) -> Draw {
+    Draw {
+        general: d
+            .general
+            .as_ref()
+            .map(|g| g.iter().map(|&(a, b, v)| (a, b, f(v))).collect()),
+        ..d.clone()
+    }
+}
+
+/// For the weak form on hats: no hat times `x'`. The weak form integrates `hat(x) x'` by parts,
+/// `−∫ ψ' H(x)` with `H` the hat's antiderivative, and the trapezoid sums of the two sides of the
+/// integration by parts agree only to `O(h²)` when the integrand has kinks (where `x` crosses a
+/// node); for the smooth bases they agree to the rule's (spectral) accuracy.
+fn smooth_by_parts(d: &Draw) -> Draw {
+    let hats = matches!(d.basis, BasisKind::Hat(_));
+    Draw {
+        general: d.general.as_ref().map(|g| {
+            g.iter()
+                .map(|&(a, b, v)| (a, if hats && v == 1 { 0 } else { b }, v))
+                .collect()
+        }),
+        ..d.clone()
+    }
 }
 
 fn basis_strategy() -> impl Strategy<Value = BasisKind> {
@@ -821,10 +888,11 @@ prop_compose! {
         segments in proptest::collection::vec((0.0..1.0, any::<bool>()), 1..=4),
         harmonics in 1usize..=8,
         lambda in proptest::collection::vec(-2.0..2.0, 40),
+        general in proptest::option::of(proptest::collection::vec((0u8..7, 0usize..16, 0u8..5), 1..=8)),
     ) -> Draw {
         Draw {
             basis, parametric, forcing, known, stiffness, forcing_period, samples_per_period,
-            start_time, period, winding, rate, offset, waves, segments, harmonics, lambda,
+            start_time, period, winding, rate, offset, waves, segments, harmonics, lambda, general,
         }
     }
 }
@@ -891,12 +959,15 @@ impl Case {
         if d.stiffness && !circle {
             form = form.with_linear_stiffness();
         }
+        if let Some(codes) = &d.general {
+            form = ModelForm::from_terms(general_terms(codes, &d.basis));
+        }
+        let unknowns = hb_solve::columns(&d.basis, &form).unwrap().len();
         let params = IdentifyParams::builder(clock)
             .harmonics(Harmonics::Fixed(d.harmonics))
             .form(form)
             .build()
             .unwrap();
-        let unknowns = hb_solve::columns(d.basis.len(), &form).len();
         let segments: Vec<(f64, usize)> = d
             .segments
             .iter()
@@ -959,21 +1030,22 @@ impl Case {
         self.params.clock()
     }
 
-    /// The damping coefficient `c` (column `x'`, always the first).
-    fn damping(&self) -> f64 {
-        self.lambda[0]
-    }
-
     /// The residual `x'' + Σ λ g + F_c cos(W t) + F_s sin(W t)` at sample `n`, from the closed
     /// form of the signal and the terms' factors.
     fn residual(&self, n: usize) -> f64 {
-        self.residual_terms(n).0
+        self.residual_terms(n, None).0
+    }
+
+    /// The residual at sample `n` with the nonlinear functions of `x'` evaluated at `v` (a
+    /// method's estimate of the velocity there).
+    fn residual_at_velocity(&self, n: usize, v: f64) -> f64 {
+        self.residual_terms(n, Some(v)).0
     }
 
     /// The residual at sample `n`; the sum of the absolute values of its terms; and the sum of
     /// the absolute values of the derivatives of its terms in `x` (`|∂r/∂x|` bounded, the
     /// sensitivity of the basis terms to an error in the sample).
-    fn residual_terms(&self, n: usize) -> (f64, f64, f64) {
+    fn residual_terms(&self, n: usize, estimate: Option<f64>) -> (f64, f64, f64) {
         use hb_solve::{DriveFactor, PositionFactor, VelocityFactor};
         let t = self.clock().time(n);
         let big_w = self.clock().forcing_frequency();
@@ -990,7 +1062,11 @@ impl Case {
         let form = self.params.form();
         let mut r = self.signal.ddx(t);
         let (mut size, mut slope) = (r.abs(), 0.0);
-        for (term, lambda) in hb_solve::columns(self.basis.len(), form).iter().zip(&self.lambda) {
+        for (term, lambda) in hb_solve::columns(&self.basis, form)
+            .unwrap()
+            .iter()
+            .zip(&self.lambda)
+        {
             let drive = match term.drive {
                 DriveFactor::One => 1.0,
                 DriveFactor::Cos(j) => (f64::from(j) * big_w * t).cos(),
@@ -1001,12 +1077,13 @@ impl Case {
                 PositionFactor::Basis(i) => (phi[i], dphi[i]),
                 PositionFactor::Linear => (sample, 1.0),
             };
+            let nonlinear = estimate.unwrap_or(v);
             let velocity = match term.velocity {
                 VelocityFactor::One => 1.0,
                 VelocityFactor::Linear => v,
-                VelocityFactor::Sign => v.signum(),
-                VelocityFactor::Quadratic => v * v.abs(),
-                VelocityFactor::Cubic => v * v * v,
+                VelocityFactor::Sign => nonlinear.signum(),
+                VelocityFactor::Quadratic => nonlinear * nonlinear.abs(),
+                VelocityFactor::Cubic => nonlinear * nonlinear * nonlinear,
             };
             let g = lambda * drive * position * velocity;
             r += g;
@@ -1038,7 +1115,7 @@ impl Case {
             })
             .collect();
         let residual_size = (0..self.record.len())
-            .map(|n| self.residual_terms(n).1)
+            .map(|n| self.residual_terms(n, None).1)
             .fold(0.0, f64::max);
         (system, rows, scale.max(residual_size))
     }
@@ -1052,10 +1129,53 @@ impl Case {
         8.0 * f64::EPSILON * self.signal.magnitude(t_max)
     }
 
+    /// The largest `Σ |∂g/∂x'|` of the residual's terms over the record (`|c|` for the presets).
+    fn velocity_slope(&self) -> f64 {
+        use hb_solve::{DriveFactor, PositionFactor};
+        let big_w = self.clock().forcing_frequency();
+        let terms = hb_solve::columns(&self.basis, self.params.form()).unwrap();
+        let mut phi = vec![0.0; self.basis.len()];
+        (0..self.record.len())
+            .map(|n| {
+                let t = self.clock().time(n);
+                let v = self.signal.dx(t);
+                let sample = self.record[n];
+                self.basis.eval(sample, &mut phi);
+                terms
+                    .iter()
+                    .zip(&self.lambda)
+                    .map(|(term, lambda)| {
+                        let drive = match term.drive {
+                            DriveFactor::One => 1.0,
+                            DriveFactor::Cos(j) => (f64::from(j) * big_w * t).cos(),
+                            DriveFactor::Sin(j) => (f64::from(j) * big_w * t).sin(),
+                        };
+                        let position = match term.position {
+                            PositionFactor::One => 1.0,
+                            PositionFactor::Basis(i) => phi[i],
+                            PositionFactor::Linear => sample,
+                        };
+                        (lambda * drive * position * term.velocity.eval_deriv(v)).abs()
+                    })
+                    .sum::<f64>()
+            })
+            .fold(0.0, f64::max)
+    }
+
+    /// Whether a term beyond the presets holds a function of `x'`, estimated from the series
+    /// (harmonic balance) or integrated by parts with an antiderivative (the weak form).
+    fn general_velocity(&self) -> bool {
+        self.params.form().terms().is_some_and(|list| {
+            list.terms()
+                .iter()
+                .any(|t| t.velocity != hb_solve::VelocityFactor::One)
+        })
+    }
+
     /// The largest `Σ |∂g/∂x|` of the residual's basis terms over the record.
     fn slope(&self) -> f64 {
         (0..self.record.len())
-            .map(|n| self.residual_terms(n).2)
+            .map(|n| self.residual_terms(n, None).2)
             .fold(0.0, f64::max)
     }
 }
@@ -1087,15 +1207,31 @@ fn residual_fourier(case: &Case, system: &hb_solve::LinearSystem) -> Vec<f64> {
 /// `ψ = w(τ)`, `w(τ) cos(jΩτ)`, `w(τ) sin(jΩτ)` (`j = 1..M`), `w = sin^p(π τ / T_s)`,
 /// `Ω = 2π / T_s`, `τ` the time from the window's first sample, `T_s = L h`.
 fn residual_weak(case: &Case, system: &hb_solve::LinearSystem, p: i32) -> Vec<f64> {
+    residual_weak_with(case, system, p, false)
+}
+
+/// [`residual_weak`], with the nonlinear functions of `x'` at the weak form's estimate of the
+/// velocity (`estimated`: [`hb_solve::velocity_series`] of the window's closed form, with the
+/// params' velocity harmonics and [`hb_solve::VelocityTrend::Quintic`]).
+fn residual_weak_with(case: &Case, system: &hb_solve::LinearSystem, p: i32, estimated: bool) -> Vec<f64> {
     let h = case.clock().step();
     let mut want = Vec::with_capacity(system.rows());
     for block in system.blocks() {
-        let (s, l) = (block.segment.start(), block.segment.len());
+        let (s, l, k) = (block.segment.start(), block.segment.len(), block.segment.period());
+        let velocity = estimated.then(|| {
+            let x: Vec<f64> = (0..=l).map(|n| case.signal.x(case.clock().time(s + n))).collect();
+            let harmonics = case.params.velocity_harmonics().count(k, l);
+            hb_solve::velocity_series(&x, h, k, harmonics, hb_solve::VelocityTrend::Quintic).unwrap()
+        });
         let terms: Vec<(f64, f64)> = (0..=l)
             .map(|n| {
                 let weight = if n == 0 || n == l { 0.5 * h } else { h };
                 let window = (PI * n as f64 / l as f64).sin().powi(p);
-                (weight * window, case.residual(s + n))
+                let r = match &velocity {
+                    Some(v) => case.residual_at_velocity(s + n, v[n]),
+                    None => case.residual(s + n),
+                };
+                (weight * window, r)
             })
             .collect();
         want.push(terms.iter().map(|(w, r)| w * r).sum());
@@ -1116,32 +1252,58 @@ fn residual_weak(case: &Case, system: &hb_solve::LinearSystem, p: i32) -> Vec<f6
 /// `δ` times the norm of the map from the samples to a row of harmonic balance over `block`:
 /// `(jΩ)² u_j`, `c (jΩ) v_j` and the coefficients of the basis terms move by at most twice the
 /// change of the samples times `(MΩ)²`, `|c| MΩ` and `Σ|∂g/∂x|`.
+///
+/// A list of terms with functions of `x'` evaluates them at the velocity of the orbit's series up
+/// to `J` harmonics, which moves by at most `2δ (Ω J (J + 1) + 1 / (L h))`.
 fn harmonic_allowance(case: &Case, block: &hb_solve::Block, delta: f64, slope: f64) -> f64 {
-    let m_omega = block.harmonics as f64 * block.segment.fundamental(case.clock());
-    2.0 * delta * (m_omega * m_omega + case.damping().abs() * m_omega + slope)
+    let omega = block.segment.fundamental(case.clock());
+    let m_omega = block.harmonics as f64 * omega;
+    let velocity = if case.general_velocity() {
+        let j = case
+            .params
+            .velocity_harmonics()
+            .count(block.segment.period(), block.segment.len()) as f64;
+        2.0 * (omega * j * (j + 1.0) + 1.0 / block.segment.duration(case.clock()))
+    } else {
+        m_omega
+    };
+    2.0 * delta * (m_omega * m_omega + case.velocity_slope() * velocity + slope)
 }
 
 /// `δ` times the norm of the map from the samples to a row of the weak form of order `p` over
 /// `block`: `∫|ψ''|`, `|c| ∫|ψ'|` and `Σ|∂g/∂x| ∫|ψ|`, with `|ψ| <= 1`, `|ψ'| <= p a + MΩ`,
 /// `|ψ''| <= (p a + MΩ)²` (`a = π / T_s`, `Ω = 2π / T_s`).
+///
+/// A list of terms integrates `D(t) f(x) x'` by parts, `−∫ (ψ D)' F(x)`, and evaluates the other
+/// functions of `x'` at the velocity of the window's series (see [`harmonic_allowance`]).
 fn weak_allowance(case: &Case, block: &hb_solve::Block, p: u32, delta: f64, slope: f64) -> f64 {
     let span = block.segment.duration(case.clock());
     let rate = f64::from(p) * PI / span + block.harmonics as f64 * TAU / span;
-    delta * span * (rate * rate + case.damping().abs() * rate + slope)
+    let velocity = if case.general_velocity() {
+        let omega = block.segment.fundamental(case.clock());
+        let j = case
+            .params
+            .velocity_harmonics()
+            .count(block.segment.period(), block.segment.len()) as f64;
+        rate + 3.0 * case.clock().forcing_frequency() + 2.0 * (omega * j * (j + 1.0) + 1.0 / span)
+    } else {
+        rate
+    };
+    delta * span * (rate * rate + case.velocity_slope() * velocity + slope)
 }
 
 /// `δ` times the norm of the map from the samples to a row of the differences: the stencils'
 /// `64/12h²` (`x''`) and `18/12h` (`x'`, times `|c|`), and `Σ|∂g/∂x|`.
 fn difference_allowance(case: &Case, delta: f64, slope: f64) -> f64 {
     let h = case.clock().step();
-    delta * (64.0 / (12.0 * h * h) + case.damping().abs() * 18.0 / (12.0 * h) + slope)
+    delta * (64.0 / (12.0 * h * h) + case.velocity_slope() * 18.0 / (12.0 * h) + slope)
 }
 
 /// The truncation error of the fourth-order differences on the signal: for a sinusoid with
 /// `ω h <= 1` at most `h⁴ ω⁵ / 30` in `x'` and `h⁴ ω⁶ / 90` in `x''` (alternating series).
 fn truncation(case: &Case) -> f64 {
     let h = case.clock().step();
-    case.damping().abs() * h.powi(4) / 30.0 * case.signal.derivative_bound(5)
+    case.velocity_slope() * h.powi(4) / 30.0 * case.signal.derivative_bound(5)
         + h.powi(4) / 90.0 * case.signal.derivative_bound(6)
 }
 
@@ -1159,6 +1321,8 @@ proptest! {
     /// Fourier coefficients of the residual by a naive DFT.
     #[test]
     fn harmonic_rows_are_the_fourier_coefficients_of_the_residual(d in draw()) {
+        // sign(x') is averaged over each sample's cell (tested on its own below).
+        let d = map_velocity(&d, |v| if v == 2 { 3 } else { v });
         let case = Case::new(&d, true);
         let (system, got, scale) = case.rows(&hb_solve::HarmonicBalance);
         let want = residual_fourier(&case, &system);
@@ -1178,6 +1342,9 @@ proptest! {
     /// row's test function.
     #[test]
     fn weak_rows_are_the_test_integrals_of_the_residual(d in draw()) {
+        // Functions of x' other than x' itself come from a window's series, exact only on a
+        // periodic record (below); x' times anything is integrated by parts exactly.
+        let d = smooth_by_parts(&map_velocity(&d, |v| v.min(1)));
         let d = Draw { samples_per_period: 2 * d.samples_per_period, ..d };
         let case = Case::new(&d, false);
         let weak = hb_solve::WeakForm::new(IDENTITY_WINDOW).unwrap();
@@ -1194,11 +1361,37 @@ proptest! {
         }
     }
 
+    /// The weak form on windows of a record that need not repeat, with any terms: row for row,
+    /// `A λ − β` equals the trapezoid integral of the residual against the row's test function
+    /// with the nonlinear functions of `x'` at the velocity of the window's series
+    /// ([`hb_solve::velocity_series`]).
+    #[test]
+    fn weak_rows_with_the_window_velocity(d in draw()) {
+        // sign(x') is averaged over each sample's cell (tested on its own below).
+        let d = smooth_by_parts(&map_velocity(&d, |v| if v == 2 { 3 } else { v }));
+        let d = Draw { samples_per_period: 2 * d.samples_per_period, ..d };
+        let case = Case::new(&d, false);
+        let weak = hb_solve::WeakForm::new(IDENTITY_WINDOW).unwrap();
+        let (system, got, scale) = case.rows(&weak);
+        let want = residual_weak_with(&case, &system, IDENTITY_WINDOW as i32, true);
+        let (delta, slope) = (case.sample_error(), case.slope());
+        for block in system.blocks() {
+            let tolerance = 1e-12 * scale + weak_allowance(&case, block, IDENTITY_WINDOW, delta, slope);
+            for r in block.first_row..block.first_row + block.rows {
+                prop_assert!((got[r] - want[r]).abs() <= tolerance,
+                    "row {}: {} vs {} (tolerance {})", r, got[r], want[r], tolerance);
+            }
+        }
+    }
+
     /// Finite differences on a record that need not repeat: the row of sample `n` is the residual
     /// at `t_n` up to the truncation error of the fourth-order differences ([`truncation`], of
     /// order `h⁴`).
     #[test]
     fn difference_rows_are_the_residual_up_to_h4(d in draw()) {
+        // sign(x') jumps where x' crosses zero, and the differences' x' is off by O(h⁴): the other
+        // functions of x' are smooth.
+        let d = map_velocity(&d, |v| if v == 2 { 3 } else { v });
         let case = Case::new(&d, false);
         let (system, got, scale) = case.rows(&hb_solve::FiniteDifferences);
         let h = case.clock().step();

@@ -66,7 +66,7 @@ fn non_periodic_windows_of_a_linear_oscillator_are_exact() {
         (8, Harmonics::Fixed(10), 1e-9),
     ] {
         let params = IdentifyParams::builder(clock)
-            .form(form)
+            .form(form.clone())
             .harmonics(harmonics)
             .build()
             .unwrap();
