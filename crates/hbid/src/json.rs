@@ -29,9 +29,11 @@ pub fn identification(id: &Identification, method: &str, basis: &str) -> serde_j
         .map(|c| (c.name.clone(), c.std_error.into()))
         .collect();
     let summary = model.summary();
+    let terms: Vec<&str> = model.coefficients().iter().map(|c| c.name.as_str()).collect();
     serde_json::json!({
         "method": method,
         "basis": basis,
+        "terms": terms,
         "coefficients": values,
         "std_errors": errors,
         "orbits_used": summary.map(|s| s.segments),

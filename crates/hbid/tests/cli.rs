@@ -1652,3 +1652,159 @@ fn report_measures_the_valid_prediction_time() {
         assert!((in_lyapunov - median * period * lyapunov).abs() < 1e-9 * in_lyapunov);
     }
 }
+
+/// `--terms` chooses the model: a rig pendulum with friction, drag and a second drive harmonic is
+/// identified with exactly its terms, printed, keyed and saved in the order of the list, each near
+/// its truth; the saved model loads with the same terms; `report` takes the same list.
+#[test]
+fn terms_choose_the_model_and_flow_into_json_and_saved_model() {
+    let dir = scratch("terms");
+    let truth = dir.join("truth.json");
+    let record = simulated(
+        &dir,
+        "rig.csv",
+        &[
+            "--friction",
+            "0.05",
+            "--drag",
+            "0.05",
+            "--drive-harmonic",
+            "2:0.1",
+            "--samples",
+            "40000",
+            "--truth",
+            truth.to_str().unwrap(),
+        ],
+    );
+    let truth: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&truth).unwrap()).unwrap();
+    let list = "x', sign(x'), x'*|x'|, sin(x), {sin(t),sin(2t)}*cos(x)";
+    let names = [
+        "x'",
+        "sign(x')",
+        "x'*|x'|",
+        "sin(x)",
+        "sin(t)*cos(x)",
+        "sin(2t)*cos(x)",
+    ];
+    let model_path = dir.join("model.json");
+    let out = hbid(&[
+        "identify",
+        record.to_str().unwrap(),
+        "--method",
+        "windowed",
+        "--terms",
+        list,
+        "--bootstrap",
+        "0",
+        "--json",
+        "--quiet",
+        "--save-model",
+        model_path.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let terms: Vec<&str> = v["terms"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|t| t.as_str().unwrap())
+        .collect();
+    assert_eq!(terms, names);
+    for name in names {
+        let want = truth["coefficients"][name].as_f64().unwrap();
+        let got = v["coefficients"][name].as_f64().unwrap();
+        assert!((got - want).abs() < 0.05 * want.abs(), "{name}: {got} vs {want}");
+    }
+    assert!(v["explained"].as_f64().unwrap() > 0.999);
+    let saved = std::fs::read_to_string(&model_path).unwrap();
+    let model = hb_solve::IdentifiedModel::<hb_basis::BasisKind>::from_json(&saved).unwrap();
+    let saved_names: Vec<&str> = model.coefficients().iter().map(|c| c.name.as_str()).collect();
+    assert_eq!(saved_names, names);
+    // The table prints the same names.
+    let out = hbid(&[
+        "identify",
+        record.to_str().unwrap(),
+        "--method",
+        "windowed",
+        "--terms",
+        list,
+        "--bootstrap",
+        "0",
+        "--quiet",
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let table = String::from_utf8_lossy(&out.stdout);
+    for name in names {
+        assert!(
+            table.lines().any(|l| l.starts_with(&format!("{name} "))),
+            "{name}: {table}"
+        );
+    }
+}
+
+/// `--drive-harmonics H` adds cos(kt)*B and sin(kt)*B for k up to H to the default model; a bad
+/// list or a drive term on a free record is named on one line, before any work.
+#[test]
+fn drive_harmonics_and_bad_term_lists() {
+    let dir = scratch("terms-bad");
+    let record = simulated(
+        &dir,
+        "rig.csv",
+        &["--drive-harmonic", "2:0.1", "--samples", "20000"],
+    );
+    let r = record.to_str().unwrap();
+    let out = hbid(&[
+        "identify",
+        r,
+        "--method",
+        "windowed",
+        "--drive-harmonics",
+        "2",
+        "--bootstrap",
+        "0",
+        "--json",
+        "--quiet",
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let terms: Vec<&str> = v["terms"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|t| t.as_str().unwrap())
+        .collect();
+    for name in [
+        "x'",
+        "sin(x)",
+        "sin(t)*cos(x)",
+        "sin(2t)*cos(x)",
+        "cos(2t)*sin(x)",
+    ] {
+        assert!(terms.contains(&name), "{name} not in {terms:?}");
+    }
+    assert!(!terms.iter().any(|t| t.contains("3t")), "{terms:?}");
+    let f = v["coefficients"]["sin(2t)*cos(x)"].as_f64().unwrap();
+    assert!((f + 0.152).abs() < 0.01, "{f}");
+    for (list, mentions) in [
+        ("x', x'", "x'"),
+        ("x', cos(t)*sin(t)", "cos(t)*sin(t)"),
+        ("x', sin(x", "sin(x"),
+        ("x', {cos(x),sin(x)", "{"),
+        ("", "term"),
+    ] {
+        let out = hbid(&["identify", r, "--terms", list, "--quiet"]);
+        assert_clean_failure(&out, mentions);
+    }
+    let out = hbid(&["identify", r, "--drive-harmonics", "0", "--quiet"]);
+    assert_clean_failure(&out, "--drive-harmonics");
+    let out = hbid(&[
+        "identify",
+        r,
+        "--terms",
+        "x', sin(x)",
+        "--basis",
+        "hat:8",
+        "--quiet",
+    ]);
+    assert_clean_failure(&out, "sin(x)");
+}

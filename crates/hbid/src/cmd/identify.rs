@@ -7,8 +7,8 @@ use circle_signal::{Domain, Segment};
 use clap::{Args, ValueEnum};
 use hb_basis::{BasisKind, Harmonic, Hat, Polynomial};
 use hb_solve::{
-    BootstrapParams, Forcing, Harmonics, IdentifiedModel, LstsqSolver, ModelForm, NoiseCorrection, QrSolver,
-    SvdSolver, WeakForm,
+    BootstrapParams, Forcing, Harmonics, IdentifiedModel, LstsqSolver, MAX_DRIVE_HARMONIC, ModelForm,
+    NoiseCorrection, QrSolver, SvdSolver, TermList, WeakForm,
 };
 use hbid::pipeline::{Identification, ModelSpec, Setup, WindowOptions};
 use upo_search::Windows;
@@ -108,12 +108,44 @@ pub struct IdentifyArgs {
     /// Leave out the parametric terms cos(t)*B and sin(t)*B.
     #[arg(long)]
     pub no_parametric: bool,
+    /// Drive harmonics H of the default model: the parametric terms cos(kt)*B, sin(kt)*B (and with
+    /// --forcing identified the forcing cos(kt), sin(kt)) for k = 1..H.
+    #[arg(long, value_name = "H")]
+    pub drive_harmonics: Option<u32>,
+    /// The model's terms instead of the default: a comma-separated list of products, e.g.
+    /// "x', sign(x'), x'*|x'|, {1,cos(t),sin(t),cos(2t),sin(2t)}*{cos(x),sin(x)}".
+    ///
+    /// The model is x'' + sum_i c_i g_i = 0 and each term g_i a product, factors joined by '*':
+    /// at most one drive factor  cos(kt), sin(kt)   (t the drive's phase, k = 1..64: cos(t), sin(2t))
+    /// at most one function of x cos(kx), sin(kx) (harmonic basis), x, x^n (poly), hatN (hat)
+    /// at most one function of x'  x', sign(x'), x'*|x'|, x'^3
+    /// and 1 (no factor). Braces multiply out: {1,cos(t)}*{cos(x),sin(x)} is cos(x), sin(x),
+    /// cos(t)*cos(x), cos(t)*sin(x) (the leftmost set varies slowest). White space is ignored; each
+    /// term may appear once. Without --basis the smallest basis that holds every function of x named
+    /// is used (cos(2x): harmonic:2; x^3: poly:3; hat7: hat:8); with it, every function named must
+    /// be in it. Terms are printed and saved with these names.
+    #[arg(
+        long,
+        value_name = "LIST",
+        verbatim_doc_comment,
+        conflicts_with_all = ["no_parametric", "drive_harmonics"]
+    )]
+    pub terms: Option<String>,
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
     /// Save the identified model: JSON if the name ends in .json, compact binary otherwise.
     #[arg(long, value_name = "PATH")]
     pub save_model: Option<PathBuf>,
+}
+
+/// The command line's name of a basis: `harmonic:K`, `hat:N` or `poly:D`.
+pub fn basis_spec(basis: &BasisKind) -> String {
+    match basis {
+        BasisKind::Harmonic(b) => format!("harmonic:{}", b.order()),
+        BasisKind::Hat(b) => format!("hat:{}", b.nodes()),
+        BasisKind::Polynomial(b) => format!("poly:{}", b.degree()),
+    }
 }
 
 /// Parses `harmonic:K`, `hat:N` or `poly:D`.
@@ -158,20 +190,53 @@ impl IdentifyArgs {
         self.input.load_with(drive, progress)
     }
 
-    /// The basis as named on the command line (default: harmonic:1 on the circle, poly:3 on the
-    /// line), for the outputs.
-    pub fn basis_name(&self, domain: Domain) -> String {
-        self.basis.clone().unwrap_or_else(|| match domain {
-            Domain::Circle => "harmonic:1".to_owned(),
-            Domain::Line => "poly:3".to_owned(),
-        })
+    /// The terms of `--terms`, parsed.
+    pub fn term_list(&self) -> anyhow::Result<Option<TermList>> {
+        self.terms
+            .as_deref()
+            .map(|text| TermList::parse(text).context("--terms"))
+            .transpose()
     }
 
-    /// What these options ask to identify by `method` (which may differ from the one chosen on the
-    /// command line) on `data`: a free oscillation has no drive terms at all.
-    pub fn spec(&self, data: &Data, method: Method) -> anyhow::Result<ModelSpec> {
+    /// The basis as named on the command line (default: the smallest that holds the functions of x
+    /// of --terms, otherwise harmonic:1 on the circle, poly:3 on the line), for the outputs.
+    pub fn basis_name(&self, domain: Domain) -> String {
+        if let Some(name) = &self.basis {
+            return name.clone();
+        }
+        let inferred = self
+            .term_list()
+            .ok()
+            .flatten()
+            .and_then(|list| list.smallest_basis().ok().flatten());
+        match inferred {
+            Some(basis) => basis_spec(&basis),
+            None => match domain {
+                Domain::Circle => "harmonic:1".to_owned(),
+                Domain::Line => "poly:3".to_owned(),
+            },
+        }
+    }
+
+    /// The form of the model: `--terms` (checked against the basis and the record), or the
+    /// default with `--forcing`, `--no-parametric` and `--drive-harmonics`.
+    fn form(&self, data: &Data, basis: &BasisKind) -> anyhow::Result<ModelForm> {
         let domain = data.domain;
-        let basis = parse_basis(&self.basis_name(domain))?;
+        let free = matches!(data.drive, DriveFound::Free { .. });
+        if let Some(list) = self.term_list()? {
+            if self.forcing == Some(ForcingArg::Identified) {
+                bail!("--forcing identified with --terms: name the forcing terms cos(t), sin(t) in the list");
+            }
+            list.check_domain(domain).context("--terms")?;
+            list.resolve(basis)
+                .with_context(|| format!("--terms with the basis {}", self.basis_name(domain)))?;
+            if free && let Some(t) = list.terms().iter().find(|t| t.drive.harmonic() > 0) {
+                bail!(
+                    "--terms: the term `{t}` has a drive factor, but the record is a free oscillation without a drive"
+                );
+            }
+            return Ok(ModelForm::from_terms(list));
+        }
         let forcing = match self.forcing.unwrap_or(match domain {
             Domain::Circle => ForcingArg::None,
             Domain::Line => ForcingArg::Identified,
@@ -180,10 +245,27 @@ impl IdentifyArgs {
             ForcingArg::Identified => Forcing::Identified,
         };
         let mut form = ModelForm::parametric().with_forcing(forcing);
-        let free = matches!(data.drive, DriveFound::Free { .. });
         if self.no_parametric || free {
             form = form.without_parametric_terms();
         }
+        match self.drive_harmonics {
+            Some(h) if !(1..=MAX_DRIVE_HARMONIC).contains(&h) => {
+                bail!("--drive-harmonics {h}: must be between 1 and {MAX_DRIVE_HARMONIC}")
+            }
+            Some(h) => form = form.with_drive_harmonics(h),
+            None => {}
+        }
+        Ok(form)
+    }
+
+    /// What these options ask to identify by `method` (which may differ from the one chosen on the
+    /// command line) on `data`: a free oscillation has no drive terms at all.
+    pub fn spec(&self, data: &Data, method: Method) -> anyhow::Result<ModelSpec> {
+        let domain = data.domain;
+        // A malformed list is named before a basis inferred from it.
+        self.term_list()?;
+        let basis = parse_basis(&self.basis_name(domain))?;
+        let form = self.form(data, &basis)?;
         let mut spec = ModelSpec::new(method, basis)
             .with_form(form)
             .with_weak_form(WeakForm::new(self.window_order)?);
@@ -314,6 +396,13 @@ pub fn save_model(model: &IdentifiedModel, path: &std::path::Path) -> anyhow::Re
 
 fn print_table(id: &Identification, method: &str, basis: &str) {
     let model = &id.model;
+    let w = model
+        .coefficients()
+        .iter()
+        .map(|c| c.name.chars().count())
+        .max()
+        .unwrap_or(0)
+        .max(18);
     println!("method {method}, basis {basis}");
     if let Some(s) = model.summary() {
         println!(
@@ -333,7 +422,7 @@ fn print_table(id: &Identification, method: &str, basis: &str) {
     match &id.intervals {
         Some(b) => {
             println!(
-                "{:<18} {:>14} {:>12}   {:.0} % interval (bootstrap, {} resamples)",
+                "{:<w$} {:>14} {:>12}   {:.0} % interval (bootstrap, {} resamples)",
                 "term",
                 "coefficient",
                 "std. error",
@@ -343,7 +432,7 @@ fn print_table(id: &Identification, method: &str, basis: &str) {
             for c in model.coefficients() {
                 let i = b.interval(&c.name);
                 println!(
-                    "{:<18} {:>14.6} {:>12.2e}   [{:.6}, {:.6}]",
+                    "{:<w$} {:>14.6} {:>12.2e}   [{:.6}, {:.6}]",
                     c.name,
                     c.value,
                     c.std_error,
@@ -353,9 +442,9 @@ fn print_table(id: &Identification, method: &str, basis: &str) {
             }
         }
         None => {
-            println!("{:<18} {:>14} {:>12}", "term", "coefficient", "std. error");
+            println!("{:<w$} {:>14} {:>12}", "term", "coefficient", "std. error");
             for c in model.coefficients() {
-                println!("{:<18} {:>14.6} {:>12.2e}", c.name, c.value, c.std_error);
+                println!("{:<w$} {:>14.6} {:>12.2e}", c.name, c.value, c.std_error);
             }
         }
     }
