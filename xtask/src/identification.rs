@@ -33,6 +33,56 @@ pub struct Identified {
     pub label: &'static str,
     pub file: &'static str,
     pub model: IdentifiedModel,
+    /// How much of the balanced acceleration the model explains, and the residual's spectrum.
+    pub quality: hb_solve::FitQuality,
+    /// The identification's warning when it explains too little.
+    pub warning: Option<String>,
+}
+
+/// The goodness of fit of every model: the fraction of the balanced acceleration explained, and
+/// the drive harmonic where the residual is largest against the right-hand side (a missing drive
+/// term would stand out there).
+pub fn goodness_of_fit(report: &mut String, models: &[Identified]) -> anyhow::Result<()> {
+    writeln!(
+        report,
+        "## Goodness of fit
+"
+    )?;
+    writeln!(
+        report,
+        "The fraction of the balanced acceleration (the right-hand side of the harmonic balance, or of the weak \
+         form on windows) that each model explains, and the residual's largest line at the drive's harmonics \
+         relative to the right-hand side's at the same harmonic. The tool warns below {:.0} % on windows and \
+         {:.0} % on orbits.\n",
+        100.0 * hb_solve::EXPLAINED_WARNING_WINDOWS,
+        100.0 * hb_solve::EXPLAINED_WARNING_ORBITS
+    )?;
+    writeln!(
+        report,
+        "| model | explained | unexplained | largest residual line (harmonic: residual / rhs) | warning |"
+    )?;
+    writeln!(report, "| --- | --- | --- | --- | --- |")?;
+    for m in models {
+        let line = m
+            .quality
+            .spectrum
+            .iter()
+            .filter(|l| l.rhs_rms > 0.0)
+            .max_by(|a, b| a.residual_rms.total_cmp(&b.residual_rms))
+            .map_or("–".to_owned(), |l| {
+                format!("{}: {:.2e} / {:.2e}", l.harmonic, l.residual_rms, l.rhs_rms)
+            });
+        writeln!(
+            report,
+            "| {} | {:.6} | {:.2e} | {line} | {} |",
+            m.label,
+            m.quality.explained,
+            m.quality.unexplained,
+            m.warning.as_deref().unwrap_or("none")
+        )?;
+    }
+    writeln!(report)?;
+    Ok(())
 }
 
 /// Table I: the paper, the truth, and each harmonic-basis model side by side.

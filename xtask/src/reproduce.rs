@@ -219,6 +219,8 @@ pub fn run(out: &Path, quick: bool) -> anyhow::Result<()> {
             label,
             file,
             model: id.model,
+            quality: id.quality,
+            warning: id.warning,
         })
         .collect();
     let in_sample: Vec<Option<PredictionTimes>> =
@@ -357,6 +359,7 @@ pub fn run(out: &Path, quick: bool) -> anyhow::Result<()> {
             .filter(|m| m.label.starts_with("harmonic"))
             .collect::<Vec<_>>(),
     )?;
+    crate::identification::goodness_of_fit(&mut report, &models)?;
     if let Some(hat) = models.iter().find(|m| m.label.starts_with("8 hats")) {
         hat_curves(out, &mut report, &hat.model, &mut figures)?;
     }

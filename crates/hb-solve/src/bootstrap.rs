@@ -313,6 +313,13 @@ fn bootstrap_with<S: LstsqSolver + ?Sized>(
         ResampleBlock::Auto => auto_block(system),
     }
     .clamp(1, n.max(1));
+    if n < 2 * ell {
+        return Err(SolveError::TooFewSegmentsToResample {
+            segments: n,
+            block: ell,
+            needed: 2 * ell,
+        });
+    }
     let draws = n.div_ceil(ell);
     let draw_starts = |r: usize| {
         let mut rng = ChaCha8Rng::seed_from_u64(params.seed);
@@ -716,6 +723,34 @@ mod tests {
                         assert!((a - b).abs() < 1e-9 * width, "{n} {block:?} {f:?} {s:?}");
                     }
                 }
+            }
+        }
+    }
+
+    /// One segment, or fewer than two runs of the block, cannot be resampled: an error, not an
+    /// interval of zero width around the estimate.
+    #[test]
+    fn too_few_segments_are_refused() {
+        let solver = crate::QrSolver::default();
+        for (n, block, ok) in [(1, 1, false), (2, 1, true), (5, 3, false), (6, 3, true)] {
+            let system = synthetic(n, 1.0);
+            let estimate = system.solve(&solver).unwrap().solution;
+            let params = BootstrapParams::builder()
+                .resamples(50)
+                .block(ResampleBlock::Segments(block))
+                .build()
+                .unwrap();
+            let got = bootstrap_with(&system, &solver, &params, &estimate, Resampler::Normal);
+            match got {
+                Ok(b) => assert!(ok, "{n} segments in runs of {block}: {b:?}"),
+                Err(SolveError::TooFewSegmentsToResample {
+                    segments,
+                    block: l,
+                    needed,
+                }) => {
+                    assert!(!ok && segments == n && l == block && needed == 2 * block)
+                }
+                Err(e) => panic!("{e}"),
             }
         }
     }

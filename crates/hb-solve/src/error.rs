@@ -234,6 +234,20 @@ pub enum SolveError {
         /// Failures tolerated.
         allowed: usize,
     },
+    /// The bootstrap needs at least two runs of consecutive segments that do not overlap:
+    /// otherwise every resample is (nearly) the estimate itself and the interval would be a point.
+    #[error(
+        "bootstrap: {segments} segment(s) in runs of {block} cannot be resampled (at least {needed} are \
+         needed); use a longer record, or no intervals"
+    )]
+    TooFewSegmentsToResample {
+        /// Segments of the system.
+        segments: usize,
+        /// Consecutive segments drawn together.
+        block: usize,
+        /// Segments needed.
+        needed: usize,
+    },
     /// Model selection: with a fold of segments held out, the candidate library is not determined.
     #[error(
         "model selection: the candidate library is not determined by the data with one of {folds} folds of \
