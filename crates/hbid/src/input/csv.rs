@@ -74,7 +74,7 @@ pub(super) fn read<'a>(bytes: &'a [u8], options: &ReadOptions) -> Result<Record,
         return Err(InputError::NoData);
     }
     if let Times::Step(dt) = time {
-        record.t = grid(record.theta.len(), dt);
+        record.t = grid(record.theta.len(), dt)?;
     }
     record.lines = Some(numbers);
     if columns.order_from_data {

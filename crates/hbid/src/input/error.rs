@@ -135,6 +135,14 @@ pub enum InputError {
         /// Why.
         why: String,
     },
+    /// A sampling step so large that the times of the samples overflow.
+    #[error("{samples} samples of step {dt:e} reach past the largest number")]
+    StepOverflow {
+        /// The step.
+        dt: f64,
+        /// The samples.
+        samples: usize,
+    },
     /// Too few samples.
     #[error("{found} samples: at least {needed} are needed")]
     TooFewSamples {
@@ -193,7 +201,7 @@ pub enum InputError {
     },
     /// Time stamps so far apart that the times of their grid overflow (stamps near the largest
     /// floating-point numbers).
-    #[error("{at}: time {t} is too far from the first stamps: the times of the grid overflow")]
+    #[error("{at}: time {t:e} is too far from the first stamps: the times of the grid overflow")]
     TimeOverflow {
         /// Where: the last sample.
         at: Location,
@@ -233,6 +241,7 @@ impl InputError {
             | InputError::Ragged { .. }
             | InputError::MixedSeparators { .. }
             | InputError::Malformed { .. }
+            | InputError::StepOverflow { .. }
             | InputError::Npy { .. } => true,
             InputError::Io { .. }
             | InputError::IsFolder { .. }

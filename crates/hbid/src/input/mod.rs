@@ -390,9 +390,13 @@ pub fn read_csv(input: impl Read) -> Result<Record, InputError> {
     csv::read(&bytes, &ReadOptions::default())
 }
 
-/// The times of `n` samples `dt` apart from 0, for records without a time column.
-fn grid(n: usize, dt: f64) -> Vec<f64> {
-    (0..n).map(|i| i as f64 * dt).collect()
+/// The times of `n` samples `dt` apart from 0, for records without a time column; an error when
+/// the last one overflows.
+fn grid(n: usize, dt: f64) -> Result<Vec<f64>, InputError> {
+    if !(n.saturating_sub(1) as f64 * dt).is_finite() {
+        return Err(InputError::StepOverflow { dt, samples: n });
+    }
+    Ok((0..n).map(|i| i as f64 * dt).collect())
 }
 
 /// Largest relative spread of a column's steps (see [`step_spread`]) for it to be read as the
@@ -709,6 +713,25 @@ mod tests {
         ));
         let both = options(Some("1"), None, Some(1.0));
         assert!(matches!(read_bytes(b"1,2\n", &both), Err(InputError::TimeTwice)));
+        // A step whose samples' times overflow (found by the fuzz target `text_options`: 25
+        // samples of step 2.2e307 were read with infinite times), in both readers.
+        let huge = options(None, None, Some(2.2284457792544677e307));
+        let text: String = (0..25).map(|i| format!("{i}\n")).collect();
+        let npy = npy::npy_bytes("<f8", "(25,)", false, &[0; 200]);
+        for bytes in [text.as_bytes(), &npy] {
+            match read_bytes(bytes, &huge) {
+                Err(e @ InputError::StepOverflow { samples: 25, .. }) => {
+                    assert!(
+                        e.to_string()
+                            .starts_with("25 samples of step 2.2284457792544677e307"),
+                        "{e}"
+                    )
+                }
+                other => panic!("{other:?}"),
+            }
+            let fits = read_bytes(bytes, &options(None, None, Some(1e300))).unwrap();
+            assert_eq!(fits.t[24], 24.0 * 1e300);
+        }
         // Position 0 (which no column option parses to) is refused like the text "0", before
         // the column policy counts back from it (found by the fuzz target `text_options`: it
         // underflowed for headerless text).

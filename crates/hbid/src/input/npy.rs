@@ -59,7 +59,7 @@ pub(super) fn read(bytes: &[u8], options: &ReadOptions) -> Result<Record, InputE
     let theta = array.column(columns.angle);
     let t = match columns.time {
         Times::Column(c) => array.column(c),
-        Times::Step(dt) => grid(array.rows, dt),
+        Times::Step(dt) => grid(array.rows, dt)?,
     };
     // Until the data decide which column is the time, neither is called one.
     let time_role = if columns.order_from_data {

@@ -332,7 +332,7 @@ proptest! {
         let column = |c: usize| (0..rows).map(|r| value(r, c)).collect::<Vec<f64>>();
         let (options, t, x) = if cols == 1 {
             let dt = 0.25;
-            (ReadOptions { dt: Some(dt), ..Default::default() }, grid(rows, dt), column(0))
+            (ReadOptions { dt: Some(dt), ..Default::default() }, grid(rows, dt).map_err(|e| TestCaseError::fail(e.to_string()))?, column(0))
         } else {
             let (tc, xc) = (cols - 1, 0);
             let options = ReadOptions {
