@@ -64,8 +64,10 @@ pub struct InputArgs {
     pub signal: Domain,
     /// What the sensor measured, on the line: the displacement, or its velocity (a laser
     /// vibrometer) or acceleration (an accelerometer), integrated here to the displacement less
-    /// its mean (velocity) or least-squares linear trend (acceleration); the model then needs a
-    /// constant term (`1`) for the unknown offset.
+    /// its mean (velocity) or least-squares linear trend (acceleration). `identify` then finds
+    /// the offset (and, for an acceleration, the slope) that the model explains best, piece by
+    /// piece; with a constant term `1` in the model the offset is left to the model (its
+    /// polynomial terms are then those of the displacement less its mean).
     #[arg(long, value_enum, default_value_t = MeasuredArg::Displacement)]
     pub measured: MeasuredArg,
 }

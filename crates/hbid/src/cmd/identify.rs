@@ -324,6 +324,45 @@ impl IdentifyArgs {
     }
 }
 
+/// For a velocity or acceleration record: the integrated record with the drift that the model of
+/// `setup` explains best over `segments` ([`hbid::pipeline::fit_drift`]), and a note of it on
+/// standard error; `None` for a displacement record.
+pub fn fitted_drift(
+    args: &IdentifyArgs,
+    data: &Data,
+    setup: &Setup,
+    segments: &[Segment],
+    found: &str,
+) -> anyhow::Result<Option<Vec<f64>>> {
+    let measured = circle_signal::Measured::from(args.input.measured);
+    if measured == circle_signal::Measured::Displacement {
+        return Ok(None);
+    }
+    let (x, fit) = hbid::pipeline::fit_drift(setup, &data.x, &data.pieces, segments, measured, |_, _| {})
+        .with_context(|| format!("{found}: fitting the integrated record's drift"))?;
+    if fit.evaluations > 0 {
+        let period = data.p as f64;
+        let pieces: Vec<String> = fit
+            .pieces
+            .iter()
+            .map(|d| {
+                format!(
+                    "slope {:.3e} per period, offset {:.3e}",
+                    d.slope * period,
+                    d.offset
+                )
+            })
+            .collect();
+        eprintln!(
+            "note: the drift of the integrated record that the model explains best ({}): unexplained {:.2e} before, {:.2e} after",
+            pieces.join("; "),
+            fit.unexplained_before,
+            fit.unexplained_after
+        );
+    }
+    Ok(Some(x))
+}
+
 pub fn run(args: &IdentifyArgs, quiet: bool, timings: bool) -> anyhow::Result<()> {
     let mut stages = crate::progress::Stages::new("identify", quiet, timings);
     if let Some(path) = &args.save_model {
@@ -361,8 +400,10 @@ pub fn run(args: &IdentifyArgs, quiet: bool, timings: bool) -> anyhow::Result<()
             }
         ),
     };
+    let drifted = fitted_drift(args, &data, &setup, &segments, &found)?;
+    let x = drifted.as_deref().unwrap_or(&data.x);
     let id = setup
-        .identify_with_progress(&data.x, &segments, |step| stages.start(step.name()))
+        .identify_with_progress(x, &segments, |step| stages.start(step.name()))
         .with_context(|| found)?;
     stages.finish();
     if let Some(path) = &args.save_model {

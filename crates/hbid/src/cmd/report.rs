@@ -114,9 +114,18 @@ pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
              identify it with hbid identify --method windowed --forcing none"
         );
     }
-    let data = args.identify.input.load_with(drive, &mut |_, _| {})?;
+    let mut data = args.identify.input.load_with(drive, &mut |_, _| {})?;
     if let Some(note) = super::identify::drive_note(&data) {
         eprintln!("{note}");
+    }
+    // A velocity or acceleration record's drift, found once by the weak form on windows, serves
+    // every model of the report.
+    if args.identify.input.measured != super::data::MeasuredArg::Displacement {
+        let setup = args.identify.spec(&data, Method::Windowed)?.setup(&data.clock)?;
+        let windows = args.identify.segments(&data, 1, Method::Windowed)?;
+        if let Some(x) = super::identify::fitted_drift(&args.identify, &data, &setup, &windows, "windows")? {
+            data.x = x;
+        }
     }
     // Every option is checked before the work.
     let pipeline = Pipeline::new(data.record()?, options(args, &data)?)?;

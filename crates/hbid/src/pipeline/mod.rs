@@ -64,10 +64,12 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+mod drift;
 mod error;
 mod prediction;
 mod setup;
 
+pub use drift::{DriftFit, GOLDEN_STEPS, PieceDrift, SCAN_POINTS, fit_drift};
 pub use error::PipelineError;
 pub use prediction::PredictionOptions;
 pub use setup::{Identification, IdentifyStep, Method, ModelSpec, Setup};

@@ -216,6 +216,21 @@ impl Setup {
         self.identify_with_progress(signal, segments, |_| {})
     }
 
+    /// The unexplained fraction of the fit over `segments` of `signal` (no bootstrap), and
+    /// whether the model has a constant term `1`: what [`super::fit_drift`] minimises.
+    pub fn unexplained(&self, signal: &[f64], segments: &[Segment]) -> Result<(f64, bool), SolveError> {
+        let system = build_system(
+            &self.basis,
+            signal,
+            segments,
+            &self.params,
+            self.assembly.as_ref(),
+        )?;
+        let fit = system.solve(self.solver.as_ref())?;
+        let constant = system.names().iter().any(|n| n == "1");
+        Ok((fit_quality(&system, &fit.solution)?.unexplained, constant))
+    }
+
     /// [`Setup::identify`], calling `progress` with each step as it starts.
     pub fn identify_with_progress(
         &self,
