@@ -160,8 +160,8 @@ impl fmt::Display for Note {
                 };
                 write!(
                     f,
-                    "{what} record integrated to the displacement less its {removed}; the model's constant and \
-                     polynomial terms absorb the unknown offset"
+                    "{what} record integrated to the displacement less its {removed}; the drift left is fitted \
+                     with the model"
                 )
             }
             Note::Spikes { found, repaired } => {
