@@ -673,6 +673,15 @@ pub fn run(out: &Path, quick: bool) -> anyhow::Result<()> {
         writeln!(r, "| {name} | {s:.1} |")?;
     }
     writeln!(r, "| total | {:.1} |", started.elapsed().as_secs_f64())?;
+    // The side by side with weak SINDy is made by `cargo xtask weak-sindy`: kept as it is.
+    if let Some(kept) = std::fs::read_to_string(out)
+        .ok()
+        .as_deref()
+        .and_then(crate::weak_sindy::kept_section)
+    {
+        r.push_str(kept);
+        r.push('\n');
+    }
     std::fs::write(out, r).with_context(|| format!("cannot write {}", out.display()))?;
     eprintln!("report written to {}", out.display());
     Ok(())

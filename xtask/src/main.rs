@@ -8,6 +8,7 @@ mod identification;
 mod real_records;
 mod reproduce;
 mod scale;
+mod weak_sindy;
 
 use std::path::PathBuf;
 
@@ -71,6 +72,20 @@ enum Command {
         #[arg(long, default_value = "target/real-records")]
         data: PathBuf,
     },
+    /// Model selection beside pysindy's weak-form SINDy on the same forced records at four noise
+    /// levels; writes its section into `docs/accuracy.md` (needs Python with pysindy:
+    /// `pip install -r xtask/peers/requirements.txt`).
+    WeakSindy {
+        /// The page the section is written into (between its markers, or appended).
+        #[arg(long, default_value = "docs/accuracy.md")]
+        out: PathBuf,
+        /// Where the simulated records are written.
+        #[arg(long, default_value = "target/weak-sindy")]
+        data: PathBuf,
+        /// The Python interpreter that has pysindy.
+        #[arg(long, default_value = "python3")]
+        python: String,
+    },
 }
 
 /// How this xtask was built, for the generated pages that report wall times: `cargo xtask` runs
@@ -95,6 +110,7 @@ fn main() -> std::process::ExitCode {
             repeats,
         } => scale::run(&out, &data, &sizes, repeats),
         Command::RealRecords { out, data } => real_records::run(&out, &data),
+        Command::WeakSindy { out, data, python } => weak_sindy::run(&out, &data, &python),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,
