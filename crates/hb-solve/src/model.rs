@@ -4,7 +4,7 @@ use std::fmt;
 
 use circle_signal::wrap;
 use hb_basis::{Basis, BasisKind, Domain, Harmonic};
-use pendulum_sim::{Pendulum, SecondOrderSystem};
+use pendulum_sim::{Branch, Pendulum, SecondOrderSystem};
 use serde::de::{DeserializeOwned, MapAccess, Visitor};
 use serde::ser::SerializeMap;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
@@ -491,9 +491,9 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
-impl<B: Basis> SecondOrderSystem for IdentifiedModel<B> {
+impl<B: Basis> IdentifiedModel<B> {
     #[inline]
-    fn acceleration(&self, t: f64, x: f64, v: f64) -> f64 {
+    fn acceleration_side(&self, side: Option<f64>, t: f64, x: f64, v: f64) -> f64 {
         let xe = self.point(x);
         match &self.eval {
             Evaluation::Paper(e) => {
@@ -515,7 +515,7 @@ impl<B: Basis> SecondOrderSystem for IdentifiedModel<B> {
                             coefficient
                                 * drive_value(term.drive, &dc, &ds)
                                 * position_value(term.position, phi, xe, false)
-                                * term.velocity.eval(v)
+                                * term.velocity.eval_on(side, v)
                         })
                         .sum::<f64>()
                 });
@@ -525,7 +525,7 @@ impl<B: Basis> SecondOrderSystem for IdentifiedModel<B> {
     }
 
     #[inline]
-    fn jacobian(&self, t: f64, x: f64, v: f64) -> [f64; 2] {
+    fn jacobian_side(&self, side: Option<f64>, t: f64, x: f64, v: f64) -> [f64; 2] {
         let xe = self.point(x);
         match &self.eval {
             Evaluation::Paper(e) => {
@@ -548,12 +548,12 @@ impl<B: Basis> SecondOrderSystem for IdentifiedModel<B> {
                             if term.position != PositionFactor::One {
                                 dx += cd
                                     * position_value(term.position, dphi, xe, true)
-                                    * term.velocity.eval(v);
+                                    * term.velocity.eval_on(side, v);
                             }
                             if term.velocity != VelocityFactor::One {
                                 dv += cd
                                     * position_value(term.position, phi, xe, false)
-                                    * term.velocity.eval_deriv(v);
+                                    * term.velocity.eval_deriv_on(side, v);
                             }
                         }
                         (dx, dv)
@@ -562,6 +562,40 @@ impl<B: Basis> SecondOrderSystem for IdentifiedModel<B> {
                 [-dx, -dv]
             }
         }
+    }
+}
+
+/// Every model runs through the integrators of `pendulum_sim`; one with `sign(x')` or `x'*|x'|`
+/// terms switches at rest, and its branches take `sign(x')` as the branch's sign.
+impl<B: Basis> SecondOrderSystem for IdentifiedModel<B> {
+    #[inline]
+    fn acceleration(&self, t: f64, x: f64, v: f64) -> f64 {
+        self.acceleration_side(None, t, x, v)
+    }
+
+    #[inline]
+    fn jacobian(&self, t: f64, x: f64, v: f64) -> [f64; 2] {
+        self.jacobian_side(None, t, x, v)
+    }
+
+    fn switches_at_rest(&self) -> bool {
+        match &self.eval {
+            Evaluation::Paper(_) => false,
+            Evaluation::General(e) => e
+                .terms
+                .iter()
+                .any(|(c, term)| *c != 0.0 && term.velocity.switches()),
+        }
+    }
+
+    #[inline]
+    fn acceleration_on(&self, branch: Branch, t: f64, x: f64, v: f64) -> f64 {
+        self.acceleration_side(Some(branch.sign()), t, x, v)
+    }
+
+    #[inline]
+    fn jacobian_on(&self, branch: Branch, t: f64, x: f64, v: f64) -> [f64; 2] {
+        self.jacobian_side(Some(branch.sign()), t, x, v)
     }
 }
 

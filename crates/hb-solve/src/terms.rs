@@ -137,6 +137,32 @@ impl VelocityFactor {
         }
     }
 
+    /// The factor on one side of `x' = 0` (`side` = 1 or −1, see `pendulum_sim::Branch`):
+    /// `sign(x')` is `side` and `x'*|x'|` is `side · x'²`, smooth in `v` across 0; the others as
+    /// [`eval`](Self::eval). `None`: [`eval`](Self::eval).
+    #[inline]
+    pub fn eval_on(&self, side: Option<f64>, v: f64) -> f64 {
+        match (self, side) {
+            (Self::Sign, Some(s)) => s,
+            (Self::Quadratic, Some(s)) => s * v * v,
+            _ => self.eval(v),
+        }
+    }
+
+    /// The derivative in `v` of [`eval_on`](Self::eval_on).
+    #[inline]
+    pub fn eval_deriv_on(&self, side: Option<f64>, v: f64) -> f64 {
+        match (self, side) {
+            (Self::Quadratic, Some(s)) => 2.0 * s * v,
+            _ => self.eval_deriv(v),
+        }
+    }
+
+    /// Whether the factor is not smooth at `x' = 0` (`sign(x')`, `x'*|x'|`).
+    pub fn switches(&self) -> bool {
+        matches!(self, Self::Sign | Self::Quadratic)
+    }
+
     /// Whether the factor is linear in `x'` (`x'` itself), so that a term holding it is the time
     /// derivative of an antiderivative of the rest.
     pub fn is_linear(&self) -> bool {

@@ -579,3 +579,42 @@ proptest! {
         prop_assert_eq!(serde_json::from_str::<TermList>(&json).unwrap(), list);
     }
 }
+
+/// A model with dry friction and drag runs through the switching integrator as the simulator's
+/// own pendulum with those losses does: the same trajectory, its stops at rest included (with
+/// `sign(x')` evaluated as a smooth function the model would chatter about `x' = 0` instead).
+#[test]
+fn a_model_with_friction_sticks_like_the_rig_pendulum() {
+    use pendulum_sim::{Losses, Pendulum};
+    let (f, c, r, mu, d) = (0.25, 0.03, 0.8333, 0.2, 0.05);
+    let pendulum = Pendulum::new(f, c, r)
+        .unwrap()
+        .with_losses(Losses::none().with_friction(mu).unwrap().with_drag(d).unwrap());
+    let model = IdentifiedModel::new(
+        BasisKind::from(hb_basis::Harmonic::new(1).unwrap()),
+        ModelForm::from_terms(TermList::parse("x', sign(x'), x'*|x'|, sin(x), sin(t)*cos(x)").unwrap()),
+        1.0,
+        &[c, mu, d, 1.0 / (r * r), -f],
+    )
+    .unwrap();
+    assert!(model.switches_at_rest() && pendulum.switches_at_rest());
+    let config = SimulationConfig::paper()
+        .with_samples(2_000)
+        .unwrap()
+        .with_transient_periods(0)
+        .with_initial(1.0, 0.0)
+        .unwrap();
+    let (a, b) = (
+        simulate(&pendulum, &config).unwrap(),
+        simulate(&model, &config).unwrap(),
+    );
+    let stuck = a.omega.iter().filter(|&&v| v == 0.0).count();
+    assert!(
+        stuck > 10,
+        "the pendulum should stop at rest: {stuck} samples at rest"
+    );
+    assert_eq!(stuck, b.omega.iter().filter(|&&v| v == 0.0).count());
+    for (p, q) in a.theta.iter().zip(&b.theta) {
+        assert!((p - q).abs() < 1e-7, "{p} vs {q}");
+    }
+}
