@@ -70,7 +70,7 @@ mod setup;
 
 pub use error::PipelineError;
 pub use prediction::PredictionOptions;
-pub use setup::{Identification, IdentifyStep, Method, ModelSpec, Setup};
+pub use setup::{Identification, IdentifyStep, Method, ModelSpec, Setup, TermSelection};
 
 use std::ops::Range;
 
