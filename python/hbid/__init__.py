@@ -62,6 +62,9 @@ __all__ = [
     "Record",
     "Simulation",
     "Identification",
+    "Selection",
+    "DroppedTerm",
+    "SelectionStep",
     "Model",
     "Embedding",
     "Orbits",
@@ -556,6 +559,59 @@ def _equation(coefficients: Mapping[str, float]) -> str:
 # Identification
 
 
+class DroppedTerm(NamedTuple):
+    """A candidate term the selection dropped, and why: the cross-validated fraction of the
+    held-out equations' right-hand side left unexplained by the model just without it and just
+    with it (the term removes less than the allowance)."""
+
+    term: str
+    unexplained_without: float
+    unexplained_with: float
+
+
+class SelectionStep(NamedTuple):
+    """One model of the backward elimination: the term removed to reach it (None for the whole
+    library), its number of terms, its cross-validated unexplained fraction and that score's
+    standard error over the folds."""
+
+    removed: Optional[str]
+    terms: int
+    unexplained: float
+    std_error: float
+
+
+@dataclass(frozen=True)
+class Selection:
+    """Which terms of a library of candidates the data support, as ``hbid identify --select``
+    chooses them: backward elimination scored by cross-validation over contiguous folds of
+    segments; the smallest model on the path within ``allowance`` of the best one is kept
+    (``allowance`` is the larger of the best score's standard error and the tolerance).
+
+    ``kept`` are the model's terms (in the library's order); ``dropped`` the others, in the
+    order they were removed.
+    """
+
+    library: List[str]
+    kept: List[str]
+    dropped: List[DroppedTerm]
+    folds: int
+    allowance: float
+    path: List[SelectionStep]
+
+    @classmethod
+    def _from_json(cls, d: Mapping[str, Any]) -> "Selection":
+        return cls(
+            library=list(d["library"]),
+            kept=list(d["kept"]),
+            dropped=[
+                DroppedTerm(x["term"], x["unexplained_without"], x["unexplained_with"]) for x in d["dropped"]
+            ],
+            folds=d["folds"],
+            allowance=d["allowance"],
+            path=[SelectionStep(p["removed"], p["terms"], p["unexplained"], p["std_error"]) for p in d["path"]],
+        )
+
+
 @dataclass(frozen=True)
 class Identification:
     """An identified equation of motion ``x'' + sum c_i g_i = 0`` with its uncertainties.
@@ -609,6 +665,17 @@ class Identification:
         return _equation(self.coefficients)
 
     @property
+    def terms(self) -> List[str]:
+        """The model's terms, in its order (with ``select``, the kept ones)."""
+        return list(self.coefficients)
+
+    @property
+    def selection(self) -> Optional[Selection]:
+        """With ``select``: the library, the kept terms and why the others were dropped; else None."""
+        d = _json.loads(self.json_text)["selection"]
+        return None if d is None else Selection._from_json(d)
+
+    @property
     def explained(self) -> float:
         """The fraction of the balanced acceleration the model explains, in [0, 1]."""
         return _json.loads(self.json_text)["explained"]
@@ -649,6 +716,42 @@ class Identification:
         return "\n".join(lines)
 
 
+def _terms(terms: Union[str, Sequence[str], None]) -> Optional[str]:
+    """``terms=`` as the list's text."""
+    if terms is None or isinstance(terms, str):
+        return terms
+    try:
+        items = list(terms)
+    except TypeError:
+        raise OptionsError(f"terms={terms!r}: a list of terms as text, or a sequence of such texts") from None
+    if not all(isinstance(t, str) for t in items):
+        raise OptionsError(f"terms={terms!r}: every item must be a text such as 'sin(t)*cos(x)'")
+    return ", ".join(items)
+
+
+def _select(select: Union[bool, Mapping[str, Any]]) -> Dict[str, Any]:
+    """``select=`` as the extension's arguments."""
+    if isinstance(select, bool):
+        return {"select": select}
+    if not isinstance(select, Mapping):
+        raise OptionsError(f"select={select!r}: True, False or a mapping with 'folds' and 'tolerance'")
+    unknown = sorted(set(select) - {"folds", "tolerance"})
+    if unknown:
+        raise OptionsError(f"select: unknown option(s) {unknown}; expected 'folds' and 'tolerance'")
+    out: Dict[str, Any] = {"select": True}
+    if "folds" in select:
+        folds = select["folds"]
+        if isinstance(folds, bool) or not isinstance(folds, int) or folds < 0:
+            raise OptionsError(f"select: folds={folds!r} must be a whole number, at least 2")
+        out["select_folds"] = folds
+    if "tolerance" in select:
+        try:
+            out["select_tolerance"] = float(select["tolerance"])
+        except (TypeError, ValueError):
+            raise OptionsError(f"select: tolerance={select['tolerance']!r} must be a number in [0, 1)") from None
+    return out
+
+
 def identify(
     x: Union[Record, ArrayLike],
     *,
@@ -658,8 +761,8 @@ def identify(
     forcing_frequency: Drive = None,
     signal: Optional[str] = None,
     method: str = "windowed",
-    terms: Optional[Sequence[str]] = None,
-    select: bool = False,
+    terms: Union[str, Sequence[str], None] = None,
+    select: Union[bool, Mapping[str, Any]] = False,
     bootstrap: int = 1000,
     seed: int = 0,
     level: Optional[float] = None,
@@ -694,11 +797,17 @@ def identify(
             ``"auto:A..B"``.
         signal: ``"circle"`` (an angle, the default) or ``"line"`` (a displacement); a Record's own.
         method: ``"windowed"`` (weak form on plain windows) or ``"upo"`` (orbits by close returns).
-        terms: the model's terms by name. Not in the library yet: raises
-            :class:`NotSupportedError`; the terms are set by ``basis``, ``forcing`` and
-            ``parametric``.
-        select: select the terms that matter. Not in the library yet: raises
-            :class:`NotSupportedError`.
+        terms: the model's terms instead of the default, as ``hbid identify --terms`` reads
+            them: a string such as ``"x', sign(x'), {1,cos(t),sin(t)}*{cos(x),sin(x)}"`` (braces
+            multiply out), or a sequence of such strings (joined by commas). Without ``basis``
+            the smallest basis that holds every function of x named is used. Not with
+            ``forcing="identified"`` or ``parametric=False`` (the list says its terms).
+        select: model selection, as ``hbid identify --select``: the model's terms (``terms``, or
+            the default's) are a library of candidates, those that predict held-out stretches of
+            the record are kept and fitted alone (:attr:`Identification.selection` says which
+            and why). ``True`` for the defaults, or a mapping with ``"folds"`` (contiguous folds
+            of segments, at least 2; default 10) and ``"tolerance"`` (the smallest held-out
+            unexplained fraction a term must remove, in [0, 1); default 1e-6).
         bootstrap: bootstrap resamples for the intervals (0: none).
         seed: seed of the bootstrap: the same seed gives the same result on any machine.
         level: confidence level of the intervals (default 0.95).
@@ -728,15 +837,7 @@ def identify(
         OptionsError: a bad argument.
         IdentificationError: too few segments, a rank-deficient system, a drive that cannot be
             estimated.
-        NotSupportedError: ``terms`` or ``select``.
     """
-    if terms is not None:
-        raise NotSupportedError(
-            "terms=: choosing the model's terms by name is not in the library yet; "
-            "set them with basis=, forcing= and parametric="
-        )
-    if select:
-        raise NotSupportedError("select=True: the selection of terms is not in the library yet")
     d = _hbid.identify(
         **_source(x, t, dt, signal),
         **({} if isinstance(x, Record) else {"repair": bool(repair)}),
@@ -758,6 +859,8 @@ def identify(
         max_period=max_period,
         dim=dim,
         delay=delay,
+        terms=_terms(terms),
+        **_select(select),
     )
     intervals = None
     if d["intervals"] is not None:

@@ -54,6 +54,10 @@ def identify(
     max_period: Optional[int] = None,
     dim: Optional[int] = None,
     delay: Optional[int] = None,
+    terms: Optional[str] = None,
+    select: bool = False,
+    select_folds: int = 10,
+    select_tolerance: float = 1e-6,
 ) -> Dict[str, Any]: ...
 def embed(
     x: npt.NDArray[np.float64],

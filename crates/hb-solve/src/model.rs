@@ -246,14 +246,23 @@ impl<B: Basis> IdentifiedModel<B> {
                 why: "must be positive and finite",
             });
         }
-        // Every basis function has a column of its own besides the damping's: a basis with as
-        // many functions as there are coefficients cannot match them, and its names (one string
-        // per function, whatever size a file claims) are not listed.
-        if basis.len() >= coefficients.len() {
+        // In a preset every basis function has a column of its own besides the damping's: a
+        // basis with as many functions as there are coefficients cannot match them, and its
+        // names (one string per function, whatever size a file claims) are not listed. A list of
+        // terms may name a few functions of a larger basis (`x', sin(x)` on cos(x), sin(x)), but
+        // not more than a list holds.
+        if form.terms().is_none() && basis.len() >= coefficients.len() {
             return Err(SolveError::InvalidParameter {
                 name: "basis size",
                 value: basis.len() as f64,
                 why: "must be less than the number of coefficients (one per basis function, and the damping)",
+            });
+        }
+        if form.terms().is_some() && basis.len() > crate::MAX_TERMS {
+            return Err(SolveError::InvalidParameter {
+                name: "basis size",
+                value: basis.len() as f64,
+                why: "must be at most 4096 functions for a model of listed terms",
             });
         }
         let names = basis.names();

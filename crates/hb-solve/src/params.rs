@@ -4,8 +4,12 @@ use serde::{Deserialize, Serialize};
 
 pub use circle_signal::SampleClock;
 
+use hb_basis::Basis;
+
 use crate::SolveError;
-use crate::terms::{DriveFactor, MAX_DRIVE_HARMONIC, TermList, VelocityFactor};
+use crate::terms::{
+    DriveFactor, MAX_DRIVE_HARMONIC, PositionFactor, TermList, TermSpec, VelocityFactor, columns,
+};
 
 /// The default cap of the velocity series, in multiples of the forcing frequency.
 const VELOCITY_CAP: f64 = 16.0;
@@ -302,6 +306,54 @@ impl ModelForm {
     /// The list of terms, when the form is one.
     pub fn terms(&self) -> Option<&TermList> {
         self.terms.as_ref()
+    }
+
+    /// The form's terms on `basis` as a list, in column order: the list itself for a form made
+    /// from one, a preset's columns ([`columns`]) named by their factors otherwise. A known
+    /// forcing stays with the form (it is not a term).
+    ///
+    /// ```
+    /// use hb_solve::{Forcing, ModelForm};
+    ///
+    /// let form = ModelForm::parametric().with_forcing(Forcing::Identified);
+    /// let list = form.term_list(&hb_basis::Harmonic::new(1)?)?;
+    /// assert_eq!(list.to_string(), "x', cos(t)*cos(x), sin(t)*cos(x), cos(x), cos(t)*sin(x), sin(t)*sin(x), sin(x), cos(t), sin(t)");
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    ///
+    /// Errors: those of [`columns`], and [`SolveError::InvalidForm`] for the linear stiffness
+    /// `k*x` of a preset, which has no name of its own in a list.
+    pub fn term_list<B: Basis + ?Sized>(&self, basis: &B) -> Result<TermList, SolveError> {
+        if let Some(list) = &self.terms {
+            list.resolve(basis)?;
+            return Ok(list.clone());
+        }
+        let names = basis.names();
+        let specs = columns(basis, self)?
+            .iter()
+            .map(|t| {
+                let function = match t.position {
+                    PositionFactor::One => None,
+                    PositionFactor::Basis(i) => names
+                        .get(i)
+                        .and_then(|n| n.parse::<TermSpec>().ok())
+                        .and_then(|s| s.function),
+                    PositionFactor::Linear => None,
+                };
+                match (t.position, function) {
+                    (PositionFactor::One, _) | (_, Some(_)) => Ok(TermSpec {
+                        drive: t.drive,
+                        function,
+                        velocity: t.velocity,
+                    }),
+                    _ => Err(SolveError::InvalidForm {
+                        why: "the linear stiffness k*x of a preset has no name in a list of terms: \
+                              list the terms, with x on the polynomial basis",
+                    }),
+                }
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        TermList::new(specs)
     }
 
     pub(crate) fn validate(self) -> Result<Self, SolveError> {

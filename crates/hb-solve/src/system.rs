@@ -82,6 +82,39 @@ impl LinearSystem {
         self.matrix.ncols()
     }
 
+    /// The system of the unknowns `columns` only (indices into [`names`](Self::names), kept in
+    /// the order given): the same rows, blocks and right-hand side. A column of the stacked
+    /// system depends on its own term only, so this is the system a model of those terms alone
+    /// assembles (what model selection refits).
+    ///
+    /// Errors: [`SolveError::InvalidParameter`] for no column, an index out of range or one
+    /// given twice.
+    pub fn with_columns(&self, columns: &[usize]) -> Result<LinearSystem, SolveError> {
+        let bad = |value: f64, why| SolveError::InvalidParameter {
+            name: "column index",
+            value,
+            why,
+        };
+        if columns.is_empty() {
+            return Err(bad(0.0, "at least one column must be kept"));
+        }
+        for (i, &c) in columns.iter().enumerate() {
+            if c >= self.unknowns() {
+                return Err(bad(c as f64, "must be less than the number of unknowns"));
+            }
+            if columns[..i].contains(&c) {
+                return Err(bad(c as f64, "each column may be kept once"));
+            }
+        }
+        let matrix = Mat::from_fn(self.rows(), columns.len(), |r, j| self.matrix[(r, columns[j])]);
+        Ok(Self {
+            matrix,
+            rhs: self.rhs.clone(),
+            names: columns.iter().map(|&c| self.names[c].clone()).collect(),
+            blocks: self.blocks.clone(),
+        })
+    }
+
     /// A system from its parts (every assembly builds the same type).
     pub(crate) fn from_parts(
         matrix: Mat<f64>,

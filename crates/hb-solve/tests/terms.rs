@@ -618,3 +618,93 @@ fn a_model_with_friction_sticks_like_the_rig_pendulum() {
         assert!((p - q).abs() < 1e-7, "{p} vs {q}");
     }
 }
+
+/// A preset's terms as a list ([`ModelForm::term_list`]) assemble the preset's system, and the
+/// system of some of a list's columns ([`hb_solve::LinearSystem::with_columns`]) is the system of
+/// those terms assembled alone, by both methods: what model selection refits.
+#[test]
+fn a_preset_as_a_list_and_the_system_of_some_columns() {
+    let (clock, x) = pendulum_at_25();
+    let x = &x[..25 * 200 + 1];
+    let segments = windows(clock, Domain::Circle, x);
+    let basis: BasisKind = Harmonic::new(1).unwrap().into();
+    let preset = ModelForm::parametric().with_drive_harmonics(2);
+    let list = preset.term_list(&basis).unwrap();
+    assert_eq!(list.names(), hb_solve::term_names(&basis, &preset));
+    let library = ModelForm::from_terms(TermList::parse(PENDULUM).unwrap());
+    let keep = [0usize, 2, 4, 7, 11];
+    let kept = TermList::new(
+        keep.iter()
+            .map(|&i| library.terms().unwrap().terms()[i])
+            .collect(),
+    )
+    .unwrap();
+    let methods: [&dyn Assembly; 2] = [&WeakForm::default(), &HarmonicBalance];
+    for method in methods {
+        let params = |form: ModelForm| {
+            IdentifyParams::builder(*clock)
+                .form(form)
+                .harmonics(method.default_harmonics())
+                .build()
+                .unwrap()
+        };
+        let system = |form: ModelForm| build_system(&basis, x, &segments, &params(form), method).unwrap();
+        let (a, b) = (
+            system(preset.clone()),
+            system(ModelForm::from_terms(list.clone())),
+        );
+        assert_eq!(a.names(), b.names());
+        assert_eq!(a.matrix(), b.matrix(), "{}", method.name());
+        let whole = system(library.clone());
+        let some = whole.with_columns(&keep).unwrap();
+        let alone = system(ModelForm::from_terms(kept.clone()));
+        assert_eq!(some.names(), alone.names());
+        assert_eq!(some.names(), kept.names());
+        assert_eq!(some.matrix(), alone.matrix(), "{}", method.name());
+        assert_eq!(some.rhs(), alone.rhs());
+        assert_eq!(some.blocks(), alone.blocks());
+    }
+    let whole = build_system(
+        &basis,
+        x,
+        &segments,
+        &IdentifyParams::builder(*clock).build().unwrap(),
+        &HarmonicBalance,
+    )
+    .unwrap();
+    for bad in [&[][..], &[0, 0], &[whole.unknowns()]] {
+        assert!(matches!(
+            whole.with_columns(bad),
+            Err(SolveError::InvalidParameter {
+                name: "column index",
+                ..
+            })
+        ));
+    }
+    // The linear stiffness of a preset has no name in a list.
+    let stiff = ModelForm::externally_forced(hb_solve::Forcing::Identified).with_linear_stiffness();
+    assert!(matches!(
+        stiff.term_list(&Polynomial::new(3).unwrap()),
+        Err(SolveError::InvalidForm { .. })
+    ));
+}
+
+/// A model of listed terms may name a few functions of its basis: `x', sin(x)` on `cos(x), sin(x)`.
+#[test]
+fn a_model_of_fewer_terms_than_basis_functions() {
+    let form = ModelForm::from_terms(TermList::parse("x', sin(x)").unwrap());
+    let model =
+        IdentifiedModel::<BasisKind>::new(Harmonic::new(1).unwrap().into(), form, 1.0, &[0.1, 1.0]).unwrap();
+    let back = IdentifiedModel::<BasisKind>::from_json(&model.to_json().unwrap()).unwrap();
+    assert_eq!(back.coefficients(), model.coefficients());
+    // A preset still needs more coefficients than basis functions.
+    assert!(
+        IdentifiedModel::<BasisKind>::new(
+            Harmonic::new(2).unwrap().into(),
+            ModelForm::parametric().without_parametric_terms(),
+            1.0,
+            &[0.1, 1.0, 0.0]
+        )
+        .is_err()
+    );
+}

@@ -3,7 +3,11 @@
 
 use circle_signal::{Domain, Segment};
 use embedding::{AmiParams, FnnParams, average_mutual_information, false_nearest_neighbours};
-use hb_solve::{BootstrapParams, Forcing, Harmonics, LstsqSolver, ModelForm, QrSolver, SvdSolver, WeakForm};
+use hb_basis::BasisKind;
+use hb_solve::{
+    BootstrapParams, Forcing, Harmonics, LstsqSolver, ModelForm, QrSolver, SelectParams, SvdSolver, TermList,
+    WeakForm,
+};
 use hbid::pipeline::{EmbedOptions, Method, ModelSpec, SearchOptions, WindowOptions};
 use hbid::prepare::{Data, DriveFound};
 use numpy::{PyArray1, PyReadonlyArray1};
@@ -100,6 +104,10 @@ pub struct IdentifyOptions {
     pub solver: String,
     pub forcing: Option<String>,
     pub parametric: bool,
+    /// `terms=`: the model's terms, a list as `--terms` reads it.
+    pub terms: Option<String>,
+    /// `select=`: the selection's folds and tolerance, when asked.
+    pub select: Option<(usize, f64)>,
 }
 
 impl IdentifyOptions {
@@ -114,19 +122,69 @@ impl IdentifyOptions {
             .map_err(fail(Kind::Options))
     }
 
-    /// What to identify on `data`, as `hbid identify` builds it: a free oscillation has no drive
-    /// terms at all.
-    fn spec(&self, method: Method, data: &Data, forcing: Forcing) -> Result<ModelSpec, Failure> {
-        let basis = options::basis(
-            self.basis
-                .as_deref()
-                .unwrap_or(options::default_basis_name(data.domain)),
-        )?;
-        let mut form = ModelForm::parametric().with_forcing(forcing);
+    /// The terms of `terms=`, parsed.
+    fn term_list(&self) -> Result<Option<TermList>, Failure> {
+        self.terms
+            .as_deref()
+            .map(|text| TermList::parse(text).map_err(terms_error))
+            .transpose()
+    }
+
+    /// The basis as named on the command line: the one given, or the smallest that holds the
+    /// functions of x of `terms=`, or the domain's default.
+    pub fn basis_name(&self, domain: Domain) -> Result<String, Failure> {
+        if let Some(name) = &self.basis {
+            return Ok(name.clone());
+        }
+        let inferred = match self.term_list()? {
+            Some(list) => list.smallest_basis().map_err(terms_error)?,
+            None => None,
+        };
+        Ok(match inferred {
+            Some(BasisKind::Harmonic(b)) => format!("harmonic:{}", b.order()),
+            Some(BasisKind::Hat(b)) => format!("hat:{}", b.nodes()),
+            Some(BasisKind::Polynomial(b)) => format!("poly:{}", b.degree()),
+            None => options::default_basis_name(domain).to_owned(),
+        })
+    }
+
+    /// The model's form: `terms=` (checked against the basis and the record), or the default
+    /// with `forcing=` and `parametric=`; a free oscillation has no drive terms at all.
+    fn form(&self, data: &Data, basis: &BasisKind, forcing: Forcing) -> Result<ModelForm, Failure> {
         let free = matches!(data.drive, DriveFound::Free { .. });
+        if let Some(list) = self.term_list()? {
+            if self.forcing.as_deref() == Some("identified") {
+                return Err(bad(
+                    "forcing='identified' with terms=: name the forcing terms cos(t), sin(t) in the list",
+                ));
+            }
+            if !self.parametric {
+                return Err(bad(
+                    "parametric=False with terms=: the list says its terms (leave out cos(t)*B, sin(t)*B)",
+                ));
+            }
+            list.check_domain(data.domain).map_err(terms_error)?;
+            list.resolve(basis).map_err(terms_error)?;
+            if free && let Some(t) = list.terms().iter().find(|t| t.drive.harmonic() > 0) {
+                return Err(bad(format!(
+                    "terms: the term `{t}` has a drive factor, but the record is a free oscillation without a drive"
+                )));
+            }
+            return Ok(ModelForm::from_terms(list));
+        }
+        let mut form = ModelForm::parametric().with_forcing(forcing);
         if !self.parametric || free {
             form = form.without_parametric_terms();
         }
+        Ok(form)
+    }
+
+    /// What to identify on `data`, as `hbid identify` builds it.
+    fn spec(&self, method: Method, data: &Data, forcing: Forcing) -> Result<ModelSpec, Failure> {
+        // A malformed list is named before a basis inferred from it.
+        self.term_list()?;
+        let basis = options::basis(&self.basis_name(data.domain)?)?;
+        let form = self.form(data, &basis, forcing)?;
         let weak =
             WeakForm::new(self.window_order.unwrap_or(WeakForm::DEFAULT_WINDOW_ORDER)).map_err(|e| {
                 let (kind, text) = fail(Kind::Options)(e);
@@ -150,6 +208,13 @@ impl IdentifyOptions {
         spec = spec
             .with_noise_correction(options::noise(self.noise_sigma.clone())?)
             .with_solver(solver);
+        if let Some((folds, tolerance)) = self.select {
+            let params = SelectParams::new(folds, tolerance).map_err(|e| {
+                let (kind, message) = fail(Kind::Options)(e);
+                (kind, format!("select: {message}"))
+            })?;
+            spec = spec.with_selection(params);
+        }
         self.windows()?;
         if self.bootstrap > 0 {
             let params = BootstrapParams::builder()
@@ -176,6 +241,12 @@ impl IdentifyOptions {
             Some(other) => Err(bad(format!("forcing='{other}': expected 'none' or 'identified'"))),
         }
     }
+}
+
+/// A bad `terms=`, named.
+fn terms_error(e: hb_solve::SolveError) -> Failure {
+    let (kind, message) = fail(Kind::Options)(e);
+    (kind, format!("terms: {message}"))
 }
 
 /// The bootstrap intervals: level, resamples and `(name, lower, upper)` of each coefficient.
@@ -284,10 +355,7 @@ pub fn identify_core(source: Source<'_>, request: Request) -> Result<Identified,
         let (kind, text) = fail(Kind::Identification)(e);
         (kind, format!("{found}: {text}"))
     })?;
-    let basis_name = opts
-        .basis
-        .clone()
-        .unwrap_or_else(|| options::default_basis_name(domain).to_owned());
+    let basis_name = opts.basis_name(domain)?;
     let json = serde_json::to_string_pretty(&hbid::json::identification(&id, method.name(), &basis_name))
         .map_err(fail(Kind::Identification))?;
     let model = id.model.to_bytes().map_err(fail(Kind::Model))?;
@@ -327,7 +395,8 @@ pub fn identify_core(source: Source<'_>, request: Request) -> Result<Identified,
     forcing_frequency=None, forcing=None, parametric=true, method="windowed", basis=None,
     harmonics=None, window_periods=None, window_order=None, bootstrap=BootstrapParams::DEFAULT_RESAMPLES,
     level=None, seed=0, noise_sigma=None, solver="qr", tolerance=None, max_period=None, dim=None,
-    delay=None
+    delay=None, terms=None, select=false, select_folds=SelectParams::DEFAULT_FOLDS,
+    select_tolerance=SelectParams::DEFAULT_TOLERANCE
 ))]
 #[allow(clippy::too_many_arguments)]
 pub fn identify<'py>(
@@ -356,6 +425,10 @@ pub fn identify<'py>(
     max_period: Option<usize>,
     dim: Option<usize>,
     delay: Option<usize>,
+    terms: Option<String>,
+    select: bool,
+    select_folds: usize,
+    select_tolerance: f64,
 ) -> PyResult<Bound<'py, PyDict>> {
     let x = crate::slice(&x)?;
     let t = t.as_ref().map(crate::slice).transpose()?;
@@ -376,6 +449,8 @@ pub fn identify<'py>(
             solver: solver.to_owned(),
             forcing,
             parametric,
+            terms,
+            select: select.then_some((select_folds, select_tolerance)),
         },
         tolerance,
         max_period,

@@ -31,6 +31,8 @@ fn case(samples: usize, bootstrap: usize, noise: f64, seed: u64) -> Result<Strin
             solver: "qr".to_owned(),
             forcing: None,
             parametric: true,
+            terms: None,
+            select: None,
         },
         tolerance: None,
         max_period: None,

@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use embedding::{AmiCurve, FnnResult};
 use upo_search::Catalogue;
 
-use crate::pipeline::Identification;
+use crate::pipeline::{Identification, TermSelection};
 
 /// The JSON of an identification, as `hbid identify --json` prints it: `method` and `basis` as
 /// named on the command line.
@@ -48,6 +48,31 @@ pub fn identification(id: &Identification, method: &str, basis: &str) -> serde_j
             "harmonic": l.harmonic, "residual_rms": l.residual_rms, "rhs_rms": l.rhs_rms, "rows": l.rows,
         })).collect::<Vec<_>>(),
         "warning": id.warning,
+        "selection": id.selection.as_ref().map(selection),
+    })
+}
+
+/// The JSON of a selection of terms: the library, the kept terms, the dropped ones with the
+/// held-out unexplained fraction without and with each, the folds, the allowance and the
+/// elimination path.
+pub fn selection(selection: &TermSelection) -> serde_json::Value {
+    let outcome = &selection.outcome;
+    serde_json::json!({
+        "library": selection.library.names(),
+        "kept": selection.kept.names(),
+        "dropped": outcome.dropped.iter().map(|d| serde_json::json!({
+            "term": d.name,
+            "unexplained_without": d.unexplained_without,
+            "unexplained_with": d.unexplained_with,
+        })).collect::<Vec<_>>(),
+        "folds": outcome.folds,
+        "allowance": outcome.allowance,
+        "path": outcome.path.iter().map(|p| serde_json::json!({
+            "removed": p.removed,
+            "terms": p.size,
+            "unexplained": p.unexplained,
+            "std_error": p.std_error,
+        })).collect::<Vec<_>>(),
     })
 }
 

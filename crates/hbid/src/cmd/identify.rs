@@ -8,9 +8,9 @@ use clap::{Args, ValueEnum};
 use hb_basis::{BasisKind, Harmonic, Hat, Polynomial};
 use hb_solve::{
     BootstrapParams, Forcing, Harmonics, IdentifiedModel, LstsqSolver, MAX_DRIVE_HARMONIC, ModelForm,
-    NoiseCorrection, QrSolver, SvdSolver, TermList, WeakForm,
+    NoiseCorrection, QrSolver, SelectParams, SvdSolver, TermList, WeakForm,
 };
-use hbid::pipeline::{Identification, ModelSpec, Setup, WindowOptions};
+use hbid::pipeline::{Identification, ModelSpec, Setup, TermSelection, WindowOptions};
 use upo_search::Windows;
 
 pub use hbid::pipeline::Method;
@@ -131,10 +131,30 @@ pub struct IdentifyArgs {
         conflicts_with_all = ["no_parametric", "drive_harmonics"]
     )]
     pub terms: Option<String>,
+    /// Model selection: the model's terms (--terms, or the default's with --drive-harmonics) are a
+    /// library of candidates; a term is kept only if the model without it predicts held-out
+    /// stretches of the record worse (backward elimination, cross-validated over contiguous folds
+    /// of segments, one-standard-error rule); the kept terms are then fitted alone.
+    #[arg(long)]
+    pub select: bool,
+    /// Folds of segments of --select (fewer when there are fewer segments; at least 2).
+    #[arg(long, value_name = "N", default_value_t = SelectParams::DEFAULT_FOLDS, requires = "select")]
+    pub select_folds: usize,
+    /// Smallest held-out unexplained fraction a term must remove to be kept by --select, in [0, 1)
+    /// (the floor of the allowance within which a smaller model counts as good as the best).
+    #[arg(
+        long,
+        value_name = "X",
+        default_value_t = SelectParams::DEFAULT_TOLERANCE,
+        requires = "select",
+        allow_hyphen_values = true
+    )]
+    pub select_tolerance: f64,
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
-    /// Save the identified model: JSON if the name ends in .json, compact binary otherwise.
+    /// Save the identified model: JSON if the name ends in .json, compact binary otherwise (with
+    /// --select, the model of the kept terms).
     #[arg(long, value_name = "PATH")]
     pub save_model: Option<PathBuf>,
 }
@@ -288,6 +308,9 @@ impl IdentifyArgs {
             SolverArg::Svd => Box::new(SvdSolver::default()),
         };
         spec = spec.with_noise_correction(noise).with_solver(solver);
+        if let Some(params) = self.selection()? {
+            spec = spec.with_selection(params);
+        }
         self.windows()?;
         if self.bootstrap > 0 {
             spec = spec.with_bootstrap(
@@ -299,6 +322,23 @@ impl IdentifyArgs {
             );
         }
         Ok(spec)
+    }
+
+    /// The parameters of `--select`, checked (`None` without it).
+    pub fn selection(&self) -> anyhow::Result<Option<SelectParams>> {
+        if !self.select {
+            return Ok(None);
+        }
+        if self.select_folds < 2 {
+            bail!("--select-folds {}: must be at least 2", self.select_folds);
+        }
+        if !(0.0..1.0).contains(&self.select_tolerance) {
+            bail!(
+                "--select-tolerance {}: must be a fraction of the held-out power in [0, 1)",
+                self.select_tolerance
+            );
+        }
+        Ok(Some(SelectParams::new(self.select_folds, self.select_tolerance)?))
     }
 
     /// The options of the windowed method's windows.
@@ -419,9 +459,88 @@ pub fn run(args: &IdentifyArgs, quiet: bool, timings: bool) -> anyhow::Result<()
             serde_json::to_string_pretty(&hbid::json::identification(&id, args.method.name(), &basis_name))?
         );
     } else {
+        if let Some(selection) = &id.selection {
+            println!("{}", equation(&id.model));
+            println!(
+                "selected {} of {} candidate terms ({} folds of segments)",
+                selection.kept.len(),
+                selection.library.len(),
+                selection.outcome.folds
+            );
+        }
         print_table(&id, args.method.name(), &basis_name);
+        if let Some(selection) = &id.selection {
+            print!("{}", dropped_lines(selection));
+        }
     }
     Ok(())
+}
+
+/// The model's equation on one line, its terms in order with signed coefficients:
+/// `x'' + 0.0301 x' + 0.0497 sign(x') - 1.52 sin(t)*cos(x) = 0`.
+pub fn equation(model: &IdentifiedModel) -> String {
+    let mut line = "x''".to_owned();
+    for c in model.coefficients() {
+        let sign = if c.value < 0.0 { '-' } else { '+' };
+        line.push_str(&format!(" {sign} {} {}", significant(c.value.abs(), 4), c.name));
+    }
+    line.push_str(" = 0");
+    line
+}
+
+/// `v` to `digits` significant digits, in plain notation between 1e-4 and 1e6, else scientific.
+fn significant(v: f64, digits: usize) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let exponent = v.abs().log10().floor() as i32;
+    if (-4..6).contains(&exponent) {
+        let decimals = (digits as i32 - 1 - exponent).max(0) as usize;
+        let text = format!("{v:.decimals$}");
+        if text.contains('.') {
+            text.trim_end_matches('0').trim_end_matches('.').to_owned()
+        } else {
+            text
+        }
+    } else {
+        format!("{v:.prec$e}", prec = digits - 1)
+    }
+}
+
+/// "dropped:" and one line per dropped term, in the order of the elimination: the held-out
+/// unexplained fraction without it and with it, and why.
+pub fn dropped_lines(selection: &TermSelection) -> String {
+    let outcome = &selection.outcome;
+    let mut text = String::new();
+    if outcome.dropped.is_empty() {
+        text.push_str("\ndropped: none (every candidate removes more than the allowance)\n");
+        return text;
+    }
+    let w = outcome
+        .dropped
+        .iter()
+        .map(|d| d.name.chars().count())
+        .max()
+        .unwrap_or(0)
+        .max(18);
+    text.push_str(&format!(
+        "\ndropped: held-out unexplained fraction without the term vs with it (the model without them is \
+         within the allowance {:.2e} of the best)\n",
+        outcome.allowance
+    ));
+    for d in &outcome.dropped {
+        let change = d.unexplained_with - d.unexplained_without;
+        let why = if change >= 0.0 {
+            "no worse without it".to_owned()
+        } else {
+            format!("removes only {:.2e}", -change)
+        };
+        text.push_str(&format!(
+            "{:<w$} {:>10.3e} vs {:>10.3e}: {why}\n",
+            d.name, d.unexplained_without, d.unexplained_with
+        ));
+    }
+    text
 }
 
 /// Saves a model as JSON (`.json`) or compact binary (anything else), atomically.

@@ -9,7 +9,7 @@ use clap::Args;
 use embedding::EmbeddingError;
 use hbid::pipeline::{
     EmbedOptions, Identification, InitialState, Outcome, Pipeline, PipelineError, PipelineOptions,
-    PredictionOptions, RecordComparison, Stage, Validation, ValidationOptions,
+    PredictionOptions, RecordComparison, Stage, TermSelection, Validation, ValidationOptions,
 };
 use hbid::plot::{BLUE, Figure, GREY, ORANGE, RED, Series, Style, add_figure};
 use pendulum_sim::Domain;
@@ -297,6 +297,9 @@ fn write_report(args: &ReportArgs, data: &Data, outcome: &Outcome) -> anyhow::Re
             j["condition_number"].as_f64().unwrap_or(f64::NAN),
             j["residual_rms"].as_f64().unwrap_or(f64::NAN)
         )?;
+        if let Some(selection) = &res.ident.selection {
+            selection_section(&mut r, &res.ident.model, selection)?;
+        }
         writeln!(
             r,
             "| term | coefficient | std. error | interval |\n| --- | --- | --- | --- |"
@@ -411,6 +414,42 @@ fn write_report(args: &ReportArgs, data: &Data, outcome: &Outcome) -> anyhow::Re
     let path = out.join("README.md");
     crate::output::write_atomically(&path, |w| w.write_all(r.as_bytes()))?;
     eprintln!("report written to {}", path.display());
+    Ok(())
+}
+
+/// The selection of terms: the chosen equation, and a table of the dropped terms with the
+/// held-out unexplained fraction without and with each.
+fn selection_section(
+    r: &mut String,
+    model: &hb_solve::IdentifiedModel,
+    selection: &TermSelection,
+) -> anyhow::Result<()> {
+    let outcome = &selection.outcome;
+    writeln!(
+        r,
+        "Model selection kept {} of {} candidate terms (backward elimination, cross-validated over {} contiguous \
+         folds of segments; a term is dropped when the model without it leaves no more than the allowance {:.2e} \
+         of the held-out right-hand side unexplained beyond the best model on the path):\n",
+        selection.kept.len(),
+        selection.library.len(),
+        outcome.folds,
+        outcome.allowance
+    )?;
+    writeln!(r, "    {}\n", super::identify::equation(model))?;
+    if !outcome.dropped.is_empty() {
+        writeln!(
+            r,
+            "| dropped term | held-out unexplained without it | with it |\n| --- | --- | --- |"
+        )?;
+        for d in &outcome.dropped {
+            writeln!(
+                r,
+                "| `{}` | {:.3e} | {:.3e} |",
+                d.name, d.unexplained_without, d.unexplained_with
+            )?;
+        }
+        writeln!(r)?;
+    }
     Ok(())
 }
 

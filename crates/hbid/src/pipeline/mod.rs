@@ -72,7 +72,7 @@ mod setup;
 pub use drift::{DriftFit, GOLDEN_STEPS, PieceDrift, SCAN_POINTS, fit_drift};
 pub use error::PipelineError;
 pub use prediction::PredictionOptions;
-pub use setup::{Identification, IdentifyStep, Method, ModelSpec, Setup};
+pub use setup::{Identification, IdentifyStep, Method, ModelSpec, Setup, TermSelection};
 
 use std::ops::Range;
 

@@ -7,8 +7,9 @@ use circle_signal::{SampleClock, Segment};
 use hb_basis::BasisKind;
 use hb_solve::{
     Assembly, Bootstrap, BootstrapParams, EXPLAINED_WARNING_ORBITS, EXPLAINED_WARNING_WINDOWS, FitQuality,
-    HarmonicBalance, Harmonics, IdentifiedModel, IdentifyParams, LstsqSolver, ModelForm, NoiseCorrection,
-    QrSolver, SolveError, WeakForm, bootstrap_fit, build_system, fit_quality,
+    Forcing, HarmonicBalance, Harmonics, IdentifiedModel, IdentifyParams, LinearSystem, LstsqSolver,
+    ModelForm, NoiseCorrection, QrSolver, SelectParams, Selection, SolveError, TermList, WeakForm,
+    bootstrap_fit, build_system, fit_quality, select_terms,
 };
 
 use super::PipelineError;
@@ -50,6 +51,8 @@ impl fmt::Display for Method {
 pub enum IdentifyStep {
     /// Assembling the stacked system of every segment (noise correction included).
     Assemble,
+    /// Selecting the terms of the library, when asked for ([`ModelSpec::with_selection`]).
+    Select,
     /// Solving it by least squares.
     Solve,
     /// The bootstrap over segments, when asked for.
@@ -57,10 +60,12 @@ pub enum IdentifyStep {
 }
 
 impl IdentifyStep {
-    /// A short name for progress displays and timings: `assemble`, `solve`, `bootstrap`.
+    /// A short name for progress displays and timings: `assemble`, `select`, `solve`,
+    /// `bootstrap`.
     pub fn name(self) -> &'static str {
         match self {
             IdentifyStep::Assemble => "assemble",
+            IdentifyStep::Select => "select",
             IdentifyStep::Solve => "solve",
             IdentifyStep::Bootstrap => "bootstrap",
         }
@@ -73,7 +78,8 @@ impl IdentifyStep {
 /// Defaults: the paper's form ([`ModelForm::parametric`]: damping, autonomous and parametric
 /// terms, no external forcing), the method's own harmonics per segment
 /// ([`Assembly::default_harmonics`]), no noise correction, column-pivoted QR, no bootstrap, and
-/// the default weak form ([`WeakForm::default`], used by [`Method::Windowed`] only).
+/// the default weak form ([`WeakForm::default`], used by [`Method::Windowed`] only), and no
+/// selection of terms.
 #[derive(Debug)]
 pub struct ModelSpec {
     method: Method,
@@ -84,6 +90,7 @@ pub struct ModelSpec {
     solver: Box<dyn LstsqSolver>,
     bootstrap: Option<BootstrapParams>,
     weak: WeakForm,
+    selection: Option<SelectParams>,
 }
 
 impl ModelSpec {
@@ -98,6 +105,7 @@ impl ModelSpec {
             solver: Box::new(QrSolver::default()),
             bootstrap: None,
             weak: WeakForm::default(),
+            selection: None,
         }
     }
 
@@ -138,15 +146,29 @@ impl ModelSpec {
         self
     }
 
+    /// Model selection: the form's terms are a library of candidates, the terms the data
+    /// support are chosen by [`hb_solve::select_terms`] with `params`, and only those are fitted
+    /// ([`Identification::selection`] says which and why). The library is the form's terms on the
+    /// basis ([`ModelForm::term_list`]): a list of terms, or the default form's own.
+    pub fn with_selection(mut self, params: SelectParams) -> Self {
+        self.selection = Some(params);
+        self
+    }
+
     /// The method.
     pub fn method(&self) -> Method {
         self.method
     }
 
-    /// The setup on the record's `clock`: the identification parameters are built and checked.
+    /// The setup on the record's `clock`: the identification parameters are built and checked
+    /// (with a selection, the library's terms too).
     pub fn setup(self, clock: &SampleClock) -> Result<Setup, PipelineError> {
         let assembly = self.method.assembly(self.weak);
         let harmonics = self.harmonics.unwrap_or_else(|| assembly.default_harmonics());
+        let selection = match self.selection {
+            Some(p) => Some((self.form.term_list(&self.basis)?, p)),
+            None => None,
+        };
         let params = IdentifyParams::builder(*clock)
             .form(self.form)
             .harmonics(harmonics)
@@ -159,6 +181,7 @@ impl ModelSpec {
             solver: self.solver,
             bootstrap: self.bootstrap,
             assembly,
+            selection,
         })
     }
 }
@@ -172,6 +195,21 @@ pub struct Setup {
     solver: Box<dyn LstsqSolver>,
     bootstrap: Option<BootstrapParams>,
     assembly: Box<dyn Assembly>,
+    /// The library's terms and the selection's parameters, when terms are selected.
+    selection: Option<(TermList, SelectParams)>,
+}
+
+/// The terms a selection kept from its library of candidates, and why it dropped the others.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TermSelection {
+    /// Every candidate, in the library's order (the names of the model's terms).
+    pub library: TermList,
+    /// The kept terms, in the library's order: the terms of the fitted model.
+    pub kept: TermList,
+    /// What [`hb_solve::select_terms`] found: the kept terms (indices into `library`), the
+    /// dropped ones with their held-out scores, the elimination path, the folds and the
+    /// allowance.
+    pub outcome: Selection,
 }
 
 /// An identified model with its bootstrap intervals.
@@ -187,6 +225,9 @@ pub struct Identification {
     /// A warning when it explains too little for its method (see
     /// [`hb_solve::EXPLAINED_WARNING_WINDOWS`] and [`hb_solve::EXPLAINED_WARNING_ORBITS`]).
     pub warning: Option<String>,
+    /// With [`ModelSpec::with_selection`]: the library, and which of its terms were kept (the
+    /// model, its intervals, quality and warning are those of the kept terms alone).
+    pub selection: Option<TermSelection>,
 }
 
 impl Setup {
@@ -210,8 +251,18 @@ impl Setup {
         self.bootstrap.as_ref()
     }
 
-    /// Assembles the rows of the method over `segments` of `signal` ([`build_system`]), solves,
-    /// and bootstraps.
+    /// The library of candidate terms and the selection's parameters, when terms are selected.
+    pub fn selection(&self) -> Option<(&TermList, &SelectParams)> {
+        self.selection.as_ref().map(|(l, p)| (l, p))
+    }
+
+    /// Assembles the rows of the method over `segments` of `signal` ([`build_system`]), selects
+    /// the terms when asked (then only the kept columns are solved), solves, and bootstraps.
+    ///
+    /// Errors: the assembly's, the solver's and the bootstrap's; with a selection also
+    /// [`SolveError::TooFewOrbits`] for fewer than two segments and
+    /// [`SolveError::SelectionUndetermined`] when a fold held out leaves the library
+    /// undetermined.
     pub fn identify(&self, signal: &[f64], segments: &[Segment]) -> Result<Identification, SolveError> {
         self.identify_with_progress(signal, segments, |_| {})
     }
@@ -246,10 +297,18 @@ impl Setup {
             &self.params,
             self.assembly.as_ref(),
         )?;
+        let (system, params, selection) = match &self.selection {
+            Some((library, select)) => {
+                progress(IdentifyStep::Select);
+                let (system, params, selection) = self.select(system, library, select)?;
+                (system, params, Some(selection))
+            }
+            None => (system, self.params.clone(), None),
+        };
         progress(IdentifyStep::Solve);
         let solver = self.solver.as_ref();
         let fit = system.solve(solver)?;
-        let model = IdentifiedModel::from_fit(self.basis, &self.params, &system, &fit, solver.name())?;
+        let model = IdentifiedModel::from_fit(self.basis, &params, &system, &fit, solver.name())?;
         let quality = fit_quality(&system, &fit.solution)?;
         let warning = quality.warning(match self.method {
             Method::Upo => EXPLAINED_WARNING_ORBITS,
@@ -267,7 +326,38 @@ impl Setup {
             intervals,
             quality,
             warning,
+            selection,
         })
+    }
+
+    /// Selects the terms of `library` on its `system`: the system of the kept columns, the
+    /// parameters of the kept terms' model (a list of them, a known forcing kept), and the
+    /// selection.
+    fn select(
+        &self,
+        system: LinearSystem,
+        library: &TermList,
+        select: &SelectParams,
+    ) -> Result<(LinearSystem, IdentifyParams, TermSelection), SolveError> {
+        let outcome = select_terms(&system, select)?;
+        let terms = library.terms();
+        let selection = TermSelection {
+            library: library.clone(),
+            kept: TermList::new(outcome.kept.iter().map(|&i| terms[i]).collect())?,
+            outcome,
+        };
+        let kept = system.with_columns(&selection.outcome.kept)?;
+        let mut form = ModelForm::from_terms(selection.kept.clone());
+        if let known @ Forcing::Known { .. } = self.params.form().forcing() {
+            form = form.with_forcing(known);
+        }
+        let params = IdentifyParams::builder(*self.params.clock())
+            .form(form)
+            .harmonics(self.params.harmonics())
+            .noise_correction(self.params.noise_correction())
+            .velocity_harmonics(self.params.velocity_harmonics())
+            .build()?;
+        Ok((kept, params, selection))
     }
 }
 
@@ -356,6 +446,87 @@ mod tests {
         );
         assert_eq!(id.intervals.unwrap().resamples, 50);
         assert_eq!(id.model.summary().unwrap().solver, "svd");
+    }
+
+    /// Selection from the default model with two drive harmonics (11 candidates) keeps exactly
+    /// the paper pendulum's three terms by either method, refits them alone (the same model as
+    /// asking for those terms), reports the selection step and bootstraps the kept terms only.
+    #[test]
+    fn selection_keeps_the_true_terms_and_refits_them_alone() {
+        let (x, clock) = record();
+        let orbits = CloseReturns::new(&clock, 5).unwrap().search(&x).unwrap();
+        let windows = Windows::new(&clock).unwrap().windows(&x).unwrap();
+        let basis = BasisKind::from(Harmonic::new(1).unwrap());
+        let library = ModelForm::parametric().with_drive_harmonics(2);
+        for (method, segments) in [(Method::Upo, &orbits), (Method::Windowed, &windows)] {
+            let mut steps = Vec::new();
+            let id = ModelSpec::new(method, basis)
+                .with_form(library.clone())
+                .with_selection(SelectParams::default())
+                .with_bootstrap(BootstrapParams::builder().resamples(50).build().unwrap())
+                .setup(&clock)
+                .unwrap()
+                .identify_with_progress(&x, segments, |s| steps.push(s))
+                .unwrap();
+            assert_eq!(
+                steps,
+                [
+                    IdentifyStep::Assemble,
+                    IdentifyStep::Select,
+                    IdentifyStep::Solve,
+                    IdentifyStep::Bootstrap
+                ]
+            );
+            let selection = id.selection.as_ref().unwrap();
+            assert_eq!(selection.library.len(), 11);
+            assert_eq!(selection.library.names(), hb_solve::term_names(&basis, &library));
+            let kept = ["x'", "sin(t)*cos(x)", "sin(x)"];
+            assert_eq!(selection.kept.names(), kept, "{method}: {:?}", selection.outcome);
+            assert_eq!(selection.outcome.dropped.len(), 8);
+            let names: Vec<&str> = id.model.coefficients().iter().map(|c| c.name.as_str()).collect();
+            assert_eq!(names, kept);
+            assert_eq!(id.intervals.as_ref().unwrap().intervals.len(), 3);
+            // The refit is the fit of the kept terms asked for by name.
+            let direct = ModelSpec::new(method, basis)
+                .with_form(ModelForm::from_terms(selection.kept.clone()))
+                .setup(&clock)
+                .unwrap()
+                .identify(&x, segments)
+                .unwrap();
+            assert!(direct.selection.is_none());
+            for (a, b) in id.model.coefficients().iter().zip(direct.model.coefficients()) {
+                assert_eq!(a.name, b.name);
+                assert!((a.value - b.value).abs() <= 1e-12 * b.value.abs(), "{a:?} {b:?}");
+            }
+            assert_eq!(id.quality.explained, direct.quality.explained);
+        }
+    }
+
+    /// Selection needs folds of segments: one segment is an error, and a library with a term
+    /// twice over (a preset's linear stiffness) is refused when the setup is made.
+    #[test]
+    fn selection_errors_are_typed() {
+        let (x, clock) = record();
+        let windows = Windows::new(&clock).unwrap().windows(&x).unwrap();
+        let basis = BasisKind::from(Harmonic::new(1).unwrap());
+        let setup = ModelSpec::new(Method::Windowed, basis)
+            .with_selection(SelectParams::default())
+            .setup(&clock)
+            .unwrap();
+        assert!(setup.selection().is_some());
+        assert!(matches!(
+            setup.identify(&x, &windows[..1]),
+            Err(SolveError::TooFewOrbits { .. })
+        ));
+        let line = BasisKind::from(hb_basis::Polynomial::new(3).unwrap());
+        let stiff = ModelForm::externally_forced(Forcing::Identified).with_linear_stiffness();
+        assert!(matches!(
+            ModelSpec::new(Method::Windowed, line)
+                .with_form(stiff)
+                .with_selection(SelectParams::default())
+                .setup(&clock),
+            Err(PipelineError::Solve(SolveError::InvalidForm { .. }))
+        ));
     }
 
     #[test]
