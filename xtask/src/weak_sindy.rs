@@ -61,6 +61,11 @@ const NOISE: [f64; 4] = [0.0, 0.01, 0.05, 0.1];
 /// STLSQ thresholds tried for the peer; pysindy's default is 0.1.
 const THRESHOLDS: [f64; 6] = [0.002, 0.005, 0.01, 0.02, 0.05, 0.1];
 
+/// A term's name in a Markdown table cell (`|` escaped).
+fn cell(name: &str) -> String {
+    name.replace('|', "\\|")
+}
+
 /// One tool's answer on one record.
 struct Found {
     tool: String,
@@ -307,14 +312,22 @@ pub fn run(out: &Path, data: &Path, python: &str) -> anyhow::Result<()> {
         let (best, best_score) = best.context("no threshold")?;
         let my_score = score(&mine, &truth);
         let mut row = |tool: &str, s: &Score, seconds: f64| -> anyhow::Result<()> {
-            let mut false_kept = s.false_kept.join(", ");
+            let mut false_kept = s
+                .false_kept
+                .iter()
+                .map(|n| cell(n))
+                .collect::<Vec<_>>()
+                .join(", ");
             if false_kept.is_empty() {
                 false_kept = "none".into();
             }
             let missed = if s.missed.is_empty() {
                 String::new()
             } else {
-                format!(" (missed {})", s.missed.join(", "))
+                format!(
+                    " (missed {})",
+                    s.missed.iter().map(|n| cell(n)).collect::<Vec<_>>().join(", ")
+                )
             };
             writeln!(
                 section,
@@ -322,7 +335,7 @@ pub fn run(out: &Path, data: &Path, python: &str) -> anyhow::Result<()> {
                 s.true_kept,
                 s.false_kept.len(),
                 s.worst.0,
-                s.worst.1
+                cell(&s.worst.1)
             )?;
             Ok(())
         };
@@ -338,7 +351,7 @@ pub fn run(out: &Path, data: &Path, python: &str) -> anyhow::Result<()> {
         writeln!(details, "| --- | --- | --- | --- |")?;
         for ((name, value), ((_, a), (_, b))) in truth.iter().zip(mine.terms.iter().zip(&best.terms)) {
             if *value != 0.0 || *a != 0.0 || *b != 0.0 {
-                writeln!(details, "| `{name}` | {value:.6} | {a:.6} | {b:.6} |")?;
+                writeln!(details, "| `{}` | {value:.6} | {a:.6} | {b:.6} |", cell(name))?;
             }
         }
     }
