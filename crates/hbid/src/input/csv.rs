@@ -37,8 +37,12 @@ pub(super) fn read<'a>(bytes: &'a [u8], options: &ReadOptions) -> Result<Record,
         time.column().map(|i| field(Role::Time, i)),
         field(Role::Angle, angle),
     );
+    let drive_field = columns.drive.map(|i| field(Role::Drive, i));
 
-    let mut record = Record::default();
+    let mut record = Record {
+        drive: drive_field.as_ref().map(|_| Vec::new()),
+        ..Record::default()
+    };
     let mut numbers = Vec::new();
     let mut cells: Vec<&'a str> = Vec::with_capacity(width);
     let mut push = |line: u64, text: &'a str, cells: &mut Vec<&'a str>| -> Result<(), InputError> {
@@ -61,6 +65,9 @@ pub(super) fn read<'a>(bytes: &'a [u8], options: &ReadOptions) -> Result<Record,
             record.t.push(time.value(cells, line)?);
         }
         record.theta.push(angle_field.value(cells, line)?);
+        if let (Some(field), Some(drive)) = (&drive_field, &mut record.drive) {
+            drive.push(field.value(cells, line)?);
+        }
         numbers.push(line);
         Ok(())
     };
