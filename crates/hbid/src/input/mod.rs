@@ -555,6 +555,7 @@ mod tests {
             time: column(time),
             angle: column(angle),
             dt,
+            drive: None,
         }
     }
 
@@ -564,6 +565,7 @@ mod tests {
         let at = |time, angle| Columns {
             time,
             angle,
+            drive: None,
             order_from_data: false,
         };
         let none = options(None, None, None);
