@@ -117,6 +117,7 @@ pub struct IdentifyArgs {
     ///
     /// The model is x'' + sum_i c_i g_i = 0 and each term g_i a product, factors joined by '*':
     /// at most one drive factor  cos(kt), sin(kt)   (t the drive's phase, k = 1..64: cos(t), sin(2t))
+    ///                           or p              (the measured drive of --forcing-col)
     /// at most one function of x cos(kx), sin(kx) (harmonic basis), x, x^n (poly), hatN (hat)
     /// at most one function of x'  x', sign(x'), x'*|x'|, x'^3
     /// and 1 (no factor). Braces multiply out: {1,cos(t)}*{cos(x),sin(x)} is cos(x), sin(x),
