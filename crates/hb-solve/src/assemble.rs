@@ -126,6 +126,7 @@ pub(crate) fn harmonic_rows<B: Basis + ?Sized>(
     segments: &[Segment],
     params: &IdentifyParams,
 ) -> Result<LinearSystem, SolveError> {
+    refuse_measured_drive(params)?;
     let layout = layout(basis, signal, segments, params)?;
     let Layout {
         domain,
@@ -214,6 +215,24 @@ pub(crate) fn harmonic_rows<B: Basis + ?Sized>(
 
     let rhs = Col::from_fn(rows, |i| rhs[i]);
     Ok(LinearSystem::from_parts(matrix, rhs, layout.term_names(), blocks))
+}
+
+/// The paper's rows balance every term's Fourier series over a segment that is (nearly) a
+/// periodic orbit of the state, found by its close return. A measured drive is not periodic with
+/// such a segment: the clock of a record driven by a measured signal is only its dominant period,
+/// and a drive of any waveform (or none periodic at all) does not return with the state, so its
+/// series over the segment would not close and its harmonics would not balance. Terms in `p` are
+/// refused here; the weak form, which needs no periodic segment, balances them.
+fn refuse_measured_drive(params: &IdentifyParams) -> Result<(), SolveError> {
+    match params.form().terms().and_then(|list| list.measured_term()) {
+        Some(term) => Err(SolveError::MeasuredDriveUnsupported {
+            term: term.to_string(),
+            method: "the harmonic balance of periodic orbits (upo)",
+            why: "an orbit is periodic in the state, not in a measured drive, whose Fourier series over the \
+                  orbit does not close; use the weak form on windows (windowed)",
+        }),
+        None => Ok(()),
+    }
 }
 
 /// Fills one segment's rows (`2m + 1` rows of `A`, all columns) and right-hand side; returns its
@@ -367,7 +386,8 @@ fn fill_block<B: Basis + ?Sized>(
                 let bin = match drive {
                     DriveFactor::Sin(_) => sb,
                     DriveFactor::Cos(_) => cb,
-                    DriveFactor::One => spec.bins()[j],
+                    // `shifted` holds harmonics k >= 2 only (and p is refused before assembly).
+                    DriveFactor::One | DriveFactor::Measured => spec.bins()[j],
                 };
                 put(Some(c), j, bin);
             }
@@ -442,6 +462,8 @@ impl SegmentView<'_> {
             DriveFactor::One => 1.0,
             DriveFactor::Cos(q) => phase(q).cos(),
             DriveFactor::Sin(q) => phase(q).sin(),
+            // Refused before assembly (`refuse_measured_drive`): never a number here.
+            DriveFactor::Measured => f64::NAN,
         }
     }
 }
@@ -503,6 +525,14 @@ fn general_columns<B: Basis + ?Sized>(
         match (term.position, term.velocity) {
             (PositionFactor::One, VelocityFactor::One) => match term.drive {
                 DriveFactor::One => a[(0, c)] = 1.0,
+                // Refused before assembly (`refuse_measured_drive`).
+                DriveFactor::Measured => {
+                    return Err(SolveError::MeasuredDriveUnsupported {
+                        term: term.name(sh.names),
+                        method: "the harmonic balance of periodic orbits (upo)",
+                        why: "use the weak form on windows (windowed)",
+                    });
+                }
                 DriveFactor::Cos(q) | DriveFactor::Sin(q) => {
                     let j = q as usize * k;
                     if j <= m {

@@ -16,7 +16,8 @@ use crate::{Assembly, Block, Forcing, Harmonics, IdentifyParams, LinearSystem, S
 /// `Σ_i λ_i g_i(x_n, x'_n, t_n) = −x''_n` (any term: its factors evaluated at the sample) for every `n` of `start .. start + L` whose stencil
 /// `n − 2 ..= n + 2` lies in the record, with
 /// `x'_n = (−x_{n+2} + 8 x_{n+1} − 8 x_{n−1} + x_{n−2}) / 12h` and
-/// `x''_n = (−x_{n+2} + 16 x_{n+1} − 30 x_n + 16 x_{n−1} − x_{n−2}) / 12h²`. Differences amplify
+/// `x''_n = (−x_{n+2} + 16 x_{n+1} − 30 x_n + 16 x_{n−1} − x_{n−2}) / 12h²`; the measured drive `p`
+/// is its sample at `n`. Differences amplify
 /// noise by `1/h` and `1/h²`: the method is exact only in the limit of fine sampling and no noise.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct FiniteDifferences;
@@ -43,6 +44,8 @@ impl Assembly for FiniteDifferences {
             domain, ref columns, ..
         } = layout;
         let clock = params.clock();
+        // The measured drive, when a term has it (checked by the layout).
+        let drive = params.drive_samples().map(|d| d.as_slice());
         let h = clock.step();
         let w = clock.forcing_frequency();
         // The rows of each segment: its samples whose stencil lies in the record.
@@ -100,7 +103,8 @@ impl Assembly for FiniteDifferences {
                                 PositionFactor::Basis(i) => phi[i],
                                 PositionFactor::Linear => y[k],
                             };
-                            t.drive.eval(w * clock.time(n)) * position * t.velocity.eval(d1)
+                            let p = drive.map_or(f64::NAN, |p| p[n]);
+                            t.drive.eval(w * clock.time(n), p) * position * t.velocity.eval(d1)
                         }
                     };
                 }

@@ -52,6 +52,48 @@ pub enum SolveError {
         /// Its value.
         value: f64,
     },
+    /// A sample of the measured drive on a segment is NaN or infinite.
+    #[error(
+        "segment {segment} (start {start}): sample {index} of the measured drive p is not finite ({value})"
+    )]
+    NonFiniteDriveSample {
+        /// Index of the segment in the list given.
+        segment: usize,
+        /// Its first sample.
+        start: usize,
+        /// Index of the bad sample in the record.
+        index: usize,
+        /// Its value.
+        value: f64,
+    },
+    /// A term has the measured drive `p` but the params hold no samples of it.
+    #[error(
+        "the term `{term}` has the measured drive p, but no samples of it were given (IdentifyParamsBuilder::drive_samples)"
+    )]
+    MissingDriveSamples {
+        /// The first term in `p`.
+        term: String,
+    },
+    /// The measured drive and the record have different numbers of samples.
+    #[error(
+        "the measured drive has {drive} samples but the record {record}: they must be sampled together, sample for sample"
+    )]
+    DriveLengthMismatch {
+        /// Samples of the drive.
+        drive: usize,
+        /// Samples of the record.
+        record: usize,
+    },
+    /// A term in the measured drive `p` with a method that cannot balance it.
+    #[error("the term `{term}` has the measured drive p, which {method} cannot balance: {why}")]
+    MeasuredDriveUnsupported {
+        /// The first term in `p`.
+        term: String,
+        /// The method.
+        method: &'static str,
+        /// Why.
+        why: &'static str,
+    },
     /// A sample of the record is NaN or infinite.
     #[error("sample {index} of the record is not finite ({value})")]
     NonFiniteRecordSample {

@@ -133,11 +133,13 @@ pub use error::SolveError;
 pub use lstsq::{LstsqFit, LstsqSolver, QrSolver, RankTolerance, SvdSolver};
 pub use method::{Assembly, HarmonicBalance};
 pub use model::{
-    Coefficient, FitSummary, IdentifiedModel, MODEL_FORMAT, MODEL_MAGIC, MODEL_OLDEST_VERSION, MODEL_VERSION,
+    Coefficient, DriveSignal, FitSummary, IdentifiedModel, MODEL_FORMAT, MODEL_MAGIC, MODEL_OLDEST_VERSION,
+    MODEL_VERSION,
 };
 pub use noise::{NOISE_BAND_START, NOISE_ESTIMATE_MIN_LEN, correct_noise, estimate_noise_sigma};
 pub use params::{
-    Forcing, Harmonics, IdentifyParams, IdentifyParamsBuilder, ModelForm, NoiseCorrection, SampleClock,
+    DriveSamples, Forcing, Harmonics, IdentifyParams, IdentifyParamsBuilder, ModelForm, NoiseCorrection,
+    SampleClock,
 };
 pub use quality::{
     EXPLAINED_WARNING_ORBITS, EXPLAINED_WARNING_WINDOWS, FitQuality, ResidualLine, fit_quality,

@@ -9,7 +9,7 @@ use serde::de::{DeserializeOwned, MapAccess, Visitor};
 use serde::ser::SerializeMap;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
-use crate::params::ModelFormV2;
+use crate::params::{ModelFormV2, ModelFormV3};
 use crate::terms::{Column, DriveFactor, PositionFactor, Term, VelocityFactor, column_families, columns};
 use crate::{
     Forcing, Harmonics, IdentifyParams, LinearSystem, LstsqFit, LstsqSolver, ModelForm, SampleClock,
@@ -65,6 +65,13 @@ pub struct FitSummary {
 ///
 /// Saved with [`to_json`](Self::to_json) (for people: coefficients as an object keyed by term
 /// name) or [`to_bytes`](Self::to_bytes) (postcard, after a magic number and a version).
+///
+/// A model with the measured drive `p` (see [`crate::DriveFactor::Measured`]) records the name of
+/// the column it came from ([`ModelForm::drive_column`]) but not its samples: to simulate it, give
+/// it the recorded drive with [`with_drive_signal`](Self::with_drive_signal), which it
+/// interpolates over the recorded span. Without it, or outside that span, its acceleration is
+/// NaN (an integrator stops there with a non-finite state); [`drive_signal_needed`]
+/// (Self::drive_signal_needed) tells before any simulation.
 #[derive(Debug, Clone, PartialEq)]
 pub struct IdentifiedModel<B = BasisKind> {
     basis: B,
@@ -73,6 +80,89 @@ pub struct IdentifiedModel<B = BasisKind> {
     coefficients: Vec<Coefficient>,
     summary: Option<FitSummary>,
     eval: Evaluation,
+    drive: Option<DriveSignal>,
+}
+
+/// A measured drive `p(t)` over the span it was recorded: samples at `t_0 + n h`, interpolated
+/// between them by the cubic Hermite spline whose slopes are the central differences
+/// (Catmull–Rom; one-sided at the ends), which passes through every sample and has a continuous
+/// first derivative, so that an integrator's error control sees no kink.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DriveSignal {
+    start_time: f64,
+    step: f64,
+    samples: crate::DriveSamples,
+}
+
+impl DriveSignal {
+    /// The drive's `samples` at `start_time + n · step`: at least 2, every one finite (a record
+    /// in pieces is simulated piece by piece, each with its own signal), `step` positive and
+    /// finite.
+    pub fn new(start_time: f64, step: f64, samples: crate::DriveSamples) -> Result<Self, SolveError> {
+        if !start_time.is_finite() {
+            return Err(SolveError::InvalidParameter {
+                name: "drive signal start time",
+                value: start_time,
+                why: "must be finite",
+            });
+        }
+        if !(step.is_finite() && step > 0.0) {
+            return Err(SolveError::InvalidParameter {
+                name: "drive signal step",
+                value: step,
+                why: "must be positive and finite",
+            });
+        }
+        let p = samples.as_slice();
+        if p.len() < 2 {
+            return Err(SolveError::RecordTooShort {
+                what: "a drive signal",
+                len: p.len(),
+                needed: 2,
+            });
+        }
+        if let Some((index, &value)) = p.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return Err(SolveError::NonFiniteRecordSample { index, value });
+        }
+        Ok(Self {
+            start_time,
+            step,
+            samples,
+        })
+    }
+
+    /// The time of the first sample.
+    pub fn start_time(&self) -> f64 {
+        self.start_time
+    }
+
+    /// The time of the last sample.
+    pub fn end_time(&self) -> f64 {
+        self.start_time + (self.samples.len() - 1) as f64 * self.step
+    }
+
+    /// The drive at time `t`: the spline through the samples, NaN outside the recorded span.
+    pub fn at(&self, t: f64) -> f64 {
+        let p = self.samples.as_slice();
+        let last = p.len() - 1;
+        let u = (t - self.start_time) / self.step;
+        if !(u >= 0.0 && u <= last as f64) {
+            return f64::NAN;
+        }
+        let i = (u.floor() as usize).min(last - 1);
+        let s = u - i as f64;
+        let slope = |j: usize| match j {
+            0 => p[1] - p[0],
+            j if j == last => p[last] - p[last - 1],
+            j => 0.5 * (p[j + 1] - p[j - 1]),
+        };
+        let (p0, p1, m0, m1) = (p[i], p[i + 1], slope(i), slope(i + 1));
+        let (s2, s3) = (s * s, s * s * s);
+        (2.0 * s3 - 3.0 * s2 + 1.0) * p0
+            + (s3 - 2.0 * s2 + s) * m0
+            + (-2.0 * s3 + 3.0 * s2) * p1
+            + (s3 - s2) * m1
+    }
 }
 
 /// The coefficients arranged for evaluation: the paper's families by basis function (the
@@ -102,6 +192,8 @@ struct GeneralEvaluation {
     /// The highest drive harmonic of a term.
     harmonics: usize,
     forcing: (f64, f64),
+    /// Whether a term has the measured drive `p`.
+    measured: bool,
 }
 
 /// The highest drive harmonic is at most [`crate::MAX_DRIVE_HARMONIC`]; this holds `cos(kθ)` and
@@ -120,13 +212,14 @@ impl GeneralEvaluation {
     }
 }
 
-/// A drive factor from the table of its harmonics.
+/// A drive factor from the table of its harmonics and the measured drive `p`.
 #[inline]
-fn drive_value(d: DriveFactor, c: &[f64; DRIVE_TABLE], s: &[f64; DRIVE_TABLE]) -> f64 {
+fn drive_value(d: DriveFactor, c: &[f64; DRIVE_TABLE], s: &[f64; DRIVE_TABLE], p: f64) -> f64 {
     match d {
         DriveFactor::One => 1.0,
         DriveFactor::Cos(k) => c[k as usize],
         DriveFactor::Sin(k) => s[k as usize],
+        DriveFactor::Measured => p,
     }
 }
 
@@ -323,6 +416,7 @@ impl<B: Basis> IdentifiedModel<B> {
                     .max()
                     .unwrap_or(0),
                 forcing,
+                measured: terms.iter().any(|t| t.drive.is_measured()),
             })
         };
         Ok(Self {
@@ -332,7 +426,43 @@ impl<B: Basis> IdentifiedModel<B> {
             coefficients,
             summary,
             eval,
+            drive: None,
         })
+    }
+
+    /// The model with the recorded drive `signal` for its terms in the measured drive `p`, so
+    /// that it can be simulated over the signal's span (the record's own time).
+    ///
+    /// Errors: [`SolveError::InvalidForm`] for a model without a term in `p`.
+    pub fn with_drive_signal(mut self, signal: DriveSignal) -> Result<Self, SolveError> {
+        if !self.form.has_measured_drive() {
+            return Err(SolveError::InvalidForm {
+                why: "a drive signal is for a model with a term in the measured drive p",
+            });
+        }
+        self.drive = Some(signal);
+        Ok(self)
+    }
+
+    /// The recorded drive given with [`with_drive_signal`](Self::with_drive_signal), if any.
+    pub fn drive_signal(&self) -> Option<&DriveSignal> {
+        self.drive.as_ref()
+    }
+
+    /// Whether the model needs a drive signal to be simulated: it has a term in the measured
+    /// drive `p` and none was given.
+    pub fn drive_signal_needed(&self) -> bool {
+        self.form.has_measured_drive() && self.drive.is_none()
+    }
+
+    /// The measured drive at `t` (NaN without a signal, or outside its span).
+    #[inline]
+    fn measured(&self, e: &GeneralEvaluation, t: f64) -> f64 {
+        match (&self.drive, e.measured) {
+            (_, false) => 0.0,
+            (Some(d), true) => d.at(t),
+            (None, true) => f64::NAN,
+        }
     }
 
     /// The damping coefficient `c_r` (term `x'`; 0 when the model has no such term).
@@ -517,12 +647,13 @@ impl<B: Basis> IdentifiedModel<B> {
             }
             Evaluation::General(e) => {
                 let (dc, ds) = e.drive_table(self.forcing_frequency * t);
+                let p = self.measured(e, t);
                 let sum = self.with_basis(xe, false, |phi| {
                     e.terms
                         .iter()
                         .map(|&(coefficient, term)| {
                             coefficient
-                                * drive_value(term.drive, &dc, &ds)
+                                * drive_value(term.drive, &dc, &ds, p)
                                 * position_value(term.position, phi, xe, false)
                                 * term.velocity.eval_on(side, v)
                         })
@@ -549,11 +680,12 @@ impl<B: Basis> IdentifiedModel<B> {
             }
             Evaluation::General(e) => {
                 let (dc, ds) = e.drive_table(self.forcing_frequency * t);
+                let p = self.measured(e, t);
                 let (dx, dv) = self.with_basis(xe, false, |phi| {
                     self.with_basis(xe, true, |dphi| {
                         let (mut dx, mut dv) = (0.0, 0.0);
                         for &(coefficient, term) in &e.terms {
-                            let cd = coefficient * drive_value(term.drive, &dc, &ds);
+                            let cd = coefficient * drive_value(term.drive, &dc, &ds, p);
                             if term.position != PositionFactor::One {
                                 dx += cd
                                     * position_value(term.position, dphi, xe, true)
@@ -613,11 +745,12 @@ impl<B: Basis> SecondOrderSystem for IdentifiedModel<B> {
 
 /// Name of the JSON format, written in every saved model.
 pub const MODEL_FORMAT: &str = "hbid-model";
-/// Version of the saved-model format this build writes (3: the form holds the drive harmonics
-/// `drive_harmonics` and, for a list of terms, `terms`, the list of the terms' names). It reads
-/// version 2 as well (no drive harmonics nor term list: the clock is written with an optional
-/// whole `samples_per_period` and an optional `step`), in JSON and in binary.
-pub const MODEL_VERSION: u32 = 3;
+/// Version of the saved-model format this build writes (4: the form holds `drive_column`, the
+/// record's column of a measured drive `p`, or null). It reads versions 3 (the form holds the
+/// drive harmonics `drive_harmonics` and, for a list of terms, `terms`, the list of the terms'
+/// names) and 2 (no drive harmonics nor term list: the clock is written with an optional whole
+/// `samples_per_period` and an optional `step`) as well, in JSON and in binary.
+pub const MODEL_VERSION: u32 = 4;
 /// The oldest saved-model format version this build reads.
 pub const MODEL_OLDEST_VERSION: u32 = 2;
 /// First bytes of a binary model.
@@ -696,6 +829,34 @@ struct ModelRecordV2<B> {
     fit: Option<FitSummary>,
 }
 
+/// A model saved in binary by format version 3 (its form without the measured drive's column).
+#[derive(Deserialize)]
+struct ModelRecordV3<B> {
+    format: String,
+    version: u32,
+    basis: B,
+    form: ModelFormV3,
+    forcing_frequency: f64,
+    coefficients: CoefficientMap,
+    fit: Option<FitSummary>,
+}
+
+impl<B> TryFrom<ModelRecordV3<B>> for ModelRecord<B> {
+    type Error = SolveError;
+
+    fn try_from(r: ModelRecordV3<B>) -> Result<Self, SolveError> {
+        Ok(Self {
+            format: r.format,
+            version: r.version,
+            basis: r.basis,
+            form: r.form.try_into()?,
+            forcing_frequency: r.forcing_frequency,
+            coefficients: r.coefficients,
+            fit: r.fit,
+        })
+    }
+}
+
 impl<B> From<ModelRecordV2<B>> for ModelRecord<B> {
     fn from(r: ModelRecordV2<B>) -> Self {
         Self {
@@ -735,7 +896,7 @@ impl<B: Basis + Clone + Serialize> IdentifiedModel<B> {
         }
     }
 
-    /// Pretty JSON: `{"format": "hbid-model", "version": 3, "basis": .., "form": ..,
+    /// Pretty JSON: `{"format": "hbid-model", "version": 4, "basis": .., "form": ..,
     /// "forcing_frequency": .., "coefficients": {"x'": {"value": .., "std_error": ..}, ..}, "fit": ..}`.
     ///
     /// A model on [`BasisKind`] records which basis it uses (`{"hat": {"nodes": 8}}`), so any
@@ -797,10 +958,10 @@ impl<B: Basis + DeserializeOwned> IdentifiedModel<B> {
         }
         let version = u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]);
         check_version(version)?;
-        let record: ModelRecord<B> = if version == 2 {
-            postcard::from_bytes::<ModelRecordV2<B>>(&bytes[12..])?.into()
-        } else {
-            postcard::from_bytes(&bytes[12..])?
+        let record: ModelRecord<B> = match version {
+            2 => postcard::from_bytes::<ModelRecordV2<B>>(&bytes[12..])?.into(),
+            3 => postcard::from_bytes::<ModelRecordV3<B>>(&bytes[12..])?.try_into()?,
+            _ => postcard::from_bytes(&bytes[12..])?,
         };
         if record.version != version {
             return Err(SolveError::UnsupportedVersion {

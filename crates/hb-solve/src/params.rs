@@ -1,5 +1,8 @@
 //! Parameters of identification: sampling clock, harmonics per orbit, model form.
 
+use std::fmt;
+use std::sync::Arc;
+
 use serde::{Deserialize, Serialize};
 
 pub use circle_signal::SampleClock;
@@ -13,6 +16,9 @@ use crate::terms::{
 
 /// The default cap of the velocity series, in multiples of the forcing frequency.
 const VELOCITY_CAP: f64 = 16.0;
+
+/// The longest name of a measured drive's column a form keeps.
+const MAX_COLUMN_NAME: usize = 256;
 
 /// Which harmonics `j` of each orbit give equations (paper eq. 15: `j = 1..M`, plus the mean).
 ///
@@ -136,10 +142,12 @@ pub struct ModelForm {
     linear_stiffness: bool,
     drive_harmonics: u32,
     terms: Option<TermList>,
+    drive_column: Option<String>,
 }
 
-/// The serialised form of [`ModelForm`] (the same field names as ever, and the drive harmonics
-/// and the term list, absent from forms saved before them), validated on reading.
+/// The serialised form of [`ModelForm`] (the same field names as ever, and the drive harmonics,
+/// the term list and the measured drive's column, absent from forms saved before them),
+/// validated on reading.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 struct ModelFormRaw {
     parametric: bool,
@@ -149,6 +157,40 @@ struct ModelFormRaw {
     drive_harmonics: u32,
     #[serde(default)]
     terms: Option<TermList>,
+    #[serde(default)]
+    drive_column: Option<String>,
+}
+
+/// [`ModelForm`] as saved by format version 3 (its binary layout: no measured drive's column),
+/// read by [`crate::IdentifiedModel::from_bytes`].
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub(crate) struct ModelFormV3 {
+    parametric: bool,
+    forcing: Forcing,
+    linear_stiffness: bool,
+    drive_harmonics: u32,
+    terms: Option<TermList>,
+}
+
+impl From<ModelFormV3> for ModelFormRaw {
+    fn from(v3: ModelFormV3) -> Self {
+        Self {
+            parametric: v3.parametric,
+            forcing: v3.forcing,
+            linear_stiffness: v3.linear_stiffness,
+            drive_harmonics: v3.drive_harmonics,
+            terms: v3.terms,
+            drive_column: None,
+        }
+    }
+}
+
+impl TryFrom<ModelFormV3> for ModelForm {
+    type Error = SolveError;
+
+    fn try_from(v3: ModelFormV3) -> Result<Self, SolveError> {
+        ModelFormRaw::from(v3).try_into()
+    }
 }
 
 fn one() -> u32 {
@@ -172,6 +214,7 @@ impl From<ModelFormV2> for ModelForm {
             linear_stiffness: v2.linear_stiffness,
             drive_harmonics: 1,
             terms: None,
+            drive_column: None,
         }
     }
 }
@@ -184,6 +227,7 @@ impl From<ModelForm> for ModelFormRaw {
             linear_stiffness: f.linear_stiffness,
             drive_harmonics: f.drive_harmonics,
             terms: f.terms,
+            drive_column: f.drive_column,
         }
     }
 }
@@ -198,6 +242,7 @@ impl TryFrom<ModelFormRaw> for ModelForm {
             linear_stiffness: raw.linear_stiffness,
             drive_harmonics: raw.drive_harmonics,
             terms: raw.terms,
+            drive_column: raw.drive_column,
         }
         .validate()
     }
@@ -218,6 +263,7 @@ impl ModelForm {
             linear_stiffness: false,
             drive_harmonics: 1,
             terms: None,
+            drive_column: None,
         }
     }
 
@@ -230,6 +276,7 @@ impl ModelForm {
             linear_stiffness: false,
             drive_harmonics: 1,
             terms: None,
+            drive_column: None,
         }
     }
 
@@ -251,7 +298,16 @@ impl ModelForm {
             linear_stiffness: false,
             drive_harmonics: 1,
             terms: Some(list),
+            drive_column: None,
         }
+    }
+
+    /// The same form with the name of the record's column its measured drive `p` was read from
+    /// (kept with the model, so that whoever simulates it knows which signal drives it). Only a
+    /// term list with a term in `p` has one (checked when the form is used).
+    pub fn with_drive_column(mut self, column: impl Into<String>) -> Self {
+        self.drive_column = Some(column.into());
+        self
     }
 
     /// The same form with this external forcing.
@@ -356,6 +412,16 @@ impl ModelForm {
         TermList::new(specs)
     }
 
+    /// Whether a term of the form has the measured drive `p` (a term list only).
+    pub fn has_measured_drive(&self) -> bool {
+        self.terms.as_ref().is_some_and(TermList::has_measured_drive)
+    }
+
+    /// The record's column the measured drive `p` was read from, when given.
+    pub fn drive_column(&self) -> Option<&str> {
+        self.drive_column.as_deref()
+    }
+
     pub(crate) fn validate(self) -> Result<Self, SolveError> {
         if let Forcing::Known { cos, sin } = self.forcing {
             for (name, value) in [
@@ -369,6 +435,18 @@ impl ModelForm {
                         why: "must be finite",
                     });
                 }
+            }
+        }
+        if let Some(column) = &self.drive_column {
+            if !self.has_measured_drive() {
+                return Err(SolveError::InvalidForm {
+                    why: "a measured drive's column is named but no term has the factor p",
+                });
+            }
+            if column.is_empty() || column.chars().count() > MAX_COLUMN_NAME {
+                return Err(SolveError::InvalidForm {
+                    why: "the measured drive's column name must have 1 to 256 characters",
+                });
             }
         }
         if !(1..=MAX_DRIVE_HARMONIC).contains(&self.drive_harmonics) {
@@ -474,7 +552,61 @@ impl NoiseCorrection {
     }
 }
 
-/// Everything identification needs besides the basis, the record and the segments.
+/// The samples of a measured drive `p(t)` (the factor `p` of a term), one per sample of the
+/// record it was measured with and on the same grid (NaN where the record has gaps, which no
+/// segment reaches): what a term in `p` is balanced from.
+///
+/// Shared, not copied, when the params are cloned. Its samples are data, not settings: they are
+/// not serialised with the params (which then deserialise without them).
+#[derive(Clone, PartialEq)]
+pub struct DriveSamples {
+    samples: Arc<[f64]>,
+}
+
+impl DriveSamples {
+    /// The drive's `samples`, aligned with the record's (sample `n` of both at the same time).
+    ///
+    /// Errors: [`SolveError::RecordTooShort`] for no sample. Non-finite samples are refused where
+    /// a segment reaches them ([`SolveError::NonFiniteDriveSample`]).
+    pub fn new(samples: impl Into<Arc<[f64]>>) -> Result<Self, SolveError> {
+        let samples = samples.into();
+        if samples.is_empty() {
+            return Err(SolveError::RecordTooShort {
+                what: "a measured drive",
+                len: 0,
+                needed: 1,
+            });
+        }
+        Ok(Self { samples })
+    }
+
+    /// The samples.
+    pub fn as_slice(&self) -> &[f64] {
+        &self.samples
+    }
+
+    /// The number of samples.
+    pub fn len(&self) -> usize {
+        self.samples.len()
+    }
+
+    /// Never true: there is at least one sample.
+    pub fn is_empty(&self) -> bool {
+        self.samples.is_empty()
+    }
+}
+
+impl fmt::Debug for DriveSamples {
+    /// The number of samples, not the samples (a record holds millions).
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("DriveSamples")
+            .field("len", &self.samples.len())
+            .finish()
+    }
+}
+
+/// Everything identification needs besides the basis, the record and the segments: the settings,
+/// and the samples of a measured drive when a term has the factor `p`.
 ///
 /// Build with [`IdentifyParams::builder`]; [`IdentifyParamsBuilder::build`] validates.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -487,6 +619,8 @@ pub struct IdentifyParams {
     noise: NoiseCorrection,
     #[serde(default = "default_velocity_harmonics")]
     velocity_harmonics: Harmonics,
+    #[serde(skip)]
+    drive: Option<DriveSamples>,
 }
 
 fn default_velocity_harmonics() -> Harmonics {
@@ -526,6 +660,7 @@ pub struct IdentifyParamsBuilder {
     form: ModelForm,
     noise: NoiseCorrection,
     velocity_harmonics: Harmonics,
+    drive: Option<DriveSamples>,
 }
 
 impl IdentifyParams {
@@ -545,6 +680,7 @@ impl IdentifyParams {
             form: ModelForm::default(),
             noise: NoiseCorrection::None,
             velocity_harmonics: Self::DEFAULT_VELOCITY_HARMONICS,
+            drive: None,
         }
     }
 
@@ -574,6 +710,11 @@ impl IdentifyParams {
     pub fn velocity_harmonics(&self) -> Harmonics {
         self.velocity_harmonics
     }
+
+    /// The samples of the measured drive `p`, when given.
+    pub fn drive_samples(&self) -> Option<&DriveSamples> {
+        self.drive.as_ref()
+    }
 }
 
 impl IdentifyParamsBuilder {
@@ -602,6 +743,13 @@ impl IdentifyParamsBuilder {
         self
     }
 
+    /// The samples of the measured drive `p` of the form's terms, aligned with the record's
+    /// (checked against the record and the segments by every assembly).
+    pub fn drive_samples(mut self, drive: DriveSamples) -> Self {
+        self.drive = Some(drive);
+        self
+    }
+
     /// Validates and builds.
     pub fn build(self) -> Result<IdentifyParams, SolveError> {
         Ok(IdentifyParams {
@@ -610,6 +758,7 @@ impl IdentifyParamsBuilder {
             form: self.form.validate()?,
             noise: self.noise.validate()?,
             velocity_harmonics: self.velocity_harmonics.validate()?,
+            drive: self.drive,
         })
     }
 }

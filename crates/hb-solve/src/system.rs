@@ -207,6 +207,7 @@ pub(crate) fn layout<B: Basis + ?Sized>(
     let terms = columns(basis, params.form())?;
     let columns = column_families(&terms);
     let (counts, rows) = plan_rows(signal, segments, params)?;
+    check_drive(signal, segments, params)?;
     check_enough(segments.len(), rows, terms.len(), params)?;
     Ok(Layout {
         domain,
@@ -309,6 +310,45 @@ pub(crate) fn plan_rows(
         rows += 2 * m + 1;
     }
     Ok((counts, rows))
+}
+
+/// When a term has the measured drive `p`: its samples are given, as many as the record's, and
+/// finite on every segment (which fit the record, [`plan_rows`]).
+pub(crate) fn check_drive(
+    signal: &[f64],
+    segments: &[Segment],
+    params: &IdentifyParams,
+) -> Result<(), SolveError> {
+    let Some(term) = params.form().terms().and_then(|list| list.measured_term()) else {
+        return Ok(());
+    };
+    let drive = params
+        .drive_samples()
+        .ok_or_else(|| SolveError::MissingDriveSamples {
+            term: term.to_string(),
+        })?
+        .as_slice();
+    if drive.len() != signal.len() {
+        return Err(SolveError::DriveLengthMismatch {
+            drive: drive.len(),
+            record: signal.len(),
+        });
+    }
+    for (i, s) in segments.iter().enumerate() {
+        if let Some((j, &value)) = drive[s.start()..=s.closing()]
+            .iter()
+            .enumerate()
+            .find(|(_, v)| !v.is_finite())
+        {
+            return Err(SolveError::NonFiniteDriveSample {
+                segment: i,
+                start: s.start(),
+                index: s.start() + j,
+                value,
+            });
+        }
+    }
+    Ok(())
 }
 
 /// The `TooFewOrbits` check: more equations than unknowns are needed (so that the residual

@@ -3,9 +3,14 @@
 //!
 //! The model is `x'' + Σ_i c_i g_i = 0`, each term `g_i` a product of three factors: a drive
 //! factor (`1`, `cos(kt)`, `sin(kt)` for harmonic `k` of the drive, `t` standing for the drive's
-//! phase `W t`), a function of `x` (`1`, a basis function, or `x` itself) and a function of `x'`
-//! (`1`, `x'`, `sign(x')`, `x'*|x'|`, `x'^3`). A term is named by its factors joined by `*`, drive
-//! factor first: `x'`, `cos(t)*sin(x)`, `sin(2t)*cos(x)`, `cos(3t)`, `x^2*x'`.
+//! phase `W t`, or `p`, the measured drive `p(t)`, a signal recorded beside the state), a function
+//! of `x` (`1`, a basis function, or `x` itself) and a function of `x'` (`1`, `x'`, `sign(x')`,
+//! `x'*|x'|`, `x'^3`). A term is named by its factors joined by `*`, drive factor first: `x'`,
+//! `cos(t)*sin(x)`, `sin(2t)*cos(x)`, `cos(3t)`, `x^2*x'`, `p`, `p*cos(x)`.
+//!
+//! The measured drive `p` is data, not a function of time: its samples come with the record's
+//! ([`crate::DriveSamples`], given to [`crate::IdentifyParamsBuilder::drive_samples`]), and a
+//! term that holds it is balanced from them (see [`crate::WeakForm`]).
 //!
 //! Two forms of a term: [`Term`] names its function of `x` by its index in a basis (what the
 //! assemblies and the model evaluate); [`TermSpec`] names it by itself ([`XFunction`]: `cos(2x)`,
@@ -20,6 +25,7 @@
 //! factor  := atom | '{' item (',' item)* '}'
 //! atom    := '1'
 //!          | 'cos(' [n] 't)' | 'sin(' [n] 't)'                    drive harmonic n >= 1
+//!          | 'p'                                                  the measured drive
 //!          | 'cos(' [n] 'x)' | 'sin(' [n] 'x)' | 'x' ['^' n] | 'hat' i   a function of x
 //!          | "x'" ['^3'] | "sign(x')" | "|x'|"                      x', x'^3, sign(x'); |x'| only in x'*|x'|
 //! ```
@@ -48,7 +54,8 @@ pub const MAX_DRIVE_HARMONIC: u32 = 64;
 /// The most terms a list may hold (braces multiply quickly).
 pub const MAX_TERMS: usize = 4096;
 
-/// The drive factor of a term: `1`, `cos(k t)` or `sin(k t)` for harmonic `k >= 1` of the drive.
+/// The drive factor of a term: `1`, `cos(k t)` or `sin(k t)` for harmonic `k >= 1` of the drive,
+/// or the measured drive `p`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum DriveFactor {
     /// No drive factor.
@@ -57,23 +64,41 @@ pub enum DriveFactor {
     Cos(u32),
     /// `sin(k t)`.
     Sin(u32),
+    /// `p`: the measured drive `p(t)`, a signal recorded with the state (a shaker's base
+    /// acceleration, a motor's torque), used as it was measured instead of a function of the
+    /// drive's phase.
+    Measured,
 }
 
 impl DriveFactor {
-    /// The harmonic `k` of the drive (0 for [`DriveFactor::One`]).
+    /// The harmonic `k` of the drive (0 for [`DriveFactor::One`] and [`DriveFactor::Measured`],
+    /// which are no function of the drive's phase).
     pub fn harmonic(&self) -> u32 {
         match *self {
-            Self::One => 0,
+            Self::One | Self::Measured => 0,
             Self::Cos(k) | Self::Sin(k) => k,
         }
     }
 
-    /// The factor at the drive's phase `θ = W t`: `1`, `cos(kθ)` or `sin(kθ)`.
-    pub fn eval(&self, phase: f64) -> f64 {
+    /// Whether the factor is the measured drive `p`.
+    pub fn is_measured(&self) -> bool {
+        *self == Self::Measured
+    }
+
+    /// Whether the factor is a function of the drive's phase (`cos(kt)`, `sin(kt)`), so that a
+    /// term holding it needs the drive's period and phase.
+    pub fn needs_phase(&self) -> bool {
+        matches!(self, Self::Cos(_) | Self::Sin(_))
+    }
+
+    /// The factor at the drive's phase `θ = W t` with the measured drive `p` at the same
+    /// instant: `1`, `cos(kθ)`, `sin(kθ)` or `p` (each factor reads only what it depends on).
+    pub fn eval(&self, phase: f64, measured: f64) -> f64 {
         match *self {
             Self::One => 1.0,
             Self::Cos(k) => (f64::from(k) * phase).cos(),
             Self::Sin(k) => (f64::from(k) * phase).sin(),
+            Self::Measured => measured,
         }
     }
 }
@@ -262,6 +287,10 @@ fn write_name(
     };
     match drive {
         DriveFactor::One => {}
+        DriveFactor::Measured => {
+            sep(f)?;
+            f.write_str("p")?;
+        }
         DriveFactor::Cos(k) | DriveFactor::Sin(k) => {
             sep(f)?;
             let trig = if matches!(drive, DriveFactor::Cos(_)) {
@@ -466,7 +495,7 @@ impl TermList {
         }
         for (i, t) in terms.iter().enumerate() {
             let k = t.drive.harmonic();
-            if k > MAX_DRIVE_HARMONIC || (k == 0 && t.drive != DriveFactor::One) {
+            if k > MAX_DRIVE_HARMONIC || (k == 0 && t.drive.needs_phase()) {
                 return Err(SolveError::InvalidParameter {
                     name: "drive harmonic of a term",
                     value: f64::from(k),
@@ -511,9 +540,25 @@ impl TermList {
         self.terms.iter().map(ToString::to_string).collect()
     }
 
-    /// The highest drive harmonic named (0 when no term has a drive factor).
+    /// The highest drive harmonic named (0 when no term has a drive factor of the drive's phase).
     pub fn drive_harmonics(&self) -> u32 {
         self.terms.iter().map(|t| t.drive.harmonic()).max().unwrap_or(0)
+    }
+
+    /// Whether a term has the measured drive `p` as its drive factor.
+    pub fn has_measured_drive(&self) -> bool {
+        self.measured_term().is_some()
+    }
+
+    /// The first term whose drive factor is the measured drive `p`, if any.
+    pub fn measured_term(&self) -> Option<&TermSpec> {
+        self.terms.iter().find(|t| t.drive.is_measured())
+    }
+
+    /// The first term whose drive factor is a function of the drive's phase (`cos(kt)`,
+    /// `sin(kt)`), if any: such a term needs the drive's period and phase.
+    pub fn phase_term(&self) -> Option<&TermSpec> {
+        self.terms.iter().find(|t| t.drive.needs_phase())
     }
 
     /// The smallest basis of `hb-basis` that holds every function of `x` named: `harmonic:K` for
@@ -739,7 +784,7 @@ impl Product {
 
 /// What a factor may be, for the errors.
 const FACTOR: &str =
-    "a factor: 1, cos(kt), sin(kt), cos(kx), sin(kx), x, x^n, hatN, x', x'^3, sign(x'), |x'| or {..}";
+    "a factor: 1, cos(kt), sin(kt), p, cos(kx), sin(kx), x, x^n, hatN, x', x'^3, sign(x'), |x'| or {..}";
 
 /// A recursive-descent parser over the characters of a spec with white space removed (each
 /// character keeps its 1-based position in the spec).
@@ -952,6 +997,9 @@ impl<'a> Parser<'a> {
         }
         if self.eat("|x'|") {
             return Ok(Atom::Abs);
+        }
+        if self.eat("p") {
+            return Ok(Atom::Drive(DriveFactor::Measured));
         }
         if self.eat("x'") {
             if self.eat("^") {

@@ -40,15 +40,20 @@ use crate::{Block, Forcing, Harmonics, IdentifyParams, LinearSystem, SolveError}
 ///
 /// Any other term of a [`crate::ModelForm`] (a product `D(t) f(x) v(x')`, see [`crate::Term`]):
 ///
-/// - linear in `x'`, `D(t) f(x) x'` is the time derivative of `D(t) F(x)` less `D'(t) F(x)`, with
-///   `F` an antiderivative of `f` ([`hb_basis::Basis::eval_antiderivative`], taken along the
-///   unwrapped angle; `x` itself for `f = 1`), so it is integrated by parts exactly:
-///   `∫ ψ D f(x) x' = −∫ (ψ' D + ψ D') F(x)`;
-/// - with `sign(x')`, `x'*|x'|` or `x'^3`: `∫ ψ g` at the velocity of the window's Fourier series
+/// - linear in `x'` with a drive factor of the drive's phase (or none), `D(t) f(x) x'` is the
+///   time derivative of `D(t) F(x)` less `D'(t) F(x)`, with `F` an antiderivative of `f`
+///   ([`hb_basis::Basis::eval_antiderivative`], taken along the unwrapped angle; `x` itself for
+///   `f = 1`), so it is integrated by parts exactly: `∫ ψ D f(x) x' = −∫ (ψ' D + ψ D') F(x)`;
+/// - with `sign(x')`, `x'*|x'|` or `x'^3`, or `x'` times the measured drive `p` (whose derivative
+///   the record does not give): `∫ ψ g` at the velocity of the window's Fourier series
 ///   ([`crate::velocity_series`] with [`crate::VelocityTrend::Quintic`], up to the params'
 ///   velocity harmonics), `sign(x')` averaged over each sample's cell so that its jumps fall where
 ///   the interpolated velocity crosses zero (`docs/identification.md` measures what this costs);
-/// - otherwise `∫ ψ g` of its samples, the drive factor at the samples' absolute time.
+/// - otherwise `∫ ψ g` of its samples, the drive factor at the samples' absolute time, or for
+///   the measured drive `p` its sample ([`crate::IdentifyParams::drive_samples`]) at each of the
+///   window's samples: `∫ ψ p f(x)` by the same trapezoid rule as every other sampled term, so
+///   that a drive of any waveform (harmonics, noise, no period at all) enters the rows as it was
+///   measured.
 ///
 /// `p >= 2` is needed (`ψ'` must vanish at the ends); larger `p` integrates more accurately but
 /// concentrates the window on its middle, so that fewer samples carry weight. The default `p = 4`
@@ -348,7 +353,7 @@ pub(crate) fn weak_rows<B: Basis + ?Sized>(
     for column in columns {
         modes.push(match column {
             Column::Damping => Mode::MinusDpsi,
-            Column::Product(t) if t.velocity == VelocityFactor::Linear => {
+            Column::Product(t) if t.velocity == VelocityFactor::Linear && !t.drive.is_measured() => {
                 if t.drive == DriveFactor::One {
                     Mode::MinusDpsi
                 } else {
@@ -381,7 +386,12 @@ pub(crate) fn weak_rows<B: Basis + ?Sized>(
         needs_anti: products(&|t| {
             t.velocity == VelocityFactor::Linear && matches!(t.position, PositionFactor::Basis(_))
         }),
-        needs_velocity: products(&|t| !matches!(t.velocity, VelocityFactor::One | VelocityFactor::Linear)),
+        needs_velocity: products(&|t| match t.velocity {
+            VelocityFactor::One => false,
+            VelocityFactor::Linear => t.drive.is_measured(),
+            _ => true,
+        }),
+        drive: params.drive_samples().map(|d| d.as_slice()),
     };
     let blocks: Vec<Block> = jobs
         .into_par_iter()
@@ -418,6 +428,9 @@ struct Shared<'a, B: ?Sized> {
     needs_anti: bool,
     /// Whether a column needs the velocity at the samples.
     needs_velocity: bool,
+    /// The measured drive's samples, aligned with the signal's (checked by the layout when a
+    /// term has it).
+    drive: Option<&'a [f64]>,
 }
 
 /// Fills one segment's rows; returns its block.
@@ -520,6 +533,9 @@ fn fill_block<B: Basis + ?Sized>(
                     // The drive factor and its time derivative.
                     let (d, dd) = match term.drive {
                         DriveFactor::One => (1.0, 0.0),
+                        // Its derivative is never needed: a term in p is never integrated by
+                        // parts.
+                        DriveFactor::Measured => (sh.drive.map_or(f64::NAN, |p| p[seg.start() + n]), 0.0),
                         DriveFactor::Cos(q) | DriveFactor::Sin(q) => {
                             let (cq, sq) = if q == 1 { (c, s) } else { ws.harmonics[q as usize] };
                             let qw = f64::from(q) * big_w;
@@ -530,7 +546,7 @@ fn fill_block<B: Basis + ?Sized>(
                         }
                     };
                     match term.velocity {
-                        VelocityFactor::Linear => {
+                        VelocityFactor::Linear if !term.drive.is_measured() => {
                             // By parts: an antiderivative F of the function of x along the window.
                             let f = match term.position {
                                 PositionFactor::One => ws.xc[n],

@@ -1071,6 +1071,8 @@ impl Case {
                 DriveFactor::One => 1.0,
                 DriveFactor::Cos(j) => (f64::from(j) * big_w * t).cos(),
                 DriveFactor::Sin(j) => (f64::from(j) * big_w * t).sin(),
+                // The generated systems have no measured drive.
+                DriveFactor::Measured => f64::NAN,
             };
             let (position, dposition) = match term.position {
                 PositionFactor::One => (1.0, 0.0),
@@ -1149,6 +1151,7 @@ impl Case {
                             DriveFactor::One => 1.0,
                             DriveFactor::Cos(j) => (f64::from(j) * big_w * t).cos(),
                             DriveFactor::Sin(j) => (f64::from(j) * big_w * t).sin(),
+                            DriveFactor::Measured => f64::NAN,
                         };
                         let position = match term.position {
                             PositionFactor::One => 1.0,

@@ -130,6 +130,7 @@ fn input_record(x: &[f64], t: Option<&[f64]>, dt: Option<f64>) -> Result<InputRe
         t,
         theta,
         lines: None,
+        drive: None,
     })
 }
 
@@ -156,6 +157,7 @@ pub fn grid_data(source: Source<'_>, signal: Domain) -> Result<GridData, Failure
                 x: x.to_vec(),
                 pieces,
                 domain: signal,
+                drive: None,
                 notes: Vec::new(),
             })
         }
@@ -194,6 +196,7 @@ pub fn read<'py>(
                 time: column(&time_col, "time_col")?,
                 angle: column(&angle_col, "angle_col")?,
                 dt,
+                drive: None,
             };
             let name = path.display().to_string();
             let record = read_path(&path, &options).map_err(|e| {

@@ -9,7 +9,8 @@ use upo_search::Catalogue;
 use crate::pipeline::{Identification, TermSelection};
 
 /// The JSON of an identification, as `hbid identify --json` prints it: `method` and `basis` as
-/// named on the command line.
+/// named on the command line, `drive_column` the record's column of the measured drive `p` (null
+/// without one).
 pub fn identification(id: &Identification, method: &str, basis: &str) -> serde_json::Value {
     let model = &id.model;
     let intervals: Option<serde_json::Map<String, serde_json::Value>> = id.intervals.as_ref().map(|b| {
@@ -34,6 +35,7 @@ pub fn identification(id: &Identification, method: &str, basis: &str) -> serde_j
         "method": method,
         "basis": basis,
         "terms": terms,
+        "drive_column": model.form().drive_column(),
         "coefficients": values,
         "std_errors": errors,
         "orbits_used": summary.map(|s| s.segments),

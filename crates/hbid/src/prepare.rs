@@ -19,7 +19,7 @@
 //! // 8 samples per forcing period of 2 time units, with a gap of 3 samples.
 //! let t: Vec<f64> = (0..80).chain(83..160).map(|n| n as f64 * 0.25).collect();
 //! let theta = t.iter().map(|t| (std::f64::consts::PI * t).sin()).collect();
-//! let record = Record { t, theta, lines: None };
+//! let record = Record { t, theta, lines: None, drive: None };
 //! let grid = condition(record, &PrepareOptions::new(Domain::Circle), &mut |_| {})?;
 //! assert_eq!(grid.pieces, [0..80, 83..160]);
 //! let data = grid.with_drive(DriveSpec::Period(2.0), &mut |_, _| {})?;
@@ -241,6 +241,8 @@ pub struct GridData {
     pub pieces: Vec<Range<usize>>,
     /// What the samples are.
     pub domain: Domain,
+    /// The measured drive on the same grid (NaN in the gaps), when the record holds one.
+    pub drive: Option<Vec<f64>>,
     /// What was done to the record or found in it, in order.
     pub notes: Vec<Note>,
 }
@@ -262,6 +264,9 @@ pub struct Data {
     pub drive: DriveFound,
     /// The samples per forcing period of the record as read, when it was resampled to `p`.
     pub resampled_from: Option<f64>,
+    /// The measured drive `p(t)` on the same clock (resampled with the record; NaN in the gaps),
+    /// when the record holds one.
+    pub measured_drive: Option<Vec<f64>>,
 }
 
 impl Data {
@@ -311,6 +316,8 @@ pub fn condition(
         notes(&n);
         kept.push(n);
     };
+    let mut record = record;
+    let drive_read = record.drive.take();
     let grid = GridRecord::fit(
         record,
         &GridOptions {
@@ -329,6 +336,18 @@ pub fn condition(
         pieces.push(piece.first..piece.first + piece.samples.len());
         x.extend(piece.samples);
     }
+    // The drive's samples follow the record's in order: every sample read is in a piece, the
+    // pieces in the order of the samples.
+    let drive = drive_read.map(|read| {
+        let mut drive = vec![f64::NAN; x.len()];
+        let mut next = read.into_iter();
+        for r in &pieces {
+            for (slot, value) in drive[r.clone()].iter_mut().zip(next.by_ref()) {
+                *slot = value;
+            }
+        }
+        drive
+    });
     if pieces.len() > 1 {
         let missing = x.len() - pieces.iter().map(Range::len).sum::<usize>();
         note(Note::Gaps {
@@ -366,6 +385,7 @@ pub fn condition(
         x,
         pieces,
         domain: options.signal,
+        drive,
         notes: kept,
     })
 }
@@ -412,6 +432,7 @@ impl GridData {
             x,
             pieces,
             domain,
+            drive: measured,
             ..
         } = self;
         let longest = circle_signal::longest_piece(&pieces);
@@ -455,13 +476,24 @@ impl GridData {
         let clock = SampleClock::from_step(period, dt)
             .and_then(|c| c.with_start_time(t0))
             .map_err(PrepareError::Clock)?;
-        let (clock, x, pieces, resampled_from) = match clock.whole_samples_per_period() {
-            Some(_) => (clock, x, pieces, None),
+        let (out_clock, x, out_pieces, resampled_from) = match clock.whole_samples_per_period() {
+            Some(_) => (clock, x, pieces.clone(), None),
             None => {
                 let r = resample_pieces(&x, &pieces, &clock, domain).map_err(PrepareError::Resample)?;
                 (r.clock, r.samples, r.pieces, Some(clock.samples_per_period()))
             }
         };
+        // The measured drive on the same grid: resampled as the record (a signal on the line),
+        // onto the same pieces.
+        let measured_drive = match measured {
+            Some(p) if resampled_from.is_some() => {
+                let r = resample_pieces(&p, &pieces, &clock, Domain::Line).map_err(PrepareError::Resample)?;
+                debug_assert_eq!(r.pieces, out_pieces);
+                Some(r.samples)
+            }
+            other => other,
+        };
+        let (clock, pieces) = (out_clock, out_pieces);
         let p = clock.require_whole().map_err(PrepareError::Whole)?;
         Ok(Data {
             clock,
@@ -471,6 +503,7 @@ impl GridData {
             domain,
             drive: found,
             resampled_from,
+            measured_drive,
         })
     }
 }

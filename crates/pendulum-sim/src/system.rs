@@ -229,6 +229,13 @@ impl Pendulum {
         &self.harmonics
     }
 
+    /// The drive at time `t` as it enters the equation: `f a(t)`, `a(t) = sin(t) + Σ ρ_k sin(k t +
+    /// φ_k)` the base acceleration, the factor of `cos x` (a record's measured drive `p`, whose
+    /// term `p*cos(x)` then has the coefficient −1).
+    pub fn drive(&self, t: f64) -> f64 {
+        self.f * (t.sin() + self.harmonics.sin_sum(t))
+    }
+
     /// The energy `E = v²/2 + (1 − cos x)/r²` of the undamped, undriven pendulum; along a
     /// solution `dE/dt = −c v² − (μ |v| + d |v|³ + c₃ v⁴) + f a(t) cos(x) v`, `a(t)` the base
     /// acceleration.
@@ -458,6 +465,12 @@ impl Duffing {
     /// Drive amplitude `f`.
     pub fn f(&self) -> f64 {
         self.f
+    }
+
+    /// The forcing at time `t` as it enters the equation: `f [cos(t) + Σ ρ_k cos(k t + φ_k)]` (a
+    /// record's measured drive `p`, whose term `p` then has the coefficient −1).
+    pub fn drive(&self, t: f64) -> f64 {
+        self.f * (t.cos() + self.harmonics.cos_sum(t))
     }
 
     /// The energy `E = v²/2 + a x²/2 + b x⁴/4` of the undamped, undriven oscillator; along a

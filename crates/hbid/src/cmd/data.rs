@@ -159,11 +159,23 @@ impl InputArgs {
         drive: DriveSpec,
         progress: &mut dyn FnMut(usize, usize),
     ) -> anyhow::Result<Data> {
-        let column = |s: &Option<String>| s.as_deref().map(str::parse::<Column>).transpose();
+        self.load_with_drive_column(drive, None, progress)
+    }
+
+    /// [`load_with`](Self::load_with), reading the measured drive from `drive_column` too (its
+    /// text as `--forcing-col` gives it).
+    pub fn load_with_drive_column(
+        &self,
+        drive: DriveSpec,
+        drive_column: Option<&str>,
+        progress: &mut dyn FnMut(usize, usize),
+    ) -> anyhow::Result<Data> {
+        let column = |s: Option<&str>| s.map(str::parse::<Column>).transpose();
         let options = ReadOptions {
-            time: column(&self.time_col)?,
-            angle: column(&self.angle_col)?,
+            time: column(self.time_col.as_deref())?,
+            angle: column(self.angle_col.as_deref())?,
             dt: self.dt,
+            drive: column(drive_column).context("--forcing-col")?,
         };
         let name = self.file.display().to_string();
         let record = read_path(&self.file, &options)
@@ -240,6 +252,9 @@ fn naming_options(error: InputError) -> anyhow::Error {
         InputError::MissingColumn {
             role: Role::Angle, ..
         } => "; choose one with --angle-col",
+        InputError::MissingColumn {
+            role: Role::Drive, ..
+        } => " (--forcing-col)",
         InputError::BadForcingPeriod { .. } => " (--forcing-period)",
         InputError::TimeGlitch { isolated: true, .. } => "; run with --repair to fix isolated glitches",
         InputError::TimeGlitch { isolated: false, .. } | InputError::TimeUnresolved { .. } => " with --dt",

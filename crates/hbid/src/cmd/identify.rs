@@ -7,8 +7,8 @@ use circle_signal::{Domain, Segment};
 use clap::{Args, ValueEnum};
 use hb_basis::{BasisKind, Harmonic, Hat, Polynomial};
 use hb_solve::{
-    BootstrapParams, Forcing, Harmonics, IdentifiedModel, LstsqSolver, MAX_DRIVE_HARMONIC, ModelForm,
-    NoiseCorrection, QrSolver, SelectParams, SvdSolver, TermList, WeakForm,
+    BootstrapParams, DriveSamples, Forcing, Harmonics, IdentifiedModel, LstsqSolver, MAX_DRIVE_HARMONIC,
+    ModelForm, NoiseCorrection, QrSolver, SelectParams, SvdSolver, TermList, WeakForm,
 };
 use hbid::pipeline::{Identification, ModelSpec, Setup, TermSelection, WindowOptions};
 use upo_search::Windows;
@@ -117,6 +117,7 @@ pub struct IdentifyArgs {
     ///
     /// The model is x'' + sum_i c_i g_i = 0 and each term g_i a product, factors joined by '*':
     /// at most one drive factor  cos(kt), sin(kt)   (t the drive's phase, k = 1..64: cos(t), sin(2t))
+    ///                           or p              (the measured drive of --forcing-col)
     /// at most one function of x cos(kx), sin(kx) (harmonic basis), x, x^n (poly), hatN (hat)
     /// at most one function of x'  x', sign(x'), x'*|x'|, x'^3
     /// and 1 (no factor). Braces multiply out: {1,cos(t)}*{cos(x),sin(x)} is cos(x), sin(x),
@@ -131,6 +132,15 @@ pub struct IdentifyArgs {
         conflicts_with_all = ["no_parametric", "drive_harmonics"]
     )]
     pub terms: Option<String>,
+    /// The measured drive p(t): a column of the record (by header name or 1-based position), such
+    /// as a shaker's base acceleration or a motor's torque, sampled with the angle. Terms name it
+    /// `p` (`p`, `p*cos(x)`, `p*x'`); without --terms the default model has it in place of cos(t)
+    /// and sin(t): x', {1,p}*B and (with --forcing identified, the default on the line) p, B the
+    /// basis. The weak form (--method windowed) balances it at every sample as measured, of any
+    /// waveform; windows are still counted in forcing periods (--forcing-period, or --forcing none
+    /// for periods of the oscillation).
+    #[arg(long, value_name = "NAME|N")]
+    pub forcing_col: Option<String>,
     /// Model selection: the model's terms (--terms, or the default's with --drive-harmonics) are a
     /// library of candidates; a term is kept only if the model without it predicts held-out
     /// stretches of the record worse (backward elimination, cross-validated over contiguous folds
@@ -207,7 +217,8 @@ impl IdentifyArgs {
                 "--forcing none without a forcing period is a free oscillation, which has no periodic orbits: use --method windowed"
             );
         }
-        self.input.load_with(drive, progress)
+        self.input
+            .load_with_drive_column(drive, self.forcing_col.as_deref(), progress)
     }
 
     /// The terms of `--terms`, parsed.
@@ -250,12 +261,24 @@ impl IdentifyArgs {
             list.check_domain(domain).context("--terms")?;
             list.resolve(basis)
                 .with_context(|| format!("--terms with the basis {}", self.basis_name(domain)))?;
-            if free && let Some(t) = list.terms().iter().find(|t| t.drive.harmonic() > 0) {
+            if free && let Some(t) = list.phase_term() {
                 bail!(
                     "--terms: the term `{t}` has a drive factor, but the record is a free oscillation without a drive"
                 );
             }
-            return Ok(ModelForm::from_terms(list));
+            match (list.measured_term(), &self.forcing_col) {
+                (Some(t), None) => bail!(
+                    "--terms: the term `{t}` has the measured drive p: name the record's column that holds it with --forcing-col"
+                ),
+                (None, Some(col)) => {
+                    bail!("--forcing-col {col}: no term of --terms has the measured drive p")
+                }
+                _ => {}
+            }
+            return Ok(self.with_drive_column(ModelForm::from_terms(list)));
+        }
+        if let Some(col) = &self.forcing_col {
+            return self.measured_default(col, domain, basis);
         }
         let forcing = match self.forcing.unwrap_or(match domain {
             Domain::Circle => ForcingArg::None,
@@ -278,6 +301,47 @@ impl IdentifyArgs {
         Ok(form)
     }
 
+    /// The default model with the measured drive `p` of `--forcing-col` in place of cos(t) and
+    /// sin(t): `x'`, `{1,p}*B` (`B` without `--no-parametric`) and `p` with the forcing
+    /// identified (the default on the line).
+    fn measured_default(&self, col: &str, domain: Domain, basis: &BasisKind) -> anyhow::Result<ModelForm> {
+        if let Some(h) = self.drive_harmonics {
+            bail!(
+                "--drive-harmonics {h} with --forcing-col {col}: the measured drive p has no harmonics to name; \
+                 list terms such as cos(2t)*sin(x) with --terms"
+            );
+        }
+        let functions = hb_basis::Basis::names(basis).join(",");
+        let mut spec = if self.no_parametric {
+            format!("x', {{{functions}}}")
+        } else {
+            format!("x', {{1,p}}*{{{functions}}}")
+        };
+        let forcing = self.forcing.unwrap_or(match domain {
+            Domain::Circle => ForcingArg::None,
+            Domain::Line => ForcingArg::Identified,
+        });
+        if forcing == ForcingArg::Identified {
+            spec.push_str(", p");
+        }
+        let list = TermList::parse(&spec)
+            .with_context(|| format!("the default terms with --forcing-col: {spec}"))?;
+        if !list.has_measured_drive() {
+            bail!(
+                "--forcing-col {col} with --no-parametric and --forcing none: no term has the measured drive p"
+            );
+        }
+        Ok(self.with_drive_column(ModelForm::from_terms(list)))
+    }
+
+    /// The form with the name of `--forcing-col`, when given.
+    fn with_drive_column(&self, form: ModelForm) -> ModelForm {
+        match &self.forcing_col {
+            Some(col) => form.with_drive_column(col.trim()),
+            None => form,
+        }
+    }
+
     /// What these options ask to identify by `method` (which may differ from the one chosen on the
     /// command line) on `data`: a free oscillation has no drive terms at all.
     pub fn spec(&self, data: &Data, method: Method) -> anyhow::Result<ModelSpec> {
@@ -286,9 +350,18 @@ impl IdentifyArgs {
         self.term_list()?;
         let basis = parse_basis(&self.basis_name(domain))?;
         let form = self.form(data, &basis)?;
+        if form.has_measured_drive() && method == Method::Upo {
+            bail!(
+                "--forcing-col: the measured drive p is balanced by the weak form only (--method windowed): a periodic \
+                 orbit of the state does not make the series of a measured drive close"
+            );
+        }
         let mut spec = ModelSpec::new(method, basis)
             .with_form(form)
             .with_weak_form(WeakForm::new(self.window_order)?);
+        if let Some(p) = &data.measured_drive {
+            spec = spec.with_drive_samples(DriveSamples::new(p.clone())?);
+        }
         match self.harmonics {
             Some(0) => bail!("--harmonics must be at least 1"),
             Some(m) => spec = spec.with_harmonics(Harmonics::Fixed(m))?,

@@ -104,6 +104,13 @@ pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
             args.validation_periods
         );
     }
+    if let Some(col) = &args.identify.forcing_col {
+        anyhow::bail!(
+            "--forcing-col {col}: hbid report simulates each model for --validation-periods periods from the record's \
+             start and compares it by orbits, which a model driven by a measured drive cannot do beyond the record's \
+             samples; identify it with hbid identify --method windowed --forcing-col {col}"
+        );
+    }
     std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
 
     let bar = Progress::spinner("read", quiet);

@@ -183,7 +183,15 @@ pub struct SimulateArgs {
     /// the record's time unit, with the drive, sampling and encoder settings.
     #[arg(long, value_name = "FILE.json", help_heading = OUTPUT)]
     truth: Option<PathBuf>,
-    /// Output file: `.npy` (samples × 3, f8, the numbers the CSV would hold) or CSV (anything else).
+    /// Also write the drive p(t) as a fourth column `p`: the forcing as it enters the equation, in
+    /// the record's time unit (the pendulum's f·a(t), a(t) its base acceleration with its
+    /// harmonics, the factor of cos x; the Duffing oscillator's f·(cos t + harmonics)), so that
+    /// its term (`p*cos(x)` of the pendulum, `p` of the Duffing oscillator) has the coefficient
+    /// −1: the measured drive of `hbid identify --forcing-col p`. Printed like the angle.
+    #[arg(long, help_heading = OUTPUT)]
+    write_drive: bool,
+    /// Output file: `.npy` (samples × 3, or × 4 with --write-drive; f8, the numbers the CSV would
+    /// hold) or CSV (anything else).
     #[arg(long, help_heading = OUTPUT)]
     out: PathBuf,
 }
@@ -588,6 +596,21 @@ pub fn run(args: &SimulateArgs, quiet: bool) -> anyhow::Result<()> {
         (System::Duffing(_), Some(e)) => Reported::Values(e.observe_continuous(&traj.theta)),
     };
     let stamps = timing.stamps(&traj, args.time_origin);
+    let drive = args.write_drive.then(|| {
+        // The drive in the record's frame: rate² times the system's, at the system's time.
+        let (frame, rate) = (timing.frame, timing.frame.rate());
+        traj.t
+            .iter()
+            .map(|&t| {
+                let tau = frame.system_time(t);
+                rate * rate
+                    * match system {
+                        System::Pendulum(p) => p.drive(tau),
+                        System::Duffing(d) => d.drive(tau),
+                    }
+            })
+            .collect::<Vec<f64>>()
+    });
     let columns: [&'static str; 3] = match (system, &reported) {
         (System::Duffing(_), _) => ["t", "x", "v"],
         (System::Pendulum(_), Reported::Counts(_)) => ["t", "count", "omega"],
@@ -595,10 +618,22 @@ pub fn run(args: &SimulateArgs, quiet: bool) -> anyhow::Result<()> {
     };
     let keep = |n: usize| kept.as_ref().is_none_or(|k| k[n]);
     let rows = (0..samples).filter(|&n| keep(n)).count();
-    write_record(args, &columns, &stamps, &reported, &traj.omega, &keep, rows)?;
+    let columns_written: Vec<&'static str> = columns
+        .iter()
+        .copied()
+        .chain(drive.is_some().then_some("p"))
+        .collect();
+    let record = Written {
+        columns: &columns_written,
+        stamps: &stamps,
+        reported: &reported,
+        velocity: &traj.omega,
+        drive: drive.as_deref(),
+    };
+    write_record(args, &record, &keep, rows)?;
 
     if let Some(path) = &args.truth {
-        let truth = truth(args, system, &timing, encoder, gaps, rows, columns)?;
+        let truth = truth(args, system, &timing, encoder, gaps, rows, columns_written)?;
         let text = serde_json::to_string_pretty(&truth)?;
         crate::output::write_atomically(path, |w: &mut dyn Write| writeln!(w, "{text}"))
             .context("--truth")?;
@@ -632,15 +667,30 @@ fn printed(v: f64, decimals: Option<usize>) -> f64 {
     }
 }
 
+/// The columns of a simulated record, as written.
+struct Written<'a> {
+    /// Their names: time, value, velocity, and `p` with a drive.
+    columns: &'a [&'a str],
+    stamps: &'a [f64],
+    reported: &'a Reported,
+    velocity: &'a [f64],
+    /// The drive, with --write-drive.
+    drive: Option<&'a [f64]>,
+}
+
 fn write_record(
     args: &SimulateArgs,
-    columns: &[&str; 3],
-    stamps: &[f64],
-    reported: &Reported,
-    velocity: &[f64],
+    record: &Written<'_>,
     keep: &dyn Fn(usize) -> bool,
     rows: usize,
 ) -> anyhow::Result<()> {
+    let Written {
+        columns,
+        stamps,
+        reported,
+        velocity,
+        drive,
+    } = *record;
     let npy = args
         .out
         .extension()
@@ -650,7 +700,7 @@ fn write_record(
         return crate::output::write_atomically(&args.out, |w: &mut dyn Write| {
             let mut writer = npyz::WriteOptions::<f64>::new()
                 .default_dtype()
-                .shape(&[rows as u64, 3])
+                .shape(&[rows as u64, columns.len() as u64])
                 .writer(w)
                 .begin_nd()?;
             for n in (0..stamps.len()).filter(|&n| keep(n)) {
@@ -659,6 +709,9 @@ fn write_record(
                     Reported::Counts(k) => f64::from(k[n]),
                 };
                 writer.extend([printed(stamps[n], td), x, printed(velocity[n], vd)])?;
+                if let Some(p) = drive {
+                    writer.push(&printed(p[n], vd))?;
+                }
             }
             writer.finish()
         })
@@ -671,7 +724,11 @@ fn write_record(
                 Reported::Values(x) => text(x[n], vd),
                 Reported::Counts(k) => k[n].to_string(),
             };
-            writeln!(w, "{},{x},{}", text(stamps[n], td), text(velocity[n], vd))?;
+            write!(w, "{},{x},{}", text(stamps[n], td), text(velocity[n], vd))?;
+            match drive {
+                Some(p) => writeln!(w, ",{}", text(p[n], vd))?,
+                None => writeln!(w)?,
+            }
         }
         Ok(())
     })
@@ -725,7 +782,7 @@ struct Truth {
     samples_per_period: f64,
     samples_simulated: usize,
     rows: usize,
-    columns: [&'static str; 3],
+    columns: Vec<&'static str>,
     transient_periods: usize,
     initial: [f64; 2],
     noise_sigma: f64,
@@ -773,7 +830,7 @@ fn truth(
     encoder: Option<Encoder>,
     gaps: Option<Gaps>,
     rows: usize,
-    columns: [&'static str; 3],
+    columns: Vec<&'static str>,
 ) -> anyhow::Result<Truth> {
     let offset = encoder.map_or(0.0, |e| e.zero_offset());
     let at_zero = match args.time_origin {

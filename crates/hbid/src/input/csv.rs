@@ -37,8 +37,12 @@ pub(super) fn read<'a>(bytes: &'a [u8], options: &ReadOptions) -> Result<Record,
         time.column().map(|i| field(Role::Time, i)),
         field(Role::Angle, angle),
     );
+    let drive_field = columns.drive.map(|i| field(Role::Drive, i));
 
-    let mut record = Record::default();
+    let mut record = Record {
+        drive: drive_field.as_ref().map(|_| Vec::new()),
+        ..Record::default()
+    };
     let mut numbers = Vec::new();
     let mut cells: Vec<&'a str> = Vec::with_capacity(width);
     let mut push = |line: u64, text: &'a str, cells: &mut Vec<&'a str>| -> Result<(), InputError> {
@@ -61,6 +65,9 @@ pub(super) fn read<'a>(bytes: &'a [u8], options: &ReadOptions) -> Result<Record,
             record.t.push(time.value(cells, line)?);
         }
         record.theta.push(angle_field.value(cells, line)?);
+        if let (Some(field), Some(drive)) = (&drive_field, &mut record.drive) {
+            drive.push(field.value(cells, line)?);
+        }
         numbers.push(line);
         Ok(())
     };
@@ -208,6 +215,64 @@ mod tests {
 
     fn with(text: &str, options: ReadOptions) -> Result<Record, InputError> {
         read_bytes(text.as_bytes(), &options)
+    }
+
+    /// A drive column is read beside the angle, by name or position, in text and `.npy`; it may
+    /// not be the time or the angle, and a bad cell in it names its line.
+    #[test]
+    fn reads_a_drive_column_beside_the_angle() {
+        let drive = |c: &str| ReadOptions {
+            drive: Some(c.parse().unwrap()),
+            ..Default::default()
+        };
+        let text = "t,theta,omega,acc\n0,0.1,0,5\n# c\n0.5,0.2,1,-6\n";
+        for chosen in ["acc", "4"] {
+            let r = with(text, drive(chosen)).unwrap();
+            assert_eq!((r.theta, r.drive), (vec![0.1, 0.2], Some(vec![5.0, -6.0])));
+        }
+        assert_eq!(read(text).unwrap().drive, None);
+        for taken in ["t", "theta", "1"] {
+            assert!(matches!(
+                with(text, drive(taken)),
+                Err(InputError::ColumnTwice {
+                    second: Role::Drive,
+                    ..
+                })
+            ));
+        }
+        assert!(matches!(
+            with(text, drive("p")),
+            Err(InputError::MissingColumn {
+                role: Role::Drive,
+                ..
+            })
+        ));
+        match with("t,theta,p\n0,1,2\n1,2,x\n", drive("p")) {
+            Err(e @ InputError::NotANumber { line: 3, .. }) => assert!(e.to_string().contains("'p'"), "{e}"),
+            other => panic!("{other:?}"),
+        }
+        // Two unnamed columns and a drive: no guessing of the order, the time is column 1.
+        let r = with("0.1,0,7\n0.2,1,8\n", drive("3")).unwrap();
+        assert_eq!((r.t, r.drive), (vec![0.1, 0.2], Some(vec![7.0, 8.0])));
+        // .npy: rows (t, x, p).
+        let f8: Vec<u8> = [0.0f64, 0.5, 9.0, 1.0, 0.6, f64::NAN]
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        let npy = super::super::npy::npy_bytes("<f8", "(2, 3)", false, &f8);
+        assert!(matches!(
+            read_bytes(&npy, &drive("3")),
+            Err(InputError::NonFinite {
+                role: Role::Drive,
+                ..
+            })
+        ));
+        let f8: Vec<u8> = [0.0f64, 0.5, 9.0, 1.0, 0.6, 8.0]
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        let npy = super::super::npy::npy_bytes("<f8", "(2, 3)", false, &f8);
+        assert_eq!(read_bytes(&npy, &drive("3")).unwrap().drive, Some(vec![9.0, 8.0]));
     }
 
     #[test]

@@ -68,6 +68,16 @@ pub enum InputError {
         /// What was given.
         given: String,
     },
+    /// One column chosen for two roles.
+    #[error("column {column} cannot be both the {first} and the {second}")]
+    ColumnTwice {
+        /// The column as chosen.
+        column: Column,
+        /// What it already is.
+        first: Role,
+        /// What it was also chosen for.
+        second: Role,
+    },
     /// A sampling step that is not positive and finite.
     #[error("the sampling step {dt} must be positive and finite")]
     BadStep {
@@ -222,6 +232,7 @@ impl Role {
         match self {
             Role::Time => "the time",
             Role::Angle => "a value",
+            Role::Drive => "a drive sample",
         }
     }
 }
@@ -248,6 +259,7 @@ impl InputError {
             | InputError::BadColumn { .. }
             | InputError::BadStep { .. }
             | InputError::TimeTwice
+            | InputError::ColumnTwice { .. }
             | InputError::TooFewSamples { .. }
             | InputError::TimeNotIncreasing { .. }
             | InputError::TimeGlitch { .. }

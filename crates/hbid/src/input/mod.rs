@@ -92,6 +92,8 @@ pub struct Record {
     pub theta: Vec<f64>,
     /// For text input, the line of each sample (1-based, comments included), to name it in errors.
     pub lines: Option<Vec<u64>>,
+    /// The measured drive at each time, when its column was asked for ([`ReadOptions::drive`]).
+    pub drive: Option<Vec<f64>>,
 }
 
 /// A column chosen by header name or by 1-based position.
@@ -140,13 +142,16 @@ pub struct ReadOptions {
     pub angle: Option<Column>,
     /// A fixed sampling step instead of a time column.
     pub dt: Option<f64>,
+    /// A column read beside the angle: the measured drive `p(t)` (a shaker's base acceleration, a
+    /// motor's torque), sampled with it. Never the time or the angle column.
+    pub drive: Option<Column>,
 }
 
 impl ReadOptions {
     /// Checks the options on their own: a step positive and finite, not both a step and a time
     /// column, positions counted from 1.
     pub fn validate(&self) -> Result<(), InputError> {
-        for column in [&self.time, &self.angle] {
+        for column in [&self.time, &self.angle, &self.drive] {
             if let Some(Column::Position(0)) = column {
                 return Err(InputError::BadColumn {
                     given: "0".to_owned(),
@@ -218,11 +223,37 @@ impl ReadOptions {
                 })?
             }
         };
-        let order_from_data =
-            names.is_none() && width == 2 && self.time.is_none() && self.angle.is_none() && self.dt.is_none();
+        let drive = match &self.drive {
+            Some(chosen) => {
+                let index = find(Role::Drive, chosen.clone(), names, width)?;
+                let taken = if Some(index) == time.column() {
+                    Some(Role::Time)
+                } else if index == angle {
+                    Some(Role::Angle)
+                } else {
+                    None
+                };
+                if let Some(role) = taken {
+                    return Err(InputError::ColumnTwice {
+                        column: chosen.clone(),
+                        first: role,
+                        second: Role::Drive,
+                    });
+                }
+                Some(index)
+            }
+            None => None,
+        };
+        let order_from_data = names.is_none()
+            && width == 2
+            && self.time.is_none()
+            && self.angle.is_none()
+            && self.dt.is_none()
+            && self.drive.is_none();
         Ok(Columns {
             time,
             angle,
+            drive,
             order_from_data,
         })
     }
@@ -284,6 +315,8 @@ pub enum Role {
     Time,
     /// The angle (or displacement).
     Angle,
+    /// The measured drive.
+    Drive,
 }
 
 impl std::fmt::Display for Role {
@@ -291,6 +324,7 @@ impl std::fmt::Display for Role {
         f.write_str(match self {
             Role::Time => "time",
             Role::Angle => "angle",
+            Role::Drive => "drive",
         })
     }
 }
@@ -302,6 +336,8 @@ pub(crate) struct Columns {
     pub(crate) time: Times,
     /// The angle column.
     pub(crate) angle: usize,
+    /// The measured drive's column, when asked for.
+    pub(crate) drive: Option<usize>,
     /// Two unnamed columns and nothing chosen: `time` and `angle` are columns 1 and 2 as read,
     /// and [`order_from_data`] swaps them when the data say the second is the time.
     pub(crate) order_from_data: bool,
@@ -519,6 +555,7 @@ mod tests {
             time: column(time),
             angle: column(angle),
             dt,
+            drive: None,
         }
     }
 
@@ -528,6 +565,7 @@ mod tests {
         let at = |time, angle| Columns {
             time,
             angle,
+            drive: None,
             order_from_data: false,
         };
         let none = options(None, None, None);

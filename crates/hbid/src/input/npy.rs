@@ -68,10 +68,21 @@ pub(super) fn read(bytes: &[u8], options: &ReadOptions) -> Result<Record, InputE
         Role::Time
     };
     check_finite(&t, time_role, &theta)?;
+    let drive = columns.drive.map(|c| array.column(c));
+    if let Some(drive) = &drive
+        && let Some((i, &value)) = drive.iter().enumerate().find(|(_, v)| !v.is_finite())
+    {
+        return Err(InputError::NonFinite {
+            at: Location::Sample(i + 1),
+            role: Role::Drive,
+            value,
+        });
+    }
     let mut record = Record {
         t,
         theta,
         lines: None,
+        drive,
     };
     if columns.order_from_data {
         super::order_from_data(&mut record);

@@ -268,7 +268,7 @@ proptest! {
         angle in column(),
         dt in step(),
     ) {
-        check_read(&bytes, &ReadOptions { time, angle, dt })?;
+        check_read(&bytes, &ReadOptions { time, angle, dt, drive: None })?;
     }
 
     /// A record written in any supported layout reads back to the same samples, each numbered by
@@ -339,6 +339,7 @@ proptest! {
                 time: Some(Column::Position(tc + 1)),
                 angle: Some(Column::Position(xc + 1)),
                 dt: None,
+                drive: None,
             };
             (options, column(tc), column(xc))
         };

@@ -96,7 +96,7 @@ impl GridRecord {
     /// the samples ([`InputError::TimeUnresolved`]); a glitch not repaired
     /// ([`InputError::TimeGlitch`]), the first in the record.
     pub fn fit(record: Record, options: &GridOptions) -> Result<Self, InputError> {
-        let Record { t, theta, lines } = record;
+        let Record { t, theta, lines, .. } = record;
         let n = t.len();
         if n < 2 {
             return Err(InputError::TooFewSamples { found: n, needed: 2 });
@@ -559,6 +559,7 @@ mod tests {
             theta: (0..t.len()).map(|i| i as f64).collect(),
             lines: Some((0..t.len() as u64).map(|i| i + 2).collect()),
             t,
+            drive: None,
         }
     }
 
@@ -868,6 +869,7 @@ mod tests {
             t,
             theta: theta.clone(),
             lines: None,
+            drive: None,
         };
         let u =
             GridRecord::fit(rec, &GridOptions::default()).map_err(|e| TestCaseError::fail(e.to_string()))?;

@@ -6,10 +6,10 @@ use std::fmt;
 use circle_signal::{SampleClock, Segment};
 use hb_basis::BasisKind;
 use hb_solve::{
-    Assembly, Bootstrap, BootstrapParams, EXPLAINED_WARNING_ORBITS, EXPLAINED_WARNING_WINDOWS, FitQuality,
-    Forcing, HarmonicBalance, Harmonics, IdentifiedModel, IdentifyParams, LinearSystem, LstsqSolver,
-    ModelForm, NoiseCorrection, QrSolver, SelectParams, Selection, SolveError, TermList, WeakForm,
-    bootstrap_fit, build_system, fit_quality, select_terms,
+    Assembly, Bootstrap, BootstrapParams, DriveSamples, EXPLAINED_WARNING_ORBITS, EXPLAINED_WARNING_WINDOWS,
+    FitQuality, Forcing, HarmonicBalance, Harmonics, IdentifiedModel, IdentifyParams, LinearSystem,
+    LstsqSolver, ModelForm, NoiseCorrection, QrSolver, SelectParams, Selection, SolveError, TermList,
+    WeakForm, bootstrap_fit, build_system, fit_quality, select_terms,
 };
 
 use super::PipelineError;
@@ -91,6 +91,7 @@ pub struct ModelSpec {
     bootstrap: Option<BootstrapParams>,
     weak: WeakForm,
     selection: Option<SelectParams>,
+    drive: Option<DriveSamples>,
 }
 
 impl ModelSpec {
@@ -106,6 +107,7 @@ impl ModelSpec {
             bootstrap: None,
             weak: WeakForm::default(),
             selection: None,
+            drive: None,
         }
     }
 
@@ -155,6 +157,14 @@ impl ModelSpec {
         self
     }
 
+    /// The samples of the measured drive `p` of the form's terms, on the record's grid (sample
+    /// `n` of both at the same time; see [`hb_solve::DriveSamples`]). Terms in `p` are balanced by
+    /// [`Method::Windowed`] only.
+    pub fn with_drive_samples(mut self, drive: DriveSamples) -> Self {
+        self.drive = Some(drive);
+        self
+    }
+
     /// The method.
     pub fn method(&self) -> Method {
         self.method
@@ -169,11 +179,14 @@ impl ModelSpec {
             Some(p) => Some((self.form.term_list(&self.basis)?, p)),
             None => None,
         };
-        let params = IdentifyParams::builder(*clock)
+        let mut builder = IdentifyParams::builder(*clock)
             .form(self.form)
             .harmonics(harmonics)
-            .noise_correction(self.noise)
-            .build()?;
+            .noise_correction(self.noise);
+        if let Some(drive) = self.drive {
+            builder = builder.drive_samples(drive);
+        }
+        let params = builder.build()?;
         Ok(Setup {
             method: self.method,
             basis: self.basis,
@@ -351,12 +364,20 @@ impl Setup {
         if let known @ Forcing::Known { .. } = self.params.form().forcing() {
             form = form.with_forcing(known);
         }
-        let params = IdentifyParams::builder(*self.params.clock())
+        if let Some(column) = self.params.form().drive_column()
+            && form.has_measured_drive()
+        {
+            form = form.with_drive_column(column);
+        }
+        let mut builder = IdentifyParams::builder(*self.params.clock())
             .form(form)
             .harmonics(self.params.harmonics())
             .noise_correction(self.params.noise_correction())
-            .velocity_harmonics(self.params.velocity_harmonics())
-            .build()?;
+            .velocity_harmonics(self.params.velocity_harmonics());
+        if let Some(drive) = self.params.drive_samples() {
+            builder = builder.drive_samples(drive.clone());
+        }
+        let params = builder.build()?;
         Ok((kept, params, selection))
     }
 }
