@@ -472,7 +472,7 @@ fn a_general_model_evaluates_its_terms() {
 fn a_general_model_is_saved_with_its_terms() {
     let m = pendulum();
     let json = m.to_json().unwrap();
-    assert!(json.contains("\"version\": 3"), "{json}");
+    assert!(json.contains("\"version\": 4"), "{json}");
     assert!(
         json.contains("\"terms\": [") && json.contains("\"sin(2t)*sin(x)\""),
         "{json}"
