@@ -42,11 +42,12 @@ def test_to_json_is_the_cli_json(pendulum):
     result = hbid.identify(pendulum.x, t=pendulum.t, bootstrap=50, seed=3)
     j = json.loads(result.to_json())
     assert set(j) == {
-        "method", "basis", "terms", "coefficients", "std_errors", "orbits_used", "rows",
+        "method", "basis", "terms", "drive_column", "coefficients", "std_errors", "orbits_used", "rows",
         "condition_number", "residual_rms", "intervals", "interval_level",
         "explained", "unexplained", "residual_spectrum", "warning", "selection",
     }
     assert j["selection"] is None and result.selection is None
+    assert j["drive_column"] is None
     assert 0.99 < result.explained <= 1.0 and result.warning is None
     assert j["coefficients"] == result.coefficients
     assert j["std_errors"] == result.std_errors
