@@ -21,6 +21,16 @@ fn motion(t: f64) -> (f64, f64, f64) {
     (x, v, acc)
 }
 
+/// Windows of the default length over a displacement `x` on the line.
+fn line_windows(clock: &SampleClock, x: &[f64]) -> Vec<circle_signal::Segment> {
+    Windows::builder(clock)
+        .domain(Domain::Line)
+        .build()
+        .unwrap()
+        .segments(x)
+        .unwrap()
+}
+
 /// Any motion satisfies `x'' + c x' + k x + b x³ − p = 0` exactly for the drive
 /// `p = x'' + c x' + k x + b x³` it takes: a drive with no period at all. The weak form finds
 /// `c`, `k`, `b` and the coefficient −1 of `p` to the accuracy of its quadrature, whatever `p`'s
@@ -42,12 +52,7 @@ fn a_drive_of_no_period_is_balanced_exactly_by_the_weak_form() {
         .drive_samples(DriveSamples::new(p.clone()).unwrap())
         .build()
         .unwrap();
-    let segments = Windows::builder(&clock)
-        .domain(Domain::Line)
-        .build()
-        .unwrap()
-        .segments(&x)
-        .unwrap();
+    let segments = line_windows(&clock, &x);
     let basis = BasisKind::from(Polynomial::new(3).unwrap());
     let model = identify(
         basis,
@@ -108,12 +113,7 @@ fn a_drive_times_the_velocity_is_balanced_at_the_series_velocity() {
         .drive_samples(DriveSamples::new(p).unwrap())
         .build()
         .unwrap();
-    let segments = Windows::builder(&clock)
-        .domain(Domain::Line)
-        .build()
-        .unwrap()
-        .segments(&x)
-        .unwrap();
+    let segments = line_windows(&clock, &x);
     let basis = BasisKind::from(Polynomial::new(1).unwrap());
     let model = identify(
         basis,
@@ -134,12 +134,7 @@ fn a_drive_times_the_velocity_is_balanced_at_the_series_velocity() {
 fn missing_mismatched_or_broken_drive_samples_and_the_papers_method_are_refused() {
     let clock = SampleClock::new(2.0, 32).unwrap();
     let x: Vec<f64> = (0..32 * 40).map(|i| motion(clock.time(i)).0).collect();
-    let segments = Windows::builder(&clock)
-        .domain(Domain::Line)
-        .build()
-        .unwrap()
-        .segments(&x)
-        .unwrap();
+    let segments = line_windows(&clock, &x);
     let basis = BasisKind::from(Polynomial::new(1).unwrap());
     let form = || ModelForm::from_terms("x', x, p".parse().unwrap());
     let run = |params: &IdentifyParams, weak: bool| {
@@ -237,12 +232,7 @@ fn a_model_in_the_measured_drive_is_simulated_with_its_recorded_drive() {
         .drive_samples(DriveSamples::new(p.clone()).unwrap())
         .build()
         .unwrap();
-    let segments = Windows::builder(&clock)
-        .domain(Domain::Line)
-        .build()
-        .unwrap()
-        .segments(&traj.theta)
-        .unwrap();
+    let segments = line_windows(&clock, &traj.theta);
     let basis = BasisKind::from(Polynomial::new(3).unwrap());
     let model = identify(
         basis,
@@ -319,12 +309,7 @@ fn the_drive_column_is_saved_and_format_3_models_still_load() {
     let clock = SampleClock::new(2.0, 32).unwrap();
     let x: Vec<f64> = (0..32 * 40).map(|i| motion(clock.time(i)).0).collect();
     let p: Vec<f64> = (0..x.len()).map(|i| (0.7 * clock.time(i)).sin()).collect();
-    let segments = Windows::builder(&clock)
-        .domain(Domain::Line)
-        .build()
-        .unwrap()
-        .segments(&x)
-        .unwrap();
+    let segments = line_windows(&clock, &x);
     let params = IdentifyParams::builder(clock)
         .form(ModelForm::from_terms("x', x, p".parse().unwrap()).with_drive_column("base acc"))
         .drive_samples(DriveSamples::new(p).unwrap())
