@@ -225,13 +225,18 @@ pub(crate) fn harmonic_rows<B: Basis + ?Sized>(
 /// refused here; the weak form, which needs no periodic segment, balances them.
 fn refuse_measured_drive(params: &IdentifyParams) -> Result<(), SolveError> {
     match params.form().terms().and_then(|list| list.measured_term()) {
-        Some(term) => Err(SolveError::MeasuredDriveUnsupported {
-            term: term.to_string(),
-            method: "the harmonic balance of periodic orbits (upo)",
-            why: "an orbit is periodic in the state, not in a measured drive, whose Fourier series over the \
-                  orbit does not close; use the weak form on windows (windowed)",
-        }),
+        Some(term) => Err(measured_drive_refused(term.to_string())),
         None => Ok(()),
+    }
+}
+
+/// The refusal of a term in the measured drive `p` by the paper's method.
+fn measured_drive_refused(term: String) -> SolveError {
+    SolveError::MeasuredDriveUnsupported {
+        term,
+        method: "the harmonic balance of periodic orbits (upo)",
+        why: "an orbit is periodic in the state, not in a measured drive, whose Fourier series over the \
+              orbit does not close; use the weak form on windows (windowed)",
     }
 }
 
@@ -526,13 +531,7 @@ fn general_columns<B: Basis + ?Sized>(
             (PositionFactor::One, VelocityFactor::One) => match term.drive {
                 DriveFactor::One => a[(0, c)] = 1.0,
                 // Refused before assembly (`refuse_measured_drive`).
-                DriveFactor::Measured => {
-                    return Err(SolveError::MeasuredDriveUnsupported {
-                        term: term.name(sh.names),
-                        method: "the harmonic balance of periodic orbits (upo)",
-                        why: "use the weak form on windows (windowed)",
-                    });
-                }
+                DriveFactor::Measured => return Err(measured_drive_refused(term.name(sh.names))),
                 DriveFactor::Cos(q) | DriveFactor::Sin(q) => {
                     let j = q as usize * k;
                     if j <= m {

@@ -31,6 +31,30 @@ fn line_windows(clock: &SampleClock, x: &[f64]) -> Vec<circle_signal::Segment> {
         .unwrap()
 }
 
+/// The parameters of `form` on `clock` with the measured drive `p`.
+fn with_drive(clock: SampleClock, form: ModelForm, p: Vec<f64>) -> IdentifyParams {
+    IdentifyParams::builder(clock)
+        .form(form)
+        .drive_samples(DriveSamples::new(p).unwrap())
+        .build()
+        .unwrap()
+}
+
+/// The weak form's fit (QR) of `params` over windows of `x` on the line, on the polynomial
+/// basis of `degree`.
+fn weak_fit(degree: usize, x: &[f64], params: &IdentifyParams) -> Result<IdentifiedModel, SolveError> {
+    let basis = BasisKind::from(Polynomial::new(degree).unwrap());
+    let segments = line_windows(params.clock(), x);
+    identify(
+        basis,
+        x,
+        &segments,
+        params,
+        &WeakForm::default(),
+        &QrSolver::default(),
+    )
+}
+
 /// Any motion satisfies `x'' + c x' + k x + b x³ − p = 0` exactly for the drive
 /// `p = x'' + c x' + k x + b x³` it takes: a drive with no period at all. The weak form finds
 /// `c`, `k`, `b` and the coefficient −1 of `p` to the accuracy of its quadrature, whatever `p`'s
@@ -47,22 +71,12 @@ fn a_drive_of_no_period_is_balanced_exactly_by_the_weak_form() {
         p.push(ai + c * vi + k * xi + b * xi * xi * xi);
     }
     let list: TermList = "x', x, x^3, p".parse().unwrap();
-    let params = IdentifyParams::builder(clock)
-        .form(ModelForm::from_terms(list).with_drive_column("p"))
-        .drive_samples(DriveSamples::new(p.clone()).unwrap())
-        .build()
-        .unwrap();
-    let segments = line_windows(&clock, &x);
-    let basis = BasisKind::from(Polynomial::new(3).unwrap());
-    let model = identify(
-        basis,
-        &x,
-        &segments,
-        &params,
-        &WeakForm::default(),
-        &QrSolver::default(),
-    )
-    .unwrap();
+    let params = with_drive(
+        clock,
+        ModelForm::from_terms(list).with_drive_column("p"),
+        p.clone(),
+    );
+    let model = weak_fit(3, &x, &params).unwrap();
     for (name, want) in [("x'", c), ("x", k), ("x^3", b), ("p", -1.0)] {
         let got = model.coefficient(name).unwrap().value;
         assert!((got - want).abs() < 1e-6 * want.abs(), "{name}: {got} vs {want}");
@@ -78,15 +92,7 @@ fn a_drive_of_no_period_is_balanced_exactly_by_the_weak_form() {
         .form(ModelForm::from_terms(phase))
         .build()
         .unwrap();
-    let wrong = identify(
-        basis,
-        &x,
-        &segments,
-        &params,
-        &WeakForm::default(),
-        &QrSolver::default(),
-    )
-    .unwrap();
+    let wrong = weak_fit(3, &x, &params).unwrap();
     assert!((wrong.coefficient("x").unwrap().value - k).abs() > 1e-3);
 }
 
@@ -108,22 +114,8 @@ fn a_drive_times_the_velocity_is_balanced_at_the_series_velocity() {
         })
         .collect();
     let list: TermList = "x', x, p*x', p".parse().unwrap();
-    let params = IdentifyParams::builder(clock)
-        .form(ModelForm::from_terms(list))
-        .drive_samples(DriveSamples::new(p).unwrap())
-        .build()
-        .unwrap();
-    let segments = line_windows(&clock, &x);
-    let basis = BasisKind::from(Polynomial::new(1).unwrap());
-    let model = identify(
-        basis,
-        &x,
-        &segments,
-        &params,
-        &WeakForm::default(),
-        &QrSolver::default(),
-    )
-    .unwrap();
+    let params = with_drive(clock, ModelForm::from_terms(list), p);
+    let model = weak_fit(1, &x, &params).unwrap();
     for (name, want) in [("x'", c), ("x", k), ("p*x'", e), ("p", -1.0)] {
         let got = model.coefficient(name).unwrap().value;
         assert!((got - want).abs() < 1e-4 * want.abs(), "{name}: {got} vs {want}");
@@ -139,14 +131,7 @@ fn missing_mismatched_or_broken_drive_samples_and_the_papers_method_are_refused(
     let form = || ModelForm::from_terms("x', x, p".parse().unwrap());
     let run = |params: &IdentifyParams, weak: bool| {
         if weak {
-            identify(
-                basis,
-                &x,
-                &segments,
-                params,
-                &WeakForm::default(),
-                &QrSolver::default(),
-            )
+            weak_fit(1, &x, params)
         } else {
             identify(
                 basis,
@@ -160,31 +145,19 @@ fn missing_mismatched_or_broken_drive_samples_and_the_papers_method_are_refused(
     };
     let without = IdentifyParams::builder(clock).form(form()).build().unwrap();
     assert!(matches!(run(&without, true), Err(SolveError::MissingDriveSamples { term }) if term == "p"));
-    let short = IdentifyParams::builder(clock)
-        .form(form())
-        .drive_samples(DriveSamples::new(vec![1.0; x.len() - 1]).unwrap())
-        .build()
-        .unwrap();
+    let short = with_drive(clock, form(), vec![1.0; x.len() - 1]);
     assert!(matches!(
         run(&short, true),
         Err(SolveError::DriveLengthMismatch { drive, record }) if drive + 1 == record
     ));
     let mut broken = vec![1.0; x.len()];
     broken[100] = f64::NAN;
-    let broken = IdentifyParams::builder(clock)
-        .form(form())
-        .drive_samples(DriveSamples::new(broken).unwrap())
-        .build()
-        .unwrap();
+    let broken = with_drive(clock, form(), broken);
     assert!(matches!(
         run(&broken, true),
         Err(SolveError::NonFiniteDriveSample { index: 100, .. })
     ));
-    let fine = IdentifyParams::builder(clock)
-        .form(form())
-        .drive_samples(DriveSamples::new(vec![1.0; x.len()]).unwrap())
-        .build()
-        .unwrap();
+    let fine = with_drive(clock, form(), vec![1.0; x.len()]);
     let refused = run(&fine, false).unwrap_err();
     assert!(
         matches!(refused, SolveError::MeasuredDriveUnsupported { .. }),
@@ -227,22 +200,12 @@ fn a_model_in_the_measured_drive_is_simulated_with_its_recorded_drive() {
         .with_start_time(traj.t[0])
         .unwrap();
     let p: Vec<f64> = traj.t.iter().map(|&t| duffing.drive(t)).collect();
-    let params = IdentifyParams::builder(clock)
-        .form(ModelForm::from_terms("x', x, x^3, p".parse().unwrap()))
-        .drive_samples(DriveSamples::new(p.clone()).unwrap())
-        .build()
-        .unwrap();
-    let segments = line_windows(&clock, &traj.theta);
-    let basis = BasisKind::from(Polynomial::new(3).unwrap());
-    let model = identify(
-        basis,
-        &traj.theta,
-        &segments,
-        &params,
-        &WeakForm::default(),
-        &QrSolver::default(),
-    )
-    .unwrap();
+    let params = with_drive(
+        clock,
+        ModelForm::from_terms("x', x, x^3, p".parse().unwrap()),
+        p.clone(),
+    );
+    let model = weak_fit(3, &traj.theta, &params).unwrap();
     for (name, want) in [("x'", 0.25), ("x", -1.0), ("x^3", 1.0), ("p", -1.0)] {
         let got = model.coefficient(name).unwrap().value;
         assert!((got - want).abs() < 1e-6, "{name}: {got} vs {want}");
@@ -283,16 +246,13 @@ fn a_model_in_the_measured_drive_is_simulated_with_its_recorded_drive() {
         "identified {a} vs true {b} drive periods"
     );
     // A model without a term in p takes no signal.
-    let plain = identify(
-        basis,
+    let plain = weak_fit(
+        3,
         &traj.theta,
-        &segments,
         &IdentifyParams::builder(clock)
             .form(ModelForm::from_terms("x', x, x^3, cos(t)".parse().unwrap()))
             .build()
             .unwrap(),
-        &WeakForm::default(),
-        &QrSolver::default(),
     )
     .unwrap();
     let signal = DriveSignal::new(0.0, 1.0, DriveSamples::new(vec![0.0, 1.0]).unwrap()).unwrap();
@@ -309,22 +269,12 @@ fn the_drive_column_is_saved_and_format_3_models_still_load() {
     let clock = SampleClock::new(2.0, 32).unwrap();
     let x: Vec<f64> = (0..32 * 40).map(|i| motion(clock.time(i)).0).collect();
     let p: Vec<f64> = (0..x.len()).map(|i| (0.7 * clock.time(i)).sin()).collect();
-    let segments = line_windows(&clock, &x);
-    let params = IdentifyParams::builder(clock)
-        .form(ModelForm::from_terms("x', x, p".parse().unwrap()).with_drive_column("base acc"))
-        .drive_samples(DriveSamples::new(p).unwrap())
-        .build()
-        .unwrap();
-    let basis = BasisKind::from(Polynomial::new(1).unwrap());
-    let model = identify(
-        basis,
-        &x,
-        &segments,
-        &params,
-        &WeakForm::default(),
-        &QrSolver::default(),
-    )
-    .unwrap();
+    let params = with_drive(
+        clock,
+        ModelForm::from_terms("x', x, p".parse().unwrap()).with_drive_column("base acc"),
+        p,
+    );
+    let model = weak_fit(1, &x, &params).unwrap();
     let json = model.to_json().unwrap();
     assert!(
         json.contains("\"version\": 4") && json.contains("\"drive_column\": \"base acc\""),

@@ -283,16 +283,21 @@ impl Setup {
     /// The unexplained fraction of the fit over `segments` of `signal` (no bootstrap), and
     /// whether the model has a constant term `1`: what [`super::fit_drift`] minimises.
     pub fn unexplained(&self, signal: &[f64], segments: &[Segment]) -> Result<(f64, bool), SolveError> {
-        let system = build_system(
+        let system = self.system(signal, segments)?;
+        let fit = system.solve(self.solver.as_ref())?;
+        let constant = system.names().iter().any(|n| n == "1");
+        Ok((fit_quality(&system, &fit.solution)?.unexplained, constant))
+    }
+
+    /// The stacked rows of the method over `segments` of `signal` ([`build_system`]).
+    fn system(&self, signal: &[f64], segments: &[Segment]) -> Result<LinearSystem, SolveError> {
+        build_system(
             &self.basis,
             signal,
             segments,
             &self.params,
             self.assembly.as_ref(),
-        )?;
-        let fit = system.solve(self.solver.as_ref())?;
-        let constant = system.names().iter().any(|n| n == "1");
-        Ok((fit_quality(&system, &fit.solution)?.unexplained, constant))
+        )
     }
 
     /// [`Setup::identify`], calling `progress` with each step as it starts.
@@ -303,13 +308,7 @@ impl Setup {
         mut progress: impl FnMut(IdentifyStep),
     ) -> Result<Identification, SolveError> {
         progress(IdentifyStep::Assemble);
-        let system = build_system(
-            &self.basis,
-            signal,
-            segments,
-            &self.params,
-            self.assembly.as_ref(),
-        )?;
+        let system = self.system(signal, segments)?;
         let (system, params, selection) = match &self.selection {
             Some((library, select)) => {
                 progress(IdentifyStep::Select);
