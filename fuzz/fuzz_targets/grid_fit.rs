@@ -3,7 +3,7 @@
 //! repeated, backwards, swapped) and jitter where the fuzzer puts them.
 #![no_main]
 
-use hbid::input::Record;
+use hb_record::input::Record;
 use hbid_fuzz::fit_and_check;
 use libfuzzer_sys::arbitrary::{self, Arbitrary};
 use libfuzzer_sys::fuzz_target;

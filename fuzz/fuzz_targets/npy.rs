@@ -2,7 +2,7 @@
 //! with the column options chosen by the first byte; whatever is read goes to the grid fit.
 #![no_main]
 
-use hbid::input::{Column, ReadOptions, read_bytes};
+use hb_record::input::{Column, ReadOptions, read_bytes};
 use hbid_fuzz::{check_error, check_record};
 use libfuzzer_sys::fuzz_target;
 

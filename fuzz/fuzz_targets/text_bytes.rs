@@ -2,7 +2,7 @@
 //! columns and with a sampling step instead of a time column.
 #![no_main]
 
-use hbid::input::{ReadOptions, read_bytes};
+use hb_record::input::{ReadOptions, read_bytes};
 use hbid_fuzz::{check_error, check_record, line_count};
 use libfuzzer_sys::fuzz_target;
 

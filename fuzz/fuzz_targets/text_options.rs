@@ -4,7 +4,7 @@
 //! every notation, names, quotes) and separators, so that most inputs get past the first row.
 #![no_main]
 
-use hbid::input::{Column, ReadOptions, read_bytes};
+use hb_record::input::{Column, ReadOptions, read_bytes};
 use hbid_fuzz::{check_error, check_record, fit_and_check, line_count};
 use libfuzzer_sys::arbitrary::{self, Arbitrary};
 use libfuzzer_sys::fuzz_target;
@@ -117,7 +117,7 @@ fuzz_target!(|input: Input| {
         Ok(record) => {
             check_record(&record, Some(lines));
             // Unwrapped angles read as times too: the fit takes any finite column.
-            let swapped = hbid::input::Record {
+            let swapped = hb_record::input::Record {
                 t: record.theta.clone(),
                 theta: record.t.clone(),
                 lines: record.lines.clone(),

@@ -20,7 +20,7 @@ use pendulum_sim::{Pendulum, SimulationConfig, simulate};
 use rayon::prelude::*;
 use upo_search::{CloseReturns, OrbitSource, Segment, Windows};
 
-use hbid::plot::{BLUE, Figure, GREEN, GREY, INK, ORANGE, PURPLE, RED, Series, Style};
+use hb_plot::{BLUE, Figure, GREEN, GREY, INK, ORANGE, PURPLE, RED, Series, Style};
 
 /// Samples per forcing period of every record.
 const P: usize = 25;
@@ -212,7 +212,7 @@ impl Method {
         }
     }
 
-    fn color(self) -> hbid::plot::RGBColor {
+    fn color(self) -> hb_plot::RGBColor {
         match self {
             Method::Upo => ORANGE,
             Method::UpoCorrected => RED,

@@ -9,7 +9,7 @@ use hb_basis::{Basis, Harmonic, Hat};
 use hb_solve::IdentifiedModel;
 use pendulum_sim::{ModelCheck, Pendulum, section_energy_distance};
 
-use hbid::plot::{BLUE, Figure, GREY, ORANGE, RED, Series, Style};
+use hb_plot::{BLUE, Figure, GREY, ORANGE, RED, Series, Style};
 
 /// The paper's pendulum as a model on the harmonic basis K = 1 (method notes section 1): the
 /// truth of Table I and of the hat curves.
@@ -232,7 +232,7 @@ pub fn hat_curves(
             y_range: Some((-1.8, 1.8)),
         }
         .save(&out.join(&name))?;
-        hbid::plot::add_figure(
+        hb_plot::add_figure(
             figures,
             name,
             format!(
@@ -335,7 +335,7 @@ pub fn validation_section(
             y_range: Some((-3.5, 3.5)),
         }
         .save(&out.join(&name))?;
-        hbid::plot::add_figure(
+        hb_plot::add_figure(
             figures,
             name,
             format!("Poincaré section of {} (Fig. 8).", v.label),

@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 use anyhow::Context;
 use circle_signal::wrap;
 use hb_basis::{BasisKind, Harmonic, Hat};
-use hbid::pipeline::{
+use hb_pipeline::pipeline::{
     Embedded, InitialState, Method, ModelSpec, Pipeline, PipelineOptions, PredictionOptions, Record,
     RecordComparison, Stage, ValidationOptions,
 };
@@ -21,7 +21,7 @@ use circle_signal::{RotationSplit, SampleClock, unwrap};
 use upo_search::{Catalogue, Segment};
 
 use crate::identification::{Identified, Validation, hat_curves, table_one, validation_section};
-use hbid::plot::{BLUE, Figure, GREY, ORANGE, RED, Series, Style};
+use hb_plot::{BLUE, Figure, GREY, ORANGE, RED, Series, Style};
 
 /// Sizes of a run.
 struct Plan {
@@ -164,7 +164,7 @@ pub fn run(out: &Path, quick: bool) -> anyhow::Result<()> {
         .with_record_comparison(RecordComparison::None)?;
     let specs = models()?;
     let options = PipelineOptions {
-        embed: hbid::pipeline::EmbedOptions::default().with_compared_metric(Domain::Line),
+        embed: hb_pipeline::pipeline::EmbedOptions::default().with_compared_metric(Domain::Line),
         models: specs
             .iter()
             .map(|&(_, _, method, basis)| ModelSpec::new(method, basis))
@@ -274,7 +274,7 @@ pub fn run(out: &Path, quick: bool) -> anyhow::Result<()> {
             y_range: Some((-std::f64::consts::PI, std::f64::consts::PI)),
         }
         .save(&out.join(name))?;
-        hbid::plot::add_figure(
+        hb_plot::add_figure(
             &mut figures,
             name,
             "Reconstructed phase plane of the wrapped angle with the AMI delay (paper Fig. 2a).".to_owned(),
@@ -295,7 +295,7 @@ pub fn run(out: &Path, quick: bool) -> anyhow::Result<()> {
             y_range: None,
         }
         .save(&out.join(name))?;
-        hbid::plot::add_figure(
+        hb_plot::add_figure(
             &mut figures,
             name,
             "Poincaré section of the true pendulum (paper Fig. 2b).",
@@ -325,7 +325,7 @@ pub fn run(out: &Path, quick: bool) -> anyhow::Result<()> {
             y_range: Some((-std::f64::consts::PI, std::f64::consts::PI)),
         }
         .save(&out.join(name))?;
-        hbid::plot::add_figure(
+        hb_plot::add_figure(
             &mut figures,
             name,
             "The wrapped angle record, first 40 forcing periods.",
@@ -614,7 +614,7 @@ fn orbit_figures(
             y_range: Some((-PI, PI)),
         }
         .save(&out.join(name))?;
-        hbid::plot::add_figure(
+        hb_plot::add_figure(
             figures,
             name,
             "A period-4 orbit from the close-return search, as the encoder reports it (Fig. 1a).",
@@ -636,7 +636,7 @@ fn orbit_figures(
             y_range: None,
         }
         .save(&out.join(name))?;
-        hbid::plot::add_figure(
+        hb_plot::add_figure(
             figures,
             name,
             "The period-4 orbit unwrapped into a continuous signal (Fig. 1b).",
@@ -672,7 +672,7 @@ fn orbit_figures(
             y_range: None,
         }
         .save(&out.join(name))?;
-        hbid::plot::add_figure(
+        hb_plot::add_figure(
             figures,
             name,
             "Its split into a constant rotation and a periodic oscillation (Fig. 1c).",
@@ -717,7 +717,7 @@ fn orbit_figures(
         y_range: Some((-PI, PI)),
     }
     .save(&out.join(name))?;
-    hbid::plot::add_figure(
+    hb_plot::add_figure(
         figures,
         name,
         "Period-1 and period-2 orbits found by close returns, in the delay plane (Fig. 4).",
@@ -802,7 +802,7 @@ fn embed_figures(out: &Path, e: &Embedded, figures: &mut Vec<(String, String)>) 
         y_range: Some((0.0, 1.05 * e.ami.values.get(2).copied().unwrap_or(1.0))),
     }
     .save(&out.join(name))?;
-    hbid::plot::add_figure(
+    hb_plot::add_figure(
         figures,
         name,
         "Average mutual information against lag, first minimum marked (Fig. 3), from lag 2 (I(0) and I(1) are far above).",
@@ -837,7 +837,7 @@ fn embed_figures(out: &Path, e: &Embedded, figures: &mut Vec<(String, String)>) 
         y_range: Some((0.0, 1.05)),
     }
     .save(&out.join(name))?;
-    hbid::plot::add_figure(
+    hb_plot::add_figure(
         figures,
         name,
         "Fraction of false nearest neighbours against dimension, circle and linear metrics.",

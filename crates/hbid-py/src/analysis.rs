@@ -4,12 +4,12 @@
 use circle_signal::{Domain, Segment};
 use embedding::{AmiParams, FnnParams, average_mutual_information, false_nearest_neighbours};
 use hb_basis::BasisKind;
+use hb_pipeline::pipeline::{EmbedOptions, Method, ModelSpec, SearchOptions, WindowOptions};
+use hb_record::prepare::{Data, DriveFound};
 use hb_solve::{
     BootstrapParams, Forcing, Harmonics, LstsqSolver, ModelForm, QrSolver, SelectParams, SvdSolver, TermList,
     WeakForm,
 };
-use hbid::pipeline::{EmbedOptions, Method, ModelSpec, SearchOptions, WindowOptions};
-use hbid::prepare::{Data, DriveFound};
 use numpy::{PyArray1, PyReadonlyArray1};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
@@ -60,7 +60,7 @@ fn search_options(
 /// The delay: the one given, or the first minimum of the mutual information. The search's
 /// options are checked against the record first, so that a bad option fails before any work.
 fn delay(search: &SearchOptions, data: &Data, given: Option<usize>) -> Result<usize, Failure> {
-    let record = data.record().map_err(fail(Kind::Input))?;
+    let record = hb_pipeline::pipeline::Record::from_data(data).map_err(fail(Kind::Input))?;
     search
         .close_returns(&record, given.unwrap_or(1))
         .map_err(fail(Kind::Options))?;
@@ -306,7 +306,7 @@ pub fn identify_core(source: Source<'_>, request: Request) -> Result<Identified,
     let drive = options::drive(forcing_period, forcing_frequency, free)?;
     let forcing = opts.forcing(domain)?;
     let search = search_options(tolerance, max_period, dim)?;
-    if drive == hbid::prepare::DriveSpec::Free && method == Method::Upo {
+    if drive == hb_record::prepare::DriveSpec::Free && method == Method::Upo {
         return Err(bad(
             "forcing='none' without a forcing period is a free oscillation, which has no periodic orbits: use method='windowed'",
         ));
@@ -319,7 +319,7 @@ pub fn identify_core(source: Source<'_>, request: Request) -> Result<Identified,
     let (segments, delay, found) = match method {
         Method::Upo => {
             let d = self::delay(&search, &data, delay)?;
-            let record = data.record().map_err(fail(Kind::Input))?;
+            let record = hb_pipeline::pipeline::Record::from_data(&data).map_err(fail(Kind::Input))?;
             let segments = search
                 .close_returns(&record, d)
                 .and_then(|s| Ok(s.search_pieces(&data.x, &data.pieces)?))
@@ -333,7 +333,7 @@ pub fn identify_core(source: Source<'_>, request: Request) -> Result<Identified,
         }
         Method::Windowed => {
             let windows = opts.windows()?;
-            let record = data.record().map_err(fail(Kind::Input))?;
+            let record = hb_pipeline::pipeline::Record::from_data(&data).map_err(fail(Kind::Input))?;
             let segments: Vec<Segment> = windows
                 .windows(&record)
                 .and_then(|w| Ok(w.windows_pieces(&data.x, &data.pieces)?))
@@ -356,8 +356,12 @@ pub fn identify_core(source: Source<'_>, request: Request) -> Result<Identified,
         (kind, format!("{found}: {text}"))
     })?;
     let basis_name = opts.basis_name(domain)?;
-    let json = serde_json::to_string_pretty(&hbid::json::identification(&id, method.name(), &basis_name))
-        .map_err(fail(Kind::Identification))?;
+    let json = serde_json::to_string_pretty(&hb_pipeline::json::identification(
+        &id,
+        method.name(),
+        &basis_name,
+    ))
+    .map_err(fail(Kind::Identification))?;
     let model = id.model.to_bytes().map_err(fail(Kind::Model))?;
     let coefficients = id
         .model
@@ -560,7 +564,7 @@ pub fn embed<'py>(
         })
         .map_err(crate::raise)?;
     let out = PyDict::new(py);
-    let json = serde_json::to_string(&hbid::json::embedding(&curve, delay, &fnn))
+    let json = serde_json::to_string(&hb_pipeline::json::embedding(&curve, delay, &fnn))
         .map_err(|e| crate::errors::raise(Kind::Identification, e))?;
     out.set_item("json", json)?;
     out.set_item("delay", delay)?;
@@ -608,7 +612,7 @@ pub fn upos<'py>(
             let drive = options::drive(forcing_period, forcing_frequency, false)?;
             let data = data(source(x, t, dt, grid, repair)?, domain, drive)?;
             let d = self::delay(&search, &data, delay)?;
-            let record = data.record().map_err(fail(Kind::Input))?;
+            let record = hb_pipeline::pipeline::Record::from_data(&data).map_err(fail(Kind::Input))?;
             let catalogue = search
                 .close_returns(&record, d)
                 .and_then(|s| Ok(s.catalogue_pieces(&data.x, &data.pieces)?))
@@ -617,7 +621,7 @@ pub fn upos<'py>(
         })
         .map_err(crate::raise)?;
     let out = PyDict::new(py);
-    let json = serde_json::to_string(&hbid::json::orbits(&catalogue))
+    let json = serde_json::to_string(&hb_pipeline::json::orbits(&catalogue))
         .map_err(|e| crate::errors::raise(Kind::Identification, e))?;
     out.set_item("json", json)?;
     out.set_item("delay", delay)?;

@@ -1,9 +1,9 @@
 //! `hbid._hbid`: the extension module of the Python package `hbid` (built by maturin from
 //! `python/`).
 //!
-//! A thin layer over the library the command line uses: records are read by `hbid::input` and
-//! made ready by `hbid::prepare`, identified through `hbid::pipeline` and `hb_solve`, and the JSON
-//! is `hbid::json`'s, so messages and results are the command line's. Each function takes NumPy
+//! A thin layer over the library the command line uses: records are read by `hb_record::input` and
+//! made ready by `hb_record::prepare`, identified through `hb_pipeline::pipeline` and `hb_solve`, and the JSON
+//! is `hb_pipeline::json`'s, so messages and results are the command line's. Each function takes NumPy
 //! arrays (borrowed, not copied, when they are contiguous `float64`), releases the interpreter
 //! while Rust works, and returns plain Python values (dicts, lists, arrays, `bytes` for a model),
 //! which the pure-Python package `hbid` wraps in documented, picklable classes. Errors become the

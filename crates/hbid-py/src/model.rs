@@ -84,7 +84,7 @@ pub fn model_save(py: Python<'_>, model: &[u8], path: PathBuf) -> PyResult<()> {
     } else {
         model.to_bytes().or_raise(Kind::Model)?
     };
-    py.detach(|| hbid::output::write_atomically(&path, |w: &mut dyn Write| w.write_all(&bytes)))
+    py.detach(|| hb_pipeline::output::write_atomically(&path, |w: &mut dyn Write| w.write_all(&bytes)))
         .map_err(|e| {
             crate::errors::raise(
                 Kind::Model,

@@ -5,9 +5,9 @@ use std::f64::consts::TAU;
 
 use circle_signal::Domain;
 use hb_basis::{BasisKind, Harmonic, Hat, Polynomial};
+use hb_pipeline::pipeline::Method;
+use hb_record::prepare::DriveSpec;
 use hb_solve::{NoiseCorrection, PeriodRange};
-use hbid::pipeline::Method;
-use hbid::prepare::DriveSpec;
 use pyo3::prelude::*;
 
 use crate::errors::Kind;

@@ -1,12 +1,12 @@
 //! Records: read from a file or taken from arrays, and made ready for analysis exactly as the
-//! command line makes them (`hbid::prepare`).
+//! command line makes them (`hb_record::prepare`).
 
 use std::ops::Range;
 use std::path::PathBuf;
 
 use circle_signal::Domain;
-use hbid::input::{Column, InputError, Location, ReadOptions, Record as InputRecord, Role, read_path};
-use hbid::prepare::{Data, DriveSpec, GridData, Note, PrepareError, PrepareOptions, condition};
+use hb_record::input::{Column, InputError, Location, ReadOptions, Record as InputRecord, Role, read_path};
+use hb_record::prepare::{Data, DriveSpec, GridData, Note, PrepareError, PrepareOptions, condition};
 use numpy::{PyArray1, PyReadonlyArray1};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};

@@ -4,7 +4,7 @@
 mod cmd;
 mod progress;
 
-pub use hbid::{input, output};
+use hb_pipeline::output;
 
 use std::process::ExitCode;
 

@@ -8,12 +8,12 @@ use circle_signal::{Domain, Measured};
 use clap::Args;
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use embedding::AmiParams;
+use hb_pipeline::pipeline::{EmbedOptions, SearchOptions};
+use hb_record::input::{Column, InputError, ReadOptions, Role, read_path};
+use hb_record::prepare::{Note, PrepareError, PrepareOptions, condition};
 use hb_solve::PeriodRange;
-use hbid::input::{Column, InputError, ReadOptions, Role, read_path};
-use hbid::pipeline::{EmbedOptions, SearchOptions};
-use hbid::prepare::{Note, PrepareError, PrepareOptions, condition};
 
-pub use hbid::prepare::{Data, DriveFound, DriveSpec};
+pub use hb_record::prepare::{Data, DriveFound, DriveSpec};
 
 /// The command-line values of a [`Domain`]: `circle` or `line` (`linear` too where `also_linear`,
 /// the name classic embedding tools give plain differences).
@@ -291,7 +291,9 @@ impl SearchArgs {
 
     /// The close-return search on `data` with `delay`, validated.
     pub fn close_returns(&self, data: &Data, delay: usize) -> anyhow::Result<upo_search::CloseReturns> {
-        Ok(self.options()?.close_returns(&data.record()?, delay)?)
+        Ok(self
+            .options()?
+            .close_returns(&hb_pipeline::pipeline::Record::from_data(data)?, delay)?)
     }
 
     /// The delay: the one given, or the first minimum of the AMI. The search's options are checked
@@ -328,9 +330,9 @@ mod tests {
     #[test]
     fn input_errors_name_the_options_that_fix_them() {
         let glitch = |isolated| InputError::TimeGlitch {
-            at: hbid::input::Location::Line(7),
+            at: hb_record::input::Location::Line(7),
             t: 1.5,
-            fault: hbid::input::StampFault::OffGrid,
+            fault: hb_record::input::StampFault::OffGrid,
             expected: 1.25,
             dt: 0.25,
             isolated,

@@ -44,7 +44,7 @@ pub fn run(args: &EmbedArgs, quiet: bool) -> anyhow::Result<()> {
     let metric = args.metric.unwrap_or(data.domain);
     let max_lag = args
         .max_lag
-        .unwrap_or_else(|| hbid::pipeline::EmbedOptions::default().max_lag(data.p));
+        .unwrap_or_else(|| hb_pipeline::pipeline::EmbedOptions::default().max_lag(data.p));
     let (curve, delay) = ami(
         data.longest(),
         &AmiParams::new(metric)
@@ -59,7 +59,7 @@ pub fn run(args: &EmbedArgs, quiet: bool) -> anyhow::Result<()> {
     if args.json {
         println!(
             "{}",
-            serde_json::to_string(&hbid::json::embedding(&curve, delay, &fnn))?
+            serde_json::to_string(&hb_pipeline::json::embedding(&curve, delay, &fnn))?
         );
     } else {
         println!("{}", data.summary());

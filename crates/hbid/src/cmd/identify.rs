@@ -6,14 +6,14 @@ use anyhow::{Context, bail};
 use circle_signal::{Domain, Segment};
 use clap::{Args, ValueEnum};
 use hb_basis::{BasisKind, Harmonic, Hat, Polynomial};
+use hb_pipeline::pipeline::{Identification, ModelSpec, Setup, TermSelection, WindowOptions};
 use hb_solve::{
     BootstrapParams, DriveSamples, Forcing, Harmonics, IdentifiedModel, LstsqSolver, MAX_DRIVE_HARMONIC,
     ModelForm, NoiseCorrection, QrSolver, SelectParams, SvdSolver, TermList, WeakForm,
 };
-use hbid::pipeline::{Identification, ModelSpec, Setup, TermSelection, WindowOptions};
 use upo_search::Windows;
 
-pub use hbid::pipeline::Method;
+pub use hb_pipeline::pipeline::Method;
 
 use super::data::{Data, DriveFound, DriveSpec, InputArgs, SearchArgs};
 
@@ -44,6 +44,13 @@ pub fn drive_note(data: &Data) -> Option<String> {
     (!notes.is_empty()).then(|| notes.join("\n"))
 }
 
+/// The command-line values of a [`Method`]: `upo` or `windowed`.
+fn method_parser() -> impl clap::builder::TypedValueParser<Value = Method> {
+    use clap::builder::TypedValueParser;
+    clap::builder::PossibleValuesParser::new(Method::ALL.map(Method::name))
+        .map(|name| name.parse::<Method>().unwrap_or(Method::Upo))
+}
+
 /// Least-squares solver.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum SolverArg {
@@ -68,7 +75,7 @@ pub struct IdentifyArgs {
     #[command(flatten)]
     pub input: InputArgs,
     /// Identification method.
-    #[arg(long, value_enum, default_value_t = Method::Upo)]
+    #[arg(long, default_value_t = Method::Upo, value_parser = method_parser())]
     pub method: Method,
     /// Basis of the unknown functions: harmonic:K (cos kx, sin kx, k = 1..K), hat:N (N periodic hats), poly:D
     /// (x .. x^D). Default: harmonic:1 on the circle, poly:3 on the line.
@@ -431,14 +438,14 @@ impl IdentifyArgs {
                 .search_pieces(&data.x, &data.pieces)?,
             Method::Windowed => self
                 .windows()?
-                .windows(&data.record()?)?
+                .windows(&hb_pipeline::pipeline::Record::from_data(data)?)?
                 .windows_pieces(&data.x, &data.pieces)?,
         })
     }
 }
 
 /// For a velocity or acceleration record: the integrated record with the drift that the model of
-/// `setup` explains best over `segments` ([`hbid::pipeline::fit_drift`]), and a note of it on
+/// `setup` explains best over `segments` ([`hb_pipeline::pipeline::fit_drift`]), and a note of it on
 /// standard error; `None` for a displacement record.
 pub fn fitted_drift(
     args: &IdentifyArgs,
@@ -451,8 +458,9 @@ pub fn fitted_drift(
     if measured == circle_signal::Measured::Displacement {
         return Ok(None);
     }
-    let (x, fit) = hbid::pipeline::fit_drift(setup, &data.x, &data.pieces, segments, measured, |_, _| {})
-        .with_context(|| format!("{found}: fitting the integrated record's drift"))?;
+    let (x, fit) =
+        hb_pipeline::pipeline::fit_drift(setup, &data.x, &data.pieces, segments, measured, |_, _| {})
+            .with_context(|| format!("{found}: fitting the integrated record's drift"))?;
     if fit.evaluations > 0 {
         let period = data.p as f64;
         let pieces: Vec<String> = fit
@@ -479,7 +487,7 @@ pub fn fitted_drift(
 pub fn run(args: &IdentifyArgs, quiet: bool, timings: bool) -> anyhow::Result<()> {
     let mut stages = crate::progress::Stages::new("identify", quiet, timings);
     if let Some(path) = &args.save_model {
-        crate::output::check_output_path(path).context("--save-model")?;
+        hb_pipeline::output::check_output_path(path).context("--save-model")?;
     }
     stages.start("read");
     let data = args.load(&mut |_, _| {})?;
@@ -529,7 +537,11 @@ pub fn run(args: &IdentifyArgs, quiet: bool, timings: bool) -> anyhow::Result<()
     if args.json {
         println!(
             "{}",
-            serde_json::to_string_pretty(&hbid::json::identification(&id, args.method.name(), &basis_name))?
+            serde_json::to_string_pretty(&hb_pipeline::json::identification(
+                &id,
+                args.method.name(),
+                &basis_name
+            ))?
         );
     } else {
         if let Some(selection) = &id.selection {
@@ -624,7 +636,7 @@ pub fn save_model(model: &IdentifiedModel, path: &std::path::Path) -> anyhow::Re
     } else {
         model.to_bytes()?
     };
-    crate::output::write_atomically(path, |w| w.write_all(&bytes)).map_err(Into::into)
+    hb_pipeline::output::write_atomically(path, |w| w.write_all(&bytes)).map_err(Into::into)
 }
 
 fn print_table(id: &Identification, method: &str, basis: &str) {

@@ -7,11 +7,11 @@ use std::path::{Path, PathBuf};
 use anyhow::Context;
 use clap::Args;
 use embedding::EmbeddingError;
-use hbid::pipeline::{
+use hb_pipeline::pipeline::{
     EmbedOptions, Identification, InitialState, Outcome, Pipeline, PipelineError, PipelineOptions,
     PredictionOptions, RecordComparison, Stage, TermSelection, Validation, ValidationOptions,
 };
-use hbid::plot::{BLUE, Figure, GREY, ORANGE, RED, Series, Style, add_figure};
+use hb_plot::{BLUE, Figure, GREY, ORANGE, RED, Series, Style, add_figure};
 use pendulum_sim::Domain;
 
 use super::data::{Data, DriveSpec};
@@ -135,7 +135,10 @@ pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
         }
     }
     // Every option is checked before the work.
-    let pipeline = Pipeline::new(data.record()?, options(args, &data)?)?;
+    let pipeline = Pipeline::new(
+        hb_pipeline::pipeline::Record::from_data(&data)?,
+        options(args, &data)?,
+    )?;
     bar.finish();
 
     let mut bar: Option<Progress> = None;
@@ -283,7 +286,7 @@ fn write_report(args: &ReportArgs, data: &Data, outcome: &Outcome) -> anyhow::Re
     writeln!(r)?;
 
     for res in &results {
-        let j = hbid::json::identification(res.ident, res.method.name(), &basis);
+        let j = hb_pipeline::json::identification(res.ident, res.method.name(), &basis);
         let how = match res.method {
             Method::Upo => "harmonic balance on the orbits above, the paper's method",
             Method::Windowed => "the weak form on plain windows of the record",
@@ -419,7 +422,7 @@ fn write_report(args: &ReportArgs, data: &Data, outcome: &Outcome) -> anyhow::Re
         writeln!(r, "![{caption}]({file})\n\n{caption}\n")?;
     }
     let path = out.join("README.md");
-    crate::output::write_atomically(&path, |w| w.write_all(r.as_bytes()))?;
+    hb_pipeline::output::write_atomically(&path, |w| w.write_all(r.as_bytes()))?;
     eprintln!("report written to {}", path.display());
     Ok(())
 }
@@ -540,7 +543,7 @@ fn prediction_section(
         "forcing_period": first.forcing_period,
         "models": json,
     }))?;
-    crate::output::write_atomically(&out.join("prediction.json"), |w| writeln!(w, "{text}"))?;
+    hb_pipeline::output::write_atomically(&out.join("prediction.json"), |w| writeln!(w, "{text}"))?;
     writeln!(r, "Each window's valid time is in `prediction.json`.\n")?;
     Figure {
         title: "Valid prediction time of each window",

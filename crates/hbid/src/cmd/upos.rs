@@ -25,7 +25,10 @@ pub fn run(args: &UposArgs, quiet: bool) -> anyhow::Result<()> {
     let catalogue = search.catalogue_pieces(&data.x, &data.pieces)?;
     bar.finish();
     if args.json {
-        println!("{}", serde_json::to_string(&hbid::json::orbits(&catalogue))?);
+        println!(
+            "{}",
+            serde_json::to_string(&hb_pipeline::json::orbits(&catalogue))?
+        );
     } else {
         println!("{}", data.summary());
         print_table(&catalogue, delay, catalogue.tolerance());

@@ -1,5 +1,34 @@
-//! Small plotting helpers on plotters: every figure of the reports (`hbid report`, `cargo xtask
-//! reproduce`) is a scatter or a set of lines.
+//! The figures of the reports (`hbid report`, `cargo xtask reproduce`, `cargo xtask benchmarks`):
+//! every one is a scatter or a set of lines, drawn by plotters into a PNG (or SVG) file.
+//!
+//! A figure is a plain value ([`Figure`] of [`Series`]); [`Figure::save`] draws it. A wrapped angle
+//! is never joined across ±π: a line breaks where it jumps by more than its
+//! [`Style::Line::break_above`].
+//!
+//! # Example
+//!
+//! ```
+//! use hb_plot::{BLUE, Figure, Series, Style};
+//!
+//! let dir = std::env::temp_dir().join("hb-plot-doc");
+//! std::fs::create_dir_all(&dir)?;
+//! let figure = Figure {
+//!     title: "a sine",
+//!     x_label: "t",
+//!     y_label: "x",
+//!     series: vec![Series {
+//!         label: "sin t",
+//!         points: (0..100).map(|n| (n as f64 * 0.1, (n as f64 * 0.1).sin())).collect(),
+//!         style: Style::Line { break_above: 3.0 },
+//!         color: BLUE,
+//!     }],
+//!     x_range: None,
+//!     y_range: None,
+//! };
+//! figure.save(&dir.join("sine.svg"))?;
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+#![deny(missing_docs)]
 
 use std::path::{Path, PathBuf};
 

@@ -30,7 +30,7 @@
 //! ```
 //! use circle_signal::SampleClock;
 //! use hb_basis::{BasisKind, Harmonic};
-//! use hbid::pipeline::{Method, ModelSpec, Pipeline, PipelineOptions, Record, Stage, ValidationOptions};
+//! use hb_pipeline::pipeline::{Method, ModelSpec, Pipeline, PipelineOptions, Record, Stage, ValidationOptions};
 //! use pendulum_sim::{Domain, Pendulum, SimulationConfig, simulate};
 //!
 //! let config = SimulationConfig::paper().with_samples(4_000)?;
@@ -72,7 +72,7 @@ mod setup;
 pub use drift::{DriftFit, GOLDEN_STEPS, PieceDrift, SCAN_POINTS, fit_drift};
 pub use error::PipelineError;
 pub use prediction::PredictionOptions;
-pub use setup::{Identification, IdentifyStep, Method, ModelSpec, Setup, TermSelection};
+pub use setup::{Identification, IdentifyStep, Method, ModelSpec, Setup, TermSelection, UnknownMethod};
 
 use std::ops::Range;
 
@@ -134,6 +134,11 @@ impl<'a> Record<'a> {
             domain,
             samples_per_period,
         })
+    }
+
+    /// The prepared record `data` ([`hb_record::prepare::Data`]) as the pipeline takes it.
+    pub fn from_data(data: &'a hb_record::prepare::Data) -> Result<Self, PipelineError> {
+        Self::with_pieces(&data.x, data.pieces.clone(), data.clock, data.domain)
     }
 
     /// The samples (NaN in the gaps between pieces).

@@ -15,7 +15,7 @@ use hb_solve::{
 use super::PipelineError;
 
 /// Identification method: where the segments come from and how they become equations.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Method {
     /// The paper's: harmonic balance over unstable periodic orbits found by close returns.
     Upo,
@@ -38,6 +38,28 @@ impl Method {
         self.assembly(WeakForm::default()).name()
     }
 }
+
+impl Method {
+    /// Every method, in the order of the reports.
+    pub const ALL: [Method; 2] = [Method::Upo, Method::Windowed];
+}
+
+/// `upo` or `windowed`, the names [`Method::name`] gives.
+impl std::str::FromStr for Method {
+    type Err = UnknownMethod;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Method::ALL
+            .into_iter()
+            .find(|m| m.name() == s.trim())
+            .ok_or_else(|| UnknownMethod(s.to_owned()))
+    }
+}
+
+/// A name that is no [`Method`]'s.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown method '{0}': expected 'windowed' or 'upo'")]
+pub struct UnknownMethod(pub String);
 
 impl fmt::Display for Method {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {

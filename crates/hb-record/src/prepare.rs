@@ -13,8 +13,8 @@
 //!
 //! ```
 //! use circle_signal::Domain;
-//! use hbid::input::Record;
-//! use hbid::prepare::{DriveSpec, PrepareOptions, condition};
+//! use hb_record::input::Record;
+//! use hb_record::prepare::{DriveSpec, PrepareOptions, condition};
 //!
 //! // 8 samples per forcing period of 2 time units, with a gap of 3 samples.
 //! let t: Vec<f64> = (0..80).chain(83..160).map(|n| n as f64 * 0.25).collect();
@@ -24,7 +24,7 @@
 //! assert_eq!(grid.pieces, [0..80, 83..160]);
 //! let data = grid.with_drive(DriveSpec::Period(2.0), &mut |_, _| {})?;
 //! assert_eq!(data.p, 8);
-//! # Ok::<(), hbid::prepare::PrepareError>(())
+//! # Ok::<(), hb_record::prepare::PrepareError>(())
 //! ```
 
 use std::f64::consts::PI;
@@ -43,7 +43,6 @@ use hb_solve::{
 use crate::input::{
     AngleRange, GridOptions, GridRecord, InputError, Record as InputRecord, TimeRepair, angle_range,
 };
-use crate::pipeline::{PipelineError, Record};
 
 /// What drives the record.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -295,11 +294,6 @@ impl Data {
     /// The longest piece (the whole record without gaps).
     pub fn longest(&self) -> &[f64] {
         &self.x[circle_signal::longest_piece(&self.pieces)]
-    }
-
-    /// The record as the pipeline takes it.
-    pub fn record(&self) -> Result<Record<'_>, PipelineError> {
-        Record::with_pieces(&self.x, self.pieces.clone(), self.clock, self.domain)
     }
 }
 
