@@ -13,6 +13,7 @@ capability the library does not have yet is also :class:`NotImplementedError`.
     ├── IdentificationError                a valid record that cannot be analysed as asked
     ├── SimulationError                    a simulation that failed
     ├── ModelError                         a saved model that cannot be read or written
+    ├── OutputError          (OSError)     a result file that cannot be written
     └── NotSupportedError    (NotImplementedError)  not in the library yet
 """
 
@@ -25,6 +26,7 @@ __all__ = [
     "IdentificationError",
     "SimulationError",
     "ModelError",
+    "OutputError",
     "NotSupportedError",
 ]
 
@@ -55,6 +57,11 @@ class SimulationError(HbidError):
 
 class ModelError(HbidError):
     """A saved model cannot be read or written."""
+
+
+class OutputError(HbidError, OSError):
+    """A result file (a simulated record, its truth) cannot be written: its folder is missing, or
+    it names a folder."""
 
 
 class NotSupportedError(HbidError, NotImplementedError):

@@ -31,9 +31,9 @@ def test_embed_finds_the_first_minimum_and_the_dimension(pendulum):
 def test_embed_options(pendulum):
     linear = hbid.embed(pendulum.x, t=pendulum.t, metric="linear", max_lag=30, max_dim=4, bins=8)
     assert linear.metric == "line" and len(linear.ami) == 31 and len(linear.fnn) == 4
-    with pytest.raises(hbid.OptionsError, match="bins=1 must be at least 2"):
+    with pytest.raises(hbid.OptionsError, match="bins=1: must be between 2 and 1024"):
         hbid.embed(pendulum.x, t=pendulum.t, bins=1)
-    with pytest.raises(hbid.OptionsError, match="max_dim must be at least 1"):
+    with pytest.raises(hbid.OptionsError, match="max_dim=0: must be between 1 and 8"):
         hbid.embed(pendulum.x, t=pendulum.t, max_dim=0)
     with pytest.raises(hbid.OptionsError, match="metric='taxi'"):
         hbid.embed(pendulum.x, t=pendulum.t, metric="taxi")

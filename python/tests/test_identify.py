@@ -42,9 +42,9 @@ def test_to_json_is_the_cli_json(pendulum):
     result = hbid.identify(pendulum.x, t=pendulum.t, bootstrap=50, seed=3)
     j = json.loads(result.to_json())
     assert set(j) == {
-        "method", "basis", "terms", "drive_column", "coefficients", "std_errors", "orbits_used", "rows",
-        "condition_number", "residual_rms", "intervals", "interval_level",
-        "explained", "unexplained", "residual_spectrum", "warning", "selection",
+        "method", "basis", "terms", "drive_column", "coefficients", "std_errors", "orbits_used", "segments", "rows",
+        "condition_number", "residual_rms", "intervals", "interval_level", "resamples", "no_intervals",
+        "explained", "unexplained", "residual_spectrum", "warning", "selection", "delay", "found", "record",
     }
     assert j["selection"] is None and result.selection is None
     assert j["drive_column"] is None
@@ -237,8 +237,8 @@ def test_select_from_the_default_model_with_options(pendulum):
         ({"terms": "x', x'"}, "terms"),
         ({"terms": ["x'", 3]}, "terms"),
         ({"terms": "x', x^3"}, "terms"),
-        ({"terms": "x', sin(x)", "forcing": "identified"}, "terms="),
-        ({"terms": "x', sin(x)", "parametric": False}, "terms="),
+        ({"terms": "x', sin(x)", "forcing": "identified"}, "forcing=identified: not with terms"),
+        ({"terms": "x', sin(x)", "no_parametric": True}, "no_parametric: not with terms"),
     ],
 )
 def test_bad_terms_and_selection_raise_options_errors(pendulum, kwargs, message):
@@ -263,13 +263,14 @@ def test_too_few_segments_for_a_selection_is_an_identification_error(pendulum):
         ({"basis": "spline:3"}, hbid.OptionsError, "unknown basis 'spline'"),
         ({"basis": "hat:x"}, hbid.OptionsError, "'x' is not a whole number"),
         ({"level": 1.5, "bootstrap": 100}, hbid.OptionsError, "level"),
-        ({"window_periods": 0}, hbid.OptionsError, "window_periods must be at least 1"),
-        ({"harmonics": 0}, hbid.OptionsError, "harmonics must be at least 1"),
+        ({"window_periods": 0}, hbid.OptionsError, "window_periods=0: must be at least 1"),
+        ({"harmonics": 0}, hbid.OptionsError, "harmonics=0: must be at least 1"),
         ({"solver": "lu"}, hbid.OptionsError, "solver='lu'"),
         ({"forcing_period": -1.0}, hbid.OptionsError, "must be positive and finite"),
         ({"forcing_period": "auto:3"}, hbid.OptionsError, "auto:A..B"),
         ({"forcing_period": 6.0, "forcing_frequency": 0.2}, hbid.OptionsError, "not both"),
-        ({"forcing": "none", "method": "upo"}, hbid.OptionsError, "use method='windowed'"),
+        ({"forcing": "none", "method": "upo"}, hbid.OptionsError, "use method=windowed"),
+        ({"drive_period": "none", "method": "upo"}, hbid.OptionsError, "use method=windowed"),
         ({"noise_sigma": "lots"}, hbid.OptionsError, "noise_sigma"),
         ({"signal": "sphere"}, hbid.OptionsError, "signal='sphere'"),
         ({"window_periods": 1000}, hbid.IdentificationError, "too short for period 1000"),
@@ -285,7 +286,7 @@ def test_bad_samples_raise_clear_errors(pendulum):
         hbid.identify(np.zeros((10, 2)), dt=0.1)
     with pytest.raises(hbid.OptionsError, match="not an array of numbers"):
         hbid.identify(["a", "b"], dt=0.1)
-    with pytest.raises(hbid.OptionsError, match="the time stamps t or the sampling step dt"):
+    with pytest.raises(hbid.OptionsError, match="give the time stamps t= or the sampling step dt="):
         hbid.identify(pendulum.x)
     with pytest.raises(hbid.OptionsError, match="one time per sample"):
         hbid.identify(pendulum.x, t=pendulum.t[:-1])
@@ -297,7 +298,7 @@ def test_bad_samples_raise_clear_errors(pendulum):
         hbid.identify([0.1], dt=0.1)
     with pytest.raises(hbid.HbidError):
         hbid.identify(pendulum.x[:40], t=pendulum.t[:40], bootstrap=0)
-    with pytest.raises(hbid.InputError, match=r"\(dt=\)"):
+    with pytest.raises(hbid.OptionsError, match="dt=0: must be positive and finite"):
         hbid.identify(pendulum.x, dt=0.0)
     # a strided view is accepted (copied once into a contiguous array)
     strided = hbid.identify(pendulum.x[::1], t=pendulum.t, bootstrap=0)

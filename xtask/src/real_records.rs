@@ -49,7 +49,7 @@ fn rigs() -> Vec<Rig> {
             name: "pendulum-500hz-upo",
             what: "the same record, by the paper's method (close returns)",
             simulate: &[PENDULUM],
-            identify: &["--forcing-frequency", "1.02"],
+            identify: &["--method", "upo", "--forcing-frequency", "1.02"],
             rewrite: None,
         },
         Rig {

@@ -25,10 +25,11 @@ use std::ops::Range;
 use crate::CircleError;
 
 /// What a record's sensor measured.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Measured {
-    /// The displacement (or angle) itself.
+    /// The displacement (or angle) itself (the default).
+    #[default]
     Displacement,
     /// Its first derivative (a laser vibrometer, a tachometer).
     Velocity,
@@ -43,6 +44,23 @@ impl std::fmt::Display for Measured {
             Measured::Velocity => "velocity",
             Measured::Acceleration => "acceleration",
         })
+    }
+}
+
+/// A name that is not a [`Measured`].
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown measured quantity '{0}': displacement, velocity or acceleration")]
+pub struct UnknownMeasured(pub String);
+
+/// `displacement`, `velocity` or `acceleration`, as [`Measured`]'s `Display` writes them.
+impl std::str::FromStr for Measured {
+    type Err = UnknownMeasured;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        [Measured::Displacement, Measured::Velocity, Measured::Acceleration]
+            .into_iter()
+            .find(|m| m.to_string() == s.trim().to_ascii_lowercase())
+            .ok_or_else(|| UnknownMeasured(s.to_owned()))
     }
 }
 

@@ -60,7 +60,7 @@ mod spikes;
 
 pub use clock::SampleClock;
 pub use domain::{Domain, UnknownDomain};
-pub use integrate::{Measured, cumulative_integral, displacement};
+pub use integrate::{Measured, UnknownMeasured, cumulative_integral, displacement};
 pub use oscillation::oscillation_period;
 pub use resample::{RESAMPLE_HALF_WIDTH, Resampled, ResampledPieces, resample_pieces, resample_to_whole};
 pub use segment::{OrbitSource, Segment};

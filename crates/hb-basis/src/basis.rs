@@ -656,6 +656,55 @@ impl BasisKind {
     }
 }
 
+impl BasisKind {
+    /// The basis as the command line and saved requests name it: `harmonic:K`, `hat:N` or
+    /// `poly:D` (read back by [`str::parse`]).
+    pub fn spec(&self) -> String {
+        match self {
+            Self::Harmonic(b) => format!("harmonic:{}", b.order),
+            Self::Hat(b) => format!("hat:{}", b.nodes),
+            Self::Polynomial(b) => format!("poly:{}", b.degree),
+        }
+    }
+}
+
+/// Reads [`BasisKind::spec`]: `harmonic:K` (cos kx, sin kx for k = 1..K), `hat:N` (N periodic
+/// hats) or `poly:D` (x .. x^D), the size checked by the basis's constructor.
+///
+/// ```
+/// use hb_basis::BasisKind;
+///
+/// let basis: BasisKind = "hat:8".parse()?;
+/// assert_eq!(basis.spec(), "hat:8");
+/// assert!("hat:2".parse::<BasisKind>().is_err());
+/// assert!("cheb:3".parse::<BasisKind>().is_err());
+/// # Ok::<(), hb_basis::BasisError>(())
+/// ```
+impl std::str::FromStr for BasisKind {
+    type Err = BasisError;
+
+    fn from_str(text: &str) -> Result<Self, Self::Err> {
+        let bad = |reason: String| BasisError::BadSpec {
+            text: text.to_owned(),
+            reason,
+        };
+        let (kind, n) = text
+            .split_once(':')
+            .ok_or_else(|| bad("expected harmonic:K, hat:N or poly:D".to_owned()))?;
+        let n: usize = n
+            .trim()
+            .parse()
+            .map_err(|_| bad(format!("'{}' is not a whole number", n.trim())))?;
+        let checked = |e: BasisError| bad(e.to_string());
+        Ok(match kind.trim() {
+            "harmonic" => Self::from(Harmonic::new(n).map_err(checked)?),
+            "hat" => Self::from(Hat::new(n).map_err(checked)?),
+            "poly" => Self::from(Polynomial::new(n).map_err(checked)?),
+            other => return Err(bad(format!("unknown basis '{other}' (harmonic, hat or poly)"))),
+        })
+    }
+}
+
 impl fmt::Display for BasisKind {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {

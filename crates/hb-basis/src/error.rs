@@ -40,4 +40,12 @@ pub enum BasisError {
         /// Its value.
         value: f64,
     },
+    /// A basis named in text that is not `harmonic:K`, `hat:N` or `poly:D`.
+    #[error("{reason}")]
+    BadSpec {
+        /// The text.
+        text: String,
+        /// What is wrong with it.
+        reason: String,
+    },
 }

@@ -1,35 +1,66 @@
 //! The application layer of `hbid`: what every front end (the command line `hbid`, the Python
 //! package, `cargo xtask`) runs on a record, written once.
 //!
-//! - [`pipeline`]: the whole analysis of one record, from its samples to validated models (the
-//!   delay, the segments, the identification by each method, the validation by simulation);
-//! - [`json`]: the JSON of the results;
+//! Each request is a struct of every option of its subcommand, by the command line's names (`_`
+//! for `-`), with the one default of every front end: [`IdentifyOptions`] (checked into an
+//! [`IdentifyRequest`]), [`EmbedRequest`], [`UposRequest`] and [`SimulateOptions`] (checked into
+//! a [`Rig`]). A request is built by the command line from its arguments and by Python from a
+//! JSON object of its keyword arguments ([`options::from_object`]: unknown names refused, a bad
+//! value named); its grammars (`harmonic:1`, `auto:5..7`, term lists) are the types' own.
+//!
+//! The runs ([`identify`], [`embed`], [`upos`], [`simulate()`]) take a [`Source`] (a file,
+//! arrays, or a record on its grid), make it ready the one way ([`load`]: read, grid, wrap,
+//! spikes, integrate, drive, resample) and return reports whose serialisation is the JSON of the
+//! command line's `--json` ([`IdentifyReport`], [`EmbedReport`], [`UposReport`], [`Truth`]).
+//! Errors are one [`RunError`] with a [`ErrorKind`]; messages name options between `«` and `»`,
+//! and [`Spelling::render`] writes them as the front end spells them (`--drive-col`,
+//! `drive_col=`).
+//!
+//! - [`pipeline`]: the whole analysis of one record behind `hbid report` and `cargo xtask
+//!   reproduce` (embedding, orbits, identification by each method, validation by simulation);
+//! - [`observe`]: progress and notices of a run ([`Observer`]);
 //! - [`output`]: result files written atomically (all or nothing, even on an interrupt).
 //!
-//! Nothing here prints; progress comes through callbacks. Files are touched only where a caller
-//! names one ([`output`]).
+//! Nothing here prints; files are touched only where a caller names one.
 //!
 //! # Example
 //!
-//! ```
-//! use circle_signal::SampleClock;
-//! use hb_basis::{BasisKind, Harmonic};
-//! use hb_pipeline::pipeline::{Method, ModelSpec};
-//! use pendulum_sim::{Pendulum, SimulationConfig, simulate};
-//! use upo_search::Windows;
+//! The paper's pendulum, simulated as `hbid simulate` does and identified as `hbid identify`
+//! does; the same request from Python's keyword arguments is the same request.
 //!
-//! let trajectory = simulate(&Pendulum::paper(), &SimulationConfig::paper().with_samples(2_000)?)?;
-//! let x = trajectory.wrapped();
-//! let clock = SampleClock::nondimensional(25)?.with_start_time(trajectory.t[0])?;
-//! let windows = Windows::new(&clock)?.windows(&x)?;
-//! let id = ModelSpec::new(Method::Windowed, BasisKind::from(Harmonic::new(1)?))
-//!     .setup(&clock)?
-//!     .identify(&x, &windows)?;
-//! assert!((id.model.coefficient("sin(t)*cos(x)").unwrap().value + 1.52).abs() < 1e-6);
+//! ```
+//! use hb_pipeline::{IdentifyOptions, IdentifyRequest, Rig, SimulateOptions, Source};
+//!
+//! let rig = Rig::new(SimulateOptions { samples: Some(2_000), ..SimulateOptions::default() })?;
+//! let table = hb_pipeline::simulate(&rig, &mut ())?.table();
+//! let (t, x): (Vec<f64>, Vec<f64>) = table.iter().map(|row| (row[0], row[1])).unzip();
+//! let request = IdentifyRequest::new(IdentifyOptions { bootstrap: 0, ..IdentifyOptions::default() })?;
+//! let source = Source::Arrays { x: &x, t: Some(&t), drive: None };
+//! let report = hb_pipeline::identify(source, &request, &mut ())?;
+//! let drive = report.identification.model.coefficient("sin(t)*cos(x)").unwrap().value;
+//! assert!((drive + 1.52).abs() < 1e-5);
+//! assert_eq!(IdentifyRequest::from_json(serde_json::json!({"bootstrap": 0}))?, request);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 #![deny(missing_docs)]
 
-pub mod json;
+pub mod embed;
+pub mod error;
+pub mod identify;
+pub mod observe;
+pub mod options;
 pub mod output;
 pub mod pipeline;
+pub mod record;
+pub mod simulate;
+
+pub use embed::{EmbedReport, EmbedRequest, UposReport, UposRequest, embed, upos};
+pub use error::{ErrorKind, RunError};
+pub use identify::{
+    ForcingTerms, IdentifyOptions, IdentifyReport, IdentifyRequest, OrbitOptions, SolverKind, identify,
+    identify_data,
+};
+pub use observe::{Notice, Notices, Observer, Stage};
+pub use options::{OptionError, Spelling};
+pub use record::{DriveFrequency, DrivePeriod, RecordOptions, RecordSummary, Source, condition_source, load};
+pub use simulate::{Rig, SimulateOptions, Simulation, Truth, simulate};

@@ -9,10 +9,10 @@ use std::sync::Mutex;
 #[non_exhaustive]
 pub enum OutputError {
     /// The path names a folder, not a file.
-    #[error("--out {} is a folder; give a file name", .0.display())]
+    #[error("{} is a folder; give a file name", .0.display())]
     IsAFolder(PathBuf),
     /// The folder the file would be written into does not exist.
-    #[error("the folder {} of --out does not exist", .0.display())]
+    #[error("the folder {} does not exist", .0.display())]
     NoSuchFolder(PathBuf),
     /// No temporary file could be created in the folder.
     #[error("cannot create a file in {}", folder.display())]

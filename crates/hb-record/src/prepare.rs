@@ -47,12 +47,89 @@ use crate::input::{
 /// What drives the record.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum DriveSpec {
-    /// A known forcing period.
+    /// A known drive period, in the record's time unit.
     Period(f64),
-    /// A forcing period to estimate from the record, within this range if given.
+    /// A drive period to estimate from the record, within this range if given.
     Auto(Option<PeriodRange>),
     /// No drive: a free oscillation, whose mean period is the unit of the windows.
     Free,
+}
+
+/// How a drive is given in text: by its period or by its frequency.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DriveUnit {
+    /// A period in the record's time unit (`T`, and `auto:A..B` between periods A and B).
+    Period,
+    /// A frequency in cycles per time unit of the record, hertz for seconds (`F`, and
+    /// `auto:A..B` between frequencies A and B).
+    Frequency,
+}
+
+/// A drive given in text that is none of `T`, `auto`, `auto:A..B` or `none`.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{reason}")]
+pub struct BadDrive {
+    /// The text.
+    pub text: String,
+    /// What is wrong with it.
+    pub reason: String,
+}
+
+impl DriveSpec {
+    /// Reads a drive as the command line and Python give it, by its period or its frequency
+    /// (`unit`): a positive number, `auto` (estimated from the record), `auto:A..B` (estimated
+    /// between A and B) or `none` (a free oscillation).
+    ///
+    /// ```
+    /// use hb_record::prepare::{DriveSpec, DriveUnit};
+    ///
+    /// assert_eq!(DriveSpec::parse("4", DriveUnit::Frequency)?, DriveSpec::Period(0.25));
+    /// assert_eq!(DriveSpec::parse("none", DriveUnit::Period)?, DriveSpec::Free);
+    /// assert!(matches!(DriveSpec::parse("auto:0.5..2", DriveUnit::Frequency)?, DriveSpec::Auto(Some(_))));
+    /// assert!(DriveSpec::parse("-1", DriveUnit::Period).is_err());
+    /// # Ok::<(), hb_record::prepare::BadDrive>(())
+    /// ```
+    pub fn parse(text: &str, unit: DriveUnit) -> Result<Self, BadDrive> {
+        let bad = |reason: String| BadDrive {
+            text: text.to_owned(),
+            reason,
+        };
+        let number = |s: &str| -> Result<f64, BadDrive> {
+            let v: f64 = s
+                .trim()
+                .parse()
+                .map_err(|_| bad(format!("'{}' is not a number", s.trim())))?;
+            if !(v.is_finite() && v > 0.0) {
+                return Err(bad(format!("{v} must be positive and finite")));
+            }
+            Ok(v)
+        };
+        let trimmed = text.trim();
+        if trimmed.eq_ignore_ascii_case("none") {
+            return Ok(Self::Free);
+        }
+        if let Some(rest) = trimmed.strip_prefix("auto") {
+            if rest.is_empty() {
+                return Ok(Self::Auto(None));
+            }
+            let (a, b) = rest
+                .strip_prefix(':')
+                .and_then(|r| r.split_once(".."))
+                .ok_or_else(|| bad("expected a number, auto, auto:A..B or none".to_owned()))?;
+            let (a, b) = (number(a)?, number(b)?);
+            let range = match unit {
+                DriveUnit::Period => PeriodRange::periods(a, b),
+                DriveUnit::Frequency => PeriodRange::frequencies(a, b),
+            }
+            .map_err(|e| bad(e.to_string()))?;
+            return Ok(Self::Auto(Some(range)));
+        }
+        let v = number(trimmed)?;
+        Ok(Self::Period(match unit {
+            DriveUnit::Period => v,
+            DriveUnit::Frequency => 1.0 / v,
+        }))
+    }
 }
 
 /// Where a record's time unit for the analysis came from.

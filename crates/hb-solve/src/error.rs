@@ -149,6 +149,16 @@ pub enum SolveError {
         /// Samples per forcing period.
         samples_per_period: usize,
     },
+    /// A setting given in text that does not read as one.
+    #[error("{name} '{text}': expected {expected}")]
+    InvalidText {
+        /// The setting.
+        name: &'static str,
+        /// The text given.
+        text: String,
+        /// What it should be.
+        expected: &'static str,
+    },
     /// A parameter is out of range.
     #[error("invalid {name}: {value} ({why})")]
     InvalidParameter {

@@ -552,6 +552,47 @@ impl NoiseCorrection {
     }
 }
 
+/// Reads a correction as the command line gives it: `auto` ([`NoiseCorrection::Estimated`]),
+/// `none`, or the standard deviation `σ` in radians ([`NoiseCorrection::Given`], checked).
+///
+/// ```
+/// use hb_solve::NoiseCorrection;
+///
+/// assert_eq!("auto".parse::<NoiseCorrection>()?, NoiseCorrection::Estimated);
+/// assert_eq!("0.01".parse::<NoiseCorrection>()?, NoiseCorrection::Given { sigma: 0.01 });
+/// assert!("-1".parse::<NoiseCorrection>().is_err() && "x".parse::<NoiseCorrection>().is_err());
+/// # Ok::<(), hb_solve::SolveError>(())
+/// ```
+impl std::str::FromStr for NoiseCorrection {
+    type Err = SolveError;
+
+    fn from_str(s: &str) -> Result<Self, SolveError> {
+        match s.trim() {
+            "auto" => Ok(Self::Estimated),
+            "none" => Ok(Self::None),
+            text => match text.parse::<f64>() {
+                Ok(sigma) => Self::Given { sigma }.validate(),
+                Err(_) => Err(SolveError::InvalidText {
+                    name: "noise sigma",
+                    text: text.to_owned(),
+                    expected: "a number of radians, auto or none",
+                }),
+            },
+        }
+    }
+}
+
+/// The text [`str::parse`] reads back: `auto`, `none` or `σ`.
+impl fmt::Display for NoiseCorrection {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::None => f.write_str("none"),
+            Self::Estimated => f.write_str("auto"),
+            Self::Given { sigma } => write!(f, "{sigma}"),
+        }
+    }
+}
+
 /// The samples of a measured drive `p(t)` (the factor `p` of a term), one per sample of the
 /// record it was measured with and on the same grid (NaN where the record has gaps, which no
 /// segment reaches): what a term in `p` is balanced from.

@@ -1,51 +1,37 @@
 //! The reference of the Dask throughput measurement (`python/examples/dask_throughput.py`): the
 //! same simulations and identifications as the Python sweep, run by Rust alone on a rayon pool.
 
+use hb_pipeline::{IdentifyOptions, IdentifyRequest, Rig, RunError, SimulateOptions, Source};
 use pyo3::prelude::*;
 use rayon::prelude::*;
 
-use crate::analysis::{IdentifyOptions, Request, identify_core};
-use crate::errors::Kind;
-use crate::options::Failure;
-use crate::record::Source;
-use crate::simulate::{Rig, run_rig};
+use crate::errors::{Kind, raise, run_error};
 
 /// One case of the sweep: `simulate(samples=samples, noise=noise, seed=seed)`, then
 /// `identify(x, t=t, bootstrap=bootstrap, seed=seed)` with every other argument at its default.
-fn case(samples: usize, bootstrap: usize, noise: f64, seed: u64) -> Result<String, Failure> {
-    let record = run_rig(&Rig::paper(Some(samples), Some(noise), seed))?;
-    let request = Request {
-        signal: "circle".to_owned(),
-        forcing_period: None,
-        forcing_frequency: None,
-        options: IdentifyOptions {
-            method: "windowed".to_owned(),
-            basis: None,
-            harmonics: None,
-            window_periods: None,
-            window_order: None,
-            bootstrap,
-            level: None,
-            seed,
-            noise_sigma: None,
-            solver: "qr".to_owned(),
-            forcing: None,
-            parametric: true,
-            terms: None,
-            select: None,
-        },
-        tolerance: None,
-        max_period: None,
-        dim: None,
-        delay: None,
+fn case(samples: usize, bootstrap: usize, noise: f64, seed: u64) -> Result<String, RunError> {
+    let rig = Rig::new(SimulateOptions {
+        samples: Some(samples),
+        noise: Some(noise),
+        seed,
+        ..SimulateOptions::default()
+    })?;
+    let simulation = hb_pipeline::simulate(&rig, &mut ())?;
+    let table = simulation.table();
+    let t: Vec<f64> = table.iter().map(|r| r[0]).collect();
+    let x: Vec<f64> = table.iter().map(|r| r[1]).collect();
+    let request = IdentifyRequest::new(IdentifyOptions {
+        bootstrap,
+        seed,
+        ..IdentifyOptions::default()
+    })?;
+    let source = Source::Arrays {
+        x: &x,
+        t: Some(&t),
+        drive: None,
     };
-    let source = Source::Raw {
-        x: &record.x,
-        t: Some(&record.t),
-        dt: None,
-        repair: false,
-    };
-    Ok(identify_core(source, request)?.json)
+    let report = hb_pipeline::identify(source, &request, &mut ())?;
+    serde_json::to_string_pretty(&report).map_err(|e| hb_pipeline::OptionError::new("options", e).into())
 }
 
 /// The sweep's cases `(noise, seed)` on a rayon pool of `threads`, without the interpreter: the
@@ -62,7 +48,7 @@ pub fn rayon_sweep(
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
-        .map_err(|e| crate::raise((Kind::Options, format!("threads={threads}: {e}"))))?;
+        .map_err(|e| raise(Kind::Options, format!("threads={threads}: {e}")))?;
     py.detach(|| {
         pool.install(|| {
             cases
@@ -71,5 +57,5 @@ pub fn rayon_sweep(
                 .collect::<Result<Vec<_>, _>>()
         })
     })
-    .map_err(crate::raise)
+    .map_err(run_error)
 }

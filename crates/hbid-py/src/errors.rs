@@ -1,8 +1,10 @@
-//! Rust errors as the Python exceptions of `hbid.errors`, with the command line's messages.
+//! Rust errors as the Python exceptions of `hbid.errors`, with the command line's messages and
+//! the options named as the Python arguments that set them.
 
 use std::error::Error;
 use std::fmt::Display;
 
+use hb_pipeline::{ErrorKind, OptionError, RunError, Spelling};
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 use pyo3::types::PyString;
@@ -21,6 +23,8 @@ pub enum Kind {
     Simulation,
     /// `ModelError`: a saved model that cannot be read or written.
     Model,
+    /// `OutputError`: a result file that cannot be written.
+    Output,
 }
 
 impl Kind {
@@ -31,21 +35,38 @@ impl Kind {
             Kind::Identification => "IdentificationError",
             Kind::Simulation => "SimulationError",
             Kind::Model => "ModelError",
+            Kind::Output => "OutputError",
+        }
+    }
+}
+
+impl From<ErrorKind> for Kind {
+    fn from(kind: ErrorKind) -> Self {
+        match kind {
+            ErrorKind::Input => Kind::Input,
+            ErrorKind::Options => Kind::Options,
+            ErrorKind::Identification => Kind::Identification,
+            ErrorKind::Simulation => Kind::Simulation,
+            ErrorKind::Model => Kind::Model,
+            ErrorKind::Output => Kind::Output,
         }
     }
 }
 
 /// The message of `error` and of every error below it, joined by `": "` (as the command line
-/// prints them).
+/// prints them), with the options spelled as Python arguments.
 pub fn chain(error: &(dyn Error + 'static)) -> String {
     let mut text = error.to_string();
     let mut source = error.source();
     while let Some(e) = source {
-        text.push_str(": ");
-        text.push_str(&e.to_string());
+        let more = e.to_string();
+        if !text.contains(&more) {
+            text.push_str(": ");
+            text.push_str(&more);
+        }
         source = e.source();
     }
-    text
+    Spelling::Python.render(&text)
 }
 
 /// The exception `kind` with `message`.
@@ -63,9 +84,14 @@ pub fn raise(kind: Kind, message: impl Display) -> PyErr {
     })
 }
 
-/// The exception `kind` carrying `error`'s messages.
-pub fn from_error(kind: Kind, error: &(dyn Error + 'static)) -> PyErr {
-    raise(kind, chain(error))
+/// A run's error as its exception: the kind by the error's variant.
+pub fn run_error(error: RunError) -> PyErr {
+    raise(error.kind().into(), chain(&error))
+}
+
+/// A bad option as `OptionsError`.
+pub fn option_error(error: OptionError) -> PyErr {
+    raise(Kind::Options, error.spelled(Spelling::Python))
 }
 
 /// Converts a Rust error into the exception `kind`.
@@ -76,6 +102,6 @@ pub trait OrRaise<T> {
 
 impl<T, E: Error + 'static> OrRaise<T> for Result<T, E> {
     fn or_raise(self, kind: Kind) -> PyResult<T> {
-        self.map_err(|e| from_error(kind, &e))
+        self.map_err(|e| raise(kind, chain(&e)))
     }
 }

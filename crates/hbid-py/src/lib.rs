@@ -1,14 +1,14 @@
 //! `hbid._hbid`: the extension module of the Python package `hbid` (built by maturin from
 //! `python/`).
 //!
-//! A thin layer over the library the command line uses: records are read by `hb_record::input` and
-//! made ready by `hb_record::prepare`, identified through `hb_pipeline::pipeline` and `hb_solve`, and the JSON
-//! is `hb_pipeline::json`'s, so messages and results are the command line's. Each function takes NumPy
-//! arrays (borrowed, not copied, when they are contiguous `float64`), releases the interpreter
-//! while Rust works, and returns plain Python values (dicts, lists, arrays, `bytes` for a model),
-//! which the pure-Python package `hbid` wraps in documented, picklable classes. Errors become the
-//! exceptions of `hbid.errors` ([`errors::Kind`]) with the command line's messages, the options
-//! named as Python arguments.
+//! A thin binding of the application layer the command line runs (`hb_pipeline`): each function
+//! takes the options as a JSON object of the command line's option names (read and checked by
+//! the layer's request types, so defaults, grammars and messages are the command line's) and the
+//! samples as a path or NumPy arrays (borrowed when contiguous `float64`), releases the
+//! interpreter while Rust works, and returns plain Python values (the report's JSON text, arrays,
+//! `bytes` for a model), which the pure-Python package `hbid` wraps in documented, picklable
+//! classes. Errors become the exceptions of `hbid.errors` by their kind ([`errors::Kind`]), the
+//! options named as Python arguments.
 //!
 //! # Example (Python)
 //!
@@ -20,30 +20,21 @@
 //! ```
 #![deny(missing_docs)]
 
-mod analysis;
 mod bench;
 mod errors;
 mod model;
-mod options;
-mod record;
-mod simulate;
+mod run;
 
 use numpy::PyReadonlyArray1;
 use pyo3::prelude::*;
 
-use errors::{Kind, raise as raise_kind};
-use options::Failure;
-
-/// A failure as its exception.
-fn raise((kind, message): Failure) -> PyErr {
-    raise_kind(kind, message)
-}
+use errors::{Kind, raise};
 
 /// The samples of a one-dimensional array, borrowed: the Python side passes contiguous `float64`
 /// arrays (`numpy.ascontiguousarray`), so nothing is copied.
 fn slice<'a>(array: &'a PyReadonlyArray1<'_, f64>) -> PyResult<&'a [f64]> {
     array.as_slice().map_err(|_| {
-        raise_kind(
+        raise(
             Kind::Options,
             "the array is not contiguous: pass numpy.ascontiguousarray(x)",
         )
@@ -54,12 +45,11 @@ fn slice<'a>(array: &'a PyReadonlyArray1<'_, f64>) -> PyResult<&'a [f64]> {
 #[pymodule]
 fn _hbid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
-    m.add_function(wrap_pyfunction!(record::read, m)?)?;
-    m.add_function(wrap_pyfunction!(record::condition_arrays, m)?)?;
-    m.add_function(wrap_pyfunction!(analysis::identify, m)?)?;
-    m.add_function(wrap_pyfunction!(analysis::embed, m)?)?;
-    m.add_function(wrap_pyfunction!(analysis::upos, m)?)?;
-    m.add_function(wrap_pyfunction!(simulate::simulate, m)?)?;
+    m.add_function(wrap_pyfunction!(run::condition, m)?)?;
+    m.add_function(wrap_pyfunction!(run::identify, m)?)?;
+    m.add_function(wrap_pyfunction!(run::embed, m)?)?;
+    m.add_function(wrap_pyfunction!(run::upos, m)?)?;
+    m.add_function(wrap_pyfunction!(run::simulate, m)?)?;
     m.add_function(wrap_pyfunction!(model::model_info, m)?)?;
     m.add_function(wrap_pyfunction!(model::model_json, m)?)?;
     m.add_function(wrap_pyfunction!(model::model_from_json, m)?)?;

@@ -13,7 +13,6 @@ use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
 
 use crate::errors::{Kind, OrRaise};
-use crate::record::domain_name;
 
 /// Three arrays: time, position, velocity.
 type Arrays3<'py> = (
@@ -40,7 +39,7 @@ pub fn model_info<'py>(py: Python<'py>, model: &[u8]) -> PyResult<Bound<'py, PyD
             .collect::<Vec<_>>(),
     )?;
     out.set_item("basis", model.basis().to_string())?;
-    out.set_item("signal", domain_name(model.domain()))?;
+    out.set_item("signal", model.domain().name())?;
     out.set_item("forcing_frequency", model.forcing_frequency())?;
     match model.summary() {
         Some(s) => {

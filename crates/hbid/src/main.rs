@@ -2,6 +2,8 @@
 #![allow(clippy::print_stderr, clippy::print_stdout)]
 
 mod cmd;
+#[cfg(test)]
+mod parity;
 mod progress;
 
 use hb_pipeline::output;
@@ -60,7 +62,25 @@ enum Command {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            use clap::error::ErrorKind;
+            if matches!(
+                e.kind(),
+                ErrorKind::DisplayHelp
+                    | ErrorKind::DisplayVersion
+                    | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+            ) {
+                e.exit();
+            }
+            // The error itself, without clap's usage lines and hint: one message, as every other
+            // error of the command line.
+            let text = e.render().to_string();
+            eprintln!("{}", text.split("\n\n").next().unwrap_or(&text).trim_end());
+            return ExitCode::from(2);
+        }
+    };
     // Ctrl-C: remove whatever is half-written (results are only renamed into place when
     // complete), then exit with the conventional status of an interrupt.
     let _ = ctrlc::set_handler(|| {
@@ -80,8 +100,30 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            // Library messages name options as the command line and Python both read them;
+            // here they are spelled as the command line writes them.
+            eprintln!(
+                "error: {}",
+                hb_pipeline::Spelling::CommandLine.render(&message(&e))
+            );
             ExitCode::FAILURE
         }
     }
+}
+
+/// The error and every cause behind it, joined by `: `, each cause left out when the text before
+/// already holds it.
+fn message(error: &anyhow::Error) -> String {
+    let mut text = String::new();
+    for cause in error.chain() {
+        let part = cause.to_string();
+        if text.contains(&part) {
+            continue;
+        }
+        if !text.is_empty() {
+            text.push_str(": ");
+        }
+        text.push_str(&part);
+    }
+    text
 }

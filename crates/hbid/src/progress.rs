@@ -1,30 +1,12 @@
 //! Progress bars on stderr, hidden off a terminal and with `--quiet`.
 
+use hb_pipeline::{Notice, Observer, Spelling, Stage};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 /// A progress bar for one stage.
 pub struct Progress(ProgressBar);
 
 impl Progress {
-    /// A bar of `len` steps named `stage`.
-    pub fn new(stage: &str, len: u64, quiet: bool) -> Self {
-        let bar = ProgressBar::with_draw_target(
-            Some(len),
-            if quiet {
-                ProgressDrawTarget::hidden()
-            } else {
-                ProgressDrawTarget::stderr()
-            },
-        );
-        bar.set_style(
-            ProgressStyle::with_template("{prefix:>10} [{bar:30}] {pos}/{len} ({elapsed})")
-                .expect("a valid template")
-                .progress_chars("=> "),
-        );
-        bar.set_prefix(stage.to_owned());
-        Self(bar)
-    }
-
     /// A spinner for a stage of unknown length.
     pub fn spinner(stage: &str, quiet: bool) -> Self {
         let bar = ProgressBar::with_draw_target(
@@ -41,11 +23,6 @@ impl Progress {
         bar.set_prefix(stage.to_owned());
         bar.enable_steady_tick(std::time::Duration::from_millis(120));
         Self(bar)
-    }
-
-    /// Sets the position.
-    pub fn set(&self, pos: u64) {
-        self.0.set_position(pos);
     }
 
     /// Clears the bar.
@@ -66,6 +43,8 @@ impl Drop for Progress {
 pub struct Stages {
     bar: Progress,
     current: Option<(&'static str, std::time::Instant)>,
+    /// The last per mille of the current stage shown.
+    shown: usize,
     done: Vec<(&'static str, std::time::Duration)>,
     timings: bool,
 }
@@ -76,6 +55,7 @@ impl Stages {
         Self {
             bar: Progress::spinner(command, quiet),
             current: None,
+            shown: usize::MAX,
             done: Vec::new(),
             timings,
         }
@@ -86,6 +66,23 @@ impl Stages {
         self.end();
         self.bar.0.set_message(name);
         self.current = Some((name, std::time::Instant::now()));
+        self.shown = usize::MAX;
+    }
+
+    /// Shows progress within the current stage (redrawn at most once per mille).
+    pub fn progress(&mut self, done: usize, total: usize) {
+        let mille = done.saturating_mul(1000) / total.max(1);
+        if let Some((name, _)) = self.current
+            && mille != self.shown
+        {
+            self.shown = mille;
+            self.bar.0.set_message(format!("{name} {done}/{total}"));
+        }
+    }
+
+    /// Prints a line on stderr without garbling the spinner.
+    pub fn print(&self, line: &str) {
+        self.bar.0.suspend(|| eprintln!("{line}"));
     }
 
     fn end(&mut self) {
@@ -105,5 +102,44 @@ impl Stages {
             }
             eprintln!("{:>12} {:>9.3} s", "total", total.as_secs_f64());
         }
+    }
+}
+
+/// The command line's observer of a run: the stages on a spinner (and their times with
+/// `--timings`), notices printed on stderr as `note:` or `warning:` with the options spelled as
+/// the command line spells them.
+pub struct Console {
+    stages: Stages,
+}
+
+impl Console {
+    /// The observer of `command`.
+    pub fn new(command: &str, quiet: bool, timings: bool) -> Self {
+        Self {
+            stages: Stages::new(command, quiet, timings),
+        }
+    }
+
+    /// Ends the run's display (and prints the times with `--timings`).
+    pub fn finish(self) {
+        self.stages.finish();
+    }
+}
+
+impl Observer for Console {
+    fn stage(&mut self, stage: Stage) {
+        self.stages.start(stage.name());
+    }
+
+    fn progress(&mut self, done: usize, total: usize) {
+        self.stages.progress(done, total);
+    }
+
+    fn notice(&mut self, notice: &Notice) {
+        let kind = if notice.is_warning() { "warning" } else { "note" };
+        self.stages.print(&format!(
+            "{kind}: {}",
+            Spelling::CommandLine.render(&notice.to_string())
+        ));
     }
 }

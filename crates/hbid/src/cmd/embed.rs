@@ -2,9 +2,11 @@
 //! dimension (false nearest neighbours).
 
 use clap::Args;
-use embedding::{AmiCurve, AmiParams, Domain, FnnParams, FnnResult, false_nearest_neighbours};
+use embedding::{AmiCurve, AmiParams, Domain, FnnParams, FnnResult};
+use hb_pipeline::{EmbedReport, EmbedRequest};
 
-use super::data::{InputArgs, ami, domain_parser};
+use super::data::InputArgs;
+use crate::progress::Console;
 
 /// Options of `hbid embed`.
 #[derive(Debug, Args)]
@@ -15,14 +17,14 @@ pub struct EmbedArgs {
     #[arg(long)]
     pub max_lag: Option<usize>,
     /// Equal boxes of the mutual-information histogram.
-    #[arg(long, default_value_t = 16)]
+    #[arg(long, default_value_t = AmiParams::DEFAULT_BINS)]
     pub bins: usize,
     /// Largest embedding dimension tested by false nearest neighbours.
-    #[arg(long, default_value_t = 8)]
+    #[arg(long, default_value_t = FnnParams::DEFAULT_MAX_DIM)]
     pub max_dim: usize,
     /// Distance between samples: circle (|wrap(a - b)|, the right one for a wrapped angle) or
     /// linear (plain differences, as classic tools do). Default: that of --signal.
-    #[arg(long, value_parser = domain_parser(true))]
+    #[arg(long, value_parser = super::data::choice::<Domain>(&["circle", "line", "linear"]))]
     pub metric: Option<Domain>,
     /// Theiler window: neighbours closer in time than this many samples are not counted.
     #[arg(long, default_value_t = 0)]
@@ -32,38 +34,31 @@ pub struct EmbedArgs {
     pub json: bool,
 }
 
+impl EmbedArgs {
+    /// The application layer's request.
+    pub fn request(&self) -> EmbedRequest {
+        EmbedRequest {
+            record: self.input.options(),
+            max_lag: self.max_lag,
+            bins: self.bins,
+            max_dim: self.max_dim,
+            metric: self.metric,
+            theiler: self.theiler,
+        }
+    }
+}
+
 pub fn run(args: &EmbedArgs, quiet: bool) -> anyhow::Result<()> {
-    if args.bins < 2 {
-        anyhow::bail!("--bins {} must be at least 2", args.bins);
-    }
-    if args.max_dim == 0 {
-        anyhow::bail!("--max-dim must be at least 1");
-    }
-    let bar = crate::progress::Progress::spinner("embed", quiet);
-    let data = args.input.load()?;
-    let metric = args.metric.unwrap_or(data.domain);
-    let max_lag = args
-        .max_lag
-        .unwrap_or_else(|| hb_pipeline::pipeline::EmbedOptions::default().max_lag(data.p));
-    let (curve, delay) = ami(
-        data.longest(),
-        &AmiParams::new(metric)
-            .with_bins(args.bins)?
-            .with_max_lag(max_lag)?,
-    )?;
-    let params = FnnParams::new(metric, delay)?
-        .with_max_dim(args.max_dim)?
-        .with_theiler_window(args.theiler);
-    let fnn = false_nearest_neighbours(data.longest(), &params)?;
-    bar.finish();
+    let request = args.request();
+    request.check()?;
+    let mut console = Console::new("embed", quiet, false);
+    let report: EmbedReport = hb_pipeline::embed(args.input.source(), &request, &mut console)?;
+    console.finish();
     if args.json {
-        println!(
-            "{}",
-            serde_json::to_string(&hb_pipeline::json::embedding(&curve, delay, &fnn))?
-        );
+        println!("{}", serde_json::to_string(&report)?);
     } else {
-        println!("{}", data.summary());
-        print_table(&curve, delay, &fnn, metric);
+        println!("{}", report.record.summary);
+        print_table(&report.ami, report.delay, &report.fnn, report.metric);
     }
     Ok(())
 }

@@ -5,18 +5,21 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
+use circle_signal::Measured;
 use clap::Args;
 use embedding::EmbeddingError;
 use hb_pipeline::pipeline::{
-    EmbedOptions, Identification, InitialState, Outcome, Pipeline, PipelineError, PipelineOptions,
-    PredictionOptions, RecordComparison, Stage, TermSelection, Validation, ValidationOptions,
+    EmbedOptions, Identification, InitialState, Method, Outcome, Pipeline, PipelineError, PipelineOptions,
+    PredictionOptions, Record, RecordComparison, Stage, TermSelection, Validation, ValidationOptions,
+    fit_drift,
 };
+use hb_pipeline::{IdentifyRequest, Notice, Observer, Spelling};
 use hb_plot::{BLUE, Figure, GREY, ORANGE, RED, Series, Style, add_figure};
+use hb_record::prepare::{Data, DriveSpec};
 use pendulum_sim::Domain;
 
-use super::data::{Data, DriveSpec};
-use super::identify::{IdentifyArgs, Method};
-use crate::progress::Progress;
+use super::identify::IdentifyArgs;
+use crate::progress::{Console, Progress};
 
 /// Options of `hbid report`.
 #[derive(Debug, Args)]
@@ -26,7 +29,7 @@ pub struct ReportArgs {
     /// Folder of the report (created if missing; README.md, figures and the models go there).
     #[arg(long)]
     pub out: PathBuf,
-    /// Forcing periods simulated for each model's Poincaré section and Lyapunov exponent.
+    /// Drive periods simulated for each model's Poincaré section and Lyapunov exponent.
     #[arg(long, default_value_t = 2000)]
     pub validation_periods: usize,
 }
@@ -49,23 +52,21 @@ pub fn check_out(path: &Path) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The pipeline's options from the command line's (the models' first, as `hbid identify`
-/// checks them).
-fn options(args: &ReportArgs, data: &Data) -> anyhow::Result<PipelineOptions> {
-    let id = &args.identify;
+/// The pipeline's options from the request (the models' first, as `hbid identify` checks them).
+fn options(args: &ReportArgs, request: &IdentifyRequest, data: &Data) -> anyhow::Result<PipelineOptions> {
     let models = METHODS
         .iter()
-        .map(|&method| id.spec(data, method))
-        .collect::<anyhow::Result<_>>()?;
+        .map(|&method| request.model_spec(data, method))
+        .collect::<Result<_, _>>()?;
     let mut embed = EmbedOptions::default();
-    if let Some(delay) = id.search.delay {
+    if let Some(delay) = request.options().orbits.delay {
         embed = embed.with_delay(delay)?;
     }
     let periods = args.validation_periods;
     Ok(PipelineOptions {
         embed,
-        search: id.search.options()?,
-        windows: id.windows()?,
+        search: request.search(),
+        windows: request.windows(),
         models,
         validation: ValidationOptions::default()
             .with_section_points(periods)?
@@ -91,9 +92,30 @@ fn stage_name(stage: Stage) -> String {
 fn naming_options(error: PipelineError) -> anyhow::Error {
     match error {
         PipelineError::Embedding(EmbeddingError::NoFirstMinimum { .. }) => {
-            anyhow::Error::new(error).context("choose the delay with --delay, or raise --max-lag")
+            anyhow::Error::new(error).context("choose the delay with «delay=», or raise «max_lag=»")
         }
         error => error.into(),
+    }
+}
+
+/// The console, and the notices kept for the report's text.
+struct Kept {
+    console: Console,
+    notices: Vec<Notice>,
+}
+
+impl Observer for Kept {
+    fn stage(&mut self, stage: hb_pipeline::Stage) {
+        self.console.stage(stage);
+    }
+
+    fn progress(&mut self, done: usize, total: usize) {
+        self.console.progress(done, total);
+    }
+
+    fn notice(&mut self, notice: &Notice) {
+        self.console.notice(notice);
+        self.notices.push(notice.clone());
     }
 }
 
@@ -104,42 +126,53 @@ pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
             args.validation_periods
         );
     }
-    if let Some(col) = &args.identify.forcing_col {
+    let request = args.identify.request()?;
+    if let Some(col) = &args.identify.input.drive_col {
         anyhow::bail!(
-            "--forcing-col {col}: hbid report simulates each model for --validation-periods periods from the record's \
+            "«drive_col={col}»: hbid report simulates each model for --validation-periods periods from the record's \
              start and compares it by orbits, which a model driven by a measured drive cannot do beyond the record's \
-             samples; identify it with hbid identify --method windowed --forcing-col {col}"
+             samples; identify it with hbid identify --method windowed --drive-col {col}"
+        );
+    }
+    if request.drive() == DriveSpec::Free {
+        anyhow::bail!(
+            "a free oscillation (no drive) has no orbits or Poincaré section to report; identify it with \
+             hbid identify --method windowed --drive-period none"
         );
     }
     std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
 
-    let bar = Progress::spinner("read", quiet);
-    let drive = args.identify.input.drive(args.identify.free())?;
-    if drive == DriveSpec::Free {
-        anyhow::bail!(
-            "--forcing none without a forcing period is a free oscillation: it has no orbits or Poincaré section to report; \
-             identify it with hbid identify --method windowed --forcing none"
-        );
-    }
-    let mut data = args.identify.input.load_with(drive, &mut |_, _| {})?;
-    if let Some(note) = super::identify::drive_note(&data) {
-        eprintln!("{note}");
-    }
+    let mut kept = Kept {
+        console: Console::new("report", quiet, false),
+        notices: Vec::new(),
+    };
+    let record = args.identify.input.options();
+    let mut data = hb_pipeline::load(args.identify.input.source(), &record, request.drive(), &mut kept)?;
     // A velocity or acceleration record's drift, found once by the weak form on windows, serves
     // every model of the report.
-    if args.identify.input.measured != super::data::MeasuredArg::Displacement {
-        let setup = args.identify.spec(&data, Method::Windowed)?.setup(&data.clock)?;
-        let windows = args.identify.segments(&data, 1, Method::Windowed)?;
-        if let Some(x) = super::identify::fitted_drift(&args.identify, &data, &setup, &windows, "windows")? {
-            data.x = x;
-        }
+    if record.measured != Measured::Displacement {
+        let setup = request.model_spec(&data, Method::Windowed)?.setup(&data.clock)?;
+        let (windows, found) = request.segments(&data, 1, Method::Windowed)?;
+        let (x, fit) = fit_drift(
+            &setup,
+            &data.x,
+            &data.pieces,
+            &windows,
+            record.measured,
+            |_, _| {},
+        )
+        .with_context(|| format!("{found}: fitting the integrated record's drift"))?;
+        kept.notice(&Notice::Drift {
+            measured: record.measured,
+            fit,
+            samples_per_period: data.p,
+        });
+        data.x = x;
     }
     // Every option is checked before the work.
-    let pipeline = Pipeline::new(
-        hb_pipeline::pipeline::Record::from_data(&data)?,
-        options(args, &data)?,
-    )?;
-    bar.finish();
+    let pipeline = Pipeline::new(Record::from_data(&data)?, options(args, &request, &data)?)?;
+    let Kept { console, notices } = kept;
+    console.finish();
 
     let mut bar: Option<Progress> = None;
     let outcome = pipeline.run(|stage| {
@@ -147,15 +180,26 @@ pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
         bar = Some(Progress::spinner(&stage_name(stage), quiet));
     });
     drop(bar);
-    write_report(args, &data, &outcome.map_err(naming_options)?)
+    let notes: Vec<String> = notices
+        .iter()
+        .filter(|n| !matches!(n, Notice::Resampled { .. } | Notice::Record(_)))
+        .map(|n| Spelling::CommandLine.render(&n.to_string()))
+        .collect();
+    write_report(args, &request, &data, &notes, &outcome.map_err(naming_options)?)
 }
 
-fn write_report(args: &ReportArgs, data: &Data, outcome: &Outcome) -> anyhow::Result<()> {
+fn write_report(
+    args: &ReportArgs,
+    request: &IdentifyRequest,
+    data: &Data,
+    notes: &[String],
+    outcome: &Outcome,
+) -> anyhow::Result<()> {
     let out = &args.out;
     let embedded = &outcome.embedded;
     let (delay, fnn, ami) = (embedded.delay, &embedded.fnn, &embedded.ami.values);
     let catalogue = &outcome.segments.catalogue;
-    let basis = args.identify.basis_name(data.domain);
+    let basis = request.basis().spec();
     let results: Vec<MethodResult<'_>> = METHODS
         .iter()
         .zip(&outcome.models)
@@ -184,11 +228,9 @@ fn write_report(args: &ReportArgs, data: &Data, outcome: &Outcome) -> anyhow::Re
         data.summary(),
         data.clock.forcing_period()
     )?;
-    if let Some(note) = super::identify::drive_note(data) {
-        // The summary above already says whether the record was resampled.
-        for line in note.lines().filter(|l| !l.contains("resampled")) {
-            writeln!(r, "{}\n", line.trim_start_matches("note: "))?;
-        }
+    // The summary above already says whether the record was resampled.
+    for note in notes {
+        writeln!(r, "{note}\n")?;
     }
 
     writeln!(r, "## Delay and embedding\n")?;
@@ -286,7 +328,7 @@ fn write_report(args: &ReportArgs, data: &Data, outcome: &Outcome) -> anyhow::Re
     writeln!(r)?;
 
     for res in &results {
-        let j = hb_pipeline::json::identification(res.ident, res.method.name(), &basis);
+        let summary = res.ident.model.summary();
         let how = match res.method {
             Method::Upo => "harmonic balance on the orbits above, the paper's method",
             Method::Windowed => "the weak form on plain windows of the record",
@@ -302,10 +344,10 @@ fn write_report(args: &ReportArgs, data: &Data, outcome: &Outcome) -> anyhow::Re
             "{} segments, {} equations, condition number {:.3e}, residual RMS {:.3e}. Standard errors treat the \
              equations as independent (read them as lower bounds); the intervals come from a bootstrap over \
              segments.\n",
-            j["orbits_used"],
-            j["rows"],
-            j["condition_number"].as_f64().unwrap_or(f64::NAN),
-            j["residual_rms"].as_f64().unwrap_or(f64::NAN)
+            summary.map_or(0, |s| s.segments),
+            summary.map_or(0, |s| s.rows),
+            summary.map_or(f64::NAN, |s| s.condition),
+            summary.map_or(f64::NAN, |s| s.residual_rms)
         )?;
         if let Some(selection) = &res.ident.selection {
             selection_section(&mut r, &res.ident.model, selection)?;

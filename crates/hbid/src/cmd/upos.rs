@@ -1,9 +1,11 @@
 //! `hbid upos`: unstable periodic orbits by close returns.
 
 use clap::Args;
+use hb_pipeline::UposRequest;
 use upo_search::Catalogue;
 
 use super::data::{InputArgs, SearchArgs};
+use crate::progress::Console;
 
 /// Options of `hbid upos`.
 #[derive(Debug, Args)]
@@ -18,20 +20,19 @@ pub struct UposArgs {
 }
 
 pub fn run(args: &UposArgs, quiet: bool) -> anyhow::Result<()> {
-    let bar = crate::progress::Progress::spinner("orbits", quiet);
-    let data = args.input.load()?;
-    let delay = args.search.delay(&data)?;
-    let search = args.search.close_returns(&data, delay)?;
-    let catalogue = search.catalogue_pieces(&data.x, &data.pieces)?;
-    bar.finish();
+    let request = UposRequest {
+        record: args.input.options(),
+        orbits: args.search.options(),
+    };
+    request.check()?;
+    let mut console = Console::new("orbits", quiet, false);
+    let report = hb_pipeline::upos(args.input.source(), &request, &mut console)?;
+    console.finish();
     if args.json {
-        println!(
-            "{}",
-            serde_json::to_string(&hb_pipeline::json::orbits(&catalogue))?
-        );
+        println!("{}", serde_json::to_string(&report)?);
     } else {
-        println!("{}", data.summary());
-        print_table(&catalogue, delay, catalogue.tolerance());
+        println!("{}", report.record.summary);
+        print_table(&report.catalogue, report.delay, report.catalogue.tolerance());
     }
     Ok(())
 }

@@ -1,0 +1,884 @@
+//! The identify request: every option of `hbid identify` (and of Python's `hbid.identify`), typed
+//! and checked once ([`IdentifyOptions`] → [`IdentifyRequest`]), its run on a record
+//! ([`identify`]), and its report ([`IdentifyReport`], whose serialisation is the JSON of
+//! `hbid identify --json`).
+
+use std::fmt;
+use std::str::FromStr;
+
+use circle_signal::{Domain, Measured, Segment};
+use hb_basis::{Basis, BasisKind};
+use hb_record::prepare::{Data, DriveFound, DriveSpec, default_basis};
+use hb_solve::{
+    BootstrapParams, DriveSamples, Forcing, Harmonics, LstsqSolver, MAX_DRIVE_HARMONIC, ModelForm,
+    NoiseCorrection, QrSolver, SelectParams, SvdSolver, TermList, WeakForm,
+};
+use serde::{Deserialize, Serialize, Serializer};
+use upo_search::{CloseReturns, Windows};
+
+use crate::error::RunError;
+use crate::observe::{Notice, Observer, Stage};
+use crate::options::{OptionError, from_object, optional_text, text};
+use crate::pipeline::{
+    DriftFit, Identification, IdentifyStep, Method, ModelSpec, Record, SearchOptions, TermSelection,
+    WindowOptions, fit_drift,
+};
+use crate::record::{RecordOptions, RecordSummary, Source, load};
+
+/// The least-squares solver, by name: `qr` (column-pivoted QR) or `svd` (thin SVD).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SolverKind {
+    /// Column-pivoted QR.
+    #[default]
+    Qr,
+    /// Thin SVD.
+    Svd,
+}
+
+impl SolverKind {
+    /// The solver.
+    pub fn solver(self) -> Box<dyn LstsqSolver> {
+        match self {
+            SolverKind::Qr => Box::new(QrSolver::default()),
+            SolverKind::Svd => Box::new(SvdSolver::default()),
+        }
+    }
+}
+
+impl FromStr for SolverKind {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s.trim() {
+            "qr" => Ok(SolverKind::Qr),
+            "svd" => Ok(SolverKind::Svd),
+            other => Err(format!("unknown solver '{other}': qr or svd")),
+        }
+    }
+}
+
+impl fmt::Display for SolverKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            SolverKind::Qr => "qr",
+            SolverKind::Svd => "svd",
+        })
+    }
+}
+
+/// The external forcing terms of the default model: none, or `cos(t)`, `sin(t)` identified (the
+/// `d_1 p(t)` of the paper's eq. 2).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ForcingTerms {
+    /// No external forcing term.
+    None,
+    /// The coefficients of `cos(t)` and `sin(t)` (of `p` with a measured drive) identified.
+    Identified,
+}
+
+impl FromStr for ForcingTerms {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s.trim() {
+            "none" => Ok(ForcingTerms::None),
+            "identified" => Ok(ForcingTerms::Identified),
+            other => Err(format!("unknown forcing '{other}': none or identified")),
+        }
+    }
+}
+
+impl fmt::Display for ForcingTerms {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            ForcingTerms::None => "none",
+            ForcingTerms::Identified => "identified",
+        })
+    }
+}
+
+/// The options of the close-return search and the delay, shared by `identify`, `upos` and
+/// `report`. Defaults: the paper's (a tolerance of 3 % of the data's span, periods 1 to 16, delay
+/// vectors of dimension 2), the delay the first minimum of the average mutual information.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct OrbitOptions {
+    /// Close-return tolerance as a fraction of the span of the data (2π for an angle), in
+    /// `(0, 0.5)`.
+    pub tolerance: f64,
+    /// Longest orbit period searched, in drive periods.
+    pub max_period: usize,
+    /// Dimension of the delay vectors compared.
+    pub dim: usize,
+    /// The delay in samples (default: the first minimum of the average mutual information).
+    pub delay: Option<usize>,
+}
+
+impl Default for OrbitOptions {
+    fn default() -> Self {
+        Self {
+            tolerance: CloseReturns::DEFAULT_TOLERANCE,
+            max_period: CloseReturns::DEFAULT_MAX_PERIOD,
+            dim: CloseReturns::DEFAULT_DIMENSION,
+            delay: None,
+        }
+    }
+}
+
+impl OrbitOptions {
+    /// The search's options, checked.
+    pub fn search(&self) -> Result<SearchOptions, OptionError> {
+        let tolerance = SearchOptions::default()
+            .with_tolerance(self.tolerance)
+            .map_err(|e| OptionError::checked("tolerance", self.tolerance, &e))?;
+        let max_period = tolerance
+            .with_max_period(self.max_period)
+            .map_err(|e| OptionError::checked("max_period", self.max_period, &e))?;
+        max_period
+            .with_dimension(self.dim)
+            .map_err(|e| OptionError::checked("dim", self.dim, &e))
+    }
+
+    /// Checks the delay (at least one sample).
+    pub fn check_delay(&self) -> Result<(), OptionError> {
+        match self.delay {
+            Some(0) => Err(OptionError::value("delay", 0, "must be at least 1 sample")),
+            _ => Ok(()),
+        }
+    }
+}
+
+/// Every option of `hbid identify` as given, by the names of the command line (`_` for `-`) and of
+/// Python's keyword arguments, with their defaults. Checked by [`IdentifyRequest::new`].
+///
+/// Defaults, one for every front end: the weak form (`method = windowed`: it needs no periodic
+/// orbit, balances a measured drive as measured and reaches the noise floor; the paper's method is
+/// `upo`), the basis `harmonic:1` on the circle and `poly:3` on the line, the external forcing
+/// terms none on the circle and identified on the line, windows of 3 drive periods with the
+/// window `sin^4`, 1000 bootstrap resamples at 95 % from seed 0, no noise correction, QR.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct IdentifyOptions {
+    /// The record.
+    #[serde(flatten)]
+    pub record: RecordOptions,
+    /// `windowed` (the weak form on plain windows) or `upo` (the paper's: harmonic balance on
+    /// unstable periodic orbits found by close returns).
+    #[serde(with = "text")]
+    pub method: Method,
+    /// The basis of the unknown functions of `x`: `harmonic:K`, `hat:N` or `poly:D`.
+    #[serde(with = "optional_text")]
+    pub basis: Option<BasisKind>,
+    /// Harmonics balanced per segment (default: the method's band).
+    pub harmonics: Option<usize>,
+    /// Window length in drive periods (the weak form).
+    pub window_periods: usize,
+    /// Order `p` of the window `sin^p` (the weak form), at least 2.
+    pub window_order: u32,
+    /// Bootstrap resamples for the intervals (0: none).
+    pub bootstrap: usize,
+    /// Confidence level of the intervals.
+    pub level: f64,
+    /// Seed of the bootstrap.
+    pub seed: u64,
+    /// The correction of Gaussian noise on the angle: `σ` in radians, or `auto`.
+    #[serde(with = "optional_text")]
+    pub noise_sigma: Option<NoiseCorrection>,
+    /// `qr` or `svd`.
+    #[serde(with = "text")]
+    pub solver: SolverKind,
+    /// The close-return search (`upo`).
+    #[serde(flatten)]
+    pub orbits: OrbitOptions,
+    /// The default model's external forcing terms (default: none on the circle, identified on
+    /// the line). `none` with no drive given is a free oscillation.
+    #[serde(with = "optional_text")]
+    pub forcing: Option<ForcingTerms>,
+    /// Leave out the default model's parametric terms `cos(t)*B`, `sin(t)*B`.
+    pub no_parametric: bool,
+    /// Drive harmonics `1..=H` of the default model's drive terms.
+    pub drive_harmonics: Option<u32>,
+    /// The model's terms instead of the default (a list, see [`TermList`]).
+    #[serde(with = "optional_text")]
+    pub terms: Option<TermList>,
+    /// Model selection: the terms are a library of candidates, the kept ones refitted alone.
+    pub select: bool,
+    /// Folds of segments of the selection (at least 2).
+    pub select_folds: usize,
+    /// The smallest held-out unexplained fraction a term must remove to be kept, in `[0, 1)`.
+    pub select_tolerance: f64,
+}
+
+impl Default for IdentifyOptions {
+    fn default() -> Self {
+        Self {
+            record: RecordOptions::default(),
+            method: Method::Windowed,
+            basis: None,
+            harmonics: None,
+            window_periods: Windows::DEFAULT_PERIODS,
+            window_order: WeakForm::DEFAULT_WINDOW_ORDER,
+            bootstrap: BootstrapParams::DEFAULT_RESAMPLES,
+            level: BootstrapParams::DEFAULT_LEVEL,
+            seed: 0,
+            noise_sigma: None,
+            solver: SolverKind::Qr,
+            orbits: OrbitOptions::default(),
+            forcing: None,
+            no_parametric: false,
+            drive_harmonics: None,
+            terms: None,
+            select: false,
+            select_folds: SelectParams::DEFAULT_FOLDS,
+            select_tolerance: SelectParams::DEFAULT_TOLERANCE,
+        }
+    }
+}
+
+/// An identify request, every option checked: only a checked request runs ([`identify`]).
+/// Read from options ([`IdentifyRequest::new`]) or from a JSON object of option names
+/// ([`IdentifyRequest::from_json`], unknown names refused).
+#[derive(Debug, Clone, PartialEq)]
+pub struct IdentifyRequest {
+    options: IdentifyOptions,
+    drive: DriveSpec,
+    basis: BasisKind,
+    weak: WeakForm,
+    windows: WindowOptions,
+    search: SearchOptions,
+    bootstrap: Option<BootstrapParams>,
+    selection: Option<SelectParams>,
+}
+
+impl IdentifyRequest {
+    /// Checks `options`, alone and together.
+    pub fn new(options: IdentifyOptions) -> Result<Self, OptionError> {
+        let o = &options;
+        o.record.check()?;
+        let search = o.orbits.search()?;
+        o.orbits.check_delay()?;
+        let weak = WeakForm::new(o.window_order)
+            .map_err(|e| OptionError::checked("window_order", o.window_order, &e))?;
+        if o.window_periods == 0 {
+            return Err(OptionError::value("window_periods", 0, "must be at least 1"));
+        }
+        let windows = WindowOptions::default()
+            .with_periods(o.window_periods)
+            .map_err(|e| OptionError::checked("window_periods", o.window_periods, &e))?;
+        if o.harmonics == Some(0) {
+            return Err(OptionError::value("harmonics", 0, "must be at least 1"));
+        }
+        if let Some(noise) = o.noise_sigma {
+            noise
+                .validate()
+                .map_err(|e| OptionError::checked("noise_sigma", noise, &e))?;
+        }
+        let bootstrap = if o.bootstrap > 0 {
+            Some(
+                BootstrapParams::builder()
+                    .resamples(o.bootstrap)
+                    .level(o.level)
+                    .seed(o.seed)
+                    .build()
+                    .map_err(|e| OptionError::checked("level", o.level, &e))?,
+            )
+        } else {
+            None
+        };
+        let selection = if o.select {
+            if o.select_folds < 2 {
+                return Err(OptionError::value(
+                    "select_folds",
+                    o.select_folds,
+                    "must be at least 2",
+                ));
+            }
+            if !(0.0..1.0).contains(&o.select_tolerance) {
+                return Err(OptionError::value(
+                    "select_tolerance",
+                    o.select_tolerance,
+                    "must be a fraction of the held-out power in [0, 1)",
+                ));
+            }
+            Some(
+                SelectParams::new(o.select_folds, o.select_tolerance)
+                    .map_err(|e| OptionError::new("select", crate::options::chain(&e)))?,
+            )
+        } else {
+            None
+        };
+        if let Some(h) = o.drive_harmonics
+            && !(1..=MAX_DRIVE_HARMONIC).contains(&h)
+        {
+            return Err(OptionError::value(
+                "drive_harmonics",
+                h,
+                format!("must be between 1 and {MAX_DRIVE_HARMONIC}"),
+            ));
+        }
+        let domain = o.record.signal;
+        let free = o.forcing == Some(ForcingTerms::None) && o.record.given_drive().is_none()
+            || o.record.given_drive() == Some(DriveSpec::Free);
+        let drive = o.record.drive(free);
+        if drive == DriveSpec::Free && o.method == Method::Upo {
+            return Err(OptionError::value(
+                "method",
+                "upo",
+                "a free oscillation (no drive) has no periodic orbits: use «method=windowed»",
+            ));
+        }
+        let basis = match (&o.basis, &o.terms) {
+            (Some(b), _) => *b,
+            (None, Some(list)) => list
+                .smallest_basis()
+                .map_err(|e| OptionError::new("terms", e))?
+                .unwrap_or_else(|| default_basis(domain)),
+            (None, None) => default_basis(domain),
+        };
+        if let Some(list) = &o.terms {
+            if o.forcing == Some(ForcingTerms::Identified) {
+                return Err(OptionError::value(
+                    "forcing",
+                    "identified",
+                    "not with «terms»: name the forcing terms cos(t), sin(t) in the list",
+                ));
+            }
+            if o.no_parametric {
+                return Err(OptionError::new(
+                    "no_parametric",
+                    "not with «terms»: the list says its terms (leave out cos(t)*B, sin(t)*B)",
+                ));
+            }
+            if let Some(h) = o.drive_harmonics {
+                return Err(OptionError::value(
+                    "drive_harmonics",
+                    h,
+                    "not with «terms»: name the harmonics' terms in the list (cos(2t)*sin(x))",
+                ));
+            }
+            list.check_domain(domain)
+                .map_err(|e| OptionError::new("terms", e))?;
+            list.resolve(&basis)
+                .map_err(|e| OptionError::new("terms", format!("with the basis {}: {e}", basis.spec())))?;
+            if drive == DriveSpec::Free
+                && let Some(t) = list.phase_term()
+            {
+                return Err(OptionError::new(
+                    "terms",
+                    format!(
+                        "the term `{t}` has a drive factor, but the record is a free oscillation without a drive"
+                    ),
+                ));
+            }
+        }
+        if let (Some(col), Some(h)) = (&o.record.drive_col, o.drive_harmonics) {
+            return Err(OptionError::value(
+                "drive_harmonics",
+                h,
+                format!(
+                    "with «drive_col={col}»: the measured drive p has no harmonics to name; list terms such as \
+                     cos(2t)*sin(x) with «terms»"
+                ),
+            ));
+        }
+        if o.record.drive_col.is_some() && o.method == Method::Upo {
+            return Err(OptionError::value(
+                "method",
+                "upo",
+                "the measured drive p is balanced by the weak form only («method=windowed»): a periodic orbit of \
+                 the state does not make the series of a measured drive close",
+            ));
+        }
+        Ok(Self {
+            drive,
+            basis,
+            weak,
+            windows,
+            search,
+            bootstrap,
+            selection,
+            options,
+        })
+    }
+
+    /// A request from a JSON object of option names (Python's keyword arguments), unknown names
+    /// refused.
+    pub fn from_json(value: serde_json::Value) -> Result<Self, OptionError> {
+        Self::new(from_object(value)?)
+    }
+
+    /// The options as given.
+    pub fn options(&self) -> &IdentifyOptions {
+        &self.options
+    }
+
+    /// The drive of the record.
+    pub fn drive(&self) -> DriveSpec {
+        self.drive
+    }
+
+    /// The basis of the unknown functions: the one given, or the smallest that holds the
+    /// functions of `x` of the terms, or the domain's default.
+    pub fn basis(&self) -> BasisKind {
+        self.basis
+    }
+
+    /// The windows of the weak form.
+    pub fn windows(&self) -> WindowOptions {
+        self.windows
+    }
+
+    /// The close-return search.
+    pub fn search(&self) -> SearchOptions {
+        self.search
+    }
+
+    /// The model's form on `data`: the terms given (the measured drive's column named), or the
+    /// default with the forcing, parametric and drive-harmonic options; a free oscillation has no
+    /// drive terms.
+    pub fn form(&self, data: &Data) -> Result<ModelForm, OptionError> {
+        let o = &self.options;
+        let free = matches!(data.drive, DriveFound::Free { .. });
+        let measured = data.measured_drive.is_some();
+        let named = |form: ModelForm| match &o.record.drive_col {
+            Some(col) => form.with_drive_column(col.trim()),
+            None => form,
+        };
+        if let Some(list) = &o.terms {
+            match (list.measured_term(), measured) {
+                (Some(t), false) => {
+                    return Err(OptionError::new(
+                        "terms",
+                        format!(
+                            "the term `{t}` has the measured drive p: name the record's column that holds it with \
+                             «drive_col=»"
+                        ),
+                    ));
+                }
+                (None, true) => {
+                    return Err(OptionError::new(
+                        "drive_col",
+                        "no term of «terms» has the measured drive p",
+                    ));
+                }
+                _ => {}
+            }
+            return Ok(named(ModelForm::from_terms(list.clone())));
+        }
+        let forcing = o.forcing.unwrap_or(match data.domain {
+            Domain::Circle => ForcingTerms::None,
+            Domain::Line => ForcingTerms::Identified,
+        });
+        if measured {
+            // The measured drive p in place of cos(t) and sin(t): x', {1,p}*B and p.
+            let functions = self.basis.names().join(",");
+            let mut spec = if o.no_parametric {
+                format!("x', {{{functions}}}")
+            } else {
+                format!("x', {{1,p}}*{{{functions}}}")
+            };
+            if forcing == ForcingTerms::Identified {
+                spec.push_str(", p");
+            }
+            let list = TermList::parse(&spec).map_err(|e| OptionError::new("drive_col", e))?;
+            if !list.has_measured_drive() {
+                return Err(OptionError::new(
+                    "drive_col",
+                    "with «no_parametric» and «forcing=none» no term has the measured drive p",
+                ));
+            }
+            return Ok(named(ModelForm::from_terms(list)));
+        }
+        let mut form = ModelForm::parametric().with_forcing(match forcing {
+            ForcingTerms::None => Forcing::None,
+            ForcingTerms::Identified => Forcing::Identified,
+        });
+        if o.no_parametric || free {
+            form = form.without_parametric_terms();
+        }
+        if let Some(h) = o.drive_harmonics {
+            form = form.with_drive_harmonics(h);
+        }
+        Ok(form)
+    }
+
+    /// What to identify by `method` (the request's own, or another for a report) on `data`.
+    pub fn model_spec(&self, data: &Data, method: Method) -> Result<ModelSpec, RunError> {
+        let o = &self.options;
+        let form = self.form(data)?;
+        let mut spec = ModelSpec::new(method, self.basis)
+            .with_form(form)
+            .with_weak_form(self.weak)
+            .with_noise_correction(o.noise_sigma.unwrap_or_default())
+            .with_solver(o.solver.solver());
+        if let Some(p) = &data.measured_drive {
+            spec = spec.with_drive_samples(DriveSamples::new(p.clone())?);
+        }
+        if let Some(m) = o.harmonics {
+            spec = spec.with_harmonics(Harmonics::Fixed(m))?;
+        }
+        if let Some(params) = self.selection {
+            spec = spec.with_selection(params);
+        }
+        if let Some(b) = &self.bootstrap {
+            spec = spec.with_bootstrap(*b);
+        }
+        Ok(spec)
+    }
+
+    /// The delay: the one given, or the first minimum of the average mutual information of the
+    /// longest piece.
+    pub fn delay(&self, data: &Data, observer: &mut dyn Observer) -> Result<usize, RunError> {
+        // The search's options are checked against the record first, so that a bad option fails
+        // before any work.
+        let record = Record::from_data(data)?;
+        self.search
+            .close_returns(&record, self.options.orbits.delay.unwrap_or(1))?;
+        match self.options.orbits.delay {
+            Some(d) => Ok(d),
+            None => {
+                observer.stage(Stage::Delay);
+                crate::embed::first_minimum(data, data.domain, None, None).map(|(_, d)| d)
+            }
+        }
+    }
+
+    /// The segments of `method` on `data`: close returns with `delay`, or plain windows; and a
+    /// line saying what was found.
+    pub fn segments(
+        &self,
+        data: &Data,
+        delay: usize,
+        method: Method,
+    ) -> Result<(Vec<Segment>, String), RunError> {
+        let record = Record::from_data(data)?;
+        Ok(match method {
+            Method::Upo => {
+                let segments = self
+                    .search
+                    .close_returns(&record, delay)?
+                    .search_pieces(&data.x, &data.pieces)
+                    .map_err(crate::pipeline::PipelineError::from)?;
+                let found = format!(
+                    "{} orbit segments found at tolerance {}",
+                    segments.len(),
+                    self.options.orbits.tolerance
+                );
+                (segments, found)
+            }
+            Method::Windowed => {
+                let segments = self
+                    .windows
+                    .windows(&record)?
+                    .windows_pieces(&data.x, &data.pieces)
+                    .map_err(crate::pipeline::PipelineError::from)?;
+                let unit = if matches!(data.drive, DriveFound::Free { .. }) {
+                    "oscillation"
+                } else {
+                    "drive"
+                };
+                let found = format!(
+                    "{} windows of {} {unit} periods",
+                    segments.len(),
+                    self.options.window_periods
+                );
+                (segments, found)
+            }
+        })
+    }
+}
+
+impl Default for IdentifyRequest {
+    fn default() -> Self {
+        Self::new(IdentifyOptions::default()).expect("the default options are valid")
+    }
+}
+
+/// Read through [`IdentifyRequest::from_json`]: unknown names refused, every option checked.
+impl<'de> Deserialize<'de> for IdentifyRequest {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let value = serde_json::Value::deserialize(d)?;
+        Self::from_json(value).map_err(serde::de::Error::custom)
+    }
+}
+
+impl Serialize for IdentifyRequest {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        self.options.serialize(s)
+    }
+}
+
+/// What an identification found, with the record and the run that led to it. Its serialisation
+/// is the JSON of `hbid identify --json` and of Python's `Identification.to_json()`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct IdentifyReport {
+    /// The method.
+    pub method: Method,
+    /// The basis.
+    pub basis: BasisKind,
+    /// The model, its intervals, fit quality, warning and selection.
+    pub identification: Identification,
+    /// The record as analysed.
+    pub record: RecordSummary,
+    /// The delay of the close-return search (`upo`).
+    pub delay: Option<usize>,
+    /// The segments identified on.
+    pub segments: usize,
+    /// What was found: `12 windows of 3 drive periods`.
+    pub found: String,
+    /// The drift found for an integrated velocity or acceleration record.
+    pub drift: Option<DriftFit>,
+    /// Why there are no bootstrap intervals, when asked for and not had.
+    pub no_intervals: Option<String>,
+}
+
+/// Identifies the equation of motion of the record of `source` as `request` asks: the record
+/// read, conditioned and its drive found ([`load`]); the delay (`upo`); the segments; the drift
+/// of an integrated record; assembly, selection, least squares and the bootstrap. `observer`
+/// hears every stage and notice.
+pub fn identify(
+    source: Source<'_>,
+    request: &IdentifyRequest,
+    observer: &mut dyn Observer,
+) -> Result<IdentifyReport, RunError> {
+    let data = load(source, &request.options.record, request.drive, observer)?;
+    identify_data(&data, request, observer)
+}
+
+/// [`identify`] on a record already loaded.
+pub fn identify_data(
+    data: &Data,
+    request: &IdentifyRequest,
+    observer: &mut dyn Observer,
+) -> Result<IdentifyReport, RunError> {
+    let method = request.options.method;
+    let setup = request.model_spec(data, method)?.setup(&data.clock)?;
+    let delay = match method {
+        Method::Upo => Some(request.delay(data, observer)?),
+        Method::Windowed => None,
+    };
+    observer.stage(Stage::Segments);
+    let (segments, found) = request.segments(data, delay.unwrap_or(1), method)?;
+    let measured = request.options.record.measured;
+    let mut drifted = None;
+    let mut drift = None;
+    if measured != Measured::Displacement {
+        observer.stage(Stage::Drift);
+        let (x, fit) = fit_drift(
+            &setup,
+            &data.x,
+            &data.pieces,
+            &segments,
+            measured,
+            |done, total| observer.progress(done, total),
+        )
+        .map_err(|source| RunError::Identify {
+            found: format!("{found}: fitting the integrated record's drift"),
+            source,
+        })?;
+        if fit.evaluations > 0 {
+            observer.notice(&Notice::Drift {
+                measured,
+                fit: fit.clone(),
+                samples_per_period: data.p,
+            });
+        }
+        drifted = Some(x);
+        drift = Some(fit);
+    }
+    let x = drifted.as_deref().unwrap_or(&data.x);
+    let identification = setup
+        .identify_with_progress(x, &segments, |step| {
+            observer.stage(match step {
+                IdentifyStep::Assemble => Stage::Assemble,
+                IdentifyStep::Select => Stage::Select,
+                IdentifyStep::Solve => Stage::Solve,
+                IdentifyStep::Bootstrap => Stage::Bootstrap,
+            })
+        })
+        .map_err(|source| RunError::Identify {
+            found: found.clone(),
+            source,
+        })?;
+    if let Some(w) = &identification.warning {
+        observer.notice(&Notice::Warning(w.clone()));
+    }
+    Ok(IdentifyReport {
+        method,
+        basis: request.basis,
+        record: RecordSummary::of(data),
+        delay,
+        segments: segments.len(),
+        found,
+        drift,
+        no_intervals: None,
+        identification,
+    })
+}
+
+/// Coefficients keyed by term name, in the model's order.
+struct Ordered<'a, T: Serialize>(Vec<(&'a str, T)>);
+
+impl<T: Serialize> Serialize for Ordered<'_, T> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut map = s.serialize_map(Some(self.0.len()))?;
+        for (name, value) in &self.0 {
+            map.serialize_entry(name, value)?;
+        }
+        map.end()
+    }
+}
+
+/// One line of the residual by harmonic.
+#[derive(Serialize)]
+struct SpectrumLine {
+    harmonic: f64,
+    residual_rms: f64,
+    rhs_rms: f64,
+    rows: usize,
+}
+
+/// The JSON of a selection.
+#[derive(Serialize)]
+struct SelectionJson<'a> {
+    library: Vec<String>,
+    kept: Vec<String>,
+    dropped: Vec<DroppedJson<'a>>,
+    folds: usize,
+    allowance: f64,
+    path: Vec<StepJson<'a>>,
+}
+
+#[derive(Serialize)]
+struct DroppedJson<'a> {
+    term: &'a str,
+    unexplained_without: f64,
+    unexplained_with: f64,
+}
+
+#[derive(Serialize)]
+struct StepJson<'a> {
+    removed: Option<&'a str>,
+    terms: usize,
+    unexplained: f64,
+    std_error: f64,
+}
+
+impl<'a> SelectionJson<'a> {
+    fn of(selection: &'a TermSelection) -> Self {
+        let outcome = &selection.outcome;
+        Self {
+            library: selection.library.names(),
+            kept: selection.kept.names(),
+            dropped: outcome
+                .dropped
+                .iter()
+                .map(|d| DroppedJson {
+                    term: &d.name,
+                    unexplained_without: d.unexplained_without,
+                    unexplained_with: d.unexplained_with,
+                })
+                .collect(),
+            folds: outcome.folds,
+            allowance: outcome.allowance,
+            path: outcome
+                .path
+                .iter()
+                .map(|p| StepJson {
+                    removed: p.removed.as_deref(),
+                    terms: p.size,
+                    unexplained: p.unexplained,
+                    std_error: p.std_error,
+                })
+                .collect(),
+        }
+    }
+}
+
+/// The JSON of an identification: the model's terms in order, coefficients, standard errors,
+/// intervals, the fit's measures and warning, the selection, and the record and run.
+#[derive(Serialize)]
+struct ReportJson<'a> {
+    method: &'static str,
+    basis: String,
+    terms: Vec<&'a str>,
+    drive_column: Option<&'a str>,
+    coefficients: Ordered<'a, f64>,
+    std_errors: Ordered<'a, f64>,
+    /// Segments (orbits or windows) the model was fitted on; kept under its first name.
+    orbits_used: Option<usize>,
+    segments: usize,
+    rows: Option<usize>,
+    condition_number: Option<f64>,
+    residual_rms: Option<f64>,
+    intervals: Option<Ordered<'a, [f64; 2]>>,
+    interval_level: Option<f64>,
+    resamples: Option<usize>,
+    no_intervals: Option<&'a str>,
+    explained: f64,
+    unexplained: f64,
+    residual_spectrum: Vec<SpectrumLine>,
+    warning: Option<&'a str>,
+    selection: Option<SelectionJson<'a>>,
+    delay: Option<usize>,
+    found: &'a str,
+    record: &'a RecordSummary,
+}
+
+impl Serialize for IdentifyReport {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let id = &self.identification;
+        let model = &id.model;
+        let coefficients = model.coefficients();
+        let summary = model.summary();
+        ReportJson {
+            method: self.method.name(),
+            basis: self.basis.spec(),
+            terms: coefficients.iter().map(|c| c.name.as_str()).collect(),
+            drive_column: model.form().drive_column(),
+            coefficients: Ordered(coefficients.iter().map(|c| (c.name.as_str(), c.value)).collect()),
+            std_errors: Ordered(
+                coefficients
+                    .iter()
+                    .map(|c| (c.name.as_str(), c.std_error))
+                    .collect(),
+            ),
+            orbits_used: summary.map(|s| s.segments),
+            segments: self.segments,
+            rows: summary.map(|s| s.rows),
+            condition_number: summary.map(|s| s.condition),
+            residual_rms: summary.map(|s| s.residual_rms),
+            intervals: id.intervals.as_ref().map(|b| {
+                Ordered(
+                    b.intervals
+                        .iter()
+                        .map(|i| (i.name.as_str(), [i.lower, i.upper]))
+                        .collect(),
+                )
+            }),
+            interval_level: id.intervals.as_ref().map(|b| b.level),
+            resamples: id.intervals.as_ref().map(|b| b.resamples),
+            no_intervals: self.no_intervals.as_deref(),
+            explained: id.quality.explained,
+            unexplained: id.quality.unexplained,
+            residual_spectrum: id
+                .quality
+                .spectrum
+                .iter()
+                .map(|l| SpectrumLine {
+                    harmonic: l.harmonic,
+                    residual_rms: l.residual_rms,
+                    rhs_rms: l.rhs_rms,
+                    rows: l.rows,
+                })
+                .collect(),
+            warning: id.warning.as_deref(),
+            selection: id.selection.as_ref().map(SelectionJson::of),
+            delay: self.delay,
+            found: &self.found,
+            record: &self.record,
+        }
+        .serialize(s)
+    }
+}

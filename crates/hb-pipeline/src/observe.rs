@@ -1,0 +1,195 @@
+//! What a run tells its front end as it goes: the stage that starts, progress within it, and
+//! notices about the record and the fit. One trait, [`Observer`], for all of it; the command line
+//! draws progress bars and prints notes, Python collects the notes, a test ignores them (`()`).
+
+use std::fmt;
+
+use circle_signal::Measured;
+use hb_record::prepare::Note;
+use hb_solve::DriveEstimate;
+
+use crate::pipeline::DriftFit;
+
+/// A stage of a run, reported as it starts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Stage {
+    /// Reading the record's file.
+    Read,
+    /// Estimating the drive's period.
+    Drive,
+    /// The delay (average mutual information).
+    Delay,
+    /// False nearest neighbours.
+    Embed,
+    /// Close returns or windows.
+    Segments,
+    /// The drift of an integrated velocity or acceleration record.
+    Drift,
+    /// Assembling the stacked system.
+    Assemble,
+    /// Selecting terms.
+    Select,
+    /// Least squares.
+    Solve,
+    /// The held-out share of the fit.
+    HeldOut,
+    /// The bootstrap.
+    Bootstrap,
+    /// Simulating.
+    Simulate,
+    /// Comparing a simulation with a record.
+    Compare,
+}
+
+impl Stage {
+    /// A short name for progress displays and timings.
+    pub fn name(self) -> &'static str {
+        match self {
+            Stage::Read => "read",
+            Stage::Drive => "drive",
+            Stage::Delay => "delay",
+            Stage::Embed => "embed",
+            Stage::Segments => "segments",
+            Stage::Drift => "drift",
+            Stage::Assemble => "assemble",
+            Stage::Select => "select",
+            Stage::Solve => "solve",
+            Stage::HeldOut => "held-out",
+            Stage::Bootstrap => "bootstrap",
+            Stage::Simulate => "simulate",
+            Stage::Compare => "compare",
+        }
+    }
+}
+
+/// Something done to the record, or found in it or in the fit, that a user should hear of.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum Notice {
+    /// A note of the record's preparation (grid, gaps, wrapping, spikes, integration).
+    Record(Note),
+    /// The drive's period estimated from the record.
+    DriveEstimated(DriveEstimate),
+    /// No drive: the windows are counted in periods of the free oscillation.
+    FreePeriod {
+        /// Its measured mean period, in samples.
+        samples: f64,
+        /// The whole number of samples used per period.
+        used: usize,
+    },
+    /// The record resampled onto a whole number of samples per period.
+    Resampled {
+        /// Samples per period as read.
+        from: f64,
+        /// Samples per period after.
+        to: usize,
+    },
+    /// The drift of an integrated record, found by the model.
+    Drift {
+        /// What was measured.
+        measured: Measured,
+        /// What the fit found.
+        fit: DriftFit,
+        /// Samples per period (to give the slope per period).
+        samples_per_period: usize,
+    },
+    /// The bootstrap gave no intervals; the coefficients and standard errors stand.
+    NoIntervals(String),
+    /// The fit's warning (too little explained, or not a description of the record).
+    Warning(String),
+}
+
+impl Notice {
+    /// Whether this is a warning (something left wrong, or a result not to trust) rather than a
+    /// plain note.
+    pub fn is_warning(&self) -> bool {
+        match self {
+            Notice::Record(note) => note.is_warning(),
+            Notice::Warning(_) => true,
+            _ => false,
+        }
+    }
+}
+
+/// The text of the notice, without `note:` or `warning:`. Options are named as
+/// [`crate::options::Spelling::render`] reads them.
+impl fmt::Display for Notice {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Notice::Record(note) => {
+                write!(f, "{note}")?;
+                if note.is_warning() {
+                    f.write_str("; run with «repair=True» to replace them")?;
+                }
+                Ok(())
+            }
+            Notice::DriveEstimated(e) => write!(
+                f,
+                "drive period estimated from the record: {:.9} ± {:.2e} (frequency {:.9} ± {:.2e})",
+                e.period,
+                e.period_uncertainty,
+                e.frequency(),
+                e.frequency_uncertainty()
+            ),
+            Notice::FreePeriod { samples, used } => write!(
+                f,
+                "no drive: windows in periods of the free oscillation, {samples:.2} samples on average ({used} used)"
+            ),
+            Notice::Resampled { from, to } => write!(
+                f,
+                "{from:.6} samples per period: resampled (band-limited) to {to}"
+            ),
+            Notice::Drift {
+                fit,
+                samples_per_period,
+                ..
+            } => {
+                let pieces: Vec<String> = fit
+                    .pieces
+                    .iter()
+                    .map(|d| {
+                        format!(
+                            "slope {:.3e} per period, offset {:.3e}",
+                            d.slope * *samples_per_period as f64,
+                            d.offset
+                        )
+                    })
+                    .collect();
+                write!(
+                    f,
+                    "the drift of the integrated record that the model explains best ({}): unexplained {:.2e} before, \
+                     {:.2e} after",
+                    pieces.join("; "),
+                    fit.unexplained_before,
+                    fit.unexplained_after
+                )
+            }
+            Notice::NoIntervals(why) => write!(f, "no bootstrap intervals: {why}"),
+            Notice::Warning(w) => f.write_str(w),
+        }
+    }
+}
+
+/// Hears of a run as it goes. Every method has an empty default: implement what you show.
+pub trait Observer {
+    /// A stage starts.
+    fn stage(&mut self, _stage: Stage) {}
+    /// Progress within the current stage: `done` of `total` steps.
+    fn progress(&mut self, _done: usize, _total: usize) {}
+    /// Something done or found.
+    fn notice(&mut self, _notice: &Notice) {}
+}
+
+/// Hears nothing.
+impl Observer for () {}
+
+/// Keeps every notice, in order (what the Python package hands back).
+#[derive(Debug, Default, Clone, PartialEq)]
+pub struct Notices(pub Vec<Notice>);
+
+impl Observer for Notices {
+    fn notice(&mut self, notice: &Notice) {
+        self.0.push(notice.clone());
+    }
+}

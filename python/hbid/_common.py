@@ -1,0 +1,168 @@
+"""What the public functions share: arrays, the options object the extension reads, the record a
+function is given (a path, arrays or a :class:`~hbid.Record`), the old keyword names and the
+warnings."""
+
+from __future__ import annotations
+
+import json
+import os
+import warnings
+from typing import Any, Dict, Mapping, Optional, Tuple, Union
+
+import numpy as np
+
+from .errors import OptionsError
+
+PathLike = Union[str, "os.PathLike[str]"]
+ArrayLike = Any
+
+
+class HbidWarning(UserWarning):
+    """Something found in a record or a fit that the analysis does not fix by itself (isolated
+    encoder spikes left in place, a model that does not describe the record): the text says what
+    to do."""
+
+
+def array(values: ArrayLike, name: str) -> np.ndarray:
+    """``values`` as a contiguous one-dimensional ``float64`` array (borrowed by the extension)."""
+    try:
+        a = np.ascontiguousarray(values, dtype=np.float64)
+    except (TypeError, ValueError) as e:
+        raise OptionsError(f"{name}: not an array of numbers ({e})") from None
+    if a.ndim != 1:
+        raise OptionsError(f"{name}: a one-dimensional array is needed, not shape {a.shape}")
+    return a
+
+
+def _plain(value: Any) -> Any:
+    """A value as JSON holds it: NumPy scalars as numbers, paths as text, tuples as lists."""
+    if isinstance(value, (np.integer,)):
+        return int(value)
+    if isinstance(value, (np.floating,)):
+        return float(value)
+    if isinstance(value, np.bool_):
+        return bool(value)
+    if isinstance(value, os.PathLike):
+        return os.fspath(value)
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    return value
+
+
+def options_json(options: Mapping[str, Any]) -> str:
+    """The options as the extension reads them: a JSON object of the command line's option names
+    (``_`` for ``-``). The values are checked in Rust, with the messages of the command line."""
+    plain = {name: _plain(value) for name, value in options.items()}
+    for name, value in plain.items():
+        if isinstance(value, float) and not np.isfinite(value):
+            raise OptionsError(f"{name}={value!r}: must be finite")
+    try:
+        return json.dumps(plain, allow_nan=False)
+    except (TypeError, ValueError) as e:
+        raise OptionsError(f"an option's value is not a number, a text or a list of them: {e}") from None
+
+
+def renamed(
+    function: str, given: Dict[str, Any], old: Mapping[str, str], options: Dict[str, Any]
+) -> None:
+    """Moves the keywords of old names in ``given`` to their new names in ``options`` (with a
+    :class:`DeprecationWarning`); any other name is an error, as Python's own."""
+    for name, value in given.items():
+        if name not in old:
+            raise TypeError(f"{function}() got an unexpected keyword argument {name!r}")
+        new = old[name]
+        warnings.warn(
+            f"{function}({name}=...) is now {function}({new}=...)", DeprecationWarning, stacklevel=3
+        )
+        options[new] = value
+
+
+#: Old keyword names of the record's options, and their names now.
+RECORD_RENAMED = {
+    "forcing_period": "drive_period",
+    "forcing_frequency": "drive_frequency",
+    "forcing_col": "drive_col",
+}
+
+
+def emit(notes: Any, stacklevel: int = 3) -> list:
+    """The notices' texts; the warnings among them are issued as :class:`HbidWarning`."""
+    texts = []
+    for text, warning in notes:
+        texts.append(text)
+        if warning:
+            warnings.warn(text, HbidWarning, stacklevel=stacklevel)
+    return texts
+
+
+def drive_value(value: Any, name: str) -> Any:
+    """A drive's period or frequency: a number, ``"auto"``, ``"auto:A..B"`` or ``"none"``."""
+    if value is None or isinstance(value, str):
+        return value
+    if isinstance(value, bool):
+        raise OptionsError(f"{name}={value!r}: a number, 'auto', 'auto:A..B' or 'none'")
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        raise OptionsError(f"{name}={value!r}: a number, 'auto', 'auto:A..B' or 'none'") from None
+
+
+def column(col: Union[str, int, None], name: str) -> Optional[str]:
+    """A column by header name or 1-based position."""
+    if col is None:
+        return None
+    if isinstance(col, bool) or not isinstance(col, (str, int, np.integer)):
+        raise OptionsError(f"{name}: a column name or a 1-based position, not {col!r}")
+    return str(col)
+
+
+#: The options of a record that a :class:`~hbid.Record` fixes when it is read.
+RECORD_FIXED = ("time_col", "angle_col", "dt", "drive_col", "repair")
+
+
+def source(
+    x: Any,
+    t: Optional[ArrayLike],
+    drive: Optional[ArrayLike],
+    options: Dict[str, Any],
+    defaults: Mapping[str, Any],
+) -> Dict[str, Any]:
+    """The extension's keyword arguments that say where the samples come from: ``path`` for a
+    file, ``x`` (with ``t`` and ``drive``) for arrays, ``x`` and ``grid`` for a Record, whose
+    own signal and measured quantity then hold (``options`` is updated)."""
+    from ._record import Record
+
+    if isinstance(x, Record):
+        for name in ("signal", "measured"):
+            own = getattr(x, name)
+            if options.get(name, defaults[name]) not in (defaults[name], own):
+                raise OptionsError(
+                    f"{name}={options[name]!r}: the record was read as {own!r}; read it again with {name}={options[name]!r}"
+                )
+            options[name] = own
+        for name in RECORD_FIXED:
+            if options.get(name, defaults.get(name)) != defaults.get(name):
+                raise OptionsError(f"{name}: the Record was read with its own; read it again to change it")
+            options.pop(name, None)
+        if t is not None or drive is not None:
+            raise OptionsError("a Record carries its own time and drive: give no t or drive with it")
+        args: Dict[str, Any] = dict(x=array(x.x, "x"), grid=x._grid())
+        if x.drive is not None:
+            args["drive"] = array(x.drive, "drive")
+        return args
+    if isinstance(x, (str, os.PathLike)):
+        if t is not None or drive is not None:
+            raise OptionsError("a file carries its own time and drive: give no t or drive with a path")
+        return dict(path=os.fspath(x))
+    args = dict(x=array(x, "x"))
+    if t is not None:
+        args["t"] = array(t, "t")
+    if drive is not None:
+        args["drive"] = array(drive, "drive")
+    return args
+
+
+def without(options: Dict[str, Any], *names: str) -> Tuple[Dict[str, Any], Dict[str, Any]]:
+    """``options`` split into those named and the rest."""
+    picked = {n: options.pop(n) for n in names if n in options}
+    return picked, options

@@ -1,0 +1,422 @@
+"""Identification: the equation of motion of a record, as ``hbid identify`` finds it."""
+
+from __future__ import annotations
+
+import json
+import os
+import warnings
+from dataclasses import dataclass, field
+from typing import Any, Dict, List, Mapping, NamedTuple, Optional, Sequence, Tuple, Union
+
+from . import _hbid
+from ._common import (
+    RECORD_RENAMED,
+    ArrayLike,
+    PathLike,
+    column,
+    drive_value,
+    emit,
+    options_json,
+    renamed,
+    source,
+)
+from ._model import Model, equation_text
+from .errors import OptionsError
+
+#: The record's options with the command line's defaults (a Record fixes its own).
+RECORD_DEFAULTS: Dict[str, Any] = dict(
+    time_col=None,
+    angle_col=None,
+    dt=None,
+    drive_col=None,
+    repair=False,
+    signal="circle",
+    measured="displacement",
+)
+
+
+class DroppedTerm(NamedTuple):
+    """A candidate term the selection dropped, and why: the cross-validated fraction of the
+    held-out equations' right-hand side left unexplained by the model just without it and just
+    with it (the term removes less than the allowance)."""
+
+    term: str
+    unexplained_without: float
+    unexplained_with: float
+
+
+class SelectionStep(NamedTuple):
+    """One model of the backward elimination: the term removed to reach it (None for the whole
+    library), its number of terms, its cross-validated unexplained fraction and that score's
+    standard error over the folds."""
+
+    removed: Optional[str]
+    terms: int
+    unexplained: float
+    std_error: float
+
+
+@dataclass(frozen=True)
+class Selection:
+    """Which terms of a library of candidates the data support, as ``hbid identify --select``
+    chooses them: backward elimination scored by cross-validation over contiguous folds of
+    segments; the smallest model on the path within ``allowance`` of the best one is kept
+    (``allowance`` is the larger of the best score's standard error and the tolerance).
+
+    ``kept`` are the model's terms (in the library's order); ``dropped`` the others, in the
+    order they were removed.
+    """
+
+    library: List[str]
+    kept: List[str]
+    dropped: List[DroppedTerm]
+    folds: int
+    allowance: float
+    path: List[SelectionStep]
+
+    @classmethod
+    def _from_json(cls, d: Mapping[str, Any]) -> "Selection":
+        return cls(
+            library=list(d["library"]),
+            kept=list(d["kept"]),
+            dropped=[DroppedTerm(x["term"], x["unexplained_without"], x["unexplained_with"]) for x in d["dropped"]],
+            folds=d["folds"],
+            allowance=d["allowance"],
+            path=[SelectionStep(p["removed"], p["terms"], p["unexplained"], p["std_error"]) for p in d["path"]],
+        )
+
+
+@dataclass(frozen=True)
+class Identification:
+    """An identified equation of motion ``x'' + sum c_i g_i = 0`` with its uncertainties.
+
+    ``coefficients``, ``std_errors`` and ``intervals`` are keyed by the command line's term names
+    (``x'``, ``sin(x)``, ``cos(t)*cos(x)``, ``hat3``, ...), in the model's order. :meth:`to_json`
+    is exactly what ``hbid identify --json`` prints. Results of the same record, settings and
+    seed are identical, whatever the machine's threads.
+    """
+
+    coefficients: Dict[str, float]
+    """The coefficient of each term."""
+    std_errors: Dict[str, float]
+    """The standard error of each coefficient (least squares)."""
+    intervals: Optional[Dict[str, Tuple[float, float]]]
+    """The bootstrap interval of each coefficient at ``interval_level``; None with ``bootstrap=0``
+    (or when the record gave none: :attr:`no_intervals` says why)."""
+    interval_level: Optional[float]
+    """The confidence level of the intervals."""
+    resamples: int
+    """Bootstrap resamples."""
+    model: Model
+    """The model: simulate, save and load it."""
+    method: str
+    """``"windowed"`` or ``"upo"``."""
+    basis: str
+    """The basis as named on the command line (``harmonic:1``, ``hat:8``, ``poly:3``)."""
+    signal: str
+    """``"circle"`` or ``"line"``."""
+    segments: int
+    """Orbit segments (``upo``) or windows (``windowed``) used."""
+    delay: Optional[int]
+    """The delay of the close-return search (``upo``), in samples."""
+    drive_period: float
+    """The period of the analysis in the record's time unit: the drive's, or the free
+    oscillation's."""
+    drive_period_uncertainty: Optional[float]
+    """Its standard uncertainty when it was estimated from the record."""
+    drive: str
+    """``"given"``, ``"estimated"`` or ``"free"`` (no drive: the free oscillation's period)."""
+    samples_per_period: int
+    """Samples per period after any resampling."""
+    resampled_from: Optional[float]
+    """Samples per period as read, when the record was resampled."""
+    summary: str
+    """One line on the record as analysed."""
+    notes: List[str]
+    """What was done to the record or found on the way, as the command line prints it."""
+    report: Dict[str, Any] = field(repr=False)
+    """The JSON of ``hbid identify --json``, read."""
+    json_text: str = field(repr=False)
+    """The JSON of ``hbid identify --json``."""
+
+    @property
+    def equation(self) -> str:
+        """The equation, ``x'' + c_1*g_1 + ... = 0``, coefficients to 6 significant digits."""
+        return equation_text(self.coefficients)
+
+    @property
+    def terms(self) -> List[str]:
+        """The model's terms, in its order (with ``select``, the kept ones)."""
+        return list(self.coefficients)
+
+    @property
+    def selection(self) -> Optional[Selection]:
+        """With ``select``: the library, the kept terms and why the others were dropped; else None."""
+        d = self.report["selection"]
+        return None if d is None else Selection._from_json(d)
+
+    @property
+    def explained(self) -> float:
+        """The fraction of the balanced acceleration the model explains, in [0, 1]."""
+        return self.report["explained"]
+
+    @property
+    def warning(self) -> Optional[str]:
+        """The command line's warning when the model explains too little, else None."""
+        return self.report["warning"]
+
+    @property
+    def no_intervals(self) -> Optional[str]:
+        """Why there are no bootstrap intervals although they were asked for, else None."""
+        return self.report.get("no_intervals")
+
+    @property
+    def condition_number(self) -> float:
+        """The condition number of the column-scaled system."""
+        return self.report["condition_number"]
+
+    @property
+    def residual_rms(self) -> float:
+        """The residual root mean square of the equations."""
+        return self.report["residual_rms"]
+
+    @property
+    def rows(self) -> int:
+        """Equations of the stacked system."""
+        return self.report["rows"]
+
+    @property
+    def forcing_period(self) -> float:
+        """The period of the analysis (the old name of :attr:`drive_period`)."""
+        return self.drive_period
+
+    @property
+    def forcing_period_uncertainty(self) -> Optional[float]:
+        """The old name of :attr:`drive_period_uncertainty`."""
+        return self.drive_period_uncertainty
+
+    def to_json(self) -> str:
+        """The JSON ``hbid identify --json`` prints for the same record and options."""
+        return self.json_text
+
+    def __str__(self) -> str:
+        lines = [f"{self.equation}", f"method {self.method}, basis {self.basis}, {self.segments} segments"]
+        for name, value in self.coefficients.items():
+            se = self.std_errors[name]
+            line = f"  {name:<18} {value:>14.6f} {se:>12.2e}"
+            if self.intervals is not None:
+                lo, hi = self.intervals[name]
+                line += f"   [{lo:.6f}, {hi:.6f}]"
+            lines.append(line)
+        return "\n".join(lines)
+
+    @classmethod
+    def _from(cls, d: Mapping[str, Any], notes: List[str]) -> "Identification":
+        report = json.loads(d["json"])
+        record = report["record"]
+        intervals = report["intervals"]
+        return cls(
+            coefficients=dict(report["coefficients"]),
+            std_errors=dict(report["std_errors"]),
+            intervals=None if intervals is None else {k: (v[0], v[1]) for k, v in intervals.items()},
+            interval_level=report["interval_level"],
+            resamples=report["resamples"] or 0,
+            model=Model(d["model"]),
+            method=report["method"],
+            basis=report["basis"],
+            signal=record["signal"],
+            segments=report["segments"],
+            delay=report["delay"],
+            drive_period=record["period"],
+            drive_period_uncertainty=record["period_uncertainty"],
+            drive=record["drive"],
+            samples_per_period=record["samples_per_period"],
+            resampled_from=record["resampled_from"],
+            summary=record["summary"],
+            notes=notes,
+            report=report,
+            json_text=d["json"],
+        )
+
+
+def _terms(terms: Union[str, Sequence[str], None]) -> Optional[str]:
+    """``terms=`` as the list's text."""
+    if terms is None or isinstance(terms, str):
+        return terms
+    try:
+        items = list(terms)
+    except TypeError:
+        raise OptionsError(f"terms={terms!r}: a list of terms as text, or a sequence of such texts") from None
+    if not all(isinstance(t, str) for t in items):
+        raise OptionsError(f"terms={terms!r}: every item must be a text such as 'sin(t)*cos(x)'")
+    return ", ".join(items)
+
+
+def _select(select: Union[bool, Mapping[str, Any]], options: Dict[str, Any]) -> None:
+    """``select=``: a flag, or (as before) a mapping with ``folds`` and ``tolerance``."""
+    if isinstance(select, bool):
+        options["select"] = select
+        return
+    if not isinstance(select, Mapping):
+        raise OptionsError(f"select={select!r}: True, False or a mapping with 'folds' and 'tolerance'")
+    unknown = sorted(set(select) - {"folds", "tolerance"})
+    if unknown:
+        raise OptionsError(f"select: unknown option(s) {unknown}; expected 'folds' and 'tolerance'")
+    options["select"] = True
+    if "folds" in select:
+        options["select_folds"] = select["folds"]
+    if "tolerance" in select:
+        options["select_tolerance"] = select["tolerance"]
+
+
+def identify(
+    x: Union[PathLike, ArrayLike, Any],
+    *,
+    t: Optional[ArrayLike] = None,
+    dt: Optional[float] = None,
+    drive: Optional[ArrayLike] = None,
+    time_col: Union[str, int, None] = None,
+    angle_col: Union[str, int, None] = None,
+    drive_col: Union[str, int, None] = None,
+    repair: bool = False,
+    signal: str = "circle",
+    measured: str = "displacement",
+    drive_period: Union[float, str, None] = None,
+    drive_frequency: Union[float, str, None] = None,
+    method: str = "windowed",
+    basis: Optional[str] = None,
+    harmonics: Optional[int] = None,
+    window_periods: int = 3,
+    window_order: int = 4,
+    bootstrap: int = 1000,
+    level: float = 0.95,
+    seed: int = 0,
+    noise_sigma: Union[float, str, None] = None,
+    solver: str = "qr",
+    tolerance: float = 0.03,
+    max_period: int = 16,
+    dim: int = 2,
+    delay: Optional[int] = None,
+    forcing: Optional[str] = None,
+    no_parametric: bool = False,
+    drive_harmonics: Optional[int] = None,
+    terms: Union[str, Sequence[str], None] = None,
+    select: Union[bool, Mapping[str, Any]] = False,
+    select_folds: int = 10,
+    select_tolerance: float = 1e-6,
+    save_model: Optional[PathLike] = None,
+    **old: Any,
+) -> Identification:
+    """Identifies the equation of motion of a record, as ``hbid identify`` does.
+
+    The record is fitted to its time grid, wrapped (an angle), resampled onto a whole number of
+    samples per drive period when needed, cut into windows (``method="windowed"``, the weak
+    form, the default) or searched for unstable periodic orbits (``method="upo"``, the
+    paper's), and the coefficients are found by least squares, with bootstrap intervals. Every
+    keyword is the option of ``hbid identify`` of the same name (``_`` for ``-``), with the same
+    default; ``hbid identify --help`` says more of each.
+
+    Args:
+        x: a file (text or ``.npy``), a :class:`Record` from :func:`read`, or the samples (a 1-D
+            array, with ``t`` or ``dt``).
+        t: the time stamps of the samples.
+        dt: or their sampling step (sample 0 at t = 0).
+        drive: the measured drive p(t), one sample per sample of ``x`` (the array form of
+            ``drive_col``).
+        time_col, angle_col: a file's time and angle (or displacement) columns.
+        drive_col: a file's column of the measured drive p(t): terms in ``p`` (``p``,
+            ``p*cos(x)``, ``p*x'``) are balanced by the weak form as measured.
+        repair: replace isolated time-stamp glitches and spikes.
+        signal: ``"circle"`` (an angle) or ``"line"`` (a displacement); a Record's own.
+        measured: ``"displacement"``, or (on the line) ``"velocity"`` or ``"acceleration"``,
+            integrated to the displacement (its drift fitted with the model); a Record's own.
+        drive_period: the drive's period in the record's time unit (default 2 pi, the paper's
+            time), ``"auto"`` or ``"auto:A..B"`` to estimate it, ``"none"`` for no drive (a free
+            oscillation).
+        drive_frequency: or the drive's frequency in cycles per time unit (Hz for seconds).
+        method: ``"windowed"`` (the weak form on plain windows) or ``"upo"`` (the paper's).
+        basis: ``"harmonic:K"``, ``"hat:N"`` or ``"poly:D"`` (default ``harmonic:1`` on the
+            circle, ``poly:3`` on the line).
+        harmonics: harmonics per segment (default: the method's band).
+        window_periods: the weak form's window length in drive periods.
+        window_order: order p of the window ``sin^p``.
+        bootstrap: bootstrap resamples for the intervals (0: none).
+        level: confidence level of the intervals.
+        seed: seed of the bootstrap: the same seed gives the same result on any machine.
+        noise_sigma: correct the bias of Gaussian noise on the angle: sigma in radians, or
+            ``"auto"`` to estimate it (harmonic basis).
+        solver: ``"qr"`` or ``"svd"``.
+        tolerance: ``upo``: close-return tolerance, a fraction of the data's span.
+        max_period: ``upo``: longest orbit period searched, in drive periods.
+        dim: ``upo``: dimension of the delay vectors compared.
+        delay: ``upo``: delay in samples (default: first minimum of the mutual information).
+        forcing: external forcing terms cos(t), sin(t) of the default model: ``"none"`` (the
+            default on the circle) or ``"identified"`` (the default on the line). ``"none"``
+            with no drive given is a free oscillation.
+        no_parametric: leave out the parametric terms ``cos(t)*B``, ``sin(t)*B``.
+        drive_harmonics: drive harmonics 1..H of the default model's drive terms.
+        terms: the model's terms instead of the default, as ``hbid identify --terms`` reads
+            them: a string such as ``"x', sign(x'), {1,cos(t),sin(t)}*{cos(x),sin(x)}"``, or a
+            sequence of such strings.
+        select: model selection: the model's terms are a library of candidates, those that
+            predict held-out stretches of the record are kept and fitted alone
+            (:attr:`Identification.selection` says which and why).
+        select_folds: contiguous folds of segments of the selection (at least 2).
+        select_tolerance: the smallest held-out unexplained fraction a term must remove to be
+            kept, in [0, 1).
+        save_model: also save the model here (JSON for a ``.json`` name, compact binary
+            otherwise).
+
+    Returns:
+        The :class:`Identification`.
+
+    Raises:
+        InputError: the record.
+        OptionsError: a bad argument.
+        IdentificationError: too few segments, a rank-deficient system, a drive that cannot be
+            estimated.
+    """
+    options: Dict[str, Any] = dict(
+        time_col=column(time_col, "time_col"),
+        angle_col=column(angle_col, "angle_col"),
+        dt=None if dt is None else float(dt),
+        drive_col=column(drive_col, "drive_col"),
+        repair=bool(repair),
+        signal=signal,
+        measured=measured,
+        drive_period=drive_value(drive_period, "drive_period"),
+        drive_frequency=drive_value(drive_frequency, "drive_frequency"),
+        method=method,
+        basis=basis,
+        harmonics=harmonics,
+        window_periods=window_periods,
+        window_order=window_order,
+        bootstrap=bootstrap,
+        level=level,
+        seed=seed,
+        noise_sigma=noise_sigma,
+        solver=solver,
+        tolerance=tolerance,
+        max_period=max_period,
+        dim=dim,
+        delay=delay,
+        forcing=forcing,
+        no_parametric=bool(no_parametric),
+        drive_harmonics=drive_harmonics,
+        terms=_terms(terms),
+        select_folds=select_folds,
+        select_tolerance=select_tolerance,
+    )
+    _select(select, options)
+    if "parametric" in old:
+        warnings.warn("identify(parametric=...) is now identify(no_parametric=...)", DeprecationWarning, stacklevel=2)
+        options["no_parametric"] = not old.pop("parametric")
+    renamed("identify", old, RECORD_RENAMED, options)
+    for name in ("drive_period", "drive_frequency"):
+        options[name] = drive_value(options[name], name)
+    samples = source(x, t, drive, options, RECORD_DEFAULTS)
+    d = _hbid.identify(options_json(options), **samples)
+    result = Identification._from(d, emit(d["notes"]))
+    if save_model is not None:
+        result.model.save(os.fspath(save_model))
+    return result

@@ -1,0 +1,238 @@
+"""Simulated rigs, as ``hbid simulate`` makes them."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from typing import Any, Dict, Iterator, Optional, Sequence, Tuple, Union
+
+import numpy as np
+
+from . import _hbid
+from ._common import PathLike, options_json, renamed
+
+
+@dataclass(frozen=True, eq=False)
+class Simulation:
+    """A simulated record: ``t, x, v = hbid.simulate()`` unpacks it.
+
+    ``x`` is the angle as the encoder reports it (wrapped unless ``unwrapped=True``; counts with
+    ``raw_counts=True``) or the Duffing displacement; ``v`` the clean velocity; ``drive`` the
+    drive ``p(t)`` as it enters the equation (with ``write_drive=True``, else None). The rows are
+    those ``hbid simulate`` writes (the gaps left out, the numbers as printed with ``decimals``).
+    ``truth`` holds the coefficients of the equation the record satisfies, ``x'' + sum c_i g_i =
+    0``, in the identification's term names and the record's time unit (as ``hbid simulate
+    --truth``); ``truth_file`` the whole truth file.
+    """
+
+    t: np.ndarray
+    """The time stamps."""
+    x: np.ndarray
+    """The angle (or displacement, or counts) as recorded."""
+    v: np.ndarray
+    """The velocity, in the record's time unit."""
+    drive: Optional[np.ndarray]
+    """The drive p(t), with ``write_drive=True``."""
+    columns: Tuple[str, ...]
+    """The columns ``hbid simulate`` writes (``t,theta,omega``, ``t,count,omega``, ``t,x,v``, and ``p``)."""
+    truth_file: Dict[str, Any]
+    """The truth file ``hbid simulate --truth`` writes."""
+
+    @property
+    def truth(self) -> Dict[str, float]:
+        """The true coefficients, keyed by the identification's term names."""
+        return dict(self.truth_file["coefficients"])
+
+    @property
+    def drive_period(self) -> float:
+        """The drive's period in the record's time unit."""
+        return float(self.truth_file["forcing_period"])
+
+    @property
+    def forcing_period(self) -> float:
+        """The drive's period (the old name of :attr:`drive_period`)."""
+        return self.drive_period
+
+    @property
+    def sample_step(self) -> float:
+        """The sampling step."""
+        return float(self.truth_file["sample_step"])
+
+    def __iter__(self) -> Iterator[np.ndarray]:
+        return iter((self.t, self.x, self.v))
+
+    def __len__(self) -> int:
+        return len(self.t)
+
+
+#: Old keyword names of ``simulate``, and their names now (the command line's aliases).
+SIMULATE_RENAMED = {"forcing": "drive", "theta0": "x0", "omega0": "v0"}
+
+
+def _gaps(gaps: Union[str, Sequence[int], None]) -> Optional[str]:
+    if gaps is None or isinstance(gaps, str):
+        return gaps
+    k, length = gaps
+    return f"{int(k)}:{int(length)}"
+
+
+def _harmonics(harmonics: Union[str, Sequence[Any], None]) -> list:
+    if harmonics is None:
+        return []
+    if isinstance(harmonics, str):
+        return [harmonics]
+    out = []
+    for h in harmonics:
+        out.append(h if isinstance(h, str) else ":".join(str(v) for v in h))
+    return out
+
+
+def simulate(
+    *,
+    system: str = "pendulum",
+    f: Optional[float] = None,
+    c: Optional[float] = None,
+    r: Optional[float] = None,
+    a: Optional[float] = None,
+    b: Optional[float] = None,
+    friction: Optional[float] = None,
+    drag: Optional[float] = None,
+    cubic_damping: Optional[float] = None,
+    drive_harmonic: Union[str, Sequence[Any], None] = None,
+    drive: str = "drive",
+    x0: float = 0.1,
+    v0: float = 0.0,
+    rtol: float = 1e-10,
+    drive_frequency: Optional[float] = None,
+    sample_rate: Optional[float] = None,
+    samples_per_period: Optional[int] = None,
+    samples: Optional[int] = None,
+    duration: Optional[float] = None,
+    transient_periods: Optional[int] = None,
+    phase: float = 0.0,
+    time_origin: str = "drive",
+    counts: Optional[int] = None,
+    raw_counts: bool = False,
+    zero_offset: Optional[float] = None,
+    bit_errors: Optional[float] = None,
+    angle_range: Optional[str] = None,
+    noise: Optional[float] = None,
+    seed: int = 0,
+    unwrapped: bool = False,
+    gaps: Union[str, Tuple[int, int], None] = None,
+    time_decimals: Optional[int] = None,
+    decimals: Optional[int] = None,
+    truth: Optional[PathLike] = None,
+    write_drive: bool = False,
+    out: Optional[PathLike] = None,
+    **old: Any,
+) -> Simulation:
+    """Simulates a rig's record, as ``hbid simulate`` does (defaults: the paper's data set).
+
+    The base-excited pendulum ``x'' + c x' + (1/r^2) sin x - f sin(t) cos x = 0`` or the
+    two-well Duffing oscillator ``x'' + c x' + a x + b x^3 = f cos(t)``, with a rig's losses and
+    drive harmonics, sampled as a rig records it. Without options: 30000 samples, 25 per drive
+    period 2 pi, after 200 periods, the angle wrapped into ``[-pi, pi)``. Every option is that of
+    ``hbid simulate``, spelled with ``_`` for ``-`` (``hbid simulate --help`` says more of each).
+
+    Args:
+        system: ``"pendulum"`` or ``"duffing"``.
+        f: drive amplitude (default 1.52 for the pendulum, 0.3 for Duffing).
+        c: damping (default 0.03, or 0.25).
+        r: pendulum: frequency ratio, stiffness 1/r^2 (default 0.8333).
+        a: Duffing: linear stiffness (default -1).
+        b: Duffing: cubic stiffness (default 1).
+        friction: dry friction ``mu sign(x')`` in the model's time.
+        drag: quadratic drag ``d x'|x'|`` in the model's time.
+        cubic_damping: cubic damping ``c3 x'^3`` in the model's time.
+        drive_harmonic: harmonics of the drive, ``"K:RATIO[:PHASE]"`` or ``(K, RATIO[, PHASE])``
+            each (a list for several).
+        drive: ``"drive"``, or ``"none"`` for a free decay (f = 0, no transient by default).
+        x0: initial angle (or displacement) at the start of the integration.
+        v0: initial velocity, in the record's time unit.
+        rtol: relative tolerance of the integrator (absolute: rtol/10).
+        drive_frequency: drive frequency in Hz: time in seconds. Without it, the model's own
+            time (drive period 2 pi).
+        sample_rate: samples per second, any ratio to the drive (needs drive_frequency).
+        samples_per_period: samples per drive period, a whole number (default 25).
+        samples: samples kept, before gaps remove any (default 30000).
+        duration: the record's length in its time unit, instead of samples.
+        transient_periods: drive periods integrated and dropped first (default 200).
+        phase: drive phase (radians) of the first sample.
+        time_origin: ``"drive"`` (stamps are the integration's time) or ``"first-sample"``
+            (stamps ``n h`` from 0, as a data acquisition's clock).
+        counts: encoder counts per revolution (the angle to the nearest count).
+        raw_counts: give the integer counts in ``[0, N)`` instead of radians (needs counts).
+        zero_offset: the encoder's zero this far (radians) from the bottom.
+        bit_errors: probability per sample of a bit error of the count (needs counts >= 1024).
+        angle_range: ``"signed"`` ``[-pi, pi)`` or ``"positive"`` ``[0, 2 pi)``.
+        noise: standard deviation of Gaussian noise on the angle or displacement.
+        seed: seed of the noise, the bit errors and the gaps.
+        unwrapped: the continuous angle instead of the wrapped one.
+        gaps: ``"K:LEN"`` or ``(K, LEN)``: drop K runs of LEN samples at seeded places.
+        time_decimals: time stamps printed with this many decimals.
+        decimals: angle (or displacement) and velocity printed with this many decimals.
+        truth: also write the truth file here (JSON).
+        write_drive: also give (and write) the drive p(t) as a column ``p``.
+        out: also write the record here: ``.npy`` or CSV.
+
+    Returns:
+        A :class:`Simulation` (``t, x, v = ...`` unpacks the arrays).
+
+    Raises:
+        OptionsError: a bad value or combination of options.
+        SimulationError: the integration failed.
+        OutputError: a file could not be written.
+    """
+    options: Dict[str, Any] = dict(
+        system=system,
+        f=f,
+        c=c,
+        r=r,
+        a=a,
+        b=b,
+        friction=friction,
+        drag=drag,
+        cubic_damping=cubic_damping,
+        drive_harmonic=_harmonics(drive_harmonic),
+        drive=drive,
+        x0=x0,
+        v0=v0,
+        rtol=rtol,
+        drive_frequency=drive_frequency,
+        sample_rate=sample_rate,
+        samples_per_period=samples_per_period,
+        samples=samples,
+        duration=duration,
+        transient_periods=transient_periods,
+        phase=phase,
+        time_origin=time_origin,
+        counts=counts,
+        raw_counts=raw_counts,
+        zero_offset=zero_offset,
+        bit_errors=bit_errors,
+        angle_range=angle_range,
+        noise=noise,
+        seed=seed,
+        unwrapped=unwrapped,
+        gaps=_gaps(gaps),
+        time_decimals=time_decimals,
+        decimals=decimals,
+        write_drive=write_drive,
+    )
+    renamed("simulate", old, SIMULATE_RENAMED, options)
+    import os
+
+    d = _hbid.simulate(
+        options_json(options),
+        out=None if out is None else os.fspath(out),
+        truth=None if truth is None else os.fspath(truth),
+    )
+    return Simulation(
+        t=d["t"],
+        x=d["x"],
+        v=d["v"],
+        drive=d["drive"],
+        columns=tuple(d["columns"]),
+        truth_file=json.loads(d["truth"]),
+    )
