@@ -16,7 +16,7 @@ use upo_search::Catalogue;
 use crate::error::RunError;
 use crate::identify::OrbitOptions;
 use crate::observe::{Observer, Stage};
-use crate::options::{OptionError, chain, from_object, optional_text};
+use crate::options::{OptionError, from_object, optional_text};
 use crate::pipeline::{EmbedOptions as Lags, Record, SearchOptions};
 use crate::record::{RecordOptions, RecordSummary, Source, load};
 
