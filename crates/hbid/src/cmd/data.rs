@@ -334,6 +334,8 @@ mod tests {
             expected: 1.25,
             dt: 0.25,
             isolated,
+            others: Vec::new(),
+            other_count: 0,
         };
         let missing = |role| InputError::MissingColumn {
             role,
@@ -355,6 +357,7 @@ mod tests {
                     off: 900,
                     total: 1000,
                     decimals: Some(3),
+                    scatter: None,
                 },
                 "give its step with --dt",
             ),
