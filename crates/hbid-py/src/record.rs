@@ -49,8 +49,10 @@ fn note_texts(notes: &[Note]) -> Vec<(String, bool)> {
     notes
         .iter()
         .map(|n| {
-            if n.is_warning() {
+            if let Note::Spikes { repaired: false, .. } = n {
                 (format!("{n}; read with repair=True to replace them"), true)
+            } else if n.is_warning() {
+                (n.to_string(), true)
             } else {
                 (n.to_string(), false)
             }

@@ -198,8 +198,10 @@ impl InputArgs {
 
 /// Prints a note on the record as the command line shows it.
 fn print_note(note: &Note) {
-    if note.is_warning() {
+    if let Note::Spikes { repaired: false, .. } = note {
         eprintln!("warning: {note}; run with --repair to replace them");
+    } else if note.is_warning() {
+        eprintln!("warning: {note}");
     } else {
         eprintln!("note: {note}");
     }
