@@ -1584,6 +1584,27 @@ mod tests {
     }
 
     #[test]
+    fn gaps_in_a_slipping_clock_split_the_record() {
+        // 100 samples missing inside a run 1 ms behind the grid, 40 inside one on it.
+        let t = logger_clock(30_000, T0, std::slice::from_ref(&(10_000..20_000)), &[]);
+        let kept: Vec<usize> = (0..30_000)
+            .filter(|i| !(15_000..15_100).contains(i) && !(25_000..25_040).contains(i))
+            .collect();
+        let u = fit(kept.iter().map(|&i| t[i]).collect()).unwrap();
+        let firsts: Vec<usize> = u.pieces.iter().map(|p| p.first).collect();
+        assert_eq!(firsts, [0, 15_100, 25_040]);
+        assert_eq!(u.sample_count(), kept.len());
+        let slips: Vec<Location> = u.report.slips.iter().map(|s| s.at).collect();
+        assert_eq!(
+            slips,
+            [Location::Line(10_002), Location::Line(19_902)],
+            "{:?}",
+            u.report
+        );
+        assert!(u.report.within_printing(), "{:?}", u.report);
+    }
+
+    #[test]
     fn a_clock_slipping_by_its_printed_unit_fits_at_any_rate() {
         // Runs one printed unit behind the grid, at resolutions from 0.044 to half a step.
         for (rate, decimals) in [(500.0, 3), (300.0, 3), (2048.0, 4), (1000.0, 4), (44_100.0, 6)] {
