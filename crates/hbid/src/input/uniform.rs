@@ -30,7 +30,8 @@
 //!    scatter of the stamps about their levels (robust standard deviation); and the line fitted
 //!    again to the stamps that fit, until it no longer changes. (When every stamp is within
 //!    0.6 of a printed unit of the line, or a millionth of a step without a printed resolution,
-//!    no slip can hide among them: the levels are 0 and are not computed.)
+//!    or no run of [`LEVEL_WINDOW`] stamps has its median deviation half the smallest slip off
+//!    the line, no slip can hide among them: the levels are 0 and are not computed.)
 //!
 //! Then each stamp is judged against the final line: it fits when it is within the tolerance of
 //! its level (see below) and less than half a step from its grid time; it is in place when its
