@@ -104,6 +104,7 @@ fuzz_target!(|input: (Stamps, bool, bool)| {
         // As a text reader numbers lines, after a header and with a comment line.
         lines: with_lines.then(|| (0..n as u64).map(|i| i + 2 + u64::from(i > 10)).collect()),
         t,
+        drive: None,
     };
     fit_and_check(record, repair);
 });

@@ -20,6 +20,7 @@ fuzz_target!(|data: &[u8]| {
             time: Some(Column::Position(2)),
             angle: Some(Column::Position(1)),
             dt: None,
+            drive: None,
         },
         3 => ReadOptions {
             angle: Some(Column::Position(usize::from(choice / 6))),

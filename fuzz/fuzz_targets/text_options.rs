@@ -110,6 +110,7 @@ fuzz_target!(|input: Input| {
         time: input.time.as_ref().and_then(Choice::column),
         angle: input.angle.as_ref().and_then(Choice::column),
         dt: input.dt,
+        drive: None,
     };
     let text = text(&input);
     let lines = line_count(text.as_bytes());
@@ -121,6 +122,7 @@ fuzz_target!(|input: Input| {
                 t: record.theta.clone(),
                 theta: record.t.clone(),
                 lines: record.lines.clone(),
+                drive: None,
             };
             fit_and_check(swapped, true);
         }

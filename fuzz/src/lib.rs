@@ -105,6 +105,16 @@ pub fn fit_and_check(record: Record, repair: bool) {
                 "the samples moved"
             );
             assert!(repair || grid.repaired.is_empty());
+            let report = &grid.report;
+            assert_eq!(report.step, grid.dt);
+            assert!(
+                report.max_deviation.abs() < 0.5 * grid.dt
+                    && report.rms_deviation <= report.max_deviation.abs() * (1.0 + 1e-12),
+                "{report:?}"
+            );
+            assert!(report.rms_jitter.is_finite() && report.max_jitter.is_finite(), "{report:?}");
+            assert!(report.slips.iter().all(|s| s.by.is_finite() && s.by != 0.0), "{report:?}");
+            assert!(!report.to_string().is_empty());
             for r in &grid.repaired {
                 assert!(r.now.is_finite());
                 match (r.at, &numbers) {

@@ -119,7 +119,7 @@ impl fmt::Display for Notice {
         match self {
             Notice::Record(note) => {
                 write!(f, "{note}")?;
-                if note.is_warning() {
+                if let Note::Spikes { repaired: false, .. } = note {
                     f.write_str("; run with «repair=True» to replace them")?;
                 }
                 Ok(())

@@ -41,7 +41,8 @@ use hb_solve::{
 };
 
 use crate::input::{
-    AngleRange, GridOptions, GridRecord, InputError, Record as InputRecord, TimeRepair, angle_range,
+    AngleRange, GridOptions, GridRecord, GridReport, InputError, Record as InputRecord, TimeRepair,
+    angle_range,
 };
 
 /// What drives the record.
@@ -186,6 +187,9 @@ impl PrepareOptions {
 /// Something done to a record, or found in it, on the way to the analysis.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Note {
+    /// How the time stamps sit on the grid, when worth a note ([`GridReport::is_notable`]): the
+    /// clock that stamped them slips, or they deviate from the grid beyond their printing.
+    Grid(GridReport),
     /// A time stamp replaced by its grid time.
     TimeRepaired(TimeRepair),
     /// Gaps in the time stamps: the record is analysed in pieces.
@@ -209,9 +213,14 @@ pub enum Note {
 }
 
 impl Note {
-    /// Whether the note is a warning (spikes left in the record), not a plain note.
+    /// Whether the note is a warning (spikes left in the record, or time stamps that jitter by
+    /// more than [`crate::input::JITTER_WARNING`] of the step), not a plain note.
     pub fn is_warning(&self) -> bool {
-        matches!(self, Note::Spikes { repaired: false, .. })
+        match self {
+            Note::Spikes { repaired, .. } => !repaired,
+            Note::Grid(report) => report.is_warning(),
+            _ => false,
+        }
     }
 }
 
@@ -220,6 +229,7 @@ impl Note {
 impl fmt::Display for Note {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
+            Note::Grid(report) => write!(f, "{report}"),
             Note::TimeRepaired(r) => {
                 write!(f, "{}: time {} replaced by its grid time {}", r.at, r.was, r.now)
             }
@@ -395,6 +405,9 @@ pub fn condition(
             repair: options.repair,
         },
     )?;
+    if grid.report.is_notable() {
+        note(Note::Grid(grid.report.clone()));
+    }
     for r in &grid.repaired {
         note(Note::TimeRepaired(*r));
     }

@@ -149,7 +149,7 @@ fn bad_options_fail_cleanly_without_output() {
     let t = target.to_str().unwrap();
     for (args, mentions) in [
         (vec!["--samples", "0"], "samples"),
-        (vec!["--samples-per-period", "0"], "samples per period"),
+        (vec!["--samples-per-period", "0"], "--samples-per-period 0"),
         (vec!["--r", "0"], "r"),
         (vec!["--rtol", "-1e-6"], "rtol"),
         (vec!["--noise", "-1"], "noise"),
@@ -257,7 +257,7 @@ fn analysis_options_are_checked() {
         (vec!["embed", &data, "--max-dim", "0"], "max-dim"),
         (vec!["upos", &data, "--tolerance", "0"], "tolerance"),
         (vec!["upos", &data, "--tolerance", "0.5"], "tolerance"),
-        (vec!["upos", &data, "--max-period", "0"], "max_period"),
+        (vec!["upos", &data, "--max-period", "0"], "--max-period 0"),
         (vec!["upos", &data, "--drive-period", "-1"], "drive-period"),
         (vec!["upos", &data, "--drive-frequency", "0"], "drive-frequency"),
         // The old names still work.
@@ -1040,7 +1040,7 @@ fn simulate_rig_options_combine_or_fail_cleanly() {
             vec!["--drive-frequency", "1.02", "--sample-rate", "0"],
             "--sample-rate",
         ),
-        (vec!["--drive-frequency", "0"], "drive frequency"),
+        (vec!["--drive-frequency", "0"], "--drive-frequency 0"),
         (vec!["--sample-rate", "500"], "needs --drive-frequency"),
         (
             vec![

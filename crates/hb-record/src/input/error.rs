@@ -175,10 +175,11 @@ pub enum InputError {
     /// others, and is not repaired: either repair was not asked for, or the glitch is not
     /// isolated.
     #[error(
-        "{at}: time {t} {fault}; on the grid of step {} this sample is at {}: {}",
+        "{at}: time {t} {fault}; on the grid of step {} this sample is at {}: {}{}",
         Rounded(*.dt),
         Rounded(*.expected),
-        glitch_advice(*.isolated)
+        glitch_advice(*.isolated),
+        other_glitches(.others, *.other_count)
     )]
     TimeGlitch {
         /// Where.
@@ -194,12 +195,17 @@ pub enum InputError {
         /// Whether the neighbours on both sides fit the grid one step away, so that repair would
         /// replace this stamp by its grid time.
         isolated: bool,
+        /// The next glitches after this one that are errors too (at most five), in order.
+        others: Vec<Location>,
+        /// How many glitches after this one are errors too (all of them, named or not).
+        other_count: usize,
     },
     /// So many time stamps are off the grid or repeated that they cannot be glitches: the stamps
     /// do not resolve the samples (printed with too few decimals, or jittering).
     #[error(
-        "{off} of {total} time stamps are off the grid of the others or repeat the previous one{}: they do not resolve the samples; if the sampling is uniform, give its step",
-        printed_hint(*.decimals)
+        "{off} of {total} time stamps are off the grid of the others or repeat the previous one{}{}: they do not resolve the samples; if the sampling is uniform, give its step",
+        printed_hint(*.decimals),
+        scatter_hint(*.scatter)
     )]
     TimeUnresolved {
         /// Stamps off the grid or repeating the previous one.
@@ -208,6 +214,9 @@ pub enum InputError {
         total: usize,
         /// The decimals the stamps are written with, when they are all written with at most 9.
         decimals: Option<u32>,
+        /// How far the stamps scatter about the grid, as a fraction of its step (robust standard
+        /// deviation about the clock's level), when a grid was fitted.
+        scatter: Option<f64>,
     },
     /// Time stamps so far apart that the times of their grid overflow (stamps near the largest
     /// floating-point numbers).
@@ -307,7 +316,17 @@ impl fmt::Display for StampFault {
 
 /// A computed number, written to 9 significant digits (the shortest text that reads back as
 /// the rounded value).
-struct Rounded(f64);
+pub(super) struct Rounded(pub(super) f64);
+
+impl Rounded {
+    /// The number to `digits` significant digits (at least 1).
+    pub(super) fn digits(&self, digits: usize) -> String {
+        let rounded: f64 = format!("{:.*e}", digits.max(1) - 1, self.0)
+            .parse()
+            .unwrap_or(self.0);
+        rounded.to_string()
+    }
+}
 
 impl fmt::Display for Rounded {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -323,6 +342,32 @@ fn glitch_advice(isolated: bool) -> &'static str {
     } else {
         "not an isolated glitch (a neighbour is off the grid too, or samples are missing beside it), so it cannot be repaired; correct the time stamps, or, if the sampling is uniform, give its step"
     }
+}
+
+/// The other glitches that are errors, for [`InputError::TimeGlitch`].
+fn other_glitches(others: &[Location], count: usize) -> String {
+    if count == 0 {
+        return String::new();
+    }
+    let named: Vec<String> = others.iter().map(Location::to_string).collect();
+    let more = count.saturating_sub(others.len());
+    let more = if more > 0 {
+        format!(" and {more} more")
+    } else {
+        String::new()
+    };
+    let noun = if count == 1 { "glitch" } else { "glitches" };
+    format!("; {count} more {noun}: {}{more}", named.join(", "))
+}
+
+/// The scatter of the stamps, for [`InputError::TimeUnresolved`].
+fn scatter_hint(scatter: Option<f64>) -> String {
+    scatter.map_or_else(String::new, |s| {
+        format!(
+            ", scattering about the grid by {} % of its step (robust RMS)",
+            Rounded(100.0 * s).digits(2)
+        )
+    })
 }
 
 /// The decimals of the stamps, for [`InputError::TimeUnresolved`].

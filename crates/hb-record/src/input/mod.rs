@@ -48,22 +48,28 @@
 //!
 //! [`GridRecord::fit`] fits the stamps to a grid `t0 + n · dt`: the step from the median step,
 //! refined on runs of single steps, then least squares on the stamps that fit (see the `uniform`
-//! module for the steps). A stamp fits when it is within [`GRID_TOLERANCE`] (a quarter of a step)
-//! of its grid time: enough for stamps printed with a resolution of up to half a step (4 decimals
-//! at 2048 Hz are off by a tenth of a step), and a quarter of a step is three quarters from any
-//! other grid time, so the index of a stamp that fits is never in doubt. The fitted `t0` and `dt`
-//! are the record's; the stamps themselves are not used further.
+//! module for the steps). The samples are taken on an even grid; the clock that stamps them may
+//! round, jitter and slip. The fit follows the clock's local offset from the grid (its level, the
+//! median deviation of the neighbouring stamps), so that runs of thousands of stamps a printed
+//! unit off the grid (a logger's clock that slips, with single steps a unit short or long) fit.
+//! A stamp fits when it is within [`GRID_TOLERANCE`] (a quarter of a step) of its level, or,
+//! when the stamps jitter beyond their printing, within [`JITTER_SIGMAS`] robust standard
+//! deviations of it (at most half a step), and less than half a step from its grid time, so that
+//! its index is never in doubt. The fitted `t0` and `dt` are the record's; the stamps themselves
+//! are not used further, but what they showed is reported ([`GridReport`]: the deviations from
+//! the grid and from the levels, the slips of the clock).
 //!
 //! - Gaps: a step of about `k · dt` (`k ≥ 2`) landing back on the grid means missing samples;
 //!   the record is split there into [`Piece`]s, each with the grid index of its first sample.
-//! - Glitches: a stamp that goes backwards, repeats the previous one or does not fit the grid is
-//!   an error ([`InputError::TimeGlitch`], naming its line) unless it is isolated (the neighbours
-//!   on both sides fit, one grid step away from it) and repair is asked for
+//! - Glitches: a stamp that goes backwards, repeats the previous one or does not fit is an error
+//!   ([`InputError::TimeGlitch`], naming its line and the next glitches) unless it is isolated
+//!   (the neighbours on both sides fit, one grid step away from it) and repair is asked for
 //!   ([`GridOptions::repair`]): then it is replaced by its grid time and listed in
 //!   [`GridRecord::repaired`]. Two glitches side by side, or one beside a gap, stay errors.
-//! - Stamps that do not resolve the samples (more than 5% of them, and at least 3, off the grid
-//!   or repeated: printed with too few decimals, or jittering) are
-//!   [`InputError::TimeUnresolved`]: give the sampling step instead.
+//! - Stamps that do not resolve the samples (more than 5% of them, and at least 3, more than a
+//!   quarter step from their level or repeated: printed with too few decimals, or jittering by
+//!   more than about a tenth of a step) are [`InputError::TimeUnresolved`]: give the sampling
+//!   step instead.
 //! - With a sampling step given, the grid is exact and there is one piece.
 //!
 //! This module holds the record, the options and the entry points; `csv` and `npy` are the two
@@ -77,7 +83,10 @@ mod proptests;
 mod uniform;
 
 pub use error::{InputError, Location, StampFault};
-pub use uniform::{GRID_TOLERANCE, GridOptions, GridRecord, Piece, TimeRepair};
+pub use uniform::{
+    GRID_TOLERANCE, GridOptions, GridRecord, GridReport, JITTER_MIN_STAMPS, JITTER_SIGMAS, JITTER_WARNING,
+    LEVEL_WINDOW, Piece, Slip, TimeRepair,
+};
 
 use std::io::Read;
 use std::path::{Path, PathBuf};

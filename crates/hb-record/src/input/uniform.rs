@@ -1,42 +1,117 @@
 //! The checks a record must pass before identification: time stamps on a uniform grid
-//! `t0 + n · dt` (each within [`GRID_TOLERANCE`] of its grid time), split into pieces at gaps,
-//! isolated glitches repaired on request. (The forcing period need not be a whole number of
-//! steps: the command line resamples the record once, `circle_signal::resample_pieces`.)
+//! `t0 + n · dt`, split into pieces at gaps, isolated glitches repaired on request, and a report
+//! of how far the stamps are from the grid ([`GridReport`]). (The forcing period need not be a
+//! whole number of steps: the command line resamples the record once,
+//! `circle_signal::resample_pieces`.)
 //!
-//! The grid is fitted in four steps, each robust to what the previous one could not see:
+//! The samples of a record are taken on an even grid; the clock that stamps them need not be
+//! even. A logger's clock rounds to the decimals it prints, may jitter, and may slip: runs of
+//! thousands of stamps one printed unit off the grid, with single steps one unit short or long
+//! where the clock slips (at 500 Hz printed to 1 ms, steps of 1 and 3 ms among the 2 ms ones).
+//! The fit finds the grid behind such a clock: it follows the clock's local offset from the grid
+//! (its "level", the median deviation of the neighbouring stamps), accepts every stamp near its
+//! level, and reports what it found: the step, the deviations from the grid, the jitter about
+//! the level, and the slips of the level.
+//!
+//! The grid is fitted in five steps, each robust to what the previous one could not see:
 //!
 //! 1. a first step, the median of the steps (at most 100 001 of them, evenly spread);
-//! 2. the step refined as the mean of the "single" steps (within half a step of the estimate),
-//!    until it settles; runs of single steps telescope, so the rounding of the stamps inside a
-//!    run cancels;
+//! 2. the step refined as the mean of the "single" steps (within half a step of the estimate,
+//!    a slip of half a step included), until it settles; runs of single steps telescope, so the
+//!    rounding of the stamps inside a run cancels;
 //! 3. the runs of single steps linked into one index sequence (the gap between two runs rounded
 //!    to whole steps), and a least-squares line fitted to their stamps;
 //! 4. every stamp indexed by the line (`n = round((t − t0) / dt)`) and the line fitted again to
-//!    the stamps within the tolerance of their grid time, until it no longer changes.
+//!    the stamps less than half a step from their grid time, until it no longer changes: the
+//!    line stays among the levels of a slipping clock rather than on the most common one;
+//! 5. the clock's level at each stamp: the median deviation from the line of the
+//!    [`LEVEL_WINDOW`] stamps that end at it or of those that start at it, whichever is nearer
+//!    its own deviation (so that a stamp beside a slip takes the level of its own side); the
+//!    scatter of the stamps about their levels (robust standard deviation); and the line fitted
+//!    again to the stamps that fit, until it no longer changes. (When every stamp is within
+//!    0.6 of a printed unit of the line, or a millionth of a step without a printed resolution,
+//!    or no run of [`LEVEL_WINDOW`] stamps has its median deviation half the smallest slip off
+//!    the line, no slip can hide among them: the levels are 0 and are not computed.)
 //!
 //! Then each stamp is judged against the final line: it fits when it is within the tolerance of
-//! its grid time; it is in place when its "level" `n − i` (grid index less position) does not go
-//! down from the previous good stamp's, and does not stand above the level of the stamps that
-//! follow. A level going up is a gap; any other stamp is a glitch.
+//! its level (see below) and less than half a step from its grid time; it is in place when its
+//! "index level" `n − i` (grid index less position) does not go down from the previous good
+//! stamp's, and does not stand above the index level of the stamps that follow. An index level
+//! going up is a gap; any other stamp is a glitch.
+//!
+//! # Tolerances, and what is refused
+//!
+//! - A stamp fits when it is within [`GRID_TOLERANCE`] (a quarter of a step) or a printed unit
+//!   (at most half a step) of its level, or within a quarter step of its grid time. When the stamps scatter about their levels by more than their printing
+//!   explains (robust standard deviation σ above 0.74 printed unit, the most that rounding gives),
+//!   the tolerance about the level is [`JITTER_SIGMAS`] σ, at least a quarter and at most half a
+//!   step, so that the tails of a jitter are not taken for glitches (in records of at least
+//!   [`JITTER_MIN_STAMPS`] stamps).
+//! - No stamp is ever half a step or more from its grid time: its index would be in doubt.
+//!   A clock whose levels span more than that (slips both ways from the grid at a resolution of
+//!   half a step, or a long slip of half a step or more) is refused, as is a slip that coincides
+//!   with a gap when it could as well be a missing sample (at a resolution of half a step).
+//! - More than 5 % of the stamps (and at least 3) more than a quarter step (or a printed unit)
+//!   from their level or repeated: the stamps do not resolve the samples ([`InputError::TimeUnresolved`], with the
+//!   scatter). A jitter of 10 % of the step (RMS, normal) puts 1.2 % of the stamps beyond a
+//!   quarter step and is accepted; one of 30 % puts 40 % there and is refused.
+//! - A level that holds for fewer than half of [`LEVEL_WINDOW`] stamps is not a slip: those
+//!   stamps are glitches, repaired only when isolated.
+//! - A slip is reported where a stamp's level moves from the mean level since the last slip by
+//!   half a printed unit or more (by 3 σ or more when the stamps jitter beyond their printing),
+//!   and by at least a hundredth of a step.
+//!
+//! # What is reported
+//!
+//! [`GridReport`], in [`GridRecord::report`]: the step, the resolution of the stamps, their
+//! largest and RMS deviation from their grid times, their largest and RMS deviation from their
+//! levels (rounding and jitter), and the slips of the level (where, by how much). A front end
+//! shows it when [`GridReport::is_notable`] (slips, or deviations beyond the printing), as a
+//! warning when [`GridReport::is_warning`]: the stamps jitter by more than [`JITTER_WARNING`] of
+//! the step (RMS). The samples are placed on the grid either way; if they were taken at their
+//! stamps instead, that moves them by the reported deviations, which act on the record as noise
+//! of the deviation times the signal's rate of change: at 5 % of the step (RMS) and 25 samples
+//! per period of a harmonic, about 1.3 % of its amplitude.
 
+use super::error::Rounded;
 use super::{InputError, Location, Record, StampFault, median, printed_decimals};
 
-/// Largest distance of a time stamp from its grid time `t0 + n · dt`, in steps, for it to fit.
+/// Largest distance of a time stamp from its level (the clock's local offset from the grid), in
+/// steps, for it to fit when the stamps do not jitter beyond their printing.
 ///
-/// A quarter of a step: a stamp that fits is then at least three quarters of a step from any
-/// other grid time, so its index is never in doubt, and the tolerance covers stamps printed with
-/// a resolution up to half a step (a DAQ at 2048 Hz printing 4 decimals is off by up to a tenth
-/// of a step) plus the jitter of a clock.
+/// A quarter of a step: it covers stamps printed with a resolution up to half a step (a DAQ at
+/// 2048 Hz printing 4 decimals is off by up to a tenth of a step) plus the jitter of a clock.
 pub const GRID_TOLERANCE: f64 = 0.25;
 
-/// More stamps than this fraction of the record (and at least [`UNRESOLVED_MIN`]) off the grid
-/// or repeated are not glitches: the stamps do not resolve the samples.
+/// The tolerance of a jittering clock about its level, in robust standard deviations of the
+/// stamps about their levels (when that is above what rounding gives): at most 2e-9 of
+/// the stamps of a normal jitter lie further.
+pub const JITTER_SIGMAS: f64 = 6.0;
+
+/// The fewest stamps whose scatter about their levels sets a jitter's tolerance: the robust
+/// standard deviation of fewer is uncertain by more than 15 %, and one glitch among them moves the
+/// line they are measured from.
+pub const JITTER_MIN_STAMPS: usize = 100;
+
+/// The RMS deviation of the stamps from their levels, as a fraction of the step, above which
+/// [`GridReport::is_warning`]: 5 %, noise of about 1.3 % of the amplitude of a harmonic sampled
+/// 25 times a period if the samples were taken at their stamps.
+pub const JITTER_WARNING: f64 = 0.05;
+
+/// A stamp's level is the median deviation from the grid of this many stamps, those that end at
+/// it or those that start at it: a level that holds for more than half as many stamps is a slip
+/// of the clock, one that holds for fewer is a run of glitches.
+pub const LEVEL_WINDOW: usize = 33;
+
+/// More stamps than this fraction of the record (and at least [`UNRESOLVED_MIN`]) off their
+/// level or repeated are not glitches: the stamps do not resolve the samples.
 const UNRESOLVED_FRACTION: f64 = 0.05;
 
 /// See [`UNRESOLVED_FRACTION`].
 const UNRESOLVED_MIN: usize = 3;
 
-/// Steps, evenly spread, whose median is the first estimate of the step.
+/// Steps, evenly spread, whose median is the first estimate of the step; also the stamps whose
+/// deviations give the scatter about the levels.
 const MEDIAN_STEPS: usize = 100_001;
 
 /// The largest grid index a stamp may have (from the first stamp of the first run).
@@ -45,10 +120,41 @@ const MAX_INDEX: f64 = (1u64 << 52) as f64;
 /// Refits of the line before it is taken as it stands.
 const MAX_REFITS: usize = 50;
 
+/// A step is single within half a step of the grid's and this fraction of a step more: the
+/// rounding of the numbers themselves, so that a slip of half a step (a step of 1 or 3 ms at
+/// 500 Hz) stays single whichever way the subtraction rounds.
+const SINGLE_SLACK: f64 = 1e-6;
+
+/// The smallest change of level reported as a slip, as a fraction of the step (also at least
+/// half a printed unit, or [`SLIP_SIGMAS`] times the scatter of a jitter, above the noise of a
+/// median of [`LEVEL_WINDOW`] stamps).
+const SLIP_FLOOR: f64 = 0.01;
+
+/// See [`SLIP_FLOOR`]: a median of 33 normal deviates scatters by 0.22 σ.
+const SLIP_SIGMAS: f64 = 3.0;
+
+/// Every stamp within this many printed units of the line (or [`NO_LEVELS_UNROUNDED`] of a step
+/// when the stamps have no printed resolution): the levels are 0, not computed.
+const NO_LEVELS_UNITS: f64 = 0.6;
+
+/// See [`NO_LEVELS_UNITS`].
+const NO_LEVELS_UNROUNDED: f64 = 1e-6;
+
+/// A stamp within a printed unit of its level (and this little more, for the arithmetic) fits:
+/// the rounding of the stamp and of its level, where the rounding error of a clock whose step is
+/// not a whole number of units moves by a unit at once.
+const PRINTED_UNITS: f64 = 1.001;
+
+/// The robust standard deviation of a normal sample: the median absolute deviation times this.
+const MAD_TO_SIGMA: f64 = 1.482_602_218_505_602;
+
+/// The most other glitches an error names.
+const GLITCHES_NAMED: usize = 5;
+
 /// How to fit a record's time stamps to a grid.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct GridOptions {
-    /// Replace each isolated glitch (a stamp off the grid, repeated or going backwards, whose
+    /// Replace each isolated glitch (a stamp off its level, repeated or going backwards, whose
     /// neighbours on both sides fit the grid one step away) by its grid time, and report it in
     /// [`GridRecord::repaired`]. Without it, such a stamp is an error.
     pub repair: bool,
@@ -74,6 +180,150 @@ pub struct Piece {
     pub samples: Vec<f64>,
 }
 
+/// A change of the level of the clock that stamps a record: from this stamp on, the stamps sit
+/// `by` further from their grid times (negative: earlier) than before it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Slip {
+    /// The first stamp at the new level.
+    pub at: Location,
+    /// The change of level, in the record's time unit.
+    pub by: f64,
+}
+
+/// How the time stamps of a record sit on its grid: what [`GridRecord::fit`] found (see the
+/// module docs). Deviations are stamp less grid time, over the stamps kept (repaired ones
+/// aside), in the record's time unit.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GridReport {
+    /// The grid's step.
+    pub step: f64,
+    /// The resolution the stamps are written with (`10^−k` for `k` decimals), when they are all
+    /// written with at most 9 decimals.
+    pub resolution: Option<f64>,
+    /// The largest deviation of a stamp from its grid time (signed).
+    pub max_deviation: f64,
+    /// Where that stamp is.
+    pub max_at: Location,
+    /// The root mean square of the deviations from the grid times.
+    pub rms_deviation: f64,
+    /// The largest deviation of a stamp from its level, the clock's local offset (signed):
+    /// rounding and jitter, the slips aside.
+    pub max_jitter: f64,
+    /// The root mean square of the deviations from the levels.
+    pub rms_jitter: f64,
+    /// The slips of the clock's level, in order.
+    pub slips: Vec<Slip>,
+}
+
+impl GridReport {
+    /// The largest deviation from the grid, as a fraction of the step.
+    pub fn max_fraction(&self) -> f64 {
+        self.max_deviation.abs() / self.step
+    }
+
+    /// The RMS deviation from the grid, as a fraction of the step.
+    pub fn rms_fraction(&self) -> f64 {
+        self.rms_deviation / self.step
+    }
+
+    /// The RMS deviation from the levels (the jitter), as a fraction of the step.
+    pub fn jitter_fraction(&self) -> f64 {
+        self.rms_jitter / self.step
+    }
+
+    /// Whether every stamp is within one printed unit of its level (and of its grid time when
+    /// the clock does not slip): the deviations are the printing's.
+    pub fn within_printing(&self) -> bool {
+        // A thousandth of a unit for the arithmetic of the fit, and a millionth of a step where
+        // no resolution is known (stamps computed in floating point).
+        let unit = self.resolution.map_or(1e-6 * self.step, |u| u * 1.001);
+        self.max_jitter.abs() <= unit && (!self.slips.is_empty() || self.max_deviation.abs() <= unit)
+    }
+
+    /// Whether the report is worth showing: the clock slips, or the stamps deviate by more than
+    /// their printing explains.
+    pub fn is_notable(&self) -> bool {
+        !self.slips.is_empty() || !self.within_printing()
+    }
+
+    /// Whether the report is a warning: the stamps jitter about their levels by more than
+    /// [`JITTER_WARNING`] of the step (RMS), beyond their printing.
+    pub fn is_warning(&self) -> bool {
+        !self.within_printing() && self.jitter_fraction() > JITTER_WARNING
+    }
+}
+
+/// A fraction as a percentage with two significant digits (at least one decimal below 10 %).
+struct Percent(f64);
+
+impl std::fmt::Display for Percent {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let p = 100.0 * self.0;
+        if p >= 10.0 {
+            write!(f, "{p:.0} %")
+        } else if p >= 0.1 {
+            write!(f, "{p:.1} %")
+        } else {
+            write!(f, "{:.1e} %", p)
+        }
+    }
+}
+
+/// What the fit found, in a sentence without the options of a front end: the deviations from the
+/// grid, the slips of the clock (the first five), and whether the printing explains them.
+impl std::fmt::Display for GridReport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "the time stamps deviate from the even grid of step {} by up to {} of the step (RMS {})",
+            Rounded(self.step).digits(6),
+            Percent(self.max_fraction()),
+            Percent(self.rms_fraction())
+        )?;
+        if !self.slips.is_empty() {
+            let list: Vec<String> = self
+                .slips
+                .iter()
+                .take(5)
+                .map(|s| {
+                    format!(
+                        "{} ({}{})",
+                        s.at,
+                        if s.by > 0.0 { "+" } else { "" },
+                        Rounded(s.by).digits(3)
+                    )
+                })
+                .collect();
+            let more = if self.slips.len() > 5 { ", ..." } else { "" };
+            write!(
+                f,
+                "; the clock that stamps them slips {} time(s), at {}{more}",
+                self.slips.len(),
+                list.join(", ")
+            )?;
+        }
+        let printing = match self.resolution {
+            Some(u) => format!("their printed resolution of {}", Rounded(u)),
+            None => "the rounding of the numbers".to_owned(),
+        };
+        if self.within_printing() {
+            write!(f, "; about their clock they are within {printing}")
+        } else {
+            write!(
+                f,
+                "; about their clock they scatter by up to {} of the step (RMS {}), more than {printing} explains",
+                Percent(self.max_jitter.abs() / self.step),
+                Percent(self.jitter_fraction())
+            )
+        }?;
+        f.write_str("; the samples are placed on the grid")?;
+        if self.is_warning() {
+            f.write_str(", which moves them by as much if they were taken at their stamps")?;
+        }
+        Ok(())
+    }
+}
+
 /// A record on a uniform time grid `t0 + n · dt`, in pieces separated by gaps (missing samples).
 #[derive(Debug, Clone, PartialEq)]
 pub struct GridRecord {
@@ -86,15 +336,17 @@ pub struct GridRecord {
     pub pieces: Vec<Piece>,
     /// The stamps replaced by their grid time, in order (empty unless repair was asked for).
     pub repaired: Vec<TimeRepair>,
+    /// How the stamps sit on the grid: deviations, jitter, slips of the clock.
+    pub report: GridReport,
 }
 
 impl GridRecord {
-    /// Fits the record's time stamps to a uniform grid (see the module docs and
-    /// [`GRID_TOLERANCE`]), splits it at gaps, and repairs isolated glitches if asked.
+    /// Fits the record's time stamps to a uniform grid (see the module docs), splits it at gaps,
+    /// repairs isolated glitches if asked, and reports how the stamps sit on the grid.
     ///
     /// Errors: fewer than 2 samples; time decreasing in most steps; stamps that do not resolve
     /// the samples ([`InputError::TimeUnresolved`]); a glitch not repaired
-    /// ([`InputError::TimeGlitch`]), the first in the record.
+    /// ([`InputError::TimeGlitch`]), the first in the record, naming the others.
     pub fn fit(record: Record, options: &GridOptions) -> Result<Self, InputError> {
         let Record { t, theta, lines, .. } = record;
         let n = t.len();
@@ -105,16 +357,18 @@ impl GridRecord {
             Some(&line) => Location::Line(line),
             None => Location::Sample(i + 1),
         };
-        let unresolved = |off: usize| InputError::TimeUnresolved {
+        let decimals = printed_decimals(&t);
+        let unresolved = |off: usize, scatter: Option<f64>| InputError::TimeUnresolved {
             off,
             total: n,
-            decimals: printed_decimals(&t),
+            decimals,
+            scatter,
         };
 
         let dt0 = first_step(&t);
         if dt0.is_nan() || dt0 <= 0.0 {
             if dt0 == 0.0 {
-                return Err(unresolved(t.windows(2).filter(|w| w[1] == w[0]).count()));
+                return Err(unresolved(t.windows(2).filter(|w| w[1] == w[0]).count(), None));
             }
             let i = (1..n).find(|&i| t[i] <= t[i - 1]).unwrap_or(1);
             return Err(InputError::TimeNotIncreasing {
@@ -126,7 +380,7 @@ impl GridRecord {
         let dt = refine_step(&t, dt0);
         let runs = single_runs(&t, dt);
         let Some(&(start, _)) = runs.first() else {
-            return Err(unresolved(n));
+            return Err(unresolved(n, None));
         };
         let origin = t[start];
         let tau = |i: usize| t[i] - origin;
@@ -138,12 +392,13 @@ impl GridRecord {
                 }
             }
         })
-        .ok_or_else(|| unresolved(n))?;
+        .ok_or_else(|| unresolved(n, None))?;
+        // Every stamp less than half a step from its grid time: the line among the levels.
         for _ in 0..MAX_REFITS {
             let next = least_squares(|f| {
                 for i in 0..n {
-                    let (k, fits) = line.locate(tau(i));
-                    if fits {
+                    let k = line.index(tau(i));
+                    if line.indexable(k, tau(i)) {
                         f(k, tau(i));
                     }
                 }
@@ -154,13 +409,97 @@ impl GridRecord {
             }
         }
         if !(line.b.is_finite() && line.b > 0.0) {
-            return Err(unresolved(n));
+            return Err(unresolved(n, None));
         }
 
+        // The clock's level at each stamp, against this line; the scatter about the levels and
+        // the tolerance it sets. A stamp's deviation from its level does not depend on the line
+        // it is indexed by, so the levels are found once.
+        let base = line;
+        let deviation = |i: usize| {
+            let k = base.index(tau(i));
+            tau(i) - base.at(k)
+        };
+        let resolution = decimals.map(|k| 10f64.powi(-(k as i32)));
+        let unit = resolution.unwrap_or(0.0);
+        let stride = n.div_ceil(MEDIAN_STEPS).max(1);
+        // The robust standard deviation of the stamps about `level` (over at most 100 001 of
+        // them, evenly spread), and whether rounding alone cannot give it: rounding puts half the
+        // stamps within half a unit of their level at most.
+        let scatter_about = |level: &dyn Fn(usize) -> f64| {
+            let mut spread: Vec<f64> = (0..n)
+                .step_by(stride)
+                .filter_map(|i| {
+                    let k = base.index(tau(i));
+                    base.indexable(k, tau(i)).then(|| (deviation(i) - level(i)).abs())
+                })
+                .collect();
+            MAD_TO_SIGMA * median(&mut spread).unwrap_or(0.0)
+        };
+        let jitter = |scatter: f64| scatter > MAD_TO_SIGMA * 0.5 * unit;
+        let slip_threshold = |scatter: f64| {
+            if jitter(scatter) {
+                SLIP_SIGMAS * scatter
+            } else {
+                0.5 * unit
+            }
+            .max(SLIP_FLOOR * base.b)
+        };
+        // Levels only where a slip can be: some stamp beyond the rounding of the line, and some
+        // window of stamps whose median is half a slip off it.
+        let flat_scatter = scatter_about(&|_| 0.0);
+        let plain = resolution.map_or(NO_LEVELS_UNROUNDED * base.b, |u| NO_LEVELS_UNITS * u);
+        let levels = ((0..n).any(|i| {
+            let d = deviation(i).abs();
+            d.is_nan() || d > plain
+        }) && windows_depart(n, &deviation, 0.5 * slip_threshold(flat_scatter)))
+        .then(|| levels(n, &deviation));
+        let level = |i: usize| levels.as_ref().map_or(0.0, |l| l.own[i]);
+        // A stamp's deviation from its level, indexed `k` on `line`: against the line the levels
+        // were found on, where there are levels; against `line` itself, where they are all 0.
+        let off_level = |line: Line, k: f64, i: usize| match &levels {
+            Some(levels) => tau(i) - base.at(k) - levels.own[i],
+            None => tau(i) - line.at(k),
+        };
+        let scatter = match levels {
+            Some(_) => scatter_about(&level),
+            None => flat_scatter,
+        };
+        // The scatter of a few stamps is too uncertain to widen the tolerance by.
+        let jitters = jitter(scatter) && n >= JITTER_MIN_STAMPS;
+        // A printed unit about the level is the printing's (the rounding of the stamp and of the
+        // level), never more than half a step.
+        let near_level =
+            (GRID_TOLERANCE * base.b).max((PRINTED_UNITS * resolution.unwrap_or(0.0)).min(0.5 * base.b));
+        let tolerance = if jitters {
+            (JITTER_SIGMAS * scatter).clamp(near_level, 0.5 * base.b)
+        } else {
+            near_level
+        };
+        // Near its level, or near its grid time as a stamp with no level would be.
+        let fits = |line: Line, k: f64, i: usize| {
+            line.indexable(k, tau(i))
+                && (off_level(line, k, i).abs() <= tolerance
+                    || (tau(i) - line.at(k)).abs() <= GRID_TOLERANCE * line.b)
+        };
+        for _ in 0..MAX_REFITS {
+            let next = least_squares(|f| {
+                for i in 0..n {
+                    let k = line.index(tau(i));
+                    if fits(line, k, i) {
+                        f(k, tau(i));
+                    }
+                }
+            });
+            match next {
+                Some(next) if next != line && next.b.is_finite() && next.b > 0.0 => line = next,
+                _ => break,
+            }
+        }
         // Grid times increase with the index: those of every stamp's index (and of the indices
         // next to them, where glitches are repaired) are finite when the extreme ones are.
         let (lowest, highest) = (0..n).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), i| {
-            let k = line.locate(tau(i)).0;
+            let k = line.index(tau(i));
             (lo.min(k), hi.max(k))
         });
         if !(origin + line.at(lowest - 1.0)).is_finite() || !(origin + line.at(highest + 1.0)).is_finite() {
@@ -170,45 +509,69 @@ impl GridRecord {
             });
         }
 
-        let judged = judge(&t, |i| line.locate(tau(i)));
-        if judged.good == 0
-            || (judged.unresolved >= UNRESOLVED_MIN
-                && judged.unresolved as f64 > UNRESOLVED_FRACTION * n as f64)
-        {
-            return Err(unresolved(judged.unresolved));
+        let index = |i: usize| line.index(tau(i));
+        let bad = judge(n, |i| {
+            let k = index(i);
+            (k, fits(line, k, i))
+        });
+        // Stamps off their level by more than a quarter step (those within a jitter's tolerance
+        // beyond it included), and repeated ones.
+        let near = |i: usize| {
+            let k = index(i);
+            line.indexable(k, tau(i))
+                && (off_level(line, k, i).abs() <= near_level
+                    || (tau(i) - line.at(k)).abs() <= GRID_TOLERANCE * line.b)
+        };
+        let off = (0..n).filter(|&i| !near(i)).count()
+            + bad
+                .iter()
+                .filter(|&&i| near(i) && i > 0 && t[i] == t[i - 1])
+                .count();
+        let scatter_of_step = Some(scatter / base.b).filter(|s| s.is_finite());
+        if bad.len() == n || (off >= UNRESOLVED_MIN && off as f64 > UNRESOLVED_FRACTION * n as f64) {
+            return Err(unresolved(off, scatter_of_step));
         }
 
         // Every glitch repaired, or the first one that cannot be is an error.
-        let index = |i: usize| line.locate(tau(i)).0;
-        let bad = &judged.bad;
-        let mut fixed = Vec::with_capacity(bad.len());
-        for (p, &i) in bad.iter().enumerate() {
+        let isolated = |p: usize| {
+            let i = bad[p];
             let prev_good = i > 0 && (p == 0 || bad[p - 1] != i - 1);
             let next_good = i + 1 < n && bad.get(p + 1) != Some(&(i + 1));
-            let isolated = (i == 0 || prev_good)
+            (i == 0 || prev_good)
                 && (i + 1 == n || next_good)
-                && (i == 0 || i + 1 == n || index(i + 1) - index(i - 1) == 2.0);
-            if !(isolated && options.repair) {
-                let fault = match i.checked_sub(1).map(|j| t[j]) {
-                    Some(previous) if t[i] == previous => StampFault::Repeated,
-                    Some(previous) if t[i] < previous => StampFault::Backwards { previous },
-                    _ => StampFault::OffGrid,
-                };
-                return Err(InputError::TimeGlitch {
-                    at: at(i),
-                    t: t[i],
-                    fault,
-                    expected: origin + line.at(expected_index(bad, p, n, index)),
-                    dt: line.b,
-                    isolated,
-                });
-            }
-            fixed.push(if prev_good {
-                index(i - 1) + 1.0
-            } else {
-                index(i + 1) - 1.0
+                && (i == 0 || i + 1 == n || index(i + 1) - index(i - 1) == 2.0)
+        };
+        let error = |p: usize| !(isolated(p) && options.repair);
+        if let Some(p) = (0..bad.len()).find(|&p| error(p)) {
+            let i = bad[p];
+            let fault = match i.checked_sub(1).map(|j| t[j]) {
+                Some(previous) if t[i] == previous => StampFault::Repeated,
+                Some(previous) if t[i] < previous => StampFault::Backwards { previous },
+                _ => StampFault::OffGrid,
+            };
+            let others: Vec<usize> = (p + 1..bad.len()).filter(|&q| error(q)).collect();
+            return Err(InputError::TimeGlitch {
+                at: at(i),
+                t: t[i],
+                fault,
+                expected: origin + line.at(expected_index(&bad, p, n, index)),
+                dt: line.b,
+                isolated: isolated(p),
+                others: others.iter().take(GLITCHES_NAMED).map(|&q| at(bad[q])).collect(),
+                other_count: others.len(),
             });
         }
+        let fixed: Vec<f64> = bad
+            .iter()
+            .enumerate()
+            .map(|(p, &i)| {
+                if i > 0 && (p == 0 || bad[p - 1] != i - 1) {
+                    index(i - 1) + 1.0
+                } else {
+                    index(i + 1) - 1.0
+                }
+            })
+            .collect();
         let final_index = |i: usize| match bad.binary_search(&i) {
             Ok(p) => fixed[p],
             Err(_) => index(i),
@@ -224,6 +587,51 @@ impl GridRecord {
                 now: t0 + (k - k0) * line.b,
             })
             .collect();
+
+        // What the stamps kept say about the clock: deviations from the grid and from the
+        // levels, and the changes of level beyond the noise of a median.
+        let threshold = slip_threshold(scatter);
+        let mut report = GridReport {
+            step: line.b,
+            resolution,
+            max_deviation: 0.0,
+            max_at: at(0),
+            rms_deviation: 0.0,
+            max_jitter: 0.0,
+            rms_jitter: 0.0,
+            slips: Vec::new(),
+        };
+        let (mut squares, mut jitter_squares, mut kept) = (Sum::default(), Sum::default(), 0usize);
+        let mut next_bad = bad.iter().peekable();
+        for i in 0..n {
+            if next_bad.next_if_eq(&&i).is_some() {
+                continue;
+            }
+            let k = index(i);
+            let deviation = tau(i) - line.at(k);
+            let jitter = off_level(line, k, i);
+            kept += 1;
+            // In steps, so that no square overflows.
+            squares.add((deviation / line.b).powi(2));
+            jitter_squares.add((jitter / line.b).powi(2));
+            if deviation.abs() > report.max_deviation.abs() {
+                (report.max_deviation, report.max_at) = (deviation, at(i));
+            }
+            if jitter.abs() > report.max_jitter.abs() {
+                report.max_jitter = jitter;
+            }
+        }
+        if let Some(levels) = &levels {
+            let good = |i: usize| bad.binary_search(&i).is_err();
+            report.slips = slips(levels, good, threshold)
+                .into_iter()
+                .map(|(i, by)| Slip { at: at(i), by })
+                .collect();
+        }
+        if kept > 0 {
+            report.rms_deviation = line.b * (squares.value() / kept as f64).sqrt();
+            report.rms_jitter = line.b * (jitter_squares.value() / kept as f64).sqrt();
+        }
 
         // Pieces, split from the end so that each sample moves once.
         let mut starts = vec![(0, 0)];
@@ -250,6 +658,7 @@ impl GridRecord {
             dt: line.b,
             pieces,
             repaired,
+            report,
         })
     }
 
@@ -268,18 +677,150 @@ struct Line {
 }
 
 impl Line {
-    /// The grid index nearest to `tau`, and whether `tau` is within the tolerance of it (never
-    /// for an index beyond 2^52, where whole numbers are no longer exact).
-    fn locate(self, tau: f64) -> (f64, bool) {
-        let k = ((tau - self.a) / self.b).round();
-        let off = tau - self.a - k * self.b;
-        (k, off.abs() <= GRID_TOLERANCE * self.b && k.abs() <= MAX_INDEX)
+    /// The grid index nearest to `tau`.
+    fn index(self, tau: f64) -> f64 {
+        ((tau - self.a) / self.b).round()
+    }
+
+    /// Whether `tau` is less than half a step from the grid time of index `k` (never for an
+    /// index beyond 2^52, where whole numbers are no longer exact): its index is not in doubt.
+    fn indexable(self, k: f64, tau: f64) -> bool {
+        (tau - self.at(k)).abs() < 0.5 * self.b && k.abs() <= MAX_INDEX
     }
 
     /// The grid time of index `k`.
     fn at(self, k: f64) -> f64 {
         self.a + k * self.b
     }
+}
+
+/// Whether the median deviation of some run of [`LEVEL_WINDOW`] stamps (in consecutive runs from
+/// the first) is `limit` or more from the line.
+fn windows_depart(n: usize, deviation: &impl Fn(usize) -> f64, limit: f64) -> bool {
+    let mut window = [0.0; LEVEL_WINDOW];
+    (0..n).step_by(LEVEL_WINDOW).any(|start| {
+        let len = LEVEL_WINDOW.min(n - start);
+        for (j, slot) in window[..len].iter_mut().enumerate() {
+            *slot = deviation(start + j);
+        }
+        median(&mut window[..len]).is_some_and(|m| m.is_nan() || m.abs() >= limit)
+    })
+}
+
+/// The clock's levels, against the line they were found on.
+struct Levels {
+    /// Each stamp's own level: the median deviation of the [`LEVEL_WINDOW`] stamps that end at it
+    /// or of those that start at it (the first or last ones of the record at its ends),
+    /// whichever is nearer its own deviation.
+    own: Vec<f64>,
+    /// The median deviation of the [`LEVEL_WINDOW`] stamps that start at each (the last ones of
+    /// the record at its end).
+    after: Vec<f64>,
+}
+
+impl Levels {
+    /// The median deviation of the [`LEVEL_WINDOW`] stamps centred on stamp `i` (shifted to stay
+    /// whole at the ends): it moves from one level to the next at a slip, without picking sides.
+    fn centred(&self, i: usize) -> f64 {
+        self.after[i.saturating_sub(LEVEL_WINDOW / 2)]
+    }
+}
+
+/// The levels of the stamps from their deviations `deviation(i)` from the line.
+fn levels(n: usize, deviation: &impl Fn(usize) -> f64) -> Levels {
+    let h = LEVEL_WINDOW - 1;
+    let mut own = running_median(n, h, 0, deviation);
+    let after = running_median(n, 0, h, deviation);
+    for (i, (b, &a)) in own.iter_mut().zip(&after).enumerate() {
+        let d = deviation(i);
+        if (d - *b).abs() > (d - a).abs() {
+            *b = a;
+        }
+    }
+    Levels { own, after }
+}
+
+/// The slips of the clock, `(first stamp at the new level, change of level)`, from the centred
+/// levels of the good stamps: a slip where a level moves `threshold` or more from the mean of the
+/// levels from one and a half windows to one window before it (whose windows do not reach it,
+/// however gradually a centred median moves from one level to the next), none of them before the
+/// previous slip. Its size is the mean level of the stamps from half a window to a window after
+/// it less that of the stamps from a window to half a window before it, or, where those are cut
+/// off by another slip or the record's ends, the nearest levels there are.
+fn slips(levels: &Levels, good: impl Fn(usize) -> bool, threshold: f64) -> Vec<(usize, f64)> {
+    let (n, w, half) = (levels.after.len(), LEVEL_WINDOW, LEVEL_WINDOW / 2);
+    let mean = |range: std::ops::Range<usize>| {
+        let (sum, count) = range
+            .filter(|&i| good(i))
+            .fold((0.0, 0usize), |(s, c), i| (s + levels.centred(i), c + 1));
+        (count > 0).then(|| sum / count as f64)
+    };
+    let mut found: Vec<(usize, f64)> = Vec::new();
+    // The first stamp whose centred window is past the previous slip.
+    let mut since = 0;
+    // The reference window `[from, to)` and the sum and count of its good levels, slid one
+    // stamp at a time and summed afresh after a slip.
+    let (mut from, mut to, mut sum, mut count) = (0, 0, 0.0, 0usize);
+    for i in (w..n).filter(|&i| good(i)) {
+        let (start, end) = (since.max(i - w - half.min(i - w)), (i - w).max(since));
+        if start < from || start > to || end < to {
+            (from, to, sum, count) = (start, start, 0.0, 0);
+        }
+        for j in from..start.min(to) {
+            if good(j) {
+                sum -= levels.centred(j);
+                count -= 1;
+            }
+        }
+        from = start;
+        for j in to.max(start)..end {
+            if good(j) {
+                sum += levels.centred(j);
+                count += 1;
+            }
+        }
+        to = end;
+        if count == 0 {
+            continue;
+        }
+        let reference = sum / count as f64;
+        if (levels.centred(i) - reference).abs() >= threshold {
+            let before = mean(since.max(i - w)..(i - half).max(since)).unwrap_or(reference);
+            let after = mean((i + half).min(n)..(i + w).min(n)).unwrap_or(levels.centred(i));
+            if (after - before).abs() >= threshold {
+                found.push((i, after - before));
+                since = i + half;
+            }
+        }
+    }
+    found
+}
+
+/// The median of the values from `before` places before each one to `after` places after it,
+/// the window shifted to stay whole at the ends of the record (the upper middle of an even
+/// count), in `O(n w)` for a window of `w` at worst and `O(n)` where the values repeat.
+fn running_median(n: usize, before: usize, after: usize, value: impl Fn(usize) -> f64) -> Vec<f64> {
+    let len = (before + after + 1).min(n);
+    let low = |i: usize| i.saturating_sub(before).min(n - len);
+    let place = |window: &[f64], v: f64| window.partition_point(|x| x.total_cmp(&v).is_lt());
+    let mut window: Vec<f64> = Vec::with_capacity(len + 1);
+    for j in 0..len {
+        let v = value(j);
+        window.insert(place(&window, v), v);
+    }
+    let mut out = Vec::with_capacity(n);
+    for i in 0..n {
+        out.push(window[len / 2]);
+        if i + 1 == n || low(i + 1) == low(i) {
+            continue;
+        }
+        let (drop, add) = (value(low(i)), value(low(i) + len));
+        if drop.to_bits() != add.to_bits() {
+            window.remove(place(&window, drop));
+            window.insert(place(&window, add), add);
+        }
+    }
+    out
 }
 
 /// The median of at most [`MEDIAN_STEPS`] steps, evenly spread.
@@ -294,7 +835,7 @@ fn first_step(t: &[f64]) -> f64 {
 
 /// Whether the step from `a` to `b` is a single step of about `dt`.
 fn single(a: f64, b: f64, dt: f64) -> bool {
-    ((b - a) / dt - 1.0).abs() <= 0.5
+    ((b - a) / dt - 1.0).abs() <= 0.5 + SINGLE_SLACK
 }
 
 /// The maximal runs `(first, last)` of at least two samples with single steps between them.
@@ -469,23 +1010,13 @@ impl Sum {
     }
 }
 
-/// The stamps judged against the line.
-struct Judged {
-    /// The samples whose stamps are glitches, in order.
-    bad: Vec<usize>,
-    /// How many glitches are off the grid or repeat the previous stamp.
-    unresolved: usize,
-    /// How many stamps are good.
-    good: usize,
-}
-
-/// Judges every stamp by its grid index `locate(i)` and whether it fits (see the module docs).
+/// Judges every stamp by its grid index `locate(i)` and whether it fits (see the module docs);
+/// returns the samples whose stamps are glitches, in order.
 ///
-/// With `g_i = n_i − i` its level, a stamp that fits is anchored when a neighbour that fits has
-/// the same level. A stamp is good when it fits, its level is not below the last good stamp's,
-/// and, unless it is anchored, not above the next anchored stamp's level either.
-fn judge(t: &[f64], locate: impl Fn(usize) -> (f64, bool)) -> Judged {
-    let n = t.len();
+/// With `g_i = n_i − i` its index level, a stamp that fits is anchored when a neighbour that fits
+/// has the same index level. A stamp is good when it fits, its index level is not below the last
+/// good stamp's, and, unless it is anchored, not above the next anchored stamp's either.
+fn judge(n: usize, locate: impl Fn(usize) -> (f64, bool)) -> Vec<usize> {
     let level = |i: usize| {
         let (k, fits) = locate(i);
         (k - i as f64, fits)
@@ -494,11 +1025,7 @@ fn judge(t: &[f64], locate: impl Fn(usize) -> (f64, bool)) -> Judged {
         let (g, fits) = level(i);
         fits && ((i > 0 && level(i - 1) == (g, true)) || (i + 1 < n && level(i + 1) == (g, true)))
     };
-    let mut judged = Judged {
-        bad: Vec::new(),
-        unresolved: 0,
-        good: 0,
-    };
+    let mut bad = Vec::new();
     let mut last: Option<f64> = None;
     // The next anchored stamp after the current one (n when there is none).
     let mut ahead = 0;
@@ -517,15 +1044,11 @@ fn judge(t: &[f64], locate: impl Fn(usize) -> (f64, bool)) -> Judged {
             });
         if good {
             last = Some(g);
-            judged.good += 1;
         } else {
-            judged.bad.push(i);
-            if !fits || (i > 0 && t[i] == t[i - 1]) {
-                judged.unresolved += 1;
-            }
+            bad.push(i);
         }
     }
-    judged
+    bad
 }
 
 /// The grid index sample `bad[p]` would have, counted from its nearest good neighbour (the one
@@ -551,6 +1074,7 @@ fn expected_index(bad: &[usize], p: usize, n: usize, index: impl Fn(usize) -> f6
 #[cfg(test)]
 mod tests {
     use super::super::*;
+    use super::Percent;
     use proptest::prelude::*;
 
     /// A record with these stamps (line numbers from 2, after a header) and values 0, 1, 2, ….
@@ -845,6 +1369,366 @@ mod tests {
         assert_eq!((u.t0, u.dt, u.pieces.len()), (0.0, 0.125, 1));
     }
 
+    /// A logger's stamps at 500 Hz printed to 1 ms (3 decimals): the samples on an even grid from
+    /// `t0`, the logger's clock 1 ms behind the grid over the ranges `late` (it slips by -1 ms at
+    /// the start of each, by +1 ms at the end: single steps of 1 and 3 ms), and the stamps of
+    /// `glitches` 7 ms early (a step of -5 ms to each, then one of +9 ms).
+    fn logger_clock(n: usize, t0: f64, late: &[std::ops::Range<usize>], glitches: &[usize]) -> Vec<f64> {
+        (0..n)
+            .map(|i| {
+                let behind = if late.iter().any(|r| r.contains(&i)) {
+                    1e-3
+                } else {
+                    0.0
+                };
+                let early = if glitches.contains(&i) { 7e-3 } else { 0.0 };
+                let stamp = t0 + i as f64 * 2e-3 - behind - early;
+                format!("{stamp:.3}").parse().unwrap()
+            })
+            .collect()
+    }
+
+    /// Seeded uniform numbers in [0, 1) (splitmix64), and normal ones by Box–Muller.
+    struct Draws(u64);
+
+    impl Draws {
+        fn uniform(&mut self) -> f64 {
+            self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+            let mut z = self.0;
+            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+            ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+        }
+
+        fn normal(&mut self) -> f64 {
+            let (u, v) = (1.0 - self.uniform(), self.uniform());
+            (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
+        }
+    }
+
+    /// How stamps jitter about their grid times.
+    #[derive(Debug, Clone, Copy)]
+    enum Jitter {
+        /// Normal, with this standard deviation (a fraction of the step).
+        Gaussian(f64),
+        /// Uniform, with this standard deviation (a fraction of the step; half-width √3 times it).
+        Uniform(f64),
+    }
+
+    /// `n` stamps at 500 Hz from `t0`, each moved by `jitter`, printed to 7 decimals (0.005 % of
+    /// the step), seeded.
+    fn jittered(n: usize, t0: f64, jitter: Jitter, seed: u64) -> Vec<f64> {
+        let dt = 2e-3;
+        let mut draws = Draws(seed);
+        (0..n)
+            .map(|i| {
+                let off = match jitter {
+                    Jitter::Gaussian(s) => s * draws.normal(),
+                    Jitter::Uniform(s) => s * 3f64.sqrt() * (2.0 * draws.uniform() - 1.0),
+                };
+                let stamp = t0 + (i as f64 + off) * dt;
+                format!("{stamp:.7}").parse().unwrap()
+            })
+            .collect()
+    }
+
+    /// The record: 250 s at 500 Hz printed to 1 ms, 25 147 stamps 1 ms behind the grid in
+    /// two runs, and two stamps 7 ms early three places apart.
+    const LATE: [std::ops::Range<usize>; 2] = [20_000..32_000, 70_000..83_147];
+    const EARLY: [usize; 2] = [76_000, 76_003];
+    const T0: f64 = 41.2374;
+
+    #[test]
+    fn a_slipping_logger_clock_fits_and_its_isolated_glitches_are_repaired() {
+        let n = 125_000;
+        let t = logger_clock(n, T0, &LATE, &EARLY);
+        // Without repair: the first glitch, and the other one named.
+        let e = fit(t.clone()).unwrap_err();
+        let text = e.to_string();
+        match e {
+            InputError::TimeGlitch {
+                at: Location::Line(76_002),
+                fault: StampFault::Backwards { previous },
+                isolated: true,
+                others,
+                other_count: 1,
+                expected,
+                ..
+            } => {
+                assert_eq!(others, [Location::Line(76_005)]);
+                assert_eq!(previous, t[75_999]);
+                // The grid lies within the 1.4 ms the stamps are off the true times.
+                assert!((expected - (T0 + 152.0)).abs() < 1.4e-3, "{expected}");
+            }
+            other => panic!("{other:?}"),
+        }
+        let head = format!(
+            "line 76002: time {} does not increase (previous sample at {})",
+            t[76_000], t[75_999]
+        );
+        assert!(text.starts_with(&head), "{text}");
+        assert!(
+            text.ends_with("can be repaired; 1 more glitch: line 76005"),
+            "{text}"
+        );
+
+        let u = repair(t.clone()).unwrap();
+        assert_eq!((u.pieces.len(), u.sample_count()), (1, n));
+        let at: Vec<Location> = u.repaired.iter().map(|r| r.at).collect();
+        assert_eq!(at, [Location::Line(76_002), Location::Line(76_005)]);
+        for r in &u.repaired {
+            let Location::Line(line) = r.at else {
+                unreachable!()
+            };
+            let i = line as usize - 2;
+            assert_eq!(r.was, t[i]);
+            assert!((r.now - (T0 + i as f64 * 2e-3)).abs() < 1.4e-3, "{r:?}");
+        }
+        // Every stamp within half a millisecond of the middle of its band (1 ms: the rounding of
+        // the true times and the slip), so the step within the bound of least squares on that.
+        let indices: Vec<usize> = (0..n).collect();
+        let bound = step_bound(&indices, 0.5e-3);
+        assert!((u.dt - 2e-3).abs() <= bound, "{} (bound {bound:e})", u.dt);
+        assert!((u.t0 - T0).abs() < 1.4e-3, "{}", u.t0);
+
+        let r = &u.report;
+        assert_eq!(r.step, u.dt);
+        assert!(r.resolution.is_some_and(|u| (u - 1e-3).abs() < 1e-15));
+        let slips: Vec<Location> = r.slips.iter().map(|s| s.at).collect();
+        assert_eq!(
+            slips,
+            [20_002, 32_002, 70_002, 83_149].map(Location::Line),
+            "{:?}",
+            r.slips
+        );
+        for (s, by) in r.slips.iter().zip([-1e-3, 1e-3, -1e-3, 1e-3]) {
+            // The levels drift against the fitted grid (its slope is that of the stamps, slips and all).
+            assert!((s.by - by).abs() < 1e-6, "{s:?}");
+        }
+        // The grid among the two levels, every stamp within a printed unit of it and on its level.
+        assert!(r.max_deviation.abs() < 1e-3 && r.rms_deviation < r.max_deviation.abs());
+        assert!(r.max_jitter.abs() < 1e-6 && r.rms_jitter < 1e-6, "{r:?}");
+        assert!(r.within_printing() && r.is_notable() && !r.is_warning(), "{r:?}");
+        let text = r.to_string();
+        assert!(
+            text.contains(
+                "slips 4 time(s), at line 20002 (-0.001), line 32002 (+0.001), line 70002 (-0.001), line 83149 (+0.001)"
+            ),
+            "{text}"
+        );
+        assert!(
+            text.contains("within their printed resolution of 0.001"),
+            "{text}"
+        );
+        assert!(
+            text.starts_with("the time stamps deviate from the even grid of step 0.002"),
+            "{text}"
+        );
+        let by = format!(
+            "by up to {} of the step (RMS {})",
+            Percent(r.max_fraction()),
+            Percent(r.rms_fraction())
+        );
+        assert!(text.contains(&by), "{text}");
+    }
+
+    #[test]
+    fn glitches_side_by_side_on_a_slipping_clock_stay_errors() {
+        // Steps of -5, 2 and 9 ms: two stamps 7 ms early side by side.
+        let t = logger_clock(
+            20_000,
+            T0,
+            std::slice::from_ref(&(5_000..9_000)),
+            &[12_000, 12_001],
+        );
+        for options in [GridOptions::default(), GridOptions { repair: true }] {
+            match GridRecord::fit(record(t.clone()), &options) {
+                Err(
+                    e @ InputError::TimeGlitch {
+                        at: Location::Line(12_002),
+                        isolated: false,
+                        ..
+                    },
+                ) => assert!(e.to_string().contains("1 more glitch: line 12003"), "{e}"),
+                other => panic!("{options:?}: {other:?}"),
+            }
+        }
+        // A run of stamps several units off is a run of glitches.
+        let run: Vec<usize> = (5_000..5_010).collect();
+        assert!(matches!(
+            repair(logger_clock(20_000, T0, &[], &run)),
+            Err(InputError::TimeGlitch {
+                at: Location::Line(5_002),
+                isolated: false,
+                other_count: 9,
+                ..
+            })
+        ));
+        // A run one unit off is within the printing: a slip when it holds for more than half the
+        // window, else nothing to report.
+        let short = fit(logger_clock(
+            20_000,
+            T0,
+            std::slice::from_ref(&(5_000..5_010)),
+            &[],
+        ))
+        .unwrap();
+        assert!(
+            short.report.slips.is_empty() && short.report.within_printing(),
+            "{:?}",
+            short.report
+        );
+        let long = logger_clock(20_000, T0, std::slice::from_ref(&(5_000..5_100)), &[]);
+        let u = fit(long).unwrap();
+        let slips: Vec<Location> = u.report.slips.iter().map(|s| s.at).collect();
+        assert_eq!(slips, [Location::Line(5_002), Location::Line(5_102)]);
+    }
+
+    #[test]
+    fn gaps_in_a_slipping_clock_split_the_record() {
+        // 100 samples missing inside a run 1 ms behind the grid, 40 inside one on it.
+        let t = logger_clock(30_000, T0, std::slice::from_ref(&(10_000..20_000)), &[]);
+        let kept: Vec<usize> = (0..30_000)
+            .filter(|i| !(15_000..15_100).contains(i) && !(25_000..25_040).contains(i))
+            .collect();
+        let u = fit(kept.iter().map(|&i| t[i]).collect()).unwrap();
+        let firsts: Vec<usize> = u.pieces.iter().map(|p| p.first).collect();
+        assert_eq!(firsts, [0, 15_100, 25_040]);
+        assert_eq!(u.sample_count(), kept.len());
+        let slips: Vec<Location> = u.report.slips.iter().map(|s| s.at).collect();
+        assert_eq!(
+            slips,
+            [Location::Line(10_002), Location::Line(19_902)],
+            "{:?}",
+            u.report
+        );
+        assert!(u.report.within_printing(), "{:?}", u.report);
+    }
+
+    #[test]
+    fn a_clock_slipping_by_its_printed_unit_fits_at_any_rate() {
+        // Runs one printed unit behind the grid, at resolutions from 0.044 to half a step.
+        for (rate, decimals) in [(500.0, 3), (300.0, 3), (2048.0, 4), (1000.0, 4), (44_100.0, 6)] {
+            let (dt, unit) = (1.0 / rate, 10f64.powi(-decimals));
+            let late = [3_000..7_000, 12_000..12_500];
+            let n = 20_000;
+            let t: Vec<f64> = (0..n)
+                .map(|i| {
+                    let behind = if late.iter().any(|r| r.contains(&i)) {
+                        unit
+                    } else {
+                        0.0
+                    };
+                    format!("{:.*}", decimals as usize, 3.21 + i as f64 * dt - behind)
+                        .parse()
+                        .unwrap()
+                })
+                .collect();
+            let u = fit(t).unwrap_or_else(|e| panic!("{rate} Hz, {decimals} decimals: {e}"));
+            assert_eq!((u.pieces.len(), u.sample_count()), (1, n));
+            let indices: Vec<usize> = (0..n).collect();
+            let bound = step_bound(&indices, unit) + 1e-12 * dt;
+            assert!(
+                (u.dt - dt).abs() <= bound,
+                "{rate} Hz: {} (bound {bound:e})",
+                u.dt
+            );
+            let r = &u.report;
+            assert_eq!(r.slips.len(), 4, "{rate} Hz: {:?}", r.slips);
+            for (s, (place, by)) in
+                r.slips
+                    .iter()
+                    .zip([(3_000, -1.0), (7_000, 1.0), (12_000, -1.0), (12_500, 1.0)])
+            {
+                let Location::Line(line) = s.at else {
+                    unreachable!()
+                };
+                let off = (line as i64 - 2 - place).abs();
+                assert!(off <= LEVEL_WINDOW as i64 / 2, "{rate} Hz: {s:?} for {place}");
+                assert!((s.by / unit - by).abs() < 0.5, "{rate} Hz: {s:?}");
+            }
+            assert!(r.is_notable() && !r.is_warning(), "{rate} Hz: {r:?}");
+            assert!(r.max_jitter.abs() <= unit, "{rate} Hz: {r:?}");
+        }
+    }
+
+    #[test]
+    fn jittering_stamps_are_reported_or_refused() {
+        let n = 50_000;
+        for level in [0.001, 0.01, 0.04, 0.1] {
+            for (seed, jitter) in [(1, Jitter::Gaussian(level)), (2, Jitter::Uniform(level))] {
+                let u = fit(jittered(n, 7.0, jitter, seed)).unwrap_or_else(|e| panic!("{jitter:?}: {e}"));
+                assert_eq!((u.pieces.len(), u.sample_count(), u.repaired.len()), (1, n, 0));
+                let r = &u.report;
+                assert!(r.slips.is_empty(), "{jitter:?}: {:?}", r.slips);
+                assert!(r.is_notable() && !r.within_printing(), "{jitter:?}: {r:?}");
+                assert_eq!(r.is_warning(), level > JITTER_WARNING, "{jitter:?}: {r:?}");
+                // The deviations are the jitter's (the rounding to 7 decimals adds 1.4e-5 step RMS).
+                let rms = r.rms_fraction();
+                assert!((rms / level - 1.0).abs() < 0.03, "{jitter:?}: RMS {rms}");
+                assert!(
+                    (r.jitter_fraction() / level - 1.0).abs() < 0.15,
+                    "{jitter:?}: {r:?}"
+                );
+                let max = r.max_fraction() / level;
+                match jitter {
+                    Jitter::Uniform(_) => assert!(max <= 3f64.sqrt() * 1.001 + 0.03, "{jitter:?}: {max}"),
+                    Jitter::Gaussian(_) => assert!((3.5..5.5).contains(&max), "{jitter:?}: {max}"),
+                }
+                let text = r.to_string();
+                assert!(
+                    text.contains(&format!("(RMS {})", Percent(r.rms_fraction())))
+                        && text.contains("more than their printed resolution of 0.0000001 explains"),
+                    "{text}"
+                );
+                assert_eq!(
+                    text.contains("which moves them by as much"),
+                    r.is_warning(),
+                    "{text}"
+                );
+            }
+        }
+        // Beyond about a tenth of a step the stamps no longer tell the samples apart.
+        for (seed, jitter) in [(3, Jitter::Gaussian(0.3)), (4, Jitter::Uniform(0.3))] {
+            match fit(jittered(n, 7.0, jitter, seed)) {
+                Err(e @ InputError::TimeUnresolved { scatter: Some(s), .. }) => {
+                    assert!((0.2..0.45).contains(&s), "{jitter:?}: {s}");
+                    assert!(e.to_string().contains("scattering about the grid by"), "{e}");
+                }
+                other => panic!("{jitter:?}: {other:?}"),
+            }
+        }
+        // A glitch stands out of a small jitter: a stamp 0.45 step off among stamps that jitter
+        // by 1 % of the step.
+        let mut t = jittered(n, 7.0, Jitter::Gaussian(0.01), 5);
+        t[1_000] += 0.45 * 2e-3;
+        assert!(matches!(
+            fit(t.clone()),
+            Err(InputError::TimeGlitch {
+                at: Location::Line(1_002),
+                fault: StampFault::OffGrid,
+                isolated: true,
+                ..
+            })
+        ));
+        let u = repair(t).unwrap();
+        assert_eq!(u.repaired.len(), 1);
+        assert!((u.repaired[0].now - (7.0 + 2.0)).abs() < 1e-5, "{:?}", u.repaired);
+    }
+
+    #[test]
+    fn clean_stamps_report_nothing_notable() {
+        let u = fit(printed(4096, 12.3456, 1.0 / 2048.0, 4)).unwrap();
+        assert!(
+            u.report.slips.is_empty() && u.report.within_printing(),
+            "{:?}",
+            u.report
+        );
+        assert!(!u.report.is_notable());
+        let u = fit((0..1000).map(|i| i as f64 * 0.01).collect()).unwrap();
+        assert!(!u.report.is_notable(), "{:?}", u.report);
+    }
+
     /// Fits stamps `t0 + n · dt` printed with the fewest decimals whose half unit is within 0.2
     /// step, plus `extra`, at the indices of `runs` (lengths and the gaps after them), and checks
     /// that the fit finds every sample's index and a step within the bound of least squares on
@@ -920,6 +1804,11 @@ mod tests {
                     prop_assert!(w[1].first > w[0].first + w[0].samples.len());
                 }
                 prop_assert!(repair || u.repaired.is_empty());
+                let r = &u.report;
+                prop_assert!(r.max_deviation.abs() < 0.5 * u.dt, "{:?}", r);
+                prop_assert!(r.rms_deviation <= r.max_deviation.abs() * (1.0 + 1e-12), "{:?}", r);
+                prop_assert!(r.max_jitter.is_finite() && r.slips.iter().all(|s| s.by.is_finite()), "{:?}", r);
+                prop_assert!(!r.to_string().is_empty());
             }
         }
 
