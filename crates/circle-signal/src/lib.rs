@@ -61,7 +61,7 @@ mod spikes;
 pub use clock::SampleClock;
 pub use domain::{Domain, UnknownDomain};
 pub use integrate::{Measured, UnknownMeasured, cumulative_integral, displacement};
-pub use oscillation::oscillation_period;
+pub use oscillation::{NoOscillationReason, OscillationPeriod, oscillation_period};
 pub use resample::{RESAMPLE_HALF_WIDTH, Resampled, ResampledPieces, resample_pieces, resample_to_whole};
 pub use segment::{OrbitSource, Segment};
 pub use spikes::{Spike, SpikeParams, Spikes, find_and_repair_spikes, find_spikes, repair_spikes};
@@ -131,15 +131,12 @@ pub enum CircleError {
         needed: usize,
     },
     /// A record without a drive must oscillate for its period to be measured.
-    #[error(
-        "the record of {len} samples crosses its trend upward {crossings} times: at least two are needed to \
-         measure its period of oscillation"
-    )]
+    #[error("the record of {len} samples shows no oscillation to measure the period of: {reason}")]
     NoOscillation {
         /// Samples of the record.
         len: usize,
-        /// Upward crossings found.
-        crossings: usize,
+        /// What the record shows instead.
+        reason: NoOscillationReason,
     },
     /// The pieces of a record with gaps must be non-empty ranges of it, in order and disjoint.
     #[error("piece {index} ({start}..{end}) is empty, out of order or beyond the record of {len} samples")]

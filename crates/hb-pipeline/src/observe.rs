@@ -134,7 +134,7 @@ impl fmt::Display for Notice {
             ),
             Notice::FreePeriod { samples, used } => write!(
                 f,
-                "no drive: windows in periods of the free oscillation, {samples:.2} samples on average ({used} used)"
+                "no drive: windows in periods of the free oscillation, {samples:.2} samples ({used} used)"
             ),
             Notice::Resampled { from, to } => write!(
                 f,

@@ -475,13 +475,21 @@ pub fn condition(
 }
 
 /// Finds the isolated spikes (bit errors) of every piece, replacing them when asked. Pieces too
-/// short for the test are left as they are.
+/// short for the test are left as they are. A record rounded to a quantum (an encoder's counts)
+/// is tested with the floor of that quantum ([`SpikeParams::with_quantum`]): near rest such a
+/// record toggles between two counts, and without the floor each toggle is a spike (and a
+/// repair next to a half-turn bit error can take the wrong sample).
 fn spikes(
     x: &mut [f64],
     pieces: &[Range<usize>],
     options: &PrepareOptions,
 ) -> Result<Option<Note>, PrepareError> {
-    let params = SpikeParams::default();
+    let params = match quantum(x, pieces, options.signal) {
+        Some(q) => SpikeParams::default()
+            .with_quantum(q)
+            .map_err(PrepareError::Spikes)?,
+        None => SpikeParams::default(),
+    };
     let mut found: Vec<Spike> = Vec::new();
     for r in pieces.iter().filter(|r| r.len() >= SpikeParams::MIN_SAMPLES) {
         let piece = &mut x[r.clone()];
@@ -500,6 +508,30 @@ fn spikes(
         found,
         repaired: options.repair,
     }))
+}
+
+/// The quantum a record is rounded to (an encoder's count, a converter's least step): the
+/// smallest step between successive samples (on the circle wrapped into `[-π, π)`), when every
+/// step is a whole multiple of it to within a hundredth of it (a record printed to fewer
+/// decimals than its quantum has still rounded it); `None` when the record moves by less
+/// (unquantised) or not at all.
+fn quantum(x: &[f64], pieces: &[Range<usize>], domain: Domain) -> Option<f64> {
+    let steps = || {
+        pieces.iter().flat_map(move |r| {
+            x[r.clone()].windows(2).map(move |w| match domain {
+                Domain::Circle => circle_signal::wrap(w[1] - w[0]).abs(),
+                Domain::Line => (w[1] - w[0]).abs(),
+            })
+        })
+    };
+    let scale = pieces
+        .iter()
+        .flat_map(|r| x[r.clone()].iter())
+        .fold(0.0_f64, |a, v| a.max(v.abs()));
+    // Steps below this are rounding of the printed values, not a quantum.
+    let noise = 1e-9 * scale.max(f64::MIN_POSITIVE);
+    let q = steps().filter(|&s| s > noise).fold(f64::INFINITY, f64::min);
+    (q.is_finite() && steps().all(|s| s <= noise || ((s / q) - (s / q).round()).abs() <= 0.01)).then_some(q)
 }
 
 impl GridData {
