@@ -246,7 +246,7 @@ fn grid_dict(py: Python<'_>, grid: GridData, repaired: bool) -> PyResult<Bound<'
     for note in &grid.notes {
         match note {
             Note::TimeRepaired(r) => time_repairs.push((r.at.to_string(), r.was, r.now)),
-            Note::Spikes { found, repaired } => {
+            Note::Spikes { found, repaired, .. } => {
                 spikes.extend(found.iter().map(|s| (s.index, s.size, *repaired)));
             }
             _ => {}
