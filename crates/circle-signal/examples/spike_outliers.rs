@@ -142,10 +142,8 @@ fn calibration(n: usize) {
             } else {
                 "–".to_owned()
             };
-            println!(
-                "| {count} | {}th largest | {target:.0e} | {kappa:.3} | {direct} |",
-                count / 16
-            );
+            let rank = ["3rd", "4th", "5th", "6th"][count / 16 - 3];
+            println!("| {count} | {rank} largest | {target:.0e} | {kappa:.3} | {direct} |");
         }
         if count == 96 {
             let mut sorted: Vec<f64> = qs.iter().map(|&(_, q)| q).collect();

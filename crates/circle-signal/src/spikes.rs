@@ -513,10 +513,10 @@ impl<'a> IntoIterator for &'a Spikes {
 /// local scales (about 200 residuals, a few thousand comparisons) and a few dozen residuals per
 /// candidate. Memory: the scale's blocks (`n / block` numbers), a few hundred numbers of scratch,
 /// one bit per sample for the flags and a map of the flagged samples' bounds, and a copy of the
-/// record here (none for [`find_and_repair_spikes`]). About 0.06 to 0.08 s per 10⁶ samples of
-/// noisy record, 0.13 to 0.17 s with a bit error per thousand samples and up to 0.25 s where the
-/// noise level changes fast (`cargo run --release -p circle-signal --example spike_outliers`; the
-/// block scale alone took 0.03 to 0.04 s).
+/// record here (none for [`find_and_repair_spikes`]). About 0.03 s per 10⁶ samples of a noisy
+/// vibrometer record, 0.04 s of an encoder's, 0.07 s with a bit error per thousand samples and
+/// 0.1 s where the noise level changes within tens of samples (the block scale alone: 0.02 s;
+/// `cargo run --release -p circle-signal --example spike_outliers`).
 ///
 /// # Example
 ///
