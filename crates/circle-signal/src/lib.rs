@@ -15,9 +15,10 @@
 //! - [`RotationSplit`]: the split of a period-k segment into a constant rotation `w_ck τ` and an
 //!   oscillation `x_var` (paper section 2, `x_ck = w_ck t + x_var,k`), needed before a whirling
 //!   orbit can be expanded in a Fourier series.
-//! - [`find_spikes`] / [`repair_spikes`]: isolated spikes (an encoder's bit errors), each sample
-//!   tested against the cubic through its four neighbours on the circle or the line with a robust
-//!   local scale, and replaced by that prediction, so that no spike is unwrapped into a false turn.
+//! - [`find_spikes`] / [`repair_spikes`]: outliers, isolated spikes (an encoder's bit errors) and
+//!   short runs (a vibrometer's dropouts), each sample tested against the cubic through its four
+//!   neighbours on the circle or the line with a robust scale that follows the local noise, and
+//!   replaced by that prediction, so that no spike is unwrapped into a false turn.
 //!
 //! It also holds the vocabulary every later stage shares, so that each is defined once:
 //!

@@ -203,12 +203,15 @@ pub enum Note {
     Wrapped,
     /// A velocity or acceleration record integrated to the displacement.
     Integrated(Measured),
-    /// Isolated spikes (bit errors) found in the record, replaced when `repaired`.
+    /// Isolated spikes (bit errors on the circle) or outliers (on the line: a sample or a short
+    /// run far off its neighbours) found in the record, replaced when `repaired`.
     Spikes {
         /// The spikes, indices in the record's grid.
         found: Vec<Spike>,
         /// Whether they were replaced by the local prediction.
         repaired: bool,
+        /// Where the record lives: on the circle an encoder's bit errors, on the line outliers.
+        domain: Domain,
     },
 }
 
@@ -250,24 +253,36 @@ impl fmt::Display for Note {
                      with the model"
                 )
             }
-            Note::Spikes { found, repaired } => {
+            Note::Spikes {
+                found,
+                repaired,
+                domain,
+            } => {
                 let list: Vec<String> = found
                     .iter()
                     .take(5)
                     .map(|s| format!("sample {} ({:+.4})", s.index + 1, s.size))
                     .collect();
                 let more = if found.len() > 5 { ", ..." } else { "" };
+                let what = match domain {
+                    Domain::Circle => "isolated spike(s)",
+                    Domain::Line => "outlier(s)",
+                };
                 if *repaired {
                     write!(
                         f,
-                        "{} isolated spike(s) replaced by the local prediction: {}{more}",
+                        "{} {what} replaced by the local prediction: {}{more}",
                         found.len(),
                         list.join(", ")
                     )
                 } else {
+                    let why = match domain {
+                        Domain::Circle => " (bit errors?)",
+                        Domain::Line => "",
+                    };
                     write!(
                         f,
-                        "{} isolated spike(s) (bit errors?) in the record: {}{more}",
+                        "{} {what}{why} in the record: {}{more}",
                         found.len(),
                         list.join(", ")
                     )
@@ -507,6 +522,7 @@ fn spikes(
     Ok((!found.is_empty()).then_some(Note::Spikes {
         found,
         repaired: options.repair,
+        domain: options.signal,
     }))
 }
 
@@ -630,5 +646,40 @@ pub fn default_basis(domain: Domain) -> BasisKind {
     match domain {
         Domain::Circle => BasisKind::from(Harmonic::new(1).expect("order 1 is valid")),
         Domain::Line => BasisKind::from(Polynomial::new(3).expect("degree 3 is valid")),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_spikes_note_speaks_of_bit_errors_on_the_circle_and_of_outliers_on_the_line() {
+        let found = vec![Spike {
+            index: 41,
+            size: 0.5,
+            replacement: 0.1,
+        }];
+        let note = |domain, repaired| {
+            Note::Spikes {
+                found: found.clone(),
+                repaired,
+                domain,
+            }
+            .to_string()
+        };
+        assert_eq!(
+            note(Domain::Circle, false),
+            "1 isolated spike(s) (bit errors?) in the record: sample 42 (+0.5000)"
+        );
+        assert_eq!(
+            note(Domain::Line, false),
+            "1 outlier(s) in the record: sample 42 (+0.5000)"
+        );
+        assert_eq!(
+            note(Domain::Line, true),
+            "1 outlier(s) replaced by the local prediction: sample 42 (+0.5000)"
+        );
+        assert!(!note(Domain::Line, false).contains("bit error"));
     }
 }

@@ -124,7 +124,7 @@ pub fn condition<'py>(
     for note in &grid.notes {
         match note {
             Note::TimeRepaired(r) => time_repairs.push((r.at.to_string(), r.was, r.now)),
-            Note::Spikes { found, repaired } => {
+            Note::Spikes { found, repaired, .. } => {
                 spikes.extend(found.iter().map(|s| (s.index, s.size, *repaired)))
             }
             _ => {}

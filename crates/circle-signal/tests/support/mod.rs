@@ -273,3 +273,109 @@ pub fn smooth_residual_max(continuous: &[f64]) -> f64 {
 pub fn motion_residual_max(motion: Motion, per_period: f64, n: usize) -> f64 {
     smooth_residual_max(&Record::new(motion, per_period, n, 0.0, false, 0).continuous)
 }
+
+/// The velocity of the two-well Duffing oscillator `x'' + 0.25 x' − x + x³ = 0.3 cos t` (chaotic,
+/// forcing period 2π) at `per_period` samples per forcing period, `n` samples after 50 periods
+/// of transient from `x = 0.1`, `x' = 0`; classical Runge–Kutta with 8 steps per sample. Also
+/// returns the displacement.
+pub fn duffing(per_period: f64, n: usize) -> (Vec<f64>, Vec<f64>) {
+    let h = TAU / per_period / 8.0;
+    let f = |t: f64, x: f64, v: f64| (v, -0.25 * v + x - x * x * x + 0.3 * t.cos());
+    let (mut x, mut v, mut t) = (0.1, 0.0, 0.0);
+    let skip = (50.0 * per_period).round() as usize;
+    let (mut xs, mut vs) = (Vec::with_capacity(n), Vec::with_capacity(n));
+    for i in 0..skip + n {
+        if i >= skip {
+            xs.push(x);
+            vs.push(v);
+        }
+        for _ in 0..8 {
+            let (k1x, k1v) = f(t, x, v);
+            let (k2x, k2v) = f(t + h / 2.0, x + h / 2.0 * k1x, v + h / 2.0 * k1v);
+            let (k3x, k3v) = f(t + h / 2.0, x + h / 2.0 * k2x, v + h / 2.0 * k2v);
+            let (k4x, k4v) = f(t + h, x + h * k3x, v + h * k3v);
+            x += h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
+            v += h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
+            t += h;
+        }
+    }
+    (xs, vs)
+}
+
+/// How a simulated vibrometer's noise behaves.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum VibrometerNoise {
+    /// White Gaussian noise of constant level.
+    White,
+    /// Gaussian noise low-pass filtered (first order, correlation 0.7 from sample to sample),
+    /// of the same standard deviation.
+    Coloured,
+    /// Speckle: the noise's standard deviation is `σ / √(0.05 + I)` over its mean, with the
+    /// returned light's intensity `I = (1 + cos(2π x / c + φ)) / 2` changing with the
+    /// displacement `x` over speckle cells of `c` (the wells are at ±1, the motion spans about
+    /// 3): the level changes by up to 4.5 times, several times per forcing period.
+    Speckle(f64),
+    /// White noise, with bursts of `len` samples at `factor` times the level starting with
+    /// probability 10⁻³ per sample.
+    Bursts {
+        /// Samples per burst.
+        len: usize,
+        /// Level in a burst over the level elsewhere.
+        factor: f64,
+    },
+    /// Student's t with the given degrees of freedom (more than 2), scaled to the standard
+    /// deviation: heavy tails.
+    Student(f64),
+}
+
+/// A vibrometer's velocity record of [`duffing`]: noise of `relative` times the velocity's
+/// root-mean-square, of the given kind, seeded.
+pub fn vibrometer(per_period: f64, n: usize, relative: f64, noise: VibrometerNoise, seed: u64) -> Vec<f64> {
+    let (x, v) = duffing(per_period, n);
+    let rms = (v.iter().map(|a| a * a).sum::<f64>() / n as f64).sqrt();
+    let sigma = relative * rms;
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let normal = Normal::new(0.0, 1.0).expect("unit normal");
+    let phase = rng.random_range(0.0..TAU);
+    let cell = match noise {
+        VibrometerNoise::Speckle(c) => c,
+        _ => 1.0,
+    };
+    let level = |x: f64| (0.05 + 0.5 * (1.0 + (TAU * x / cell + phase).cos())).powf(-0.5);
+    let mean_level = match noise {
+        VibrometerNoise::Speckle(_) => x.iter().map(|&x| level(x)).sum::<f64>() / n as f64,
+        _ => 1.0,
+    };
+    let mut coloured = 0.0;
+    let mut burst = 0usize;
+    x.iter()
+        .zip(&v)
+        .map(|(&x, &v)| {
+            let e = match noise {
+                VibrometerNoise::White => normal.sample(&mut rng),
+                VibrometerNoise::Coloured => {
+                    coloured = 0.7 * coloured + (1.0f64 - 0.49).sqrt() * normal.sample(&mut rng);
+                    coloured
+                }
+                VibrometerNoise::Speckle(_) => level(x) / mean_level * normal.sample(&mut rng),
+                VibrometerNoise::Bursts { len, factor } => {
+                    if burst == 0 && rng.random::<f64>() < 1e-3 {
+                        burst = len;
+                    }
+                    let f = if burst > 0 {
+                        burst -= 1;
+                        factor
+                    } else {
+                        1.0
+                    };
+                    f * normal.sample(&mut rng)
+                }
+                VibrometerNoise::Student(dof) => {
+                    let t = rand_distr::StudentT::new(dof).expect("degrees of freedom");
+                    t.sample(&mut rng) / (dof / (dof - 2.0)).sqrt()
+                }
+            };
+            v + sigma * e
+        })
+        .collect()
+}
