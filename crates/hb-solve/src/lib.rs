@@ -121,8 +121,8 @@ mod velocity;
 mod weak;
 
 pub use bootstrap::{
-    Bootstrap, BootstrapParams, BootstrapParamsBuilder, Interval, NORMAL_EQUATIONS_CONDITION, ResampleBlock,
-    bootstrap, bootstrap_fit,
+    Bootstrap, BootstrapParams, BootstrapParamsBuilder, Interval, NORMAL_EQUATIONS_CONDITION, NoIntervals,
+    ResampleBlock, bootstrap, bootstrap_fit, bootstrap_or_reason,
 };
 pub use differences::FiniteDifferences;
 pub use drive::{
