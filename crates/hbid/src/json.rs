@@ -10,7 +10,10 @@ use crate::pipeline::{Identification, TermSelection};
 
 /// The JSON of an identification, as `hbid identify --json` prints it: `method` and `basis` as
 /// named on the command line, `drive_column` the record's column of the measured drive `p` (null
-/// without one).
+/// without one), `no_intervals` why there are no intervals when they were asked for (null
+/// otherwise), `held_out_explained` the share explained on stretches of the record the model was
+/// not fitted on (null when it cannot be had), `warning` that the model does not describe the
+/// record.
 pub fn identification(id: &Identification, method: &str, basis: &str) -> serde_json::Value {
     let model = &id.model;
     let intervals: Option<serde_json::Map<String, serde_json::Value>> = id.intervals.as_ref().map(|b| {
@@ -44,8 +47,11 @@ pub fn identification(id: &Identification, method: &str, basis: &str) -> serde_j
         "residual_rms": summary.map(|s| s.residual_rms),
         "intervals": intervals,
         "interval_level": id.intervals.as_ref().map(|b| b.level),
+        "no_intervals": id.no_intervals,
         "explained": id.quality.explained,
         "unexplained": id.quality.unexplained,
+        "held_out_explained": id.quality.held_out.map(|h| h.explained),
+        "held_out_unexplained": id.quality.held_out.map(|h| h.unexplained),
         "residual_spectrum": id.quality.spectrum.iter().map(|l| serde_json::json!({
             "harmonic": l.harmonic, "residual_rms": l.residual_rms, "rhs_rms": l.rhs_rms, "rows": l.rows,
         })).collect::<Vec<_>>(),
