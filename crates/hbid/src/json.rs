@@ -51,7 +51,6 @@ pub fn identification(id: &Identification, method: &str, basis: &str) -> serde_j
         "explained": id.quality.explained,
         "unexplained": id.quality.unexplained,
         "held_out_explained": id.quality.held_out.map(|h| h.explained),
-        "held_out_unexplained": id.quality.held_out.map(|h| h.unexplained),
         "residual_spectrum": id.quality.spectrum.iter().map(|l| serde_json::json!({
             "harmonic": l.harmonic, "residual_rms": l.residual_rms, "rhs_rms": l.rhs_rms, "rows": l.rows,
         })).collect::<Vec<_>>(),
