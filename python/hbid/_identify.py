@@ -166,6 +166,13 @@ class Identification:
         return self.report["warning"]
 
     @property
+    def held_out_explained(self) -> Optional[float]:
+        """The fraction explained on stretches of the record the model was not fitted on (fit on
+        all folds of segments but one, scored on that one), beside :attr:`explained`; None when it
+        cannot be had."""
+        return self.report["held_out_explained"]
+
+    @property
     def no_intervals(self) -> Optional[str]:
         """Why there are no bootstrap intervals although they were asked for, else None."""
         return self.report.get("no_intervals")

@@ -44,10 +44,12 @@ def test_to_json_is_the_cli_json(pendulum):
     assert set(j) == {
         "method", "basis", "terms", "drive_column", "coefficients", "std_errors", "orbits_used", "segments", "rows",
         "condition_number", "residual_rms", "intervals", "interval_level", "resamples", "no_intervals",
-        "explained", "unexplained", "residual_spectrum", "warning", "selection", "delay", "found", "record",
+        "explained", "unexplained", "held_out_explained", "residual_spectrum", "warning", "selection", "delay",
+        "found", "record",
     }
     assert j["selection"] is None and result.selection is None
     assert j["drive_column"] is None
+    assert j["no_intervals"] is None and 0.9 < j["held_out_explained"] <= 1.0
     assert 0.99 < result.explained <= 1.0 and result.warning is None
     assert j["coefficients"] == result.coefficients
     assert j["std_errors"] == result.std_errors

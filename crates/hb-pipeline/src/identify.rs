@@ -628,8 +628,6 @@ pub struct IdentifyReport {
     pub found: String,
     /// The drift found for an integrated velocity or acceleration record.
     pub drift: Option<DriftFit>,
-    /// Why there are no bootstrap intervals, when asked for and not had.
-    pub no_intervals: Option<String>,
 }
 
 /// Identifies the equation of motion of the record of `source` as `request` asks: the record
@@ -700,6 +698,9 @@ pub fn identify_data(
             found: found.clone(),
             source,
         })?;
+    if let Some(why) = &identification.no_intervals {
+        observer.notice(&Notice::NoIntervals(why.clone()));
+    }
     if let Some(w) = &identification.warning {
         observer.notice(&Notice::Warning(w.clone()));
     }
@@ -711,7 +712,6 @@ pub fn identify_data(
         segments: segments.len(),
         found,
         drift,
-        no_intervals: None,
         identification,
     })
 }
@@ -818,6 +818,7 @@ struct ReportJson<'a> {
     no_intervals: Option<&'a str>,
     explained: f64,
     unexplained: f64,
+    held_out_explained: Option<f64>,
     residual_spectrum: Vec<SpectrumLine>,
     warning: Option<&'a str>,
     selection: Option<SelectionJson<'a>>,
@@ -859,9 +860,10 @@ impl Serialize for IdentifyReport {
             }),
             interval_level: id.intervals.as_ref().map(|b| b.level),
             resamples: id.intervals.as_ref().map(|b| b.resamples),
-            no_intervals: self.no_intervals.as_deref(),
+            no_intervals: id.no_intervals.as_deref(),
             explained: id.quality.explained,
             unexplained: id.quality.unexplained,
+            held_out_explained: id.quality.held_out.map(|h| h.explained),
             residual_spectrum: id
                 .quality
                 .spectrum

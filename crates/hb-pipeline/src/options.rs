@@ -333,7 +333,7 @@ mod tests {
         let e = from_object::<Sample>(serde_json::json!({"basis": "cheb:3"})).unwrap_err();
         assert_eq!(e.option(), "basis");
         assert!(
-            e.spelled(Spelling::Python).starts_with("basis=\"cheb:3\": "),
+            e.spelled(Spelling::Python).starts_with("basis='cheb:3': "),
             "{e}"
         );
         assert!(e.reason().contains("unknown basis 'cheb'"), "{e}");

@@ -18,12 +18,21 @@ use crate::{LinearSystem, LstsqFit, LstsqSolver, SolveError};
 #[serde(rename_all = "snake_case")]
 #[non_exhaustive]
 pub enum ResampleBlock {
-    /// At least as many consecutive segments as cover, on average, one segment's length
-    /// (`ceil(median length / median gap between consecutive starts)`: 3 for the default windows of
-    /// three periods stepped by one), and at least `ceil(n^(1/3))` for `n` segments, the order of
-    /// block length that balances the bias and the variance of a block bootstrap's variance
-    /// (Hall, Horowitz and Jing 1995): runs grow with the record, so that they span its
-    /// correlations and a resample's cost grows like `n^(2/3)`.
+    /// The moving-block length of Politis and White (2004, with the correction of Patton, Politis
+    /// and White 2009) for the correlation that shared samples give: with `m` the mean number of
+    /// segments that share a sample of the record (their total length over the length of their
+    /// union: 1 for segments that do not overlap, about `k` for windows of `k` periods stepped by
+    /// one period), the errors of segments `i` and `i + j` in the order of their first sample
+    /// correlate like `1 − |j| / m` (a moving sum of `m` independent terms), and the block that
+    /// minimises the error of the bootstrap's variance is
+    /// `ℓ = ((m² − 1)² / (6 m²) · n)^(1/3)` for `n` segments (`n^(1/3)` growth, Hall, Horowitz
+    /// and Jing 1995), taken at least `m` so that a run spans the correlation: `ceil` of the
+    /// larger. Segments that do not overlap are drawn one by one; 248 windows of three periods
+    /// give runs of 7.
+    ///
+    /// The length counts the segments that share samples, not the gaps between their starts: close
+    /// returns find orbits of several periods in one passage, a few samples apart, and a length of
+    /// one segment over the median gap between starts made runs of half the segments.
     #[default]
     Auto,
     /// A given number `>= 1` of consecutive segments (1: every segment drawn on its own).
@@ -288,6 +297,45 @@ pub fn bootstrap_fit<S: LstsqSolver + ?Sized>(
         Resampler::Stacked
     };
     bootstrap_with(system, solver, params, &fit.solution, resampler)
+}
+
+/// Why an identification has no bootstrap intervals ([`bootstrap_or_reason`]).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[non_exhaustive]
+pub struct NoIntervals {
+    /// The reason, in words (one line).
+    pub reason: String,
+}
+
+impl std::fmt::Display for NoIntervals {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "no intervals: {}", self.reason)
+    }
+}
+
+/// [`bootstrap_fit`] for an identification, which never fails for its intervals: the intervals,
+/// or why there are none (too few segments for two runs of the block, too many resamples that do
+/// not determine every unknown, ...), so that the model and its standard errors are still given.
+pub fn bootstrap_or_reason<S: LstsqSolver + ?Sized>(
+    system: &LinearSystem,
+    fit: &LstsqFit,
+    solver: &S,
+    params: &BootstrapParams,
+) -> Result<Bootstrap, NoIntervals> {
+    bootstrap_fit(system, fit, solver, params).map_err(|e| NoIntervals {
+        reason: match e {
+            SolveError::TooFewSegmentsToResample { segments, block, .. } => {
+                let depth = overlap_depth(system);
+                format!(
+                    "the {segments} segment(s) share each sample {depth:.1}-fold on average (about {:.1} \
+                     independent stretches of the record), and a moving-block bootstrap needs at least two \
+                     runs of {block} consecutive segments; a longer record gives intervals",
+                    segments as f64 / depth
+                )
+            }
+            other => other.to_string(),
+        },
+    })
 }
 
 /// How resamples are solved (see [`bootstrap`]).
@@ -579,26 +627,50 @@ fn quantile(v: &[f64], q: f64) -> f64 {
     v[lo] + frac * (v[hi] - v[lo])
 }
 
-/// The larger of `ceil(median length / median gap)` over the segments ordered by start and
-/// `ceil(n^(1/3))` for `n` segments; at least 1.
-fn auto_block(system: &LinearSystem) -> usize {
-    let mut starts: Vec<usize> = system.blocks().iter().map(|b| b.segment.start()).collect();
-    let mut lens: Vec<usize> = system.blocks().iter().map(|b| b.segment.len()).collect();
-    if starts.len() < 2 {
-        return 1;
+/// The mean number of segments that share a sample: the segments' total length over the length
+/// of their union (1 for none, or for segments that do not overlap).
+fn overlap_depth(system: &LinearSystem) -> f64 {
+    let mut spans: Vec<(usize, usize)> = system
+        .blocks()
+        .iter()
+        .map(|b| (b.segment.start(), b.segment.start() + b.segment.len()))
+        .collect();
+    spans.sort_unstable();
+    let total: usize = spans.iter().map(|(a, b)| b - a).sum();
+    let (mut union, mut open) = (0, None::<(usize, usize)>);
+    for &(a, b) in &spans {
+        open = match open {
+            Some((s, e)) if a < e => Some((s, e.max(b))),
+            Some((s, e)) => {
+                union += e - s;
+                Some((a, b))
+            }
+            None => Some((a, b)),
+        };
     }
-    starts.sort_unstable();
-    lens.sort_unstable();
-    let mut gaps: Vec<usize> = starts.windows(2).map(|w| w[1] - w[0]).collect();
-    gaps.sort_unstable();
-    let gap = gaps[gaps.len() / 2].max(1);
-    let cover = lens[lens.len() / 2].div_ceil(gap);
-    // The smallest whole number whose cube is at least n (exact, unlike a float cube root).
-    let n = starts.len();
-    let root = (1..)
-        .find(|&l: &usize| l.saturating_mul(l).saturating_mul(l) >= n)
-        .unwrap_or(1);
-    cover.max(root).max(1)
+    if let Some((s, e)) = open {
+        union += e - s;
+    }
+    if union == 0 {
+        1.0
+    } else {
+        (total as f64 / union as f64).max(1.0)
+    }
+}
+
+/// The block of [`ResampleBlock::Auto`] for `n` segments sharing samples `depth`-fold: the larger
+/// of `ceil(depth)` and `ceil(((depth² − 1)² / (6 depth²) · n)^(1/3))`, at least 1.
+fn politis_white_block(n: usize, depth: f64) -> usize {
+    let m2 = depth * depth;
+    let cube = (m2 - 1.0) * (m2 - 1.0) / (6.0 * m2) * n as f64;
+    // A little below each whole number counts as it, so that 27^(1/3) or a depth of 3 are 3.
+    let up = |v: f64| (v - 1e-9).ceil().max(1.0) as usize;
+    up(depth).max(up(cube.cbrt()))
+}
+
+/// [`ResampleBlock::Auto`]'s block for `system`'s segments.
+fn auto_block(system: &LinearSystem) -> usize {
+    politis_white_block(system.blocks().len(), overlap_depth(system))
 }
 
 /// The block `[A_s | b_s]` of `rows` rows from `first`, reduced to its R factor when it has more
@@ -755,11 +827,85 @@ mod tests {
         }
     }
 
+    /// A system of segments of `(start, periods)` at 25 samples per period (2 rows each).
+    fn spans(segments: &[(usize, usize)]) -> LinearSystem {
+        use crate::Block;
+        use circle_signal::{SampleClock, Segment};
+        let clock = SampleClock::nondimensional(25).unwrap();
+        let rows = 2 * segments.len();
+        let blocks = segments
+            .iter()
+            .enumerate()
+            .map(|(i, &(start, k))| Block {
+                segment: Segment::new(start, k, &clock, 0.0, usize::MAX).unwrap(),
+                first_row: 2 * i,
+                rows: 2,
+                harmonics: 0,
+                winding: 0,
+                rotation_rate: 0.0,
+            })
+            .collect();
+        let matrix = Mat::from_fn(rows, 1, |i, _| 1.0 + i as f64);
+        let rhs = Col::from_fn(rows, |i| i as f64);
+        LinearSystem::from_parts(matrix, rhs, vec!["a".into()], blocks)
+    }
+
+    /// Too few segments for two runs is a reason for no intervals, not a failure.
     #[test]
-    fn auto_block_grows_with_the_cube_root() {
-        // 10-sample gaps, 25-sample segments: cover 3; 101 segments: cube root 4.66 -> 5.
+    fn too_few_segments_give_a_reason() {
+        let solver = crate::QrSolver::default();
+        let params = |block| {
+            BootstrapParams::builder()
+                .resamples(50)
+                .block(block)
+                .build()
+                .unwrap()
+        };
+        let system = synthetic(5, 1.0);
+        let fit = system.solve(&solver).unwrap();
+        let why =
+            bootstrap_or_reason(&system, &fit, &solver, &params(ResampleBlock::Segments(3))).unwrap_err();
+        assert!(why.reason.contains("two runs of 3"), "{why}");
+        assert!(
+            why.to_string().starts_with("no intervals: the 5 segment(s)"),
+            "{why}"
+        );
+        let ok = bootstrap_or_reason(&system, &fit, &solver, &params(ResampleBlock::Segments(1))).unwrap();
+        assert_eq!(ok.block, 1);
+    }
+
+    #[test]
+    fn auto_block_grows_with_the_cube_root_of_the_segments() {
+        // 25-sample segments 10 samples apart: depth 25n / (10n + 15); ((m²−1)²/(6m²) n)^(1/3)
+        // is 4.14 for 101 segments (depth 2.46), 2.57 for 27 and 2.61 for 28 (depth 2.37).
         assert_eq!(auto_block(&synthetic(101, 1.0)), 5);
         assert_eq!(auto_block(&synthetic(27, 1.0)), 3);
-        assert_eq!(auto_block(&synthetic(28, 1.0)), 4);
+        assert_eq!(auto_block(&synthetic(28, 1.0)), 3);
+        assert!((overlap_depth(&synthetic(101, 1.0)) - 2525.0 / 1025.0).abs() < 1e-12);
+        // Windows of three periods stepped by one: depth 3n / (n + 2); 248 of them give 7.
+        let windows: Vec<(usize, usize)> = (0..248).map(|s| (25 * s, 3)).collect();
+        assert_eq!(auto_block(&spans(&windows)), 7);
+        // Segments that share no sample are drawn one by one, however many.
+        let apart: Vec<(usize, usize)> = (0..1000).map(|s| (30 * s, 1)).collect();
+        assert_eq!(overlap_depth(&spans(&apart)), 1.0);
+        assert_eq!(auto_block(&spans(&apart)), 1);
+        // The block grows like n^(1/3) at a fixed depth: 8 times the windows, twice the block.
+        let more: Vec<(usize, usize)> = (0..8 * 248).map(|s| (25 * s, 3)).collect();
+        assert_eq!(auto_block(&spans(&more)), 14);
+    }
+
+    /// Close returns find orbits of several periods in one passage, a few samples apart: 20
+    /// passages 500 samples apart, each with orbits of 1 to 6 periods one sample apart. The
+    /// median gap between starts is one sample, and one median segment over it made runs of 100
+    /// of the 120 segments, which cannot be resampled. Here the segments share a sample 3.4-fold
+    /// (10500 samples over a union of 3100): runs of 6.
+    #[test]
+    fn orbits_found_in_one_passage_do_not_make_runs_of_half_the_record() {
+        let passages: Vec<(usize, usize)> = (0..20)
+            .flat_map(|p| (1..=6).map(move |k| (500 * p + k - 1, k)))
+            .collect();
+        let system = spans(&passages);
+        assert!((overlap_depth(&system) - 10500.0 / 3100.0).abs() < 1e-12);
+        assert_eq!(auto_block(&system), 6);
     }
 }

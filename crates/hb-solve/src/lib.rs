@@ -121,8 +121,8 @@ mod velocity;
 mod weak;
 
 pub use bootstrap::{
-    Bootstrap, BootstrapParams, BootstrapParamsBuilder, Interval, NORMAL_EQUATIONS_CONDITION, ResampleBlock,
-    bootstrap, bootstrap_fit,
+    Bootstrap, BootstrapParams, BootstrapParamsBuilder, Interval, NORMAL_EQUATIONS_CONDITION, NoIntervals,
+    ResampleBlock, bootstrap, bootstrap_fit, bootstrap_or_reason,
 };
 pub use differences::FiniteDifferences;
 pub use drive::{
@@ -142,7 +142,8 @@ pub use params::{
     SampleClock,
 };
 pub use quality::{
-    EXPLAINED_WARNING_ORBITS, EXPLAINED_WARNING_WINDOWS, FitQuality, ResidualLine, fit_quality,
+    EXPLAINED_WARNING_ORBITS, EXPLAINED_WARNING_WINDOWS, FitQuality, HELD_OUT_FOLDS, HELD_OUT_LOSS_RATIO,
+    HeldOut, ResidualLine, fit_quality, held_out,
 };
 pub use select::{DroppedTerm, SelectParams, Selection, SelectionStep, select_terms};
 pub use system::{Block, LinearSystem};

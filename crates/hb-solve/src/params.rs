@@ -58,6 +58,26 @@ impl Harmonics {
         }
     }
 
+    /// The band widened to reach drive harmonic `highest`: a cap below `highest` forcing
+    /// harmonics is raised to it, so that a term driven at `highest` times the forcing frequency
+    /// is balanced at its own frequency (a band that stops short of it sees such a term only
+    /// through a window's leakage, or not at all, and a selection drops it as if it were absent).
+    /// A cap already above, a fixed `M` and `highest = 0` are left as they are.
+    ///
+    /// ```
+    /// use hb_solve::Harmonics;
+    ///
+    /// assert_eq!(Harmonics::ForcingCap(2.0).reaching(3), Harmonics::ForcingCap(3.0));
+    /// assert_eq!(Harmonics::ForcingCap(3.0).reaching(2), Harmonics::ForcingCap(3.0));
+    /// assert_eq!(Harmonics::Fixed(6).reaching(5), Harmonics::Fixed(6));
+    /// ```
+    pub fn reaching(self, highest: u32) -> Self {
+        match self {
+            Self::ForcingCap(c) if c < f64::from(highest) => Self::ForcingCap(f64::from(highest)),
+            other => other,
+        }
+    }
+
     /// Number of harmonics `M_k` used for a period-`k` orbit of `len` samples.
     pub fn count(self, period: usize, len: usize) -> usize {
         let below_nyquist = len.saturating_sub(1) / 2;
@@ -357,6 +377,23 @@ impl ModelForm {
     /// The drive harmonics `H` of the preset (1 for a term list, whose terms say their own).
     pub fn drive_harmonics(&self) -> u32 {
         self.drive_harmonics
+    }
+
+    /// The highest multiple `k` of the drive's frequency in a term's drive factor (`cos(kt)`,
+    /// `sin(kt)`): a list's highest, a preset's `H` when it has parametric terms or an identified
+    /// forcing, 1 for a known forcing alone, 0 without any (the measured drive `p` counts 0: it is
+    /// balanced as measured).
+    pub fn highest_drive_harmonic(&self) -> u32 {
+        if let Some(list) = &self.terms {
+            return list.drive_harmonics();
+        }
+        let forcing = match self.forcing {
+            Forcing::None => 0,
+            Forcing::Known { .. } => 1,
+            Forcing::Identified => self.drive_harmonics,
+        };
+        let parametric = if self.parametric { self.drive_harmonics } else { 0 };
+        forcing.max(parametric)
     }
 
     /// The list of terms, when the form is one.

@@ -241,7 +241,7 @@ pub fn select_terms(system: &LinearSystem, params: &SelectParams) -> Result<Sele
 
 /// Per fold: the triangular factor of its column-scaled `[A_f | b_f]` (so that `‖A_f c − b_f‖²`
 /// is `‖R_f [c; −1]‖²` exactly) and its Gram matrix `R_fᵀ R_f`; and their sum over folds.
-struct FoldMoments {
+pub(crate) struct FoldMoments {
     cols: usize,
     factors: Vec<Mat<f64>>,
     grams: Vec<Mat<f64>>,
@@ -249,7 +249,7 @@ struct FoldMoments {
 }
 
 impl FoldMoments {
-    fn new(system: &LinearSystem, folds: usize) -> Self {
+    pub(crate) fn new(system: &LinearSystem, folds: usize) -> Self {
         let a = system.matrix();
         let b = system.rhs();
         let cols = a.ncols();
@@ -298,7 +298,7 @@ impl FoldMoments {
 
     /// `(CV, SE)` of the model with columns `active`; `None` when a training set does not
     /// determine it.
-    fn score(&self, active: &[usize]) -> Option<(f64, f64)> {
+    pub(crate) fn score(&self, active: &[usize]) -> Option<(f64, f64)> {
         let k = active.len();
         let rhs = self.cols;
         let mut fractions = Vec::with_capacity(self.grams.len());

@@ -253,8 +253,8 @@ fn bootstrap_is_deterministic_and_brackets_the_estimate() {
     .unwrap();
     assert_ne!(a, other);
 
-    // Runs of ceil(n^(1/3)) windows: 248 windows of 3 periods give 7 (more than the 3 that cover
-    // one window).
+    // Runs of Politis and White's length for windows that share each sample 3-fold: 248 windows
+    // of 3 periods give 7 (more than the 3 that cover one window).
     assert_eq!(segments.len(), 248);
     assert_eq!((a.resamples, a.failed, a.block, a.level), (200, 0, 7, 0.95));
     let model = IdentifiedModel::fit(basis, &params, &system, &solver).unwrap();

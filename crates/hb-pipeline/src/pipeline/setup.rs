@@ -7,9 +7,9 @@ use circle_signal::{SampleClock, Segment};
 use hb_basis::BasisKind;
 use hb_solve::{
     Assembly, Bootstrap, BootstrapParams, DriveSamples, EXPLAINED_WARNING_ORBITS, EXPLAINED_WARNING_WINDOWS,
-    FitQuality, Forcing, HarmonicBalance, Harmonics, IdentifiedModel, IdentifyParams, LinearSystem,
-    LstsqSolver, ModelForm, NoiseCorrection, QrSolver, SelectParams, Selection, SolveError, TermList,
-    WeakForm, bootstrap_fit, build_system, fit_quality, select_terms,
+    FitQuality, Forcing, HELD_OUT_FOLDS, HarmonicBalance, Harmonics, IdentifiedModel, IdentifyParams,
+    LinearSystem, LstsqSolver, ModelForm, NoiseCorrection, QrSolver, SelectParams, Selection, SolveError,
+    TermList, WeakForm, bootstrap_or_reason, build_system, fit_quality, select_terms,
 };
 
 use super::PipelineError;
@@ -98,8 +98,8 @@ impl IdentifyStep {
 /// against the record's clock ([`ModelSpec::setup`]), where the combination is checked.
 ///
 /// Defaults: the paper's form ([`ModelForm::parametric`]: damping, autonomous and parametric
-/// terms, no external forcing), the method's own harmonics per segment
-/// ([`Assembly::default_harmonics`]), no noise correction, column-pivoted QR, no bootstrap, and
+/// terms, no external forcing), the method's own harmonics per segment, reaching the form's
+/// highest drive harmonic ([`Assembly::default_harmonics_for`]), no noise correction, column-pivoted QR, no bootstrap, and
 /// the default weak form ([`WeakForm::default`], used by [`Method::Windowed`] only), and no
 /// selection of terms.
 #[derive(Debug)]
@@ -196,7 +196,9 @@ impl ModelSpec {
     /// (with a selection, the library's terms too).
     pub fn setup(self, clock: &SampleClock) -> Result<Setup, PipelineError> {
         let assembly = self.method.assembly(self.weak);
-        let harmonics = self.harmonics.unwrap_or_else(|| assembly.default_harmonics());
+        let harmonics = self
+            .harmonics
+            .unwrap_or_else(|| assembly.default_harmonics_for(&self.form));
         let selection = match self.selection {
             Some(p) => Some((self.form.term_list(&self.basis)?, p)),
             None => None,
@@ -252,13 +254,19 @@ pub struct TermSelection {
 pub struct Identification {
     /// The model, with its fit summary.
     pub model: IdentifiedModel,
-    /// The bootstrap intervals of its coefficients, when asked for.
+    /// The bootstrap intervals of its coefficients, when asked for and they can be had.
     pub intervals: Option<Bootstrap>,
-    /// How well it fits: the fraction of the balanced acceleration it explains and the residual
-    /// by frequency ([`hb_solve::fit_quality`]).
+    /// Why there are no intervals when they were asked for ([`hb_solve::bootstrap_or_reason`]):
+    /// the model and its standard errors are given all the same.
+    pub no_intervals: Option<String>,
+    /// How well it fits: the fraction of the balanced acceleration it explains, in sample and on
+    /// held-out stretches of the record, and the residual by frequency
+    /// ([`hb_solve::fit_quality`], [`hb_solve::held_out`]).
     pub quality: FitQuality,
-    /// A warning when it explains too little for its method (see
-    /// [`hb_solve::EXPLAINED_WARNING_WINDOWS`] and [`hb_solve::EXPLAINED_WARNING_ORBITS`]).
+    /// A warning that the model does not describe the record: it explains too little for its
+    /// method, in sample or held out, or far less held out than in sample
+    /// ([`FitQuality::warning`], [`hb_solve::EXPLAINED_WARNING_WINDOWS`],
+    /// [`hb_solve::EXPLAINED_WARNING_ORBITS`]).
     pub warning: Option<String>,
     /// With [`ModelSpec::with_selection`]: the library, and which of its terms were kept (the
     /// model, its intervals, quality and warning are those of the kept terms alone).
@@ -343,21 +351,26 @@ impl Setup {
         let solver = self.solver.as_ref();
         let fit = system.solve(solver)?;
         let model = IdentifiedModel::from_fit(self.basis, &params, &system, &fit, solver.name())?;
-        let quality = fit_quality(&system, &fit.solution)?;
+        let folds = self.selection.as_ref().map_or(HELD_OUT_FOLDS, |(_, p)| p.folds());
+        let quality = fit_quality(&system, &fit.solution)?.with_held_out(&system, folds);
         let warning = quality.warning(match self.method {
             Method::Upo => EXPLAINED_WARNING_ORBITS,
             Method::Windowed => EXPLAINED_WARNING_WINDOWS,
         });
-        let intervals = match &self.bootstrap {
+        let (intervals, no_intervals) = match &self.bootstrap {
             Some(b) => {
                 progress(IdentifyStep::Bootstrap);
-                Some(bootstrap_fit(&system, &fit, solver, b)?)
+                match bootstrap_or_reason(&system, &fit, solver, b) {
+                    Ok(intervals) => (Some(intervals), None),
+                    Err(why) => (None, Some(why.reason)),
+                }
             }
-            None => None,
+            None => (None, None),
         };
         Ok(Identification {
             model,
             intervals,
+            no_intervals,
             quality,
             warning,
             selection,

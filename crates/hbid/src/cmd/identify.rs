@@ -296,7 +296,19 @@ fn print_table(report: &IdentifyReport) {
         "explained {:.6} of the balanced acceleration (unexplained {:.2e})",
         id.quality.explained, id.quality.unexplained
     );
+    if let Some(h) = id.quality.held_out {
+        println!(
+            "explained {:.6} of stretches it was not fitted on ({} folds of segments)",
+            h.explained, h.folds
+        );
+    }
+    if let Some(why) = &id.no_intervals {
+        println!("no intervals: {why}");
+    }
     println!();
+    if let Some(w) = &id.warning {
+        println!("NOT A DESCRIPTION OF THE RECORD: {w}");
+    }
     match &id.intervals {
         Some(b) => {
             println!(
