@@ -332,10 +332,7 @@ mod tests {
         assert!(e.reason().contains("did you mean folds?"), "{e}");
         let e = from_object::<Sample>(serde_json::json!({"basis": "cheb:3"})).unwrap_err();
         assert_eq!(e.option(), "basis");
-        assert!(
-            e.spelled(Spelling::Python).starts_with("basis='cheb:3': "),
-            "{e}"
-        );
+        assert!(e.spelled(Spelling::Python).starts_with("basis='cheb:3': "), "{e}");
         assert!(e.reason().contains("unknown basis 'cheb'"), "{e}");
         let e = from_object::<Sample>(serde_json::json!({"folds": -1})).unwrap_err();
         assert_eq!(e.option(), "folds");
