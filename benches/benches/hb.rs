@@ -1,11 +1,11 @@
 //! Fourier coefficients, assembly and least squares on the paper's data set (e = 3 %, periods 1..16).
 use std::hint::black_box;
 
+use circle_signal::SampleClock;
 use criterion::{Criterion, criterion_group, criterion_main};
 use hb_basis::{FourierPlanner, Harmonic, Hat};
-use hb_solve::{
-    Harmonics, IdentifyParams, LstsqSolver, QrSolver, SampleClock, SvdSolver, assemble, identify,
-};
+use hb_model::Harmonics;
+use hb_solve::{IdentifyParams, LstsqSolver, QrSolver, SvdSolver, assemble, identify};
 use upo_search::{CloseReturns, OrbitSource, Segment};
 
 fn paper() -> (f64, Vec<f64>, Vec<Segment>) {

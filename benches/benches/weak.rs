@@ -1,11 +1,13 @@
 //! The weak form on the paper's data set: windows, assembly, identification, bootstrap, noise estimate.
 use std::hint::black_box;
 
+use circle_signal::SampleClock;
 use criterion::{Criterion, criterion_group, criterion_main};
 use hb_basis::{Domain, Harmonic, Hat};
+use hb_model::Harmonics;
 use hb_solve::{
-    BootstrapParams, Harmonics, IdentifyParams, QrSolver, SampleClock, WeakForm, assemble_weak, bootstrap,
-    estimate_noise_sigma, identify,
+    BootstrapParams, IdentifyParams, QrSolver, WeakForm, assemble_weak, bootstrap, estimate_noise_sigma,
+    identify,
 };
 use upo_search::{OrbitSource, Windows};
 

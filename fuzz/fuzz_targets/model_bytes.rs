@@ -3,7 +3,7 @@
 #![no_main]
 
 use hb_basis::BasisKind;
-use hb_solve::{IdentifiedModel, MODEL_MAGIC, MODEL_VERSION};
+use hb_model::{IdentifiedModel, MODEL_MAGIC, MODEL_VERSION};
 use hbid_fuzz::check_model;
 use libfuzzer_sys::fuzz_target;
 

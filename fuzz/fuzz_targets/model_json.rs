@@ -3,7 +3,7 @@
 #![no_main]
 
 use hb_basis::BasisKind;
-use hb_solve::IdentifiedModel;
+use hb_model::IdentifiedModel;
 use hbid_fuzz::check_model;
 use libfuzzer_sys::fuzz_target;
 

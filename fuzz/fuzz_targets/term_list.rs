@@ -3,7 +3,7 @@
 //! has one, holds every term.
 #![no_main]
 
-use hb_solve::TermList;
+use hb_model::TermList;
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|text: &str| {

@@ -3,7 +3,7 @@
 //! reports as a crash, like a panic inside the code under test.
 
 use hb_basis::BasisKind;
-use hb_solve::IdentifiedModel;
+use hb_model::IdentifiedModel;
 use hbid::input::{GridOptions, GridRecord, InputError, Location, Record, angle_range};
 use pendulum_sim::SecondOrderSystem;
 

@@ -9,11 +9,12 @@ use std::sync::LazyLock;
 use std::time::Instant;
 
 use anyhow::{Context, anyhow};
+use circle_signal::SampleClock;
 use hb_basis::Harmonic;
+use hb_model::Harmonics;
 use hb_solve::{
-    BootstrapParams, FiniteDifferences, Harmonics, IdentifiedModel, IdentifyParams, LinearSystem,
-    NoiseCorrection, QrSolver, SampleClock, WeakForm, assemble, assemble_weak, bootstrap, build_system,
-    estimate_noise_sigma,
+    BootstrapParams, FiniteDifferences, IdentifyParams, LinearSystem, NoiseCorrection, QrSolver, WeakForm,
+    assemble, assemble_weak, bootstrap, build_system, estimate_noise_sigma,
 };
 use pendulum_sim::observe::Encoder;
 use pendulum_sim::{Pendulum, SimulationConfig, simulate};
@@ -49,7 +50,7 @@ struct Truth {
 impl Truth {
     /// The true model of `pendulum`.
     fn of(pendulum: &Pendulum) -> anyhow::Result<Self> {
-        let model = IdentifiedModel::<Harmonic>::from_pendulum(pendulum)?;
+        let model = hb_model::truth::pendulum_model::<Harmonic>(pendulum)?;
         let column = |name: &str| {
             model
                 .coefficients()

@@ -122,13 +122,18 @@ impl SampleClock {
         Ok(self)
     }
 
-    /// Forcing period `T`.
-    pub fn forcing_period(&self) -> f64 {
+    /// The drive's period `T`, in the record's time unit.
+    pub fn drive_period(&self) -> f64 {
         self.forcing_period
     }
 
-    /// Forcing angular frequency `W = 2π / T`.
-    pub fn forcing_frequency(&self) -> f64 {
+    /// The drive's frequency `1 / T`, in cycles per time unit (hertz for seconds).
+    pub fn drive_frequency(&self) -> f64 {
+        1.0 / self.forcing_period
+    }
+
+    /// The drive's angular frequency `W = 2π / T`, in radians per time unit.
+    pub fn drive_angular_frequency(&self) -> f64 {
         TAU / self.forcing_period
     }
 

@@ -155,7 +155,7 @@ pub fn resample_pieces(
 /// [`RESAMPLE_HALF_WIDTH`] input steps after the record's.
 fn whole_clock(clock: &SampleClock) -> Result<SampleClock, CircleError> {
     let p = clock.samples_per_period().round().max(2.0) as usize;
-    SampleClock::new(clock.forcing_period(), p)?
+    SampleClock::new(clock.drive_period(), p)?
         .with_start_time(clock.start_time() + RESAMPLE_HALF_WIDTH as f64 * clock.step())
 }
 

@@ -1,7 +1,7 @@
 use std::iter::{StepBy, Take};
 use std::slice::Iter;
 
-use crate::EmbeddingError;
+use crate::error::EmbeddingError;
 
 /// An embedding dimension `d ≥ 1` and a delay `T_d ≥ 1` (in samples), validated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

@@ -208,7 +208,7 @@ impl<const D: usize> Copies<D> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::Embedding;
+    use crate::delay::Embedding;
     use std::f64::consts::PI;
 
     #[test]

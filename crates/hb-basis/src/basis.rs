@@ -6,7 +6,7 @@ use std::fmt;
 use circle_signal::wrap;
 use serde::{Deserialize, Serialize};
 
-use crate::BasisError;
+use crate::error::BasisError;
 
 pub use circle_signal::Domain;
 

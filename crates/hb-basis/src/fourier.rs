@@ -13,7 +13,7 @@ use std::sync::Arc;
 use realfft::num_complex::Complex;
 use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
 
-use crate::BasisError;
+use crate::error::BasisError;
 
 /// A complex number of `f64`, the element of a spectrum.
 pub type Complex64 = Complex<f64>;

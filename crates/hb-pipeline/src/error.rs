@@ -66,12 +66,18 @@ pub enum RunError {
     /// A simulation.
     #[error(transparent)]
     Simulation(#[from] pendulum_sim::SimError),
-    /// A saved model, or one being saved.
+    /// A model: saved, being saved, or made from a record's drive.
     #[error("the model")]
-    Model(#[source] hb_solve::SolveError),
+    Model(#[source] hb_model::ModelError),
     /// Writing a result file.
     #[error(transparent)]
     Output(#[from] crate::output::OutputError),
+}
+
+impl From<hb_model::ModelError> for RunError {
+    fn from(e: hb_model::ModelError) -> Self {
+        RunError::Model(e)
+    }
 }
 
 impl From<hb_solve::SolveError> for RunError {

@@ -8,11 +8,9 @@ use std::str::FromStr;
 
 use circle_signal::{Domain, Measured, Segment};
 use hb_basis::{Basis, BasisKind};
+use hb_model::{Forcing, Harmonics, MAX_DRIVE_HARMONIC, MeasuredDrive, ModelForm, TermList};
 use hb_record::prepare::{Data, DriveFound, DriveSpec, default_basis};
-use hb_solve::{
-    BootstrapParams, DriveSamples, Forcing, Harmonics, LstsqSolver, MAX_DRIVE_HARMONIC, ModelForm,
-    NoiseCorrection, QrSolver, SelectParams, SvdSolver, TermList, WeakForm,
-};
+use hb_solve::{BootstrapParams, LstsqSolver, NoiseCorrection, QrSolver, SelectParams, SvdSolver, WeakForm};
 use serde::{Deserialize, Serialize, Serializer};
 use upo_search::{CloseReturns, Windows};
 
@@ -512,7 +510,11 @@ impl IdentifyRequest {
             .with_noise_correction(o.noise_sigma.unwrap_or_default())
             .with_solver(o.solver.solver());
         if let Some(p) = &data.measured_drive {
-            spec = spec.with_drive_samples(DriveSamples::new(p.clone())?);
+            spec = spec.with_measured_drive(MeasuredDrive::new(
+                p.clone(),
+                data.clock.start_time(),
+                data.clock.step(),
+            )?);
         }
         if let Some(m) = o.harmonics {
             spec = spec.with_harmonics(Harmonics::Fixed(m))?;

@@ -5,8 +5,8 @@
 use std::fmt;
 
 use circle_signal::Measured;
+use hb_drive::DriveEstimate;
 use hb_record::prepare::Note;
-use hb_solve::DriveEstimate;
 
 use crate::pipeline::DriftFit;
 

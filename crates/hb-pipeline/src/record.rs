@@ -380,7 +380,7 @@ impl RecordSummary {
             start: data.clock.start_time(),
             step: data.clock.step(),
             samples_per_period: data.p,
-            period: data.clock.forcing_period(),
+            period: data.clock.drive_period(),
             drive,
             period_uncertainty: uncertainty,
             resampled_from: data.resampled_from,

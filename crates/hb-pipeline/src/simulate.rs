@@ -13,12 +13,13 @@ use std::path::Path;
 use std::str::FromStr;
 
 use hb_basis::{Harmonic, Polynomial};
-use hb_solve::{Forcing, ModelForm};
+use hb_model::TrueEquation;
+use hb_model::{Forcing, ModelForm};
 use npyz::WriterBuilder;
 use pendulum_sim::observe::{AngleRange, Encoder, Gaps};
 use pendulum_sim::{
     DriveHarmonic, DriveHarmonics, Duffing, InFrame, Losses, Pendulum, RecordFrame, SecondOrderSystem,
-    SimulationConfig, Tolerances, Trajectory, TrueCoefficients, simulate_with_progress,
+    SimulationConfig, Tolerances, Trajectory, simulate_with_progress,
 };
 use serde::{Deserialize, Serialize};
 
@@ -570,7 +571,7 @@ impl Rig {
         let mut config = SimulationConfig::paper();
         if let Some(hz) = o.drive_frequency {
             config = config
-                .with_forcing_period(1.0 / hz)
+                .with_drive_period(1.0 / hz)
                 .map_err(|e| OptionError::checked("drive_frequency", hz, &e))?;
         }
         match (o.sample_rate, o.samples_per_period) {
@@ -1032,8 +1033,8 @@ fn truth(rig: &Rig, rows: usize, columns: Vec<&'static str>) -> Result<Truth, Ru
     let frame = rig.frame.with_phase(at_zero)?.with_offset(offset)?;
     let (known, layout, parameters, mut hint) = match rig.system {
         System::Pendulum(p) => (
-            p.coefficients(&frame)?,
-            hb_solve::term_names(
+            p.equation(&frame)?.named(),
+            hb_model::term_names(
                 &Harmonic::new(1).map_err(hb_solve::SolveError::from)?,
                 &ModelForm::parametric(),
             ),
@@ -1047,8 +1048,8 @@ fn truth(rig: &Rig, rows: usize, columns: Vec<&'static str>) -> Result<Truth, Ru
             },
         ),
         System::Duffing(d) => (
-            d.coefficients(&frame)?,
-            hb_solve::term_names(
+            d.equation(&frame)?.named(),
+            hb_model::term_names(
                 &Polynomial::new(3).map_err(hb_solve::SolveError::from)?,
                 &ModelForm::parametric().with_forcing(Forcing::Identified),
             ),
@@ -1120,7 +1121,7 @@ fn truth(rig: &Rig, rows: usize, columns: Vec<&'static str>) -> Result<Truth, Ru
             "nondimensional"
         },
         drive_frequency: o.drive_frequency,
-        forcing_period: config.forcing_period(),
+        forcing_period: config.drive_period(),
         time_scale: rig.frame.rate(),
         drive_phase_at_zero: at_zero,
         drive_phase_at_first_sample: rig.first_phase,
@@ -1128,7 +1129,7 @@ fn truth(rig: &Rig, rows: usize, columns: Vec<&'static str>) -> Result<Truth, Ru
         first_sample_time,
         sample_step: step,
         sample_rate: 1.0 / step,
-        samples_per_period: config.forcing_period() / step,
+        samples_per_period: config.drive_period() / step,
         samples_simulated: config.samples(),
         rows,
         columns,

@@ -1,6 +1,6 @@
 //! A record made ready for analysis, the one way every front end does it: time stamps fitted to a
 //! grid (pieces on one grid, NaN in the gaps), wrapped on the circle, encoder spikes found (and
-//! repaired on request), the drive given, estimated ([`hb_solve::estimate_forcing_period`]) or
+//! repaired on request), the drive given, estimated ([`hb_drive::estimate_forcing_period`]) or
 //! absent (a free oscillation, [`circle_signal::oscillation_period`]), and the record resampled
 //! once onto a whole number of samples per forcing period when needed.
 //!
@@ -36,9 +36,9 @@ use circle_signal::{
     resample_pieces,
 };
 use hb_basis::{BasisKind, Harmonic, Polynomial};
-use hb_solve::{
-    DriveEstimate, DriveSearch, Forcing, ModelForm, PeriodRange, SolveError, estimate_forcing_period,
-};
+
+use hb_drive::{DriveEstimate, DriveSearch, DriveSearchError, PeriodRange, estimate_forcing_period};
+use hb_model::{Forcing, ModelForm};
 
 use crate::input::{
     AngleRange, GridOptions, GridRecord, GridReport, InputError, Record as InputRecord, TimeRepair,
@@ -314,10 +314,10 @@ pub enum PrepareError {
     FreePeriod(#[source] CircleError),
     /// The drive search's options.
     #[error(transparent)]
-    DriveSearch(SolveError),
+    DriveSearch(DriveSearchError),
     /// The forcing period could not be estimated.
     #[error("estimating the forcing period")]
-    DriveEstimate(#[source] SolveError),
+    DriveEstimate(#[source] DriveSearchError),
     /// No clock with this forcing period and step.
     #[error("the forcing period")]
     Clock(#[source] CircleError),

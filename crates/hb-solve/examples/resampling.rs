@@ -17,9 +17,8 @@ use std::f64::consts::TAU;
 
 use circle_signal::{Domain, SampleClock, resample_to_whole, wrap};
 use hb_basis::Harmonic;
-use hb_solve::{
-    Assembly, HarmonicBalance, IdentifiedModel, IdentifyParams, QrSolver, WeakForm, identify_from_source,
-};
+use hb_model::IdentifiedModel;
+use hb_solve::{Assembly, HarmonicBalance, IdentifyParams, QrSolver, WeakForm, identify_from_source};
 use pendulum_sim::{Pendulum, SimulationConfig, simulate};
 use upo_search::{CloseReturns, Windows};
 
@@ -35,7 +34,7 @@ fn record(ratio: f64) -> Result<(f64, Vec<f64>), Box<dyn Error>> {
     let config = SimulationConfig::paper()
         .with_samples((PERIODS * ratio) as usize)?
         .with_samples_per_period(p)?
-        .with_forcing_period(p as f64 * h)?;
+        .with_drive_period(p as f64 * h)?;
     let traj = simulate(&Pendulum::paper(), &config)?;
     Ok((traj.t[0], traj.wrapped()))
 }

@@ -11,8 +11,10 @@
 use std::error::Error;
 use std::f64::consts::{PI, TAU};
 
+use circle_signal::SampleClock;
 use hb_basis::{Basis, Harmonic, Hat};
-use hb_solve::{Harmonics, IdentifiedModel, IdentifyParams, QrSolver, SampleClock, identify};
+use hb_model::{Harmonics, IdentifiedModel};
+use hb_solve::{IdentifyParams, QrSolver, identify};
 use pendulum_sim::observe::{Encoder, NormalDraw};
 use upo_search::{CloseReturns, Domain, OrbitSource, Segment};
 

@@ -22,9 +22,9 @@ use std::f64::consts::{PI, TAU};
 
 use circle_signal::{Domain, SampleClock, Segment, unwrap, wrap};
 use hb_basis::{BasisKind, Harmonic, Polynomial};
+use hb_model::{Harmonics, IdentifiedModel, ModelForm, TermList};
 use hb_solve::{
-    Assembly, HarmonicBalance, Harmonics, IdentifiedModel, IdentifyParams, ModelForm, QrSolver, TermList,
-    VelocityTrend, WeakForm, identify, velocity_series,
+    Assembly, HarmonicBalance, IdentifyParams, QrSolver, VelocityTrend, WeakForm, identify, velocity_series,
 };
 use pendulum_sim::{SimulationConfig, Trajectory, simulate};
 use upo_search::{CloseReturns, OrbitSource, Windows};
@@ -95,7 +95,7 @@ impl Truth {
 /// The trajectory at `p` samples per period.
 fn record(truth: &Truth, p: usize, periods: usize) -> Result<Trajectory, Box<dyn Error>> {
     let config = SimulationConfig::paper()
-        .with_forcing_period(truth.period)?
+        .with_drive_period(truth.period)?
         .with_samples_per_period(p)?
         .with_samples(p * periods)?;
     Ok(simulate(&truth.model()?, &config)?)

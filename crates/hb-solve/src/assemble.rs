@@ -7,10 +7,13 @@ use faer::{Col, Mat, MatMut};
 use hb_basis::{Basis, Complex64, Domain, FourierPlan, FourierPlanner, coefficients_from_bin};
 use rayon::prelude::*;
 
+use crate::error::{AssemblyError, SolveError};
+use crate::params::IdentifyParams;
+use crate::system::{Block, LinearSystem};
 use crate::system::{Layout, RowJob, layout, split_rows};
-use crate::terms::{Column, DriveFactor, PositionFactor, Term, VelocityFactor};
 use crate::velocity::{Series, VelocityTrend, cell_sign, velocity_into};
-use crate::{Block, Forcing, IdentifyParams, LinearSystem, SolveError};
+use hb_model::Forcing;
+use hb_model::{Column, DriveFactor, PositionFactor, Term, VelocityFactor};
 
 /// Per-worker buffers, reused over segments.
 #[derive(Debug, Clone)]
@@ -232,12 +235,12 @@ fn refuse_measured_drive(params: &IdentifyParams) -> Result<(), SolveError> {
 
 /// The refusal of a term in the measured drive `p` by the paper's method.
 fn measured_drive_refused(term: String) -> SolveError {
-    SolveError::MeasuredDriveUnsupported {
+    SolveError::Assembly(AssemblyError::MeasuredDriveUnsupported {
         term,
         method: "the harmonic balance of periodic orbits (upo)",
         why: "an orbit is periodic in the state, not in a measured drive, whose Fourier series over the \
               orbit does not close; use the weak form on windows (windowed)",
-    }
+    })
 }
 
 /// Fills one segment's rows (`2m + 1` rows of `A`, all columns) and right-hand side; returns its
@@ -261,7 +264,7 @@ fn fill_block<B: Basis + ?Sized>(
     let form = sh.params.form();
     let cols = sh.columns.len();
     let (k, l) = (seg.period(), seg.len());
-    let big_w = clock.forcing_frequency();
+    let big_w = clock.drive_angular_frequency();
     let omega = seg.fundamental(clock);
     let raw = &sh.signal[seg.start()..=seg.start() + l];
 
@@ -350,11 +353,11 @@ fn fill_block<B: Basis + ?Sized>(
         let row = phi.row(i, l);
         if row.iter().any(|v| !v.is_finite()) {
             let term = sh.basis.name(i).unwrap_or_default();
-            return Err(SolveError::NonFiniteTerm {
+            return Err(SolveError::Assembly(AssemblyError::NonFiniteTerm {
                 segment: index,
                 start: seg.start(),
                 term,
-            });
+            }));
         }
         let spec = plan.transform(row)?;
         let col_of = |want: Column| sh.columns.iter().position(|&t| t == want);
@@ -419,11 +422,11 @@ fn fill_block<B: Basis + ?Sized>(
 
     let bad_row = (0..a.nrows()).find(|&r| !b[r].is_finite() || (0..cols).any(|c| !a[(r, c)].is_finite()));
     if let Some(row) = bad_row {
-        return Err(SolveError::NonFiniteRow {
+        return Err(SolveError::Assembly(AssemblyError::NonFiniteRow {
             segment: index,
             start: seg.start(),
             row,
-        });
+        }));
     }
     Ok(Block {
         segment,
@@ -521,10 +524,12 @@ fn general_columns<B: Basis + ?Sized>(
             &mut buf.xdot,
         )?;
     }
-    let not_finite = |term: &Term| SolveError::NonFiniteTerm {
-        segment: seg.index,
-        start: seg.start,
-        term: term.name(sh.names),
+    let not_finite = |term: &Term| {
+        SolveError::Assembly(AssemblyError::NonFiniteTerm {
+            segment: seg.index,
+            start: seg.start,
+            term: term.name(sh.names),
+        })
     };
     for &(c, term) in &sh.others {
         match (term.position, term.velocity) {

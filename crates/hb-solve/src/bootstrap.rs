@@ -6,7 +6,11 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::{LinearSystem, LstsqFit, LstsqSolver, SolveError};
+use crate::error::{BootstrapError, LstsqError, SolveError};
+
+use crate::lstsq::{LstsqFit, LstsqSolver};
+
+use crate::system::LinearSystem;
 
 /// How many consecutive segments are drawn together.
 ///
@@ -263,7 +267,7 @@ pub const NORMAL_EQUATIONS_CONDITION: f64 = 1e5;
 ///
 /// Resamples run in parallel; resample `r` draws from the ChaCha8 stream `r` of `seed`, so results
 /// do not depend on the number of threads. Resamples that do not determine every unknown are left
-/// out; more than a tenth of them is an error ([`SolveError::BootstrapFailed`]).
+/// out; more than a tenth of them is an error ([`SolveError::Bootstrap(BootstrapError::BootstrapFailed)`]).
 ///
 /// Memory: `(n − ℓ + 1) · u (u + 3) / 2` numbers for `u` unknowns (the run sums), or the reduced
 /// factors, `n (u + 1)²` numbers, for ill-conditioned systems.
@@ -324,7 +328,7 @@ pub fn bootstrap_or_reason<S: LstsqSolver + ?Sized>(
 ) -> Result<Bootstrap, NoIntervals> {
     bootstrap_fit(system, fit, solver, params).map_err(|e| NoIntervals {
         reason: match e {
-            SolveError::TooFewSegmentsToResample { segments, block, .. } => {
+            SolveError::Bootstrap(BootstrapError::TooFewSegmentsToResample { segments, block, .. }) => {
                 let depth = overlap_depth(system);
                 format!(
                     "the {segments} segment(s) share each sample {depth:.1}-fold on average (about {:.1} \
@@ -362,11 +366,11 @@ fn bootstrap_with<S: LstsqSolver + ?Sized>(
     }
     .clamp(1, n.max(1));
     if n < 2 * ell {
-        return Err(SolveError::TooFewSegmentsToResample {
+        return Err(SolveError::Bootstrap(BootstrapError::TooFewSegmentsToResample {
             segments: n,
             block: ell,
             needed: 2 * ell,
-        });
+        }));
     }
     let draws = n.div_ceil(ell);
     let draw_starts = |r: usize| {
@@ -411,9 +415,10 @@ fn bootstrap_with<S: LstsqSolver + ?Sized>(
                     }
                     match solver.solve(a.as_ref(), b.as_ref()) {
                         Ok(fit) => Ok(Some(fit.solution)),
-                        Err(SolveError::RankDeficient { .. } | SolveError::Underdetermined { .. }) => {
-                            Ok(None)
-                        }
+                        Err(
+                            SolveError::Lstsq(LstsqError::RankDeficient { .. })
+                            | SolveError::Lstsq(LstsqError::Underdetermined { .. }),
+                        ) => Ok(None),
                         Err(e) => Err(e),
                     }
                 })
@@ -424,11 +429,11 @@ fn bootstrap_with<S: LstsqSolver + ?Sized>(
     let failed = outcomes.iter().filter(|o| o.is_none()).count();
     let allowed = params.resamples / 10;
     if failed > allowed {
-        return Err(SolveError::BootstrapFailed {
+        return Err(SolveError::Bootstrap(BootstrapError::BootstrapFailed {
             failed,
             resamples: params.resamples,
             allowed,
-        });
+        }));
     }
     let solutions: Vec<Vec<f64>> = outcomes.into_iter().flatten().collect();
     let (lo_q, hi_q) = ((1.0 - params.level) / 2.0, (1.0 + params.level) / 2.0);
@@ -732,7 +737,7 @@ mod tests {
 
     /// A synthetic system of `n` segments of 5 rows and 3 unknowns, in shuffled order.
     fn synthetic(n: usize, scale: f64) -> LinearSystem {
-        use crate::Block;
+        use crate::system::Block;
         use circle_signal::Segment;
         let rows = 5 * n;
         let noise = |i: usize| ((i * 7919 + 13) % 1009) as f64 / 1009.0 - 0.5;
@@ -815,11 +820,11 @@ mod tests {
             let got = bootstrap_with(&system, &solver, &params, &estimate, Resampler::Normal);
             match got {
                 Ok(b) => assert!(ok, "{n} segments in runs of {block}: {b:?}"),
-                Err(SolveError::TooFewSegmentsToResample {
+                Err(SolveError::Bootstrap(BootstrapError::TooFewSegmentsToResample {
                     segments,
                     block: l,
                     needed,
-                }) => {
+                })) => {
                     assert!(!ok && segments == n && l == block && needed == 2 * block)
                 }
                 Err(e) => panic!("{e}"),
@@ -829,7 +834,7 @@ mod tests {
 
     /// A system of segments of `(start, periods)` at 25 samples per period (2 rows each).
     fn spans(segments: &[(usize, usize)]) -> LinearSystem {
-        use crate::Block;
+        use crate::system::Block;
         use circle_signal::{SampleClock, Segment};
         let clock = SampleClock::nondimensional(25).unwrap();
         let rows = 2 * segments.len();

@@ -4,9 +4,13 @@ use circle_signal::{Segment, unwrap_into, wrap};
 use faer::{Col, Mat};
 use hb_basis::{Basis, Domain};
 
+use crate::error::{AssemblyError, LstsqError, SolveError};
+use crate::method::Assembly;
+use crate::params::IdentifyParams;
+use crate::system::{Block, LinearSystem};
 use crate::system::{Layout, layout};
-use crate::terms::{Column, PositionFactor};
-use crate::{Assembly, Block, Forcing, Harmonics, IdentifyParams, LinearSystem, SolveError};
+use hb_model::{Column, PositionFactor};
+use hb_model::{Forcing, Harmonics};
 
 /// The equation of motion at every sample, with `x'` and `x''` from fourth-order central
 /// differences of the (unwrapped) record: what most identification tools do, and the peer the
@@ -45,9 +49,9 @@ impl Assembly for FiniteDifferences {
         } = layout;
         let clock = params.clock();
         // The measured drive, when a term has it (checked by the layout).
-        let drive = params.drive_samples().map(|d| d.as_slice());
+        let drive = params.measured_drive().map(|d| d.samples());
         let h = clock.step();
-        let w = clock.forcing_frequency();
+        let w = clock.drive_angular_frequency();
         // The rows of each segment: its samples whose stencil lies in the record.
         let spans: Vec<(usize, usize)> = segments
             .iter()
@@ -55,10 +59,10 @@ impl Assembly for FiniteDifferences {
             .collect();
         let rows: usize = spans.iter().map(|&(a, b)| b.saturating_sub(a)).sum();
         if rows <= columns.len() {
-            return Err(SolveError::TooFewOrbits {
+            return Err(SolveError::Lstsq(LstsqError::TooFewOrbits {
                 found: segments.len(),
                 needed: segments.len() + 1,
-            });
+            }));
         }
         let mut matrix = Mat::<f64>::zeros(rows, columns.len());
         let mut rhs = Col::<f64>::zeros(rows);
@@ -114,11 +118,11 @@ impl Assembly for FiniteDifferences {
                         _ => 0.0,
                     };
                 if !rhs[r].is_finite() || (0..columns.len()).any(|col| !matrix[(r, col)].is_finite()) {
-                    return Err(SolveError::NonFiniteRow {
+                    return Err(SolveError::Assembly(AssemblyError::NonFiniteRow {
                         segment: index,
                         start: segment.start(),
                         row: r - first_row,
-                    });
+                    }));
                 }
                 r += 1;
             }

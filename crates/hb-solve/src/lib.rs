@@ -51,8 +51,9 @@
 //!
 //! ```
 //! use hb_basis::Polynomial;
-//! use hb_solve::{Forcing, HarmonicBalance, IdentifyParams, ModelForm, QrSolver, SampleClock, identify};
-//! use circle_signal::Segment;
+//! use circle_signal::{SampleClock, Segment};
+//! use hb_model::{Forcing, ModelForm};
+//! use hb_solve::{HarmonicBalance, IdentifyParams, QrSolver, identify};
 //!
 //! let p = 25;
 //! let clock = SampleClock::nondimensional(p)?.with_start_time(3.7)?;
@@ -106,56 +107,51 @@
 mod assemble;
 mod bootstrap;
 mod differences;
-mod drive;
 mod error;
+mod fit;
 mod lstsq;
 mod method;
-mod model;
 mod noise;
 mod params;
 mod quality;
 mod select;
 mod system;
-mod terms;
 mod velocity;
 mod weak;
+
+/// The building blocks of the weak form and of the least squares, for identifications built
+/// beside this crate's (the drive-period search of `hb-drive` assembles the weak form on a
+/// record's own grid for many candidate periods): the test functions of a window
+/// ([`WeakForm::tables`]), the inner product of a row, the triangular factor of a block of rows,
+/// and the factorisations' own thread pool.
+pub mod kernel {
+    pub use crate::lstsq::{on_factor_pool, triangular_factor};
+    pub use crate::weak::{Tables, dot};
+}
 
 pub use bootstrap::{
     Bootstrap, BootstrapParams, BootstrapParamsBuilder, Interval, NORMAL_EQUATIONS_CONDITION, NoIntervals,
     ResampleBlock, bootstrap, bootstrap_fit, bootstrap_or_reason,
 };
 pub use differences::FiniteDifferences;
-pub use drive::{
-    DriveEstimate, DriveSearch, DriveSearchBuilder, MIN_SAMPLES_PER_PERIOD, PeriodRange, RangeSource,
-    RefinedCandidate, ScanPoint, dominant_period, estimate_forcing_period,
-};
-pub use error::SolveError;
+pub use error::{AssemblyError, BootstrapError, LstsqError, SelectError, SolveError};
+pub use fit::FitModel;
 pub use lstsq::{LstsqFit, LstsqSolver, QrSolver, RankTolerance, SvdSolver};
 pub use method::{Assembly, HarmonicBalance};
-pub use model::{
-    Coefficient, DriveSignal, FitSummary, IdentifiedModel, MODEL_FORMAT, MODEL_MAGIC, MODEL_OLDEST_VERSION,
-    MODEL_VERSION,
-};
 pub use noise::{NOISE_BAND_START, NOISE_ESTIMATE_MIN_LEN, correct_noise, estimate_noise_sigma};
-pub use params::{
-    DriveSamples, Forcing, Harmonics, IdentifyParams, IdentifyParamsBuilder, ModelForm, NoiseCorrection,
-    SampleClock,
-};
+pub use params::{IdentifyParams, IdentifyParamsBuilder, NoiseCorrection};
 pub use quality::{
     EXPLAINED_WARNING_ORBITS, EXPLAINED_WARNING_WINDOWS, FitQuality, HELD_OUT_FOLDS, HELD_OUT_LOSS_RATIO,
     HeldOut, ResidualLine, fit_quality, held_out,
 };
 pub use select::{DroppedTerm, SelectParams, Selection, SelectionStep, select_terms};
 pub use system::{Block, LinearSystem};
-pub use terms::{
-    DriveFactor, MAX_DRIVE_HARMONIC, MAX_TERMS, PositionFactor, Term, TermList, TermSpec, VelocityFactor,
-    XFunction, columns, term_names,
-};
 pub use velocity::{VelocityTrend, velocity_series};
 pub use weak::WeakForm;
 
 use circle_signal::{OrbitSource, Segment};
 use hb_basis::Basis;
+use hb_model::IdentifiedModel;
 
 /// The stacked system of `segments` of `signal` for a model on `basis` by `method`, with the
 /// params' noise correction applied to its columns: what every identification solves.
@@ -211,8 +207,8 @@ pub fn assemble_weak<B: Basis + ?Sized>(
 /// Identifies a model on `basis` from `segments` of `signal` by `method` ([`HarmonicBalance`],
 /// [`WeakForm`] or [`FiniteDifferences`]): [`build_system`], then least squares by `solver`.
 ///
-/// Errors: [`SolveError::TooFewOrbits`] when the segments give no more equations than unknowns,
-/// [`SolveError::RankDeficient`] when they do not determine every unknown, and typed errors for
+/// Errors: [`SolveError::Lstsq(LstsqError::TooFewOrbits)`] when the segments give no more equations than unknowns,
+/// [`SolveError::Lstsq(LstsqError::RankDeficient)`] when they do not determine every unknown, and typed errors for
 /// bad segments and non-finite samples.
 pub fn identify<B: Basis, A: Assembly + ?Sized, S: LstsqSolver + ?Sized>(
     basis: B,
@@ -238,6 +234,6 @@ pub fn identify_from_source<B: Basis, O: OrbitSource, A: Assembly + ?Sized, S: L
 ) -> Result<IdentifiedModel<B>, SolveError> {
     let segments = source
         .segments(signal)
-        .map_err(|e| SolveError::Source(Box::new(e)))?;
+        .map_err(|e| SolveError::Assembly(AssemblyError::Source(Box::new(e))))?;
     identify(basis, signal, &segments, params, method, solver)
 }

@@ -9,7 +9,7 @@ use faer::linalg::svd::{self, ComputeSvdVectors};
 use faer::{ColRef, Conj, Mat, MatRef, Par};
 use rayon::prelude::*;
 
-use crate::SolveError;
+use crate::error::{LstsqError, SolveError};
 
 /// The relative threshold below which a singular value counts as zero.
 ///
@@ -182,7 +182,7 @@ const REDUCE_BLOCK: usize = 2048;
 /// The `cols × cols` triangular factor `R` of a Householder QR of `m` (`rows × cols`, taken by
 /// value and overwritten), or `m` itself when it has no more rows than columns. The same
 /// least-squares problem, since the factor `Q` is orthogonal. Sequential (`Par::Seq`).
-pub(crate) fn triangular_factor(mut m: Mat<f64>) -> Mat<f64> {
+pub fn triangular_factor(mut m: Mat<f64>) -> Mat<f64> {
     let (rows, cols) = m.shape();
     if rows <= cols {
         return m;
@@ -246,7 +246,7 @@ fn reduce_rows(a: MatRef<'_, f64>, b: ColRef<'_, f64>, norms: &[f64]) -> Mat<f64
 /// scan: 0.27 ms before, 0.82 ms after, also with one thread; an AVX `vzeroall` does not undo it).
 /// Keeping the factorisations on their own threads leaves the caller's threads and rayon's global
 /// pool unaffected (0.29 ms).
-pub(crate) fn on_factor_pool<R: Send>(f: impl FnOnce() -> R + Send) -> R {
+pub fn on_factor_pool<R: Send>(f: impl FnOnce() -> R + Send) -> R {
     static POOL: std::sync::OnceLock<Option<rayon::ThreadPool>> = std::sync::OnceLock::new();
     let pool = POOL.get_or_init(|| {
         rayon::ThreadPoolBuilder::new()
@@ -283,19 +283,25 @@ fn prepare(a: MatRef<'_, f64>, b: ColRef<'_, f64>) -> Result<Scaled, SolveError>
         });
     }
     if m <= n || n == 0 {
-        return Err(SolveError::Underdetermined { rows: m, cols: n });
+        return Err(SolveError::Lstsq(LstsqError::Underdetermined {
+            rows: m,
+            cols: n,
+        }));
     }
     if let Some(row) = b.iter().position(|v| !v.is_finite()) {
-        return Err(SolveError::NonFiniteInput {
+        return Err(SolveError::Lstsq(LstsqError::NonFiniteInput {
             what: "right-hand side",
             row,
-        });
+        }));
     }
     let mut norms = Vec::with_capacity(n);
     for c in 0..n {
         let col = a.col(c);
         if let Some(row) = col.iter().position(|v| !v.is_finite()) {
-            return Err(SolveError::NonFiniteInput { what: "matrix", row });
+            return Err(SolveError::Lstsq(LstsqError::NonFiniteInput {
+                what: "matrix",
+                row,
+            }));
         }
         // The plain sum of squares, or a scaled one when that over- or underflows.
         let plain: f64 = col.iter().map(|v| v * v).sum();
@@ -351,7 +357,7 @@ fn svd_seq(a: MatRef<'_, f64>) -> Result<SvdParts, SolveError> {
         MemStack::new(&mut mem),
         Default::default(),
     )
-    .map_err(|_| SolveError::SvdNoConvergence)?;
+    .map_err(|_| SolveError::Lstsq(LstsqError::SvdNoConvergence))?;
     Ok(SvdParts {
         s: s.column_vector().iter().copied().collect(),
         u,
@@ -373,13 +379,13 @@ fn rank_of(s: &[f64], tol: f64) -> (usize, f64, usize) {
 }
 
 fn rank_error(rank: usize, rows: usize, cols: usize, column: usize) -> SolveError {
-    SolveError::RankDeficient {
+    SolveError::Lstsq(LstsqError::RankDeficient {
         rank,
         unknowns: cols,
         rows,
         column,
         suspect: format!("column {column}"),
-    }
+    })
 }
 
 /// Index of the largest-magnitude entry of column `k` of `v`.
@@ -589,23 +595,23 @@ mod tests {
         let dup = Mat::from_fn(6, 4, |i, j| if j < 3 { a[(i, j)] } else { 2.0 * a[(i, 0)] });
         for solver in [&QrSolver::default() as &dyn LstsqSolver, &SvdSolver::default()] {
             match solver.solve(zero.as_ref(), b.as_ref()) {
-                Err(SolveError::RankDeficient {
+                Err(SolveError::Lstsq(LstsqError::RankDeficient {
                     rank: 3,
                     unknowns: 4,
                     suspect,
                     ..
-                }) => {
+                })) => {
                     assert_eq!(suspect, "column 3", "{}", solver.name())
                 }
                 other => panic!("{}: {other:?}", solver.name()),
             }
             assert!(matches!(
                 solver.solve(dup.as_ref(), b.as_ref()),
-                Err(SolveError::RankDeficient {
+                Err(SolveError::Lstsq(LstsqError::RankDeficient {
                     rank: 3,
                     unknowns: 4,
                     ..
-                })
+                }))
             ));
         }
     }
@@ -616,15 +622,18 @@ mod tests {
         let qr = QrSolver::default();
         assert!(matches!(
             qr.solve(a.get(..3, ..), b.get(..3)),
-            Err(SolveError::Underdetermined { rows: 3, cols: 3 })
+            Err(SolveError::Lstsq(LstsqError::Underdetermined {
+                rows: 3,
+                cols: 3
+            }))
         ));
         a[(4, 1)] = f64::NAN;
         assert!(matches!(
             qr.solve(a.as_ref(), b.as_ref()),
-            Err(SolveError::NonFiniteInput {
+            Err(SolveError::Lstsq(LstsqError::NonFiniteInput {
                 what: "matrix",
                 row: 4
-            })
+            }))
         ));
         assert!(QrSolver::new(RankTolerance::Relative(1.5)).is_err());
         assert!(SvdSolver::new(RankTolerance::Relative(f64::NAN)).is_err());

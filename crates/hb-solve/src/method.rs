@@ -6,7 +6,15 @@ use std::fmt;
 use circle_signal::Segment;
 use hb_basis::Basis;
 
-use crate::{Harmonics, IdentifyParams, LinearSystem, ModelForm, SolveError, WeakForm};
+use crate::error::SolveError;
+
+use crate::params::IdentifyParams;
+
+use crate::system::LinearSystem;
+
+use crate::weak::WeakForm;
+
+use hb_model::{Harmonics, ModelForm};
 
 /// A way of turning segments of a record into the stacked system `A λ = β` of a model
 /// ([`LinearSystem`]): the paper's harmonic-balance rows ([`HarmonicBalance`]), the weak form

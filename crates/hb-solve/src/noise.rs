@@ -4,8 +4,12 @@
 use circle_signal::unwrap;
 use hb_basis::{Basis, Domain, FourierPlan};
 
-use crate::terms::{Column, PositionFactor, VelocityFactor, column_families, columns};
-use crate::{IdentifyParams, LinearSystem, NoiseCorrection, SolveError};
+use hb_model::{Column, PositionFactor, VelocityFactor, columns};
+
+use crate::error::{AssemblyError, SolveError};
+use crate::params::{IdentifyParams, NoiseCorrection};
+use crate::system::LinearSystem;
+use hb_model::form::column_families;
 
 /// The band of the noise estimate: frequencies from this fraction of the Nyquist frequency up to
 /// the Nyquist frequency.
@@ -32,14 +36,17 @@ pub const NOISE_ESTIMATE_MIN_LEN: usize = 64;
 pub fn estimate_noise_sigma(signal: &[f64], domain: Domain) -> Result<f64, SolveError> {
     let n = signal.len();
     if n < NOISE_ESTIMATE_MIN_LEN {
-        return Err(SolveError::RecordTooShort {
+        return Err(SolveError::Assembly(AssemblyError::RecordTooShort {
             what: "the noise estimate",
             len: n,
             needed: NOISE_ESTIMATE_MIN_LEN,
-        });
+        }));
     }
     if let Some((index, &value)) = signal.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-        return Err(SolveError::NonFiniteRecordSample { index, value });
+        return Err(SolveError::Assembly(AssemblyError::NonFiniteRecordSample {
+            index,
+            value,
+        }));
     }
     let mut y = match domain {
         Domain::Circle => unwrap(signal),
@@ -130,12 +137,12 @@ pub(crate) fn column_factors<B: Basis + ?Sized>(
                     // instant (stationary noise), so E[φ(x + n) (x' + n')] = E[φ(x + n)] x'.
                     VelocityFactor::One | VelocityFactor::Linear => {}
                     VelocityFactor::Sign | VelocityFactor::Quadratic | VelocityFactor::Cubic => {
-                        return Err(SolveError::NoiseCorrectionUnavailable {
+                        return Err(SolveError::Assembly(AssemblyError::NoiseCorrectionUnavailable {
                             term: term.name(&names),
                             why: "the bias of a nonlinear function of x' under noise on the angle depends on \
                                   the noise of the velocity series, not a rescaling; identify without the \
                                   correction",
-                        });
+                        }));
                     }
                 }
                 match t.position {
@@ -148,19 +155,21 @@ pub(crate) fn column_factors<B: Basis + ?Sized>(
             }
         };
         if basis.domain() != Domain::Circle {
-            return Err(SolveError::NoiseCorrectionUnavailable {
+            return Err(SolveError::Assembly(AssemblyError::NoiseCorrectionUnavailable {
                 term: names[i].clone(),
                 why: "the correction is for an angle on the circle; on the line the bias of a \
                       function of the displacement is not a rescaling",
-            });
+            }));
         }
         let k = match orders[i] {
             Some(k) => k,
             None => {
-                let k = harmonic_order(basis, i)?.ok_or_else(|| SolveError::NoiseCorrectionUnavailable {
-                    term: names[i].clone(),
-                    why: "it is not a single harmonic cos(kx) or sin(kx) of the angle, so its bias \
+                let k = harmonic_order(basis, i)?.ok_or_else(|| {
+                    SolveError::Assembly(AssemblyError::NoiseCorrectionUnavailable {
+                        term: names[i].clone(),
+                        why: "it is not a single harmonic cos(kx) or sin(kx) of the angle, so its bias \
                           under noise is not a rescaling; use the harmonic basis",
+                    })
                 })?;
                 orders[i] = Some(k);
                 k
@@ -231,15 +240,19 @@ mod tests {
         let hat = Hat::new(8).unwrap();
         assert_eq!(harmonic_order(&hat, 2).unwrap(), None);
         // The line is refused before any order is looked for.
-        let clock = crate::SampleClock::nondimensional(25).unwrap();
+        let clock = circle_signal::SampleClock::nondimensional(25).unwrap();
         let params = IdentifyParams::builder(clock).build().unwrap();
         assert!(matches!(
             column_factors(&Polynomial::new(2).unwrap(), &params, 0.1),
-            Err(SolveError::NoiseCorrectionUnavailable { .. })
+            Err(SolveError::Assembly(
+                AssemblyError::NoiseCorrectionUnavailable { .. }
+            ))
         ));
         assert!(matches!(
             column_factors(&hat, &params, 0.1),
-            Err(SolveError::NoiseCorrectionUnavailable { .. })
+            Err(SolveError::Assembly(
+                AssemblyError::NoiseCorrectionUnavailable { .. }
+            ))
         ));
         // x', then (cos t, sin t, 1) times cos x, sin x, cos 2x, sin 2x.
         let f = column_factors(&Harmonic::new(2).unwrap(), &params, 0.2).unwrap();
@@ -281,13 +294,19 @@ mod tests {
         assert!(estimate_noise_sigma(&noisy(0.0, 4), Domain::Circle).unwrap() < 1e-8);
         assert!(matches!(
             estimate_noise_sigma(&[0.0; 10], Domain::Line),
-            Err(SolveError::RecordTooShort { len: 10, .. })
+            Err(SolveError::Assembly(AssemblyError::RecordTooShort {
+                len: 10,
+                ..
+            }))
         ));
         let mut x = noisy(0.1, 5);
         x[7] = f64::NAN;
         assert!(matches!(
             estimate_noise_sigma(&x, Domain::Circle),
-            Err(SolveError::NonFiniteRecordSample { index: 7, .. })
+            Err(SolveError::Assembly(AssemblyError::NonFiniteRecordSample {
+                index: 7,
+                ..
+            }))
         ));
     }
 }

@@ -20,7 +20,9 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::{LinearSystem, SolveError};
+use crate::error::SolveError;
+
+use crate::system::LinearSystem;
 
 /// The residual at one balanced frequency, over all segments.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -162,10 +164,12 @@ pub const HELD_OUT_FOLDS: usize = crate::SelectParams::DEFAULT_FOLDS;
 pub fn fit_quality(system: &LinearSystem, solution: &[f64]) -> Result<FitQuality, SolveError> {
     let (a, b) = (system.matrix(), system.rhs());
     if solution.len() != a.ncols() {
-        return Err(SolveError::ModelMismatch {
-            expected: system.names().to_vec(),
-            found: (0..solution.len()).map(|i| format!("value {i}")).collect(),
-        });
+        return Err(SolveError::Model(hb_model::ModelError::Io(
+            hb_model::ModelIoError::ModelMismatch {
+                expected: system.names().to_vec(),
+                found: (0..solution.len()).map(|i| format!("value {i}")).collect(),
+            },
+        )));
     }
     let residual: Vec<f64> = (0..a.nrows())
         .map(|r| (0..a.ncols()).map(|c| a[(r, c)] * solution[c]).sum::<f64>() - b[r])
@@ -223,7 +227,7 @@ fn gcd(a: usize, b: usize) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::Block;
+    use crate::system::Block;
     use circle_signal::{SampleClock, Segment};
     use faer::{Col, Mat};
 

@@ -31,7 +31,9 @@
 use faer::Mat;
 use serde::{Deserialize, Serialize};
 
-use crate::{LinearSystem, SolveError};
+use crate::error::{LstsqError, SelectError, SolveError};
+
+use crate::system::LinearSystem;
 
 /// Parameters of [`select_terms`]; [`SelectParams::new`] validates.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -168,10 +170,10 @@ pub fn select_terms(system: &LinearSystem, params: &SelectParams) -> Result<Sele
     let names = system.names();
     let blocks = system.blocks();
     if blocks.len() < 2 {
-        return Err(SolveError::TooFewOrbits {
+        return Err(SolveError::Lstsq(LstsqError::TooFewOrbits {
             found: blocks.len(),
             needed: 2,
-        });
+        }));
     }
     let folds = params.folds.min(blocks.len());
     let moments = FoldMoments::new(system, folds);
@@ -179,7 +181,7 @@ pub fn select_terms(system: &LinearSystem, params: &SelectParams) -> Result<Sele
     let mut active: Vec<usize> = (0..cols).collect();
     let first = moments
         .score(&active)
-        .ok_or(SolveError::SelectionUndetermined { folds })?;
+        .ok_or(SolveError::Select(SelectError::SelectionUndetermined { folds }))?;
     let mut path = vec![SelectionStep {
         removed: None,
         size: cols,
@@ -376,7 +378,7 @@ fn cholesky_solve(mut g: Mat<f64>, mut y: Vec<f64>) -> Option<Vec<f64>> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::Block;
+    use crate::system::Block;
     use circle_signal::{SampleClock, Segment};
     use faer::Col;
     use faer::prelude::SolveLstsq;
@@ -503,7 +505,7 @@ mod tests {
             .for_each(|(d, v)| *d = 2.0 * v);
         assert!(matches!(
             select_terms(&s, &SelectParams::default()),
-            Err(SolveError::SelectionUndetermined { .. })
+            Err(SolveError::Select(SelectError::SelectionUndetermined { .. }))
         ));
     }
 }

@@ -6,8 +6,12 @@ use faer::{Col, ColRef, Mat, MatMut, MatRef};
 use hb_basis::{Basis, Domain};
 use serde::{Deserialize, Serialize};
 
-use crate::terms::{Column, Term, column_families, columns};
-use crate::{IdentifyParams, LstsqFit, LstsqSolver, SolveError};
+use hb_model::{Column, Term, columns};
+
+use crate::error::{AssemblyError, LstsqError, SolveError};
+use crate::lstsq::{LstsqFit, LstsqSolver};
+use crate::params::IdentifyParams;
+use hb_model::form::column_families;
 
 /// Where one segment's equations sit in the stacked system, and what was found on it.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -157,22 +161,22 @@ impl LinearSystem {
     /// Solves by least squares; a rank deficiency names the suspect term.
     pub fn solve<S: LstsqSolver + ?Sized>(&self, solver: &S) -> Result<LstsqFit, SolveError> {
         solver.solve(self.matrix(), self.rhs()).map_err(|e| match e {
-            SolveError::RankDeficient {
+            SolveError::Lstsq(LstsqError::RankDeficient {
                 rank,
                 unknowns,
                 rows,
                 column,
                 suspect,
-            } => {
+            }) => {
                 // The solver knows columns by index; give the term's name.
                 let suspect = self.names.get(column).cloned().unwrap_or(suspect);
-                SolveError::RankDeficient {
+                SolveError::Lstsq(LstsqError::RankDeficient {
                     rank,
                     unknowns,
                     rows,
                     column,
                     suspect,
-                }
+                })
             }
             other => other,
         })
@@ -284,26 +288,26 @@ pub(crate) fn plan_rows(
     let mut rows = 0;
     for (i, s) in segments.iter().enumerate() {
         if !s.fits(clock, signal.len()) {
-            return Err(SolveError::BadSegment {
+            return Err(SolveError::Assembly(AssemblyError::BadSegment {
                 segment: i,
                 start: s.start(),
                 period: s.period(),
                 len: s.len(),
                 record: signal.len(),
                 samples_per_period: p,
-            });
+            }));
         }
         if let Some((j, &value)) = signal[s.start()..=s.start() + s.len()]
             .iter()
             .enumerate()
             .find(|(_, v)| !v.is_finite())
         {
-            return Err(SolveError::NonFiniteSample {
+            return Err(SolveError::Assembly(AssemblyError::NonFiniteSample {
                 segment: i,
                 start: s.start(),
                 index: s.start() + j,
                 value,
-            });
+            }));
         }
         let m = params.harmonics().count(s.period(), s.len());
         counts.push(m);
@@ -323,16 +327,18 @@ pub(crate) fn check_drive(
         return Ok(());
     };
     let drive = params
-        .drive_samples()
-        .ok_or_else(|| SolveError::MissingDriveSamples {
-            term: term.to_string(),
+        .measured_drive()
+        .ok_or_else(|| {
+            SolveError::Assembly(AssemblyError::MissingDriveSamples {
+                term: term.to_string(),
+            })
         })?
-        .as_slice();
+        .samples();
     if drive.len() != signal.len() {
-        return Err(SolveError::DriveLengthMismatch {
+        return Err(SolveError::Assembly(AssemblyError::DriveLengthMismatch {
             drive: drive.len(),
             record: signal.len(),
-        });
+        }));
     }
     for (i, s) in segments.iter().enumerate() {
         if let Some((j, &value)) = drive[s.start()..=s.closing()]
@@ -340,12 +346,12 @@ pub(crate) fn check_drive(
             .enumerate()
             .find(|(_, v)| !v.is_finite())
         {
-            return Err(SolveError::NonFiniteDriveSample {
+            return Err(SolveError::Assembly(AssemblyError::NonFiniteDriveSample {
                 segment: i,
                 start: s.start(),
                 index: s.start() + j,
                 value,
-            });
+            }));
         }
     }
     Ok(())
@@ -365,8 +371,8 @@ pub(crate) fn check_enough(
     let p = params.clock().require_whole()?;
     let per_orbit = 2 * params.harmonics().count(1, p) + 1;
     let missing = unknowns + 1 - rows;
-    Err(SolveError::TooFewOrbits {
+    Err(SolveError::Lstsq(LstsqError::TooFewOrbits {
         found: segments,
         needed: segments + missing.div_ceil(per_orbit),
-    })
+    }))
 }

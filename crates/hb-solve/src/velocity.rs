@@ -3,7 +3,7 @@
 
 use hb_basis::FourierPlan;
 
-use crate::SolveError;
+use crate::error::{AssemblyError, SolveError};
 
 /// The fewest samples (the closing one included) a segment's velocity is estimated from.
 const MIN_SAMPLES: usize = 9;
@@ -74,11 +74,11 @@ pub fn velocity_series(
     trend: VelocityTrend,
 ) -> Result<Vec<f64>, SolveError> {
     if x.len() < MIN_SAMPLES {
-        return Err(SolveError::RecordTooShort {
+        return Err(SolveError::Assembly(AssemblyError::RecordTooShort {
             what: "the velocity series",
             len: x.len(),
             needed: MIN_SAMPLES,
-        });
+        }));
     }
     if !(step.is_finite() && step > 0.0) {
         return Err(SolveError::InvalidParameter {
@@ -88,7 +88,10 @@ pub fn velocity_series(
         });
     }
     if let Some((index, &value)) = x.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-        return Err(SolveError::NonFiniteRecordSample { index, value });
+        return Err(SolveError::Assembly(AssemblyError::NonFiniteRecordSample {
+            index,
+            value,
+        }));
     }
     let mut plan = FourierPlan::new(x.len() - 1)?;
     let (mut detrended, mut out) = (Vec::new(), Vec::new());
@@ -246,7 +249,7 @@ pub(crate) fn velocity_into(
 /// integral or Fourier coefficient of it), its cell means put it where the interpolated velocity
 /// crosses zero. `periodic`: `v[0]` and `v[L]` are the same point (an orbit).
 pub(crate) fn cell_sign(v: &[f64], n: usize, periodic: bool) -> f64 {
-    let sign = |a: f64| crate::VelocityFactor::Sign.eval(a);
+    let sign = |a: f64| hb_model::VelocityFactor::Sign.eval(a);
     // The mean of sign over a segment on which the velocity goes linearly from a to b.
     let half = |a: f64, b: f64| {
         if (a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0) {
@@ -295,7 +298,7 @@ mod tests {
         for n in 0..=len {
             let q = if n == 0 || n == len { 0.5 * h } else { h };
             let t = n as f64 * h;
-            point += q * w(t) * crate::VelocityFactor::Sign.eval(samples[n]);
+            point += q * w(t) * hb_model::VelocityFactor::Sign.eval(samples[n]);
             cell += q * w(t) * cell_sign(&samples, n, false);
         }
         // The reference: between the crossings of v (1.3 τ + 0.4 = jπ), w by composite Simpson

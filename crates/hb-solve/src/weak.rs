@@ -10,10 +10,13 @@ use hb_basis::{Basis, Domain, FourierPlanner};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use crate::error::{AssemblyError, SolveError};
+use crate::params::IdentifyParams;
+use crate::system::{Block, LinearSystem};
 use crate::system::{Layout, RowJob, layout, split_rows};
-use crate::terms::{Column, DriveFactor, PositionFactor, Term, VelocityFactor};
 use crate::velocity::{Series, VelocityTrend, cell_sign, velocity_into};
-use crate::{Block, Forcing, Harmonics, IdentifyParams, LinearSystem, SolveError};
+use hb_model::{Column, DriveFactor, PositionFactor, Term, VelocityFactor};
+use hb_model::{Forcing, Harmonics};
 
 /// Parameters of the weak form: the order `p` of the window `w(τ) = sin^p(π τ / T_s)`.
 ///
@@ -50,7 +53,7 @@ use crate::{Block, Forcing, Harmonics, IdentifyParams, LinearSystem, SolveError}
 ///   velocity harmonics), `sign(x')` averaged over each sample's cell so that its jumps fall where
 ///   the interpolated velocity crosses zero (`docs/identification.md` measures what this costs);
 /// - otherwise `∫ ψ g` of its samples, the drive factor at the samples' absolute time, or for
-///   the measured drive `p` its sample ([`crate::IdentifyParams::drive_samples`]) at each of the
+///   the measured drive `p` its sample ([`crate::IdentifyParams::measured_drive`]) at each of the
 ///   window's samples: `∫ ψ p f(x)` by the same trapezoid rule as every other sampled term, so
 ///   that a drive of any waveform (harmonics, noise, no period at all) enters the rows as it was
 ///   measured.
@@ -119,7 +122,7 @@ impl WeakForm {
     /// The test functions of a segment of `len` samples (and the closing one) with `harmonics`
     /// harmonics and sample step `h`: `2M + 1` rows of `len + 1` values of `ψ`, `ψ'` and `ψ''`,
     /// each multiplied by its trapezoid weight.
-    pub(crate) fn tables(&self, len: usize, harmonics: usize, h: f64, forcing_frequency: f64) -> Tables {
+    pub fn tables(&self, len: usize, harmonics: usize, h: f64, forcing_frequency: f64) -> Tables {
         let p = self.window_order as i32;
         let pf = f64::from(self.window_order);
         let samples = len + 1;
@@ -177,19 +180,26 @@ impl WeakForm {
     }
 }
 
-/// Weighted test functions of one segment shape, row-major (`rows × samples`).
+/// The weighted test functions of one segment shape, row-major (`rows × samples`): the test
+/// functions `ψ_r = w cos(jΩτ)`, `w sin(jΩτ)` of a window and their first two derivatives at
+/// every sample, what every row of the weak form integrates against ([`WeakForm::tables`]).
 #[derive(Debug)]
-pub(crate) struct Tables {
-    pub(crate) samples: usize,
-    pub(crate) psi: Vec<f64>,
-    pub(crate) dpsi: Vec<f64>,
-    pub(crate) ddpsi: Vec<f64>,
+pub struct Tables {
+    /// Samples of the window (its closing one included).
+    pub samples: usize,
+    /// `ψ_r(τ_n)`, row `r` after row `r − 1`.
+    pub psi: Vec<f64>,
+    /// `ψ_r'(τ_n)`.
+    pub dpsi: Vec<f64>,
+    /// `ψ_r''(τ_n)`.
+    pub ddpsi: Vec<f64>,
     /// `(cos, sin)(W n h)`: the forcing's phase advance from the window's first sample.
     turn: Vec<(f64, f64)>,
 }
 
 impl Tables {
-    pub(crate) fn row<'a>(&self, table: &'a [f64], r: usize) -> &'a [f64] {
+    /// Row `r` of `table` (one of [`Tables::psi`], [`Tables::dpsi`], [`Tables::ddpsi`]).
+    pub fn row<'a>(&self, table: &'a [f64], r: usize) -> &'a [f64] {
         &table[r * self.samples..(r + 1) * self.samples]
     }
 }
@@ -229,9 +239,10 @@ pub(crate) enum Mode {
     ByParts(usize),
 }
 
-/// `Σ a_i b_i` (slices of equal length) in the vectors of `simd`, two partial sums.
+/// `Σ a_i b_i` (slices of equal length) in the vectors of `simd`, two partial sums: the inner
+/// product of every row of the weak form.
 #[inline(always)]
-pub(crate) fn dot<S: pulp::Simd>(simd: S, a: &[f64], b: &[f64]) -> f64 {
+pub fn dot<S: pulp::Simd>(simd: S, a: &[f64], b: &[f64]) -> f64 {
     let (a_head, a_tail) = S::as_simd_f64s(a);
     let (b_head, b_tail) = S::as_simd_f64s(b);
     let (mut acc0, mut acc1) = (simd.splat_f64s(0.0), simd.splat_f64s(0.0));
@@ -329,7 +340,7 @@ pub(crate) fn weak_rows<B: Basis + ?Sized>(
     for (s, &m) in segments.iter().zip(counts) {
         tables
             .entry((s.len(), m))
-            .or_insert_with(|| weak.tables(s.len(), m, h, params.clock().forcing_frequency()));
+            .or_insert_with(|| weak.tables(s.len(), m, h, params.clock().drive_angular_frequency()));
         max_samples = max_samples.max(s.len() + 1);
     }
     let ws = Workspace {
@@ -391,7 +402,7 @@ pub(crate) fn weak_rows<B: Basis + ?Sized>(
             VelocityFactor::Linear => t.drive.is_measured(),
             _ => true,
         }),
-        drive: params.drive_samples().map(|d| d.as_slice()),
+        drive: params.measured_drive().map(|d| d.samples()),
     };
     let blocks: Vec<Block> = jobs
         .into_par_iter()
@@ -492,17 +503,17 @@ fn fill_block<B: Basis + ?Sized>(
     ws.g.clear();
     ws.g.resize(width * samples, 0.0);
     ws.forcing.clear();
-    let big_w = clock.forcing_frequency();
+    let big_w = clock.drive_angular_frequency();
     let (s0, c0) = (big_w * clock.time(seg.start())).sin_cos();
     for (n, &xr) in raw.iter().enumerate() {
         let xe = if sh.domain == Domain::Circle { wrap(xr) } else { xr };
         sh.basis.eval(xe, &mut ws.phi);
         if let Some(i) = ws.phi.iter().position(|v| !v.is_finite()) {
-            return Err(SolveError::NonFiniteTerm {
+            return Err(SolveError::Assembly(AssemblyError::NonFiniteTerm {
                 segment: index,
                 start: seg.start(),
                 term: sh.basis.name(i).unwrap_or_default(),
-            });
+            }));
         }
         // cos, sin of W t_n = W t_start + W n h by the angle-addition formulas.
         let (cr, sr) = t.turn[n];
@@ -605,11 +616,11 @@ fn fill_block<B: Basis + ?Sized>(
 
     let bad_row = (0..rows).find(|&r| !b[r].is_finite() || (0..cols).any(|c| !a[(r, c)].is_finite()));
     if let Some(row) = bad_row {
-        return Err(SolveError::NonFiniteRow {
+        return Err(SolveError::Assembly(AssemblyError::NonFiniteRow {
             segment: index,
             start: seg.start(),
             row,
-        });
+        }));
     }
     Ok(Block {
         segment,

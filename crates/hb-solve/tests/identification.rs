@@ -1,13 +1,15 @@
 //! Identification checks: manufactured systems with exact answers, the least-squares solvers as
 //! identities, errors, and the paper's data set.
+use hb_solve::{AssemblyError, LstsqError};
 use std::f64::consts::{PI, TAU};
 
+use circle_signal::SampleClock;
 use circle_signal::wrap;
 use faer::{Col, Mat};
 use hb_basis::{Basis, BasisKind, Harmonic, Hat, Polynomial};
+use hb_model::{Forcing, Harmonics, IdentifiedModel, ModelForm};
 use hb_solve::{
-    Forcing, Harmonics, IdentifiedModel, IdentifyParams, LstsqSolver, ModelForm, QrSolver, SampleClock,
-    SolveError, SvdSolver, assemble, identify, identify_from_source,
+    IdentifyParams, LstsqSolver, QrSolver, SolveError, SvdSolver, assemble, identify, identify_from_source,
 };
 use pendulum_sim::{Pendulum, SecondOrderSystem};
 use proptest::prelude::*;
@@ -101,7 +103,7 @@ fn paper_segments(x: &[f64]) -> Vec<Segment> {
 fn linear_oscillator() -> (SampleClock, Vec<f64>, (f64, f64, f64)) {
     let (c, k, amp) = (0.1 * 4.0 * PI, 2.0 * (4.0 * PI) * (4.0 * PI), 3.0);
     let clock = SampleClock::new(0.5, 40).unwrap().with_start_time(0.37).unwrap();
-    let w = clock.forcing_frequency();
+    let w = clock.drive_angular_frequency();
     // X = amp / (k − w² + i c w): x = Re(X e^{iwt}).
     let (re, im) = (k - w * w, c * w);
     let den = re * re + im * im;
@@ -141,7 +143,7 @@ fn linear_oscillator_with_known_forcing_is_recovered_exactly() {
         assert!((kk - k).abs() <= 1e-9 * k, "{}: k = {kk} vs {k}", solver.name());
         // The model reproduces the acceleration of the true system.
         let (t, xx, v) = (0.81, 0.02, -0.3);
-        let w = clock.forcing_frequency();
+        let w = clock.drive_angular_frequency();
         let want = -c * v - k * xx + amp * (w * t).cos();
         assert!((m.acceleration(t, xx, v) - want).abs() <= 1e-8 * k);
     }
@@ -165,7 +167,7 @@ fn linear_oscillator_with_unknown_forcing_is_rank_deficient() {
             &hb_solve::HarmonicBalance,
             solver,
         ) {
-            Err(SolveError::RankDeficient { rank, unknowns, .. }) => {
+            Err(SolveError::Lstsq(LstsqError::RankDeficient { rank, unknowns, .. })) => {
                 assert_eq!((rank, unknowns), (2, 4), "{}", solver.name())
             }
             other => panic!("{}: expected a rank deficiency, got {other:?}", solver.name()),
@@ -184,12 +186,12 @@ fn linear_oscillator_with_unknown_forcing_is_rank_deficient() {
         &hb_solve::HarmonicBalance,
         &QrSolver::default(),
     ) {
-        Err(SolveError::RankDeficient {
+        Err(SolveError::Lstsq(LstsqError::RankDeficient {
             rank: 2,
             unknowns: 3,
             suspect,
             ..
-        }) => {
+        })) => {
             assert!(suspect == "x" || suspect == "k*x", "{suspect}")
         }
         other => panic!("{other:?}"),
@@ -344,7 +346,10 @@ fn too_few_orbits_says_how_many() {
     )
     .unwrap_err();
     assert!(
-        matches!(err, SolveError::TooFewOrbits { found: 1, needed: 3 }),
+        matches!(
+            err,
+            SolveError::Lstsq(LstsqError::TooFewOrbits { found: 1, needed: 3 })
+        ),
         "{err:?}"
     );
     let msg = err.to_string();
@@ -362,7 +367,10 @@ fn too_few_orbits_says_how_many() {
     )
     .unwrap_err();
     assert!(
-        matches!(err, SolveError::TooFewOrbits { found: 0, needed: 2 }),
+        matches!(
+            err,
+            SolveError::Lstsq(LstsqError::TooFewOrbits { found: 0, needed: 2 })
+        ),
         "{err:?}"
     );
 }
@@ -386,11 +394,11 @@ fn bad_input_never_reaches_the_solver() {
     assert!(
         matches!(
             err,
-            SolveError::NonFiniteSample {
+            SolveError::Assembly(AssemblyError::NonFiniteSample {
                 segment: 3,
                 index: 310,
                 ..
-            }
+            })
         ),
         "{err:?}"
     );
@@ -405,7 +413,7 @@ fn bad_input_never_reaches_the_solver() {
             &hb_solve::HarmonicBalance,
             &QrSolver::default()
         ),
-        Err(SolveError::BadSegment { segment: 0, .. })
+        Err(SolveError::Assembly(AssemblyError::BadSegment { segment: 0, .. }))
     ));
     let past_end = [common::segment(x.len() - 25, 1, 25, 0.0)];
     assert!(matches!(
@@ -417,7 +425,7 @@ fn bad_input_never_reaches_the_solver() {
             &hb_solve::HarmonicBalance,
             &QrSolver::default()
         ),
-        Err(SolveError::BadSegment { .. })
+        Err(SolveError::Assembly(AssemblyError::BadSegment { .. }))
     ));
     // k*x makes no sense for an angle.
     let params = IdentifyParams::builder(clock)
@@ -433,7 +441,7 @@ fn bad_input_never_reaches_the_solver() {
             &hb_solve::HarmonicBalance,
             &QrSolver::default()
         ),
-        Err(SolveError::TermNotAllowed { ref term, .. }) if term == "k*x"
+        Err(SolveError::Model(hb_model::ModelError::Term(hb_model::TermError::TermNotAllowed { ref term, .. }))) if term == "k*x"
     ));
     // A monomial that overflows is caught with its segment.
     let huge: Vec<f64> = (0..200).map(|n| 1e120 * (n as f64 * 0.3).sin()).collect();
@@ -444,7 +452,7 @@ fn bad_input_never_reaches_the_solver() {
     let segs = [common::segment(0, 1, 25, 0.0), common::segment(50, 1, 25, 0.0)];
     assert!(matches!(
         identify(Polynomial::new(3).unwrap(), &huge, &segs, &params, &hb_solve::HarmonicBalance, &QrSolver::default()),
-        Err(SolveError::NonFiniteTerm { segment: 0, ref term, .. }) if term == "x^3"
+        Err(SolveError::Assembly(AssemblyError::NonFiniteTerm { segment: 0, ref term, .. })) if term == "x^3"
     ));
 }
 
@@ -807,9 +815,9 @@ struct Draw {
 /// The list of terms of `codes` on `basis`: drive `0` none, `1..=6` `cos(t)`, `sin(t)`, `cos(2t)`,
 /// .., `sin(3t)`; function `0` none, `i` basis function `i − 1` (modulo); velocity `0..5` none,
 /// `x'`, `sign(x')`, `x'*|x'|`, `x'^3`. Repeated terms are dropped.
-fn general_terms(codes: &[(u8, usize, u8)], basis: &BasisKind) -> hb_solve::TermList {
+fn general_terms(codes: &[(u8, usize, u8)], basis: &BasisKind) -> hb_model::TermList {
     let names = basis.names();
-    let mut terms: Vec<hb_solve::TermSpec> = Vec::new();
+    let mut terms: Vec<hb_model::TermSpec> = Vec::new();
     for &(drive, function, velocity) in codes {
         let mut factors: Vec<String> = Vec::new();
         if drive > 0 {
@@ -833,12 +841,12 @@ fn general_terms(codes: &[(u8, usize, u8)], basis: &BasisKind) -> hb_solve::Term
         } else {
             factors.join("*")
         };
-        let term: hb_solve::TermSpec = name.parse().unwrap();
+        let term: hb_model::TermSpec = name.parse().unwrap();
         if !terms.contains(&term) {
             terms.push(term);
         }
     }
-    hb_solve::TermList::new(terms).unwrap()
+    hb_model::TermList::new(terms).unwrap()
 }
 
 /// `codes` with every velocity factor mapped by `f`.
@@ -916,7 +924,7 @@ impl Case {
             .unwrap()
             .with_start_time(d.start_time)
             .unwrap();
-        let big_w = clock.forcing_frequency();
+        let big_w = clock.drive_angular_frequency();
         let k = d.period;
         let omega = big_w / k as f64;
         let circle = d.basis.domain() == Domain::Circle;
@@ -962,7 +970,7 @@ impl Case {
         if let Some(codes) = &d.general {
             form = ModelForm::from_terms(general_terms(codes, &d.basis));
         }
-        let unknowns = hb_solve::columns(&d.basis, &form).unwrap().len();
+        let unknowns = hb_model::columns(&d.basis, &form).unwrap().len();
         let params = IdentifyParams::builder(clock)
             .harmonics(Harmonics::Fixed(d.harmonics))
             .form(form)
@@ -1046,9 +1054,9 @@ impl Case {
     /// the absolute values of the derivatives of its terms in `x` (`|∂r/∂x|` bounded, the
     /// sensitivity of the basis terms to an error in the sample).
     fn residual_terms(&self, n: usize, estimate: Option<f64>) -> (f64, f64, f64) {
-        use hb_solve::{DriveFactor, PositionFactor, VelocityFactor};
+        use hb_model::{DriveFactor, PositionFactor, VelocityFactor};
         let t = self.clock().time(n);
-        let big_w = self.clock().forcing_frequency();
+        let big_w = self.clock().drive_angular_frequency();
         let sample = self.record[n];
         let (mut phi, mut dphi) = (vec![0.0; self.basis.len()], vec![0.0; self.basis.len()]);
         let at = if self.basis.domain() == Domain::Circle {
@@ -1062,7 +1070,7 @@ impl Case {
         let form = self.params.form();
         let mut r = self.signal.ddx(t);
         let (mut size, mut slope) = (r.abs(), 0.0);
-        for (term, lambda) in hb_solve::columns(&self.basis, form)
+        for (term, lambda) in hb_model::columns(&self.basis, form)
             .unwrap()
             .iter()
             .zip(&self.lambda)
@@ -1133,9 +1141,9 @@ impl Case {
 
     /// The largest `Σ |∂g/∂x'|` of the residual's terms over the record (`|c|` for the presets).
     fn velocity_slope(&self) -> f64 {
-        use hb_solve::{DriveFactor, PositionFactor};
-        let big_w = self.clock().forcing_frequency();
-        let terms = hb_solve::columns(&self.basis, self.params.form()).unwrap();
+        use hb_model::{DriveFactor, PositionFactor};
+        let big_w = self.clock().drive_angular_frequency();
+        let terms = hb_model::columns(&self.basis, self.params.form()).unwrap();
         let mut phi = vec![0.0; self.basis.len()];
         (0..self.record.len())
             .map(|n| {
@@ -1171,7 +1179,7 @@ impl Case {
         self.params.form().terms().is_some_and(|list| {
             list.terms()
                 .iter()
-                .any(|t| t.velocity != hb_solve::VelocityFactor::One)
+                .any(|t| t.velocity != hb_model::VelocityFactor::One)
         })
     }
 
@@ -1288,7 +1296,7 @@ fn weak_allowance(case: &Case, block: &hb_solve::Block, p: u32, delta: f64, slop
             .params
             .velocity_harmonics()
             .count(block.segment.period(), block.segment.len()) as f64;
-        rate + 3.0 * case.clock().forcing_frequency() + 2.0 * (omega * j * (j + 1.0) + 1.0 / span)
+        rate + 3.0 * case.clock().drive_angular_frequency() + 2.0 * (omega * j * (j + 1.0) + 1.0 / span)
     } else {
         rate
     };
@@ -1434,7 +1442,7 @@ fn exact_case(d: &Draw, whirl: bool, known: bool) -> Case {
         .unwrap()
         .with_start_time(d.start_time)
         .unwrap();
-    let big_w = clock.forcing_frequency();
+    let big_w = clock.drive_angular_frequency();
     let len = 6 * 3 * samples_per_period + 1;
     let origin = clock.time(len / 2);
     let l = &d.lambda;
@@ -1471,7 +1479,7 @@ fn exact_case(d: &Draw, whirl: bool, known: bool) -> Case {
         ];
         let form = ModelForm::parametric().with_forcing(Forcing::Identified);
         assert_eq!(
-            hb_solve::term_names(&basis, &form),
+            hb_model::term_names(&basis, &form),
             [
                 "x'",
                 "cos(t)*cos(x)",
@@ -1507,7 +1515,7 @@ fn exact_case(d: &Draw, whirl: bool, known: bool) -> Case {
             Forcing::Identified
         };
         let form = ModelForm::externally_forced(forcing);
-        let lambda = hb_solve::term_names(&basis, &form)
+        let lambda = hb_model::term_names(&basis, &form)
             .iter()
             .map(|name| match name.as_str() {
                 "x'" => c,

@@ -1,11 +1,11 @@
 //! A measured drive `p`: exact manufactured cases of the weak form, the refusals of the paper's
 //! method and of missing or mismatched samples, a model driven by its recorded drive, and models
 //! saved before the measured drive (format 3) still read.
+use circle_signal::SampleClock;
 use hb_basis::{BasisKind, Domain, Polynomial};
-use hb_solve::{
-    DriveSamples, DriveSignal, HarmonicBalance, IdentifiedModel, IdentifyParams, ModelForm, QrSolver,
-    SampleClock, SolveError, TermList, WeakForm, identify,
-};
+use hb_model::{IdentifiedModel, MeasuredDrive, ModelForm, TermList};
+use hb_solve::AssemblyError;
+use hb_solve::{HarmonicBalance, IdentifyParams, QrSolver, SolveError, WeakForm, identify};
 use pendulum_sim::{
     PredictionConfig, PredictionRecord, SecondOrderSystem, SimulationConfig, Tolerances, prediction_starts,
     simulate, valid_prediction_times,
@@ -35,7 +35,7 @@ fn line_windows(clock: &SampleClock, x: &[f64]) -> Vec<circle_signal::Segment> {
 fn with_drive(clock: SampleClock, form: ModelForm, p: Vec<f64>) -> IdentifyParams {
     IdentifyParams::builder(clock)
         .form(form)
-        .drive_samples(DriveSamples::new(p).unwrap())
+        .measured_drive(MeasuredDrive::new(p, clock.start_time(), clock.step()).unwrap())
         .build()
         .unwrap()
 }
@@ -144,37 +144,48 @@ fn missing_mismatched_or_broken_drive_samples_and_the_papers_method_are_refused(
         }
     };
     let without = IdentifyParams::builder(clock).form(form()).build().unwrap();
-    assert!(matches!(run(&without, true), Err(SolveError::MissingDriveSamples { term }) if term == "p"));
+    assert!(
+        matches!(run(&without, true), Err(SolveError::Assembly(AssemblyError::MissingDriveSamples { term })) if term == "p")
+    );
     let short = with_drive(clock, form(), vec![1.0; x.len() - 1]);
     assert!(matches!(
         run(&short, true),
-        Err(SolveError::DriveLengthMismatch { drive, record }) if drive + 1 == record
+        Err(SolveError::Assembly(AssemblyError::DriveLengthMismatch { drive, record })) if drive + 1 == record
     ));
     let mut broken = vec![1.0; x.len()];
     broken[100] = f64::NAN;
     let broken = with_drive(clock, form(), broken);
     assert!(matches!(
         run(&broken, true),
-        Err(SolveError::NonFiniteDriveSample { index: 100, .. })
+        Err(SolveError::Assembly(AssemblyError::NonFiniteDriveSample {
+            index: 100,
+            ..
+        }))
     ));
     let fine = with_drive(clock, form(), vec![1.0; x.len()]);
     let refused = run(&fine, false).unwrap_err();
     assert!(
-        matches!(refused, SolveError::MeasuredDriveUnsupported { .. }),
+        matches!(
+            refused,
+            SolveError::Assembly(AssemblyError::MeasuredDriveUnsupported { .. })
+        ),
         "{refused}"
     );
     assert!(refused.to_string().contains("weak form"), "{refused}");
-    assert!(DriveSamples::new(Vec::<f64>::new()).is_err());
+    assert!(MeasuredDrive::new(Vec::<f64>::new(), 0.0, 1.0).is_err());
+    assert!(MeasuredDrive::new(vec![1.0, 2.0], 0.0, 0.0).is_err());
     // A column is named only for a form with a term in p.
     let no_p = ModelForm::from_terms("x', x".parse().unwrap()).with_drive_column("p");
     assert!(matches!(
         IdentifyParams::builder(clock).form(no_p).build(),
-        Err(SolveError::InvalidForm { .. })
+        Err(SolveError::Model(hb_model::ModelError::Term(
+            hb_model::TermError::InvalidForm { .. }
+        )))
     ));
 }
 
 /// A Duffing oscillator driven by a waveform with harmonics, identified with `p`, integrated
-/// again with its recorded drive ([`DriveSignal`]) from the record's state, follows the record;
+/// again with its recorded drive ([`MeasuredDrive`]) from the record's state, follows the record;
 /// without the signal the model says it needs one, and outside the recorded span it is NaN.
 #[test]
 fn a_model_in_the_measured_drive_is_simulated_with_its_recorded_drive() {
@@ -210,22 +221,17 @@ fn a_model_in_the_measured_drive_is_simulated_with_its_recorded_drive() {
         let got = model.coefficient(name).unwrap().value;
         assert!((got - want).abs() < 1e-6, "{name}: {got} vs {want}");
     }
-    assert!(model.drive_signal_needed());
+    assert!(model.needs_measured_drive());
     let (t, x, v) = (traj.t[500], traj.theta[500], traj.omega[500]);
     assert!(model.acceleration(t, x, v).is_nan());
 
-    let signal = DriveSignal::new(
-        clock.start_time(),
-        clock.step(),
-        DriveSamples::new(p.clone()).unwrap(),
-    )
-    .unwrap();
+    let signal = MeasuredDrive::new(p.clone(), clock.start_time(), clock.step()).unwrap();
     // The spline passes through every sample and is NaN outside the span.
     assert!((signal.at(clock.time(37)) - p[37]).abs() < 1e-12);
     assert!(signal.at(clock.time(p.len() - 1) + 0.5 * clock.step()).is_nan());
     assert!(signal.at(clock.start_time() - 1e-9).is_nan());
-    let model = model.with_drive_signal(signal).unwrap();
-    assert!(!model.drive_signal_needed());
+    let model = model.with_measured_drive(signal).unwrap();
+    assert!(!model.needs_measured_drive());
     // Its acceleration is the oscillator's within the spline's error (step 2π/64).
     let want = duffing.acceleration(t + 0.3 * clock.step(), x, v);
     let got = model.acceleration(t + 0.3 * clock.step(), x, v);
@@ -255,10 +261,12 @@ fn a_model_in_the_measured_drive_is_simulated_with_its_recorded_drive() {
             .unwrap(),
     )
     .unwrap();
-    let signal = DriveSignal::new(0.0, 1.0, DriveSamples::new(vec![0.0, 1.0]).unwrap()).unwrap();
+    let signal = MeasuredDrive::new(vec![0.0, 1.0], 0.0, 1.0).unwrap();
     assert!(matches!(
-        plain.with_drive_signal(signal),
-        Err(SolveError::InvalidForm { .. })
+        plain.with_measured_drive(signal),
+        Err(hb_model::ModelError::Term(
+            hb_model::TermError::InvalidForm { .. }
+        ))
     ));
 }
 

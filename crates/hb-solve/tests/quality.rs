@@ -4,10 +4,10 @@ mod common;
 
 use circle_signal::SampleClock;
 use hb_basis::{BasisKind, Harmonic, Polynomial};
+use hb_model::{Harmonics, ModelForm, TermList};
 use hb_solve::{
     Assembly, EXPLAINED_WARNING_ORBITS, EXPLAINED_WARNING_WINDOWS, HELD_OUT_FOLDS, HarmonicBalance,
-    Harmonics, IdentifyParams, ModelForm, QrSolver, SelectParams, TermList, WeakForm, build_system,
-    fit_quality, select_terms,
+    IdentifyParams, QrSolver, SelectParams, WeakForm, build_system, fit_quality, select_terms,
 };
 use upo_search::Windows;
 
@@ -182,7 +182,7 @@ fn a_drive_the_library_cannot_express_is_told() {
             w.contains("% of stretches of the record it was not fitted on"),
             "{w}"
         );
-        let right = quality(ModelForm::parametric().with_forcing(hb_solve::Forcing::Identified));
+        let right = quality(ModelForm::parametric().with_forcing(hb_model::Forcing::Identified));
         assert!(right.warning(threshold).is_none(), "{}: {right:?}", method.name());
         assert!(right.held_out.unwrap().explained > threshold);
     }

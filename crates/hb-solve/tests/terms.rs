@@ -1,14 +1,15 @@
 //! General terms: lists of terms as written, the true systems with friction, drag, a second drive
 //! harmonic and a velocity-dependent stiffness identified by both methods, models with general
 //! terms evaluated, saved and read, and models saved before general terms read back.
+use hb_solve::AssemblyError;
 use std::f64::consts::TAU;
 
 use circle_signal::{Domain, SampleClock, Segment, wrap};
 use hb_basis::{BasisKind, Harmonic, Polynomial};
+use hb_model::{IdentifiedModel, ModelForm, TermList, TermSpec};
 use hb_solve::{
-    Assembly, BootstrapParams, DriveSearch, FiniteDifferences, HarmonicBalance, IdentifiedModel,
-    IdentifyParams, ModelForm, NoiseCorrection, QrSolver, SolveError, TermList, TermSpec, WeakForm,
-    bootstrap, build_system, estimate_forcing_period, identify,
+    Assembly, BootstrapParams, FiniteDifferences, HarmonicBalance, IdentifyParams, NoiseCorrection, QrSolver,
+    SolveError, WeakForm, bootstrap, build_system, identify,
 };
 use pendulum_sim::{SecondOrderSystem, SimulationConfig, simulate};
 use proptest::prelude::*;
@@ -45,9 +46,9 @@ fn duffing() -> IdentifiedModel {
 /// `periods` forcing periods of `system` at `p` samples per period: the clock and the record
 /// (wrapped on the circle).
 fn record(system: &IdentifiedModel, p: usize, periods: usize) -> (SampleClock, Vec<f64>) {
-    let period = TAU / system.forcing_frequency();
+    let period = TAU / system.drive_angular_frequency();
     let config = SimulationConfig::paper()
-        .with_forcing_period(period)
+        .with_drive_period(period)
         .unwrap()
         .with_samples_per_period(p)
         .unwrap()
@@ -253,7 +254,7 @@ fn finite_differences_balance_general_terms() {
 fn the_preset_with_two_drive_harmonics() {
     let form = ModelForm::parametric().with_drive_harmonics(2);
     let basis: BasisKind = Harmonic::new(1).unwrap().into();
-    let names = hb_solve::term_names(&basis, &form);
+    let names = hb_model::term_names(&basis, &form);
     let q = 1.0 / (0.8333f64 * 0.8333);
     let values: Vec<f64> = names
         .iter()
@@ -334,7 +335,9 @@ fn noise_correction_scales_the_functions_of_the_angle_and_refuses_nonlinear_velo
                 &params(terms, NoiseCorrection::Given { sigma }),
                 &WeakForm::default()
             ),
-            Err(SolveError::NoiseCorrectionUnavailable { .. })
+            Err(SolveError::Assembly(
+                AssemblyError::NoiseCorrectionUnavailable { .. }
+            ))
         ));
     }
 }
@@ -364,45 +367,25 @@ fn the_bootstrap_resamples_general_terms() {
 }
 
 #[test]
-fn the_drive_estimate_refuses_general_terms() {
-    let truth = pendulum();
-    let (clock, x) = record(&truth, 25, 200);
-    let result = estimate_forcing_period(
-        &x,
-        clock.step(),
-        clock.time(0),
-        Domain::Circle,
-        &DriveSearch::builder().build().unwrap(),
-        truth.basis(),
-        truth.form(),
-        &mut |_, _| {},
-    );
-    assert!(
-        matches!(result, Err(SolveError::TermNotSupported { ref term, .. }) if term == "sign(x')"),
-        "{result:?}"
-    );
-}
-
-#[test]
 fn forms_check_their_terms() {
     let circle: BasisKind = Harmonic::new(1).unwrap().into();
     let list = |s: &str| ModelForm::from_terms(TermList::parse(s).unwrap());
     // A function of the other domain, a function the basis lacks.
     assert!(matches!(
         IdentifiedModel::new(circle, list("x', x^3"), 1.0, &[0.0, 0.0]),
-        Err(SolveError::TermNotAllowed { ref term, .. }) if term == "x^3"
+        Err(hb_model::ModelError::Term(hb_model::TermError::TermNotAllowed { ref term, .. })) if term == "x^3"
     ));
     assert!(matches!(
         IdentifiedModel::new(circle, list("x', cos(2x)"), 1.0, &[0.0, 0.0]),
-        Err(SolveError::TermNotInBasis { ref function, .. }) if function == "cos(2x)"
+        Err(hb_model::ModelError::Term(hb_model::TermError::TermNotInBasis { ref function, .. })) if function == "cos(2x)"
     ));
     // A list with preset switches, or with the known forcing's own terms.
-    let known = hb_solve::Forcing::Known { cos: 1.0, sin: 0.0 };
+    let known = hb_model::Forcing::Known { cos: 1.0, sin: 0.0 };
     let clock = SampleClock::nondimensional(25).unwrap();
     for form in [
         list("x'").with_linear_stiffness(),
         list("x'").with_drive_harmonics(2),
-        list("x'").with_forcing(hb_solve::Forcing::Identified),
+        list("x'").with_forcing(hb_model::Forcing::Identified),
         list("x', cos(t)").with_forcing(known),
         ModelForm::parametric().with_drive_harmonics(0),
         ModelForm::parametric().with_drive_harmonics(65),
@@ -418,7 +401,7 @@ fn forms_check_their_terms() {
     // The velocity harmonics are validated like the others.
     assert!(
         IdentifyParams::builder(clock)
-            .velocity_harmonics(hb_solve::Harmonics::ForcingCap(0.5))
+            .velocity_harmonics(hb_model::Harmonics::ForcingCap(0.5))
             .build()
             .is_err()
     );
@@ -485,7 +468,9 @@ fn a_general_model_is_saved_with_its_terms() {
     assert!(renamed != json);
     assert!(matches!(
         IdentifiedModel::<BasisKind>::from_json(&renamed),
-        Err(SolveError::ModelMismatch { .. })
+        Err(hb_model::ModelError::Io(
+            hb_model::ModelIoError::ModelMismatch { .. }
+        ))
     ));
     let bad_list = json.replace("\"x'*|x'|\",", "\"x'*|x'|*x'\",");
     assert!(bad_list != json && IdentifiedModel::<BasisKind>::from_json(&bad_list).is_err());
@@ -530,7 +515,7 @@ fn models_saved_before_general_terms_still_load() {
 // Printing and parsing
 
 fn term_strategy() -> impl Strategy<Value = TermSpec> {
-    use hb_solve::{DriveFactor, VelocityFactor, XFunction};
+    use hb_model::{DriveFactor, VelocityFactor, XFunction};
     let drive = prop_oneof![
         Just(DriveFactor::One),
         (1u32..=64).prop_map(DriveFactor::Cos),
@@ -630,7 +615,7 @@ fn a_preset_as_a_list_and_the_system_of_some_columns() {
     let basis: BasisKind = Harmonic::new(1).unwrap().into();
     let preset = ModelForm::parametric().with_drive_harmonics(2);
     let list = preset.term_list(&basis).unwrap();
-    assert_eq!(list.names(), hb_solve::term_names(&basis, &preset));
+    assert_eq!(list.names(), hb_model::term_names(&basis, &preset));
     let library = ModelForm::from_terms(TermList::parse(PENDULUM).unwrap());
     let keep = [0usize, 2, 4, 7, 11];
     let kept = TermList::new(
@@ -682,10 +667,12 @@ fn a_preset_as_a_list_and_the_system_of_some_columns() {
         ));
     }
     // The linear stiffness of a preset has no name in a list.
-    let stiff = ModelForm::externally_forced(hb_solve::Forcing::Identified).with_linear_stiffness();
+    let stiff = ModelForm::externally_forced(hb_model::Forcing::Identified).with_linear_stiffness();
     assert!(matches!(
         stiff.term_list(&Polynomial::new(3).unwrap()),
-        Err(SolveError::InvalidForm { .. })
+        Err(hb_model::ModelError::Term(
+            hb_model::TermError::InvalidForm { .. }
+        ))
     ));
 }
 

@@ -1,10 +1,12 @@
 //! The weak form, the bootstrap and the noise correction: exact manufactured cases, the paper's
 //! data set, determinism, and the effect of the correction on a noisy simulated record.
+use circle_signal::SampleClock;
 use hb_basis::{BasisKind, Domain, Harmonic, Hat, Polynomial};
+use hb_model::{Forcing, Harmonics, IdentifiedModel, ModelForm};
+use hb_solve::{AssemblyError, FitModel, LstsqError};
 use hb_solve::{
-    BootstrapParams, Forcing, Harmonics, IdentifiedModel, IdentifyParams, ModelForm, NoiseCorrection,
-    QrSolver, ResampleBlock, SampleClock, SolveError, SvdSolver, WeakForm, assemble, assemble_weak,
-    bootstrap, estimate_noise_sigma, identify, identify_from_source,
+    BootstrapParams, IdentifyParams, NoiseCorrection, QrSolver, ResampleBlock, SolveError, SvdSolver,
+    WeakForm, assemble, assemble_weak, bootstrap, estimate_noise_sigma, identify, identify_from_source,
 };
 use pendulum_sim::observe::Encoder;
 use pendulum_sim::{Pendulum, SimulationConfig, Tolerances, simulate};
@@ -33,7 +35,7 @@ fn with_noise(x: &[f64], sigma: f64, seed: u64) -> Vec<f64> {
 /// the periodic response plus a decaying free oscillation, so that no window closes.
 fn linear_transient() -> (SampleClock, Vec<f64>, [f64; 4]) {
     let clock = SampleClock::new(0.5, 40).unwrap().with_start_time(0.37).unwrap();
-    let w = clock.forcing_frequency();
+    let w = clock.drive_angular_frequency();
     let (c, k, fc, fs) = (0.1 * w, 2.3 * w * w, -3.0 * w * w, 1.2 * w * w);
     // Particular solution X cos + Y sin of x'' + c x' + k x = −F_c cos − F_s sin.
     let (d, e) = (k - w * w, c * w);
@@ -148,7 +150,7 @@ fn unforced_pendulum_on_the_circle() {
         &SvdSolver::default(),
     )
     .unwrap();
-    let want = IdentifiedModel::<Harmonic>::from_pendulum(&pendulum).unwrap();
+    let want = hb_model::truth::pendulum_model::<Harmonic>(&pendulum).unwrap();
     for (c, w) in m.coefficients().iter().zip(want.coefficients()) {
         assert_eq!(c.name, w.name);
         let w = w.value;
@@ -388,7 +390,9 @@ fn noise_correction_needs_single_harmonics_on_the_circle() {
     let hat = Hat::new(8).unwrap();
     assert!(matches!(
         assemble_weak(&hat, x, &segments, &params, &WeakForm::default()),
-        Err(SolveError::NoiseCorrectionUnavailable { .. })
+        Err(SolveError::Assembly(
+            AssemblyError::NoiseCorrectionUnavailable { .. }
+        ))
     ));
     // Both assemblies apply it.
     let basis = Harmonic::new(2).unwrap();
@@ -427,18 +431,21 @@ fn bad_input_is_refused() {
     bad[45] = f64::NAN;
     assert!(matches!(
         assemble_weak(&basis, &bad, &segments, &params, &weak),
-        Err(SolveError::NonFiniteSample { index: 45, .. })
+        Err(SolveError::Assembly(AssemblyError::NonFiniteSample {
+            index: 45,
+            ..
+        }))
     ));
     // Too few windows for four unknowns.
     assert!(matches!(
         assemble_weak(&basis, &x, &segments[..0], &params, &weak),
-        Err(SolveError::TooFewOrbits { .. })
+        Err(SolveError::Lstsq(LstsqError::TooFewOrbits { .. }))
     ));
     // A window that runs past the record.
     segments[0] = common::segment(x.len() - 10, 3, 120, 0.0);
     assert!(matches!(
         assemble_weak(&basis, &x, &segments, &params, &weak),
-        Err(SolveError::BadSegment { segment: 0, .. })
+        Err(SolveError::Assembly(AssemblyError::BadSegment { segment: 0, .. }))
     ));
     // A model of another basis than the system.
     let system = assemble_weak(&basis, &x, &segments[1..], &params, &weak).unwrap();
@@ -449,6 +456,8 @@ fn bad_input_is_refused() {
             &system,
             &QrSolver::default()
         ),
-        Err(SolveError::ModelMismatch { .. })
+        Err(SolveError::Model(hb_model::ModelError::Io(
+            hb_model::ModelIoError::ModelMismatch { .. }
+        )))
     ));
 }

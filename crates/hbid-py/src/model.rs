@@ -6,7 +6,7 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use circle_signal::Domain;
-use hb_solve::{IdentifiedModel, MODEL_MAGIC};
+use hb_model::{IdentifiedModel, MODEL_MAGIC};
 use numpy::PyArray1;
 use pendulum_sim::{SimulationConfig, Tolerances, simulate};
 use pyo3::prelude::*;
@@ -40,7 +40,7 @@ pub fn model_info<'py>(py: Python<'py>, model: &[u8]) -> PyResult<Bound<'py, PyD
     )?;
     out.set_item("basis", model.basis().to_string())?;
     out.set_item("signal", model.domain().name())?;
-    out.set_item("forcing_frequency", model.forcing_frequency())?;
+    out.set_item("forcing_frequency", model.drive_angular_frequency())?;
     match model.summary() {
         Some(s) => {
             let summary = PyDict::new(py);
@@ -51,7 +51,7 @@ pub fn model_info<'py>(py: Python<'py>, model: &[u8]) -> PyResult<Bound<'py, PyD
             summary.set_item("whirling_segments", s.whirling_segments)?;
             summary.set_item("condition_number", s.condition)?;
             summary.set_item("residual_rms", s.residual_rms)?;
-            summary.set_item("forcing_period", s.clock.forcing_period())?;
+            summary.set_item("forcing_period", s.clock.drive_period())?;
             summary.set_item("sample_step", s.clock.step())?;
             out.set_item("summary", summary)?;
         }
@@ -98,7 +98,7 @@ pub fn model_load<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, Py
     let bytes = py
         .detach(|| std::fs::read(&path))
         .map_err(|e| crate::errors::raise(Kind::Model, format!("{}: {e}", path.display())))?;
-    let named = |e: hb_solve::SolveError| {
+    let named = |e: hb_model::ModelError| {
         crate::errors::raise(
             Kind::Model,
             format!("{}: {}", path.display(), crate::errors::chain(&e)),
@@ -136,7 +136,7 @@ pub fn model_simulate<'py>(
     wrapped: bool,
 ) -> PyResult<Arrays3<'py>> {
     let model = decode(model)?;
-    let w = model.forcing_frequency();
+    let w = model.drive_angular_frequency();
     let period = std::f64::consts::TAU / w;
     let p = samples_per_period
         .or_else(|| model.summary().and_then(|s| s.clock.whole_samples_per_period()))
@@ -147,7 +147,7 @@ pub fn model_simulate<'py>(
             )
         })?;
     let config = SimulationConfig::paper()
-        .with_forcing_period(period)
+        .with_drive_period(period)
         .and_then(|c| c.with_samples_per_period(p))
         .and_then(|c| c.with_samples(samples))
         .and_then(|c| c.with_initial(x0, v0))

@@ -172,7 +172,7 @@ fn bad_options_fail_cleanly_without_output() {
 
 /// The true coefficients of the paper's pendulum with the harmonic basis K = 1, by term name.
 fn pendulum_truth() -> Vec<(String, f64)> {
-    hb_solve::IdentifiedModel::<hb_basis::Harmonic>::from_pendulum(&pendulum_sim::Pendulum::paper())
+    hb_model::truth::pendulum_model::<hb_basis::Harmonic>(&pendulum_sim::Pendulum::paper())
         .unwrap()
         .coefficients()
         .iter()
@@ -444,7 +444,7 @@ fn identify_json_recovers_the_pendulum_and_saves_the_model() {
     assert!(v["orbits_used"].as_u64().unwrap() > 0 && v["rows"].as_u64().unwrap() > 7);
     assert!(v["condition_number"].as_f64().unwrap() >= 1.0);
     let saved = std::fs::read_to_string(&model_path).unwrap();
-    let model = hb_solve::IdentifiedModel::<hb_basis::BasisKind>::from_json(&saved).unwrap();
+    let model = hb_model::IdentifiedModel::<hb_basis::BasisKind>::from_json(&saved).unwrap();
     assert_eq!(model.damping(), v["coefficients"]["x'"].as_f64().unwrap());
 }
 
@@ -485,7 +485,7 @@ fn duffing_record(dir: &Path) -> PathBuf {
     }
     let period = std::f64::consts::TAU / 1.2;
     let cfg = pendulum_sim::SimulationConfig::paper()
-        .with_forcing_period(period)
+        .with_drive_period(period)
         .unwrap()
         .with_samples_per_period(50)
         .unwrap()
@@ -1749,7 +1749,7 @@ fn terms_choose_the_model_and_flow_into_json_and_saved_model() {
     }
     assert!(v["explained"].as_f64().unwrap() > 0.999);
     let saved = std::fs::read_to_string(&model_path).unwrap();
-    let model = hb_solve::IdentifiedModel::<hb_basis::BasisKind>::from_json(&saved).unwrap();
+    let model = hb_model::IdentifiedModel::<hb_basis::BasisKind>::from_json(&saved).unwrap();
     let saved_names: Vec<&str> = model.coefficients().iter().map(|c| c.name.as_str()).collect();
     assert_eq!(saved_names, names);
     // The table prints the same names.
@@ -1894,7 +1894,7 @@ fn select_keeps_exactly_the_true_terms_of_a_rig() {
         let (record, truth) = rig_for_selection(&dir, samples_per_period);
         let r = record.to_str().unwrap();
         let coefficients = truth["coefficients"].as_object().unwrap();
-        let library = hb_solve::TermList::parse(SELECT_LIBRARY).unwrap().names();
+        let library = hb_model::TermList::parse(SELECT_LIBRARY).unwrap().names();
         // The truth's nonzero terms, in the library's order; its extra terms are candidates too.
         let true_terms: Vec<&str> = library
             .iter()
@@ -1973,7 +1973,7 @@ fn select_keeps_exactly_the_true_terms_of_a_rig() {
             );
         }
         let saved = std::fs::read_to_string(&model_path).unwrap();
-        let model = hb_solve::IdentifiedModel::<hb_basis::BasisKind>::from_json(&saved).unwrap();
+        let model = hb_model::IdentifiedModel::<hb_basis::BasisKind>::from_json(&saved).unwrap();
         let saved_names: Vec<&str> = model.coefficients().iter().map(|c| c.name.as_str()).collect();
         assert_eq!(saved_names, true_terms);
         if samples_per_period != "25" {
@@ -2103,7 +2103,7 @@ fn select_json_shape_and_report() {
         "{text}"
     );
     let saved = std::fs::read_to_string(out_dir.join("model_windowed.json")).unwrap();
-    let model = hb_solve::IdentifiedModel::<hb_basis::BasisKind>::from_json(&saved).unwrap();
+    let model = hb_model::IdentifiedModel::<hb_basis::BasisKind>::from_json(&saved).unwrap();
     assert_eq!(model.coefficients().len(), 3);
 }
 

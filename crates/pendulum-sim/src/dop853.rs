@@ -3,7 +3,7 @@
 // Stage and component loops index several arrays in step; iterators would hide the formulas.
 #![allow(clippy::needless_range_loop)]
 
-use crate::SimError;
+use crate::error::SimError;
 use crate::tableau::{A, B, BHH, C, D, E5, STAGES, STAGES_EXT};
 
 /// A first-order system `y' = f(t, y)` of fixed size `N`.

@@ -17,8 +17,7 @@
 //!   (computed by multiplication, so no sample is lost or shifted by accumulated rounding), from
 //!   dense output;
 //! - [`InFrame`]: a system in a record's time unit and coordinate (`τ = 2π f_drive t` for a rig
-//!   driven at `f_drive` Hz), and [`TrueCoefficients`]: its equation in the identification's form
-//!   (module [`frame`]);
+//!   driven at `f_drive` Hz) (module [`frame`]);
 //! - [`poincare_section`]: the stroboscopic map, one state per forcing period;
 //! - [`largest_lyapunov`]: the largest Lyapunov exponent from the tangent-linear equation
 //!   `(δx, δv)' = (δv, ∂F/∂x δx + ∂F/∂v δv)`, renormalised every forcing period;
@@ -95,6 +94,7 @@ mod error;
 pub mod frame;
 mod machine;
 pub mod observe;
+mod oscillators;
 pub mod prediction;
 mod simulate;
 mod switching;
@@ -105,8 +105,9 @@ mod validate;
 pub use circle_signal::Domain;
 pub use dop853::{Dop853, OdeSystem, Stats, Tolerances};
 pub use error::SimError;
-pub use frame::{InFrame, RecordFrame, TrueCoefficients};
+pub use frame::{InFrame, RecordFrame};
 pub use machine::{DriveHarmonic, DriveHarmonics, Losses};
+pub use oscillators::{Duffing, Pendulum};
 pub use prediction::{
     DecayEnvelope, PredictionConfig, PredictionRecord, PredictionTimes, TimeSummary, WindowPrediction,
     decay_envelope, estimate_state, predict_window, prediction_starts, valid_prediction_times,
@@ -115,7 +116,7 @@ pub use simulate::{
     FirstOrder, LyapunovConfig, LyapunovEstimate, SimulationConfig, Tangent, Trajectory, largest_lyapunov,
     poincare_section, simulate, simulate_with_progress,
 };
-pub use system::{Branch, Duffing, Pendulum, SecondOrderSystem};
+pub use system::{Branch, SecondOrderSystem};
 pub use validate::{
     CheckConfig, ModelCheck, PeriodicOrbit, Seeds, ShootingConfig, Variational, check_model, energy_distance,
     flow_with_jacobian, periodic_orbits, section_energy_distance, whirling_fraction,

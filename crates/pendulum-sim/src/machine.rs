@@ -22,7 +22,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::SimError;
+use crate::error::SimError;
 use crate::system::Branch;
 
 /// Velocity-dependent losses `μ sign(x') + d x'|x'| + c₃ x'^3` on the left-hand side of an

@@ -45,7 +45,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 
-use crate::SimError;
+use crate::error::SimError;
 
 /// Where the bit errors' draws start in the encoder's ChaCha8 stream, in 32-bit words.
 const BIT_ERROR_WORD: u128 = 1 << 66;

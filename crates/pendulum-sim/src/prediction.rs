@@ -65,9 +65,10 @@ use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
 use crate::dop853::Tolerances;
+use crate::error::SimError;
 use crate::simulate::FirstOrder;
 use crate::switching::{Flow, OnMode};
-use crate::{SecondOrderSystem, SimError};
+use crate::system::SecondOrderSystem;
 
 /// Degree of the local polynomial that gives the state at a sample.
 const FIT_DEGREE: usize = 4;
@@ -608,7 +609,7 @@ pub fn valid_prediction_times<S: SecondOrderSystem + Sync>(
     Ok(PredictionTimes {
         windows,
         tolerance: config.tolerance * record.spread,
-        forcing_period: record.clock.forcing_period(),
+        forcing_period: record.clock.drive_period(),
         lyapunov,
     })
 }
@@ -772,7 +773,8 @@ pub fn decay_envelope<S: SecondOrderSystem>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{Pendulum, SimulationConfig, simulate};
+    use crate::oscillators::Pendulum;
+    use crate::simulate::{SimulationConfig, simulate};
 
     fn paper_record(samples: usize) -> (Vec<f64>, Vec<f64>, SampleClock) {
         let traj = simulate(

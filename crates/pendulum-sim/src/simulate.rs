@@ -3,8 +3,9 @@
 use std::f64::consts::TAU;
 
 use crate::dop853::{OdeSystem, Tolerances};
+use crate::error::SimError;
 use crate::switching::{Flow, OnMode, Switched};
-use crate::{SecondOrderSystem, SimError};
+use crate::system::SecondOrderSystem;
 
 /// A second-order system seen as the first-order system `(x, v)' = (v, F(t, x, v))`.
 #[derive(Debug, Clone, Copy)]
@@ -102,7 +103,7 @@ impl TryFrom<SimulationConfigRaw> for SimulationConfig {
             .with_samples_per_period(raw.samples_per_period)?
             .with_transient_periods(raw.transient_periods)
             .with_initial(raw.initial[0], raw.initial[1])?
-            .with_forcing_period(raw.forcing_period)?
+            .with_drive_period(raw.forcing_period)?
             .with_phase(raw.phase)?
             .with_tolerances(raw.tolerances);
         match raw.sample_step {
@@ -226,7 +227,7 @@ impl SimulationConfig {
     }
 
     /// The forcing period `T` in the system's time unit (`2π` for the paper's non-dimensional time).
-    pub fn with_forcing_period(mut self, period: f64) -> Result<Self, SimError> {
+    pub fn with_drive_period(mut self, period: f64) -> Result<Self, SimError> {
         self.forcing_period = checked_period(period)?;
         Ok(self)
     }
@@ -272,7 +273,7 @@ impl SimulationConfig {
         self.initial
     }
     /// Forcing period.
-    pub fn forcing_period(&self) -> f64 {
+    pub fn drive_period(&self) -> f64 {
         self.forcing_period
     }
     /// Tolerances.
@@ -435,7 +436,7 @@ impl TryFrom<LyapunovConfigRaw> for LyapunovConfig {
             .with_transient_periods(raw.transient_periods)
             .with_periods(raw.periods)?
             .with_initial(raw.initial[0], raw.initial[1])?
-            .with_forcing_period(raw.forcing_period)?
+            .with_drive_period(raw.forcing_period)?
             .with_tolerances(raw.tolerances))
     }
 }
@@ -492,7 +493,7 @@ impl LyapunovConfig {
         Ok(self)
     }
     /// Forcing period `T` (positive).
-    pub fn with_forcing_period(mut self, period: f64) -> Result<Self, SimError> {
+    pub fn with_drive_period(mut self, period: f64) -> Result<Self, SimError> {
         self.forcing_period = checked_period(period)?;
         Ok(self)
     }
@@ -506,7 +507,7 @@ impl LyapunovConfig {
         self.initial
     }
     /// The forcing period.
-    pub(crate) fn forcing_period(&self) -> f64 {
+    pub(crate) fn drive_period(&self) -> f64 {
         self.forcing_period
     }
 }
@@ -593,7 +594,7 @@ pub fn largest_lyapunov<S: SecondOrderSystem>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{Duffing, Pendulum};
+    use crate::oscillators::{Duffing, Pendulum};
 
     /// The classic fourth-order Runge–Kutta method with a fixed step, from `(0, y0)` to each of
     /// `times` (increasing), landing exactly on each: an integrator independent of DOP853.

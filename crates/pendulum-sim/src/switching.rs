@@ -24,7 +24,8 @@
 //! zeroed (`diag(1, 0)`); at a release they are continuous.
 
 use crate::dop853::{Dop853, OdeSystem, Tolerances};
-use crate::{Branch, SecondOrderSystem, SimError};
+use crate::error::SimError;
+use crate::system::{Branch, SecondOrderSystem};
 
 /// Where a system is.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -393,10 +394,17 @@ mod tests {
 
     use proptest::prelude::*;
 
-    use crate::{
-        DriveHarmonic, DriveHarmonics, Duffing, InFrame, Losses, Pendulum, RecordFrame, SimulationConfig,
-        Tolerances, flow_with_jacobian, simulate,
-    };
+    use crate::dop853::Tolerances;
+
+    use crate::frame::{InFrame, RecordFrame};
+
+    use crate::machine::{DriveHarmonic, DriveHarmonics, Losses};
+
+    use crate::oscillators::{Duffing, Pendulum};
+
+    use crate::simulate::{SimulationConfig, simulate};
+
+    use crate::validate::flow_with_jacobian;
 
     use super::*;
 
@@ -600,7 +608,7 @@ mod tests {
         let seconds = simulate(
             &InFrame::new(rig, frame),
             &SimulationConfig::paper()
-                .with_forcing_period(frame.forcing_period())
+                .with_drive_period(frame.drive_period())
                 .unwrap()
                 .with_sample_step(0.01)
                 .unwrap()

@@ -8,12 +8,13 @@ use std::f64::consts::{PI, TAU};
 use nalgebra::{Matrix2, Vector2};
 
 use crate::dop853::{OdeSystem, Tolerances};
+use crate::error::SimError;
 use crate::simulate::checked_period;
-use crate::switching::{Flow, OnMode, Switched};
-use crate::{
-    LyapunovConfig, LyapunovEstimate, SecondOrderSystem, SimError, SimulationConfig, largest_lyapunov,
-    poincare_section,
+use crate::simulate::{
+    LyapunovConfig, LyapunovEstimate, SimulationConfig, largest_lyapunov, poincare_section,
 };
+use crate::switching::{Flow, OnMode, Switched};
+use crate::system::SecondOrderSystem;
 
 /// A second-order system with its variational equation for two tangent vectors: the state is
 /// `(x, v, Φ11, Φ21, Φ12, Φ22)`, the columns of the fundamental matrix `Φ` stacked.
@@ -133,7 +134,7 @@ impl TryFrom<ShootingConfigRaw> for ShootingConfig {
             return Err(invalid("max iterations", 0.0, "must be at least 1"));
         }
         let config = Self::default()
-            .with_forcing_period(raw.forcing_period)?
+            .with_drive_period(raw.forcing_period)?
             .with_periods(raw.periods)?
             .with_space(raw.space)
             .with_tolerances(raw.tolerances);
@@ -199,7 +200,7 @@ fn invalid(name: &'static str, value: f64, why: &'static str) -> SimError {
 
 impl ShootingConfig {
     /// The forcing period `T` (positive).
-    pub fn with_forcing_period(mut self, period: f64) -> Result<Self, SimError> {
+    pub fn with_drive_period(mut self, period: f64) -> Result<Self, SimError> {
         self.forcing_period = checked_period(period)?;
         Ok(self)
     }
@@ -467,8 +468,8 @@ struct CheckConfigRaw {
 impl TryFrom<CheckConfigRaw> for CheckConfig {
     type Error = SimError;
     fn try_from(raw: CheckConfigRaw) -> Result<Self, SimError> {
-        let period = raw.section.forcing_period();
-        for other in [raw.lyapunov.forcing_period(), raw.shooting.forcing_period] {
+        let period = raw.section.drive_period();
+        for other in [raw.lyapunov.drive_period(), raw.shooting.forcing_period] {
             if other != period {
                 return Err(invalid(
                     "forcing period",
@@ -519,13 +520,13 @@ impl CheckConfig {
     ) -> Result<Self, SimError> {
         Ok(Self {
             section: SimulationConfig::paper()
-                .with_forcing_period(forcing_period)?
+                .with_drive_period(forcing_period)?
                 .with_samples(points)?,
             lyapunov: LyapunovConfig::default()
-                .with_forcing_period(forcing_period)?
+                .with_drive_period(forcing_period)?
                 .with_periods(lyapunov_periods)?,
             shooting: ShootingConfig::default()
-                .with_forcing_period(forcing_period)?
+                .with_drive_period(forcing_period)?
                 .with_space(space),
             max_seeds: 64,
         })
@@ -602,7 +603,7 @@ pub fn check_model<S: SecondOrderSystem + Sync>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::Pendulum;
+    use crate::oscillators::Pendulum;
 
     #[test]
     fn newton_converges_to_the_known_period_one_orbits() {

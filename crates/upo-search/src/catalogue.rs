@@ -1,7 +1,7 @@
 //! Distinct orbits among close-return segments.
 
-use crate::Segment;
 use crate::metric::Distance;
+use circle_signal::Segment;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 

@@ -1,8 +1,9 @@
 //! The close-return search: parameters, metric, and the scan over periods.
 
 use crate::catalogue::{Catalogue, group};
+use crate::error::UpoError;
 use crate::metric::{AnyCircle, Distance, Line, WrappedCircle};
-use crate::{Domain, OrbitSource, SampleClock, Segment, UpoError};
+use circle_signal::{Domain, OrbitSource, SampleClock, Segment};
 use rayon::prelude::*;
 use std::f64::consts::{PI, TAU};
 use std::ops::Range;

@@ -2,7 +2,9 @@
 
 use std::ops::Range;
 
-use crate::{Domain, OrbitSource, SampleClock, Segment, UpoError};
+use circle_signal::{Domain, OrbitSource, SampleClock, Segment};
+
+use crate::error::UpoError;
 
 /// Windows of `k` forcing periods laid over the whole record, periodic or not.
 ///

@@ -22,6 +22,9 @@ pub enum PipelineError {
     /// The identification parameters.
     #[error(transparent)]
     Solve(#[from] hb_solve::SolveError),
+    /// The model's form or terms.
+    #[error(transparent)]
+    Model(#[from] hb_model::ModelError),
     /// The simulation of a model, or the validation's options.
     #[error(transparent)]
     Simulation(#[from] pendulum_sim::SimError),

@@ -489,7 +489,7 @@ impl ValidationOptions {
     fn check_config(&self, record: &Record<'_>) -> Result<CheckConfig, PipelineError> {
         let (x0, v0) = self.initial_state(record);
         Ok(CheckConfig::new(
-            record.clock.forcing_period(),
+            record.clock.drive_period(),
             record.domain,
             self.section_points,
             self.lyapunov_periods,
@@ -507,7 +507,7 @@ impl ValidationOptions {
         let samples = periods.saturating_mul(p).min(record.samples.len().max(50 * p));
         Ok(Some(
             SimulationConfig::paper()
-                .with_forcing_period(record.clock.forcing_period())?
+                .with_drive_period(record.clock.drive_period())?
                 .with_samples_per_period(p)?
                 .with_samples(samples)?
                 .with_initial(x0, v0)?,
@@ -780,9 +780,8 @@ impl<'a> Pipeline<'a> {
         // distance between its two halves: what one attractor gives.
         let record_section = comparison.as_ref().map(|_| {
             let clock = record.clock;
-            let offset = ((-clock.start_time()).rem_euclid(clock.forcing_period()) / clock.step()).round()
-                as usize
-                % p;
+            let offset =
+                ((-clock.start_time()).rem_euclid(clock.drive_period()) / clock.step()).round() as usize % p;
             let (points, embedded) = delay_section(record.samples, p, offset, delay, domain);
             let half = embedded.len() / 2;
             let floor = energy_distance(&embedded[..half], &embedded[half..]);

@@ -5,11 +5,12 @@ use std::fmt;
 
 use circle_signal::{SampleClock, Segment};
 use hb_basis::BasisKind;
+use hb_model::{Forcing, Harmonics, IdentifiedModel, MeasuredDrive, ModelForm, TermList};
 use hb_solve::{
-    Assembly, Bootstrap, BootstrapParams, DriveSamples, EXPLAINED_WARNING_ORBITS, EXPLAINED_WARNING_WINDOWS,
-    FitQuality, Forcing, HELD_OUT_FOLDS, HarmonicBalance, Harmonics, IdentifiedModel, IdentifyParams,
-    LinearSystem, LstsqSolver, ModelForm, NoiseCorrection, QrSolver, SelectParams, Selection, SolveError,
-    TermList, WeakForm, bootstrap_or_reason, build_system, fit_quality, select_terms,
+    Assembly, Bootstrap, BootstrapParams, EXPLAINED_WARNING_ORBITS, EXPLAINED_WARNING_WINDOWS, FitModel,
+    FitQuality, HELD_OUT_FOLDS, HarmonicBalance, IdentifyParams, LinearSystem, LstsqSolver, NoiseCorrection,
+    QrSolver, SelectParams, Selection, SolveError, WeakForm, bootstrap_or_reason, build_system, fit_quality,
+    select_terms,
 };
 
 use super::PipelineError;
@@ -113,7 +114,7 @@ pub struct ModelSpec {
     bootstrap: Option<BootstrapParams>,
     weak: WeakForm,
     selection: Option<SelectParams>,
-    drive: Option<DriveSamples>,
+    drive: Option<MeasuredDrive>,
 }
 
 impl ModelSpec {
@@ -180,9 +181,9 @@ impl ModelSpec {
     }
 
     /// The samples of the measured drive `p` of the form's terms, on the record's grid (sample
-    /// `n` of both at the same time; see [`hb_solve::DriveSamples`]). Terms in `p` are balanced by
+    /// `n` of both at the same time; see [`hb_model::MeasuredDrive`]). Terms in `p` are balanced by
     /// [`Method::Windowed`] only.
-    pub fn with_drive_samples(mut self, drive: DriveSamples) -> Self {
+    pub fn with_measured_drive(mut self, drive: MeasuredDrive) -> Self {
         self.drive = Some(drive);
         self
     }
@@ -208,7 +209,7 @@ impl ModelSpec {
             .harmonics(harmonics)
             .noise_correction(self.noise);
         if let Some(drive) = self.drive {
-            builder = builder.drive_samples(drive);
+            builder = builder.measured_drive(drive);
         }
         let params = builder.build()?;
         Ok(Setup {
@@ -303,8 +304,8 @@ impl Setup {
     /// the terms when asked (then only the kept columns are solved), solves, and bootstraps.
     ///
     /// Errors: the assembly's, the solver's and the bootstrap's; with a selection also
-    /// [`SolveError::TooFewOrbits`] for fewer than two segments and
-    /// [`SolveError::SelectionUndetermined`] when a fold held out leaves the library
+    /// [`SolveError::Lstsq(LstsqError::TooFewOrbits)`] for fewer than two segments and
+    /// [`SolveError::Select(SelectError::SelectionUndetermined)`] when a fold held out leaves the library
     /// undetermined.
     pub fn identify(&self, signal: &[f64], segments: &[Segment]) -> Result<Identification, SolveError> {
         self.identify_with_progress(signal, segments, |_| {})
@@ -408,8 +409,8 @@ impl Setup {
             .harmonics(self.params.harmonics())
             .noise_correction(self.params.noise_correction())
             .velocity_harmonics(self.params.velocity_harmonics());
-        if let Some(drive) = self.params.drive_samples() {
-            builder = builder.drive_samples(drive.clone());
+        if let Some(drive) = self.params.measured_drive() {
+            builder = builder.measured_drive(drive.clone());
         }
         let params = builder.build()?;
         Ok((kept, params, selection))
@@ -424,6 +425,7 @@ mod tests {
     use upo_search::{CloseReturns, Windows};
 
     use super::*;
+    use hb_solve::LstsqError;
 
     fn record() -> (Vec<f64>, SampleClock) {
         let config = SimulationConfig::paper().with_samples(4_000).unwrap();
@@ -534,7 +536,7 @@ mod tests {
             );
             let selection = id.selection.as_ref().unwrap();
             assert_eq!(selection.library.len(), 11);
-            assert_eq!(selection.library.names(), hb_solve::term_names(&basis, &library));
+            assert_eq!(selection.library.names(), hb_model::term_names(&basis, &library));
             let kept = ["x'", "sin(t)*cos(x)", "sin(x)"];
             assert_eq!(selection.kept.names(), kept, "{method}: {:?}", selection.outcome);
             assert_eq!(selection.outcome.dropped.len(), 8);
@@ -571,7 +573,7 @@ mod tests {
         assert!(setup.selection().is_some());
         assert!(matches!(
             setup.identify(&x, &windows[..1]),
-            Err(SolveError::TooFewOrbits { .. })
+            Err(SolveError::Lstsq(LstsqError::TooFewOrbits { .. }))
         ));
         let line = BasisKind::from(hb_basis::Polynomial::new(3).unwrap());
         let stiff = ModelForm::externally_forced(Forcing::Identified).with_linear_stiffness();
@@ -580,7 +582,9 @@ mod tests {
                 .with_form(stiff)
                 .with_selection(SelectParams::default())
                 .setup(&clock),
-            Err(PipelineError::Solve(SolveError::InvalidForm { .. }))
+            Err(PipelineError::Model(hb_model::ModelError::Term(
+                hb_model::TermError::InvalidForm { .. }
+            )))
         ));
     }
 
@@ -589,7 +593,7 @@ mod tests {
         let basis = BasisKind::from(Harmonic::new(1).unwrap());
         assert!(matches!(
             ModelSpec::new(Method::Upo, basis).with_harmonics(Harmonics::Fixed(0)),
-            Err(PipelineError::Solve(_))
+            Err(PipelineError::Model(_))
         ));
         let spec =
             ModelSpec::new(Method::Upo, basis).with_noise_correction(NoiseCorrection::Given { sigma: -1.0 });

@@ -7,8 +7,8 @@ use std::error::Error;
 
 /// The paper's pendulum, x'' + 0.03 x' + (1/0.8333²) sin x − 1.52 sin t cos x = 0, as a model on
 /// the harmonic basis K = 1 (method notes section 1): the truth identified models are compared with.
-pub fn truth() -> hb_solve::IdentifiedModel<hb_basis::Harmonic> {
-    hb_solve::IdentifiedModel::from_pendulum(&pendulum_sim::Pendulum::paper()).unwrap()
+pub fn truth() -> hb_model::IdentifiedModel<hb_basis::Harmonic> {
+    hb_model::truth::pendulum_model(&pendulum_sim::Pendulum::paper()).unwrap()
 }
 
 /// The shared fixture `paper_dataset.csv`, beside the repository.
@@ -42,8 +42,8 @@ pub fn read_paper_dataset() -> (f64, Vec<f64>) {
 
 /// The clock of the paper's data set: non-dimensional time, 25 samples per forcing period, first
 /// sample at `t0`.
-pub fn paper_clock(t0: f64) -> hb_solve::SampleClock {
-    hb_solve::SampleClock::nondimensional(25)
+pub fn paper_clock(t0: f64) -> circle_signal::SampleClock {
+    circle_signal::SampleClock::nondimensional(25)
         .unwrap()
         .with_start_time(t0)
         .unwrap()

@@ -5,9 +5,10 @@ use std::path::PathBuf;
 use anyhow::Context;
 use clap::Args;
 use hb_basis::BasisKind;
+use hb_model::{IdentifiedModel, TermList};
 use hb_pipeline::pipeline::{Method, TermSelection};
 use hb_pipeline::{ForcingTerms, IdentifyOptions, IdentifyReport, IdentifyRequest, SolverKind};
-use hb_solve::{BootstrapParams, IdentifiedModel, NoiseCorrection, SelectParams, TermList, WeakForm};
+use hb_solve::{BootstrapParams, NoiseCorrection, SelectParams, WeakForm};
 use upo_search::Windows;
 
 use super::data::{InputArgs, SearchArgs};

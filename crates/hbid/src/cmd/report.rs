@@ -226,7 +226,7 @@ fn write_report(
         r,
         "{}; forcing period {}.\n",
         data.summary(),
-        data.clock.forcing_period()
+        data.clock.drive_period()
     )?;
     // The summary above already says whether the record was resampled.
     for note in notes {
@@ -374,7 +374,7 @@ fn write_report(
         std::fs::write(out.join(&model_file), res.ident.model.to_json()?).context("saving a model")?;
         writeln!(
             r,
-            "Saved as `{model_file}` (load it with `hb_solve::IdentifiedModel::from_json`).\n"
+            "Saved as `{model_file}` (load it with `hb_model::IdentifiedModel::from_json`).\n"
         )?;
     }
 
@@ -473,7 +473,7 @@ fn write_report(
 /// held-out unexplained fraction without and with each.
 fn selection_section(
     r: &mut String,
-    model: &hb_solve::IdentifiedModel,
+    model: &hb_model::IdentifiedModel,
     selection: &TermSelection,
 ) -> anyhow::Result<()> {
     let outcome = &selection.outcome;

@@ -57,11 +57,11 @@
 //!    there. After each stage, survivors that met in one basin are merged, and those whose `ρ`
 //!    exceeds [`prune_ratio`](DriveSearch::prune_ratio) times the best are dropped.
 //! 4. **Choice.** The survivor with the smallest `ρ` on the whole record wins, unless it sits on an
-//!    end of the range ([`SolveError::DrivePeriodAtRangeEdge`]) or its `ρ` is not well below the
+//!    end of the range ([`DriveSearchError::DrivePeriodAtRangeEdge`]) or its `ρ` is not well below the
 //!    scan's median ([`DriveEstimate::contrast`] above [`DriveSearch::max_contrast`]): a range that
 //!    misses the truth has no deep minimum, only side lobes, and is reported as
-//!    [`SolveError::DrivePeriodAtRangeEdge`] when the scan's best candidate is an end of the range
-//!    (a truth just outside it) and [`SolveError::DrivePeriodNotFound`] otherwise, never as a
+//!    [`DriveSearchError::DrivePeriodAtRangeEdge`] when the scan's best candidate is an end of the range
+//!    (a truth just outside it) and [`DriveSearchError::DrivePeriodNotFound`] otherwise, never as a
 //!    silent number.
 //! 5. **Polish** on the winner's own windows (above), and the uncertainty there.
 //!
@@ -72,7 +72,7 @@
 //! `sin(W t) = 2 sin(W t / 2) cos(W t / 2)`, a product its columns do not span, and one at `T / 2`
 //! would need `sin(W t)` from `cos(2 W t)`, `sin(2 W t)`: neither fits the true equation, however
 //! the coefficients are chosen, unless every true drive coefficient is zero (a record without a
-//! drive, whose residual does not depend on `W`: no contrast, [`SolveError::DrivePeriodNotFound`]).
+//! drive, whose residual does not depend on `W`: no contrast, [`DriveSearchError::DrivePeriodNotFound`]).
 //! Near `2T` and `T / 2` there are local minima nonetheless (the response itself has components
 //! there), which is why several survivors are carried to the whole record and compared there,
 //! on common test functions that reach above the true frequency: the true period's residual is at
@@ -101,11 +101,12 @@ use hb_basis::{Basis, Domain, FourierPlan};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::RankTolerance;
-use crate::lstsq::{on_factor_pool, triangular_factor};
-use crate::terms::{Column, check_form, column_families, columns};
-use crate::weak::{Tables, dot};
-use crate::{Forcing, Harmonics, ModelForm, SolveError, WeakForm};
+use hb_model::form::{check_form, column_families};
+use hb_model::{Column, Forcing, Harmonics, ModelForm, columns};
+use hb_solve::kernel::{Tables, dot, on_factor_pool, triangular_factor};
+use hb_solve::{RankTolerance, WeakForm};
+
+use crate::error::DriveSearchError;
 
 /// Fewest samples per forcing period a candidate may have.
 pub const MIN_SAMPLES_PER_PERIOD: f64 = 4.0;
@@ -126,25 +127,25 @@ struct PeriodRangeRaw {
 }
 
 impl TryFrom<PeriodRangeRaw> for PeriodRange {
-    type Error = SolveError;
+    type Error = DriveSearchError;
 
-    fn try_from(raw: PeriodRangeRaw) -> Result<Self, SolveError> {
+    fn try_from(raw: PeriodRangeRaw) -> Result<Self, DriveSearchError> {
         Self::periods(raw.shortest, raw.longest)
     }
 }
 
 impl PeriodRange {
     /// Periods from `shortest` to `longest` (finite, `0 < shortest < longest`).
-    pub fn periods(shortest: f64, longest: f64) -> Result<Self, SolveError> {
+    pub fn periods(shortest: f64, longest: f64) -> Result<Self, DriveSearchError> {
         if !(shortest.is_finite() && shortest > 0.0) {
-            return Err(SolveError::InvalidParameter {
+            return Err(DriveSearchError::InvalidParameter {
                 name: "shortest forcing period",
                 value: shortest,
                 why: "must be positive and finite",
             });
         }
         if !(longest.is_finite() && longest > shortest) {
-            return Err(SolveError::InvalidParameter {
+            return Err(DriveSearchError::InvalidParameter {
                 name: "longest forcing period",
                 value: longest,
                 why: "must be finite and longer than the shortest",
@@ -155,16 +156,16 @@ impl PeriodRange {
 
     /// Frequencies from `lowest` to `highest` in cycles per time unit (hertz for a record in
     /// seconds): periods `1 / highest` to `1 / lowest`.
-    pub fn frequencies(lowest: f64, highest: f64) -> Result<Self, SolveError> {
+    pub fn frequencies(lowest: f64, highest: f64) -> Result<Self, DriveSearchError> {
         if !(lowest.is_finite() && lowest > 0.0) {
-            return Err(SolveError::InvalidParameter {
+            return Err(DriveSearchError::InvalidParameter {
                 name: "lowest forcing frequency",
                 value: lowest,
                 why: "must be positive and finite",
             });
         }
         if !(highest.is_finite() && highest > lowest) {
-            return Err(SolveError::InvalidParameter {
+            return Err(DriveSearchError::InvalidParameter {
                 name: "highest forcing frequency",
                 value: highest,
                 why: "must be finite and higher than the lowest",
@@ -174,9 +175,9 @@ impl PeriodRange {
     }
 
     /// Periods from `period / factor` to `period * factor` (`factor > 1`).
-    pub fn around(period: f64, factor: f64) -> Result<Self, SolveError> {
+    pub fn around(period: f64, factor: f64) -> Result<Self, DriveSearchError> {
         if !(factor.is_finite() && factor > 1.0) {
-            return Err(SolveError::InvalidParameter {
+            return Err(DriveSearchError::InvalidParameter {
                 name: "forcing period range factor",
                 value: factor,
                 why: "must be finite and greater than 1",
@@ -237,9 +238,9 @@ struct DriveSearchRaw {
 }
 
 impl TryFrom<DriveSearchRaw> for DriveSearch {
-    type Error = SolveError;
+    type Error = DriveSearchError;
 
-    fn try_from(raw: DriveSearchRaw) -> Result<Self, SolveError> {
+    fn try_from(raw: DriveSearchRaw) -> Result<Self, DriveSearchError> {
         DriveSearchBuilder {
             params: DriveSearch {
                 range: raw.range,
@@ -381,7 +382,7 @@ impl DriveSearch {
     }
 
     /// Largest [`DriveEstimate::contrast`] accepted: a winner whose residual is not this much
-    /// below the scan's median is [`SolveError::DrivePeriodNotFound`].
+    /// below the scan's median is [`DriveSearchError::DrivePeriodNotFound`].
     pub fn max_contrast(&self) -> f64 {
         self.max_contrast
     }
@@ -461,11 +462,11 @@ impl DriveSearchBuilder {
     }
 
     /// Validates and builds.
-    pub fn build(self) -> Result<DriveSearch, SolveError> {
+    pub fn build(self) -> Result<DriveSearch, DriveSearchError> {
         let p = self.params;
         let count = |name: &'static str, value: usize, min: usize, why: &'static str| {
             if value < min {
-                Err(SolveError::InvalidParameter {
+                Err(DriveSearchError::InvalidParameter {
                     name,
                     value: value as f64,
                     why,
@@ -476,7 +477,7 @@ impl DriveSearchBuilder {
         };
         count("window periods", p.window_periods, 1, "must be at least 1")?;
         if p.scan_periods <= p.window_periods {
-            return Err(SolveError::InvalidParameter {
+            return Err(DriveSearchError::InvalidParameter {
                 name: "scan periods",
                 value: p.scan_periods as f64,
                 why: "must exceed the window length in periods",
@@ -487,28 +488,33 @@ impl DriveSearchBuilder {
         count("survivors", p.survivors, 1, "must be at least 1")?;
         count("iterations", p.max_iterations, 1, "must be at least 1")?;
         if p.prune_ratio.is_nan() || p.prune_ratio < 1.0 {
-            return Err(SolveError::InvalidParameter {
+            return Err(DriveSearchError::InvalidParameter {
                 name: "prune ratio",
                 value: p.prune_ratio,
                 why: "must be at least 1 (infinite keeps every survivor)",
             });
         }
         if p.max_contrast.is_nan() || p.max_contrast <= 0.0 {
-            return Err(SolveError::InvalidParameter {
+            return Err(DriveSearchError::InvalidParameter {
                 name: "largest contrast",
                 value: p.max_contrast,
                 why: "must be positive (infinite accepts any winner)",
             });
         }
         if !(1e-15..=1e-3).contains(&p.tolerance) {
-            return Err(SolveError::InvalidParameter {
+            return Err(DriveSearchError::InvalidParameter {
                 name: "period tolerance",
                 value: p.tolerance,
                 why: "must lie in [1e-15, 1e-3] (relative)",
             });
         }
         Ok(DriveSearch {
-            harmonics: p.harmonics.validate()?,
+            harmonics: p.harmonics.validate().map_err(|e| match e {
+                hb_model::ModelError::InvalidParameter { name, value, why } => {
+                    DriveSearchError::InvalidParameter { name, value, why }
+                }
+                other => DriveSearchError::Model(other),
+            })?,
             ..p
         })
     }
@@ -608,7 +614,7 @@ impl DriveEstimate {
 
     /// The sampling clock of a record with this forcing period, step `step` and first sample at
     /// `start_time`.
-    pub fn clock(&self, step: f64, start_time: f64) -> Result<SampleClock, SolveError> {
+    pub fn clock(&self, step: f64, start_time: f64) -> Result<SampleClock, DriveSearchError> {
         Ok(SampleClock::from_step(self.period, step)?.with_start_time(start_time)?)
     }
 }
@@ -622,14 +628,21 @@ impl DriveEstimate {
 /// considered.
 ///
 /// Errors: a record of fewer than 16 samples, a non-finite sample, or no bin in the band.
-pub fn dominant_period(x: &[f64], step: f64, domain: Domain, min_periods: usize) -> Result<f64, SolveError> {
+pub fn dominant_period(
+    x: &[f64],
+    step: f64,
+    domain: Domain,
+    min_periods: usize,
+) -> Result<f64, DriveSearchError> {
     let n = x.len();
     if n < 16 {
-        return Err(SolveError::RecordTooShort {
-            what: "the dominant period",
-            len: n,
-            needed: 16,
-        });
+        return Err(DriveSearchError::Solve(hb_solve::SolveError::Assembly(
+            hb_solve::AssemblyError::RecordTooShort {
+                what: "the dominant period",
+                len: n,
+                needed: 16,
+            },
+        )));
     }
     check_step(step)?;
     check_finite(x)?;
@@ -673,11 +686,13 @@ pub fn dominant_period(x: &[f64], step: f64, domain: Domain, min_periods: usize)
     let first = min_periods.max(1);
     let last = n / 2;
     if first + 1 >= last {
-        return Err(SolveError::RecordTooShort {
-            what: "the dominant period",
-            len: n,
-            needed: 2 * (first + 2),
-        });
+        return Err(DriveSearchError::Solve(hb_solve::SolveError::Assembly(
+            hb_solve::AssemblyError::RecordTooShort {
+                what: "the dominant period",
+                len: n,
+                needed: 2 * (first + 2),
+            },
+        )));
     }
     let (j, _) = (first..last).fold((first, -1.0), |best, j| {
         if power[j] > best.1 { (j, power[j]) } else { best }
@@ -710,14 +725,16 @@ pub fn dominant_period(x: &[f64], step: f64, domain: Domain, min_periods: usize)
 /// circle, and a polynomial with an identified forcing on the line. The form must have a drive term
 /// (parametric terms or an external forcing).
 ///
-/// Errors: [`SolveError::NoDriveTerm`], [`SolveError::DomainMismatch`],
-/// [`SolveError::DriveRangeUnfit`] (a range the record cannot resolve),
-/// [`SolveError::DrivePeriodAtRangeEdge`] (the best period on an end of the range), and the
+/// Errors: [`DriveSearchError::NoDriveTerm`], a record on the other domain than the basis
+/// ([`hb_solve::AssemblyError::DomainMismatch`]),
+/// [`DriveSearchError::DriveRangeUnfit`] (a range the record cannot resolve),
+/// [`DriveSearchError::DrivePeriodAtRangeEdge`] (the best period on an end of the range), and the
 /// typed errors of bad samples, steps and rank-deficient systems.
 ///
 /// ```
 /// use hb_basis::Polynomial;
-/// use hb_solve::{DriveSearch, Forcing, ModelForm, PeriodRange, estimate_forcing_period};
+/// use hb_drive::{DriveSearch, PeriodRange, estimate_forcing_period};
+/// use hb_model::{Forcing, ModelForm};
 /// use circle_signal::Domain;
 ///
 /// // x'' + 0.1 x' + 2 x = cos(W t) with a decaying free oscillation added; W = 2π / 1.37.
@@ -735,7 +752,7 @@ pub fn dominant_period(x: &[f64], step: f64, domain: Domain, min_periods: usize)
 ///     .collect();
 /// let search = DriveSearch::builder().range(PeriodRange::periods(1.0, 2.0)?).build()?;
 /// let form = ModelForm::externally_forced(Forcing::Identified);
-/// let found = estimate_forcing_period(&x, h, 0.3, Domain::Line, &search, &Polynomial::new(1)?, &form, |_, _| {})?;
+/// let found = estimate_forcing_period(&x, h, 0.3, Domain::Line, &search, &Polynomial::new(1)?, &form, &mut |_, _| {})?;
 /// assert!((found.period / 1.37 - 1.0).abs() < 1e-8);
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
@@ -749,20 +766,22 @@ pub fn estimate_forcing_period<B: Basis + ?Sized>(
     basis: &B,
     form: &ModelForm,
     mut progress: impl FnMut(usize, usize),
-) -> Result<DriveEstimate, SolveError> {
+) -> Result<DriveEstimate, DriveSearchError> {
     check_step(step)?;
     if !start_time.is_finite() {
-        return Err(SolveError::InvalidParameter {
+        return Err(DriveSearchError::InvalidParameter {
             name: "start time",
             value: start_time,
             why: "must be finite",
         });
     }
     if basis.domain() != domain {
-        return Err(SolveError::DomainMismatch {
-            record: domain,
-            basis: basis.domain(),
-        });
+        return Err(DriveSearchError::Solve(hb_solve::SolveError::Assembly(
+            hb_solve::AssemblyError::DomainMismatch {
+                record: domain,
+                basis: basis.domain(),
+            },
+        )));
     }
     let form = form.clone().validate()?;
     check_form(domain, &form)?;
@@ -781,7 +800,7 @@ pub fn estimate_forcing_period<B: Basis + ?Sized>(
                 (dominant / below).max(min_period),
                 (dominant * above).min(max_period),
             );
-            let range = PeriodRange::periods(lo, hi).map_err(|_| SolveError::DriveRangeUnfit {
+            let range = PeriodRange::periods(lo, hi).map_err(|_| DriveSearchError::DriveRangeUnfit {
                 shortest: dominant / below,
                 longest: dominant * above,
                 min_period,
@@ -796,7 +815,7 @@ pub fn estimate_forcing_period<B: Basis + ?Sized>(
         }
     };
     if range.shortest < min_period || range.longest > max_period {
-        return Err(SolveError::DriveRangeUnfit {
+        return Err(DriveSearchError::DriveRangeUnfit {
             shortest: range.shortest,
             longest: range.longest,
             min_period,
@@ -838,7 +857,7 @@ pub fn estimate_forcing_period<B: Basis + ?Sized>(
                 let design = problem.design(common, Some(n0 * t))?;
                 Ok(problem.evaluate(&design, TAU / t)?.normalised())
             })
-            .collect::<Result<Vec<f64>, SolveError>>()?;
+            .collect::<Result<Vec<f64>, DriveSearchError>>()?;
         scan.extend(
             chunk
                 .iter()
@@ -908,7 +927,7 @@ pub fn estimate_forcing_period<B: Basis + ?Sized>(
 
     // 4. The best on the whole record, unless it sits on an end of the range or is no better than
     // the scan's typical candidate.
-    let best = live.first().ok_or(SolveError::DrivePeriodNotFound {
+    let best = live.first().ok_or(DriveSearchError::DrivePeriodNotFound {
         period: f64::NAN,
         residual: f64::NAN,
         typical: f64::NAN,
@@ -916,7 +935,7 @@ pub fn estimate_forcing_period<B: Basis + ?Sized>(
     let w = TAU / best.period;
     let at = |bound: f64| (w - bound).abs() <= 4.0 * search.tolerance * w;
     if at(bounds.0) || at(bounds.1) {
-        return Err(SolveError::DrivePeriodAtRangeEdge {
+        return Err(DriveSearchError::DrivePeriodAtRangeEdge {
             period: best.period,
             shortest: range.shortest,
             longest: range.longest,
@@ -943,7 +962,7 @@ pub fn estimate_forcing_period<B: Basis + ?Sized>(
             Some((i, p))
                 if (i == 0 || i + 1 == scan.len()) && p.residual <= search.max_contrast * typical =>
             {
-                SolveError::DrivePeriodAtRangeEdge {
+                DriveSearchError::DrivePeriodAtRangeEdge {
                     period: p.period,
                     shortest: range.shortest,
                     longest: range.longest,
@@ -951,7 +970,7 @@ pub fn estimate_forcing_period<B: Basis + ?Sized>(
                     residual: p.residual,
                 }
             }
-            _ => SolveError::DrivePeriodNotFound {
+            _ => DriveSearchError::DrivePeriodNotFound {
                 period: best.period,
                 residual: best.residual,
                 typical,
@@ -1037,11 +1056,11 @@ impl Survivor {
     }
 }
 
-fn check_step(step: f64) -> Result<(), SolveError> {
+fn check_step(step: f64) -> Result<(), DriveSearchError> {
     if step.is_finite() && step > 0.0 {
         Ok(())
     } else {
-        Err(SolveError::InvalidParameter {
+        Err(DriveSearchError::InvalidParameter {
             name: "sample step",
             value: step,
             why: "must be positive and finite",
@@ -1049,9 +1068,11 @@ fn check_step(step: f64) -> Result<(), SolveError> {
     }
 }
 
-fn check_finite(x: &[f64]) -> Result<(), SolveError> {
+fn check_finite(x: &[f64]) -> Result<(), DriveSearchError> {
     match x.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-        Some((index, &value)) => Err(SolveError::NonFiniteRecordSample { index, value }),
+        Some((index, &value)) => Err(DriveSearchError::Solve(hb_solve::SolveError::Assembly(
+            hb_solve::AssemblyError::NonFiniteRecordSample { index, value },
+        ))),
         None => Ok(()),
     }
 }
@@ -1151,15 +1172,17 @@ impl Problem {
         basis: &B,
         form: &ModelForm,
         search: &DriveSearch,
-    ) -> Result<Self, SolveError> {
+    ) -> Result<Self, DriveSearchError> {
         let names = basis.names();
         let terms = columns(basis, form)?;
         let columns = column_families(&terms);
-        if let Some(t) = terms.iter().find(|t| !t.column().is_paper()) {
-            return Err(SolveError::TermNotSupported {
-                term: t.name(&names),
-                by: "the forcing period's estimate (damping, basis functions, and the drive's first harmonic times them or alone)",
-            });
+        if let Some(t) = terms.iter().find(|t| !Column::of(t).is_paper()) {
+            return Err(DriveSearchError::Solve(hb_solve::SolveError::Assembly(
+                hb_solve::AssemblyError::TermNotSupported {
+                    term: t.name(&names),
+                    by: "the forcing period's estimate (damping, basis functions, and the drive's first harmonic times them or alone)",
+                },
+            )));
         }
         let drive: Vec<usize> = columns
             .iter()
@@ -1177,7 +1200,7 @@ impl Problem {
             _ => None,
         };
         if drive.is_empty() && known.is_none() {
-            return Err(SolveError::NoDriveTerm);
+            return Err(DriveSearchError::NoDriveTerm);
         }
         let cont = match domain {
             Domain::Circle => unwrap(x),
@@ -1191,11 +1214,13 @@ impl Problem {
             basis.eval(if domain == Domain::Circle { wrap(v) } else { v }, &mut row);
             for (i, &p) in row.iter().enumerate() {
                 if !p.is_finite() {
-                    return Err(SolveError::NonFiniteTerm {
-                        segment: 0,
-                        start: n,
-                        term: basis.name(i).unwrap_or_default(),
-                    });
+                    return Err(DriveSearchError::Solve(hb_solve::SolveError::Assembly(
+                        hb_solve::AssemblyError::NonFiniteTerm {
+                            segment: 0,
+                            start: n,
+                            term: basis.name(i).unwrap_or_default(),
+                        },
+                    )));
                 }
                 phi[i * len + n] = p;
             }
@@ -1231,7 +1256,7 @@ impl Problem {
     /// `round(T_w / h)`, with the params' harmonics relative to `T_w` (test functions up to the cap
     /// times `2π / T_w`), over a stretch of duration `stretch` in the middle of the record (the
     /// whole record for `None` or a stretch longer than it).
-    fn design(&self, window_period: f64, stretch: Option<f64>) -> Result<Design, SolveError> {
+    fn design(&self, window_period: f64, stretch: Option<f64>) -> Result<Design, DriveSearchError> {
         let p = window_period / self.h;
         let len = ((self.k as f64 * p).round() as usize).max(2);
         let step = (p.round() as usize).max(1);
@@ -1251,10 +1276,12 @@ impl Problem {
         let harmonics = self.harmonics.count(self.k, len);
         let per = 2 * harmonics + 1;
         if starts.len() * per <= self.unknowns() + 1 {
-            return Err(SolveError::TooFewOrbits {
-                found: starts.len(),
-                needed: (self.unknowns() + 2).div_ceil(per).max(starts.len() + 1),
-            });
+            return Err(DriveSearchError::Solve(hb_solve::SolveError::Lstsq(
+                hb_solve::LstsqError::TooFewOrbits {
+                    found: starts.len(),
+                    needed: (self.unknowns() + 2).div_ceil(per).max(starts.len() + 1),
+                },
+            )));
         }
         Ok(Design {
             starts,
@@ -1285,7 +1312,7 @@ impl Problem {
         start: usize,
         ws: &mut Workspace,
         out: MatMut<'_, f64>,
-    ) -> Result<(), SolveError> {
+    ) -> Result<(), DriveSearchError> {
         let samples = design.len + 1;
         let cont = &self.cont[start..start + samples];
         let mean = cont.iter().sum::<f64>() / samples as f64;
@@ -1343,11 +1370,13 @@ impl Problem {
         let (rows, cols) = out.shape();
         for r in 0..rows {
             if (0..cols).any(|c| !out[(r, c)].is_finite()) {
-                return Err(SolveError::NonFiniteRow {
-                    segment: index,
-                    start,
-                    row: r,
-                });
+                return Err(DriveSearchError::Solve(hb_solve::SolveError::Assembly(
+                    hb_solve::AssemblyError::NonFiniteRow {
+                        segment: index,
+                        start,
+                        row: r,
+                    },
+                )));
             }
         }
         Ok(())
@@ -1366,7 +1395,7 @@ impl Problem {
         starts: &[usize],
         per_block: usize,
         f: impl Fn(usize, Mat<f64>) -> R + Sync,
-    ) -> Result<Vec<R>, SolveError> {
+    ) -> Result<Vec<R>, DriveSearchError> {
         let rpw = design.rows_per_window();
         let width = self.width();
         let per_block = per_block.max(1);
@@ -1387,7 +1416,7 @@ impl Problem {
             groups
                 .par_iter()
                 .map_init(Workspace::default, fill)
-                .collect::<Result<_, SolveError>>()
+                .collect::<Result<_, DriveSearchError>>()
         } else {
             let mut ws = Workspace::default();
             groups.iter().map(|g| fill(&mut ws, g)).collect()
@@ -1401,7 +1430,7 @@ impl Problem {
     }
 
     /// The triangular factor of `[A | b | ∂A | ∂b]` at `w`, and its number of rows.
-    fn factor(&self, design: &Design, w: f64) -> Result<(Mat<f64>, usize), SolveError> {
+    fn factor(&self, design: &Design, w: f64) -> Result<(Mat<f64>, usize), DriveSearchError> {
         let turn = self.turn(design, w);
         let (per_block, batch) = self.batch_windows(design);
         let mut factors: Vec<Mat<f64>> = Vec::new();
@@ -1419,7 +1448,7 @@ impl Problem {
     }
 
     /// `S`, the Gauss–Newton step and what the uncertainty needs, at `w`.
-    fn evaluate(&self, design: &Design, w: f64) -> Result<Evaluation, SolveError> {
+    fn evaluate(&self, design: &Design, w: f64) -> Result<Evaluation, DriveSearchError> {
         let (r, rows) = self.factor(design, w)?;
         let p = self.unknowns();
         let width = self.width();
@@ -1429,13 +1458,15 @@ impl Problem {
             let norm = (0..=j).map(|i| r[(i, j)] * r[(i, j)]).sum::<f64>().sqrt();
             let diagonal = r[(j, j)].abs();
             if diagonal.is_nan() || diagonal <= tol * norm {
-                return Err(SolveError::RankDeficient {
-                    rank: j,
-                    unknowns: p,
-                    rows,
-                    column: j,
-                    suspect: self.names.get(j).cloned().unwrap_or_default(),
-                });
+                return Err(DriveSearchError::Solve(hb_solve::SolveError::Lstsq(
+                    hb_solve::LstsqError::RankDeficient {
+                        rank: j,
+                        unknowns: p,
+                        rows,
+                        column: j,
+                        suspect: self.names.get(j).cloned().unwrap_or_default(),
+                    },
+                )));
             }
         }
         // R_AA y = v by back substitution.
@@ -1502,7 +1533,7 @@ impl Problem {
         bounds: (f64, f64),
         tolerance: f64,
         iterations: usize,
-    ) -> Result<(Evaluation, usize), SolveError> {
+    ) -> Result<(Evaluation, usize), DriveSearchError> {
         let mut e = self.evaluate(design, w.clamp(bounds.0, bounds.1))?;
         let mut count = 1;
         // A phase drift of at most one radian over the stretch.
@@ -1531,7 +1562,7 @@ impl Problem {
 
     /// The cluster-robust variance of `W` at `eval` (see the module documentation): clusters of
     /// consecutive windows.
-    fn robust_variance(&self, design: &Design, eval: &Evaluation) -> Result<f64, SolveError> {
+    fn robust_variance(&self, design: &Design, eval: &Evaluation) -> Result<f64, DriveSearchError> {
         let turn = self.turn(design, eval.w);
         let (per_block, batch) = self.batch_windows(design);
         let rpw = design.rows_per_window();
@@ -1700,7 +1731,10 @@ mod tests {
             b().max_iterations(0).build(),
             b().harmonics(Harmonics::Fixed(0)).build(),
         ] {
-            assert!(matches!(bad, Err(SolveError::InvalidParameter { .. })), "{bad:?}");
+            assert!(
+                matches!(bad, Err(DriveSearchError::InvalidParameter { .. })),
+                "{bad:?}"
+            );
         }
         assert!(b().prune_ratio(f64::INFINITY).build().is_ok());
         let json = serde_json::to_string(&ok).unwrap();

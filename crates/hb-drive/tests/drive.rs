@@ -4,10 +4,10 @@ use std::f64::consts::TAU;
 
 use circle_signal::wrap;
 use hb_basis::{Harmonic, Polynomial};
-use hb_solve::{
-    DriveEstimate, DriveSearch, Forcing, ModelForm, PeriodRange, RangeSource, SolveError,
-    estimate_forcing_period,
-};
+use hb_drive::DriveSearchError;
+use hb_drive::{DriveEstimate, DriveSearch, PeriodRange, RangeSource, estimate_forcing_period};
+use hb_model::{Forcing, ModelForm};
+use hb_solve::{AssemblyError, SolveError};
 use pendulum_sim::observe::Encoder;
 use pendulum_sim::{Domain, Dop853, FirstOrder, Pendulum, SecondOrderSystem, Tolerances};
 
@@ -47,7 +47,7 @@ fn search(period: f64, below: f64, above: f64) -> DriveSearch {
         .unwrap()
 }
 
-fn on_circle(x: &[f64], step: f64, t0: f64, search: &DriveSearch) -> Result<DriveEstimate, SolveError> {
+fn on_circle(x: &[f64], step: f64, t0: f64, search: &DriveSearch) -> Result<DriveEstimate, DriveSearchError> {
     let basis = Harmonic::new(1).unwrap();
     estimate_forcing_period(
         x,
@@ -142,7 +142,7 @@ fn a_range_without_the_truth_is_an_error() {
     for x in [&exact, &noisy] {
         for (below, above, end) in [(1.005, 1.6, "short"), (0.7, 0.995, "long")] {
             match on_circle(x, step, t0, &search(TAU, below, above)) {
-                Err(SolveError::DrivePeriodAtRangeEdge { period, edge, .. }) => {
+                Err(hb_drive::DriveSearchError::DrivePeriodAtRangeEdge { period, edge, .. }) => {
                     assert_eq!(edge, end);
                     let bound = if end == "short" { below } else { above } * TAU;
                     assert!((period / bound - 1.0).abs() < 1e-9, "{period} against {bound}");
@@ -152,7 +152,7 @@ fn a_range_without_the_truth_is_an_error() {
         }
         for (below, above) in [(1.2, 1.6), (0.3, 0.45)] {
             match on_circle(x, step, t0, &search(TAU, below, above)) {
-                Err(SolveError::DrivePeriodNotFound {
+                Err(hb_drive::DriveSearchError::DrivePeriodNotFound {
                     residual, typical, ..
                 }) => {
                     assert!(residual > 0.9 * typical, "{residual} against {typical}");
@@ -252,15 +252,17 @@ fn bad_input_is_refused() {
     let no_drive = ModelForm::parametric().without_parametric_terms();
     assert!(matches!(
         run(&x, step, Domain::Circle, &s, &no_drive),
-        Err(SolveError::NoDriveTerm)
+        Err(hb_drive::DriveSearchError::NoDriveTerm)
     ));
     assert!(matches!(
         run(&x, step, Domain::Line, &s, &parametric),
-        Err(SolveError::DomainMismatch { .. })
+        Err(DriveSearchError::Solve(SolveError::Assembly(
+            AssemblyError::DomainMismatch { .. }
+        )))
     ));
     assert!(matches!(
         run(&x, 0.0, Domain::Circle, &s, &parametric),
-        Err(SolveError::InvalidParameter { .. })
+        Err(DriveSearchError::InvalidParameter { .. })
     ));
     // Fewer than 4 samples per period, and a period too long for 6 of it in the record.
     for (lo, hi) in [(2.0 * step, TAU), (TAU, 20.0 * TAU)] {
@@ -270,14 +272,16 @@ fn bad_input_is_refused() {
             .unwrap();
         assert!(matches!(
             run(&x, step, Domain::Circle, &s, &parametric),
-            Err(SolveError::DriveRangeUnfit { .. })
+            Err(hb_drive::DriveSearchError::DriveRangeUnfit { .. })
         ));
     }
     let mut bad = x.clone();
     bad[77] = f64::NAN;
     assert!(matches!(
         run(&bad, step, Domain::Circle, &s, &parametric),
-        Err(SolveError::NonFiniteRecordSample { index: 77, .. })
+        Err(DriveSearchError::Solve(SolveError::Assembly(
+            AssemblyError::NonFiniteRecordSample { index: 77, .. }
+        )))
     ));
 }
 
@@ -313,4 +317,31 @@ fn known_forcing_and_a_basis_chosen_at_run_time() {
     .unwrap();
     let e = relative_error(&found, period);
     assert!(e.abs() < 1e-8, "{e:e}");
+}
+
+/// The search balances the paper's families only: a form with a term nonlinear in the velocity
+/// is refused by name before any work.
+#[test]
+fn the_drive_estimate_refuses_general_terms() {
+    let form =
+        ModelForm::from_terms(hb_model::TermList::parse("x', sign(x'), sin(x), sin(t)*cos(x)").unwrap());
+    let x: Vec<f64> = (0..4000).map(|n| wrap(0.3 * (0.25 * n as f64).sin())).collect();
+    let result = estimate_forcing_period(
+        &x,
+        TAU / 25.0,
+        0.0,
+        Domain::Circle,
+        &DriveSearch::builder().build().unwrap(),
+        &Harmonic::new(1).unwrap(),
+        &form,
+        &mut |_, _| {},
+    );
+    assert!(
+        matches!(
+            result,
+            Err(DriveSearchError::Solve(SolveError::Assembly(AssemblyError::TermNotSupported { ref term, .. })))
+                if term == "sign(x')"
+        ),
+        "{result:?}"
+    );
 }

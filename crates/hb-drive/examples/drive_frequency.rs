@@ -25,7 +25,8 @@ use std::time::Instant;
 
 use circle_signal::{Domain, SampleClock, resample_to_whole, wrap};
 use hb_basis::Harmonic;
-use hb_solve::{DriveEstimate, DriveSearch, ModelForm, PeriodRange, RangeSource, estimate_forcing_period};
+use hb_drive::{DriveEstimate, DriveSearch, PeriodRange, RangeSource, estimate_forcing_period};
+use hb_model::ModelForm;
 use pendulum_sim::observe::Encoder;
 use pendulum_sim::{Dop853, FirstOrder, Pendulum, Tolerances};
 

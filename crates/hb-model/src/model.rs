@@ -1,20 +1,17 @@
-//! The identified equation of motion: coefficients, statistics, simulation, save and load.
-
-use std::fmt;
+//! The identified equation of motion: coefficients, statistics, and its evaluation as a system
+//! that `pendulum_sim` simulates.
 
 use circle_signal::wrap;
-use hb_basis::{Basis, BasisKind, Domain, Harmonic};
-use pendulum_sim::{Branch, Pendulum, SecondOrderSystem};
-use serde::de::{DeserializeOwned, MapAccess, Visitor};
-use serde::ser::SerializeMap;
-use serde::{Deserialize, Deserializer, Serialize, Serializer};
+use hb_basis::{Basis, BasisKind, Domain};
+use pendulum_sim::{Branch, SecondOrderSystem};
+use serde::{Deserialize, Serialize};
 
-use crate::params::{ModelFormV2, ModelFormV3};
-use crate::terms::{Column, DriveFactor, PositionFactor, Term, VelocityFactor, column_families, columns};
-use crate::{
-    Forcing, Harmonics, IdentifyParams, LinearSystem, LstsqFit, LstsqSolver, ModelForm, SampleClock,
-    SolveError,
-};
+use circle_signal::SampleClock;
+
+use crate::drive::MeasuredDrive;
+use crate::error::{ModelError, ModelIoError, TermError};
+use crate::form::{Column, Forcing, Harmonics, ModelForm, column_families, columns};
+use crate::terms::{DriveFactor, PositionFactor, Term, VelocityFactor};
 
 /// One identified coefficient.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -29,7 +26,6 @@ pub struct Coefficient {
 
 /// How a model was identified.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[non_exhaustive]
 pub struct FitSummary {
     /// The least-squares solver (`qr`, `svd`).
     pub solver: String,
@@ -68,101 +64,19 @@ pub struct FitSummary {
 ///
 /// A model with the measured drive `p` (see [`crate::DriveFactor::Measured`]) records the name of
 /// the column it came from ([`ModelForm::drive_column`]) but not its samples: to simulate it, give
-/// it the recorded drive with [`with_drive_signal`](Self::with_drive_signal), which it
+/// it the recorded drive with [`with_measured_drive`](Self::with_measured_drive), which it
 /// interpolates over the recorded span. Without it, or outside that span, its acceleration is
-/// NaN (an integrator stops there with a non-finite state); [`drive_signal_needed`]
-/// (Self::drive_signal_needed) tells before any simulation.
+/// NaN (an integrator stops there with a non-finite state); [`needs_measured_drive`]
+/// (Self::needs_measured_drive) tells before any simulation.
 #[derive(Debug, Clone, PartialEq)]
 pub struct IdentifiedModel<B = BasisKind> {
-    basis: B,
-    form: ModelForm,
-    forcing_frequency: f64,
-    coefficients: Vec<Coefficient>,
-    summary: Option<FitSummary>,
+    pub(crate) basis: B,
+    pub(crate) form: ModelForm,
+    pub(crate) forcing_frequency: f64,
+    pub(crate) coefficients: Vec<Coefficient>,
+    pub(crate) summary: Option<FitSummary>,
     eval: Evaluation,
-    drive: Option<DriveSignal>,
-}
-
-/// A measured drive `p(t)` over the span it was recorded: samples at `t_0 + n h`, interpolated
-/// between them by the cubic Hermite spline whose slopes are the central differences
-/// (Catmull–Rom; one-sided at the ends), which passes through every sample and has a continuous
-/// first derivative, so that an integrator's error control sees no kink.
-#[derive(Debug, Clone, PartialEq)]
-pub struct DriveSignal {
-    start_time: f64,
-    step: f64,
-    samples: crate::DriveSamples,
-}
-
-impl DriveSignal {
-    /// The drive's `samples` at `start_time + n · step`: at least 2, every one finite (a record
-    /// in pieces is simulated piece by piece, each with its own signal), `step` positive and
-    /// finite.
-    pub fn new(start_time: f64, step: f64, samples: crate::DriveSamples) -> Result<Self, SolveError> {
-        if !start_time.is_finite() {
-            return Err(SolveError::InvalidParameter {
-                name: "drive signal start time",
-                value: start_time,
-                why: "must be finite",
-            });
-        }
-        if !(step.is_finite() && step > 0.0) {
-            return Err(SolveError::InvalidParameter {
-                name: "drive signal step",
-                value: step,
-                why: "must be positive and finite",
-            });
-        }
-        let p = samples.as_slice();
-        if p.len() < 2 {
-            return Err(SolveError::RecordTooShort {
-                what: "a drive signal",
-                len: p.len(),
-                needed: 2,
-            });
-        }
-        if let Some((index, &value)) = p.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-            return Err(SolveError::NonFiniteRecordSample { index, value });
-        }
-        Ok(Self {
-            start_time,
-            step,
-            samples,
-        })
-    }
-
-    /// The time of the first sample.
-    pub fn start_time(&self) -> f64 {
-        self.start_time
-    }
-
-    /// The time of the last sample.
-    pub fn end_time(&self) -> f64 {
-        self.start_time + (self.samples.len() - 1) as f64 * self.step
-    }
-
-    /// The drive at time `t`: the spline through the samples, NaN outside the recorded span.
-    pub fn at(&self, t: f64) -> f64 {
-        let p = self.samples.as_slice();
-        let last = p.len() - 1;
-        let u = (t - self.start_time) / self.step;
-        if !(u >= 0.0 && u <= last as f64) {
-            return f64::NAN;
-        }
-        let i = (u.floor() as usize).min(last - 1);
-        let s = u - i as f64;
-        let slope = |j: usize| match j {
-            0 => p[1] - p[0],
-            j if j == last => p[last] - p[last - 1],
-            j => 0.5 * (p[j + 1] - p[j - 1]),
-        };
-        let (p0, p1, m0, m1) = (p[i], p[i + 1], slope(i), slope(i + 1));
-        let (s2, s3) = (s * s, s * s * s);
-        (2.0 * s3 - 3.0 * s2 + 1.0) * p0
-            + (s3 - 2.0 * s2 + s) * m0
-            + (-2.0 * s3 + 3.0 * s2) * p1
-            + (s3 - s2) * m1
-    }
+    drive: Option<MeasuredDrive>,
 }
 
 /// The coefficients arranged for evaluation: the paper's families by basis function (the
@@ -246,15 +160,15 @@ impl<B: Basis> IdentifiedModel<B> {
         form: ModelForm,
         forcing_frequency: f64,
         values: &[f64],
-    ) -> Result<Self, SolveError> {
+    ) -> Result<Self, ModelError> {
         let form = form.validate()?;
         let names = basis.names();
         let layout = columns(&basis, &form)?;
         if values.len() != layout.len() {
-            return Err(SolveError::ModelMismatch {
+            return Err(ModelError::Io(ModelIoError::ModelMismatch {
                 expected: layout.iter().map(|t| t.name(&names)).collect(),
                 found: (0..values.len()).map(|i| format!("value {i}")).collect(),
-            });
+            }));
         }
         let coefficients = layout
             .into_iter()
@@ -265,75 +179,21 @@ impl<B: Basis> IdentifiedModel<B> {
                 std_error: 0.0,
             })
             .collect();
-        Self::from_parts(basis, form, forcing_frequency, coefficients, None)
+        Self::from_coefficients(basis, form, forcing_frequency, coefficients, None)
     }
 
-    /// Solves an assembled `system` (from [`crate::assemble`] or [`crate::assemble_weak`] with the
-    /// same `basis` and `params`) with `solver` and builds the model, e.g. to keep the system for
-    /// [`crate::bootstrap`].
-    ///
-    /// Errors: [`SolveError::ModelMismatch`] when the system's unknowns are not those of `basis`
-    /// and `params`, and the solver's errors.
-    pub fn fit<S: LstsqSolver + ?Sized>(
-        basis: B,
-        params: &IdentifyParams,
-        system: &LinearSystem,
-        solver: &S,
-    ) -> Result<Self, SolveError> {
-        let fit = system.solve(solver)?;
-        Self::from_fit(basis, params, system, &fit, solver.name())
-    }
-
-    /// [`IdentifiedModel::fit`] from a fit already computed, `fit = system.solve(solver)` with a
-    /// solver named `solver`: the fit can then also serve [`crate::bootstrap_fit`].
-    pub fn from_fit(
-        basis: B,
-        params: &IdentifyParams,
-        system: &LinearSystem,
-        fit: &LstsqFit,
-        solver: &str,
-    ) -> Result<Self, SolveError> {
-        let coefficients = system
-            .names()
-            .iter()
-            .zip(fit.solution.iter().zip(&fit.std_errors))
-            .map(|(name, (&value, &std_error))| Coefficient {
-                name: name.clone(),
-                value,
-                std_error,
-            })
-            .collect();
-        let summary = FitSummary {
-            solver: solver.to_owned(),
-            harmonics: params.harmonics(),
-            clock: *params.clock(),
-            rows: fit.rows,
-            unknowns: fit.cols,
-            segments: system.blocks().len(),
-            whirling_segments: system.blocks().iter().filter(|b| b.winding != 0).count(),
-            condition: fit.condition,
-            residual_rms: fit.residual_rms,
-            residual_variance: fit.residual_variance,
-        };
-        Self::from_parts(
-            basis,
-            params.form().clone(),
-            params.clock().forcing_frequency(),
-            coefficients,
-            Some(summary),
-        )
-    }
-
-    /// Checks names against the basis and form and arranges the values for evaluation.
-    fn from_parts(
+    /// A model of `coefficients` (named as the layout of `basis` and `form` names them, in its
+    /// order or a list's), drive angular frequency `forcing_frequency` and fit `summary`:
+    /// checks the names against the basis and form and arranges the values for evaluation.
+    pub fn from_coefficients(
         basis: B,
         form: ModelForm,
         forcing_frequency: f64,
         coefficients: Vec<Coefficient>,
         summary: Option<FitSummary>,
-    ) -> Result<Self, SolveError> {
+    ) -> Result<Self, ModelError> {
         if !(forcing_frequency.is_finite() && forcing_frequency > 0.0) {
-            return Err(SolveError::InvalidParameter {
+            return Err(ModelError::InvalidParameter {
                 name: "forcing frequency",
                 value: forcing_frequency,
                 why: "must be positive and finite",
@@ -345,14 +205,14 @@ impl<B: Basis> IdentifiedModel<B> {
         // terms may name a few functions of a larger basis (`x', sin(x)` on cos(x), sin(x)), but
         // not more than a list holds.
         if form.terms().is_none() && basis.len() >= coefficients.len() {
-            return Err(SolveError::InvalidParameter {
+            return Err(ModelError::InvalidParameter {
                 name: "basis size",
                 value: basis.len() as f64,
                 why: "must be less than the number of coefficients (one per basis function, and the damping)",
             });
         }
         if form.terms().is_some() && basis.len() > crate::MAX_TERMS {
-            return Err(SolveError::InvalidParameter {
+            return Err(ModelError::InvalidParameter {
                 name: "basis size",
                 value: basis.len() as f64,
                 why: "must be at most 4096 functions for a model of listed terms",
@@ -365,16 +225,18 @@ impl<B: Basis> IdentifiedModel<B> {
         if coefficients.len() != expected.len()
             || coefficients.iter().zip(&expected).any(|(c, e)| &c.name != e)
         {
-            return Err(SolveError::ModelMismatch {
+            return Err(ModelError::Io(ModelIoError::ModelMismatch {
                 expected,
                 found: coefficients.iter().map(|c| c.name.clone()).collect(),
-            });
+            }));
         }
         if let Some(c) = coefficients
             .iter()
             .find(|c| !c.value.is_finite() || !c.std_error.is_finite())
         {
-            return Err(SolveError::NonFiniteModelValue { name: c.name.clone() });
+            return Err(ModelError::Io(ModelIoError::NonFiniteModelValue {
+                name: c.name.clone(),
+            }));
         }
         let forcing = match form.forcing() {
             Forcing::Known { cos, sin } => (cos, sin),
@@ -430,28 +292,28 @@ impl<B: Basis> IdentifiedModel<B> {
         })
     }
 
-    /// The model with the recorded drive `signal` for its terms in the measured drive `p`, so
-    /// that it can be simulated over the signal's span (the record's own time).
+    /// The model with the recorded drive for its terms in the measured drive `p`, so that it can
+    /// be simulated over the drive's span (the record's own time).
     ///
-    /// Errors: [`SolveError::InvalidForm`] for a model without a term in `p`.
-    pub fn with_drive_signal(mut self, signal: DriveSignal) -> Result<Self, SolveError> {
+    /// Errors: [`TermError::InvalidForm`] for a model without a term in `p`.
+    pub fn with_measured_drive(mut self, signal: MeasuredDrive) -> Result<Self, ModelError> {
         if !self.form.has_measured_drive() {
-            return Err(SolveError::InvalidForm {
+            return Err(ModelError::Term(TermError::InvalidForm {
                 why: "a drive signal is for a model with a term in the measured drive p",
-            });
+            }));
         }
         self.drive = Some(signal);
         Ok(self)
     }
 
-    /// The recorded drive given with [`with_drive_signal`](Self::with_drive_signal), if any.
-    pub fn drive_signal(&self) -> Option<&DriveSignal> {
+    /// The recorded drive given with [`with_measured_drive`](Self::with_measured_drive), if any.
+    pub fn measured_drive(&self) -> Option<&MeasuredDrive> {
         self.drive.as_ref()
     }
 
-    /// Whether the model needs a drive signal to be simulated: it has a term in the measured
+    /// Whether the model needs a measured drive to be simulated: it has a term in the measured
     /// drive `p` and none was given.
-    pub fn drive_signal_needed(&self) -> bool {
+    pub fn needs_measured_drive(&self) -> bool {
         self.form.has_measured_drive() && self.drive.is_none()
     }
 
@@ -503,7 +365,7 @@ impl<B: Basis> IdentifiedModel<B> {
     }
 
     /// Forcing angular frequency `W`.
-    pub fn forcing_frequency(&self) -> f64 {
+    pub fn drive_angular_frequency(&self) -> f64 {
         self.forcing_frequency
     }
 
@@ -577,52 +439,6 @@ impl<B: Basis> IdentifiedModel<B> {
                 out
             }),
         }
-    }
-}
-
-impl<B: Basis + From<Harmonic>> IdentifiedModel<B> {
-    /// The true equation of `pendulum` (paper eq. 1 in non-dimensional time,
-    /// `x'' + c x' + (1/r²) sin x − f sin(t) cos x = 0`) as a model on the harmonic basis `K = 1`
-    /// with the paper's terms ([`ModelForm::parametric`]) and forcing frequency `W = 1`: the
-    /// reference every identified pendulum model is compared with.
-    ///
-    /// In the order of [`crate::columns`] the coefficients are `x'` = `c`, `cos(t)*cos(x)` = 0,
-    /// `sin(t)*cos(x)` = `−f`, `cos(x)` = 0, `cos(t)*sin(x)` = 0, `sin(t)*sin(x)` = 0 and
-    /// `sin(x)` = `1/r²` (computed as `1.0 / (r * r)`, as the pendulum does), every standard error
-    /// 0 and no fit summary. The model drives exactly like the pendulum
-    /// ([`SecondOrderSystem::acceleration`] agrees to rounding). `B` is [`Harmonic`] or
-    /// [`BasisKind`].
-    ///
-    /// ```
-    /// use hb_basis::Harmonic;
-    /// use hb_solve::IdentifiedModel;
-    /// use pendulum_sim::Pendulum;
-    ///
-    /// let truth = IdentifiedModel::<Harmonic>::from_pendulum(&Pendulum::paper())?;
-    /// assert_eq!(truth.damping(), 0.03);
-    /// assert_eq!(truth.coefficient("sin(t)*cos(x)").unwrap().value, -1.52);
-    /// assert_eq!(truth.coefficient("sin(x)").unwrap().value, 1.0 / (0.8333 * 0.8333));
-    /// # Ok::<(), hb_solve::SolveError>(())
-    /// ```
-    ///
-    /// Errors: [`SolveError::NonFiniteModelValue`] when `1/r²` overflows (`|r|` below about
-    /// `1e-154`).
-    pub fn from_pendulum(pendulum: &Pendulum) -> Result<Self, SolveError> {
-        let basis = Harmonic::new(1)?;
-        // Harmonic K = 1 is cos(x), sin(x), in this order.
-        let (cos_x, sin_x) = (0, 1);
-        let form = ModelForm::parametric();
-        let r = pendulum.r();
-        let values: Vec<f64> = columns(&basis, &form)?
-            .into_iter()
-            .map(|term| match term {
-                Term::DAMPING => pendulum.c(),
-                t if t == Term::basis(DriveFactor::Sin(1), cos_x) => -pendulum.f(),
-                t if t == Term::basis(DriveFactor::One, sin_x) => 1.0 / (r * r),
-                _ => 0.0,
-            })
-            .collect();
-        Self::new(B::from(basis), form, 1.0, &values)
     }
 }
 
@@ -740,247 +556,26 @@ impl<B: Basis> SecondOrderSystem for IdentifiedModel<B> {
     }
 }
 
-// ---------------------------------------------------------------------------------------------
-// Save and load.
-
-/// Name of the JSON format, written in every saved model.
-pub const MODEL_FORMAT: &str = "hbid-model";
-/// Version of the saved-model format this build writes (4: the form holds `drive_column`, the
-/// record's column of a measured drive `p`, or null). It reads versions 3 (the form holds the
-/// drive harmonics `drive_harmonics` and, for a list of terms, `terms`, the list of the terms'
-/// names) and 2 (no drive harmonics nor term list: the clock is written with an optional whole
-/// `samples_per_period` and an optional `step`) as well, in JSON and in binary.
-pub const MODEL_VERSION: u32 = 4;
-/// The oldest saved-model format version this build reads.
-pub const MODEL_OLDEST_VERSION: u32 = 2;
-/// First bytes of a binary model.
-pub const MODEL_MAGIC: [u8; 8] = *b"HBIDMODL";
-
-/// Coefficients serialised as an ordered map `name -> {value, std_error}`.
-#[derive(Debug, Clone, PartialEq)]
-struct CoefficientMap(Vec<Coefficient>);
-
-#[derive(Serialize, Deserialize)]
-struct Estimate {
-    value: f64,
-    std_error: f64,
-}
-
-impl Serialize for CoefficientMap {
-    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        let mut map = s.serialize_map(Some(self.0.len()))?;
-        for c in &self.0 {
-            map.serialize_entry(
-                &c.name,
-                &Estimate {
-                    value: c.value,
-                    std_error: c.std_error,
-                },
-            )?;
-        }
-        map.end()
-    }
-}
-
-impl<'de> Deserialize<'de> for CoefficientMap {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        struct V;
-        impl<'de> Visitor<'de> for V {
-            type Value = CoefficientMap;
-            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-                f.write_str("a map from term names to {value, std_error}")
-            }
-            fn visit_map<A: MapAccess<'de>>(self, mut access: A) -> Result<CoefficientMap, A::Error> {
-                let mut out = Vec::with_capacity(access.size_hint().unwrap_or(0).min(4096));
-                while let Some((name, e)) = access.next_entry::<String, Estimate>()? {
-                    out.push(Coefficient {
-                        name,
-                        value: e.value,
-                        std_error: e.std_error,
-                    });
-                }
-                Ok(CoefficientMap(out))
-            }
-        }
-        d.deserialize_map(V)
-    }
-}
-
-#[derive(Serialize, Deserialize)]
-struct ModelRecord<B> {
-    format: String,
-    version: u32,
-    basis: B,
-    form: ModelForm,
-    forcing_frequency: f64,
-    coefficients: CoefficientMap,
-    fit: Option<FitSummary>,
-}
-
-/// A model saved in binary by format version 2 (its form without drive harmonics or terms).
-#[derive(Deserialize)]
-struct ModelRecordV2<B> {
-    format: String,
-    version: u32,
-    basis: B,
-    form: ModelFormV2,
-    forcing_frequency: f64,
-    coefficients: CoefficientMap,
-    fit: Option<FitSummary>,
-}
-
-/// A model saved in binary by format version 3 (its form without the measured drive's column).
-#[derive(Deserialize)]
-struct ModelRecordV3<B> {
-    format: String,
-    version: u32,
-    basis: B,
-    form: ModelFormV3,
-    forcing_frequency: f64,
-    coefficients: CoefficientMap,
-    fit: Option<FitSummary>,
-}
-
-impl<B> TryFrom<ModelRecordV3<B>> for ModelRecord<B> {
-    type Error = SolveError;
-
-    fn try_from(r: ModelRecordV3<B>) -> Result<Self, SolveError> {
-        Ok(Self {
-            format: r.format,
-            version: r.version,
-            basis: r.basis,
-            form: r.form.try_into()?,
-            forcing_frequency: r.forcing_frequency,
-            coefficients: r.coefficients,
-            fit: r.fit,
-        })
-    }
-}
-
-impl<B> From<ModelRecordV2<B>> for ModelRecord<B> {
-    fn from(r: ModelRecordV2<B>) -> Self {
-        Self {
-            format: r.format,
-            version: r.version,
-            basis: r.basis,
-            form: r.form.into(),
-            forcing_frequency: r.forcing_frequency,
-            coefficients: r.coefficients,
-            fit: r.fit,
-        }
-    }
-}
-
-/// Whether this build reads format `version`.
-fn check_version(version: u32) -> Result<(), SolveError> {
-    if (MODEL_OLDEST_VERSION..=MODEL_VERSION).contains(&version) {
-        Ok(())
-    } else {
-        Err(SolveError::UnsupportedVersion {
-            found: version,
-            supported: MODEL_VERSION,
-        })
-    }
-}
-
-impl<B: Basis + Clone + Serialize> IdentifiedModel<B> {
-    fn record(&self) -> ModelRecord<B> {
-        ModelRecord {
-            format: MODEL_FORMAT.to_owned(),
-            version: MODEL_VERSION,
-            basis: self.basis.clone(),
-            form: self.form.clone(),
-            forcing_frequency: self.forcing_frequency,
-            coefficients: CoefficientMap(self.coefficients.clone()),
-            fit: self.summary.clone(),
-        }
-    }
-
-    /// Pretty JSON: `{"format": "hbid-model", "version": 4, "basis": .., "form": ..,
-    /// "forcing_frequency": .., "coefficients": {"x'": {"value": .., "std_error": ..}, ..}, "fit": ..}`.
-    ///
-    /// A model on [`BasisKind`] records which basis it uses (`{"hat": {"nodes": 8}}`), so any
-    /// program can load it; a model on a concrete basis type records only its size and must be
-    /// loaded as the same type.
-    pub fn to_json(&self) -> Result<String, SolveError> {
-        Ok(serde_json::to_string_pretty(&self.record())?)
-    }
-
-    /// Compact binary: the 8 bytes [`MODEL_MAGIC`], the format version as a little-endian `u32`, then
-    /// the model in postcard.
-    pub fn to_bytes(&self) -> Result<Vec<u8>, SolveError> {
-        let mut out = MODEL_MAGIC.to_vec();
-        out.extend_from_slice(&MODEL_VERSION.to_le_bytes());
-        Ok(postcard::to_extend(&self.record(), out)?)
-    }
-}
-
-impl<B: Basis + DeserializeOwned> IdentifiedModel<B> {
-    fn from_record(r: ModelRecord<B>) -> Result<Self, SolveError> {
-        check_version(r.version)?;
-        if r.format != MODEL_FORMAT {
-            return Err(SolveError::BadMagic);
-        }
-        if let Some(fit) = &r.fit {
-            for (name, v) in [
-                ("fit condition", fit.condition),
-                ("fit residual_rms", fit.residual_rms),
-                ("fit residual_variance", fit.residual_variance),
-            ] {
-                // The condition number may legitimately be infinite only for a rank-deficient
-                // system, which never becomes a model.
-                if !v.is_finite() {
-                    return Err(SolveError::NonFiniteModelValue {
-                        name: name.to_owned(),
-                    });
-                }
-            }
-        }
-        Self::from_parts(
-            r.basis,
-            r.form.validate()?,
-            r.forcing_frequency,
-            r.coefficients.0,
-            r.fit,
-        )
-    }
-
-    /// Reads a model written by [`to_json`](Self::to_json), checking that its terms match its basis
-    /// and form.
-    pub fn from_json(text: &str) -> Result<Self, SolveError> {
-        Self::from_record(serde_json::from_str(text)?)
-    }
-
-    /// Reads a model written by [`to_bytes`](Self::to_bytes).
-    pub fn from_bytes(bytes: &[u8]) -> Result<Self, SolveError> {
-        if bytes.len() < 12 || bytes[..8] != MODEL_MAGIC {
-            return Err(SolveError::BadMagic);
-        }
-        let version = u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]);
-        check_version(version)?;
-        let record: ModelRecord<B> = match version {
-            2 => postcard::from_bytes::<ModelRecordV2<B>>(&bytes[12..])?.into(),
-            3 => postcard::from_bytes::<ModelRecordV3<B>>(&bytes[12..])?.try_into()?,
-            _ => postcard::from_bytes(&bytes[12..])?,
-        };
-        if record.version != version {
-            return Err(SolveError::UnsupportedVersion {
-                found: record.version,
-                supported: MODEL_VERSION,
-            });
-        }
-        Self::from_record(record)
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use hb_basis::{Hat, Polynomial};
+    use crate::io::MODEL_VERSION;
+    use crate::truth::TrueEquation;
+    use hb_basis::{Harmonic, Hat, Polynomial};
+    use pendulum_sim::{Pendulum, RecordFrame};
+
+    /// The true model of `p` on the harmonic basis of order 1 in the paper's layout.
+    fn true_model<B: Basis + From<Harmonic>>(p: &Pendulum) -> Result<IdentifiedModel<B>, ModelError> {
+        p.equation(&RecordFrame::nondimensional())?.model(
+            B::from(Harmonic::new(1)?),
+            &ModelForm::parametric(),
+            1.0,
+        )
+    }
 
     /// The paper's pendulum, x'' + 0.03 x' + (1/0.8333²) sin x − 1.52 sin t cos x = 0.
     fn pendulum() -> IdentifiedModel<BasisKind> {
-        IdentifiedModel::from_pendulum(&Pendulum::paper()).unwrap()
+        true_model(&Pendulum::paper()).unwrap()
     }
 
     #[test]
@@ -1012,10 +607,10 @@ mod tests {
             Pendulum::new(0.0, 0.0, 1.0).unwrap(),
         ];
         for p in pendulums {
-            let m = IdentifiedModel::<Harmonic>::from_pendulum(&p).unwrap();
+            let m = true_model::<Harmonic>(&p).unwrap();
             assert_eq!(m.basis(), &Harmonic::new(1).unwrap());
             assert_eq!(m.form(), &ModelForm::parametric());
-            assert_eq!(m.forcing_frequency(), 1.0);
+            assert_eq!(m.drive_angular_frequency(), 1.0);
             assert!(m.summary().is_none());
             let want = [
                 ("x'", p.c()),
@@ -1046,18 +641,18 @@ mod tests {
                     "{p:?} at ({t}, {x}, {v})"
                 );
             }
-            let kind = IdentifiedModel::<BasisKind>::from_pendulum(&p).unwrap();
+            let kind = true_model::<BasisKind>(&p).unwrap();
             assert_eq!(kind.coefficients(), m.coefficients());
             assert_eq!(kind.basis(), &BasisKind::from(Harmonic::new(1).unwrap()));
         }
         // The paper's, as the tests and the reproduction have always written it.
-        let paper = IdentifiedModel::<Harmonic>::from_pendulum(&Pendulum::paper()).unwrap();
+        let paper = true_model::<Harmonic>(&Pendulum::paper()).unwrap();
         let values: Vec<f64> = paper.coefficients().iter().map(|c| c.value).collect();
         assert_eq!(values, [0.03, 0.0, -1.52, 0.0, 0.0, 0.0, 1.0 / (0.8333 * 0.8333)]);
         // 1/r² overflows.
         assert!(matches!(
-            IdentifiedModel::<Harmonic>::from_pendulum(&Pendulum::new(1.0, 0.1, 1e-160).unwrap()),
-            Err(SolveError::NonFiniteModelValue { ref name }) if name == "sin(x)"
+            true_model::<Harmonic>(&Pendulum::new(1.0, 0.1, 1e-160).unwrap()),
+            Err(ModelError::Io(ModelIoError::NonFiniteModelValue { ref name })) if name == "sin(x)"
         ));
     }
 
@@ -1080,20 +675,20 @@ mod tests {
         bytes[8..12].copy_from_slice(&foreign.to_le_bytes());
         assert!(matches!(
             IdentifiedModel::<BasisKind>::from_bytes(&bytes),
-            Err(SolveError::UnsupportedVersion {
+            Err(ModelError::Io(ModelIoError::UnsupportedVersion {
                 found,
                 supported: MODEL_VERSION
-            }) if found == foreign
+            })) if found == foreign
         ));
         assert!(matches!(
             IdentifiedModel::<BasisKind>::from_bytes(b"nonsense"),
-            Err(SolveError::BadMagic)
+            Err(ModelError::Io(ModelIoError::BadMagic))
         ));
         // A basis of another size than the coefficients.
         let json = m.to_json().unwrap().replace("\"order\": 1", "\"order\": 2");
         assert!(matches!(
             IdentifiedModel::<BasisKind>::from_json(&json),
-            Err(SolveError::ModelMismatch { .. })
+            Err(ModelError::Io(ModelIoError::ModelMismatch { .. }))
         ));
         let json = m.to_json().unwrap().replace("\"value\": 0.03", "\"value\": NaN");
         assert!(IdentifiedModel::<BasisKind>::from_json(&json).is_err());
@@ -1114,10 +709,10 @@ mod tests {
             residual_rms: 1e-3,
             residual_variance: variance,
         };
-        IdentifiedModel::from_parts(
+        IdentifiedModel::from_coefficients(
             *m.basis(),
             m.form().clone(),
-            m.forcing_frequency(),
+            m.drive_angular_frequency(),
             m.coefficients().to_vec(),
             Some(summary),
         )
@@ -1138,7 +733,7 @@ mod tests {
             let bytes = fitted(variance).to_bytes().unwrap();
             assert!(matches!(
                 IdentifiedModel::<BasisKind>::from_bytes(&bytes),
-                Err(SolveError::NonFiniteModelValue { ref name }) if name == "fit residual_variance"
+                Err(ModelError::Io(ModelIoError::NonFiniteModelValue { ref name })) if name == "fit residual_variance"
             ));
         }
     }
@@ -1161,7 +756,7 @@ mod tests {
             );
             match IdentifiedModel::<BasisKind>::from_json(&json) {
                 Err(
-                    e @ SolveError::InvalidParameter {
+                    e @ ModelError::InvalidParameter {
                         name: "basis size", ..
                     },
                 ) => {
@@ -1177,7 +772,7 @@ mod tests {
         let hat: BasisKind = Hat::new(4).unwrap().into();
         assert!(matches!(
             IdentifiedModel::new(hat, ModelForm::parametric(), 1.0, &[0.0; 3]),
-            Err(SolveError::ModelMismatch { .. })
+            Err(ModelError::Io(ModelIoError::ModelMismatch { .. }))
         ));
         assert!(matches!(
             IdentifiedModel::new(
@@ -1186,7 +781,7 @@ mod tests {
                 1.0,
                 &[0.0; 14]
             ),
-            Err(SolveError::TermNotAllowed { .. })
+            Err(ModelError::Term(TermError::TermNotAllowed { .. }))
         ));
         let line: BasisKind = Polynomial::new(1).unwrap().into();
         let form = ModelForm::externally_forced(Forcing::Known { cos: -1.0, sin: 0.0 });
