@@ -110,3 +110,15 @@ def test_the_stubs_are_the_extensions_signatures():
                 assert kw_defaults.get(p.name, "missing") == p.default, f"{name}({p.name})"
             else:
                 assert p.name not in kw_defaults, f"{name}({p.name}) has no default"
+
+
+@pytest.mark.parametrize("command", sorted(CLI))
+def test_docs_python_md_documents_every_keyword(command):
+    docs = (HERE.parents[1] / "docs" / "python.md").read_text()
+    parameters = inspect.signature(getattr(hbid, command)).parameters
+    missing = [
+        name
+        for name, p in parameters.items()
+        if p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD) and name != "x" and f"`{name}`" not in docs
+    ]
+    assert not missing, f"docs/python.md does not document hbid.{command}'s {missing}"
