@@ -116,52 +116,6 @@ def column(col: Union[str, int, None], name: str) -> Optional[str]:
     return str(col)
 
 
-#: The options of a record that a :class:`~hbid.Record` fixes when it is read.
-RECORD_FIXED = ("time_col", "angle_col", "dt", "drive_col", "repair")
-
-
-def source(
-    x: Any,
-    t: Optional[ArrayLike],
-    drive: Optional[ArrayLike],
-    options: Dict[str, Any],
-    defaults: Mapping[str, Any],
-) -> Dict[str, Any]:
-    """The extension's keyword arguments that say where the samples come from: ``path`` for a
-    file, ``x`` (with ``t`` and ``drive``) for arrays, ``x`` and ``grid`` for a Record, whose
-    own signal and measured quantity then hold (``options`` is updated)."""
-    from ._record import Record
-
-    if isinstance(x, Record):
-        for name in ("signal", "measured"):
-            own = getattr(x, name)
-            if options.get(name, defaults[name]) not in (defaults[name], own):
-                raise OptionsError(
-                    f"{name}={options[name]!r}: the record was read as {own!r}; read it again with {name}={options[name]!r}"
-                )
-            options[name] = own
-        for name in RECORD_FIXED:
-            if options.get(name, defaults.get(name)) != defaults.get(name):
-                raise OptionsError(f"{name}: the Record was read with its own; read it again to change it")
-            options.pop(name, None)
-        if t is not None or drive is not None:
-            raise OptionsError("a Record carries its own time and drive: give no t or drive with it")
-        args: Dict[str, Any] = dict(x=array(x.x, "x"), grid=x._grid())
-        if x.drive is not None:
-            args["drive"] = array(x.drive, "drive")
-        return args
-    if isinstance(x, (str, os.PathLike)):
-        if t is not None or drive is not None:
-            raise OptionsError("a file carries its own time and drive: give no t or drive with a path")
-        return dict(path=os.fspath(x))
-    args = dict(x=array(x, "x"))
-    if t is not None:
-        args["t"] = array(t, "t")
-    if drive is not None:
-        args["drive"] = array(drive, "drive")
-    return args
-
-
 def without(options: Dict[str, Any], *names: str) -> Tuple[Dict[str, Any], Dict[str, Any]]:
     """``options`` split into those named and the rest."""
     picked = {n: options.pop(n) for n in names if n in options}

@@ -10,7 +10,8 @@ from typing import Any, Dict, List, NamedTuple, Optional, Union
 import numpy as np
 
 from . import _hbid
-from ._common import RECORD_RENAMED, ArrayLike, PathLike, column, drive_value, emit, options_json, renamed, source
+from ._common import RECORD_RENAMED, ArrayLike, PathLike, column, drive_value, emit, options_json, renamed
+from ._record import source
 from ._identify import RECORD_DEFAULTS
 
 

@@ -18,8 +18,8 @@ from ._common import (
     emit,
     options_json,
     renamed,
-    source,
 )
+from ._record import source
 from ._model import Model, equation_text
 from .errors import OptionsError
 

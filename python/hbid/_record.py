@@ -5,12 +5,13 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass, field
-from typing import Any, List, Optional, Tuple, Union
+from typing import Any, Dict, List, Mapping, Optional, Tuple, Union
 
 import numpy as np
 
 from . import _hbid
 from ._common import ArrayLike, PathLike, array, column, emit, options_json
+from .errors import OptionsError
 
 
 @dataclass(frozen=True, eq=False)
@@ -139,8 +140,6 @@ def read(
     )
     if isinstance(path, (str, os.PathLike)):
         if t is not None or drive is not None:
-            from .errors import OptionsError
-
             raise OptionsError("a file carries its own time and drive: give no t or drive with a path")
         name = os.fspath(path)
         return _record(_hbid.condition(options_json(options), path=name), name)
@@ -151,3 +150,47 @@ def read(
         drive=None if drive is None else array(drive, "drive"),
     )
     return _record(d)
+
+
+#: The options of a record that a :class:`~hbid.Record` fixes when it is read.
+RECORD_FIXED = ("time_col", "angle_col", "dt", "drive_col", "repair")
+
+
+def source(
+    x: Any,
+    t: Optional[ArrayLike],
+    drive: Optional[ArrayLike],
+    options: Dict[str, Any],
+    defaults: Mapping[str, Any],
+) -> Dict[str, Any]:
+    """The extension's keyword arguments that say where the samples come from: ``path`` for a
+    file, ``x`` (with ``t`` and ``drive``) for arrays, ``x`` and ``grid`` for a Record, whose
+    own signal and measured quantity then hold (``options`` is updated)."""
+    if isinstance(x, Record):
+        for name in ("signal", "measured"):
+            own = getattr(x, name)
+            if options.get(name, defaults[name]) not in (defaults[name], own):
+                raise OptionsError(
+                    f"{name}={options[name]!r}: the record was read as {own!r}; read it again with {name}={options[name]!r}"
+                )
+            options[name] = own
+        for name in RECORD_FIXED:
+            if options.get(name, defaults.get(name)) != defaults.get(name):
+                raise OptionsError(f"{name}: the Record was read with its own; read it again to change it")
+            options.pop(name, None)
+        if t is not None or drive is not None:
+            raise OptionsError("a Record carries its own time and drive: give no t or drive with it")
+        args: Dict[str, Any] = dict(x=array(x.x, "x"), grid=x._grid())
+        if x.drive is not None:
+            args["drive"] = array(x.drive, "drive")
+        return args
+    if isinstance(x, (str, os.PathLike)):
+        if t is not None or drive is not None:
+            raise OptionsError("a file carries its own time and drive: give no t or drive with a path")
+        return dict(path=os.fspath(x))
+    args = dict(x=array(x, "x"))
+    if t is not None:
+        args["t"] = array(t, "t")
+    if drive is not None:
+        args["drive"] = array(drive, "drive")
+    return args

@@ -11,10 +11,9 @@ use embedding::{
 };
 use hb_record::prepare::Data;
 use serde::{Deserialize, Serialize, Serializer};
-use upo_search::Catalogue;
+use upo_search::{Catalogue, CloseReturns};
 
 use crate::error::RunError;
-use crate::identify::OrbitOptions;
 use crate::observe::{Observer, Stage};
 use crate::options::{OptionError, from_object, optional_text};
 use crate::pipeline::{EmbedOptions as Lags, Record, SearchOptions};
@@ -49,6 +48,57 @@ pub(crate) fn first_minimum(
         average_mutual_information(data.longest(), &params).map_err(crate::pipeline::PipelineError::from)?;
     let delay = curve.delay().map_err(RunError::NoDelay)?;
     Ok((curve, delay))
+}
+
+/// The options of the close-return search and the delay, shared by `identify`, `upos` and
+/// `report`. Defaults: the paper's (a tolerance of 3 % of the data's span, periods 1 to 16, delay
+/// vectors of dimension 2), the delay the first minimum of the average mutual information.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct OrbitOptions {
+    /// Close-return tolerance as a fraction of the span of the data (2π for an angle), in
+    /// `(0, 0.5)`.
+    pub tolerance: f64,
+    /// Longest orbit period searched, in drive periods.
+    pub max_period: usize,
+    /// Dimension of the delay vectors compared.
+    pub dim: usize,
+    /// The delay in samples (default: the first minimum of the average mutual information).
+    pub delay: Option<usize>,
+}
+
+impl Default for OrbitOptions {
+    fn default() -> Self {
+        Self {
+            tolerance: CloseReturns::DEFAULT_TOLERANCE,
+            max_period: CloseReturns::DEFAULT_MAX_PERIOD,
+            dim: CloseReturns::DEFAULT_DIMENSION,
+            delay: None,
+        }
+    }
+}
+
+impl OrbitOptions {
+    /// The search's options, checked.
+    pub fn search(&self) -> Result<SearchOptions, OptionError> {
+        let tolerance = SearchOptions::default()
+            .with_tolerance(self.tolerance)
+            .map_err(|e| OptionError::checked("tolerance", self.tolerance, &e))?;
+        let max_period = tolerance
+            .with_max_period(self.max_period)
+            .map_err(|e| OptionError::checked("max_period", self.max_period, &e))?;
+        max_period
+            .with_dimension(self.dim)
+            .map_err(|e| OptionError::checked("dim", self.dim, &e))
+    }
+
+    /// Checks the delay (at least one sample).
+    pub fn check_delay(&self) -> Result<(), OptionError> {
+        match self.delay {
+            Some(0) => Err(OptionError::value("delay", 0, "must be at least 1 sample")),
+            _ => Ok(()),
+        }
+    }
 }
 
 /// Every option of `hbid embed`, by the names of the command line and Python. Defaults: lags up to

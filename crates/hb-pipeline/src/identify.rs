@@ -12,8 +12,9 @@ use hb_model::{Forcing, Harmonics, MAX_DRIVE_HARMONIC, MeasuredDrive, ModelForm,
 use hb_record::prepare::{Data, DriveFound, DriveSpec, default_basis};
 use hb_solve::{BootstrapParams, LstsqSolver, NoiseCorrection, QrSolver, SelectParams, SvdSolver, WeakForm};
 use serde::{Deserialize, Serialize, Serializer};
-use upo_search::{CloseReturns, Windows};
+use upo_search::Windows;
 
+use crate::embed::{OrbitOptions, first_minimum};
 use crate::error::RunError;
 use crate::observe::{Notice, Observer, Stage};
 use crate::options::{OptionError, from_object, optional_text, text};
@@ -92,57 +93,6 @@ impl fmt::Display for ForcingTerms {
             ForcingTerms::None => "none",
             ForcingTerms::Identified => "identified",
         })
-    }
-}
-
-/// The options of the close-return search and the delay, shared by `identify`, `upos` and
-/// `report`. Defaults: the paper's (a tolerance of 3 % of the data's span, periods 1 to 16, delay
-/// vectors of dimension 2), the delay the first minimum of the average mutual information.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct OrbitOptions {
-    /// Close-return tolerance as a fraction of the span of the data (2π for an angle), in
-    /// `(0, 0.5)`.
-    pub tolerance: f64,
-    /// Longest orbit period searched, in drive periods.
-    pub max_period: usize,
-    /// Dimension of the delay vectors compared.
-    pub dim: usize,
-    /// The delay in samples (default: the first minimum of the average mutual information).
-    pub delay: Option<usize>,
-}
-
-impl Default for OrbitOptions {
-    fn default() -> Self {
-        Self {
-            tolerance: CloseReturns::DEFAULT_TOLERANCE,
-            max_period: CloseReturns::DEFAULT_MAX_PERIOD,
-            dim: CloseReturns::DEFAULT_DIMENSION,
-            delay: None,
-        }
-    }
-}
-
-impl OrbitOptions {
-    /// The search's options, checked.
-    pub fn search(&self) -> Result<SearchOptions, OptionError> {
-        let tolerance = SearchOptions::default()
-            .with_tolerance(self.tolerance)
-            .map_err(|e| OptionError::checked("tolerance", self.tolerance, &e))?;
-        let max_period = tolerance
-            .with_max_period(self.max_period)
-            .map_err(|e| OptionError::checked("max_period", self.max_period, &e))?;
-        max_period
-            .with_dimension(self.dim)
-            .map_err(|e| OptionError::checked("dim", self.dim, &e))
-    }
-
-    /// Checks the delay (at least one sample).
-    pub fn check_delay(&self) -> Result<(), OptionError> {
-        match self.delay {
-            Some(0) => Err(OptionError::value("delay", 0, "must be at least 1 sample")),
-            _ => Ok(()),
-        }
     }
 }
 
@@ -540,7 +490,7 @@ impl IdentifyRequest {
             Some(d) => Ok(d),
             None => {
                 observer.stage(Stage::Delay);
-                crate::embed::first_minimum(data, data.domain, None, None).map(|(_, d)| d)
+                first_minimum(data, data.domain, None, None).map(|(_, d)| d)
             }
         }
     }

@@ -54,11 +54,10 @@ pub mod pipeline;
 pub mod record;
 pub mod simulate;
 
-pub use embed::{EmbedReport, EmbedRequest, UposReport, UposRequest, embed, upos};
+pub use embed::{EmbedReport, EmbedRequest, OrbitOptions, UposReport, UposRequest, embed, upos};
 pub use error::{ErrorKind, RunError};
 pub use identify::{
-    ForcingTerms, IdentifyOptions, IdentifyReport, IdentifyRequest, OrbitOptions, SolverKind, identify,
-    identify_data,
+    ForcingTerms, IdentifyOptions, IdentifyReport, IdentifyRequest, SolverKind, identify, identify_data,
 };
 pub use observe::{Notice, Notices, Observer, Stage};
 pub use options::{OptionError, Spelling};
