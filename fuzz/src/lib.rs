@@ -4,7 +4,7 @@
 
 use hb_basis::BasisKind;
 use hb_model::IdentifiedModel;
-use hbid::input::{GridOptions, GridRecord, InputError, Location, Record, angle_range};
+use hb_record::input::{GridOptions, GridRecord, InputError, Location, Record, angle_range};
 use pendulum_sim::SecondOrderSystem;
 
 /// The number of lines of a text as the reader counts them (a last line without a line end

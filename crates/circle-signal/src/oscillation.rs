@@ -14,8 +14,7 @@ use std::f64::consts::{LN_2, PI, TAU};
 use std::fmt;
 use std::ops::Range;
 
-use realfft::RealFftPlanner;
-use realfft::num_complex::Complex;
+use hb_fft::{Complex, Planner};
 
 use crate::{CircleError, Domain};
 
@@ -396,7 +395,7 @@ fn fast_len(m: usize) -> usize {
 
 /// `|X_k|²` for `k = 0..=len/2`, `X` the transform of `s` padded with zeros to `len`.
 fn power_spectrum(s: &[f64], len: usize) -> Vec<f64> {
-    let fft = RealFftPlanner::<f64>::new().plan_fft_forward(len);
+    let fft = Planner::new().forward(len);
     let mut input = fft.make_input_vec();
     input[..s.len()].copy_from_slice(s);
     let mut bins = fft.make_output_vec();

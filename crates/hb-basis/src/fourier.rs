@@ -8,10 +8,8 @@
 //! frequency.
 
 use std::fmt;
-use std::sync::Arc;
 
-use realfft::num_complex::Complex;
-use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
+use hb_fft::{Complex, Forward, Inverse, Planner};
 
 use crate::error::BasisError;
 
@@ -104,12 +102,12 @@ impl<'a> Spectrum<'a> {
 /// Cloning shares the plan and copies the buffers, so each worker thread can own a clone.
 #[derive(Clone)]
 pub struct FourierPlan {
-    fft: Arc<dyn RealToComplex<f64>>,
+    fft: Forward,
     input: Vec<f64>,
     bins: Vec<Complex64>,
     scratch: Vec<Complex64>,
     /// The inverse transform and its scratch, planned on the first [`FourierPlan::derivative`].
-    inverse: Option<(Arc<dyn ComplexToReal<f64>>, Vec<Complex64>)>,
+    inverse: Option<(Inverse, Vec<Complex64>)>,
 }
 
 impl fmt::Debug for FourierPlan {
@@ -123,10 +121,10 @@ impl fmt::Debug for FourierPlan {
 impl FourierPlan {
     /// A plan for segments of `len >= 2` samples.
     pub fn new(len: usize) -> Result<Self, BasisError> {
-        Self::with_planner(len, &mut RealFftPlanner::new())
+        Self::with_planner(len, &mut Planner::new())
     }
 
-    fn with_planner(len: usize, planner: &mut RealFftPlanner<f64>) -> Result<Self, BasisError> {
+    fn with_planner(len: usize, planner: &mut Planner) -> Result<Self, BasisError> {
         if len < 2 {
             return Err(BasisError::TooSmall {
                 name: "segment length",
@@ -134,7 +132,7 @@ impl FourierPlan {
                 min: 2,
             });
         }
-        let fft = planner.plan_fft_forward(len);
+        let fft = planner.forward(len);
         let input = fft.make_input_vec();
         let bins = fft.make_output_vec();
         let scratch = fft.make_scratch_vec();
@@ -221,7 +219,7 @@ impl FourierPlan {
             };
         }
         let (inverse, scratch) = self.inverse.get_or_insert_with(|| {
-            let inverse = RealFftPlanner::<f64>::new().plan_fft_inverse(len);
+            let inverse = Planner::new().inverse(len);
             let scratch = inverse.make_scratch_vec();
             (inverse, scratch)
         });
@@ -267,7 +265,7 @@ impl FourierPlan {
 /// most 16 plans. Cloning copies the plans (sharing the FFTs) and starts a fresh planner.
 #[derive(Default)]
 pub struct FourierPlanner {
-    planner: RealFftPlanner<f64>,
+    planner: Planner,
     plans: Vec<FourierPlan>,
 }
 
@@ -283,7 +281,7 @@ impl fmt::Debug for FourierPlanner {
 impl Clone for FourierPlanner {
     fn clone(&self) -> Self {
         Self {
-            planner: RealFftPlanner::new(),
+            planner: Planner::new(),
             plans: self.plans.clone(),
         }
     }

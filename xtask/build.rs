@@ -1,0 +1,3 @@
+//! Empty: it lets `xtask` declare the build dependency of `Cargo.toml` that unifies features.
+
+fn main() {}
