@@ -136,7 +136,13 @@ fn rigs() -> Vec<Rig> {
                    from 80 counts to a few over 45 s at about 1.3 Hz, with dry friction, bit errors (rate 1e-4) and four \
                    half-turn (2048-count) spikes; near rest the quantised angle toggles between counts",
             simulate: &[DECAY],
-            identify: &["--drive-period", "none", "--repair"],
+            identify: &[
+                "--drive-period",
+                "none",
+                "--repair",
+                "--terms",
+                "x', sign(x'), cos(x), sin(x)",
+            ],
             rewrite: Some(half_turn_spikes),
             make: None,
         },
@@ -452,9 +458,11 @@ pub fn run(out: &Path, data: &Path) -> anyhow::Result<()> {
     writeln!(
         report,
         "# Real records\n\n\
-         Records shaped like real rigs' — any sampling rate, DAQ time stamps, encoder counts, an encoder zero away \
-         from the bottom, bit errors, gaps, an unknown drive frequency, no drive — made by `hbid simulate` and each \
-         identified by one `hbid identify` command, with no preprocessing. The truth is the simulated equation \
+         Records shaped like real rigs' — any sampling rate, DAQ time stamps (printed to a fixed resolution, \
+         jittering, from a clock that slips, with glitches), encoder counts, an encoder zero away from the bottom, \
+         bit errors and half-turn spikes, a vibrometer's dropouts, gaps, an unknown drive frequency, drive \
+         harmonics, no drive, and a drive the library cannot express — made by `hbid simulate` (the last one by \
+         `pendulum-sim` directly) and each identified by one `hbid identify` command, with no preprocessing. The truth is the simulated equation \
          written in the record's own time unit (seconds), `x'' + Σ c_i g_i = 0`, from `hbid simulate --truth`. \
          Relative errors are to the largest coefficient of the model for the terms whose truth is zero.\n\n\
          Made by `cargo xtask real-records` ({}); the records are written to `{}` and not kept in the repository.\n",
@@ -555,6 +563,13 @@ pub fn run(out: &Path, data: &Path) -> anyhow::Result<()> {
         if rows.is_empty() {
             bail!("{}: no coefficient of the truth was identified", rig.name);
         }
+        let missing: Vec<String> = coefficients
+            .iter()
+            .filter(|(term, value)| {
+                value.as_f64().is_some_and(|v| v != 0.0) && !rows.iter().any(|r| &r.term == *term)
+            })
+            .map(|(term, value)| format!("`{term}` ({})", value.as_f64().unwrap_or(f64::NAN)))
+            .collect();
         let scale = rows.iter().map(|r| r.truth.abs()).fold(0.0, f64::max);
         let error = |r: &Row| {
             let reference = if r.truth == 0.0 { scale } else { r.truth.abs() };
@@ -596,6 +611,13 @@ pub fn run(out: &Path, data: &Path) -> anyhow::Result<()> {
                 (true, None) => writeln!(report, " | |")?,
                 (false, _) => writeln!(report)?,
             }
+        }
+        if !missing.is_empty() {
+            writeln!(
+                report,
+                "\nTerms of the truth that the model does not have: {}.",
+                missing.join(", ")
+            )?;
         }
         writeln!(
             report,
