@@ -26,7 +26,9 @@ The functions:
 - :func:`read` a record from a file; :func:`simulate` a rig's record;
 - :func:`identify` the equation of motion (:class:`Identification`, with its :class:`Model`);
 - :func:`embed`: the delay and the embedding dimension (:class:`Embedding`);
-- :func:`upos`: unstable periodic orbits by close returns (:class:`Orbits`).
+- :func:`upos`: unstable periodic orbits by close returns (:class:`Orbits`);
+- :func:`compare`: a saved model run freely under a record's measured input and scored against
+  its measured output (:class:`Comparison`), the validation on held-out data.
 
 Errors are the exceptions of :mod:`hbid.errors`, all :class:`HbidError`.
 """
@@ -35,6 +37,7 @@ from __future__ import annotations
 
 from . import _hbid
 from ._common import HbidWarning
+from ._compare import Comparison, ModelRun, RangeScore, RunPiece, compare
 from ._embed import Embedding, Orbit, Orbits, embed, upos
 from ._identify import DroppedTerm, Identification, Selection, SelectionStep, identify
 from ._model import Model
@@ -59,7 +62,12 @@ __all__ = [
     "identify",
     "embed",
     "upos",
+    "compare",
     "Record",
+    "Comparison",
+    "RangeScore",
+    "RunPiece",
+    "ModelRun",
     "Simulation",
     "Identification",
     "Selection",

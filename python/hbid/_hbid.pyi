@@ -48,6 +48,37 @@ def upos(
     grid: Optional[Grid] = None,
 ) -> Dict[str, Any]: ...
 def simulate(options: str, *, out: Optional[str] = None, truth: Optional[str] = None) -> Dict[str, Any]: ...
+def compare(
+    model: bytes,
+    options: str,
+    *,
+    path: Optional[str] = None,
+    x: Optional[Array] = None,
+    t: Optional[Array] = None,
+    drive: Optional[Array] = None,
+    grid: Optional[Grid] = None,
+) -> Dict[str, Any]: ...
+def model_run(
+    model: bytes,
+    options: str,
+    rig: str,
+    *,
+    path: Optional[str] = None,
+    x: Optional[Array] = None,
+    t: Optional[Array] = None,
+    drive: Optional[Array] = None,
+    grid: Optional[Grid] = None,
+    out: Optional[str] = None,
+) -> Dict[str, Any]: ...
+def model_run_on(
+    model: bytes,
+    t: Array,
+    *,
+    x0: float,
+    v0: float,
+    drive: Optional[Array] = None,
+    rtol: float = 1e-10,
+) -> Dict[str, Any]: ...
 def model_info(model: bytes) -> Dict[str, Any]: ...
 def model_json(model: bytes) -> str: ...
 def model_from_json(text: str) -> bytes: ...

@@ -9,7 +9,8 @@ from typing import Any, Dict, Mapping, Optional, Tuple
 import numpy as np
 
 from . import _hbid
-from ._common import PathLike
+from ._common import HbidWarning, PathLike, array
+from .errors import OptionsError
 
 
 class Model:
@@ -111,8 +112,10 @@ class Model:
 
     def simulate(
         self,
-        samples: int,
+        samples: Optional[int] = None,
         *,
+        t: Optional[Any] = None,
+        drive: Optional[Any] = None,
         x0: float = 0.1,
         v0: float = 0.0,
         samples_per_period: Optional[int] = None,
@@ -122,8 +125,17 @@ class Model:
     ) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Simulates the model from ``(x0, v0)`` in the record's time.
 
+        Either ``samples`` samples on the record's grid (``samples_per_period`` per drive period,
+        after ``transient_periods``), or the times ``t`` (an even grid, in the record's time unit;
+        the model's own drive at those times), driven by ``drive`` (one sample per time, for a
+        model with terms in the measured drive ``p``; read between samples from the C1 cubic
+        spline through them). With ``t`` the run starts at ``t[0]`` with no transient; a run that
+        blows up stops with a :class:`HbidWarning` and NaN from there on.
+
         Args:
-            samples: samples kept.
+            samples: samples kept (without ``t``).
+            t: the times to run over, instead of ``samples``.
+            drive: the measured drive at the times ``t``.
             x0: initial position.
             v0: initial velocity.
             samples_per_period: samples per drive period (default: the record's, from the fit).
@@ -134,16 +146,37 @@ class Model:
         Returns:
             ``(t, x, v)`` arrays.
         """
-        return _hbid.model_simulate(
+        if t is None:
+            if drive is not None:
+                raise OptionsError("drive: a measured drive is given at times: give t= with it")
+            if samples is None:
+                raise OptionsError("give samples= (on the record's grid) or the times t=")
+            return _hbid.model_simulate(
+                self._bytes,
+                samples=samples,
+                x0=x0,
+                v0=v0,
+                samples_per_period=samples_per_period,
+                transient_periods=transient_periods,
+                rtol=rtol,
+                wrapped=wrapped,
+            )
+        if samples is not None or samples_per_period is not None or transient_periods != 0:
+            raise OptionsError("t: the times say where to run; give no samples, samples_per_period or transient_periods")
+        d = _hbid.model_run_on(
             self._bytes,
-            samples=samples,
-            x0=x0,
-            v0=v0,
-            samples_per_period=samples_per_period,
-            transient_periods=transient_periods,
+            array(t, "t"),
+            x0=float(x0),
+            v0=float(v0),
+            drive=None if drive is None else array(drive, "drive"),
             rtol=rtol,
-            wrapped=wrapped,
         )
+        if d["stopped"] is not None:
+            warnings.warn(d["stopped"], HbidWarning, stacklevel=2)
+        x = d["x"]
+        if wrapped and self.signal == "circle":
+            x = np.where(np.isfinite(x), (x + np.pi) % (2.0 * np.pi) - np.pi, x)
+        return d["t"], x, d["v"]
 
     def save(self, path: PathLike) -> None:
         """Saves the model: JSON if the name ends in ``.json``, compact binary otherwise (written

@@ -10,6 +10,7 @@ import numpy as np
 
 from . import _hbid
 from ._common import PathLike, options_json, renamed
+from .errors import OptionsError
 
 
 @dataclass(frozen=True, eq=False)
@@ -125,8 +126,15 @@ def simulate(
     truth: Optional[PathLike] = None,
     write_drive: bool = False,
     out: Optional[PathLike] = None,
+    model: Any = None,
+    input: Any = None,
+    time_col: Union[str, int, None] = None,
+    angle_col: Union[str, int, None] = None,
+    dt: Optional[float] = None,
+    drive_col: Union[str, int, None] = None,
+    init: Optional[int] = None,
     **old: Any,
-) -> Simulation:
+) -> Any:
     """Simulates a rig's record, as ``hbid simulate`` does (defaults: the paper's data set).
 
     The base-excited pendulum ``x'' + c x' + (1/r^2) sin x - f sin(t) cos x = 0`` or the
@@ -175,9 +183,21 @@ def simulate(
         truth: also write the truth file here (JSON).
         write_drive: also give (and write) the drive p(t) as a column ``p``.
         out: also write the record here: ``.npy`` or CSV.
+        model: a saved model (a :class:`Model` or its path) to run instead of a built-in system,
+            over the grid of the record ``input`` and driven by its measured drive; takes no
+            option of a built-in system (only ``x0``, ``v0``, ``rtol``, ``out`` and the input's).
+        input: the record that drives ``model``: a path or a :class:`Record`.
+        time_col: the input's time column.
+        angle_col: the input's output column (its first samples set the initial state).
+        dt: the input's sampling step, for a record without times.
+        drive_col: the input's measured drive column, for a model with terms in ``p``.
+        init: samples of the input that set the initial state of each piece (default: one period
+            of the model's drive, at most a tenth of the record, at least 8); 0 starts from
+            ``x0``, ``v0``.
 
     Returns:
-        A :class:`Simulation` (``t, x, v = ...`` unpacks the arrays).
+        A :class:`Simulation` (``t, x, v = ...`` unpacks the arrays); with ``model``, a
+        :class:`~hbid.ModelRun`.
 
     Raises:
         OptionsError: a bad value or combination of options.
@@ -222,6 +242,37 @@ def simulate(
     )
     renamed("simulate", old, SIMULATE_RENAMED, options)
     import os
+
+    if model is not None or input is not None:
+        if model is None or input is None:
+            raise OptionsError("model= runs under the record input=: give both")
+        from ._compare import run_model
+
+        if truth is not None:
+            raise OptionsError("truth is the equation of a built-in system: a saved model= has none to write")
+        return run_model(
+            model,
+            input,
+            rig=options_json(options),
+            time_col=time_col,
+            angle_col=angle_col,
+            dt=dt,
+            drive_col=drive_col,
+            init=init,
+            x0=options["x0"],
+            v0=options["v0"],
+            rtol=options["rtol"],
+            out=out,
+        )
+    for name, value in (
+        ("time_col", time_col),
+        ("angle_col", angle_col),
+        ("dt", dt),
+        ("drive_col", drive_col),
+        ("init", init),
+    ):
+        if value is not None:
+            raise OptionsError(f"{name} reads the record of input=, for a saved model=")
 
     d = _hbid.simulate(
         options_json(options),

@@ -69,6 +69,14 @@ pub enum RunError {
     /// A model: saved, being saved, or made from a record's drive.
     #[error("the model")]
     Model(#[source] hb_model::ModelError),
+    /// A model file that cannot be read or is not a model.
+    #[error("{path}: {why}")]
+    ModelFile {
+        /// The file.
+        path: String,
+        /// What is wrong with it.
+        why: String,
+    },
     /// Writing a result file.
     #[error(transparent)]
     Output(#[from] crate::output::OutputError),
@@ -103,7 +111,7 @@ impl RunError {
             RunError::Pipeline(_) => ErrorKind::Identification,
             RunError::Identify { .. } | RunError::NoDelay(_) => ErrorKind::Identification,
             RunError::Simulation(_) => ErrorKind::Simulation,
-            RunError::Model(_) => ErrorKind::Model,
+            RunError::Model(_) | RunError::ModelFile { .. } => ErrorKind::Model,
             RunError::Output(_) => ErrorKind::Output,
         }
     }

@@ -44,6 +44,7 @@
 //! ```
 #![deny(missing_docs)]
 
+pub mod compare;
 pub mod embed;
 pub mod error;
 pub mod identify;
@@ -54,6 +55,10 @@ pub mod pipeline;
 pub mod record;
 pub mod simulate;
 
+pub use compare::{
+    CompareOptions, CompareReport, CompareRequest, ModelRun, SampleRange, compare, model_run, read_model,
+    run_on_times,
+};
 pub use embed::{EmbedReport, EmbedRequest, OrbitOptions, UposReport, UposRequest, embed, upos};
 pub use error::{ErrorKind, RunError};
 pub use identify::{

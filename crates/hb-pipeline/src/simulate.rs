@@ -342,6 +342,26 @@ impl Default for SimulateOptions {
     }
 }
 
+/// Why an option of a built-in system is refused with a saved model, after the option's name.
+pub const MODEL_TAKES_NO_RIG: &str = "is an option of a built-in system: a saved model («model») takes only the input's options, «x0», «v0» and «rtol»";
+
+impl SimulateOptions {
+    /// The options of a built-in system set away from their defaults (every option but `x0`,
+    /// `v0` and `rtol`): what a saved model's run under a record's input (`hbid simulate --model`)
+    /// does not take.
+    pub fn rig_settings(&self) -> Vec<String> {
+        let (Ok(serde_json::Value::Object(now)), Ok(serde_json::Value::Object(default))) =
+            (serde_json::to_value(self), serde_json::to_value(Self::default()))
+        else {
+            return Vec::new();
+        };
+        now.into_iter()
+            .filter(|(k, v)| !matches!(k.as_str(), "x0" | "v0" | "rtol") && default.get(k) != Some(v))
+            .map(|(k, _)| k)
+            .collect()
+    }
+}
+
 /// Decimals beyond which printing gains nothing an `f64` holds.
 const MAX_DECIMALS: usize = 30;
 

@@ -50,6 +50,9 @@ fn _hbid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(run::embed, m)?)?;
     m.add_function(wrap_pyfunction!(run::upos, m)?)?;
     m.add_function(wrap_pyfunction!(run::simulate, m)?)?;
+    m.add_function(wrap_pyfunction!(run::compare, m)?)?;
+    m.add_function(wrap_pyfunction!(run::model_run, m)?)?;
+    m.add_function(wrap_pyfunction!(run::model_run_on, m)?)?;
     m.add_function(wrap_pyfunction!(model::model_info, m)?)?;
     m.add_function(wrap_pyfunction!(model::model_json, m)?)?;
     m.add_function(wrap_pyfunction!(model::model_from_json, m)?)?;

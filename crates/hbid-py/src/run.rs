@@ -10,8 +10,8 @@ use std::path::PathBuf;
 
 use circle_signal::Domain;
 use hb_pipeline::{
-    EmbedRequest, IdentifyRequest, Notice, Notices, RecordOptions, Rig, Source, Spelling, UposRequest,
-    condition_source,
+    CompareRequest, EmbedRequest, IdentifyRequest, Notice, Notices, RecordOptions, Rig, Source, Spelling,
+    UposRequest, condition_source,
 };
 use hb_record::prepare::{GridData, Note};
 use numpy::{PyArray1, PyReadonlyArray1};
@@ -299,5 +299,148 @@ pub fn simulate<'py>(
     dict.set_item("drive", (columns.len() > 3).then(|| column(3)))?;
     dict.set_item("columns", columns)?;
     dict.set_item("truth", truth_json)?;
+    Ok(dict)
+}
+
+/// A saved model (its bytes) run freely under a record's measured input and scored against its
+/// measured output, as `hbid compare --json` does: the report's JSON, each range's runs as
+/// `(start, init, t, measured, x, v)` pieces, and the notices.
+#[pyfunction]
+#[pyo3(signature = (model, options, *, path=None, x=None, t=None, drive=None, grid=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn compare<'py>(
+    py: Python<'py>,
+    model: &[u8],
+    options: &str,
+    path: Option<PathBuf>,
+    x: Option<PyReadonlyArray1<'py, f64>>,
+    t: Option<PyReadonlyArray1<'py, f64>>,
+    drive: Option<PyReadonlyArray1<'py, f64>>,
+    grid: Option<Grid>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let model = hb_model::IdentifiedModel::from_bytes(model).map_err(|e| raise(Kind::Model, e))?;
+    let request = CompareRequest::from_json(self::options(options)?).map_err(option_error)?;
+    let samples = Samples {
+        path,
+        x: optional(&x)?,
+        t: optional(&t)?,
+        drive: optional(&drive)?,
+        grid,
+    };
+    let source = samples.source()?;
+    let mut notices = Notices::default();
+    let report = py
+        .detach(|| hb_pipeline::compare(&model, source, &request, &mut notices))
+        .map_err(run_error)?;
+    let out = PyDict::new(py);
+    out.set_item(
+        "json",
+        serde_json::to_string(&report).map_err(|e| raise(Kind::Options, e))?,
+    )?;
+    let runs = PyList::empty(py);
+    for range in report.runs {
+        let pieces = PyList::empty(py);
+        for p in range {
+            pieces.append((
+                p.start,
+                p.init,
+                PyArray1::from_vec(py, p.t),
+                PyArray1::from_vec(py, p.measured),
+                PyArray1::from_vec(py, p.x),
+                PyArray1::from_vec(py, p.v),
+            ))?;
+        }
+        runs.append(pieces)?;
+    }
+    out.set_item("runs", runs)?;
+    out.set_item("notes", notice_texts(&notices.0))?;
+    Ok(out)
+}
+
+/// A saved model run from `(x0, v0)` over the even grid of times `t`, driven by `drive` (for a
+/// model with terms in p): `(t, x, v)` and why the run stopped, if it did.
+#[pyfunction]
+#[pyo3(signature = (model, t, *, x0, v0, drive=None, rtol=1e-10))]
+pub fn model_run_on<'py>(
+    py: Python<'py>,
+    model: &[u8],
+    t: PyReadonlyArray1<'py, f64>,
+    x0: f64,
+    v0: f64,
+    drive: Option<PyReadonlyArray1<'py, f64>>,
+    rtol: f64,
+) -> PyResult<Bound<'py, PyDict>> {
+    let model = hb_model::IdentifiedModel::from_bytes(model).map_err(|e| raise(Kind::Model, e))?;
+    let times = crate::slice(&t)?;
+    let drive = optional(&drive)?;
+    let run = py
+        .detach(|| hb_pipeline::run_on_times(&model, times, drive, [x0, v0], rtol))
+        .map_err(run_error)?;
+    let column = |i: usize| PyArray1::from_vec(py, run.rows.iter().map(|row| row[i]).collect());
+    let out = PyDict::new(py);
+    out.set_item("t", column(0))?;
+    out.set_item("x", column(1))?;
+    out.set_item("v", column(2))?;
+    out.set_item("stopped", run.stopped.clone())?;
+    Ok(out)
+}
+
+/// A saved model run over a record's grid under its measured drive, as `hbid simulate --model
+/// --input` does: `(t, x, v)` at every sample run and why the run stopped, if it did.
+/// `rig` holds the options of `simulate` for a built-in system: any set away from its default is
+/// refused, as the command line refuses it.
+#[pyfunction]
+#[pyo3(signature = (model, options, rig, *, path=None, x=None, t=None, drive=None, grid=None, out=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn model_run<'py>(
+    py: Python<'py>,
+    model: &[u8],
+    options: &str,
+    rig: &str,
+    path: Option<PathBuf>,
+    x: Option<PyReadonlyArray1<'py, f64>>,
+    t: Option<PyReadonlyArray1<'py, f64>>,
+    drive: Option<PyReadonlyArray1<'py, f64>>,
+    grid: Option<Grid>,
+    out: Option<PathBuf>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let rig: hb_pipeline::SimulateOptions =
+        hb_pipeline::options::from_object(self::options(rig)?).map_err(option_error)?;
+    if let Some(name) = rig.rig_settings().first() {
+        return Err(option_error(hb_pipeline::OptionError::sentence(
+            name.as_str(),
+            hb_pipeline::simulate::MODEL_TAKES_NO_RIG,
+        )));
+    }
+    let model = hb_model::IdentifiedModel::from_bytes(model).map_err(|e| raise(Kind::Model, e))?;
+    let request = CompareRequest::from_json(self::options(options)?).map_err(option_error)?;
+    let samples = Samples {
+        path,
+        x: optional(&x)?,
+        t: optional(&t)?,
+        drive: optional(&drive)?,
+        grid,
+    };
+    let source = samples.source()?;
+    let mut notices = Notices::default();
+    let run = py
+        .detach(|| {
+            if let Some(path) = &out {
+                hb_pipeline::output::check_output_path(path)?;
+            }
+            let run = hb_pipeline::model_run(&model, source, &request, &mut notices)?;
+            if let Some(path) = &out {
+                run.write(path)?;
+            }
+            Ok::<_, hb_pipeline::RunError>(run)
+        })
+        .map_err(run_error)?;
+    let column = |i: usize| PyArray1::from_vec(py, run.rows.iter().map(|row| row[i]).collect());
+    let dict = PyDict::new(py);
+    dict.set_item("t", column(0))?;
+    dict.set_item("x", column(1))?;
+    dict.set_item("v", column(2))?;
+    dict.set_item("stopped", run.stopped.clone())?;
+    dict.set_item("notes", notice_texts(&notices.0))?;
     Ok(dict)
 }

@@ -59,6 +59,15 @@ enum Command {
     Identify(cmd::identify::IdentifyArgs),
     /// Embed, find orbits, identify and validate, and write a Markdown report with figures.
     Report(cmd::report::ReportArgs),
+    /// Run a saved model freely under a record's measured input and score it against the record's measured output.
+    ///
+    /// The model starts each range (and each piece after a gap) from the state whose free run
+    /// best matches the range's first --init samples, is driven by the record's drive column (a
+    /// model with terms in p) or its own drive on the record's clock, and is scored on the samples
+    /// after them: RMSE in the record's unit, NRMSE (RMSE over the measured output's standard
+    /// deviation) and fit % = 100 (1 - |y - y_sim| / |y - mean(y)|). Friction terms stick at rest
+    /// as in every simulation.
+    Compare(cmd::compare::CompareArgs),
 }
 
 fn main() -> ExitCode {
@@ -93,6 +102,7 @@ fn main() -> ExitCode {
         Command::Embed(args) => cmd::embed::run(args, cli.quiet),
         Command::Upos(args) => cmd::upos::run(args, cli.quiet),
         Command::Identify(args) => cmd::identify::run(args, cli.quiet, cli.timings),
+        Command::Compare(args) => cmd::compare::run(args, cli.quiet),
         Command::Report(args) => {
             cmd::report::check_out(&args.out).and_then(|()| cmd::report::run(args, cli.quiet))
         }

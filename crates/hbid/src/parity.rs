@@ -9,7 +9,7 @@ use serde_json::{Map, Value, json};
 use super::Cli;
 
 /// The subcommands that Python has as functions of the same name.
-const COMMANDS: [&str; 4] = ["identify", "simulate", "embed", "upos"];
+const COMMANDS: [&str; 5] = ["identify", "simulate", "embed", "upos", "compare"];
 
 /// Every option of `command`: its name with `_` for `-`, its default as the help prints it (null
 /// for none), whether it is a flag, and its aliases.

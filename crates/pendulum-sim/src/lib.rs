@@ -92,6 +92,7 @@
 mod dop853;
 mod error;
 pub mod frame;
+mod free_run;
 mod machine;
 pub mod observe;
 mod oscillators;
@@ -106,6 +107,7 @@ pub use circle_signal::Domain;
 pub use dop853::{Dop853, OdeSystem, Stats, Tolerances};
 pub use error::SimError;
 pub use frame::{InFrame, RecordFrame};
+pub use free_run::{FreeRun, InitialState, fit_initial_state, free_run};
 pub use machine::{DriveHarmonic, DriveHarmonics, Losses};
 pub use oscillators::{Duffing, Pendulum};
 pub use prediction::{

@@ -1,4 +1,5 @@
 //! Subcommands.
+pub mod compare;
 pub mod data;
 pub mod embed;
 pub mod identify;

@@ -2,13 +2,13 @@
 //! application layer's ([`hb_pipeline::simulate`]); this module holds the arguments and writes
 //! the files.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use clap::{Args, ValueEnum};
 use hb_pipeline::simulate::{
     DriveKind, GapsText, HarmonicText, RangeKind, SystemKind, TimeOrigin, check_outputs, write_truth,
 };
-use hb_pipeline::{Rig, SimulateOptions};
+use hb_pipeline::{CompareOptions, CompareRequest, OptionError, Rig, SimulateOptions, Source};
 
 use crate::progress::Console;
 
@@ -55,6 +55,7 @@ const TIME: &str = "Time and sampling";
 const ENCODER: &str = "Encoder (pendulum only)";
 const NOISE: &str = "Noise and seed";
 const OUTPUT: &str = "Output";
+const MODEL: &str = "A saved model under a record's input";
 
 /// Options of `hbid simulate`.
 #[derive(Debug, Args)]
@@ -184,6 +185,35 @@ pub struct SimulateArgs {
     /// hold) or CSV (anything else).
     #[arg(long, help_heading = OUTPUT)]
     out: PathBuf,
+
+    /// Simulate this saved model (from `hbid identify --save-model`) instead of a built-in system,
+    /// over the grid of the record --input, driven by its measured drive (--drive-col) or by the
+    /// model's own drive on the record's clock; writes t,x,v at every sample of the record, piece
+    /// by piece between gaps, each piece from the state whose free run best matches its first
+    /// --init samples (or from --x0, --v0 with --init 0). Takes no option of a built-in system.
+    #[arg(long, value_name = "MODEL", requires = "input", help_heading = MODEL)]
+    model: Option<PathBuf>,
+    /// The record whose input drives --model (text or .npy, read as by `hbid identify`).
+    #[arg(long, value_name = "RECORD", requires = "model", help_heading = MODEL)]
+    input: Option<PathBuf>,
+    /// The input's time column, by header name or 1-based position.
+    #[arg(long, value_name = "NAME|N", help_heading = MODEL)]
+    time_col: Option<String>,
+    /// The input's measured output column (angle or displacement), by header name or 1-based
+    /// position: its first samples set the initial state.
+    #[arg(long, value_name = "NAME|N", help_heading = MODEL)]
+    angle_col: Option<String>,
+    /// The input's sampling step, for a record without a time column.
+    #[arg(long, allow_hyphen_values = true, help_heading = MODEL)]
+    dt: Option<f64>,
+    /// The input's measured drive p(t), for a model with terms in p (by header name or 1-based
+    /// position); read between samples from the C¹ cubic spline through them.
+    #[arg(long, value_name = "NAME|N", help_heading = MODEL)]
+    drive_col: Option<String>,
+    /// Samples of the input that set the initial state of each piece [default: one period of the
+    /// model's drive, at most a tenth of the record, at least 8]; 0 starts from --x0, --v0.
+    #[arg(long, value_name = "N", help_heading = MODEL)]
+    init: Option<usize>,
 }
 
 impl From<SystemArg> for SystemKind {
@@ -264,7 +294,65 @@ impl SimulateArgs {
     }
 }
 
+/// `--model`: the saved model run under the input's measured drive.
+fn run_model(args: &SimulateArgs, model: &Path, input: &Path, quiet: bool) -> anyhow::Result<()> {
+    let request = model_request(args)?;
+    check_outputs(Some(&args.out), None)?;
+    let model = hb_pipeline::read_model(model)?;
+    let mut console = Console::new("simulate", quiet, false);
+    let run = hb_pipeline::model_run(&model, Source::Path(input), &request, &mut console)?;
+    console.finish();
+    if let Some(why) = &run.stopped {
+        eprintln!("warning: {why}; its later samples are NaN");
+    }
+    run.write(&args.out)?;
+    Ok(())
+}
+
+/// The request of a model's run: the input's options, the initial state's, and no option of a
+/// built-in system.
+fn model_request(args: &SimulateArgs) -> anyhow::Result<CompareRequest> {
+    if let Some(name) = args.options().rig_settings().first() {
+        return Err(OptionError::sentence(name.as_str(), hb_pipeline::simulate::MODEL_TAKES_NO_RIG).into());
+    }
+    if args.truth.is_some() {
+        return Err(OptionError::sentence(
+            "truth",
+            "is the equation of a built-in system: a saved «model» has none to write",
+        )
+        .into());
+    }
+    let given = args.init == Some(0);
+    Ok(CompareRequest::new(CompareOptions {
+        time_col: args.time_col.clone(),
+        angle_col: args.angle_col.clone(),
+        dt: args.dt,
+        drive_col: args.drive_col.clone(),
+        init: args.init.filter(|&n| n > 0),
+        x0: given.then_some(args.x0),
+        v0: given.then_some(args.v0),
+        rtol: args.rtol,
+        ..CompareOptions::default()
+    })?)
+}
+
 pub fn run(args: &SimulateArgs, quiet: bool) -> anyhow::Result<()> {
+    if let (Some(model), Some(input)) = (&args.model, &args.input) {
+        return run_model(args, model, input, quiet);
+    }
+    for (name, given) in [
+        ("time_col", args.time_col.is_some()),
+        ("angle_col", args.angle_col.is_some()),
+        ("dt", args.dt.is_some()),
+        ("drive_col", args.drive_col.is_some()),
+        ("init", args.init.is_some()),
+    ] {
+        if given {
+            return Err(
+                OptionError::sentence(name, "reads the record of «input», for a saved «model»").into(),
+            );
+        }
+    }
     let rig = Rig::new(args.options())?;
     check_outputs(Some(&args.out), args.truth.as_deref())?;
     let mut console = Console::new("simulate", quiet, false);

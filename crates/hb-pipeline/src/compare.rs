@@ -1,0 +1,773 @@
+//! A saved model against a record it was not fitted to: the model driven by the record's own
+//! input and run freely from an initial state the record's first samples give, its output
+//! compared with the measured one, as system identification scores a model on held-out data
+//! (`hbid compare`, `hbid simulate --model --input`, Python's `hbid.compare` and
+//! `Model.simulate`).
+//!
+//! The record is read and conditioned as for an identification ([`condition_source`]: its grid,
+//! gaps, wrapping, spikes, integration), but never resampled: the model runs on the record's own
+//! grid in its own time unit, the unit of the record it was identified from. A model with terms
+//! in the measured drive `p` reads it from the record's drive column between samples through
+//! [`MeasuredDrive`]'s spline (C¹, so that the integrator's error control sees no kink; linear
+//! interpolation would put a kink at every sample); a model with a periodic drive runs on the
+//! record's clock, so the drive's phase is the one it was identified with.
+//!
+//! Each range is run piece by piece (a gap has no measured drive to run on, so the model starts
+//! again after it): on each piece the initial state is the one whose free run best matches its
+//! first `init` samples ([`fit_initial_state`]), or the state given for the first piece; the
+//! scores count the samples after them. They are the field's usual three: the RMSE in the
+//! record's unit, the NRMSE (the RMSE over the standard deviation of the measured output) and the
+//! fit percentage `100 (1 − ‖y − ŷ‖ / ‖y − ȳ‖)`. On the circle differences are the shortest arcs.
+//! A run that stops (the model blows up) is a result: its range is scored `None` and says where.
+
+use std::fmt;
+use std::str::FromStr;
+
+use circle_signal::{Domain, Measured, wrap};
+use hb_model::{IdentifiedModel, MeasuredDrive};
+use hb_record::prepare::GridData;
+use pendulum_sim::{Tolerances, fit_initial_state, free_run};
+use serde::{Deserialize, Serialize};
+
+use crate::error::RunError;
+use crate::observe::{Observer, Stage};
+use crate::options::{OptionError, from_object, optional_text, text};
+use crate::record::{RecordOptions, Source, condition_source};
+
+/// A range of samples of the record's grid, `A..B` (0-based, `B` excluded), or `A..` to the
+/// record's end. For a record without gaps the grid's samples are the file's rows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SampleRange {
+    /// The first sample.
+    pub start: usize,
+    /// One past the last sample (`None`: the record's end).
+    pub end: Option<usize>,
+}
+
+impl SampleRange {
+    /// The whole record.
+    pub const ALL: SampleRange = SampleRange { start: 0, end: None };
+
+    /// The range on a record of `len` samples, `[start, end)`, or why it does not fit.
+    fn on(self, len: usize) -> Result<std::ops::Range<usize>, OptionError> {
+        let end = self.end.unwrap_or(len);
+        if end > len {
+            return Err(OptionError::value(
+                "range",
+                self,
+                format!("ends past the record's {len} samples"),
+            ));
+        }
+        if self.start >= end {
+            return Err(OptionError::value("range", self, "holds no sample of the record"));
+        }
+        Ok(self.start..end)
+    }
+}
+
+impl FromStr for SampleRange {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        let s = s.trim();
+        let (a, b) = s
+            .split_once("..")
+            .ok_or_else(|| format!("'{s}' is not a range of samples A..B (or A.. to the end)"))?;
+        let number = |t: &str| {
+            t.trim()
+                .parse::<usize>()
+                .map_err(|_| format!("'{t}' in '{s}' is not a sample index"))
+        };
+        let start = if a.trim().is_empty() { 0 } else { number(a)? };
+        let end = if b.trim().is_empty() {
+            None
+        } else {
+            Some(number(b)?)
+        };
+        if let Some(end) = end
+            && end <= start
+        {
+            return Err(format!("'{s}' is empty: the end must come after the start"));
+        }
+        Ok(Self { start, end })
+    }
+}
+
+impl fmt::Display for SampleRange {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.end {
+            Some(end) => write!(f, "{}..{}", self.start, end),
+            None => write!(f, "{}..", self.start),
+        }
+    }
+}
+
+impl Serialize for SampleRange {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_str(self)
+    }
+}
+
+impl<'de> Deserialize<'de> for SampleRange {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let text = String::deserialize(d)?;
+        text.parse().map_err(serde::de::Error::custom)
+    }
+}
+
+/// Every option of `hbid compare` (and of Python's `hbid.compare`), by the command line's names
+/// with `_` for `-`. The record's options are those of `hbid identify` that say how to read it;
+/// its signal defaults to the model's.
+///
+/// Defaults: the whole record as one range; `init` one period of the model's drive in samples,
+/// at most a tenth of the range and at least 8 (the state is best set by a stretch as long as
+/// the motion's own time scale, and must leave most of the range to score); the state fitted,
+/// not given; the integrator's `rtol = 1e-10`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct CompareOptions {
+    /// The time column of a file, by header name or 1-based position.
+    #[serde(with = "optional_text")]
+    pub time_col: Option<String>,
+    /// The measured output's column (angle or displacement), by header name or 1-based position.
+    #[serde(with = "optional_text")]
+    pub angle_col: Option<String>,
+    /// The sampling step, for records without time stamps (the first sample at t = 0).
+    pub dt: Option<f64>,
+    /// The column of the measured drive `p(t)`, for a model with terms in `p`.
+    #[serde(with = "optional_text")]
+    pub drive_col: Option<String>,
+    /// Replace isolated time-stamp glitches and encoder spikes.
+    pub repair: bool,
+    /// An angle on the circle or a displacement on the line (default: the model's).
+    #[serde(with = "optional_text")]
+    pub signal: Option<Domain>,
+    /// What the sensor measured: the displacement, or its velocity or acceleration.
+    #[serde(with = "text")]
+    pub measured: Measured,
+    /// The ranges of samples compared, each scored on its own (default: the whole record).
+    pub range: Vec<SampleRange>,
+    /// Samples at the start of each range (and after each gap) that set the initial state and
+    /// are not scored.
+    pub init: Option<usize>,
+    /// The initial position, instead of fitting it (with `v0`; the first piece of each range).
+    pub x0: Option<f64>,
+    /// The initial velocity, in the record's time unit (with `x0`).
+    pub v0: Option<f64>,
+    /// Relative tolerance of the integrator (the absolute one is rtol/10).
+    pub rtol: f64,
+}
+
+impl Default for CompareOptions {
+    fn default() -> Self {
+        Self {
+            time_col: None,
+            angle_col: None,
+            dt: None,
+            drive_col: None,
+            repair: false,
+            signal: None,
+            measured: Measured::Displacement,
+            range: Vec::new(),
+            init: None,
+            x0: None,
+            v0: None,
+            rtol: CompareRequest::DEFAULT_RTOL,
+        }
+    }
+}
+
+/// A compare request, every option checked ([`CompareRequest::new`], or
+/// [`CompareRequest::from_json`] from Python's keyword arguments).
+#[derive(Debug, Clone, PartialEq)]
+pub struct CompareRequest {
+    options: CompareOptions,
+    tolerances: Tolerances,
+}
+
+impl CompareRequest {
+    /// The integrator's default relative tolerance.
+    pub const DEFAULT_RTOL: f64 = 1e-10;
+    /// The fewest samples that set an initial state.
+    pub const MIN_INIT: usize = 2;
+
+    /// Checks `options`.
+    pub fn new(options: CompareOptions) -> Result<Self, OptionError> {
+        let o = &options;
+        if !(o.rtol.is_finite() && o.rtol > 0.0 && o.rtol <= 1e-2) {
+            return Err(OptionError::value("rtol", o.rtol, "must be in (0, 0.01]"));
+        }
+        if let Some(init) = o.init
+            && init < Self::MIN_INIT
+        {
+            return Err(OptionError::value(
+                "init",
+                init,
+                format!("must be at least {}: a state has two components", Self::MIN_INIT),
+            ));
+        }
+        match (o.x0, o.v0) {
+            (Some(_), None) | (None, Some(_)) => {
+                return Err(OptionError::new(
+                    if o.x0.is_some() { "x0" } else { "v0" },
+                    "give the initial state whole, «x0» with «v0», or neither to fit it to the record",
+                ));
+            }
+            (Some(x), Some(v)) if !(x.is_finite() && v.is_finite()) => {
+                return Err(OptionError::value("x0", x, "the initial state must be finite"));
+            }
+            _ => {}
+        }
+        let record = o.record_options(Domain::Line);
+        if o.measured != Measured::Displacement && o.signal == Some(Domain::Circle) {
+            return Err(OptionError::value(
+                "measured",
+                o.measured,
+                "a velocity or acceleration record is integrated to a displacement on the line: needs «signal=line»",
+            ));
+        }
+        record.check()?;
+        let tolerances =
+            Tolerances::new(o.rtol, o.rtol / 10.0).map_err(|e| OptionError::value("rtol", o.rtol, e))?;
+        Ok(Self { options, tolerances })
+    }
+
+    /// A request from a JSON object of option names (Python's keyword arguments).
+    pub fn from_json(value: serde_json::Value) -> Result<Self, OptionError> {
+        Self::new(from_object::<CompareOptions>(value)?)
+    }
+
+    /// The options as given.
+    pub fn options(&self) -> &CompareOptions {
+        &self.options
+    }
+}
+
+impl CompareOptions {
+    /// The record's options of an identification that reads the record the same way.
+    fn record_options(&self, signal: Domain) -> RecordOptions {
+        RecordOptions {
+            time_col: self.time_col.clone(),
+            angle_col: self.angle_col.clone(),
+            dt: self.dt,
+            drive_col: self.drive_col.clone(),
+            repair: self.repair,
+            signal,
+            measured: self.measured,
+            drive_period: None,
+            drive_frequency: None,
+        }
+    }
+}
+
+/// The scores of one range.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RangeScore {
+    /// The range compared, `[start, end)` samples of the grid.
+    pub range: [usize; 2],
+    /// Samples that set the initial state of each piece (not scored).
+    pub init: usize,
+    /// Samples scored.
+    pub scored: usize,
+    /// Root mean square of the measured output less the simulated one, in the record's unit
+    /// (`None` when the model's run stopped before the range's end).
+    pub rmse: Option<f64>,
+    /// The RMSE over the standard deviation of the measured output.
+    pub nrmse: Option<f64>,
+    /// `100 (1 − ‖y − ŷ‖ / ‖y − ȳ‖)`.
+    pub fit_percent: Option<f64>,
+    /// The largest difference.
+    pub max_error: Option<f64>,
+    /// The initial state `(x, x')` of each piece run, and the RMS of its fit to the first samples
+    /// (0 for a given state).
+    pub initial_states: Vec<[f64; 3]>,
+    /// Pieces of the range too short to run (at most `init` samples), not scored.
+    pub skipped_pieces: usize,
+    /// Where and why the model's run stopped, if it did.
+    pub stopped: Option<String>,
+}
+
+/// One piece of a range as run: the measured and simulated output at each of its samples.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunPiece {
+    /// The grid's index of the first sample.
+    pub start: usize,
+    /// The times.
+    pub t: Vec<f64>,
+    /// The measured output.
+    pub measured: Vec<f64>,
+    /// The simulated position (on the circle, on the turn of the measured angle: unwrapped
+    /// along the run, then shifted by whole turns).
+    pub x: Vec<f64>,
+    /// The simulated velocity.
+    pub v: Vec<f64>,
+    /// Samples at the start that set the initial state.
+    pub init: usize,
+}
+
+/// What `hbid compare` reports; its serialisation is the JSON of `hbid compare --json`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CompareReport {
+    /// The record's samples that hold data.
+    pub samples: usize,
+    /// The sampling step.
+    pub step: f64,
+    /// Circle or line.
+    #[serde(serialize_with = "text::serialize")]
+    pub signal: Domain,
+    /// Whether the model was driven by the record's measured drive.
+    pub measured_drive: bool,
+    /// One score per range, in the order given.
+    pub ranges: Vec<RangeScore>,
+    /// The runs of each range, piece by piece (for plots and files; not in the JSON).
+    #[serde(skip)]
+    pub runs: Vec<Vec<RunPiece>>,
+}
+
+/// Runs `model` freely on the ranges of the record of `source` and scores it against the
+/// measurement (see the [module documentation](self)).
+///
+/// Errors: the record's ([`RunError::Read`], [`RunError::Prepare`]); an option that does not fit
+/// the model or the record (a model on the circle and a record on the line, a model in `p` and no
+/// drive column, a drive column for a model without `p`, a range past the record's end); a
+/// simulation that cannot start ([`RunError::Simulation`]).
+pub fn compare(
+    model: &IdentifiedModel,
+    source: Source<'_>,
+    request: &CompareRequest,
+    observer: &mut dyn Observer,
+) -> Result<CompareReport, RunError> {
+    let o = &request.options;
+    let domain = o.signal.unwrap_or_else(|| model.domain());
+    if domain != model.domain() {
+        return Err(OptionError::value(
+            "signal",
+            domain,
+            format!(
+                "the model's signal is {}: compare it with a record of the same kind",
+                model.domain()
+            ),
+        )
+        .into());
+    }
+    let grid = condition_source(source, &o.record_options(domain), observer)?;
+    let measured_drive = check_drive(model, &grid, o.drive_col.is_some())?;
+    observer.stage(Stage::Simulate);
+    let len = grid.x.len();
+    let ranges: Vec<std::ops::Range<usize>> = if o.range.is_empty() {
+        vec![SampleRange::ALL.on(len)?]
+    } else {
+        o.range.iter().map(|r| r.on(len)).collect::<Result<_, _>>()?
+    };
+    let period = std::f64::consts::TAU / model.drive_angular_frequency() / grid.dt;
+    let mut scores = Vec::with_capacity(ranges.len());
+    let mut runs = Vec::with_capacity(ranges.len());
+    let total: usize = ranges.iter().map(|r| r.len()).sum();
+    let mut done = 0;
+    for range in &ranges {
+        let init = o.init.unwrap_or_else(|| default_init(period, range.len()));
+        let (score, pieces) = run_range(model, &grid, range.clone(), init, request)?;
+        done += range.len();
+        observer.progress(done, total);
+        scores.push(score);
+        runs.push(pieces);
+    }
+    observer.stage(Stage::Compare);
+    Ok(CompareReport {
+        samples: grid.pieces.iter().map(|p| p.len()).sum(),
+        step: grid.dt,
+        signal: domain,
+        measured_drive,
+        ranges: scores,
+        runs,
+    })
+}
+
+/// The default samples of the initial state: one drive period (see [`CompareOptions`]).
+fn default_init(period_samples: f64, range: usize) -> usize {
+    let period = if period_samples.is_finite() {
+        period_samples.round().min(1e9) as usize
+    } else {
+        8
+    };
+    period.min(range / 10).max(8)
+}
+
+/// Checks that the record's drive and the model agree: a drive column for a model in `p`, none
+/// for a model without. Returns whether the model runs on the record's drive.
+fn check_drive(model: &IdentifiedModel, grid: &GridData, named: bool) -> Result<bool, RunError> {
+    match (&grid.drive, model.form().has_measured_drive()) {
+        (Some(_), true) => Ok(true),
+        (None, true) => Err(OptionError::new(
+            "drive_col",
+            "the model has terms in the measured drive p: name the record's drive column with «drive_col=»",
+        )
+        .into()),
+        (Some(_), false) if named => Err(OptionError::new(
+            "drive_col",
+            "the model has no term in the measured drive p: it runs on its own drive, leave out «drive_col»",
+        )
+        .into()),
+        _ => Ok(false),
+    }
+}
+
+/// `model` driven by the record's drive over one piece `[start, end)` of its grid: the spline
+/// through that piece's samples alone, so that it ends at the piece's ends and no gap's NaN
+/// reaches it.
+fn driven_on(
+    model: &IdentifiedModel,
+    grid: &GridData,
+    start: usize,
+    end: usize,
+) -> Result<IdentifiedModel, RunError> {
+    match &grid.drive {
+        Some(p) if model.form().has_measured_drive() => {
+            let signal =
+                MeasuredDrive::new(p[start..end].to_vec(), grid.t0 + start as f64 * grid.dt, grid.dt)?;
+            Ok(model.clone().with_measured_drive(signal)?)
+        }
+        _ => Ok(model.clone()),
+    }
+}
+
+/// The difference of a simulated and a measured output, as the domain measures it.
+fn difference(domain: Domain, simulated: f64, measured: f64) -> f64 {
+    match domain {
+        Domain::Circle => wrap(simulated - measured),
+        Domain::Line => simulated - measured,
+    }
+}
+
+/// One range run piece by piece and scored.
+fn run_range(
+    model: &IdentifiedModel,
+    grid: &GridData,
+    range: std::ops::Range<usize>,
+    init: usize,
+    request: &CompareRequest,
+) -> Result<(RangeScore, Vec<RunPiece>), RunError> {
+    let o = &request.options;
+    let domain = grid.domain;
+    let mut pieces = Vec::new();
+    let mut skipped = 0;
+    let mut stopped = None;
+    let mut states = Vec::new();
+    for piece in &grid.pieces {
+        let (start, end) = (piece.start.max(range.start), piece.end.min(range.end));
+        if start >= end {
+            continue;
+        }
+        if end - start <= init {
+            skipped += 1;
+            continue;
+        }
+        let y = &grid.x[start..end];
+        let t0 = grid.t0 + start as f64 * grid.dt;
+        let model = &driven_on(model, grid, start, end)?;
+        let (state, fit_rms) = match (o.x0, o.v0, pieces.is_empty()) {
+            (Some(x), Some(v), true) => ([x, v], 0.0),
+            _ => {
+                let fit = fit_initial_state(model, &y[..init], t0, grid.dt, domain, request.tolerances)?;
+                (fit.state, fit.rms)
+            }
+        };
+        states.push([state[0], state[1], fit_rms]);
+        let run = free_run(model, t0, grid.dt, y.len(), state, request.tolerances)?;
+        if let (None, Some(why)) = (&stopped, &run.stopped) {
+            stopped = Some(format!("the model's run from sample {start} stopped: {why}"));
+        }
+        let mut x = run.x;
+        if domain == Domain::Circle {
+            // On the turn of each measured sample, so that plots and files read as the record.
+            for (xi, yi) in x.iter_mut().zip(y) {
+                if xi.is_finite() {
+                    *xi = yi + wrap(*xi - yi);
+                }
+            }
+        }
+        pieces.push(RunPiece {
+            start,
+            t: (start..end).map(|n| grid.t0 + n as f64 * grid.dt).collect(),
+            measured: y.to_vec(),
+            x,
+            v: run.v,
+            init,
+        });
+    }
+    let score = score(
+        &pieces,
+        domain,
+        [range.start, range.end],
+        init,
+        skipped,
+        states,
+        stopped,
+    );
+    Ok((score, pieces))
+}
+
+/// The scores of the pieces of a range, over the samples after each one's `init`.
+fn score(
+    pieces: &[RunPiece],
+    domain: Domain,
+    range: [usize; 2],
+    init: usize,
+    skipped_pieces: usize,
+    initial_states: Vec<[f64; 3]>,
+    stopped: Option<String>,
+) -> RangeScore {
+    let scored: Vec<(f64, f64)> = pieces
+        .iter()
+        .flat_map(|p| {
+            p.measured[p.init..]
+                .iter()
+                .zip(&p.x[p.init..])
+                .map(|(&y, &x)| (y, x))
+        })
+        .collect();
+    let n = scored.len();
+    let finite = n > 0 && scored.iter().all(|(_, x)| x.is_finite());
+    let (rmse, nrmse, fit, max) = if finite {
+        // The measured output's spread about its mean: on the circle the shortest arcs from the
+        // circular mean (a whirling angle's unwrapped spread would grow with every turn).
+        let spread = match domain {
+            Domain::Line => {
+                let mean = scored.iter().map(|p| p.0).sum::<f64>() / n as f64;
+                (scored.iter().map(|p| (p.0 - mean).powi(2)).sum::<f64>() / n as f64).sqrt()
+            }
+            Domain::Circle => {
+                let (s, c) = scored
+                    .iter()
+                    .fold((0.0, 0.0), |(s, c), p| (s + p.0.sin(), c + p.0.cos()));
+                let mean = s.atan2(c);
+                (scored.iter().map(|p| wrap(p.0 - mean).powi(2)).sum::<f64>() / n as f64).sqrt()
+            }
+        };
+        let errors: Vec<f64> = scored.iter().map(|&(y, x)| difference(domain, x, y)).collect();
+        let rmse = (errors.iter().map(|e| e * e).sum::<f64>() / n as f64).sqrt();
+        let max = errors.iter().fold(0.0f64, |m, e| m.max(e.abs()));
+        let nrmse = (spread > 0.0).then(|| rmse / spread);
+        (Some(rmse), nrmse, nrmse.map(|r| 100.0 * (1.0 - r)), Some(max))
+    } else {
+        (None, None, None, None)
+    };
+    RangeScore {
+        range,
+        init,
+        scored: n,
+        rmse,
+        nrmse,
+        fit_percent: fit,
+        max_error: max,
+        initial_states,
+        skipped_pieces,
+        stopped,
+    }
+}
+
+/// Reads a model saved by `hbid identify --save-model` (compact binary, or JSON text).
+///
+/// Errors: [`RunError::ModelFile`] naming the file, for a file that cannot be read or is not a
+/// model.
+pub fn read_model(path: &std::path::Path) -> Result<IdentifiedModel, RunError> {
+    let named = |why: String| RunError::ModelFile {
+        path: path.display().to_string(),
+        why,
+    };
+    let bytes = std::fs::read(path).map_err(|e| named(e.to_string()))?;
+    if bytes.starts_with(&hb_model::MODEL_MAGIC) {
+        return IdentifiedModel::from_bytes(&bytes).map_err(|e| named(crate::options::chain(&e)));
+    }
+    let text =
+        String::from_utf8(bytes).map_err(|_| named("neither a binary model nor JSON text".to_owned()))?;
+    IdentifiedModel::from_json(&text).map_err(|e| named(crate::options::chain(&e)))
+}
+
+/// A model's free run over a record, as `hbid simulate --model --input` writes it: the time, the
+/// simulated position and velocity at every sample of the ranges run (piece by piece, each from
+/// the state its first samples give).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModelRun {
+    /// `(t, x, v)` per sample, in order; none in the gaps.
+    pub rows: Vec<[f64; 3]>,
+    /// Where and why the run stopped, if it did (its later rows are NaN).
+    pub stopped: Option<String>,
+}
+
+impl ModelRun {
+    /// Writes the run as CSV with the header `t,x,v`, or as a samples × 3 `.npy` array (by the
+    /// file's extension), atomically; numbers in full precision.
+    pub fn write(&self, path: &std::path::Path) -> Result<(), crate::output::OutputError> {
+        use npyz::WriterBuilder;
+        use std::io::Write;
+        let npy = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("npy"));
+        crate::output::write_atomically(path, |w: &mut dyn Write| {
+            if npy {
+                let mut writer = npyz::WriteOptions::<f64>::new()
+                    .default_dtype()
+                    .shape(&[self.rows.len() as u64, 3])
+                    .writer(w)
+                    .begin_nd()?;
+                for row in &self.rows {
+                    writer.extend(row.iter().copied())?;
+                }
+                return writer.finish();
+            }
+            writeln!(w, "t,x,v")?;
+            for [t, x, v] in &self.rows {
+                writeln!(w, "{t},{x},{v}")?;
+            }
+            Ok(())
+        })
+    }
+}
+
+/// Runs `model` on the record of `source` as [`compare`] does and returns the simulated output.
+pub fn model_run(
+    model: &IdentifiedModel,
+    source: Source<'_>,
+    request: &CompareRequest,
+    observer: &mut dyn Observer,
+) -> Result<ModelRun, RunError> {
+    let report = compare(model, source, request, observer)?;
+    let rows = report
+        .runs
+        .iter()
+        .flatten()
+        .flat_map(|p| (0..p.t.len()).map(move |i| [p.t[i], p.x[i], p.v[i]]))
+        .collect();
+    let stopped = report.ranges.iter().find_map(|r| r.stopped.clone());
+    Ok(ModelRun { rows, stopped })
+}
+
+/// Runs `model` from `state = (x, x')` at `t[0]` over the times `t`, an even grid (stamps within
+/// 10⁻⁶ of a step of `t[0] + n · dt`), driven by `drive` (one sample per time, for a model with
+/// terms in `p`): what Python's `Model.simulate(t=..., drive=...)` returns. The run is not
+/// fitted to anything: no record's output is involved.
+///
+/// Errors: options that do not fit (`t` not an even grid, fewer than 2 times, a drive missing,
+/// of another length or for a model without `p`, a tolerance out of range), and a simulation
+/// that cannot start.
+pub fn run_on_times(
+    model: &IdentifiedModel,
+    t: &[f64],
+    drive: Option<&[f64]>,
+    state: [f64; 2],
+    rtol: f64,
+) -> Result<ModelRun, RunError> {
+    if t.len() < 2 {
+        return Err(OptionError::new("t", format!("{} time(s): at least 2 are needed", t.len())).into());
+    }
+    if let Some(bad) = t.iter().find(|v| !v.is_finite()) {
+        return Err(OptionError::value("t", bad, "every time must be finite").into());
+    }
+    let dt = (t[t.len() - 1] - t[0]) / (t.len() - 1) as f64;
+    if !(dt > 0.0 && dt.is_finite()) {
+        return Err(OptionError::new("t", "the times must increase").into());
+    }
+    if let Some(n) = (0..t.len()).find(|&n| (t[n] - (t[0] + n as f64 * dt)).abs() > 1e-6 * dt) {
+        return Err(OptionError::new(
+            "t",
+            format!(
+                "time {} (index {n}) is off the even grid of step {dt}: a model runs on a record's grid (read the record with hbid.read to fit its stamps)",
+                t[n]
+            ),
+        )
+        .into());
+    }
+    let tolerances = Tolerances::new(rtol, rtol / 10.0).map_err(|e| OptionError::value("rtol", rtol, e))?;
+    let model = match (drive, model.form().has_measured_drive()) {
+        (Some(p), true) => {
+            if p.len() != t.len() {
+                return Err(OptionError::new(
+                    "drive",
+                    format!(
+                        "{} drive samples for {} times: give one per time",
+                        p.len(),
+                        t.len()
+                    ),
+                )
+                .into());
+            }
+            model
+                .clone()
+                .with_measured_drive(MeasuredDrive::new(p.to_vec(), t[0], dt)?)?
+        }
+        (None, true) => {
+            return Err(OptionError::new(
+                "drive",
+                "the model has terms in the measured drive p: give its samples at the times t",
+            )
+            .into());
+        }
+        (Some(_), false) => {
+            return Err(OptionError::new(
+                "drive",
+                "the model has no term in the measured drive p: it runs on its own drive",
+            )
+            .into());
+        }
+        (None, false) => model.clone(),
+    };
+    let run = free_run(&model, t[0], dt, t.len(), state, tolerances)?;
+    let rows = (0..t.len()).map(|n| [t[n], run.x[n], run.v[n]]).collect();
+    Ok(ModelRun {
+        rows,
+        stopped: run.stopped.map(|why| format!("the model's run stopped: {why}")),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ranges_read_and_print() {
+        let r: SampleRange = "100..40575".parse().unwrap();
+        assert_eq!(
+            r,
+            SampleRange {
+                start: 100,
+                end: Some(40575)
+            }
+        );
+        assert_eq!(r.to_string(), "100..40575");
+        assert_eq!("5..".parse::<SampleRange>().unwrap().end, None);
+        assert!("7..7".parse::<SampleRange>().is_err());
+        assert!("a..b".parse::<SampleRange>().is_err());
+        assert!("12".parse::<SampleRange>().is_err());
+        assert!(r.on(40000).is_err());
+        assert_eq!(r.on(50000).unwrap(), 100..40575);
+    }
+
+    #[test]
+    fn options_are_checked() {
+        let bad = |o: CompareOptions| CompareRequest::new(o).unwrap_err().option().to_owned();
+        let d = CompareOptions::default;
+        assert_eq!(bad(CompareOptions { init: Some(1), ..d() }), "init");
+        assert_eq!(bad(CompareOptions { x0: Some(1.0), ..d() }), "x0");
+        assert_eq!(bad(CompareOptions { v0: Some(1.0), ..d() }), "v0");
+        assert_eq!(bad(CompareOptions { rtol: 0.0, ..d() }), "rtol");
+        assert_eq!(
+            bad(CompareOptions {
+                dt: Some(-1.0),
+                ..d()
+            }),
+            "dt"
+        );
+        let json = serde_json::json!({"range": ["100..200", "300.."], "init": 50, "dt": 0.01});
+        let request = CompareRequest::from_json(json).unwrap();
+        assert_eq!(request.options().range.len(), 2);
+        assert!(CompareRequest::from_json(serde_json::json!({"ranges": ["1..2"]})).is_err());
+    }
+
+    #[test]
+    fn the_default_init_scales_with_the_drive_and_the_range() {
+        assert_eq!(default_init(25.0, 30_000), 25);
+        assert_eq!(default_init(490.2, 150_000), 490);
+        assert_eq!(default_init(6283.0, 20_000), 2000);
+        assert_eq!(default_init(3.0, 1000), 8);
+        assert_eq!(default_init(f64::INFINITY, 1000), 8);
+    }
+}

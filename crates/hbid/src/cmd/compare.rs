@@ -1,0 +1,234 @@
+//! `hbid compare`: a saved model run freely under a record's measured input and scored against its
+//! measured output (the application layer's [`hb_pipeline::compare`]); this module holds the
+//! arguments, prints the scores and draws the figure.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+use circle_signal::{Domain, Measured};
+use clap::Args;
+use hb_pipeline::{CompareOptions, CompareReport, CompareRequest, SampleRange, Source};
+use hb_plot::{BLUE, Figure, ORANGE, RED, Series, Style};
+
+use super::data::choice;
+use crate::progress::Console;
+
+/// Options of `hbid compare`.
+#[derive(Debug, Args)]
+pub struct CompareArgs {
+    /// The model, as saved by `hbid identify --save-model` (JSON or binary).
+    pub model: PathBuf,
+    /// The record: its measured output (the angle or displacement column) and, for a model with
+    /// terms in p, its measured drive (--drive-col); text or .npy, as for `hbid identify`.
+    pub file: PathBuf,
+    /// Time column, by header name or 1-based position.
+    #[arg(long, value_name = "NAME|N")]
+    pub time_col: Option<String>,
+    /// The measured output's column (angle or displacement), by header name or 1-based position.
+    #[arg(long, value_name = "NAME|N")]
+    pub angle_col: Option<String>,
+    /// Sampling step, for records without a time column (the first sample is at t = 0).
+    #[arg(long, allow_hyphen_values = true)]
+    pub dt: Option<f64>,
+    /// The measured drive p(t), for a model with terms in p: a column of the record, by header name
+    /// or 1-based position. Between samples the model reads it from the C¹ cubic spline through
+    /// them (Catmull–Rom), so that the integrator's error control sees no kink.
+    #[arg(long, value_name = "NAME|N")]
+    pub drive_col: Option<String>,
+    /// Fix isolated time-stamp glitches and encoder spikes (each listed on stderr).
+    #[arg(long)]
+    pub repair: bool,
+    /// circle or line [default: the model's].
+    #[arg(long, value_parser = choice::<Domain>(&["circle", "line"]))]
+    pub signal: Option<Domain>,
+    /// What the sensor measured, on the line: displacement, velocity or acceleration (integrated
+    /// to the displacement, as for `hbid identify`).
+    #[arg(long, default_value_t = Measured::Displacement, value_parser = choice::<Measured>(&["displacement", "velocity", "acceleration"]))]
+    pub measured: Measured,
+    /// Samples compared, A..B (0-based, B excluded) or A.. to the end, of the record's grid (its
+    /// rows for a record without gaps); repeatable, each range scored on its own [default: the
+    /// whole record].
+    #[arg(long, value_name = "A..B")]
+    pub range: Vec<SampleRange>,
+    /// Samples at the start of each range (and after each gap) that set the model's initial state
+    /// and are not scored [default: one period of the model's drive, at most a tenth of the range,
+    /// at least 8].
+    #[arg(long, value_name = "N")]
+    pub init: Option<usize>,
+    /// The initial position instead of fitting it (with --v0).
+    #[arg(long, allow_hyphen_values = true)]
+    pub x0: Option<f64>,
+    /// The initial velocity in the record's time unit (with --x0).
+    #[arg(long, allow_hyphen_values = true)]
+    pub v0: Option<f64>,
+    /// Relative tolerance of the integrator (the absolute one is rtol/10).
+    #[arg(long, default_value_t = CompareRequest::DEFAULT_RTOL, allow_hyphen_values = true)]
+    pub rtol: f64,
+    /// Print the scores as JSON.
+    #[arg(long)]
+    pub json: bool,
+    /// Draw the measured and the simulated output and their difference (PNG, or SVG by extension).
+    #[arg(long, value_name = "FILE.png")]
+    pub plot: Option<PathBuf>,
+}
+
+impl CompareArgs {
+    /// The application layer's options.
+    pub fn options(&self) -> CompareOptions {
+        CompareOptions {
+            time_col: self.time_col.clone(),
+            angle_col: self.angle_col.clone(),
+            dt: self.dt,
+            drive_col: self.drive_col.clone(),
+            repair: self.repair,
+            signal: self.signal,
+            measured: self.measured,
+            range: self.range.clone(),
+            init: self.init,
+            x0: self.x0,
+            v0: self.v0,
+            rtol: self.rtol,
+        }
+    }
+}
+
+pub fn run(args: &CompareArgs, quiet: bool) -> anyhow::Result<()> {
+    let request = CompareRequest::new(args.options())?;
+    if let Some(path) = &args.plot {
+        hb_pipeline::output::check_output_path(path).context("«plot»")?;
+    }
+    let model = hb_pipeline::read_model(&args.model)?;
+    let mut console = Console::new("compare", quiet, false);
+    let report = hb_pipeline::compare(&model, Source::Path(&args.file), &request, &mut console)?;
+    console.finish();
+    if let Some(path) = &args.plot {
+        plot(&report, path)?;
+    }
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        print!("{}", table(&report));
+    }
+    Ok(())
+}
+
+/// A score, or `-` when there is none.
+fn cell(value: Option<f64>, f: impl Fn(f64) -> String) -> String {
+    value.map_or_else(|| "-".to_owned(), f)
+}
+
+/// The scores as a table, one line per range, and why a run stopped.
+pub fn table(report: &CompareReport) -> String {
+    let unit = match report.signal {
+        Domain::Circle => "radians (shortest arcs)",
+        Domain::Line => "the record's unit",
+    };
+    let drive = if report.measured_drive {
+        "driven by the record's measured drive"
+    } else {
+        "on its own drive, on the record's clock"
+    };
+    let mut out = format!(
+        "free run of the model {drive}, {} samples, step {}; errors in {unit}\n\n",
+        report.samples, report.step
+    );
+    out.push_str(&format!(
+        "{:<18} {:>6} {:>9} {:>12} {:>10} {:>9} {:>12}\n",
+        "range", "init", "scored", "RMSE", "NRMSE", "fit %", "max error"
+    ));
+    for r in &report.ranges {
+        out.push_str(&format!(
+            "{:<18} {:>6} {:>9} {:>12} {:>10} {:>9} {:>12}\n",
+            format!("{}..{}", r.range[0], r.range[1]),
+            r.init,
+            r.scored,
+            cell(r.rmse, |v| format!("{v:.4e}")),
+            cell(r.nrmse, |v| format!("{v:.4}")),
+            cell(r.fit_percent, |v| format!("{v:.2}")),
+            cell(r.max_error, |v| format!("{v:.3e}")),
+        ));
+    }
+    for r in &report.ranges {
+        if let Some(why) = &r.stopped {
+            out.push_str(&format!("\nrange {}..{}: {why}\n", r.range[0], r.range[1]));
+        }
+        if r.skipped_pieces > 0 {
+            out.push_str(&format!(
+                "range {}..{}: {} piece(s) between gaps no longer than --init {} were not run\n",
+                r.range[0], r.range[1], r.skipped_pieces, r.init
+            ));
+        }
+    }
+    out
+}
+
+/// Draws the measured and simulated output and their difference into `path`, atomically.
+fn plot(report: &CompareReport, path: &Path) -> anyhow::Result<()> {
+    let break_above = match report.signal {
+        Domain::Circle => std::f64::consts::PI,
+        Domain::Line => f64::INFINITY,
+    };
+    let mut series = Vec::new();
+    for (i, piece) in report.runs.iter().flatten().enumerate() {
+        let first = i == 0;
+        let points = |v: &dyn Fn(usize) -> f64| -> Vec<(f64, f64)> {
+            (0..piece.t.len())
+                .map(|k| (piece.t[k], v(k)))
+                .filter(|p| p.1.is_finite())
+                .collect()
+        };
+        series.push(Series {
+            label: if first { "measured" } else { "" },
+            points: points(&|k| piece.measured[k]),
+            style: Style::Line { break_above },
+            color: BLUE,
+        });
+        series.push(Series {
+            label: if first { "model, free run" } else { "" },
+            points: points(&|k| piece.x[k]),
+            style: Style::Line { break_above },
+            color: ORANGE,
+        });
+        let difference = |k: usize| match report.signal {
+            Domain::Circle => circle_signal::wrap(piece.x[k] - piece.measured[k]),
+            Domain::Line => piece.x[k] - piece.measured[k],
+        };
+        series.push(Series {
+            label: if first { "model − measured" } else { "" },
+            points: points(&difference),
+            style: Style::Line { break_above },
+            color: RED,
+        });
+    }
+    let figure = Figure {
+        title: "The model's free run against the record",
+        x_label: "t",
+        y_label: "output",
+        series,
+        x_range: None,
+        y_range: None,
+    };
+    let parent = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let suffix = path
+        .extension()
+        .map(|e| format!(".{}", e.to_string_lossy()))
+        .unwrap_or_else(|| ".png".to_owned());
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(".hbid-partial-").suffix(&suffix);
+    // An ordinary file's permissions (0o666 less the umask), not the temporary file's owner-only.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        builder.permissions(std::fs::Permissions::from_mode(0o666));
+    }
+    let tmp = builder
+        .tempfile_in(parent)
+        .with_context(|| format!("cannot create a file in {}", parent.display()))?;
+    figure.save(tmp.path())?;
+    tmp.persist(path)
+        .with_context(|| format!("cannot write {}", path.display()))?;
+    Ok(())
+}

@@ -1,0 +1,418 @@
+//! Free-run simulation: a model integrated over a record's grid from one initial state, driven by
+//! nothing but its own terms (a measured drive among them), as system identification scores a
+//! model on held-out data.
+//!
+//! - [`free_run`] integrates a [`SecondOrderSystem`] from `(t_first, x, x')` and samples it at
+//!   `t_first + n · dt`. Systems that switch at `x' = 0` (dry friction) stick and slip as in every
+//!   other simulation of this crate. Where the integration cannot go on (the solution blows up,
+//!   the drive was not measured there, the step budget runs out) the run stops, says why
+//!   ([`FreeRun::stopped`]) and its later samples are NaN: a diverging model is a result, not an
+//!   error.
+//! - [`fit_initial_state`] finds the initial state whose free run best matches the first samples
+//!   of a record (least squares on the position, Levenberg–Marquardt from a local polynomial's
+//!   state), the state a model may take from the measured output before it runs on its own.
+//!
+//! # Example
+//!
+//! ```
+//! use pendulum_sim::{Domain, Duffing, Tolerances, fit_initial_state, free_run};
+//!
+//! let duffing = Duffing::two_well();
+//! let truth = free_run(&duffing, 0.0, 0.1, 400, [1.0, 0.0], Tolerances::default())?;
+//! // The state is found again from the first 30 samples of the run...
+//! let fit = fit_initial_state(&duffing, &truth.x[..30], 0.0, 0.1, Domain::Line, Tolerances::default())?;
+//! assert!((fit.state[0] - 1.0).abs() < 1e-6 && fit.state[1].abs() < 1e-6);
+//! // ...and the model run from it follows the record.
+//! let run = free_run(&duffing, 0.0, 0.1, 400, fit.state, Tolerances::default())?;
+//! assert!(run.stopped.is_none());
+//! assert!((run.x[399] - truth.x[399]).abs() < 1e-3);
+//! # Ok::<(), pendulum_sim::SimError>(())
+//! ```
+
+use circle_signal::{Domain, wrap};
+use nalgebra::{DMatrix, DVector, Matrix2, Vector2};
+
+use crate::dop853::Tolerances;
+use crate::error::SimError;
+use crate::simulate::FirstOrder;
+use crate::switching::{Flow, OnMode};
+use crate::system::SecondOrderSystem;
+
+/// A free run sampled on a grid.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FreeRun {
+    /// The position at `t_first + n · dt` (unwrapped on the circle); NaN from where the run
+    /// stopped.
+    pub x: Vec<f64>,
+    /// The velocity at the same times.
+    pub v: Vec<f64>,
+    /// Why the integration stopped before the last sample, if it did: the error says where.
+    pub stopped: Option<SimError>,
+}
+
+impl FreeRun {
+    /// Samples with a finite state: all of them, or those before the run stopped.
+    pub fn finite_len(&self) -> usize {
+        self.x
+            .iter()
+            .zip(&self.v)
+            .take_while(|(x, v)| x.is_finite() && v.is_finite())
+            .count()
+    }
+}
+
+/// Steps allowed per sample of a free run (plus a fixed allowance): far more than a smooth
+/// solution takes at any sampling rate, few enough that a runaway model stops in seconds.
+const STEPS_PER_SAMPLE: usize = 1_000;
+const STEPS_BASE: usize = 100_000;
+
+fn invalid(name: &'static str, value: f64, why: &'static str) -> SimError {
+    SimError::InvalidParameter { name, value, why }
+}
+
+/// Integrates `system` from `state = (x, x')` at `t_first` and samples it at
+/// `t_first + n · dt`, `n = 0..count` (see the [module documentation](self)).
+///
+/// Errors: [`SimError::InvalidParameter`] for a non-finite `t_first` or state, or a step `dt`
+/// that is not positive and finite. Everything that goes wrong during the integration is
+/// reported in [`FreeRun::stopped`] instead.
+pub fn free_run<S: SecondOrderSystem>(
+    system: &S,
+    t_first: f64,
+    dt: f64,
+    count: usize,
+    state: [f64; 2],
+    tolerances: Tolerances,
+) -> Result<FreeRun, SimError> {
+    if !t_first.is_finite() {
+        return Err(invalid("start time", t_first, "must be finite"));
+    }
+    if !(dt.is_finite() && dt > 0.0) {
+        return Err(invalid("step", dt, "must be positive and finite"));
+    }
+    for (name, value) in [("initial position", state[0]), ("initial velocity", state[1])] {
+        if !value.is_finite() {
+            return Err(invalid(name, value, "must be finite"));
+        }
+    }
+    let mut x = vec![f64::NAN; count];
+    let mut v = vec![f64::NAN; count];
+    if count == 0 {
+        return Ok(FreeRun { x, v, stopped: None });
+    }
+    let budget = STEPS_BASE.saturating_add(STEPS_PER_SAMPLE.saturating_mul(count));
+    let outcome = Flow::new(FirstOrder(OnMode::new(system)), t_first, state, tolerances).and_then(|flow| {
+        flow.with_max_steps(budget)
+            .sample_grid(t_first, dt, count, |n, _, y| {
+                x[n] = y[0];
+                v[n] = y[1];
+            })
+    });
+    Ok(FreeRun {
+        x,
+        v,
+        stopped: outcome.err(),
+    })
+}
+
+/// An initial state fitted to a record's first samples.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct InitialState {
+    /// `(x, x')` at the first sample.
+    pub state: [f64; 2],
+    /// Root mean square of the free run's position less the samples it was fitted to.
+    pub rms: f64,
+    /// The samples it was fitted to.
+    pub samples: usize,
+}
+
+/// Iterations of the Levenberg–Marquardt search.
+const MAX_ITERATIONS: usize = 50;
+/// Samples of the polynomial that gives the first guess of the velocity.
+const GUESS_SAMPLES: usize = 5;
+
+/// The state `(x, x')` at `t_first` whose free run of `system` (sampled every `dt`) best matches
+/// `samples` in the least-squares sense, positions compared as [`Domain`] measures them (the
+/// shortest arc on the circle).
+///
+/// The search starts from the first sample and the slope of the quadratic through the first few,
+/// and takes Levenberg–Marquardt steps with a central-difference Jacobian; a state whose run stops
+/// inside the samples counts as infinitely bad. With two samples it solves for the state that
+/// passes through both; with more it smooths their noise.
+///
+/// Errors: [`SimError::RecordTooShort`] for fewer than 2 samples, [`SimError::InvalidParameter`]
+/// for a non-finite sample or time or a step that is not positive, and [`SimError::NonFinite`]
+/// when no state tried has a run that reaches the last sample.
+pub fn fit_initial_state<S: SecondOrderSystem>(
+    system: &S,
+    samples: &[f64],
+    t_first: f64,
+    dt: f64,
+    domain: Domain,
+    tolerances: Tolerances,
+) -> Result<InitialState, SimError> {
+    let n = samples.len();
+    if n < 2 {
+        return Err(SimError::RecordTooShort { len: n, needed: 2 });
+    }
+    if let Some(&bad) = samples.iter().find(|s| !s.is_finite()) {
+        return Err(invalid("sample", bad, "must be finite"));
+    }
+    if !(dt.is_finite() && dt > 0.0) {
+        return Err(invalid("step", dt, "must be positive and finite"));
+    }
+    if !t_first.is_finite() {
+        return Err(invalid("start time", t_first, "must be finite"));
+    }
+    // The samples unwrapped, so that a polynomial and the differences see one continuous angle.
+    let mut y = Vec::with_capacity(n);
+    y.push(samples[0]);
+    for i in 1..n {
+        let step = match domain {
+            Domain::Circle => wrap(samples[i] - samples[i - 1]),
+            Domain::Line => samples[i] - samples[i - 1],
+        };
+        y.push(y[i - 1] + step);
+    }
+    let spread =
+        y.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b)) - y.iter().fold(f64::INFINITY, |a, &b| a.min(b));
+    let scale_x = spread.max(y[0].abs() * 1e-3).max(f64::MIN_POSITIVE.sqrt());
+    let duration = (n - 1) as f64 * dt;
+    let scale_v = scale_x / duration;
+
+    let residuals = |s: [f64; 2]| -> Option<Vec<f64>> {
+        let run = free_run(system, t_first, dt, n, s, tolerances).ok()?;
+        if run.stopped.is_some() {
+            return None;
+        }
+        let r: Vec<f64> = run.x.iter().zip(&y).map(|(a, b)| a - b).collect();
+        r.iter().all(|v| v.is_finite()).then_some(r)
+    };
+    let cost = |r: &[f64]| r.iter().map(|v| v * v).sum::<f64>();
+
+    let mut state = [y[0], velocity_guess(&y, dt)];
+    let mut r = match residuals(state) {
+        Some(r) => r,
+        None => {
+            // A run from the guessed velocity may blow up in a stiff model: try from rest.
+            state[1] = 0.0;
+            residuals(state).ok_or(SimError::NonFinite { t: t_first })?
+        }
+    };
+    let mut best = cost(&r);
+    let mut lambda = 1e-3;
+    for _ in 0..MAX_ITERATIONS {
+        let h = [
+            1e-6 * state[0].abs().max(scale_x),
+            1e-6 * state[1].abs().max(scale_v),
+        ];
+        let mut jac = DMatrix::<f64>::zeros(n, 2);
+        let mut ok = true;
+        for k in 0..2 {
+            let (mut up, mut down) = (state, state);
+            up[k] += h[k];
+            down[k] -= h[k];
+            match (residuals(up), residuals(down)) {
+                (Some(a), Some(b)) => {
+                    for i in 0..n {
+                        jac[(i, k)] = (a[i] - b[i]) / (2.0 * h[k]);
+                    }
+                }
+                _ => ok = false,
+            }
+        }
+        if !ok {
+            break;
+        }
+        let jt = jac.transpose();
+        let jtj: Matrix2<f64> = (&jt * &jac).fixed_view::<2, 2>(0, 0).into_owned();
+        let g: Vector2<f64> = (&jt * DVector::from_column_slice(&r))
+            .fixed_rows::<2>(0)
+            .into_owned();
+        let mut improved = false;
+        for _ in 0..20 {
+            let mut a = jtj;
+            for k in 0..2 {
+                a[(k, k)] += lambda * jtj[(k, k)].max(f64::MIN_POSITIVE);
+            }
+            let Some(delta) = a.lu().solve(&(-g)) else {
+                lambda *= 10.0;
+                continue;
+            };
+            let trial = [state[0] + delta[0], state[1] + delta[1]];
+            match residuals(trial) {
+                Some(rt) if cost(&rt) < best => {
+                    let gain = best - cost(&rt);
+                    state = trial;
+                    best = cost(&rt);
+                    r = rt;
+                    lambda = (lambda / 10.0).max(1e-12);
+                    improved = gain > 1e-14 * best.max(f64::MIN_POSITIVE);
+                    break;
+                }
+                _ => lambda *= 10.0,
+            }
+        }
+        if !improved {
+            break;
+        }
+    }
+    if domain == Domain::Circle {
+        // The state on the turn of the first sample as read.
+        let shift = samples[0] - y[0];
+        state[0] += shift;
+    }
+    Ok(InitialState {
+        state,
+        rms: (best / n as f64).sqrt(),
+        samples: n,
+    })
+}
+
+/// The slope at the first sample of the least-squares quadratic (a line with fewer than three
+/// samples) through the first [`GUESS_SAMPLES`] samples.
+fn velocity_guess(y: &[f64], dt: f64) -> f64 {
+    let m = y.len().min(GUESS_SAMPLES);
+    let degree = (m - 1).min(2);
+    let a = DMatrix::from_fn(m, degree + 1, |i, k| (i as f64).powi(k as i32));
+    let b = DVector::from_iterator(m, y[..m].iter().map(|v| v - y[0]));
+    match a.svd(true, true).solve(&b, 1e-12) {
+        Ok(c) if c[1].is_finite() => c[1] / dt,
+        _ => (y[1] - y[0]) / dt,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{Duffing, Losses, Pendulum};
+
+    /// `x'' + 2ζω x' + ω² x = 0` from `(x0, v0)`: the closed-form underdamped solution.
+    fn damped(t: f64, zeta: f64, omega: f64, x0: f64, v0: f64) -> f64 {
+        let wd = omega * (1.0 - zeta * zeta).sqrt();
+        let a = x0;
+        let b = (v0 + zeta * omega * x0) / wd;
+        (-zeta * omega * t).exp() * (a * (wd * t).cos() + b * (wd * t).sin())
+    }
+
+    #[derive(Debug)]
+    struct Linear {
+        zeta: f64,
+        omega: f64,
+    }
+
+    impl SecondOrderSystem for Linear {
+        fn acceleration(&self, _t: f64, x: f64, v: f64) -> f64 {
+            -2.0 * self.zeta * self.omega * v - self.omega * self.omega * x
+        }
+        fn jacobian(&self, _t: f64, _x: f64, _v: f64) -> [f64; 2] {
+            [-self.omega * self.omega, -2.0 * self.zeta * self.omega]
+        }
+    }
+
+    #[test]
+    fn a_free_run_is_the_closed_form_solution() {
+        let sys = Linear {
+            zeta: 0.05,
+            omega: 3.0,
+        };
+        let run = free_run(&sys, 2.0, 0.01, 1000, [0.7, -0.4], Tolerances::default()).unwrap();
+        assert!(run.stopped.is_none());
+        for (n, x) in run.x.iter().enumerate() {
+            let exact = damped(n as f64 * 0.01, 0.05, 3.0, 0.7, -0.4);
+            assert!((x - exact).abs() < 1e-8, "sample {n}: {x} against {exact}");
+        }
+    }
+
+    #[test]
+    fn the_fitted_state_is_the_true_one_and_noise_is_smoothed() {
+        let sys = Linear {
+            zeta: 0.02,
+            omega: 2.0,
+        };
+        let (x0, v0, dt) = (-0.3, 1.1, 0.05);
+        let exact: Vec<f64> = (0..50)
+            .map(|n| damped(n as f64 * dt, 0.02, 2.0, x0, v0))
+            .collect();
+        let fit = fit_initial_state(&sys, &exact, 0.0, dt, Domain::Line, Tolerances::default()).unwrap();
+        assert!(
+            (fit.state[0] - x0).abs() < 1e-7 && (fit.state[1] - v0).abs() < 1e-6,
+            "{fit:?}"
+        );
+        // Alternating noise of 1 % of the amplitude: the fit smooths it far below its size.
+        let noisy: Vec<f64> = exact
+            .iter()
+            .enumerate()
+            .map(|(n, x)| x + if n % 2 == 0 { 0.01 } else { -0.01 })
+            .collect();
+        let fit = fit_initial_state(&sys, &noisy, 0.0, dt, Domain::Line, Tolerances::default()).unwrap();
+        assert!((fit.state[0] - x0).abs() < 3e-3, "{fit:?}");
+        assert!((fit.state[1] - v0).abs() < 1e-2, "{fit:?}");
+        assert!((fit.rms - 0.01).abs() < 2e-3, "{fit:?}");
+    }
+
+    #[test]
+    fn a_whirling_pendulum_is_fitted_on_the_circle() {
+        let p = Pendulum::paper();
+        let (dt, t0) = (std::f64::consts::TAU / 25.0, 0.3);
+        let run = free_run(&p, t0, dt, 40, [3.0, 2.5], Tolerances::default()).unwrap();
+        let wrapped: Vec<f64> = run.x.iter().map(|&x| wrap(x)).collect();
+        let fit = fit_initial_state(&p, &wrapped, t0, dt, Domain::Circle, Tolerances::default()).unwrap();
+        assert!((wrap(fit.state[0] - 3.0)).abs() < 1e-6, "{fit:?}");
+        assert!((fit.state[1] - 2.5).abs() < 1e-6, "{fit:?}");
+        // On the turn of the first sample as read.
+        assert!((fit.state[0] - wrapped[0]).abs() < 0.5);
+    }
+
+    #[test]
+    fn dry_friction_sticks_in_a_free_run() {
+        // A Duffing oscillator with dry friction and no drive comes to rest and stays there.
+        let losses = Losses::none().with_friction(0.3).unwrap();
+        let sys = Duffing::new(0.05, 1.0, 0.0, 0.0).unwrap().with_losses(losses);
+        let run = free_run(&sys, 0.0, 0.05, 4000, [2.0, 0.0], Tolerances::default()).unwrap();
+        assert!(run.stopped.is_none());
+        let end = &run.x[3000..];
+        assert!(end.iter().all(|&x| (x - end[0]).abs() < 1e-12), "not at rest");
+        assert!(
+            end[0].abs() <= 0.3 + 1e-9,
+            "rests outside the friction band: {}",
+            end[0]
+        );
+    }
+
+    #[test]
+    fn a_diverging_model_stops_and_says_where() {
+        #[derive(Debug)]
+        struct Blowup;
+        impl SecondOrderSystem for Blowup {
+            fn acceleration(&self, _t: f64, x: f64, _v: f64) -> f64 {
+                x * x * x * x
+            }
+            fn jacobian(&self, _t: f64, x: f64, _v: f64) -> [f64; 2] {
+                [4.0 * x * x * x, 0.0]
+            }
+        }
+        let run = free_run(&Blowup, 0.0, 0.1, 100, [1.0, 1.0], Tolerances::default()).unwrap();
+        let stopped = run.stopped.clone().expect("a finite-time blow-up stops the run");
+        assert!(run.finite_len() < 100 && run.finite_len() > 0, "{stopped}");
+        assert!(run.x[run.finite_len()..].iter().all(|x| x.is_nan()));
+    }
+
+    #[test]
+    fn bad_input_is_refused() {
+        let sys = Linear {
+            zeta: 0.1,
+            omega: 1.0,
+        };
+        let tol = Tolerances::default();
+        assert!(free_run(&sys, 0.0, 0.0, 10, [0.0, 0.0], tol).is_err());
+        assert!(free_run(&sys, f64::NAN, 0.1, 10, [0.0, 0.0], tol).is_err());
+        assert!(free_run(&sys, 0.0, 0.1, 10, [f64::INFINITY, 0.0], tol).is_err());
+        assert!(free_run(&sys, 0.0, 0.1, 0, [0.0, 0.0], tol).unwrap().x.is_empty());
+        assert!(matches!(
+            fit_initial_state(&sys, &[1.0], 0.0, 0.1, Domain::Line, tol),
+            Err(SimError::RecordTooShort { .. })
+        ));
+        assert!(fit_initial_state(&sys, &[1.0, f64::NAN], 0.0, 0.1, Domain::Line, tol).is_err());
+    }
+}
