@@ -294,6 +294,8 @@ def identify(
     basis: Optional[str] = None,
     harmonics: Optional[int] = None,
     window_periods: int = 3,
+    window: Optional[float] = None,
+    window_samples: Optional[int] = None,
     window_order: int = 4,
     bootstrap: int = 1000,
     level: float = 0.95,
@@ -346,6 +348,10 @@ def identify(
             circle, ``poly:3`` on the line).
         harmonics: harmonics per segment (default: the method's band).
         window_periods: the weak form's window length in drive periods.
+        window: for a record without a periodic drive (``drive_period="none"``, or a measured
+            drive alone), the window length in the record's time unit; its unit is
+            ``window / window_periods``, rounded to whole samples.
+        window_samples: the window length in samples, instead of ``window``.
         window_order: order p of the window ``sin^p``.
         bootstrap: bootstrap resamples for the intervals (0: none).
         level: confidence level of the intervals.
@@ -397,6 +403,8 @@ def identify(
         basis=basis,
         harmonics=harmonics,
         window_periods=window_periods,
+        window=window,
+        window_samples=window_samples,
         window_order=window_order,
         bootstrap=bootstrap,
         level=level,

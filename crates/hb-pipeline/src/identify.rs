@@ -9,7 +9,7 @@ use std::str::FromStr;
 use circle_signal::{Domain, Measured, Segment};
 use hb_basis::{Basis, BasisKind};
 use hb_model::{Forcing, Harmonics, MAX_DRIVE_HARMONIC, MeasuredDrive, ModelForm, TermList};
-use hb_record::prepare::{Data, DriveFound, DriveSpec, default_basis};
+use hb_record::prepare::{Data, DriveFound, DriveSpec, WindowUnit, default_basis};
 use hb_solve::{BootstrapParams, LstsqSolver, NoiseCorrection, QrSolver, SelectParams, SvdSolver, WeakForm};
 use serde::{Deserialize, Serialize, Serializer};
 use upo_search::Windows;
@@ -121,6 +121,12 @@ pub struct IdentifyOptions {
     pub harmonics: Option<usize>,
     /// Window length in drive periods (the weak form).
     pub window_periods: usize,
+    /// Window length in the record's time unit, for a record without a periodic drive (no drive,
+    /// or a measured drive alone): the windows' unit is this over `window_periods`, rounded to
+    /// whole samples.
+    pub window: Option<f64>,
+    /// Window length in samples, instead of `window`.
+    pub window_samples: Option<usize>,
     /// Order `p` of the window `sin^p` (the weak form), at least 2.
     pub window_order: u32,
     /// Bootstrap resamples for the intervals (0: none).
@@ -165,6 +171,8 @@ impl Default for IdentifyOptions {
             basis: None,
             harmonics: None,
             window_periods: Windows::DEFAULT_PERIODS,
+            window: None,
+            window_samples: None,
             window_order: WeakForm::DEFAULT_WINDOW_ORDER,
             bootstrap: BootstrapParams::DEFAULT_RESAMPLES,
             level: BootstrapParams::DEFAULT_LEVEL,
@@ -180,6 +188,42 @@ impl Default for IdentifyOptions {
             select_folds: SelectParams::DEFAULT_FOLDS,
             select_tolerance: SelectParams::DEFAULT_TOLERANCE,
         }
+    }
+}
+
+/// The windows' unit given by `window` or `window_samples` (a window is `window_periods` units),
+/// checked.
+fn window_unit(o: &IdentifyOptions) -> Result<Option<WindowUnit>, OptionError> {
+    let k = o.window_periods.max(1);
+    match (o.window, o.window_samples) {
+        (Some(_), Some(_)) => Err(OptionError::new(
+            "window",
+            "give the windows' length by «window» or by «window_samples», not both",
+        )),
+        (Some(length), None) => {
+            if !(length.is_finite() && length > 0.0) {
+                return Err(OptionError::value(
+                    "window",
+                    length,
+                    "must be positive and finite",
+                ));
+            }
+            Ok(Some(WindowUnit::Time(length / k as f64)))
+        }
+        (None, Some(n)) => {
+            if n < 2 * k {
+                return Err(OptionError::value(
+                    "window_samples",
+                    n,
+                    format!(
+                        "must be at least {} (2 samples per unit, «window_periods={k}»)",
+                        2 * k
+                    ),
+                ));
+            }
+            Ok(Some(WindowUnit::Samples(n / k)))
+        }
+        (None, None) => Ok(None),
     }
 }
 
@@ -267,7 +311,40 @@ impl IdentifyRequest {
         let domain = o.record.signal;
         let free = o.forcing == Some(ForcingTerms::None) && o.record.given_drive().is_none()
             || o.record.given_drive() == Some(DriveSpec::Free);
-        let drive = o.record.drive(free);
+        let mut drive = o.record.drive(free);
+        if let Some(unit) = window_unit(o)? {
+            let name = if o.window.is_some() {
+                "window"
+            } else {
+                "window_samples"
+            };
+            if matches!(
+                o.record.given_drive(),
+                Some(DriveSpec::Period(_) | DriveSpec::Auto(_))
+            ) {
+                return Err(OptionError::new(
+                    name,
+                    "is for a record without a periodic drive (none, or a measured drive «drive_col» alone): with a \
+                     periodic drive the windows are «window_periods» of its periods",
+                ));
+            }
+            if o.method == Method::Upo {
+                return Err(OptionError::value(
+                    "method",
+                    "upo",
+                    format!("«{name}» sets the weak form's windows: use «method=windowed»"),
+                ));
+            }
+            if o.forcing == Some(ForcingTerms::Identified) && o.record.drive_col.is_none() {
+                return Err(OptionError::value(
+                    "forcing",
+                    "identified",
+                    "a record without a periodic drive has no cos(t), sin(t) to identify (a measured drive is \
+                     named with «drive_col»)",
+                ));
+            }
+            drive = DriveSpec::Windows(unit);
+        }
         if drive == DriveSpec::Free && o.method == Method::Upo {
             return Err(OptionError::value(
                 "method",
@@ -308,14 +385,12 @@ impl IdentifyRequest {
                 .map_err(|e| OptionError::new("terms", e))?;
             list.resolve(&basis)
                 .map_err(|e| OptionError::new("terms", format!("with the basis {}: {e}", basis.spec())))?;
-            if drive == DriveSpec::Free
+            if matches!(drive, DriveSpec::Free | DriveSpec::Windows(_))
                 && let Some(t) = list.phase_term()
             {
                 return Err(OptionError::new(
                     "terms",
-                    format!(
-                        "the term `{t}` has a drive factor, but the record is a free oscillation without a drive"
-                    ),
+                    format!("the term `{t}` has a drive factor, but the record has no periodic drive"),
                 ));
             }
         }
@@ -386,8 +461,10 @@ impl IdentifyRequest {
     /// drive terms.
     pub fn form(&self, data: &Data) -> Result<ModelForm, OptionError> {
         let o = &self.options;
-        let free = matches!(data.drive, DriveFound::Free { .. });
         let measured = data.measured_drive.is_some();
+        // Windows given in time or samples: no periodic drive, so no cos(t), sin(t) terms.
+        let free = matches!(data.drive, DriveFound::Free { .. })
+            || matches!(data.drive, DriveFound::Windows { .. }) && !measured;
         let named = |form: ModelForm| match &o.record.drive_col {
             Some(col) => form.with_drive_column(col.trim()),
             None => form,
@@ -413,10 +490,12 @@ impl IdentifyRequest {
             }
             return Ok(named(ModelForm::from_terms(list.clone())));
         }
-        let forcing = o.forcing.unwrap_or(match data.domain {
-            Domain::Circle => ForcingTerms::None,
-            Domain::Line => ForcingTerms::Identified,
-        });
+        let forcing = match (o.forcing, data.domain) {
+            (Some(f), _) => f,
+            (None, _) if free && matches!(data.drive, DriveFound::Windows { .. }) => ForcingTerms::None,
+            (None, Domain::Circle) => ForcingTerms::None,
+            (None, Domain::Line) => ForcingTerms::Identified,
+        };
         if measured {
             // The measured drive p in place of cos(t) and sin(t): x', {1,p}*B and p.
             let functions = self.basis.names().join(",");
@@ -524,16 +603,16 @@ impl IdentifyRequest {
                     .windows(&record)?
                     .windows_pieces(&data.x, &data.pieces)
                     .map_err(crate::pipeline::PipelineError::from)?;
-                let unit = if matches!(data.drive, DriveFound::Free { .. }) {
-                    "oscillation"
-                } else {
-                    "drive"
+                let k = self.options.window_periods;
+                let found = match data.drive {
+                    DriveFound::Free { .. } => {
+                        format!("{} windows of {k} oscillation periods", segments.len())
+                    }
+                    DriveFound::Windows { samples } => {
+                        format!("{} windows of {} samples", segments.len(), k * samples)
+                    }
+                    _ => format!("{} windows of {k} drive periods", segments.len()),
                 };
-                let found = format!(
-                    "{} windows of {} {unit} periods",
-                    segments.len(),
-                    self.options.window_periods
-                );
                 (segments, found)
             }
         })
@@ -655,6 +734,15 @@ pub fn identify_data(
     }
     if let Some(w) = &identification.warning {
         observer.notice(&Notice::Warning(w.clone()));
+    }
+    if method == Method::Windowed && segments.len() < hb_solve::HELD_OUT_FOLDS {
+        let unknowns = identification.model.coefficients().len();
+        observer.notice(&Notice::Warning(format!(
+            "only {} window(s) ({found}) for {unknowns} unknowns: too few to check the fit on stretches it was \
+             not fitted on, so its share explained says little; shorten the windows with «window», \
+             «window_samples» or «window_periods»",
+            segments.len()
+        )));
     }
     Ok(IdentifyReport {
         method,

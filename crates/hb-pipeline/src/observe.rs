@@ -78,6 +78,13 @@ pub enum Notice {
         /// The whole number of samples used per period.
         used: usize,
     },
+    /// No periodic drive: the windows' unit as given (a window is `window_periods` of them).
+    WindowUnit {
+        /// Samples per unit.
+        samples: usize,
+        /// Its length in the record's time unit.
+        length: f64,
+    },
     /// The record resampled onto a whole number of samples per period.
     Resampled {
         /// Samples per period as read.
@@ -135,6 +142,10 @@ impl fmt::Display for Notice {
             Notice::FreePeriod { samples, used } => write!(
                 f,
                 "no drive: windows in periods of the free oscillation, {samples:.2} samples ({used} used)"
+            ),
+            Notice::WindowUnit { samples, length } => write!(
+                f,
+                "no periodic drive: the windows' unit is {samples} samples ({length} in the record's time unit)"
             ),
             Notice::Resampled { from, to } => write!(
                 f,

@@ -331,6 +331,10 @@ pub fn load(
             samples: *samples,
             used: data.p,
         }),
+        DriveFound::Windows { samples } => observer.notice(&Notice::WindowUnit {
+            samples: *samples,
+            length: *samples as f64 * data.clock.step(),
+        }),
     }
     if let Some(from) = data.resampled_from {
         observer.notice(&Notice::Resampled { from, to: data.p });
@@ -352,7 +356,8 @@ pub struct RecordSummary {
     pub samples_per_period: usize,
     /// The period that is the windows' unit: the drive's, or the free oscillation's.
     pub period: f64,
-    /// `given`, `estimated` or `free`.
+    /// `given`, `estimated`, `free`, or `windows` (no periodic drive: the windows' length
+    /// given).
     pub drive: &'static str,
     /// The estimate's standard uncertainty, for an estimated drive.
     pub period_uncertainty: Option<f64>,
@@ -374,6 +379,7 @@ impl RecordSummary {
             DriveFound::Given => ("given", None),
             DriveFound::Estimated(e) => ("estimated", Some(e.period_uncertainty)),
             DriveFound::Free { .. } => ("free", None),
+            DriveFound::Windows { .. } => ("windows", None),
         };
         Self {
             samples: data.pieces.iter().map(|r| r.len()).sum(),

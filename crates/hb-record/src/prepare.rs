@@ -54,6 +54,19 @@ pub enum DriveSpec {
     Auto(Option<PeriodRange>),
     /// No drive: a free oscillation, whose mean period is the unit of the windows.
     Free,
+    /// No periodic drive (none, or a measured one with no period): the unit of the windows given
+    /// by its length.
+    Windows(WindowUnit),
+}
+
+/// The length of the windows' unit (a window is a whole number of units), for a record without a
+/// periodic drive to count them in.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum WindowUnit {
+    /// A length in the record's time unit, rounded to whole samples.
+    Time(f64),
+    /// A whole number of samples (at least 2).
+    Samples(usize),
 }
 
 /// How a drive is given in text: by its period or by its frequency.
@@ -144,6 +157,11 @@ pub enum DriveFound {
     Free {
         /// The measured mean period, in samples (the clock's period is its nearest whole number).
         samples: f64,
+    },
+    /// No periodic drive: the windows' unit as given, in whole samples.
+    Windows {
+        /// Samples per unit.
+        samples: usize,
     },
 }
 
@@ -575,6 +593,13 @@ impl GridData {
                     .map_err(PrepareError::FreePeriod)?;
                 let whole = samples.round().max(2.0);
                 (whole * dt, DriveFound::Free { samples })
+            }
+            DriveSpec::Windows(unit) => {
+                let samples = match unit {
+                    WindowUnit::Time(length) => (length / dt).round().clamp(2.0, 1e12) as usize,
+                    WindowUnit::Samples(n) => n.max(2),
+                };
+                (samples as f64 * dt, DriveFound::Windows { samples })
             }
             DriveSpec::Auto(range) => {
                 let mut search = DriveSearch::builder();

@@ -395,3 +395,78 @@ fn bad_requests_are_refused_in_one_line() {
     assert_clean_failure(&hbid(&["simulate", "--dt", "0.1", "--out", s(&out)]), "--dt");
     assert!(!out.exists(), "no output for a refused request");
 }
+
+/// The EMPS benchmark (`../shared/benchmarks/emps`): a positioning system with viscous and dry
+/// friction under a measured force with no period.
+fn emps(file: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/benchmarks/emps")
+        .join(file)
+}
+
+#[test]
+fn windows_in_seconds_for_a_drive_without_a_period() {
+    let (train, test) = (emps("emps_train_txp.csv"), emps("emps_test_txp.csv"));
+    let dir = scratch("emps");
+    let terms = "1, x', sign(x'), p";
+    let base = [
+        "identify",
+        s(&train),
+        "--signal",
+        "line",
+        "--drive-col",
+        "p",
+        "--terms",
+        terms,
+        "--bootstrap",
+        "0",
+    ];
+    // Windows in periods of the record's slow motion: one window, and a warning that says so.
+    let mut args = base.to_vec();
+    args.extend(["--drive-period", "none"]);
+    let err = String::from_utf8_lossy(&ok(&args).stderr).into_owned();
+    assert!(
+        err.contains("only 1 window(s)") && err.contains("--window"),
+        "{err}"
+    );
+    // Windows of 0.75 s: the benchmark's reference parameters (inverse dynamics, its document)
+    // within 1 to 3 %.
+    let model = dir.join("emps.json");
+    let mut args = base.to_vec();
+    args.extend(["--window", "0.75", "--json", "--save-model", s(&model)]);
+    let out = ok(&args);
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("window(s)"));
+    let v = json(&out);
+    let c = |name: &str| v["coefficients"][name].as_f64().unwrap();
+    let mass = -1.0 / c("p");
+    for (name, value, reference, within) in [
+        ("M", mass, 95.1089, 0.01),
+        ("Fv", mass * c("x'"), 203.5034, 0.02),
+        ("Fc", mass * c("sign(x')"), 20.3935, 0.02),
+        ("offset", mass * c("1"), -3.1648, 0.03),
+    ] {
+        assert!(
+            ((value - reference) / reference).abs() < within,
+            "{name} = {value} against {reference}"
+        );
+    }
+    assert_eq!(v["record"]["drive"], "windows");
+    // The protocol: a free run under the test record's force, 20 samples for the state; the
+    // benchmark's reference model scores about 8.4 mm.
+    let v = json(&ok(&[
+        "compare",
+        s(&model),
+        s(&test),
+        "--drive-col",
+        "p",
+        "--init",
+        "20",
+        "--json",
+    ]));
+    let rmse = v["ranges"][0]["rmse"].as_f64().unwrap();
+    assert!(rmse < 8.4e-3, "RMSE {rmse} m");
+    // A periodic drive counts its windows in its periods.
+    let mut args = base.to_vec();
+    args.extend(["--window", "0.75", "--drive-frequency", "4"]);
+    assert_clean_failure(&hbid(&args), "--window");
+}

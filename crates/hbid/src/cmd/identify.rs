@@ -43,6 +43,21 @@ pub struct IdentifyArgs {
     /// Windowed method: window length in drive periods.
     #[arg(long, default_value_t = Windows::DEFAULT_PERIODS)]
     pub window_periods: usize,
+    /// Windowed method, for a record without a periodic drive (--drive-period none, or a measured
+    /// drive --drive-col alone): the window length in the record's time unit (seconds for a
+    /// record in seconds), instead of periods of the free oscillation or of the default 2π. The
+    /// windows' unit is LENGTH/--window-periods, rounded to whole samples; --harmonics counts in
+    /// it.
+    #[arg(
+        long,
+        value_name = "LENGTH",
+        allow_hyphen_values = true,
+        conflicts_with = "window_samples"
+    )]
+    pub window: Option<f64>,
+    /// Windowed method: the window length in samples, instead of --window.
+    #[arg(long, value_name = "N")]
+    pub window_samples: Option<usize>,
     /// Windowed method: order p of the window w = sin^p (at least 2).
     #[arg(long, default_value_t = WeakForm::DEFAULT_WINDOW_ORDER)]
     pub window_order: u32,
@@ -133,6 +148,8 @@ impl IdentifyArgs {
             basis: self.basis,
             harmonics: self.harmonics,
             window_periods: self.window_periods,
+            window: self.window,
+            window_samples: self.window_samples,
             window_order: self.window_order,
             bootstrap: self.bootstrap,
             level: self.level,

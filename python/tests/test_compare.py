@@ -1,0 +1,103 @@
+"""hbid.compare, hbid.simulate(model=, input=) and Model.simulate(t=, drive=): a saved model run
+freely under a held-out record's measured drive, the same numbers as the command line."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+
+import numpy as np
+import pytest
+
+import hbid
+
+
+def _shaker(**kwargs) -> hbid.Simulation:
+    """A one-well Duffing oscillator on a shaker, its drive written as the column p."""
+    common = dict(
+        system="duffing", f=0.1, drive_frequency=6.5, sample_rate=2048, time_origin="first-sample", write_drive=True
+    )
+    common.update(kwargs)
+    return hbid.simulate(**common)
+
+
+@pytest.fixture(scope="module")
+def shaker(tmp_path_factory):
+    dir = tmp_path_factory.mktemp("shaker")
+    train = _shaker(duration=30, x0=1.0)
+    test = _shaker(duration=10, phase=1.0, noise=1e-3, seed=3, out=dir / "test.csv")
+    result = hbid.identify(
+        train.x,
+        t=train.t,
+        drive=train.drive,
+        signal="line",
+        drive_frequency=6.5,
+        terms="x', x, x^3, p",
+        bootstrap=0,
+    )
+    model = dir / "m.json"
+    result.model.save(model)
+    return dict(dir=dir, train=train, test=test, model=result.model, model_path=model, csv=dir / "test.csv")
+
+
+def test_a_held_out_record_is_matched_to_its_noise(shaker):
+    test = shaker["test"]
+    c = hbid.compare(shaker["model"], test.x, t=test.t, drive=test.drive, init=100)
+    assert c.measured_drive and len(c.ranges) == 1
+    r = c.ranges[0]
+    assert r.scored == len(test.t) - 100
+    assert 0.9e-3 < r.rmse < 1.15e-3, r
+    assert r.fit_percent == pytest.approx(100 * (1 - r.nrmse))
+    piece = c.runs[0][0]
+    assert piece.start == 0 and piece.init == 100
+    assert np.allclose(piece.t, test.t) and np.allclose(piece.measured, test.x)
+    assert np.sqrt(np.mean((piece.x[100:] - test.x[100:]) ** 2)) == pytest.approx(r.rmse)
+
+
+def test_the_same_scores_as_the_command_line(shaker, cli):
+    c = hbid.compare(shaker["model_path"], str(shaker["csv"]), drive_col="p", range=[(0, 5000), "5000.."], init=64)
+    out = subprocess.run(
+        [str(cli), "--quiet", "compare", str(shaker["model_path"]), str(shaker["csv"]), "--drive-col", "p",
+         "--range", "0..5000", "--range", "5000..", "--init", "64", "--json"],
+        capture_output=True, text=True, check=True,
+    )
+    assert json.loads(out.stdout) == json.loads(c.to_json())
+    assert [r.range for r in c.ranges] == [(0, 5000), (5000, len(shaker["test"].t))]
+
+
+def test_simulate_a_model_under_a_records_input(shaker, tmp_path):
+    run = hbid.simulate(model=shaker["model"], input=str(shaker["csv"]), drive_col="p", init=100, out=tmp_path / "r.csv")
+    t, x, v = run
+    test = shaker["test"]
+    assert run.stopped is None and len(run) == len(test.t)
+    assert np.allclose(t, test.t) and np.max(np.abs(x - test.x)) < 6e-3
+    written = np.loadtxt(tmp_path / "r.csv", delimiter=",", skiprows=1)
+    assert np.array_equal(written[:, 1], x)
+    with pytest.raises(hbid.OptionsError, match="f"):
+        hbid.simulate(model=shaker["model"], input=str(shaker["csv"]), drive_col="p", f=2.0)
+    with pytest.raises(hbid.OptionsError, match="input"):
+        hbid.simulate(model=shaker["model"])
+
+
+def test_model_simulate_at_given_times_with_a_drive(shaker):
+    test = shaker["test"]
+    run = hbid.compare(shaker["model"], test.x, t=test.t, drive=test.drive, init=100)
+    x0, v0, _ = run.ranges[0].initial_states[0]
+    t, x, v = shaker["model"].simulate(t=test.t, drive=test.drive, x0=x0, v0=v0)
+    assert np.allclose(x, run.runs[0][0].x, atol=1e-9)
+    with pytest.raises(hbid.OptionsError, match="drive"):
+        shaker["model"].simulate(t=test.t, x0=x0, v0=v0)
+    with pytest.raises(hbid.OptionsError, match="even grid"):
+        shaker["model"].simulate(t=test.t ** 1.01, drive=test.drive, x0=x0, v0=v0)
+
+
+def test_bad_requests(shaker):
+    test = shaker["test"]
+    with pytest.raises(hbid.OptionsError, match="drive_col"):
+        hbid.compare(shaker["model"], str(shaker["csv"]))
+    with pytest.raises(hbid.OptionsError, match="range"):
+        hbid.compare(shaker["model"], test.x, t=test.t, drive=test.drive, range="0..99999999")
+    with pytest.raises(hbid.OptionsError, match="x0"):
+        hbid.compare(shaker["model"], test.x, t=test.t, drive=test.drive, x0=1.0)
+    with pytest.raises(hbid.ModelError):
+        hbid.compare(str(shaker["csv"]), test.x, t=test.t, drive=test.drive)
