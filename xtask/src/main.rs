@@ -4,6 +4,7 @@
 #![allow(clippy::print_stderr, clippy::print_stdout)]
 
 mod accuracy;
+mod benchmarks;
 mod identification;
 mod real_records;
 mod reproduce;
@@ -72,6 +73,19 @@ enum Command {
         #[arg(long, default_value = "target/real-records")]
         data: PathBuf,
     },
+    /// The field's public benchmarks (Silverbox, EMPS) by their protocols: identified on the
+    /// training part, scored by a free run on the test parts; writes `docs/benchmarks.md`.
+    Benchmarks {
+        /// The report.
+        #[arg(long, default_value = "docs/benchmarks.md")]
+        doc: PathBuf,
+        /// Also write `benchmarks.json` (coefficients and scores) into this folder.
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Where the records cut from the benchmarks' files and the models are written.
+        #[arg(long, default_value = "target/benchmarks")]
+        work: PathBuf,
+    },
     /// Model selection beside pysindy's weak-form SINDy on the same forced records at four noise
     /// levels; writes its section into `docs/accuracy.md` (needs Python with pysindy:
     /// `pip install -r xtask/peers/requirements.txt`).
@@ -110,6 +124,7 @@ fn main() -> std::process::ExitCode {
             repeats,
         } => scale::run(&out, &data, &sizes, repeats),
         Command::RealRecords { out, data } => real_records::run(&out, &data),
+        Command::Benchmarks { doc, out, work } => benchmarks::run(&doc, out.as_deref(), &work),
         Command::WeakSindy { out, data, python } => weak_sindy::run(&out, &data, &python),
     };
     match result {
