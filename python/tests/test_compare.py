@@ -77,6 +77,8 @@ def test_simulate_a_model_under_a_records_input(shaker, tmp_path):
         hbid.simulate(model=shaker["model"], input=str(shaker["csv"]), drive_col="p", f=2.0)
     with pytest.raises(hbid.OptionsError, match="input"):
         hbid.simulate(model=shaker["model"])
+    with pytest.raises(hbid.OptionsError, match="x0"):
+        hbid.simulate(model=shaker["model"], input=str(shaker["csv"]), drive_col="p", x0=1.0)
 
 
 def test_model_simulate_at_given_times_with_a_drive(shaker):

@@ -213,8 +213,11 @@ impl CompareRequest {
                     "give the initial state whole, «x0» with «v0», or neither to fit it to the record",
                 ));
             }
-            (Some(x), Some(v)) if !(x.is_finite() && v.is_finite()) => {
+            (Some(x), Some(_)) if !x.is_finite() => {
                 return Err(OptionError::value("x0", x, "the initial state must be finite"));
+            }
+            (Some(_), Some(v)) if !v.is_finite() => {
+                return Err(OptionError::value("v0", v, "the initial state must be finite"));
             }
             _ => {}
         }
@@ -367,6 +370,17 @@ pub fn compare(
     for range in &ranges {
         let init = o.init.unwrap_or_else(|| default_init(period, range.len()));
         let (score, pieces) = run_range(model, &grid, range.clone(), init, request)?;
+        if score.scored == 0 && score.stopped.is_none() {
+            return Err(OptionError::value(
+                "init",
+                init,
+                format!(
+                    "leaves no sample of the range {}..{} to score: its pieces between gaps are no longer",
+                    range.start, range.end
+                ),
+            )
+            .into());
+        }
         done += range.len();
         observer.progress(done, total);
         scores.push(score);
@@ -403,9 +417,12 @@ fn check_drive(model: &IdentifiedModel, grid: &GridData, named: bool) -> Result<
             "the model has terms in the measured drive p: name the record's drive column with «drive_col=»",
         )
         .into()),
-        (Some(_), false) if named => Err(OptionError::new(
-            "drive_col",
-            "the model has no term in the measured drive p: it runs on its own drive, leave out «drive_col»",
+        (Some(_), false) => Err(OptionError::new(
+            if named { "drive_col" } else { "drive" },
+            format!(
+                "the model has no term in the measured drive p: it runs on its own drive, leave out «{}»",
+                if named { "drive_col" } else { "drive" }
+            ),
         )
         .into()),
         _ => Ok(false),
@@ -458,22 +475,35 @@ fn run_range(
         if start >= end {
             continue;
         }
-        if end - start <= init {
+        // The state given is the state at the range's start: its piece is run whatever its length.
+        let given = match (o.x0, o.v0) {
+            (Some(x), Some(v)) if start == range.start => Some([x, v]),
+            _ => None,
+        };
+        if given.is_none() && end - start <= init {
             skipped += 1;
             continue;
         }
         let y = &grid.x[start..end];
         let t0 = grid.t0 + start as f64 * grid.dt;
         let model = &driven_on(model, grid, start, end)?;
-        let (state, fit_rms) = match (o.x0, o.v0, pieces.is_empty()) {
-            (Some(x), Some(v), true) => ([x, v], 0.0),
-            _ => {
-                let fit = fit_initial_state(model, &y[..init], t0, grid.dt, domain, request.tolerances)?;
-                (fit.state, fit.rms)
-            }
+        let state = match given {
+            Some(state) => Ok((state, 0.0)),
+            None => fit_initial_state(model, &y[..init], t0, grid.dt, domain, request.tolerances)
+                .map(|fit| (fit.state, fit.rms)),
         };
-        states.push([state[0], state[1], fit_rms]);
-        let run = free_run(model, t0, grid.dt, y.len(), state, request.tolerances)?;
+        let run = match state {
+            Ok((state, fit_rms)) => {
+                states.push([state[0], state[1], fit_rms]);
+                free_run(model, t0, grid.dt, y.len(), state, request.tolerances)?
+            }
+            // No state from which the model runs through the first samples: the piece has no run.
+            Err(why) => pendulum_sim::FreeRun {
+                x: vec![f64::NAN; y.len()],
+                v: vec![f64::NAN; y.len()],
+                stopped: Some(why),
+            },
+        };
         if let (None, Some(why)) = (&stopped, &run.stopped) {
             stopped = Some(format!("the model's run from sample {start} stopped: {why}"));
         }

@@ -123,7 +123,7 @@ pub struct IdentifyOptions {
     pub window_periods: usize,
     /// Window length in the record's time unit, for a record without a periodic drive (no drive,
     /// or a measured drive alone): the windows' unit is this over `window_periods`, rounded to
-    /// whole samples.
+    /// whole samples (at least 2).
     pub window: Option<f64>,
     /// Window length in samples, instead of `window`.
     pub window_samples: Option<usize>,
@@ -221,7 +221,7 @@ fn window_unit(o: &IdentifyOptions) -> Result<Option<WindowUnit>, OptionError> {
                     ),
                 ));
             }
-            Ok(Some(WindowUnit::Samples(n / k)))
+            Ok(Some(WindowUnit::Samples((n + k / 2) / k)))
         }
         (None, None) => Ok(None),
     }

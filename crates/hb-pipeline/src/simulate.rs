@@ -345,6 +345,22 @@ impl Default for SimulateOptions {
 /// Why an option of a built-in system is refused with a saved model, after the option's name.
 pub const MODEL_TAKES_NO_RIG: &str = "is an option of a built-in system: a saved model («model») takes only the input's options, «x0», «v0» and «rtol»";
 
+/// With a saved model the initial state is fitted to the input's first samples unless `init` is 0
+/// (`state_given`): an `x0` or `v0` set away from its default without it would be ignored, and
+/// is refused instead.
+pub fn check_model_state(rig: &SimulateOptions, state_given: bool) -> Result<(), OptionError> {
+    let d = SimulateOptions::default();
+    if !state_given && (rig.x0 != d.x0 || rig.v0 != d.v0) {
+        let name = if rig.x0 != d.x0 { "x0" } else { "v0" };
+        return Err(OptionError::sentence(
+            name,
+            "sets the state of a saved «model» with «init=0» only (otherwise the state is fitted to the input's \
+             first samples)",
+        ));
+    }
+    Ok(())
+}
+
 impl SimulateOptions {
     /// The options of a built-in system set away from their defaults (every option but `x0`,
     /// `v0` and `rtol`): what a saved model's run under a record's input (`hbid simulate --model`)

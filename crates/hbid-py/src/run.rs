@@ -414,6 +414,7 @@ pub fn model_run<'py>(
     }
     let model = hb_model::IdentifiedModel::from_bytes(model).map_err(|e| raise(Kind::Model, e))?;
     let request = CompareRequest::from_json(self::options(options)?).map_err(option_error)?;
+    hb_pipeline::simulate::check_model_state(&rig, request.options().x0.is_some()).map_err(option_error)?;
     let samples = Samples {
         path,
         x: optional(&x)?,

@@ -393,6 +393,55 @@ fn bad_requests_are_refused_in_one_line() {
         "--f",
     );
     assert_clean_failure(&hbid(&["simulate", "--dt", "0.1", "--out", s(&out)]), "--dt");
+    // A state given without --init 0 would be ignored: refused.
+    assert_clean_failure(
+        &hbid(&[
+            "simulate",
+            "--model",
+            m,
+            "--input",
+            t,
+            "--drive-col",
+            "p",
+            "--x0",
+            "1",
+            "--out",
+            s(&out),
+        ]),
+        "--x0",
+    );
+    // An --init that leaves nothing of a range to score.
+    assert_clean_failure(
+        &hbid(&[
+            "compare",
+            m,
+            t,
+            "--drive-col",
+            "p",
+            "--range",
+            "0..50",
+            "--init",
+            "60",
+        ]),
+        "--init",
+    );
+    // The report's orbits need a periodic drive.
+    let report = dir.join("report");
+    assert_clean_failure(
+        &hbid(&[
+            "report",
+            t,
+            "--signal",
+            "line",
+            "--drive-period",
+            "none",
+            "--window",
+            "1",
+            "--out",
+            s(&report),
+        ]),
+        "periodic drive",
+    );
     assert!(!out.exists(), "no output for a refused request");
 }
 

@@ -134,10 +134,10 @@ pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
              samples; identify it with hbid identify --method windowed --drive-col {col}"
         );
     }
-    if request.drive() == DriveSpec::Free {
+    if matches!(request.drive(), DriveSpec::Free | DriveSpec::Windows(_)) {
         anyhow::bail!(
-            "a free oscillation (no drive) has no orbits or Poincaré section to report; identify it with \
-             hbid identify --method windowed --drive-period none"
+            "a record without a periodic drive has no orbits or Poincaré section to report; identify it with \
+             hbid identify --method windowed (--drive-period none, --window)"
         );
     }
     std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;

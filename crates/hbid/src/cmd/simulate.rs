@@ -190,7 +190,8 @@ pub struct SimulateArgs {
     /// over the grid of the record --input, driven by its measured drive (--drive-col) or by the
     /// model's own drive on the record's clock; writes t,x,v at every sample of the record, piece
     /// by piece between gaps, each piece from the state whose free run best matches its first
-    /// --init samples (or from --x0, --v0 with --init 0). Takes no option of a built-in system.
+    /// --init samples (or from --x0, --v0 with --init 0); pieces no longer than --init are not run.
+    /// Takes no option of a built-in system.
     #[arg(long, value_name = "MODEL", requires = "input", help_heading = MODEL)]
     model: Option<PathBuf>,
     /// The record whose input drives --model (text or .npy, read as by `hbid identify`).
@@ -323,6 +324,7 @@ fn model_request(args: &SimulateArgs) -> anyhow::Result<CompareRequest> {
         .into());
     }
     let given = args.init == Some(0);
+    hb_pipeline::simulate::check_model_state(&args.options(), given)?;
     Ok(CompareRequest::new(CompareOptions {
         time_col: args.time_col.clone(),
         angle_col: args.angle_col.clone(),
