@@ -111,8 +111,9 @@ impl MeasuredDrive {
         let p = &self.samples[..];
         let last = p.len() - 1;
         let u = (t - self.start_time) / self.step;
-        // An integrator's stage at the span's end may sit a rounding past it: that is the end.
-        let slack = 1e-9 * (last as f64).max(1.0);
+        // An integrator's stage at the span's end may sit a rounding of the times past it: that
+        // is the end (a few ulps of the times, in samples).
+        let slack = 8.0 * f64::EPSILON * ((t.abs() + self.start_time.abs()) / self.step + last as f64);
         if !(u >= -slack && u <= last as f64 + slack) {
             return f64::NAN;
         }
