@@ -31,14 +31,16 @@ fn hbid(exe: &Path, args: &[String]) -> anyhow::Result<Value> {
 }
 
 /// The `hbid` of this xtask's own build (the test profile: `cargo xtask` shares the build of
-/// `cargo test`), built when missing.
+/// `cargo test --workspace`), brought up to date by `cargo test --workspace --no-run`: with the
+/// workspace's features, so that after `cargo test` it builds nothing (`cargo build -p hbid`
+/// alone would resolve other features and build every dependency again).
 fn hbid_exe() -> anyhow::Result<PathBuf> {
     let status = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
-        .args(["build", "--profile", "test", "-p", "hbid"])
+        .args(["test", "--workspace", "--no-run", "--quiet"])
         .status()
-        .context("cargo build")?;
+        .context("cargo test --no-run")?;
     if !status.success() {
-        bail!("cargo build --profile test -p hbid failed");
+        bail!("cargo test --workspace --no-run failed");
     }
     let exe = std::env::current_exe()?;
     let dir = exe.parent().context("xtask is not in a cargo target folder")?;
