@@ -35,6 +35,23 @@ struct Samples<'a> {
 }
 
 impl<'a> Samples<'a> {
+    /// The samples of a function's `path`, `x`, `t`, `drive` and `grid` arguments.
+    fn new(
+        path: Option<PathBuf>,
+        x: &'a Option<PyReadonlyArray1<'_, f64>>,
+        t: &'a Option<PyReadonlyArray1<'_, f64>>,
+        drive: &'a Option<PyReadonlyArray1<'_, f64>>,
+        grid: Option<Grid>,
+    ) -> PyResult<Self> {
+        Ok(Self {
+            path,
+            x: optional(x)?,
+            t: optional(t)?,
+            drive: optional(drive)?,
+            grid,
+        })
+    }
+
     /// The layer's source; a grid is checked here.
     fn source(&self) -> PyResult<Source<'_>> {
         match (&self.path, self.x, &self.grid) {
@@ -106,13 +123,7 @@ pub fn condition<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let record: RecordOptions =
         hb_pipeline::options::from_object(self::options(options)?).map_err(option_error)?;
-    let samples = Samples {
-        path,
-        x: optional(&x)?,
-        t: optional(&t)?,
-        drive: optional(&drive)?,
-        grid: None,
-    };
+    let samples = Samples::new(path, &x, &t, &drive, None)?;
     let source = samples.source()?;
     let mut notices = Notices::default();
     let grid = py
@@ -161,13 +172,7 @@ pub fn identify<'py>(
     grid: Option<Grid>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let request = IdentifyRequest::from_json(self::options(options)?).map_err(option_error)?;
-    let samples = Samples {
-        path,
-        x: optional(&x)?,
-        t: optional(&t)?,
-        drive: optional(&drive)?,
-        grid,
-    };
+    let samples = Samples::new(path, &x, &t, &drive, grid)?;
     let source = samples.source()?;
     let mut notices = Notices::default();
     let (json, model) = py
@@ -203,13 +208,7 @@ pub fn embed<'py>(
     grid: Option<Grid>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let request = EmbedRequest::from_json(self::options(options)?).map_err(option_error)?;
-    let samples = Samples {
-        path,
-        x: optional(&x)?,
-        t: optional(&t)?,
-        drive: optional(&drive)?,
-        grid,
-    };
+    let samples = Samples::new(path, &x, &t, &drive, grid)?;
     let source = samples.source()?;
     let mut notices = Notices::default();
     let report = py
@@ -242,13 +241,7 @@ pub fn upos<'py>(
     grid: Option<Grid>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let request = UposRequest::from_json(self::options(options)?).map_err(option_error)?;
-    let samples = Samples {
-        path,
-        x: optional(&x)?,
-        t: optional(&t)?,
-        drive: optional(&drive)?,
-        grid,
-    };
+    let samples = Samples::new(path, &x, &t, &drive, grid)?;
     let source = samples.source()?;
     let mut notices = Notices::default();
     let report = py
@@ -320,13 +313,7 @@ pub fn compare<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let model = hb_model::IdentifiedModel::from_bytes(model).map_err(|e| raise(Kind::Model, e))?;
     let request = CompareRequest::from_json(self::options(options)?).map_err(option_error)?;
-    let samples = Samples {
-        path,
-        x: optional(&x)?,
-        t: optional(&t)?,
-        drive: optional(&drive)?,
-        grid,
-    };
+    let samples = Samples::new(path, &x, &t, &drive, grid)?;
     let source = samples.source()?;
     let mut notices = Notices::default();
     let report = py
@@ -415,13 +402,7 @@ pub fn model_run<'py>(
     let model = hb_model::IdentifiedModel::from_bytes(model).map_err(|e| raise(Kind::Model, e))?;
     let request = CompareRequest::from_json(self::options(options)?).map_err(option_error)?;
     hb_pipeline::simulate::check_model_state(&rig, request.options().x0.is_some()).map_err(option_error)?;
-    let samples = Samples {
-        path,
-        x: optional(&x)?,
-        t: optional(&t)?,
-        drive: optional(&drive)?,
-        grid,
-    };
+    let samples = Samples::new(path, &x, &t, &drive, grid)?;
     let source = samples.source()?;
     let mut notices = Notices::default();
     let run = py

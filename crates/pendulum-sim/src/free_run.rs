@@ -257,11 +257,6 @@ pub fn fit_initial_state<S: SecondOrderSystem>(
             break;
         }
     }
-    if domain == Domain::Circle {
-        // The state on the turn of the first sample as read.
-        let shift = samples[0] - y[0];
-        state[0] += shift;
-    }
     Ok(InitialState {
         state,
         rms: (best / n as f64).sqrt(),
