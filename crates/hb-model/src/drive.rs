@@ -13,10 +13,15 @@ use crate::error::ModelError;
 ///
 /// Identification balances a term in `p` from the samples themselves ([`MeasuredDrive::samples`];
 /// a non-finite sample is refused where a segment reaches it). A model in `p` is simulated with
-/// [`MeasuredDrive::at`]: the cubic Hermite spline whose slopes are the central differences
-/// (Catmull–Rom; one-sided at the ends), which passes through every sample and has a continuous
-/// first derivative, so that an integrator's error control sees no kink. It is NaN outside the
-/// recorded span and next to a gap, so that a model never runs on a drive that was not measured.
+/// [`MeasuredDrive::at`]: the interpolating cubic spline of each run of finite samples (continuous
+/// second derivative, not-a-knot ends; a parabola through a run of 3 samples, a line through 2).
+/// It passes through every sample and has no kink for an integrator's error control to see, and,
+/// unlike a local spline, it keeps the amplitude of a band-limited drive up to a good fraction of
+/// the sampling rate: at a quarter of it the spline is within 2.5 % of a sinusoid's amplitude
+/// between samples, where the Catmull–Rom spline (central-difference slopes) is 10 % off, a bias
+/// a free run under a measured input carries through every resonance it drives. It is NaN
+/// outside the recorded span and next to a gap, so that a model never runs on a drive that was
+/// not measured.
 ///
 /// The samples are shared, not copied, when the drive is cloned (a record holds millions), and
 /// are data, not settings: nothing saves them with a model or a request.
@@ -24,10 +29,11 @@ use crate::error::ModelError;
 /// ```
 /// use hb_model::MeasuredDrive;
 ///
-/// // cos t sampled at 0.01 from t = 2: the spline is within 1e-7 between samples.
+/// // cos t sampled at 0.01 from t = 2: the spline is within 1e-9 between samples.
 /// let p: Vec<f64> = (0..1000).map(|n| (2.0 + 0.01 * n as f64).cos()).collect();
 /// let drive = MeasuredDrive::new(p, 2.0, 0.01)?;
-/// assert!((drive.at(3.005) - 3.005f64.cos()).abs() < 1e-7);
+/// assert!((drive.at(3.005) - 3.005f64.cos()).abs() < 1e-9);
+/// assert!((drive.at(2.005) - 2.005f64.cos()).abs() < 1e-9);
 /// assert!(drive.at(1.0).is_nan() && drive.at(20.0).is_nan());
 /// // The ends are in the span, to a rounding.
 /// assert!((drive.at(2.0 + 999.0 * 0.01 + 1e-15) - (2.0 + 9.99f64).cos()).abs() < 1e-12);
@@ -36,6 +42,9 @@ use crate::error::ModelError;
 #[derive(Clone, PartialEq)]
 pub struct MeasuredDrive {
     samples: Arc<[f64]>,
+    /// The spline's second derivatives at the samples (times step², NaN where a sample is not
+    /// finite), made once from the samples.
+    curvatures: Arc<[f64]>,
     start_time: f64,
     step: f64,
 }
@@ -62,8 +71,10 @@ impl MeasuredDrive {
         if samples.len() < 2 {
             return Err(ModelError::DriveTooShort { len: samples.len() });
         }
+        let curvatures = curvatures(&samples).into();
         Ok(Self {
             samples,
+            curvatures,
             start_time,
             step,
         })
@@ -102,7 +113,17 @@ impl MeasuredDrive {
     /// The same samples from another grid's origin (a record's grid after resampling keeps its
     /// samples; a piece of a record starts elsewhere).
     pub fn starting_at(&self, start_time: f64) -> Result<Self, ModelError> {
-        Self::new(self.samples.clone(), start_time, self.step)
+        if !start_time.is_finite() {
+            return Err(ModelError::InvalidParameter {
+                name: "measured drive's start time",
+                value: start_time,
+                why: "must be finite",
+            });
+        }
+        Ok(Self {
+            start_time,
+            ..self.clone()
+        })
     }
 
     /// The drive at time `t`: the spline through the samples, NaN outside the recorded span and
@@ -120,17 +141,72 @@ impl MeasuredDrive {
         let u = u.clamp(0.0, last as f64);
         let i = (u.floor() as usize).min(last - 1);
         let s = u - i as f64;
-        let slope = |j: usize| match j {
-            0 => p[1] - p[0],
-            j if j == last => p[last] - p[last - 1],
-            j => 0.5 * (p[j + 1] - p[j - 1]),
-        };
-        let (p0, p1, m0, m1) = (p[i], p[i + 1], slope(i), slope(i + 1));
-        let (s2, s3) = (s * s, s * s * s);
-        (2.0 * s3 - 3.0 * s2 + 1.0) * p0
-            + (s3 - 2.0 * s2 + s) * m0
-            + (-2.0 * s3 + 3.0 * s2) * p1
-            + (s3 - s2) * m1
+        if s == 0.0 {
+            // On a sample (a run's last sample before a gap included).
+            return if p[i].is_finite() { p[i] } else { f64::NAN };
+        }
+        let r = 1.0 - s;
+        let m = &self.curvatures[..];
+        // Between the samples: the line through them plus the curvatures' cubic corrections
+        // (NaN where either sample, hence its curvature, is not finite).
+        r * p[i] + s * p[i + 1] - s * r / 6.0 * ((1.0 + r) * m[i] + (1.0 + s) * m[i + 1])
+    }
+}
+
+/// The second derivatives (in samples: times step²) of the interpolating cubic spline of each
+/// run of finite samples, not-a-knot at the run's ends (a parabola through 3 samples, a line
+/// through 2); NaN at the non-finite samples.
+fn curvatures(p: &[f64]) -> Vec<f64> {
+    let mut m = vec![f64::NAN; p.len()];
+    let mut start = 0;
+    while start < p.len() {
+        if !p[start].is_finite() {
+            start += 1;
+            continue;
+        }
+        let end = p[start..]
+            .iter()
+            .position(|v| !v.is_finite())
+            .map_or(p.len(), |k| start + k);
+        run_curvatures(&p[start..end], &mut m[start..end]);
+        start = end;
+    }
+    m
+}
+
+/// [`curvatures`] of one run of finite samples, into `m`.
+fn run_curvatures(p: &[f64], m: &mut [f64]) {
+    let n = p.len();
+    match n {
+        0 => {}
+        1 | 2 => m.fill(0.0),
+        3 => m.fill(p[0] - 2.0 * p[1] + p[2]),
+        _ => {
+            // Unit spacing: m[i-1] + 4 m[i] + m[i+1] = 6 (p[i-1] - 2 p[i] + p[i+1]) inside, and
+            // not-a-knot (the third derivative continuous at samples 1 and n-2): m0 = 2 m1 - m2,
+            // m[n-1] = 2 m[n-2] - m[n-3]. Eliminated, the unknowns m1 .. m[n-2] solve a
+            // tridiagonal system whose first and last rows are 6 m1 = d1 and 6 m[n-2] = d[n-2]
+            // (the n = 4 system is then diagonal too).
+            let k = n - 2;
+            let d = |i: usize| 6.0 * (p[i - 1] - 2.0 * p[i] + p[i + 1]);
+            // Thomas algorithm; row j is for the unknown m[j+1].
+            let mut c = vec![0.0; k];
+            let mut x = vec![0.0; k];
+            for j in 0..k {
+                let inner = j > 0 && j < k - 1;
+                let (lower, diag, upper) = if inner { (1.0, 4.0, 1.0) } else { (0.0, 6.0, 0.0) };
+                let (c_prev, x_prev) = if j > 0 { (c[j - 1], x[j - 1]) } else { (0.0, 0.0) };
+                let denom = diag - lower * c_prev;
+                c[j] = upper / denom;
+                x[j] = (d(j + 1) - lower * x_prev) / denom;
+            }
+            for j in (0..k - 1).rev() {
+                x[j] -= c[j] * x[j + 1];
+            }
+            m[1..n - 1].copy_from_slice(&x);
+            m[0] = 2.0 * m[1] - m[2];
+            m[n - 1] = 2.0 * m[n - 2] - m[n - 3];
+        }
     }
 }
 
@@ -142,5 +218,80 @@ impl fmt::Debug for MeasuredDrive {
             .field("start_time", &self.start_time)
             .field("step", &self.step)
             .finish()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn drive(p: Vec<f64>) -> MeasuredDrive {
+        MeasuredDrive::new(p, 0.0, 1.0).unwrap()
+    }
+
+    /// The largest error between samples `lo .. hi` (at 7 points each) against `f`.
+    fn worst(d: &MeasuredDrive, f: impl Fn(f64) -> f64, lo: usize, hi: usize) -> f64 {
+        (lo..hi)
+            .flat_map(|i| (1..8).map(move |k| i as f64 + k as f64 / 8.0))
+            .map(|t| (d.at(t) - f(t)).abs())
+            .fold(0.0, f64::max)
+    }
+
+    #[test]
+    fn cubics_are_reproduced_to_the_ends() {
+        let f = |t: f64| 0.3 - 1.2 * t + 0.05 * t * t - 0.004 * t * t * t;
+        for n in [4, 5, 9, 40] {
+            let d = drive((0..n).map(|i| f(i as f64)).collect());
+            let err = worst(&d, f, 0, n - 1);
+            assert!(err < 1e-12, "{n} samples: {err}");
+        }
+        // Three samples: the parabola through them; two: the line.
+        let g = |t: f64| 1.0 + 2.0 * t - 0.5 * t * t;
+        assert!(worst(&drive(vec![g(0.0), g(1.0), g(2.0)]), g, 0, 2) < 1e-14);
+        let d = drive(vec![1.0, 3.0]);
+        assert!((d.at(0.25) - 1.5).abs() < 1e-15);
+    }
+
+    /// A sinusoid at a quarter of the sampling rate keeps its amplitude between samples (within
+    /// 2.5 %) where the Catmull–Rom spline loses a tenth of it.
+    #[test]
+    fn a_band_limited_drive_keeps_its_amplitude() {
+        let f = |t: f64| (0.5 * std::f64::consts::PI * t + 0.3).sin();
+        let p: Vec<f64> = (0..400).map(|i| f(i as f64)).collect();
+        let d = drive(p.clone());
+        // Away from the ends, where the spline is the cardinal one.
+        let spline = worst(&d, f, 50, 350);
+        let catmull_rom = (50..350)
+            .map(|i| {
+                let (m0, m1) = (0.5 * (p[i + 1] - p[i - 1]), 0.5 * (p[i + 2] - p[i]));
+                let mid = 0.5 * (p[i] + p[i + 1]) + (m0 - m1) / 8.0;
+                (mid - f(i as f64 + 0.5)).abs()
+            })
+            .fold(0.0, f64::max);
+        assert!(spline < 0.025, "spline {spline}");
+        assert!(catmull_rom > 0.09, "Catmull–Rom {catmull_rom}");
+    }
+
+    #[test]
+    fn gaps_split_the_spline_into_runs() {
+        let f = |t: f64| (0.3 * t).cos();
+        let mut p: Vec<f64> = (0..30).map(|i| f(i as f64)).collect();
+        p[10] = f64::NAN;
+        p[12] = f64::INFINITY;
+        let d = drive(p);
+        // Each run is its own spline: finite inside, NaN on the intervals that touch a gap.
+        assert!(worst(&d, f, 13, 29) < 2e-3);
+        assert!(worst(&d, f, 0, 9) < 2e-3);
+        for t in [9.5, 10.0, 10.5, 11.5, 12.0, 12.5] {
+            assert!(d.at(t).is_nan(), "{t}");
+        }
+        // The samples around the gaps themselves are kept, and the lone sample 11 too.
+        for i in [9, 11, 13] {
+            assert_eq!(d.at(i as f64), f(i as f64));
+        }
+        // A piece of the record keeps its spline from another origin.
+        let moved = d.starting_at(100.0).unwrap();
+        assert_eq!(moved.at(103.25), d.at(3.25));
+        assert!(d.starting_at(f64::NAN).is_err());
     }
 }

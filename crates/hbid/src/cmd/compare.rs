@@ -31,8 +31,8 @@ pub struct CompareArgs {
     #[arg(long, allow_hyphen_values = true)]
     pub dt: Option<f64>,
     /// The measured drive p(t), for a model with terms in p: a column of the record, by header name
-    /// or 1-based position. Between samples the model reads it from the C¹ cubic spline through
-    /// them (Catmull–Rom), so that the integrator's error control sees no kink.
+    /// or 1-based position. Between samples the model reads it from the interpolating cubic spline
+    /// of the samples (not-a-knot), which keeps a band-limited drive's amplitude and has no kink.
     #[arg(long, value_name = "NAME|N")]
     pub drive_col: Option<String>,
     /// Fix isolated time-stamp glitches and encoder spikes (each listed on stderr).
