@@ -135,7 +135,41 @@ fn command(words: &[String], model: &str) -> String {
     format!("hbid {} --save-model {model}", quoted.join(" "))
 }
 
-pub fn run(doc: &Path, out: Option<&Path>, work: &Path) -> anyhow::Result<()> {
+/// The peer (`xtask/peers/sysidentpy_benchmarks.py`: sysidentpy's polynomial NARX by FROLS) run
+/// with `python` on the same files, its JSON.
+fn peer(python: &str, shared: &Path, work: &Path) -> anyhow::Result<Value> {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("peers/sysidentpy_benchmarks.py");
+    let out = work.join("sysidentpy.json");
+    let status = Command::new(python)
+        .arg(&script)
+        .arg("--silverbox")
+        .arg(shared.join("silverbox/SNLS80mV.csv"))
+        .arg("--emps-train")
+        .arg(shared.join("emps/emps_train_txp.csv"))
+        .arg("--emps-test")
+        .arg(shared.join("emps/emps_test_txp.csv"))
+        .arg("--out")
+        .arg(&out)
+        .status()
+        .with_context(|| format!("running {python} {}", script.display()))?;
+    if !status.success() {
+        bail!(
+            "{python} {} failed (is sysidentpy installed? `{python} -m pip install -r xtask/peers/requirements.txt`)",
+            script.display()
+        );
+    }
+    let text = std::fs::read_to_string(&out).with_context(|| out.display().to_string())?;
+    serde_json::from_str(&text).with_context(|| format!("{}: its JSON", out.display()))
+}
+
+/// The numbers of a JSON array (null where a value is not a number).
+fn numbers(v: &Value) -> Vec<Option<f64>> {
+    v.as_array()
+        .map(|a| a.iter().map(Value::as_f64).collect())
+        .unwrap_or_default()
+}
+
+pub fn run(doc: &Path, out: Option<&Path>, work: &Path, python: Option<&str>) -> anyhow::Result<()> {
     let shared = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/benchmarks");
     if !shared.is_dir() {
         bail!("the benchmarks are not at {}", shared.display());
@@ -261,6 +295,13 @@ pub fn run(doc: &Path, out: Option<&Path>, work: &Path) -> anyhow::Result<()> {
     let em = emps("physical", "1, x', sign(x'), p", false, "emps.json")?;
     let em_library = "1, x', sign(x'), x'*|x'|, x'^3, x, p";
     let em_select = emps("selected", em_library, true, "emps-selected.json")?;
+    let peer = match python {
+        Some(python) => {
+            eprintln!("sysidentpy");
+            Some(peer(python, &shared, work)?)
+        }
+        None => None,
+    };
 
     // Physical parameters: the equation x'' + Σ c_i g_i = 0 times the mass -1/c_p.
     let physical = |s: &Scored, names: &[(&str, &str)]| -> Vec<(String, f64)> {
@@ -329,6 +370,27 @@ pub fn run(doc: &Path, out: Option<&Path>, work: &Path) -> anyhow::Result<()> {
             s.seconds
         )?;
     }
+    if let Some(peer) = &peer {
+        let s = &peer["silverbox"];
+        let v = numbers(&s["rmse_mv"]);
+        let joined = |v: &Value, decimals: usize| -> String {
+            numbers(v)
+                .into_iter()
+                .map(|x| shown(x, decimals))
+                .collect::<Vec<_>>()
+                .join(" / ")
+        };
+        writeln!(
+            r,
+            "| polynomial NARX by FROLS, sysidentpy {} run here (its published configuration) | {} | {} | {} | {} | {} s |",
+            peer["version"].as_str().unwrap_or("?"),
+            joined(&s["terms"], 0),
+            shown(v.first().copied().flatten(), 3),
+            shown(v.get(1).copied().flatten(), 3),
+            shown(v.get(2).copied().flatten(), 3),
+            joined(&s["fit_seconds"], 2),
+        )?;
+    }
     writeln!(
         r,
         "| goal of this project | | 0.33 | 0.45 | 0.34 | under 1 s |\n\
@@ -337,6 +399,25 @@ pub fn run(doc: &Path, out: Option<&Path>, work: &Path) -> anyhow::Result<()> {
          | polynomial NARX by FROLS (sysidentpy's documentation) | | 7.7 | 4.1 | 2.2 | |\n\n\
          The output noise floor is about 0.29 mV.\n"
     )?;
+    if let Some(peer) = &peer {
+        let fits = numbers(&peer["silverbox"]["fit_seconds"]);
+        let ratio = |x: Option<f64>| x.map_or_else(|| "—".to_owned(), |x| format!("{:.0}", x / sb.seconds));
+        writeln!(
+            r,
+            "The peer ran in this command on this machine (`--peer PYTHON`, `xtask/peers/sysidentpy_benchmarks.py`): \
+             sysidentpy's own Silverbox configuration (its tutorial), which fits one model per test set (terms and fit \
+             times are listed per set; the two arrow sets share one model), a choice the protocol leaves to the \
+             training part. Its fits took {} and {} times as long as ours (fit alone against identification with \
+             reading). Its single arrow model scored on all three sets: [{}] mV.\n",
+            ratio(fits.first().copied().flatten()),
+            ratio(fits.get(1).copied().flatten()),
+            numbers(&peer["silverbox"]["rmse_mv_by_model"]["arrow_full"])
+                .into_iter()
+                .map(|x| shown(x, 3))
+                .collect::<Vec<_>>()
+                .join("; "),
+        )?;
+    }
     writeln!(r, "```\n{}", command(&sb.identify, "silverbox.json"))?;
     writeln!(r, "hbid compare silverbox.json {}\n```\n", sb.compare.join(" "))?;
     writeln!(
@@ -374,11 +455,34 @@ pub fn run(doc: &Path, out: Option<&Path>, work: &Path) -> anyhow::Result<()> {
             s.seconds
         )?;
     }
+    if let Some(peer) = &peer {
+        let e = &peer["emps"];
+        writeln!(
+            r,
+            "| polynomial NARX by FROLS, sysidentpy {} run here (degree 2, lags 2, AIC) | {} | {} | {} s |",
+            peer["version"].as_str().unwrap_or("?"),
+            e["terms"]
+                .as_u64()
+                .map_or_else(|| "—".to_owned(), |n| n.to_string()),
+            shown(e["rmse_mm"].as_f64(), 2),
+            shown(e["fit_seconds"].as_f64(), 2),
+        )?;
+    }
     writeln!(
         r,
         "| goal of this project | | 8.0 | under 1 s |\n\
          | the benchmark's reference model, open loop | 4 | about 8.4 | |\n"
     )?;
+    if let Some(peer) = &peer {
+        writeln!(
+            r,
+            "sysidentpy publishes no EMPS configuration: the peer takes its README's quick start (FROLS, polynomial \
+             degree 2, lags 2, the size by AIC), fixed before any run. Its fit took {} times as long as ours.\n",
+            peer["emps"]["fit_seconds"]
+                .as_f64()
+                .map_or_else(|| "—".to_owned(), |x| format!("{:.0}", x / em.seconds))
+        )?;
+    }
     writeln!(r, "```\n{}", command(&em.identify, "emps.json"))?;
     writeln!(r, "hbid compare emps.json {}\n```\n", em.compare.join(" "))?;
     writeln!(
@@ -414,6 +518,7 @@ pub fn run(doc: &Path, out: Option<&Path>, work: &Path) -> anyhow::Result<()> {
                 "selected": {"coefficients": em_select.found["coefficients"], "rmse_mm": em_select.rmse(1e3).first().copied().flatten()},
                 "identify_seconds": em.seconds,
             },
+            "peer": peer,
         });
         let path = dir.join("benchmarks.json");
         std::fs::write(&path, serde_json::to_string_pretty(&summary)? + "\n")?;

@@ -85,6 +85,11 @@ enum Command {
         /// Where the records cut from the benchmarks' files and the models are written.
         #[arg(long, default_value = "target/benchmarks")]
         work: PathBuf,
+        /// Also run the peer, sysidentpy's polynomial NARX by FROLS in its published
+        /// configuration, with this Python interpreter (`pip install -r xtask/peers/requirements.txt`;
+        /// about 2 minutes and 10 GB of memory for its degree-3 Silverbox model).
+        #[arg(long, value_name = "PYTHON")]
+        peer: Option<String>,
     },
     /// Model selection beside pysindy's weak-form SINDy on the same forced records at four noise
     /// levels; writes its section into `docs/accuracy.md` (needs Python with pysindy:
@@ -124,7 +129,9 @@ fn main() -> std::process::ExitCode {
             repeats,
         } => scale::run(&out, &data, &sizes, repeats),
         Command::RealRecords { out, data } => real_records::run(&out, &data),
-        Command::Benchmarks { doc, out, work } => benchmarks::run(&doc, out.as_deref(), &work),
+        Command::Benchmarks { doc, out, work, peer } => {
+            benchmarks::run(&doc, out.as_deref(), &work, peer.as_deref())
+        }
         Command::WeakSindy { out, data, python } => weak_sindy::run(&out, &data, &python),
     };
     match result {
