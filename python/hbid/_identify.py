@@ -140,6 +140,13 @@ class Identification:
     """The JSON of ``hbid identify --json``."""
 
     @property
+    def refinement(self) -> Optional[Dict[str, Any]]:
+        """What the output-error refinement did (``refine=True``): ``rmse_before``,
+        ``rmse_after``, ``scored``, ``init``, ``iterations``, ``simulations``, ``converged`` and
+        the ``start`` coefficients (the weak form's); None without it."""
+        return self.report.get("refinement")
+
+    @property
     def equation(self) -> str:
         """The equation, ``x'' + c_1*g_1 + ... = 0``, coefficients to 6 significant digits."""
         return equation_text(self.coefficients)
@@ -313,6 +320,8 @@ def identify(
     select: Union[bool, Mapping[str, Any]] = False,
     select_folds: int = 10,
     select_tolerance: float = 1e-6,
+    refine: bool = False,
+    refine_init: Optional[int] = None,
     save_model: Optional[PathLike] = None,
     **old: Any,
 ) -> Identification:
@@ -377,6 +386,12 @@ def identify(
         select_folds: contiguous folds of segments of the selection (at least 2).
         select_tolerance: the smallest held-out unexplained fraction a term must remove to be
             kept, in [0, 1).
+        refine: after the fit, refine the coefficients by the free run's error on the record
+            (output error; :attr:`Identification.refinement` says what it did): the model then
+            follows the record as :func:`compare` scores it.
+        refine_init: samples at the start of each piece that set the refinement's free-run
+            state and are not scored (default: one drive period, at most a tenth of the longest
+            piece, at least 8).
         save_model: also save the model here (JSON for a ``.json`` name, compact binary
             otherwise).
 
@@ -421,6 +436,8 @@ def identify(
         terms=_terms(terms),
         select_folds=select_folds,
         select_tolerance=select_tolerance,
+        refine=bool(refine),
+        refine_init=refine_init,
     )
     _select(select, options)
     if "parametric" in old:

@@ -103,3 +103,21 @@ def test_bad_requests(shaker):
         hbid.compare(shaker["model"], test.x, t=test.t, drive=test.drive, x0=1.0)
     with pytest.raises(hbid.ModelError):
         hbid.compare(str(shaker["csv"]), test.x, t=test.t, drive=test.drive)
+
+
+def test_a_refined_model_keeps_the_weak_forms_beside(shaker):
+    """identify(refine=True): the coefficients refined by the free run's error on the record,
+    the weak form's kept in ``refinement["start"]``; the free run's error does not grow."""
+    train = shaker["train"]
+    kwargs = dict(t=train.t, drive=train.drive, signal="line", drive_frequency=6.5, terms="x', x, x^3, p", bootstrap=0)
+    weak = hbid.identify(train.x, **kwargs)
+    refined = hbid.identify(train.x, refine=True, refine_init=100, **kwargs)
+    r = refined.refinement
+    assert weak.refinement is None and r is not None
+    # Scored on the record as analysed: resampled onto a whole number of samples per period.
+    assert r["init"] == 100 and 0.99 * len(train.t) < r["scored"] + 100 <= len(train.t)
+    assert r["rmse_after"] <= r["rmse_before"]
+    assert r["start"] == weak.coefficients
+    assert list(refined.coefficients) == list(weak.coefficients)
+    with pytest.raises(hbid.OptionsError, match="refine"):
+        hbid.identify(train.x, refine_init=100, **kwargs)

@@ -45,9 +45,9 @@ def test_to_json_is_the_cli_json(pendulum):
         "method", "basis", "terms", "drive_column", "coefficients", "std_errors", "orbits_used", "segments", "rows",
         "condition_number", "residual_rms", "intervals", "interval_level", "resamples", "no_intervals",
         "explained", "unexplained", "held_out_explained", "residual_spectrum", "warning", "selection", "delay",
-        "found", "record",
+        "found", "record", "refinement",
     }
-    assert j["selection"] is None and result.selection is None
+    assert j["selection"] is None and result.selection is None and j["refinement"] is None
     assert j["drive_column"] is None
     assert j["no_intervals"] is None and 0.9 < j["held_out_explained"] <= 1.0
     assert 0.99 < result.explained <= 1.0 and result.warning is None

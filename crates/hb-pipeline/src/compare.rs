@@ -398,7 +398,7 @@ pub fn compare(
 }
 
 /// The default samples of the initial state: one drive period (see [`CompareOptions`]).
-fn default_init(period_samples: f64, range: usize) -> usize {
+pub(crate) fn default_init(period_samples: f64, range: usize) -> usize {
     let period = if period_samples.is_finite() {
         period_samples.round().min(1e9) as usize
     } else {
@@ -432,7 +432,7 @@ fn check_drive(model: &IdentifiedModel, grid: &GridData, named: bool) -> Result<
 /// `model` driven by the record's drive over one piece `[start, end)` of its grid: the spline
 /// through that piece's samples alone, so that it ends at the piece's ends and no gap's NaN
 /// reaches it.
-fn driven_on(
+pub(crate) fn driven_on(
     model: &IdentifiedModel,
     grid: &GridData,
     start: usize,
@@ -449,7 +449,7 @@ fn driven_on(
 }
 
 /// The difference of a simulated and a measured output, as the domain measures it.
-fn difference(domain: Domain, simulated: f64, measured: f64) -> f64 {
+pub(crate) fn difference(domain: Domain, simulated: f64, measured: f64) -> f64 {
     match domain {
         Domain::Circle => wrap(simulated - measured),
         Domain::Line => simulated - measured,

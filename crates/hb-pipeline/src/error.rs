@@ -69,6 +69,9 @@ pub enum RunError {
     /// A model: saved, being saved, or made from a record's drive.
     #[error("the model")]
     Model(#[source] hb_model::ModelError),
+    /// An output-error refinement that cannot start.
+    #[error("refining the model by its free run: {0}")]
+    Refine(String),
     /// A model file that cannot be read or is not a model.
     #[error("{path}: {why}")]
     ModelFile {
@@ -110,7 +113,7 @@ impl RunError {
             RunError::Pipeline(PipelineError::Simulation(_)) => ErrorKind::Simulation,
             RunError::Pipeline(_) => ErrorKind::Identification,
             RunError::Identify { .. } | RunError::NoDelay(_) => ErrorKind::Identification,
-            RunError::Simulation(_) => ErrorKind::Simulation,
+            RunError::Simulation(_) | RunError::Refine(_) => ErrorKind::Simulation,
             RunError::Model(_) | RunError::ModelFile { .. } => ErrorKind::Model,
             RunError::Output(_) => ErrorKind::Output,
         }

@@ -9,7 +9,7 @@ use std::str::FromStr;
 use circle_signal::{Domain, Measured, Segment};
 use hb_basis::{Basis, BasisKind};
 use hb_model::{Forcing, Harmonics, MAX_DRIVE_HARMONIC, MeasuredDrive, ModelForm, TermList};
-use hb_record::prepare::{Data, DriveFound, DriveSpec, WindowUnit, default_basis};
+use hb_record::prepare::{Data, DriveFound, DriveSpec, GridData, WindowUnit, default_basis};
 use hb_solve::{BootstrapParams, LstsqSolver, NoiseCorrection, QrSolver, SelectParams, SvdSolver, WeakForm};
 use serde::{Deserialize, Serialize, Serializer};
 use upo_search::Windows;
@@ -161,6 +161,13 @@ pub struct IdentifyOptions {
     pub select_folds: usize,
     /// The smallest held-out unexplained fraction a term must remove to be kept, in `[0, 1)`.
     pub select_tolerance: f64,
+    /// Refine the coefficients by the free run's error on the record after the fit
+    /// ([`crate::refine`]): the model then follows the record as `compare` scores it.
+    pub refine: bool,
+    /// Samples at the start of each piece that set the free run's state in the refinement and
+    /// are not scored (default as `compare`'s: one drive period, at most a tenth of the longest
+    /// piece and at least 8).
+    pub refine_init: Option<usize>,
 }
 
 impl Default for IdentifyOptions {
@@ -187,6 +194,8 @@ impl Default for IdentifyOptions {
             select: false,
             select_folds: SelectParams::DEFAULT_FOLDS,
             select_tolerance: SelectParams::DEFAULT_TOLERANCE,
+            refine: false,
+            refine_init: None,
         }
     }
 }
@@ -277,6 +286,21 @@ impl IdentifyRequest {
         } else {
             None
         };
+        if let Some(init) = o.refine_init {
+            if !o.refine {
+                return Err(OptionError::new(
+                    "refine_init",
+                    "is for a refinement: give «refine» too",
+                ));
+            }
+            if init < crate::compare::CompareRequest::MIN_INIT {
+                return Err(OptionError::value(
+                    "refine_init",
+                    init,
+                    "must be at least 2: a state has two components",
+                ));
+            }
+        }
         let selection = if o.select {
             if o.select_folds < 2 {
                 return Err(OptionError::value(
@@ -659,7 +683,16 @@ pub struct IdentifyReport {
     pub found: String,
     /// The drift found for an integrated velocity or acceleration record.
     pub drift: Option<DriftFit>,
+    /// What the output-error refinement did (`refine`); the model's coefficients are then the
+    /// refined ones, and its fit measures, intervals and selection those of the weak form.
+    pub refinement: Option<crate::refine::Refinement>,
 }
+
+/// The integrator's relative tolerance in the refinement (as `compare`'s default: the
+/// differences of free runs a millionth of a coefficient apart must stand above its error).
+pub const REFINE_RTOL: f64 = 1e-10;
+/// The most Levenberg–Marquardt iterations of the refinement.
+pub const REFINE_ITERATIONS: usize = 30;
 
 /// Identifies the equation of motion of the record of `source` as `request` asks: the record
 /// read, conditioned and its drive found ([`load`]); the delay (`upo`); the segments; the drift
@@ -744,9 +777,53 @@ pub fn identify_data(
             segments.len()
         )));
     }
+    let mut identification = identification;
+    let mut refinement = None;
+    if request.options.refine {
+        observer.stage(Stage::Refine);
+        let grid = GridData {
+            t0: data.clock.start_time(),
+            dt: data.clock.step(),
+            x: x.to_vec(),
+            pieces: data.pieces.clone(),
+            domain: data.domain,
+            drive: data.measured_drive.clone(),
+            notes: Vec::new(),
+        };
+        let model = &identification.model;
+        let longest = data.pieces.iter().map(|p| p.len()).max().unwrap_or(0);
+        let period = std::f64::consts::TAU / model.drive_angular_frequency() / grid.dt;
+        let init = request
+            .options
+            .refine_init
+            .unwrap_or_else(|| crate::compare::default_init(period, longest));
+        let tolerances = pendulum_sim::Tolerances::new(REFINE_RTOL, REFINE_RTOL / 10.0)
+            .map_err(|e| RunError::Refine(e.to_string()))?;
+        let (refined, done) =
+            crate::refine::refine(model, &grid, init, tolerances, REFINE_ITERATIONS, &mut |d, t| {
+                observer.progress(d, t)
+            })?;
+        identification.model = refined;
+        if identification.intervals.take().is_some() || identification.no_intervals.is_some() {
+            identification.no_intervals = Some(
+                "the coefficients were refined by the free run's error: their standard errors are the \
+                 refinement's, and the weak form's bootstrap intervals do not apply to them"
+                    .into(),
+            );
+        }
+        if !done.converged {
+            observer.notice(&Notice::Warning(format!(
+                "the refinement stopped after {} iterations without converging: the free run's RMSE went from \
+                 {:.4e} to {:.4e}",
+                done.iterations, done.rmse_before, done.rmse_after
+            )));
+        }
+        refinement = Some(done);
+    }
     Ok(IdentifyReport {
         method,
         basis: request.basis,
+        refinement,
         record: RecordSummary::of(data),
         delay,
         segments: segments.len(),
@@ -865,6 +942,20 @@ struct ReportJson<'a> {
     delay: Option<usize>,
     found: &'a str,
     record: &'a RecordSummary,
+    refinement: Option<RefinementJson<'a>>,
+}
+
+/// The JSON of a refinement: the coefficients it started from keyed by name.
+#[derive(Serialize)]
+struct RefinementJson<'a> {
+    rmse_before: f64,
+    rmse_after: f64,
+    scored: usize,
+    init: usize,
+    iterations: usize,
+    simulations: usize,
+    converged: bool,
+    start: Ordered<'a, f64>,
 }
 
 impl Serialize for IdentifyReport {
@@ -920,6 +1011,16 @@ impl Serialize for IdentifyReport {
             delay: self.delay,
             found: &self.found,
             record: &self.record,
+            refinement: self.refinement.as_ref().map(|r| RefinementJson {
+                rmse_before: r.rmse_before,
+                rmse_after: r.rmse_after,
+                scored: r.scored,
+                init: r.init,
+                iterations: r.iterations,
+                simulations: r.simulations,
+                converged: r.converged,
+                start: Ordered(r.start.iter().map(|(n, v)| (n.as_str(), *v)).collect()),
+            }),
         }
         .serialize(s)
     }

@@ -53,6 +53,7 @@ pub mod options;
 pub mod output;
 pub mod pipeline;
 pub mod record;
+pub mod refine;
 pub mod simulate;
 
 pub use compare::{
@@ -67,4 +68,5 @@ pub use identify::{
 pub use observe::{Notice, Notices, Observer, Stage};
 pub use options::{OptionError, Spelling};
 pub use record::{DriveFrequency, DrivePeriod, RecordOptions, RecordSummary, Source, condition_source, load};
+pub use refine::{Refinement, refine};
 pub use simulate::{Rig, SimulateOptions, Simulation, Truth, simulate};

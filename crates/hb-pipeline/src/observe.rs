@@ -40,6 +40,8 @@ pub enum Stage {
     Simulate,
     /// Comparing a simulation with a record.
     Compare,
+    /// Refining a model by its free run's error.
+    Refine,
 }
 
 impl Stage {
@@ -59,6 +61,7 @@ impl Stage {
             Stage::Bootstrap => "bootstrap",
             Stage::Simulate => "simulate",
             Stage::Compare => "compare",
+            Stage::Refine => "refine",
         }
     }
 }

@@ -130,6 +130,15 @@ pub struct IdentifyArgs {
         allow_hyphen_values = true
     )]
     pub select_tolerance: f64,
+    /// After the fit, refine the coefficients by the free run's error on the record (output
+    /// error: each piece run from the state fitted to its first samples, Levenberg–Marquardt;
+    /// docs/identification.md): the model then follows the record as `hbid compare` scores it.
+    #[arg(long)]
+    pub refine: bool,
+    /// Samples at the start of each piece that set the refinement's free-run state and are not
+    /// scored (default: one drive period, at most a tenth of the longest piece, at least 8).
+    #[arg(long, value_name = "N")]
+    pub refine_init: Option<usize>,
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -164,6 +173,8 @@ impl IdentifyArgs {
             select: self.select,
             select_folds: self.select_folds,
             select_tolerance: self.select_tolerance,
+            refine: self.refine,
+            refine_init: self.refine_init,
         }
     }
 
@@ -318,6 +329,19 @@ fn print_table(report: &IdentifyReport) {
         println!(
             "explained {:.6} of stretches it was not fitted on ({} folds of segments)",
             h.explained, h.folds
+        );
+    }
+    if let Some(r) = &report.refinement {
+        println!(
+            "refined by the free run's error (the fit measures above are the weak form's): RMSE {:.4e} -> {:.4e} \
+             over {} samples ({} per piece set the state), {} iterations, {} free runs{}",
+            r.rmse_before,
+            r.rmse_after,
+            r.scored,
+            r.init,
+            r.iterations,
+            r.simulations,
+            if r.converged { "" } else { ", not converged" }
         );
     }
     if let Some(why) = &id.no_intervals {
