@@ -162,6 +162,11 @@ fn peer(python: &str, shared: &Path, work: &Path) -> anyhow::Result<Value> {
     serde_json::from_str(&text).with_context(|| format!("{}: its JSON", out.display()))
 }
 
+/// What the refined rows are.
+const REFINED: &str = "Refined: the same `hbid identify` with `--refine`, on the training part alone: after the weak \
+form, Levenberg–Marquardt on the free run's error over the training part, each run's state set by its first \
+samples as the protocol sets it on the test sets (`--refine-init`); its time includes the refinement.";
+
 /// The numbers of a JSON array (null where a value is not a number).
 fn numbers(v: &Value) -> Vec<Option<f64>> {
     v.as_array()
@@ -203,13 +208,11 @@ pub fn run(doc: &Path, out: Option<&Path>, work: &Path, python: Option<&str>) ->
         "--dt",
         "0.0016384",
     ];
-    let sb_identify = |terms: &str, select: bool| {
+    let sb_identify = |terms: &str, extra: &[&str]| {
         let mut a = vec!["identify".to_owned(), "silverbox-train.csv".into()];
         a.extend(strings(&sb_read));
         a.extend(strings(&["--drive-period", "none", "--terms", terms]));
-        if select {
-            a.push("--select".into());
-        }
+        a.extend(strings(extra));
         a
     };
     let mut sb_compare = vec!["silverbox.csv".to_owned()];
@@ -232,8 +235,8 @@ pub fn run(doc: &Path, out: Option<&Path>, work: &Path, python: Option<&str>) ->
             })
             .collect()
     };
-    let silverbox = |label, terms: &str, select: bool, name: &str| -> anyhow::Result<Scored> {
-        let shown_identify = sb_identify(terms, select);
+    let silverbox = |label, terms: &str, extra: &[&str], name: &str| -> anyhow::Result<Scored> {
+        let shown_identify = sb_identify(terms, extra);
         let mut s = scored(
             &exe,
             label,
@@ -246,15 +249,23 @@ pub fn run(doc: &Path, out: Option<&Path>, work: &Path, python: Option<&str>) ->
         Ok(s)
     };
     eprintln!("silverbox");
-    let sb = silverbox("physical", "1, x', x, x^2, x^3, p", false, "silverbox.json")?;
+    let sb_terms = "1, x', x, x^2, x^3, p";
+    let sb = silverbox("physical", sb_terms, &[], "silverbox.json")?;
+    // The refinement's state set by as many samples as the protocol's: 50.
+    let sb_refined = silverbox(
+        "physical, refined by its free run",
+        sb_terms,
+        &["--refine", "--refine-init", "50"],
+        "silverbox-refined.json",
+    )?;
     let sb_library = "1, x', x'^3, x'*|x'|, x, x^2, x^3, x^4, x^5, p, x*x', x^2*x'";
-    let sb_select = silverbox("selected", sb_library, true, "silverbox-selected.json")?;
+    let sb_select = silverbox("selected", sb_library, &["--select"], "silverbox-selected.json")?;
 
     // EMPS: the force has no period, so the weak form's windows are given in seconds.
     eprintln!("emps");
     let emps_train = shared.join("emps/emps_train_txp.csv");
     let emps_test = shared.join("emps/emps_test_txp.csv");
-    let emps_identify = |terms: &str, select: bool| {
+    let emps_identify = |terms: &str, extra: &[&str]| {
         let mut a = strings(&[
             "identify",
             "emps_train_txp.csv",
@@ -264,9 +275,7 @@ pub fn run(doc: &Path, out: Option<&Path>, work: &Path, python: Option<&str>) ->
             "p",
         ]);
         a.extend(strings(&["--window", "0.75", "--terms", terms]));
-        if select {
-            a.push("--select".into());
-        }
+        a.extend(strings(extra));
         a
     };
     let emps_compare = strings(&["emps_test_txp.csv", "--drive-col", "p", "--init", "20"]);
@@ -279,8 +288,8 @@ pub fn run(doc: &Path, out: Option<&Path>, work: &Path, python: Option<&str>) ->
             })
             .collect()
     };
-    let emps = |label, terms: &str, select: bool, name: &str| -> anyhow::Result<Scored> {
-        let shown_identify = emps_identify(terms, select);
+    let emps = |label, terms: &str, extra: &[&str], name: &str| -> anyhow::Result<Scored> {
+        let shown_identify = emps_identify(terms, extra);
         let mut s = scored(
             &exe,
             label,
@@ -292,9 +301,16 @@ pub fn run(doc: &Path, out: Option<&Path>, work: &Path, python: Option<&str>) ->
         s.compare = emps_compare.clone();
         Ok(s)
     };
-    let em = emps("physical", "1, x', sign(x'), p", false, "emps.json")?;
+    let em_terms = "1, x', sign(x'), p";
+    let em = emps("physical", em_terms, &[], "emps.json")?;
+    let em_refined = emps(
+        "physical, refined by its free run",
+        em_terms,
+        &["--refine", "--refine-init", "20"],
+        "emps-refined.json",
+    )?;
     let em_library = "1, x', sign(x'), x'*|x'|, x'^3, x, p";
-    let em_select = emps("selected", em_library, true, "emps-selected.json")?;
+    let em_select = emps("selected", em_library, &["--select"], "emps-selected.json")?;
     let peer = match python {
         Some(python) => {
             eprintln!("sysidentpy");
@@ -314,24 +330,22 @@ pub fn run(doc: &Path, out: Option<&Path>, work: &Path, python: Option<&str>) ->
         );
         v
     };
-    let sb_params = physical(
-        &sb,
-        &[
-            ("damping d", "x'"),
-            ("stiffness k1", "x"),
-            ("k2 (of y^2)", "x^2"),
-            ("k3 (of y^3)", "x^3"),
-            ("offset", "1"),
-        ],
-    );
-    let em_params = physical(
-        &em,
-        &[
-            ("viscous friction Fv", "x'"),
-            ("dry friction Fc", "sign(x')"),
-            ("offset", "1"),
-        ],
-    );
+    let sb_names = [
+        ("damping d", "x'"),
+        ("stiffness k1", "x"),
+        ("k2 (of y^2)", "x^2"),
+        ("k3 (of y^3)", "x^3"),
+        ("offset", "1"),
+    ];
+    let sb_params = physical(&sb, &sb_names);
+    let sb_params_refined = physical(&sb_refined, &sb_names);
+    let em_names = [
+        ("viscous friction Fv", "x'"),
+        ("dry friction Fc", "sign(x')"),
+        ("offset", "1"),
+    ];
+    let em_params = physical(&em, &em_names);
+    let em_params_refined = physical(&em_refined, &em_names);
 
     let mut r = String::new();
     writeln!(
@@ -357,7 +371,7 @@ pub fn run(doc: &Path, out: Option<&Path>, work: &Path, python: Option<&str>) ->
         "| model | terms | multisine | arrow, full | arrow, no extrapolation | identification |"
     )?;
     writeln!(r, "| --- | ---: | ---: | ---: | ---: | ---: |")?;
-    for s in [&sb, &sb_select] {
+    for s in [&sb, &sb_refined, &sb_select] {
         let v = s.rmse(1e3);
         writeln!(
             r,
@@ -422,6 +436,11 @@ pub fn run(doc: &Path, out: Option<&Path>, work: &Path, python: Option<&str>) ->
     writeln!(r, "hbid compare silverbox.json {}\n```\n", sb.compare.join(" "))?;
     writeln!(
         r,
+        "{REFINED}\n\n```\n{}\n```\n",
+        command(&sb_refined.identify, "silverbox-refined.json")
+    )?;
+    writeln!(
+        r,
         "Selected ({}): `{}` from `{sb_library}`.\n",
         sb_select.terms(),
         term_list(&sb_select)
@@ -430,9 +449,9 @@ pub fn run(doc: &Path, out: Option<&Path>, work: &Path, python: Option<&str>) ->
         r,
         "Physical parameters of `m y'' + d y' + k1 y + k2 y^2 + k3 y^3 + offset = u` (V, s):\n"
     )?;
-    writeln!(r, "| parameter | value |\n| --- | ---: |")?;
-    for (name, value) in &sb_params {
-        writeln!(r, "| {name} | {value:.6e} |")?;
+    writeln!(r, "| parameter | weak form | refined |\n| --- | ---: | ---: |")?;
+    for ((name, value), (_, refined)) in sb_params.iter().zip(&sb_params_refined) {
+        writeln!(r, "| {name} | {value:.6e} | {refined:.6e} |")?;
     }
     writeln!(r, "\n## EMPS (RMSE of the free run, mm)\n")?;
     writeln!(
@@ -445,7 +464,7 @@ pub fn run(doc: &Path, out: Option<&Path>, work: &Path, python: Option<&str>) ->
         r,
         "| model | terms | RMSE | identification |\n| --- | ---: | ---: | ---: |"
     )?;
-    for s in [&em, &em_select] {
+    for s in [&em, &em_refined, &em_select] {
         writeln!(
             r,
             "| {} | {} | {} | {:.2} s |",
@@ -487,6 +506,11 @@ pub fn run(doc: &Path, out: Option<&Path>, work: &Path, python: Option<&str>) ->
     writeln!(r, "hbid compare emps.json {}\n```\n", em.compare.join(" "))?;
     writeln!(
         r,
+        "{REFINED}\n\n```\n{}\n```\n",
+        command(&em_refined.identify, "emps-refined.json")
+    )?;
+    writeln!(
+        r,
         "Selected ({}): `{}` from `{em_library}`.\n",
         em_select.terms(),
         term_list(&em_select)
@@ -496,9 +520,16 @@ pub fn run(doc: &Path, out: Option<&Path>, work: &Path, python: Option<&str>) ->
         "Physical parameters of `M x'' + Fv x' + Fc sign(x') + offset = p` (kg, N s/m, N, N) beside the benchmark's \
          reference (inverse-dynamics least squares, its document):\n"
     )?;
-    writeln!(r, "| parameter | value | reference |\n| --- | ---: | ---: |")?;
-    for ((name, value), reference) in em_params.iter().zip([95.1089, 203.5034, 20.3935, -3.1648]) {
-        writeln!(r, "| {name} | {value:.4} | {reference} |")?;
+    writeln!(
+        r,
+        "| parameter | weak form | refined | reference |\n| --- | ---: | ---: | ---: |"
+    )?;
+    for (((name, value), (_, refined)), reference) in em_params
+        .iter()
+        .zip(&em_params_refined)
+        .zip([95.1089, 203.5034, 20.3935, -3.1648])
+    {
+        writeln!(r, "| {name} | {value:.4} | {refined:.4} | {reference} |")?;
     }
     std::fs::write(doc, &r).with_context(|| doc.display().to_string())?;
     eprintln!("wrote {}", doc.display());
@@ -511,12 +542,24 @@ pub fn run(doc: &Path, out: Option<&Path>, work: &Path, python: Option<&str>) ->
                 "rmse_mv": sb.rmse(1e3),
                 "selected": {"coefficients": sb_select.found["coefficients"], "rmse_mv": sb_select.rmse(1e3)},
                 "identify_seconds": sb.seconds,
+                "refined": {
+                    "coefficients": sb_refined.found["coefficients"],
+                    "rmse_mv": sb_refined.rmse(1e3),
+                    "identify_seconds": sb_refined.seconds,
+                    "refinement": sb_refined.found["refinement"],
+                },
             },
             "emps": {
                 "coefficients": em.found["coefficients"],
                 "rmse_mm": em.rmse(1e3).first().copied().flatten(),
                 "selected": {"coefficients": em_select.found["coefficients"], "rmse_mm": em_select.rmse(1e3).first().copied().flatten()},
                 "identify_seconds": em.seconds,
+                "refined": {
+                    "coefficients": em_refined.found["coefficients"],
+                    "rmse_mm": em_refined.rmse(1e3).first().copied().flatten(),
+                    "identify_seconds": em_refined.seconds,
+                    "refinement": em_refined.found["refinement"],
+                },
             },
             "peer": peer,
         });
