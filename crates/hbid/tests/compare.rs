@@ -276,22 +276,26 @@ fn dry_friction_sticks_in_the_free_run() {
     args.extend(["--duration", "30", "--phase", "2", "--out", s(&test)]);
     ok(&args);
     let model = dir.join("m.json");
-    ok(&[
-        "identify",
-        s(&train),
-        "--signal",
-        "line",
-        "--drive-frequency",
-        "2",
-        "--drive-col",
-        "p",
-        "--terms",
-        "x', sign(x'), p",
-        "--bootstrap",
-        "0",
-        "--save-model",
-        s(&model),
-    ]);
+    // The identify command on the training record, with `extra` options.
+    let identify = |extra: &[&'static str]| -> Vec<String> {
+        let mut a: Vec<String> = [
+            "identify",
+            s(&train),
+            "--signal",
+            "line",
+            "--drive-frequency",
+            "2",
+        ]
+        .iter()
+        .map(|a| a.to_string())
+        .collect();
+        a.extend(["--drive-col", "p", "--terms", "x', sign(x'), p"].map(String::from));
+        a.extend(extra.iter().map(|e| e.to_string()));
+        a
+    };
+    let mut weak = identify(&["--bootstrap", "0", "--save-model"]);
+    weak.push(s(&model).to_owned());
+    ok(&weak.iter().map(String::as_str).collect::<Vec<_>>());
     let v = json(&ok(&[
         "compare",
         s(&model),
@@ -339,22 +343,9 @@ fn dry_friction_sticks_in_the_free_run() {
     // record is noiseless, so the refined model's free run on the held-out record is exact to
     // the integrator's tolerance, where the weak form's was a tenth of the spread off.
     let refined = dir.join("refined.json");
-    let found = json(&ok(&[
-        "identify",
-        s(&train),
-        "--signal",
-        "line",
-        "--drive-frequency",
-        "2",
-        "--drive-col",
-        "p",
-        "--terms",
-        "x', sign(x'), p",
-        "--refine",
-        "--json",
-        "--save-model",
-        s(&refined),
-    ]));
+    let mut refine = identify(&["--refine", "--json", "--save-model"]);
+    refine.push(s(&refined).to_owned());
+    let found = json(&ok(&refine.iter().map(String::as_str).collect::<Vec<_>>()));
     let r = &found["refinement"];
     let (before, after) = (
         r["rmse_before"].as_f64().unwrap(),
@@ -388,23 +379,8 @@ fn dry_friction_sticks_in_the_free_run() {
     assert!(rmse < 1e-6 && fit > 99.9999, "RMSE {rmse}, fit {fit} %");
     // A refinement whose state would take every sample is refused, and --refine-init alone too.
     // (The record's stick phases also raise a warning of outliers first.)
-    let out = hbid(&[
-        "identify",
-        s(&train),
-        "--signal",
-        "line",
-        "--drive-frequency",
-        "2",
-        "--drive-col",
-        "p",
-        "--terms",
-        "x', sign(x'), p",
-        "--bootstrap",
-        "0",
-        "--refine",
-        "--refine-init",
-        "20000",
-    ]);
+    let too_long = identify(&["--bootstrap", "0", "--refine", "--refine-init", "20000"]);
+    let out = hbid(&too_long.iter().map(String::as_str).collect::<Vec<_>>());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success() && !err.contains("panicked"), "{err}");
     let errors: Vec<&str> = err.lines().filter(|l| l.starts_with("error")).collect();
