@@ -15,19 +15,8 @@ use serde_json::{Value, json};
 
 /// Runs `hbid` with `args`: its stdout as JSON, failing with its stderr.
 fn hbid(exe: &Path, args: &[String]) -> anyhow::Result<Value> {
-    let out = Command::new(exe)
-        .arg("--quiet")
-        .args(args)
-        .output()
-        .with_context(|| format!("running {}", exe.display()))?;
-    if !out.status.success() {
-        bail!(
-            "hbid {}: {}",
-            args.join(" "),
-            String::from_utf8_lossy(&out.stderr)
-        );
-    }
-    serde_json::from_slice(&out.stdout).with_context(|| format!("hbid {}: its JSON", args.join(" ")))
+    let (stdout, _) = crate::run_hbid(exe, args)?;
+    serde_json::from_str(&stdout).with_context(|| format!("hbid {}: its JSON", args.join(" ")))
 }
 
 /// The `hbid` of this xtask's own build (the test profile: `cargo xtask` shares the build of

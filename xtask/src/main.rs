@@ -11,7 +11,9 @@ mod reproduce;
 mod scale;
 mod weak_sindy;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, bail};
 
 use clap::{Parser, Subcommand};
 
@@ -109,6 +111,20 @@ enum Command {
 
 /// How this xtask was built, for the generated pages that report wall times: `cargo xtask` runs
 /// in the test profile so that it shares one build with `cargo test` (see README.md).
+/// Runs `hbid --quiet` with `args`: its stdout and stderr, failing with its stderr.
+pub(crate) fn run_hbid(exe: &Path, args: &[String]) -> anyhow::Result<(String, String)> {
+    let out = std::process::Command::new(exe)
+        .arg("--quiet")
+        .args(args)
+        .output()
+        .with_context(|| format!("running {}", exe.display()))?;
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    if !out.status.success() {
+        bail!("hbid {}: {stderr}", args.join(" "));
+    }
+    Ok((String::from_utf8_lossy(&out.stdout).into_owned(), stderr))
+}
+
 pub fn build_profile() -> &'static str {
     if cfg!(debug_assertions) {
         "test-profile build: opt-level 2, debug assertions on"

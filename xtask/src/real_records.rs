@@ -4,7 +4,6 @@
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 use std::time::Instant;
 
 use anyhow::{Context, bail};
@@ -437,20 +436,6 @@ fn found_interval(found: &serde_json::Value, term: &str) -> Option<[f64; 2]> {
     Some([pair.first()?.as_f64()?, pair.get(1)?.as_f64()?])
 }
 
-/// Runs `hbid` with `args`, failing with its stderr.
-fn hbid(exe: &Path, args: &[String]) -> anyhow::Result<(String, String)> {
-    let out = Command::new(exe)
-        .arg("--quiet")
-        .args(args)
-        .output()
-        .with_context(|| format!("running {}", exe.display()))?;
-    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
-    if !out.status.success() {
-        bail!("hbid {}: {stderr}", args.join(" "));
-    }
-    Ok((String::from_utf8_lossy(&out.stdout).into_owned(), stderr))
-}
-
 pub fn run(out: &Path, data: &Path) -> anyhow::Result<()> {
     let exe = crate::scale::build_hbid()?;
     std::fs::create_dir_all(data).with_context(|| format!("{}", data.display()))?;
@@ -485,7 +470,7 @@ pub fn run(out: &Path, data: &Path) -> anyhow::Result<()> {
                 "--out".into(),
                 record.display().to_string(),
             ]);
-            hbid(&exe, &simulate)?;
+            crate::run_hbid(&exe, &simulate)?;
         }
         if let Some(rewrite) = rig.rewrite {
             let text = std::fs::read_to_string(&record)?;
@@ -499,7 +484,7 @@ pub fn run(out: &Path, data: &Path) -> anyhow::Result<()> {
         }
         identify.push("--json".into());
         let started = Instant::now();
-        let (stdout, stderr) = hbid(&exe, &identify)?;
+        let (stdout, stderr) = crate::run_hbid(&exe, &identify)?;
         let seconds = started.elapsed().as_secs_f64();
         let found: serde_json::Value = serde_json::from_str(&stdout)?;
         writeln!(report, "## {}\n\n{}.\n", rig.name, rig.what)?;

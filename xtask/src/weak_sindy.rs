@@ -119,22 +119,6 @@ fn score(found: &Found, truth: &[(String, f64)]) -> Score {
     }
 }
 
-fn run_hbid(exe: &Path, args: &[String]) -> anyhow::Result<String> {
-    let out = Command::new(exe)
-        .arg("--quiet")
-        .args(args)
-        .output()
-        .with_context(|| format!("running {}", exe.display()))?;
-    if !out.status.success() {
-        bail!(
-            "hbid {}: {}",
-            args.join(" "),
-            String::from_utf8_lossy(&out.stderr)
-        );
-    }
-    Ok(String::from_utf8_lossy(&out.stdout).into_owned())
-}
-
 fn ours(exe: &Path, record: &Path) -> anyhow::Result<Found> {
     let args: Vec<String> = [
         "identify",
@@ -151,7 +135,7 @@ fn ours(exe: &Path, record: &Path) -> anyhow::Result<Found> {
     .map(String::from)
     .to_vec();
     let started = Instant::now();
-    let json: serde_json::Value = serde_json::from_str(&run_hbid(exe, &args)?)?;
+    let json: serde_json::Value = serde_json::from_str(&crate::run_hbid(exe, &args)?.0)?;
     let seconds = started.elapsed().as_secs_f64();
     let terms = LIBRARY
         .iter()
@@ -285,7 +269,7 @@ pub fn run(out: &Path, data: &Path, python: &str) -> anyhow::Result<()> {
         args.extend(["--noise".into(), sigma.to_string()]);
         args.extend(["--truth".into(), truth_path.display().to_string()]);
         args.extend(["--out".into(), record.display().to_string()]);
-        run_hbid(&exe, &args)?;
+        crate::run_hbid(&exe, &args)?;
         let truth: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&truth_path)?)?;
         let truth: Vec<(String, f64)> = LIBRARY
             .iter()

@@ -21,6 +21,7 @@
 
 use hb_model::{Coefficient, IdentifiedModel};
 use hb_record::prepare::GridData;
+use nalgebra::{DMatrix, DVector};
 use pendulum_sim::{Tolerances, fit_initial_state, free_run};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -122,30 +123,6 @@ fn squared(r: &[f64]) -> f64 {
     r.iter().map(|e| e * e).sum()
 }
 
-/// Solves the symmetric positive definite `a x = b` (Cholesky); `None` if it is not.
-fn solve_spd(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Option<Vec<f64>> {
-    let n = b.len();
-    for j in 0..n {
-        let d = a[j][j] - (0..j).map(|k| a[j][k] * a[j][k]).sum::<f64>();
-        if !(d > 0.0 && d.is_finite()) {
-            return None;
-        }
-        let d = d.sqrt();
-        a[j][j] = d;
-        for i in j + 1..n {
-            let s = a[i][j] - (0..j).map(|k| a[i][k] * a[j][k]).sum::<f64>();
-            a[i][j] = s / d;
-        }
-    }
-    for i in 0..n {
-        b[i] = (b[i] - (0..i).map(|k| a[i][k] * b[k]).sum::<f64>()) / a[i][i];
-    }
-    for i in (0..n).rev() {
-        b[i] = (b[i] - (i + 1..n).map(|k| a[k][i] * b[k]).sum::<f64>()) / a[i][i];
-    }
-    Some(b)
-}
-
 /// Refines `model`'s coefficients on `grid` (see the [module documentation](self)): each piece
 /// longer than `init` samples is scored after its first `init`, at most `max_iterations`
 /// Levenberg–Marquardt steps. `progress` hears the iterations done of at most `max_iterations`.
@@ -210,24 +187,17 @@ pub fn refine(
         simulations += n;
         iterations += 1;
         progress(iterations, max_iterations);
-        let jtj: Vec<Vec<f64>> = (0..n)
-            .map(|a| {
-                (0..n)
-                    .map(|b| jac[a].iter().zip(&jac[b]).map(|(x, y)| x * y).sum())
-                    .collect()
-            })
-            .collect();
-        let jtr: Vec<f64> = (0..n)
-            .map(|a| jac[a].iter().zip(&r).map(|(x, y)| x * y).sum())
-            .collect();
+        let jac = DMatrix::from_fn(r.len(), n, |i, j| jac[j][i]);
+        let jtj = jac.tr_mul(&jac);
+        let jtr = jac.tr_mul(&DVector::from_column_slice(&r));
         last_jacobian = Some(jtj.clone());
         let mut stepped = false;
         while lambda < 1e6 {
             let mut a = jtj.clone();
-            for (j, row) in a.iter_mut().enumerate() {
-                row[j] += lambda * jtj[j][j].max(1e-300);
+            for j in 0..n {
+                a[(j, j)] += lambda * jtj[(j, j)].max(1e-300);
             }
-            let Some(delta) = solve_spd(a, jtr.iter().map(|v| -v).collect()) else {
+            let Some(delta) = a.cholesky().map(|c| c.solve(&-&jtr)) else {
                 lambda *= 4.0;
                 continue;
             };
@@ -259,14 +229,12 @@ pub fn refine(
     // one, or the one before a step too small to matter).
     let std_errors = last_jacobian.and_then(|jtj| {
         let sigma2 = cost / (scored.saturating_sub(n).max(1)) as f64;
-        let inverse: Option<Vec<Vec<f64>>> = (0..n)
-            .map(|j| {
-                let mut e = vec![0.0; n];
-                e[j] = 1.0;
-                solve_spd(jtj.clone(), e)
-            })
-            .collect();
-        inverse.map(|inv| (0..n).map(|j| (sigma2 * inv[j][j]).sqrt()).collect::<Vec<f64>>())
+        let inverse = jtj.cholesky()?.inverse();
+        Some(
+            (0..n)
+                .map(|j| (sigma2 * inverse[(j, j)]).sqrt())
+                .collect::<Vec<f64>>(),
+        )
     });
     let refined = with_values(model, &theta, std_errors.as_deref())?;
     Ok((
