@@ -4,14 +4,12 @@
 //! and injected dropouts. The bounds come from the tables of `docs/spikes.md`
 //! (`cargo run --release -p circle-signal --example spike_outliers`).
 
-mod support;
-
 use std::collections::BTreeSet;
 
+use crate::support::{VibrometerNoise, duffing, vibrometer};
 use circle_signal::{Domain, SpikeParams, find_spikes};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use support::{VibrometerNoise, duffing, vibrometer};
 
 const SAMPLES: usize = 100_000;
 

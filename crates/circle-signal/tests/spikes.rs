@@ -3,20 +3,18 @@
 //! isolated positions. The full table of rates is printed by
 //! `cargo run --release -p circle-signal --example spike_rates`.
 
-mod support;
-
 use std::f64::consts::{PI, TAU};
 
+use crate::support::{
+    COUNT, Injected, Motion, Outcome, Record, bit_errors, inject, motion_residual_max, paper_quantised,
+    paper_record, positions, run, smooth_residual_max,
+};
 use circle_signal::{
     CircleError, Domain, SpikeParams, circle_distance, find_and_repair_spikes, find_spikes, repair_spikes,
     unwrap, wrap,
 };
 use proptest::prelude::*;
 use proptest::test_runner::RngSeed;
-use support::{
-    COUNT, Injected, Motion, Outcome, Record, bit_errors, inject, motion_residual_max, paper_quantised,
-    paper_record, positions, run, smooth_residual_max,
-};
 
 const SAMPLES: usize = 100_000;
 const RATE: f64 = 1e-3;

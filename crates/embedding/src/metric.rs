@@ -73,32 +73,3 @@ pub fn spread(domain: Domain, x: &[f64]) -> f64 {
     };
     (x.iter().map(|&v| domain.distance(v, centre).powi(2)).sum::<f64>() / n).sqrt()
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn tree_coordinates_are_in_the_box() {
-        for v in [-PI, -1e-300, -1e-17, 0.0, PI, 3.0 * PI, -7.0, 1e6] {
-            let c = Domain::Circle.tree_coordinate(v);
-            assert!((0.0..TAU).contains(&c), "{v} -> {c}");
-            // The shift by π keeps circle distances.
-            assert!((Domain::Circle.distance(c, PI) - Domain::Circle.distance(v, 0.0)).abs() < 1e-9);
-        }
-    }
-
-    #[test]
-    fn spread_values() {
-        let x = [1.0, 3.0];
-        assert_eq!(spread(Domain::Line, &x), 1.0);
-        // Two angles either side of π: the circular mean is π and the spread is 0.1.
-        let y = [PI - 0.1, -PI + 0.1];
-        assert!((spread(Domain::Circle, &y) - 0.1).abs() < 1e-12);
-        let even: Vec<f64> = (0..10_000)
-            .map(|k| -PI + TAU * (k as f64 + 0.5) / 10_000.0)
-            .collect();
-        assert!((spread(Domain::Circle, &even) - PI / 3f64.sqrt()).abs() < 1e-3);
-        assert_eq!(spread(Domain::Circle, &[]), 0.0);
-    }
-}

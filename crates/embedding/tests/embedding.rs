@@ -1,6 +1,8 @@
 //! Integration tests: the paper's data set against the classic tool, and the neighbour search
 //! against brute force.
 
+mod checks;
+
 use std::f64::consts::{PI, TAU};
 
 use embedding::{

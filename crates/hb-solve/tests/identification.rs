@@ -20,8 +20,7 @@ use upo_search::{CloseReturns, Domain, Segment};
 // Helpers
 
 /// One classical Runge-Kutta step of x'' = f(t, x, v).
-mod common;
-use common::{read_paper_dataset, truth};
+use crate::common::{read_paper_dataset, truth};
 
 fn rk4(f: &impl Fn(f64, f64, f64) -> f64, t: f64, (x, v): (f64, f64), h: f64) -> (f64, f64) {
     let k1 = (v, f(t, x, v));
@@ -119,7 +118,10 @@ fn linear_oscillator() -> (SampleClock, Vec<f64>, (f64, f64, f64)) {
 fn linear_oscillator_with_known_forcing_is_recovered_exactly() {
     let (clock, x, (c, k, amp)) = linear_oscillator();
     // One period-1 segment starting off the forcing's phase, and one period-2 segment.
-    let segments = [common::segment(13, 1, 40, 0.0), common::segment(3, 2, 80, 0.0)];
+    let segments = [
+        crate::common::segment(13, 1, 40, 0.0),
+        crate::common::segment(3, 2, 80, 0.0),
+    ];
     let form = ModelForm::externally_forced(Forcing::Known { cos: -amp, sin: 0.0 });
     let params = IdentifyParams::builder(clock).form(form).build().unwrap();
     for solver in [&QrSolver::default() as &dyn LstsqSolver, &SvdSolver::default()] {
@@ -153,7 +155,7 @@ fn linear_oscillator_with_known_forcing_is_recovered_exactly() {
 fn linear_oscillator_with_unknown_forcing_is_rank_deficient() {
     // One sinusoidal orbit balances only harmonic 1: two equations for c, k, F_c, F_s.
     let (clock, x, _) = linear_oscillator();
-    let segments = [common::segment(13, 1, 40, 0.0)];
+    let segments = [crate::common::segment(13, 1, 40, 0.0)];
     let params = IdentifyParams::builder(clock)
         .form(ModelForm::externally_forced(Forcing::Identified))
         .build()
@@ -210,7 +212,10 @@ fn duffing_orbit_identifies_stiffness_nonlinearity_and_forcing() {
         .unwrap()
         .with_start_time(t0)
         .unwrap();
-    let segments = [common::segment(21, 1, p, 0.0), common::segment(5, 2, 2 * p, 0.0)];
+    let segments = [
+        crate::common::segment(21, 1, p, 0.0),
+        crate::common::segment(5, 2, 2 * p, 0.0),
+    ];
     let params = IdentifyParams::builder(clock)
         .harmonics(Harmonics::Fixed(20))
         .form(ModelForm::externally_forced(Forcing::Identified))
@@ -273,8 +278,8 @@ fn whirling_pendulum_orbits_identify_the_pendulum_exactly() {
     assert_eq!(b_start % p, 0);
     record.extend(xb.iter().map(|&v| wrap(v)));
     let segments = [
-        common::segment(17, 2, 2 * p, 0.0),
-        common::segment(b_start + 29, 3, 3 * p, 0.0),
+        crate::common::segment(17, 2, 2 * p, 0.0),
+        crate::common::segment(b_start + 29, 3, 3 * p, 0.0),
     ];
     let want = [
         ("x'", 0.2),
@@ -329,12 +334,12 @@ fn whirling_pendulum_orbits_identify_the_pendulum_exactly() {
 #[test]
 fn too_few_orbits_says_how_many() {
     let (t0, x) = read_paper_dataset();
-    let clock = common::paper_clock(t0);
+    let clock = crate::common::paper_clock(t0);
     let params = IdentifyParams::builder(clock)
         .harmonics(Harmonics::Fixed(3))
         .build()
         .unwrap();
-    let one = [common::segment(0, 1, 25, 0.0)];
+    let one = [crate::common::segment(0, 1, 25, 0.0)];
     // Harmonic K = 3: 1 + 3·6 = 19 unknowns; a period-1 orbit gives 7 equations; 20 are needed.
     let err = identify(
         Harmonic::new(3).unwrap(),
@@ -378,9 +383,11 @@ fn too_few_orbits_says_how_many() {
 #[test]
 fn bad_input_never_reaches_the_solver() {
     let (t0, mut x) = read_paper_dataset();
-    let clock = common::paper_clock(t0);
+    let clock = crate::common::paper_clock(t0);
     let params = IdentifyParams::builder(clock).build().unwrap();
-    let segs: Vec<Segment> = (0..4).map(|i| common::segment(100 * i, 1, 25, 0.0)).collect();
+    let segs: Vec<Segment> = (0..4)
+        .map(|i| crate::common::segment(100 * i, 1, 25, 0.0))
+        .collect();
     x[310] = f64::NAN;
     let err = identify(
         Harmonic::new(1).unwrap(),
@@ -403,7 +410,7 @@ fn bad_input_never_reaches_the_solver() {
         "{err:?}"
     );
     x[310] = 0.0;
-    let bad = [common::segment(0, 2, 25, 0.0)];
+    let bad = [crate::common::segment(0, 2, 25, 0.0)];
     assert!(matches!(
         identify(
             Harmonic::new(1).unwrap(),
@@ -415,7 +422,7 @@ fn bad_input_never_reaches_the_solver() {
         ),
         Err(SolveError::Assembly(AssemblyError::BadSegment { segment: 0, .. }))
     ));
-    let past_end = [common::segment(x.len() - 25, 1, 25, 0.0)];
+    let past_end = [crate::common::segment(x.len() - 25, 1, 25, 0.0)];
     assert!(matches!(
         identify(
             Harmonic::new(1).unwrap(),
@@ -449,7 +456,10 @@ fn bad_input_never_reaches_the_solver() {
         .form(ModelForm::externally_forced(Forcing::None))
         .build()
         .unwrap();
-    let segs = [common::segment(0, 1, 25, 0.0), common::segment(50, 1, 25, 0.0)];
+    let segs = [
+        crate::common::segment(0, 1, 25, 0.0),
+        crate::common::segment(50, 1, 25, 0.0),
+    ];
     assert!(matches!(
         identify(Polynomial::new(3).unwrap(), &huge, &segs, &params, &hb_solve::HarmonicBalance, &QrSolver::default()),
         Err(SolveError::Assembly(AssemblyError::NonFiniteTerm { segment: 0, ref term, .. })) if term == "x^3"
@@ -548,7 +558,7 @@ fn standard_errors_match_the_textbook_formula() {
 fn paper_dataset_harmonic_basis() {
     let (t0, x) = read_paper_dataset();
     let segs = paper_segments(&x);
-    let clock = common::paper_clock(t0);
+    let clock = crate::common::paper_clock(t0);
     let params = IdentifyParams::builder(clock).build().unwrap();
     let basis: BasisKind = Harmonic::new(1).unwrap().into();
     let m = identify(
@@ -623,7 +633,7 @@ const PROJECTION_POINTS: usize = 4096;
 fn paper_dataset_hat_basis() {
     let (t0, x) = read_paper_dataset();
     let segs = paper_segments(&x);
-    let clock = common::paper_clock(t0);
+    let clock = crate::common::paper_clock(t0);
     let params = IdentifyParams::builder(clock).build().unwrap();
     let hat = Hat::new(8).unwrap();
     let m = identify(
@@ -673,7 +683,7 @@ fn paper_dataset_hat_basis() {
 fn rows_do_not_depend_on_the_other_segments() {
     let (t0, x) = read_paper_dataset();
     let segs = paper_segments(&x);
-    let clock = common::paper_clock(t0);
+    let clock = crate::common::paper_clock(t0);
     let params = IdentifyParams::builder(clock).build().unwrap();
     let basis = Hat::new(8).unwrap();
     let all = assemble(&basis, &x, &segs, &params).unwrap();

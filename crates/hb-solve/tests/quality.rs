@@ -1,7 +1,5 @@
 //! Goodness of fit and model selection on identifications of simulated and published records.
 
-mod common;
-
 use circle_signal::SampleClock;
 use hb_basis::{BasisKind, Harmonic, Polynomial};
 use hb_model::{Harmonics, ModelForm, TermList};
@@ -11,7 +9,7 @@ use hb_solve::{
 };
 use upo_search::Windows;
 
-use common::{paper_clock, read_paper_dataset};
+use crate::common::{paper_clock, read_paper_dataset};
 
 /// The paper's data set by the weak form: the right model explains all but rounding of the
 /// windowed acceleration and leaves no line at a drive harmonic; the model without the

@@ -12,8 +12,7 @@ use pendulum_sim::observe::Encoder;
 use pendulum_sim::{Pendulum, SimulationConfig, Tolerances, simulate};
 use upo_search::{CloseReturns, OrbitSource, Windows};
 
-mod common;
-use common::{read_paper_dataset, truth};
+use crate::common::{read_paper_dataset, truth};
 
 fn max_error<B: hb_basis::Basis>(m: &IdentifiedModel<B>) -> f64 {
     truth()
@@ -166,7 +165,7 @@ fn unforced_pendulum_on_the_circle() {
 #[test]
 fn paper_dataset_with_the_defaults() {
     let (t0, x) = read_paper_dataset();
-    let clock = common::paper_clock(t0);
+    let clock = crate::common::paper_clock(t0);
     let windows = Windows::new(&SampleClock::nondimensional(25).unwrap()).unwrap();
     let segments = windows.segments(&x).unwrap();
     assert_eq!(segments.len(), 1197);
@@ -220,7 +219,7 @@ fn paper_dataset_with_the_defaults() {
 fn bootstrap_is_deterministic_and_brackets_the_estimate() {
     let (t0, x) = read_paper_dataset();
     let x = with_noise(&x[..250 * 25 + 1], 0.05, 3);
-    let clock = common::paper_clock(t0);
+    let clock = crate::common::paper_clock(t0);
     let params = IdentifyParams::builder(clock)
         .harmonics(WeakForm::DEFAULT_HARMONICS)
         .build()
@@ -288,7 +287,7 @@ fn bootstrap_is_deterministic_and_brackets_the_estimate() {
 fn bootstrap_of_orbit_segments() {
     let (t0, x) = read_paper_dataset();
     let x = &x[..600 * 25];
-    let clock = common::paper_clock(t0);
+    let clock = crate::common::paper_clock(t0);
     let params = IdentifyParams::builder(clock).build().unwrap();
     let basis = Harmonic::new(1).unwrap();
     let segments = CloseReturns::builder(&SampleClock::nondimensional(25).unwrap(), 5)
@@ -326,7 +325,7 @@ fn noise_correction_removes_the_bias_of_the_trigonometric_terms() {
     let est = estimate_noise_sigma(&x, Domain::Circle).unwrap();
     assert!((est / sigma - 1.0).abs() < 0.03, "estimated sigma {est}");
 
-    let clock = common::paper_clock(t0);
+    let clock = crate::common::paper_clock(t0);
     let segments = Windows::new(&SampleClock::nondimensional(25).unwrap())
         .unwrap()
         .segments(&x)
@@ -377,7 +376,7 @@ fn noise_correction_removes_the_bias_of_the_trigonometric_terms() {
 fn noise_correction_needs_single_harmonics_on_the_circle() {
     let (t0, x) = read_paper_dataset();
     let x = &x[..100 * 25 + 1];
-    let clock = common::paper_clock(t0);
+    let clock = crate::common::paper_clock(t0);
     let params = IdentifyParams::builder(clock)
         .harmonics(WeakForm::DEFAULT_HARMONICS)
         .noise_correction(NoiseCorrection::Given { sigma: 0.1 })
@@ -442,7 +441,7 @@ fn bad_input_is_refused() {
         Err(SolveError::Lstsq(LstsqError::TooFewOrbits { .. }))
     ));
     // A window that runs past the record.
-    segments[0] = common::segment(x.len() - 10, 3, 120, 0.0);
+    segments[0] = crate::common::segment(x.len() - 10, 3, 120, 0.0);
     assert!(matches!(
         assemble_weak(&basis, &x, &segments, &params, &weak),
         Err(SolveError::Assembly(AssemblyError::BadSegment { segment: 0, .. }))
