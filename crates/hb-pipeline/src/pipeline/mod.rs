@@ -76,6 +76,8 @@ pub use setup::{Identification, IdentifyStep, Method, ModelSpec, Setup, TermSele
 
 use std::ops::Range;
 
+use rayon::prelude::*;
+
 use circle_signal::{Domain, SampleClock, Segment};
 use embedding::{
     AmiCurve, AmiParams, FnnParams, FnnResult, average_mutual_information, false_nearest_neighbours,
@@ -766,7 +768,9 @@ impl<'a> Pipeline<'a> {
     }
 
     /// Validates every model (`models` in the order of the setups, as [`Pipeline::identify`]
-    /// returns them), calling `progress` as each starts.
+    /// returns them), the models side by side on rayon's threads. `progress` is called on this
+    /// thread, in the setups' order: model `i`'s stage when every model before it is done (the
+    /// first at once). The first error in that order is returned, as a serial loop would.
     pub fn validate(
         &self,
         embedded: &Embedded,
@@ -794,12 +798,7 @@ impl<'a> Pipeline<'a> {
             )
         });
         let check = self.validation.check_config(record)?;
-        let mut validations = Vec::with_capacity(models.len());
-        for (model, (setup, ident)) in self.setups.iter().zip(models).enumerate() {
-            progress(Stage::Validate {
-                model,
-                method: setup.method(),
-            });
+        let one = |ident: &Identification| -> Result<Validation, PipelineError> {
             let measured = check_model(&ident.model, &check)?;
             let section = match (&comparison, &record_section) {
                 (Some(config), Some((_, record_embedded))) => {
@@ -819,12 +818,54 @@ impl<'a> Pipeline<'a> {
             let prediction =
                 self.prediction
                     .measure(&ident.model, record, Some(measured.lyapunov.per_unit_time))?;
-            validations.push(Validation {
+            Ok(Validation {
                 check: measured,
                 section,
                 prediction,
+            })
+        };
+        // The models side by side (each validation is a long serial run, and they are
+        // independent: the numbers do not depend on the order). `progress` hears the stages on
+        // this thread, in the setups' order: a model's when every model before it is done.
+        let stage = |model: usize| Stage::Validate {
+            model,
+            method: self.setups[model].method(),
+        };
+        let count = models.len().min(self.setups.len());
+        let mut results = Vec::with_capacity(count);
+        std::thread::scope(|scope| {
+            let (send, receive) = std::sync::mpsc::channel();
+            let one = &one;
+            scope.spawn(move || {
+                models[..count]
+                    .par_iter()
+                    .enumerate()
+                    .for_each_with(send, |send, (model, ident)| {
+                        // The receiver lives until every model is in: a send cannot fail.
+                        let _ = send.send((model, one(ident)));
+                    });
             });
-        }
+            let mut finished = vec![false; count];
+            let mut next = 0;
+            if count > 0 {
+                progress(stage(0));
+            }
+            for (model, result) in receive {
+                finished[model] = true;
+                results.push((model, result));
+                while next < count && finished[next] {
+                    next += 1;
+                    if next < count {
+                        progress(stage(next));
+                    }
+                }
+            }
+        });
+        results.sort_by_key(|&(model, _)| model);
+        let validations = results
+            .into_iter()
+            .map(|(_, v)| v)
+            .collect::<Result<Vec<_>, _>>()?;
         Ok(Validations {
             record: record_section.map(|(section, _)| section),
             models: validations,
