@@ -73,15 +73,23 @@ impl Scored {
 }
 
 /// Identifies with `identify` (the training record first) and scores with `compare` (the model
-/// and test record first).
+/// and test record first). Both are kept as shown in the report, with the records' bare names;
+/// `located` gives the path a bare name stands for when hbid runs.
 fn scored(
     exe: &Path,
     label: &'static str,
     identify: Vec<String>,
     model: &Path,
     compare: Vec<String>,
+    located: &dyn Fn(&str) -> Option<PathBuf>,
 ) -> anyhow::Result<Scored> {
-    let mut args = identify.clone();
+    let locate = |words: &[String]| -> Vec<String> {
+        words
+            .iter()
+            .map(|w| located(w).map_or_else(|| w.clone(), |p| p.display().to_string()))
+            .collect()
+    };
+    let mut args = locate(&identify);
     args.extend([
         "--bootstrap".into(),
         "0".into(),
@@ -93,7 +101,7 @@ fn scored(
     let found = hbid(exe, &args)?;
     let seconds = started.elapsed().as_secs_f64();
     let mut args = vec!["compare".to_owned(), model.display().to_string()];
-    args.extend(compare.iter().cloned());
+    args.extend(locate(&compare));
     args.push("--json".into());
     let scores = hbid(exe, &args)?;
     Ok(Scored {
@@ -216,26 +224,18 @@ pub fn run(doc: &Path, out: Option<&Path>, work: &Path, python: Option<&str>) ->
         "--range",
         "100..32100",
     ]));
-    let in_work = |args: &[String]| -> Vec<String> {
-        args.iter()
-            .map(|a| match a.as_str() {
-                "silverbox.csv" | "silverbox-train.csv" => work.join(a).display().to_string(),
-                _ => a.clone(),
-            })
-            .collect()
-    };
-    let silverbox = |label, terms: &str, extra: &[&str], name: &str| -> anyhow::Result<Scored> {
-        let shown_identify = sb_identify(terms, extra);
-        let mut s = scored(
+    let in_work =
+        |name: &str| matches!(name, "silverbox.csv" | "silverbox-train.csv").then(|| work.join(name));
+    let silverbox = |label, terms: &str, extra: &[&str], name: &str| {
+        let identify = sb_identify(terms, extra);
+        scored(
             &exe,
             label,
-            in_work(&shown_identify),
+            identify,
             &work.join(name),
-            in_work(&sb_compare),
-        )?;
-        s.identify = shown_identify;
-        s.compare = sb_compare.clone();
-        Ok(s)
+            sb_compare.clone(),
+            &in_work,
+        )
     };
     eprintln!("silverbox");
     let sb_terms = "1, x', x, x^2, x^3, p";
@@ -268,27 +268,21 @@ pub fn run(doc: &Path, out: Option<&Path>, work: &Path, python: Option<&str>) ->
         a
     };
     let emps_compare = strings(&["emps_test_txp.csv", "--drive-col", "p", "--init", "20"]);
-    let emps_paths = |args: &[String]| -> Vec<String> {
-        args.iter()
-            .map(|a| match a.as_str() {
-                "emps_train_txp.csv" => emps_train.display().to_string(),
-                "emps_test_txp.csv" => emps_test.display().to_string(),
-                _ => a.clone(),
-            })
-            .collect()
+    let emps_paths = |name: &str| match name {
+        "emps_train_txp.csv" => Some(emps_train.clone()),
+        "emps_test_txp.csv" => Some(emps_test.clone()),
+        _ => None,
     };
-    let emps = |label, terms: &str, extra: &[&str], name: &str| -> anyhow::Result<Scored> {
-        let shown_identify = emps_identify(terms, extra);
-        let mut s = scored(
+    let emps = |label, terms: &str, extra: &[&str], name: &str| {
+        let identify = emps_identify(terms, extra);
+        scored(
             &exe,
             label,
-            emps_paths(&shown_identify),
+            identify,
             &work.join(name),
-            emps_paths(&emps_compare),
-        )?;
-        s.identify = shown_identify;
-        s.compare = emps_compare.clone();
-        Ok(s)
+            emps_compare.clone(),
+            &emps_paths,
+        )
     };
     let em_terms = "1, x', sign(x'), p";
     let em = emps("physical", em_terms, &[], "emps.json")?;
