@@ -5,8 +5,10 @@ use std::f64::consts::TAU;
 use circle_signal::wrap;
 use hb_basis::{Harmonic, Polynomial};
 use hb_drive::DriveSearchError;
-use hb_drive::{DriveEstimate, DriveSearch, PeriodRange, RangeSource, estimate_forcing_period};
-use hb_model::{Forcing, ModelForm};
+use hb_drive::{
+    DriveEstimate, DriveSearch, PeriodRange, RangeSource, dominant_period, estimate_forcing_period,
+};
+use hb_model::{Forcing, Harmonics, ModelForm};
 use hb_solve::{AssemblyError, SolveError};
 use pendulum_sim::observe::Encoder;
 use pendulum_sim::{Domain, Dop853, FirstOrder, Pendulum, SecondOrderSystem, Tolerances};
@@ -344,4 +346,86 @@ fn the_drive_estimate_refuses_general_terms() {
         ),
         "{result:?}"
     );
+}
+
+// Parameters and the spectral first guess.
+
+#[test]
+fn ranges_are_validated() {
+    let r = PeriodRange::frequencies(0.5, 2.0).unwrap();
+    assert_eq!((r.shortest(), r.longest()), (0.5, 2.0));
+    let r = PeriodRange::around(2.0, 4.0).unwrap();
+    assert_eq!((r.shortest(), r.longest()), (0.5, 8.0));
+    assert!(r.contains(0.5) && r.contains(8.0) && !r.contains(8.5));
+    for (a, b) in [
+        (0.0, 1.0),
+        (1.0, 1.0),
+        (2.0, 1.0),
+        (f64::NAN, 1.0),
+        (1.0, f64::INFINITY),
+    ] {
+        assert!(PeriodRange::periods(a, b).is_err(), "{a}..{b}");
+        assert!(PeriodRange::frequencies(a, b).is_err(), "{a}..{b}");
+    }
+    assert!(PeriodRange::around(1.0, 1.0).is_err());
+    let json = serde_json::to_string(&PeriodRange::periods(1.0, 3.0).unwrap()).unwrap();
+    assert_eq!(
+        serde_json::from_str::<PeriodRange>(&json).unwrap(),
+        PeriodRange::periods(1.0, 3.0).unwrap()
+    );
+    assert!(serde_json::from_str::<PeriodRange>(r#"{"shortest":3.0,"longest":1.0}"#).is_err());
+}
+
+#[test]
+fn search_params_are_validated() {
+    let ok = DriveSearch::builder()
+        .range(PeriodRange::periods(1.0, 2.0).unwrap())
+        .survivors(5)
+        .build()
+        .unwrap();
+    assert_eq!(ok.survivors(), 5);
+    assert_eq!(DriveSearch::builder().build().unwrap(), DriveSearch::default());
+    let b = DriveSearch::builder;
+    for bad in [
+        b().window_periods(0).build(),
+        b().scan_periods(3).build(),
+        b().points_per_basin(1).build(),
+        b().growth(1).build(),
+        b().survivors(0).build(),
+        b().prune_ratio(0.5).build(),
+        b().prune_ratio(f64::NAN).build(),
+        b().tolerance(0.0).build(),
+        b().tolerance(0.1).build(),
+        b().max_iterations(0).build(),
+        b().harmonics(Harmonics::Fixed(0)).build(),
+    ] {
+        assert!(
+            matches!(bad, Err(DriveSearchError::InvalidParameter { .. })),
+            "{bad:?}"
+        );
+    }
+    assert!(b().prune_ratio(f64::INFINITY).build().is_ok());
+    let json = serde_json::to_string(&ok).unwrap();
+    assert_eq!(serde_json::from_str::<DriveSearch>(&json).unwrap(), ok);
+    let bad = json.replace(r#""growth":4"#, r#""growth":1"#);
+    assert!(bad != json && serde_json::from_str::<DriveSearch>(&bad).is_err());
+}
+
+/// The dominant period of a sinusoid (on the line) and of an oscillating angle (on the
+/// circle), neither a whole number of bins.
+#[test]
+fn dominant_period_of_a_sinusoid() {
+    let (period, h) = (1.37, 0.01);
+    let line: Vec<f64> = (0..5000)
+        .map(|n| 0.3 * n as f64 * h + (TAU * n as f64 * h / period).sin())
+        .collect();
+    let found = dominant_period(&line, h, Domain::Line, 5).unwrap();
+    assert!((found / period - 1.0).abs() < 2e-3, "{found}");
+    let angle: Vec<f64> = (0..5000)
+        .map(|n| wrap(1.5 * (TAU * n as f64 * h / period).cos()))
+        .collect();
+    let found = dominant_period(&angle, h, Domain::Circle, 5).unwrap();
+    assert!((found / period - 1.0).abs() < 2e-3, "{found}");
+    assert!(dominant_period(&line[..10], h, Domain::Line, 5).is_err());
+    assert!(dominant_period(&line, -1.0, Domain::Line, 5).is_err());
 }
