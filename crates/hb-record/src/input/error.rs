@@ -246,39 +246,6 @@ impl Role {
     }
 }
 
-#[cfg(test)]
-impl InputError {
-    /// Whether the error is about what the input holds, the only kind bytes alone can cause (not
-    /// reading a file, the options on their own, or the checks after reading).
-    pub(crate) fn is_about_the_content(&self) -> bool {
-        match self {
-            InputError::Empty
-            | InputError::NoData
-            | InputError::MissingColumn { .. }
-            | InputError::NeedStep
-            | InputError::NotANumber { .. }
-            | InputError::NonFinite { .. }
-            | InputError::Ragged { .. }
-            | InputError::MixedSeparators { .. }
-            | InputError::Malformed { .. }
-            | InputError::StepOverflow { .. }
-            | InputError::Npy { .. } => true,
-            InputError::Io { .. }
-            | InputError::IsFolder { .. }
-            | InputError::BadColumn { .. }
-            | InputError::BadStep { .. }
-            | InputError::TimeTwice
-            | InputError::ColumnTwice { .. }
-            | InputError::TooFewSamples { .. }
-            | InputError::TimeNotIncreasing { .. }
-            | InputError::TimeGlitch { .. }
-            | InputError::TimeUnresolved { .. }
-            | InputError::TimeOverflow { .. }
-            | InputError::BadForcingPeriod { .. } => false,
-        }
-    }
-}
-
 /// The columns an input has, for [`InputError::MissingColumn`].
 fn columns_found(found: &[String], width: usize, wanted: &Column) -> String {
     match (found, wanted) {
@@ -373,55 +340,4 @@ fn scatter_hint(scatter: Option<f64>) -> String {
 /// The decimals of the stamps, for [`InputError::TimeUnresolved`].
 fn printed_hint(decimals: Option<u32>) -> String {
     decimals.map_or_else(String::new, |k| format!(" (they are written with {k} decimals)"))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn locations_read_as_before() {
-        assert_eq!(Location::Line(12).to_string(), "line 12");
-        assert_eq!(Location::Sample(12).to_string(), "sample 12");
-    }
-
-    #[test]
-    fn missing_columns_say_what_there_is() {
-        let missing = |wanted, found: &[&str], width| InputError::MissingColumn {
-            role: Role::Time,
-            wanted,
-            found: found.iter().map(|&c| c.to_owned()).collect(),
-            width,
-        };
-        assert_eq!(
-            missing(Column::Name("t".into()), &["time", "theta"], 2).to_string(),
-            "no time column 't' in the input (columns: time,theta)"
-        );
-        assert_eq!(
-            missing(Column::Position(3), &[], 2).to_string(),
-            "no time column 3 in the input (2 unnamed columns)"
-        );
-        assert_eq!(
-            missing(Column::Name("t".into()), &[], 2).to_string(),
-            "no time column 't' in the input (2 unnamed columns: give a position)"
-        );
-    }
-
-    #[test]
-    fn texts_name_no_command_line_options() {
-        for e in [
-            InputError::NeedStep,
-            InputError::TimeTwice,
-            InputError::BadStep { dt: 0.0 },
-            InputError::BadForcingPeriod { period: -1.0 },
-            InputError::MissingColumn {
-                role: Role::Angle,
-                wanted: Column::Position(2),
-                found: Vec::new(),
-                width: 1,
-            },
-        ] {
-            assert!(!e.to_string().contains("--"), "{e}");
-        }
-    }
 }

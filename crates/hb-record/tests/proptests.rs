@@ -6,7 +6,11 @@
 use proptest::prelude::*;
 use proptest::test_runner::RngSeed;
 
-use super::*;
+use hb_record::input::{
+    Column, GridOptions, GridRecord, InputError, Location, ReadOptions, VALUE_NAMES, read_bytes,
+};
+
+use crate::common::npy_bytes;
 
 /// The lines of a text as the reader counts them.
 fn line_count(text: &[u8]) -> u64 {
@@ -328,11 +332,11 @@ proptest! {
             (0..rows).for_each(|r| (0..cols).for_each(|c| push(r, c)));
         }
         let shape = if cols == 1 { format!("({rows},)") } else { format!("({rows}, {cols})") };
-        let bytes = npy::npy_bytes(descr, &shape, fortran, &payload);
+        let bytes = npy_bytes(descr, &shape, fortran, &payload);
         let column = |c: usize| (0..rows).map(|r| value(r, c)).collect::<Vec<f64>>();
         let (options, t, x) = if cols == 1 {
             let dt = 0.25;
-            (ReadOptions { dt: Some(dt), ..Default::default() }, grid(rows, dt).map_err(|e| TestCaseError::fail(e.to_string()))?, column(0))
+            (ReadOptions { dt: Some(dt), ..Default::default() }, (0..rows).map(|i| i as f64 * dt).collect(), column(0))
         } else {
             let (tc, xc) = (cols - 1, 0);
             let options = ReadOptions {

@@ -1,0 +1,348 @@
+//! The text reader: comments, headers, separators, default and chosen columns, a drive column,
+//! and the errors that name the line and column of what is wrong.
+use hb_record::input::{Column, InputError, Location, ReadOptions, Record, Role, Separator, read_bytes};
+
+use crate::common::{is_about_the_content, npy_bytes};
+
+fn read(text: &str) -> Result<Record, InputError> {
+    read_bytes(text.as_bytes(), &ReadOptions::default())
+}
+
+fn with(text: &str, options: ReadOptions) -> Result<Record, InputError> {
+    read_bytes(text.as_bytes(), &options)
+}
+
+/// A drive column is read beside the angle, by name or position, in text and `.npy`; it may
+/// not be the time or the angle, and a bad cell in it names its line.
+#[test]
+fn reads_a_drive_column_beside_the_angle() {
+    let drive = |c: &str| ReadOptions {
+        drive: Some(c.parse().unwrap()),
+        ..Default::default()
+    };
+    let text = "t,theta,omega,acc\n0,0.1,0,5\n# c\n0.5,0.2,1,-6\n";
+    for chosen in ["acc", "4"] {
+        let r = with(text, drive(chosen)).unwrap();
+        assert_eq!((r.theta, r.drive), (vec![0.1, 0.2], Some(vec![5.0, -6.0])));
+    }
+    assert_eq!(read(text).unwrap().drive, None);
+    for taken in ["t", "theta", "1"] {
+        assert!(matches!(
+            with(text, drive(taken)),
+            Err(InputError::ColumnTwice {
+                second: Role::Drive,
+                ..
+            })
+        ));
+    }
+    assert!(matches!(
+        with(text, drive("p")),
+        Err(InputError::MissingColumn {
+            role: Role::Drive,
+            ..
+        })
+    ));
+    match with("t,theta,p\n0,1,2\n1,2,x\n", drive("p")) {
+        Err(e @ InputError::NotANumber { line: 3, .. }) => assert!(e.to_string().contains("'p'"), "{e}"),
+        other => panic!("{other:?}"),
+    }
+    // Two unnamed columns and a drive: no guessing of the order, the time is column 1.
+    let r = with("0.1,0,7\n0.2,1,8\n", drive("3")).unwrap();
+    assert_eq!((r.t, r.drive), (vec![0.1, 0.2], Some(vec![7.0, 8.0])));
+    // .npy: rows (t, x, p).
+    let f8: Vec<u8> = [0.0f64, 0.5, 9.0, 1.0, 0.6, f64::NAN]
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    let npy = npy_bytes("<f8", "(2, 3)", false, &f8);
+    assert!(matches!(
+        read_bytes(&npy, &drive("3")),
+        Err(InputError::NonFinite {
+            role: Role::Drive,
+            ..
+        })
+    ));
+    let f8: Vec<u8> = [0.0f64, 0.5, 9.0, 1.0, 0.6, 8.0]
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    let npy = npy_bytes("<f8", "(2, 3)", false, &f8);
+    assert_eq!(read_bytes(&npy, &drive("3")).unwrap().drive, Some(vec![9.0, 8.0]));
+}
+
+#[test]
+fn reads_with_comments_and_extra_columns() {
+    let r = read("# a comment\nt,theta,omega\n0,0.1,0\n# mid\n0.5,-3.0,1e-3\n").unwrap();
+    assert_eq!(r.t, vec![0.0, 0.5]);
+    assert_eq!(r.theta, vec![0.1, -3.0]);
+    assert_eq!(r.lines, Some(vec![3, 5]));
+    let r = read("theta, t\n1,2\n").unwrap();
+    assert_eq!((r.t[0], r.theta[0]), (2.0, 1.0));
+    // Windows line ends, a byte-order mark, quoted names, blank lines.
+    let r = read("\u{feff}\"t\",\"theta\"\r\n\r\n0,1\r\n0.5,2\r\n").unwrap();
+    assert_eq!(
+        (r.t, r.theta, r.lines),
+        (vec![0.0, 0.5], vec![1.0, 2.0], Some(vec![3, 4]))
+    );
+}
+
+#[test]
+fn whitespace_semicolons_and_tabs_separate_cells() {
+    let expected = (vec![0.0, 0.5, 1.0], vec![0.1, -0.2, 0.3]);
+    for text in [
+        "t theta\n0 0.1\n0.5 -0.2\n1 0.3\n",
+        "   t    theta  \n  0   0.1\n0.5     -0.2   \n 1 0.3 \n",
+        "t\ttheta\n0\t0.1\n0.5\t-0.2\n1\t0.3\n",
+        "t \t theta\n0\t\t0.1\n0.5 \t-0.2\n1 0.3\n",
+        "t;theta\n0;0.1\n0.5;-0.2\n1;0.3\n",
+        "t ; theta\n0; 0,1\n0,5 ;-0,2\n1;0.3\n",
+        "0 0.1\n0.5 -0.2\n1 0.3\n",
+        "0;0.1\n0.5;-0.2\n1;0.3\n",
+    ] {
+        let r = read(text).unwrap_or_else(|e| panic!("{text:?}: {e}"));
+        assert_eq!((r.t, r.theta), expected, "{text:?}");
+    }
+    // A single column with the step: white space around it is no separator.
+    let step = ReadOptions {
+        dt: Some(0.5),
+        ..Default::default()
+    };
+    assert_eq!(with("  1.5\n2.5  \n", step).unwrap().theta, vec![1.5, 2.5]);
+}
+
+#[test]
+fn mixed_separators_name_the_line() {
+    for (text, line, expected, found) in [
+        ("0,1\n1,2\n2 3\n", 3, Separator::Comma, Separator::Whitespace),
+        (
+            "t theta\n0 1\n1;2\n",
+            3,
+            Separator::Whitespace,
+            Separator::Semicolon,
+        ),
+        (
+            "t;theta\n0;1\n# c\n1,2\n",
+            4,
+            Separator::Semicolon,
+            Separator::Comma,
+        ),
+        ("0\t1\n1\t2\n2,3\n", 3, Separator::Whitespace, Separator::Comma),
+    ] {
+        match read(text) {
+            Err(e @ InputError::MixedSeparators { .. }) => {
+                assert_eq!(
+                    e.to_string(),
+                    format!("line {line}: cells separated by {found} where the first row uses {expected}"),
+                );
+            }
+            other => panic!("{text:?}: {other:?}"),
+        }
+    }
+}
+
+#[test]
+fn headerless_and_column_choices() {
+    let r = read("0,1.5\n1,2.5\n").unwrap();
+    assert_eq!((r.t.clone(), r.theta.clone()), (vec![0.0, 1.0], vec![1.5, 2.5]));
+    let opts = ReadOptions {
+        dt: Some(0.5),
+        ..Default::default()
+    };
+    let r = with("1.5\n2.5\n3.5\n", opts.clone()).unwrap();
+    assert_eq!(r.t, vec![0.0, 0.5, 1.0]);
+    assert!(matches!(read("1.5\n2.5\n"), Err(InputError::NeedStep)));
+    let opts = ReadOptions {
+        time: Some("time".parse().unwrap()),
+        angle: Some("3".parse().unwrap()),
+        ..Default::default()
+    };
+    let r = with("time,x,angle\n0,9,1\n1,9,2\n", opts).unwrap();
+    assert_eq!(r.theta, vec![1.0, 2.0]);
+    assert!("0".parse::<Column>().is_err());
+    assert!("".parse::<Column>().is_err());
+    let both = ReadOptions {
+        time: Some(Column::Position(1)),
+        dt: Some(1.0),
+        ..Default::default()
+    };
+    assert!(matches!(with("1,2\n", both), Err(InputError::TimeTwice)));
+}
+
+#[test]
+fn default_value_columns() {
+    // theta first, then x, then angle; else the only column besides the time.
+    for (header, expected) in [
+        ("t,x,theta", 3.0),
+        ("angle,t,x", 3.0),
+        ("angle,t,y", 1.0),
+        ("t,position", 2.0),
+        ("volts,t", 1.0),
+    ] {
+        // Row 1 holds each column's position.
+        let width = header.split(',').count();
+        let row: Vec<String> = (1..=width).map(|c| c.to_string()).collect();
+        let text = format!("{header}\n{}\n", row.join(","));
+        let r = read(&text).unwrap_or_else(|e| panic!("{header}: {e}"));
+        assert_eq!(r.theta[0], expected, "{header}");
+    }
+    // Three columns and none of the names: nothing to guess.
+    assert!(matches!(
+        read("t,a,b\n0,1,2\n"),
+        Err(InputError::MissingColumn {
+            role: Role::Angle,
+            ..
+        })
+    ));
+    // An explicit choice still wins.
+    let chosen = ReadOptions {
+        angle: Some(Column::Name("a".into())),
+        ..Default::default()
+    };
+    assert_eq!(with("t,a,x\n0,1,2\n", chosen).unwrap().theta, vec![1.0]);
+}
+
+#[test]
+fn headerless_columns_in_either_order() {
+    let n = 50;
+    let dt = 1.0 / 2048.0;
+    let angle = |i: usize| 2.5 * (i as f64 * 0.3).sin();
+    let time_first: String = (0..n)
+        .map(|i| format!("{:.4} {:.6}\n", 3.0 + i as f64 * dt, angle(i)))
+        .collect();
+    let angle_first: String = (0..n)
+        .map(|i| format!("{:.6}\t{:.4}\n", angle(i), 3.0 + i as f64 * dt))
+        .collect();
+    let a = read(&time_first).unwrap();
+    let b = read(&angle_first).unwrap();
+    assert_eq!((&a.t, &a.theta), (&b.t, &b.theta));
+    assert!((a.t[1] - a.t[0] - dt).abs() < 1e-4 && (a.theta[1] - angle(1)).abs() < 1e-6);
+    // A value column as uniform as the time leaves the default: column 1 is the time.
+    let ramps: String = (0..n).map(|i| format!("{} {}\n", 2 * i, i)).collect();
+    assert_eq!(read(&ramps).unwrap().t[1], 2.0);
+}
+
+#[test]
+fn bad_inputs_are_named() {
+    assert!(matches!(read(""), Err(InputError::Empty)));
+    assert!(matches!(read("# only a comment\n"), Err(InputError::Empty)));
+    assert!(matches!(read("t,theta\n"), Err(InputError::NoData)));
+    assert!(matches!(
+        read("time,angle\n1,2\n"),
+        Err(InputError::MissingColumn { .. })
+    ));
+    match read("t,theta\n0,1\n1,abc\n") {
+        Err(InputError::NotANumber { line: 3, .. }) => {}
+        other => panic!("{other:?}"),
+    }
+    match read("t,theta\n0,1\n1,NaN\n") {
+        Err(InputError::NonFinite { at, .. }) if at == Location::Line(3) && at.to_string() == "line 3" => {}
+        other => panic!("{other:?}"),
+    }
+    match read("t,theta\n0,1\n1,inf\n") {
+        Err(InputError::NonFinite { .. }) => {}
+        other => panic!("{other:?}"),
+    }
+    match read("t,theta\n0,1\n1\n") {
+        Err(InputError::Ragged {
+            line: 3,
+            expected: 2,
+            found: 1,
+        }) => {}
+        other => panic!("{other:?}"),
+    }
+    // A decimal comma only where semicolons separate the cells.
+    assert!(matches!(
+        read("t theta\n0 1,5\n"),
+        Err(InputError::MixedSeparators { .. })
+    ));
+    assert!(read_bytes(&[0xff, 0xfe, 0x00, 0x01], &ReadOptions::default()).is_err());
+}
+
+#[test]
+fn a_time_column_is_reported_as_a_time_whatever_its_name() {
+    let named = ReadOptions {
+        time: Some(Column::Name("time".into())),
+        angle: Some(Column::Name("angle".into())),
+        ..Default::default()
+    };
+    let unnamed = ReadOptions::default();
+    for (text, options, role, line, says) in [
+        (
+            "time,angle\n0,1\nnan,2\n",
+            &named,
+            Role::Time,
+            3,
+            "the time is NaN",
+        ),
+        (
+            "time,angle\n0,1\n1,inf\n",
+            &named,
+            Role::Angle,
+            3,
+            "a value is inf",
+        ),
+        ("0,1,2\n-inf,2,3\n", &unnamed, Role::Time, 2, "the time is -inf"),
+        // Two unnamed columns: which is the time is not known yet.
+        ("0,1\n-inf,2\n", &unnamed, Role::Angle, 2, "a value is -inf"),
+    ] {
+        match read_bytes(text.as_bytes(), options) {
+            Err(e @ InputError::NonFinite { role: r, at, .. }) if r == role && at == Location::Line(line) => {
+                assert!(e.to_string().contains(says), "{e}");
+            }
+            other => panic!("{text:?}: {other:?}"),
+        }
+    }
+}
+
+#[test]
+fn bad_cells_name_their_column() {
+    match read("time,theta,t\n0,1,2\n1,x,3\n") {
+        Err(InputError::NotANumber {
+            line: 3,
+            column,
+            value,
+        }) => {
+            assert_eq!((column, value.as_str()), (Column::Name("theta".into()), "x"));
+        }
+        other => panic!("{other:?}"),
+    }
+    match read("0,1\nx,2\n") {
+        Err(InputError::NotANumber { column, .. }) => assert_eq!(column, Column::Position(1)),
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn binary_data_is_named() {
+    match read_bytes(&[b'1', b',', 0xff, 0xfe, b'\n'], &ReadOptions::default()) {
+        Err(e @ InputError::Malformed { line: 1, .. }) => {
+            assert!(e.to_string().contains("binary data"), "{e}");
+            assert!(std::error::Error::source(&e).is_some());
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+proptest::proptest! {
+    #[test]
+    fn csv_never_panics_on_arbitrary_bytes(bytes in proptest::collection::vec(proptest::prelude::any::<u8>(), 0..300)) {
+        for options in [ReadOptions::default(), ReadOptions { dt: Some(0.1), ..Default::default() }] {
+            if let Err(e) = read_bytes(&bytes, &options) {
+                proptest::prop_assert!(is_about_the_content(&e), "{e:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn csv_round_trips_numbers(
+        values in proptest::collection::vec(-1e6..1e6f64, 1..50),
+        separator in proptest::sample::select(vec![",", ";", " ", "\t", "  \t "]),
+    ) {
+        let mut text = format!("t{separator}theta\n");
+        for (i, v) in values.iter().enumerate() {
+            text.push_str(&format!("{i}{separator}{v}\n"));
+        }
+        let r = read_bytes(text.as_bytes(), &ReadOptions::default()).unwrap();
+        proptest::prop_assert_eq!(r.theta, values);
+    }
+}

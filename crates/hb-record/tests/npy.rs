@@ -1,0 +1,145 @@
+//! The `.npy` reader: 1-D and 2-D arrays in C and Fortran order, converted element types, and
+//! corrupted or hostile headers refused before anything is allocated.
+use hb_record::input::{InputError, Location, ReadOptions, Role, read_bytes};
+
+use crate::common::{is_about_the_content, npy_bytes};
+
+#[test]
+fn reads_npy_1d_2d_and_orders() {
+    let f8: Vec<u8> = [0.0f64, 0.5, 1.0, 0.1, 0.2, 0.3]
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    // C order, 3 samples × 2 channels: rows (0, 0.5), (1, 0.1), (0.2, 0.3).
+    let r = read_bytes(&npy_bytes("<f8", "(3, 2)", false, &f8), &ReadOptions::default()).unwrap();
+    assert_eq!(r.t, vec![0.0, 1.0, 0.2]);
+    assert_eq!(r.theta, vec![0.5, 0.1, 0.3]);
+    // Fortran order: column 1 is (0, 0.5, 1), column 2 is (0.1, 0.2, 0.3).
+    let r = read_bytes(&npy_bytes("<f8", "(3, 2)", true, &f8), &ReadOptions::default()).unwrap();
+    assert_eq!(r.t, vec![0.0, 0.5, 1.0]);
+    assert_eq!(r.theta, vec![0.1, 0.2, 0.3]);
+    let dt = ReadOptions {
+        dt: Some(0.1),
+        ..Default::default()
+    };
+    let r = read_bytes(&npy_bytes("<f8", "(6,)", false, &f8), &dt).unwrap();
+    assert_eq!(r.theta.len(), 6);
+    assert!(matches!(
+        read_bytes(&npy_bytes("<f8", "(6,)", false, &f8), &ReadOptions::default()),
+        Err(InputError::NeedStep)
+    ));
+    let i4: Vec<u8> = [1i32, -2, 3].iter().flat_map(|v| v.to_le_bytes()).collect();
+    let r = read_bytes(&npy_bytes("<i4", "(3,)", false, &i4), &dt).unwrap();
+    assert_eq!(r.theta, vec![1.0, -2.0, 3.0]);
+    // A header that promises more data than the file holds.
+    assert!(matches!(
+        read_bytes(&npy_bytes("<f8", "(1000000000000,)", false, &f8), &dt),
+        Err(InputError::Npy { .. })
+    ));
+    let nan: Vec<u8> = [0.0f64, f64::NAN].iter().flat_map(|v| v.to_le_bytes()).collect();
+    assert!(matches!(
+        read_bytes(&npy_bytes("<f8", "(2,)", false, &nan), &dt),
+        Err(InputError::NonFinite { .. })
+    ));
+}
+
+#[test]
+fn converted_elements_follow_the_order_and_name_samples() {
+    let f4: Vec<u8> = [0.0f32, 0.5, 1.0, 0.25, -0.5, 2.0]
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    let r = read_bytes(&npy_bytes("<f4", "(3, 2)", true, &f4), &ReadOptions::default()).unwrap();
+    assert_eq!((r.t, r.theta), (vec![0.0, 0.5, 1.0], vec![0.25, -0.5, 2.0]));
+    let r = read_bytes(&npy_bytes("<f4", "(3, 2)", false, &f4), &ReadOptions::default()).unwrap();
+    assert_eq!((r.t, r.theta), (vec![0.0, 1.0, -0.5], vec![0.5, 0.25, 2.0]));
+    for shape in ["()", "(1, 2, 3)"] {
+        assert!(matches!(
+            read_bytes(&npy_bytes("<f4", shape, false, &f4), &ReadOptions::default()),
+            Err(InputError::Npy { .. })
+        ));
+    }
+    let f8: Vec<u8> = [0.0f64, 1.0, 1.0, f64::INFINITY]
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    match read_bytes(&npy_bytes("<f8", "(2, 2)", false, &f8), &ReadOptions::default()) {
+        Err(InputError::NonFinite { at, role, .. }) => {
+            assert_eq!((at, role), (Location::Sample(2), Role::Angle));
+            assert_eq!(at.to_string(), "sample 2");
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+/// A header length beyond the file (a reader would allocate it: 4 GiB for format 2) is an
+/// error before anything is allocated; so are versions and files cut short.
+#[test]
+fn header_lengths_beyond_the_file_are_refused() {
+    // The input the fuzz target `npy` found: format 2.0, header length 0xfffffffe.
+    let mut found = b"\x93NUMPY\x02\x00\xfe\xff\xff\xff{'descr': '".to_vec();
+    found.extend_from_slice(&[b' '; 40]);
+    for (bytes, says) in [
+        (found, "announces 4294967294 bytes"),
+        (b"\x93NUMPY\x01\x00\x40\x00{}".to_vec(), "announces 64 bytes"),
+        (b"\x93NUMPY\x04\x00\x00\x00".to_vec(), "version 4.0"),
+        (b"\x93NUMPY\x01".to_vec(), "inside the format version"),
+        (b"\x93NUMPY\x03\x00\x01\x00".to_vec(), "inside the header length"),
+    ] {
+        match read_bytes(&bytes, &ReadOptions::default()) {
+            Err(e @ InputError::Npy { .. }) => assert!(e.to_string().contains(says), "{e}"),
+            other => panic!("{bytes:?}: {other:?}"),
+        }
+    }
+    // Brackets nested 22 deep in the shape (found by the fuzz target `npy`: the header's
+    // parser took more than 10 s); within the limit, brackets in a string are only a bad element
+    // type.
+    let mut deep =
+        b"\x93NUMPY\x01\x00\x76\x00{'descr': '<i4', 'fortran_order': False, 'shape': (2, ".to_vec();
+    deep.extend_from_slice(&[b'['; 22]);
+    deep.resize(10 + 0x76 - 1, b' ');
+    deep.push(b'\n');
+    deep.extend_from_slice(&[0; 16]);
+    let start = std::time::Instant::now();
+    match read_bytes(&deep, &ReadOptions::default()) {
+        Err(e @ InputError::Npy { .. }) => assert!(e.to_string().contains("24 deep"), "{e}"),
+        other => panic!("{other:?}"),
+    }
+    assert!(start.elapsed().as_secs_f64() < 1.0, "{:?}", start.elapsed());
+    let strange = npy_bytes("<f8[[", "(2,)", false, &[0; 16]);
+    match read_bytes(&strange, &ReadOptions::default()) {
+        Err(e @ InputError::Npy { .. }) => assert!(!e.to_string().contains("deep"), "{e}"),
+        other => panic!("{other:?}"),
+    }
+    // Format 2 with a header that fits reads as format 1 does.
+    let f8: Vec<u8> = [0.0f64, 1.0, 0.5, 2.0]
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    let mut v2 = npy_bytes("<f8", "(2, 2)", false, &f8);
+    let length = u16::from_le_bytes([v2[8], v2[9]]);
+    v2[6] = 2;
+    v2.splice(8..10, u32::from(length).to_le_bytes());
+    let r = read_bytes(&v2, &ReadOptions::default()).unwrap();
+    assert_eq!((r.t, r.theta), (vec![0.0, 0.5], vec![1.0, 2.0]));
+}
+
+proptest::proptest! {
+    #[test]
+    fn npy_never_panics_on_corrupted_files(
+        cut in 0usize..200,
+        flips in proptest::collection::vec((0usize..200, proptest::prelude::any::<u8>()), 0..6),
+    ) {
+        let f8: Vec<u8> = (0..12).flat_map(|v| (v as f64).to_le_bytes()).collect();
+        let mut bytes = npy_bytes("<f8", "(6, 2)", false, &f8);
+        for (i, b) in flips {
+            if i < bytes.len() { bytes[i] = b; }
+        }
+        bytes.truncate(cut.max(6));
+        for options in [ReadOptions::default(), ReadOptions { dt: Some(0.1), ..Default::default() }] {
+            if let Err(e) = read_bytes(&bytes, &options) {
+                proptest::prop_assert!(is_about_the_content(&e), "{e:?}");
+            }
+        }
+    }
+}
