@@ -231,28 +231,39 @@ pub(crate) const D: [[(usize, f64); 12]; 4] = [
     ],
 ];
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn rows_are_consistent_with_nodes() {
-        // For an explicit Runge–Kutta method each row of A sums to its node: c_i = sum_j a_ij.
-        for (i, row) in A.iter().enumerate() {
-            let s: f64 = row.iter().map(|&(_, a)| a).sum();
-            assert!((s - C[i]).abs() < 1e-13, "row {i}: {s} vs {}", C[i]);
-            assert!(row.iter().all(|&(j, _)| j < i), "row {i} is not strictly lower");
+// Checked when the crate compiles: each row of `A` uses only earlier stages (an explicit method),
+// the weights of the 8th-order solution sum to one and those of both error estimators to zero.
+const _: () = {
+    let mut i = 0;
+    while i < STAGES_EXT {
+        let row = A[i];
+        let mut k = 0;
+        while k < row.len() {
+            assert!(row[k].0 < i, "a row of A is not strictly lower triangular");
+            k += 1;
         }
+        i += 1;
     }
+    let b = sum(&B);
+    assert!((b - 1.0).abs() < 1e-14, "the weights b do not sum to one");
+    assert!(
+        sum(&E5).abs() < 1e-14,
+        "the 5th-order estimator's weights do not sum to zero"
+    );
+    // The 3rd-order estimator's weights are b minus the corrections; they must sum to zero too.
+    assert!(
+        (b - sum(&BHH)).abs() < 1e-14,
+        "the 3rd-order estimator's weights do not sum to zero"
+    );
+};
 
-    #[test]
-    fn weights_sum_to_one_and_estimators_to_zero() {
-        let b: f64 = B.iter().map(|&(_, b)| b).sum();
-        assert!((b - 1.0).abs() < 1e-14);
-        let e5: f64 = E5.iter().map(|&(_, e)| e).sum();
-        assert!(e5.abs() < 1e-14, "{e5}");
-        // The 3rd-order estimator's weights are b minus the corrections; they must sum to zero too.
-        let e3: f64 = b - BHH.iter().map(|&(_, e)| e).sum::<f64>();
-        assert!(e3.abs() < 1e-14, "{e3}");
+/// The sum of the values of sparse weights, in order (for the checks above).
+const fn sum(weights: &[(usize, f64)]) -> f64 {
+    let mut s = 0.0;
+    let mut k = 0;
+    while k < weights.len() {
+        s += weights[k].1;
+        k += 1;
     }
+    s
 }
