@@ -9,6 +9,8 @@
 use std::f64::consts::PI;
 use std::ops::Range;
 
+use rayon::prelude::*;
+
 use crate::{CircleError, Domain, SampleClock, unwrap, wrap};
 
 /// Half the number of taps of the interpolation kernel: the output starts and ends this many
@@ -159,9 +161,95 @@ fn whole_clock(clock: &SampleClock) -> Result<SampleClock, CircleError> {
         .with_start_time(clock.start_time() + RESAMPLE_HALF_WIDTH as f64 * clock.step())
 }
 
+/// The number of taps of the interpolation kernel.
+const TAPS: usize = 2 * RESAMPLE_HALF_WIDTH;
+
+/// Degree of the Chebyshev interpolant of each tap's weight in the fractional position (see
+/// [`Kernel`]): 16 brings it within about 1e-14 of the closed form (the interpolant converges
+/// geometrically; beyond 14 only rounding is left).
+const KERNEL_DEGREE: usize = 16;
+
+/// Outputs per parallel task.
+const CHUNK: usize = 4096;
+
+/// The kernel's weights as functions of the fractional part `φ ∈ [0, 1)` of the input position:
+/// tap `k` (input sample `⌊u⌋ + 1 − half + k`) lies at distance `d = φ + half − 1 − k` and weighs
+/// `fc · sinc(fc · d) · I₀(β √(1 − (d / half)²)) / I₀(β)`. Each tap's weight is an entire
+/// function of `φ`, so its Chebyshev interpolant on `[0, 1]` at [`KERNEL_DEGREE`]` + 1` points
+/// agrees with the closed form to rounding, and evaluates for all taps at once (one Clenshaw
+/// recurrence, the taps in the inner loop) at a tenth of the closed form's cost (its Bessel series
+/// and sine per tap).
+struct Kernel {
+    /// Chebyshev coefficients, degree-major: `coefficients[j][k]` of tap `k`.
+    coefficients: Vec<[f64; TAPS]>,
+}
+
+impl Kernel {
+    /// The kernel of cut-off `fc` (in cycles per input sample).
+    fn new(fc: f64) -> Self {
+        let nodes = KERNEL_DEGREE + 1;
+        let angle = |i: usize, j: usize| PI * j as f64 * (i as f64 + 0.5) / nodes as f64;
+        let norm = bessel_i0(KAISER_BETA);
+        let mut coefficients = vec![[0.0; TAPS]; nodes];
+        for k in 0..TAPS {
+            // The weight at the Chebyshev points of the first kind, mapped onto [0, 1].
+            let values: Vec<f64> = (0..nodes)
+                .map(|i| {
+                    let phase = 0.5 * (1.0 + angle(i, 1).cos());
+                    exact_weight(fc, phase + (RESAMPLE_HALF_WIDTH - 1) as f64 - k as f64, norm)
+                })
+                .collect();
+            for (j, c) in coefficients.iter_mut().enumerate() {
+                let sum: f64 = values
+                    .iter()
+                    .enumerate()
+                    .map(|(i, v)| v * angle(i, j).cos())
+                    .sum();
+                c[k] = sum * if j == 0 { 1.0 } else { 2.0 } / nodes as f64;
+            }
+        }
+        Self { coefficients }
+    }
+
+    /// The weights at fractional position `phase ∈ [0, 1)` into `w`.
+    fn weights(&self, phase: f64, w: &mut [f64; TAPS]) {
+        let t = 2.0 * phase - 1.0;
+        let (mut b1, mut b2) = ([0.0; TAPS], [0.0; TAPS]);
+        for c in self.coefficients[1..].iter().rev() {
+            for k in 0..TAPS {
+                let b0 = c[k] + 2.0 * t * b1[k] - b2[k];
+                b2[k] = b1[k];
+                b1[k] = b0;
+            }
+        }
+        for k in 0..TAPS {
+            w[k] = self.coefficients[0][k] + t * b1[k] - b2[k];
+        }
+        // The last tap at exactly `d = −half` is the window's end, where it is zero (the
+        // interpolant continues it with the window's value there, 1 / I₀(β)).
+        if phase == 0.0 {
+            w[TAPS - 1] = 0.0;
+        }
+    }
+}
+
+/// The closed form of the weight at distance `d` (input samples) from the output position: the
+/// sinc of cut-off `fc` under the Kaiser window of half-width [`RESAMPLE_HALF_WIDTH`], `norm`
+/// being `I₀(β)`.
+fn exact_weight(fc: f64, d: f64, norm: f64) -> f64 {
+    let z = d / RESAMPLE_HALF_WIDTH as f64;
+    let window = if z.abs() < 1.0 {
+        bessel_i0(KAISER_BETA * (1.0 - z * z).sqrt()) / norm
+    } else {
+        0.0
+    };
+    fc * sinc(fc * d) * window
+}
+
 /// The Kaiser-windowed sinc interpolation of `x` (finite, at least `2 · half + 2` samples; its
 /// first sample at input position `offset`) at the positions `half + m · ratio` for `m` in
-/// `outputs`, all of which must keep the kernel inside `x`.
+/// `outputs`, all of which must keep the kernel inside `x`. The outputs are computed in parallel,
+/// each on its own: the result does not depend on the number of threads.
 fn interpolate(x: &[f64], domain: Domain, offset: f64, ratio: f64, outputs: Range<usize>) -> Vec<f64> {
     let half = RESAMPLE_HALF_WIDTH;
     let n = x.len();
@@ -173,39 +261,36 @@ fn interpolate(x: &[f64], domain: Domain, offset: f64, ratio: f64, outputs: Rang
     for (m, v) in y.iter_mut().enumerate() {
         *v -= y0 + slope * m as f64;
     }
-    let fc = CUTOFF * ratio.recip().min(1.0);
-    let norm = bessel_i0(KAISER_BETA);
-    let mut weights = vec![0.0; 2 * half];
-    outputs
-        .map(|j| {
-            // Position in `x`, clamped against rounding at the ends of the range.
-            let u = (half as f64 + j as f64 * ratio - offset).clamp((half - 1) as f64, (n - 1 - half) as f64);
-            let base = u.floor() as usize;
-            let first = base + 1 - half;
-            let mut total = 0.0;
-            for (k, w) in weights.iter_mut().enumerate() {
-                let d = u - (first + k) as f64;
-                let z = d / half as f64;
-                let window = if z.abs() < 1.0 {
-                    bessel_i0(KAISER_BETA * (1.0 - z * z).sqrt()) / norm
-                } else {
-                    0.0
-                };
-                *w = fc * sinc(fc * d) * window;
-                total += *w;
-            }
-            let v: f64 = weights
-                .iter()
-                .zip(&y[first..first + 2 * half])
-                .map(|(w, y)| w * y)
-                .sum();
-            let value = v / total + y0 + slope * u;
-            match domain {
-                Domain::Circle => wrap(value),
-                Domain::Line => value,
-            }
+    let kernel = Kernel::new(CUTOFF * ratio.recip().min(1.0));
+    let one = |j: usize, weights: &mut [f64; TAPS]| {
+        // Position in `x`, clamped against rounding at the ends of the range.
+        let u = (half as f64 + j as f64 * ratio - offset).clamp((half - 1) as f64, (n - 1 - half) as f64);
+        let base = u.floor();
+        kernel.weights(u - base, weights);
+        let first = base as usize + 1 - half;
+        let total: f64 = weights.iter().sum();
+        let v: f64 = weights
+            .iter()
+            .zip(&y[first..first + TAPS])
+            .map(|(w, y)| w * y)
+            .sum();
+        let value = v / total + y0 + slope * u;
+        match domain {
+            Domain::Circle => wrap(value),
+            Domain::Line => value,
+        }
+    };
+    let starts: Vec<usize> = outputs.clone().step_by(CHUNK).collect();
+    let chunks: Vec<Vec<f64>> = starts
+        .into_par_iter()
+        .map(|start| {
+            let mut weights = [0.0; TAPS];
+            (start..(start + CHUNK).min(outputs.end))
+                .map(|j| one(j, &mut weights))
+                .collect()
         })
-        .collect()
+        .collect();
+    chunks.concat()
 }
 
 /// `sin(πz) / (πz)`.
@@ -236,6 +321,28 @@ fn bessel_i0(x: f64) -> f64 {
 mod tests {
     use super::*;
     use std::f64::consts::TAU;
+
+    #[test]
+    fn kernel_matches_closed_form() {
+        // The interpolated weights against the closed form, at cut-offs from the widest (a
+        // finer output grid: 0.9) down, and phases across [0, 1) including 0.
+        let norm = bessel_i0(KAISER_BETA);
+        let mut worst: f64 = 0.0;
+        for fc in [0.9, 0.9 / 1.0004, 0.5, 0.2] {
+            let kernel = Kernel::new(fc);
+            let mut w = [0.0; TAPS];
+            for i in 0..997 {
+                let phase = i as f64 / 997.0;
+                kernel.weights(phase, &mut w);
+                for (k, &wk) in w.iter().enumerate() {
+                    let e = exact_weight(fc, phase + (RESAMPLE_HALF_WIDTH - 1) as f64 - k as f64, norm);
+                    worst = worst.max((wk - e).abs());
+                }
+            }
+        }
+        // Rounding: the closed form's own error is about 1e-16, the interpolant's 7e-15.
+        assert!(worst < 1e-14, "{worst}");
+    }
 
     #[test]
     fn bessel_values() {
