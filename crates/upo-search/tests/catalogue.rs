@@ -24,6 +24,18 @@ fn fraction_for(x: &[f64], eps: f64) -> f64 {
     eps / (hi - lo)
 }
 
+/// The close-return search of both tests on the line record `x`: `p` samples per period,
+/// periods 1 and 2, d = 1, absolute tolerance `eps`.
+fn line_search(x: &[f64], p: usize, eps: f64) -> CloseReturns {
+    CloseReturns::builder(&clock(p), 1)
+        .tolerance(fraction_for(x, eps))
+        .max_period(2)
+        .dimension(1)
+        .domain(Domain::Line)
+        .build()
+        .unwrap()
+}
+
 #[test]
 fn shift_aligns_forcing_phase() {
     // An orbit of period 2, P = 3, as a function of absolute time: x[n] = pattern[n mod 6], held
@@ -42,13 +54,7 @@ fn shift_aligns_forcing_phase() {
             x[n] = pattern[n % 6];
         }
     }
-    let search = CloseReturns::builder(&clock(3), 1)
-        .tolerance(fraction_for(&x, 0.1))
-        .max_period(2)
-        .dimension(1)
-        .domain(Domain::Line)
-        .build()
-        .unwrap();
+    let search = line_search(&x, 3, 0.1);
     let cat = search.catalogue(&x).unwrap();
     assert!((cat.tolerance() - 0.1).abs() < 1e-15, "{}", cat.tolerance());
     let found: Vec<(usize, usize, f64)> = cat
@@ -92,13 +98,7 @@ fn groups_by_representative_and_counts() {
         }
         x[start + 4] = offset + pattern[0] + error;
     }
-    let search = CloseReturns::builder(&clock(4), 1)
-        .tolerance(fraction_for(&x, 0.05))
-        .max_period(2)
-        .dimension(1)
-        .domain(Domain::Line)
-        .build()
-        .unwrap();
+    let search = line_search(&x, 4, 0.05);
     let cat = search.catalogue(&x).unwrap();
     assert!((cat.tolerance() - 0.05).abs() < 1e-15, "{}", cat.tolerance());
     assert_eq!(cat.segments().len(), 4);
