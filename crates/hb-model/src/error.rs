@@ -90,6 +90,30 @@ pub enum TermError {
         /// Why.
         why: &'static str,
     },
+    /// A name of a coordinate or a drive that cannot be written in terms.
+    #[error("the name `{name}` cannot be used: {why}")]
+    BadName {
+        /// The name (or names).
+        name: String,
+        /// Why.
+        why: &'static str,
+    },
+    /// A term that names a coordinate or a drive the record does not have.
+    #[error("the term `{term}` names a {what} the record does not have")]
+    UnknownName {
+        /// The term.
+        term: String,
+        /// What it names: `coordinate` or `measured drive`.
+        what: &'static str,
+    },
+    /// A term whose factors do not make a term of its equation.
+    #[error("the term `{term}` is not a term of its equation: {why}")]
+    InvalidTerm {
+        /// The term.
+        term: String,
+        /// Why.
+        why: &'static str,
+    },
     /// A basis or Fourier error.
     #[error(transparent)]
     Basis(#[from] BasisError),

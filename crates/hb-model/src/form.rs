@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{ModelError, TermError};
 use crate::terms::{
-    DriveFactor, MAX_DRIVE_HARMONIC, PositionFactor, Term, TermList, TermSpec, VelocityFactor,
+    Coupling, DriveFactor, MAX_DRIVE_HARMONIC, PositionFactor, Term, TermList, TermSpec, VelocityFactor,
 };
 
 /// The longest name of a measured drive's column a form keeps.
@@ -431,6 +431,7 @@ impl ModelForm {
                         drive: t.drive,
                         function,
                         velocity: t.velocity,
+                        coupling: t.coupling,
                     }),
                     _ => Err(ModelError::Term(TermError::InvalidForm {
                         why: "the linear stiffness k*x of a preset has no name in a list of terms: \
@@ -548,6 +549,9 @@ impl Column {
         use DriveFactor as D;
         use PositionFactor as X;
         use VelocityFactor as V;
+        if !term.coupling.is_empty() {
+            return Column::Product(*term);
+        }
         match (term.drive, term.position, term.velocity) {
             (D::One, X::One, V::Linear) => Column::Damping,
             (D::Cos(1), X::Basis(i), V::One) => Column::CosT(i),
@@ -593,6 +597,7 @@ fn preset_columns(functions: usize, form: &ModelForm) -> Vec<Term> {
             drive: DriveFactor::One,
             position: PositionFactor::Linear,
             velocity: VelocityFactor::One,
+            coupling: Coupling::NONE,
         });
     }
     t

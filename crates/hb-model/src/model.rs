@@ -10,8 +10,8 @@ use circle_signal::SampleClock;
 
 use crate::drive::MeasuredDrive;
 use crate::error::{ModelError, ModelIoError, TermError};
-use crate::form::{Column, Forcing, Harmonics, ModelForm, column_families, columns};
-use crate::terms::{DriveFactor, PositionFactor, Term, VelocityFactor};
+use crate::form::{Column, Forcing, Harmonics, ModelForm, column_families, columns, term_names};
+use crate::terms::{DriveFactor, Factor, PositionFactor, Term, TermList, VelocityFactor};
 
 /// One identified coefficient.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -76,7 +76,8 @@ pub struct IdentifiedModel<B = BasisKind> {
     pub(crate) coefficients: Vec<Coefficient>,
     pub(crate) summary: Option<FitSummary>,
     eval: Evaluation,
-    drive: Option<MeasuredDrive>,
+    /// The recorded drives, by the index of a term's measured drive factor (empty until given).
+    drives: Vec<MeasuredDrive>,
 }
 
 /// The coefficients arranged for evaluation: the paper's families by basis function (the
@@ -99,15 +100,20 @@ struct PaperEvaluation {
     stiffness: f64,
 }
 
-/// Any terms: `Σ c D(t) F(x) V(x')` over the columns, and the known forcing.
+/// Any terms: `Σ c D(t) F(x) V(x') C(q, q')` over the columns (`C` the factors in other
+/// coordinates), and the known forcing.
 #[derive(Debug, Clone, PartialEq)]
 struct GeneralEvaluation {
     terms: Vec<(f64, Term)>,
     /// The highest drive harmonic of a term.
     harmonics: usize,
     forcing: (f64, f64),
-    /// Whether a term has the measured drive `p`.
-    measured: bool,
+    /// The measured drives a term reads, by index (empty when none does).
+    measured: Vec<usize>,
+    /// Whether a term has a factor in another coordinate or an acceleration.
+    coupled: bool,
+    /// The coordinates of the names the terms are written in.
+    coordinates: usize,
 }
 
 /// The highest drive harmonic is at most [`crate::MAX_DRIVE_HARMONIC`]; this holds `cos(kθ)` and
@@ -126,14 +132,17 @@ impl GeneralEvaluation {
     }
 }
 
-/// A drive factor from the table of its harmonics and the measured drive `p`.
+/// The most measured drives read at one instant without an allocation.
+const DRIVES: usize = crate::terms::MAX_DRIVES;
+
+/// A drive factor from the table of its harmonics and the measured drives' values.
 #[inline]
-fn drive_value(d: DriveFactor, c: &[f64; DRIVE_TABLE], s: &[f64; DRIVE_TABLE], p: f64) -> f64 {
+fn drive_value(d: DriveFactor, c: &[f64; DRIVE_TABLE], s: &[f64; DRIVE_TABLE], p: &[f64; DRIVES]) -> f64 {
     match d {
         DriveFactor::One => 1.0,
         DriveFactor::Cos(k) => c[k as usize],
         DriveFactor::Sin(k) => s[k as usize],
-        DriveFactor::Measured => p,
+        DriveFactor::Measured(i) => p[usize::from(i)],
     }
 }
 
@@ -162,19 +171,19 @@ impl<B: Basis> IdentifiedModel<B> {
         values: &[f64],
     ) -> Result<Self, ModelError> {
         let form = form.validate()?;
-        let names = basis.names();
         let layout = columns(&basis, &form)?;
+        let names = term_names(&basis, &form);
         if values.len() != layout.len() {
             return Err(ModelError::Io(ModelIoError::ModelMismatch {
-                expected: layout.iter().map(|t| t.name(&names)).collect(),
+                expected: names,
                 found: (0..values.len()).map(|i| format!("value {i}")).collect(),
             }));
         }
-        let coefficients = layout
+        let coefficients = names
             .into_iter()
             .zip(values)
-            .map(|(t, &value)| Coefficient {
-                name: t.name(&names),
+            .map(|(name, &value)| Coefficient {
+                name,
                 value,
                 std_error: 0.0,
             })
@@ -220,7 +229,7 @@ impl<B: Basis> IdentifiedModel<B> {
         }
         let names = basis.names();
         let terms = columns(&basis, &form)?;
-        let expected: Vec<String> = terms.iter().map(|t| t.name(&names)).collect();
+        let expected: Vec<String> = term_names(&basis, &form);
         let layout = column_families(&terms);
         if coefficients.len() != expected.len()
             || coefficients.iter().zip(&expected).any(|(c, e)| &c.name != e)
@@ -278,7 +287,9 @@ impl<B: Basis> IdentifiedModel<B> {
                     .max()
                     .unwrap_or(0),
                 forcing,
-                measured: terms.iter().any(|t| t.drive.is_measured()),
+                measured: form.terms().map(TermList::measured_drives).unwrap_or_default(),
+                coupled: terms.iter().any(|t| !t.coupling.is_empty()),
+                coordinates: form.terms().map_or(1, |l| l.names_in().coordinates().len()),
             })
         };
         Ok(Self {
@@ -288,43 +299,71 @@ impl<B: Basis> IdentifiedModel<B> {
             coefficients,
             summary,
             eval,
-            drive: None,
+            drives: Vec::new(),
         })
     }
 
-    /// The model with the recorded drive for its terms in the measured drive `p`, so that it can
-    /// be simulated over the drive's span (the record's own time).
+    /// The model with the recorded drive for its terms in the measured drive `p` (the one drive
+    /// of a one-coordinate record), so that it can be simulated over the drive's span (the
+    /// record's own time).
     ///
     /// Errors: [`TermError::InvalidForm`] for a model without a term in `p`.
-    pub fn with_measured_drive(mut self, signal: MeasuredDrive) -> Result<Self, ModelError> {
+    pub fn with_measured_drive(self, signal: MeasuredDrive) -> Result<Self, ModelError> {
+        self.with_measured_drives(vec![signal])
+    }
+
+    /// The model with the recorded drives of its record, in the order of its names' drives (a
+    /// term's measured drive factor is an index into them).
+    ///
+    /// Errors: [`TermError::InvalidForm`] for a model without a term in a measured drive, or
+    /// fewer drives than its terms read.
+    pub fn with_measured_drives(mut self, signals: Vec<MeasuredDrive>) -> Result<Self, ModelError> {
         if !self.form.has_measured_drive() {
             return Err(ModelError::Term(TermError::InvalidForm {
                 why: "a drive signal is for a model with a term in the measured drive p",
             }));
         }
-        self.drive = Some(signal);
+        let needed = self
+            .form
+            .terms()
+            .map(TermList::measured_drives)
+            .and_then(|d| d.last().copied())
+            .map_or(0, |d| d + 1);
+        if signals.len() < needed {
+            return Err(ModelError::Term(TermError::InvalidForm {
+                why: "fewer recorded drives than the model's terms read",
+            }));
+        }
+        self.drives = signals;
         Ok(self)
     }
 
-    /// The recorded drive given with [`with_measured_drive`](Self::with_measured_drive), if any.
+    /// The recorded drive given with [`with_measured_drive`](Self::with_measured_drive) (the
+    /// first of [`with_measured_drives`](Self::with_measured_drives)), if any.
     pub fn measured_drive(&self) -> Option<&MeasuredDrive> {
-        self.drive.as_ref()
+        self.drives.first()
     }
 
-    /// Whether the model needs a measured drive to be simulated: it has a term in the measured
-    /// drive `p` and none was given.
+    /// The recorded drives given, in order.
+    pub fn measured_drives(&self) -> &[MeasuredDrive] {
+        &self.drives
+    }
+
+    /// Whether the model needs a measured drive to be simulated: it has a term in a measured
+    /// drive and none was given.
     pub fn needs_measured_drive(&self) -> bool {
-        self.form.has_measured_drive() && self.drive.is_none()
+        self.form.has_measured_drive() && self.drives.is_empty()
     }
 
-    /// The measured drive at `t` (NaN without a signal, or outside its span).
+    /// The measured drives at `t` that a term reads (NaN without a signal, or outside its
+    /// span); the others 0.
     #[inline]
-    fn measured(&self, e: &GeneralEvaluation, t: f64) -> f64 {
-        match (&self.drive, e.measured) {
-            (_, false) => 0.0,
-            (Some(d), true) => d.at(t),
-            (None, true) => f64::NAN,
+    fn measured(&self, e: &GeneralEvaluation, t: f64) -> [f64; DRIVES] {
+        let mut out = [0.0; DRIVES];
+        for &d in &e.measured {
+            out[d] = self.drives.get(d).map_or(f64::NAN, |signal| signal.at(t));
         }
+        out
     }
 
     /// The damping coefficient `c_r` (term `x'`; 0 when the model has no such term).
@@ -409,7 +448,11 @@ impl<B: Basis> IdentifiedModel<B> {
             Evaluation::General(e) => self.with_basis(xe, false, |phi| {
                 e.terms
                     .iter()
-                    .filter(|(_, t)| t.drive == DriveFactor::One && t.velocity == VelocityFactor::One)
+                    .filter(|(_, t)| {
+                        t.drive == DriveFactor::One
+                            && t.velocity == VelocityFactor::One
+                            && t.coupling.is_empty()
+                    })
                     .map(|&(c, t)| c * position_value(t.position, phi, xe, false))
                     .sum()
             }),
@@ -427,7 +470,7 @@ impl<B: Basis> IdentifiedModel<B> {
             }
             Evaluation::General(e) => self.with_basis(xe, false, |phi| {
                 let mut out = (0.0, 0.0);
-                for &(c, t) in &e.terms {
+                for &(c, t) in e.terms.iter().filter(|(_, t)| t.coupling.is_empty()) {
                     if let (PositionFactor::Basis(i), VelocityFactor::One) = (t.position, t.velocity) {
                         match t.drive {
                             DriveFactor::Cos(1) => out.0 += c * phi[i],
@@ -461,6 +504,17 @@ impl<B: Basis> IdentifiedModel<B> {
                 });
                 -(e.damping * v + e.stiffness * xe + basis_part + e.forcing.0 * c + e.forcing.1 * s)
             }
+            Evaluation::General(e) if e.coupled => {
+                // One equation of a system is simulated with the system.
+                if e.coordinates != 1 {
+                    return f64::NAN;
+                }
+                // One coordinate with its own acceleration times a function of x: the mass
+                // `1 + Σ c f(x)` divides the rest.
+                let mut mass = [1.0];
+                let rest = self.general_sum(e, &|_| side, t, &[x], &[v], Some(&mut mass));
+                -rest / mass[0]
+            }
             Evaluation::General(e) => {
                 let (dc, ds) = e.drive_table(self.forcing_frequency * t);
                 let p = self.measured(e, t);
@@ -469,7 +523,7 @@ impl<B: Basis> IdentifiedModel<B> {
                         .iter()
                         .map(|&(coefficient, term)| {
                             coefficient
-                                * drive_value(term.drive, &dc, &ds, p)
+                                * drive_value(term.drive, &dc, &ds, &p)
                                 * position_value(term.position, phi, xe, false)
                                 * term.velocity.eval_on(side, v)
                         })
@@ -477,6 +531,119 @@ impl<B: Basis> IdentifiedModel<B> {
                 });
                 -(sum + e.forcing.0 * dc[1] + e.forcing.1 * ds[1])
             }
+        }
+    }
+
+    /// `Σ c D(t) F(x_own) V(v_own) C(q, v)` over the terms without an acceleration factor, at the
+    /// state `(q, v)` of the whole system (positions as measured, not wrapped), with the known
+    /// forcing; the terms with the acceleration of coordinate `j` add their `c D F V C` to
+    /// `mass[j]` when given. `side(c)` is the branch of coordinate `c`'s velocity (its sign's
+    /// value) for the factors that switch at rest, `None` for their plain value.
+    fn general_sum(
+        &self,
+        e: &GeneralEvaluation,
+        side: &dyn Fn(usize) -> Option<f64>,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        mut mass: Option<&mut [f64]>,
+    ) -> f64 {
+        let own = self.own();
+        let xe = self.point(q[own]);
+        let (dc, ds) = e.drive_table(self.forcing_frequency * t);
+        let p = self.measured(e, t);
+        let own_side = side(own);
+        let sum = self.with_basis(xe, false, |phi| {
+            let mut sum = 0.0;
+            for &(coefficient, term) in &e.terms {
+                let mut value = coefficient
+                    * drive_value(term.drive, &dc, &ds, &p)
+                    * position_value(term.position, phi, xe, false)
+                    * term.velocity.eval_on(own_side, v[own]);
+                for factor in term.coupling.factors() {
+                    value *= match *factor {
+                        Factor::Velocity { coordinate, function } => {
+                            let c = usize::from(coordinate);
+                            function.eval_on(side(c), v[c])
+                        }
+                        other => other.eval(q, v),
+                    };
+                }
+                match (term.coupling.acceleration(), mass.as_deref_mut()) {
+                    (Some(j), Some(m)) => m[j] += value,
+                    (Some(_), None) => {}
+                    (None, _) => sum += value,
+                }
+            }
+            sum
+        });
+        sum + e.forcing.0 * dc[1] + e.forcing.1 * ds[1]
+    }
+
+    /// The equation at a state of the whole system: writes its row of the mass matrix into
+    /// `mass` (the own coordinate's 1 plus the terms in an acceleration, one entry per
+    /// coordinate) and returns the sum of its other terms, so that `mass · q'' = −rest`. `q` are
+    /// the positions (angles in any branch), `v` the velocities, `sides[c]` the value a factor
+    /// `sign(q_c')` takes (±1 on a branch, a held value while `q_c` sticks; `None`: the sign of
+    /// `v[c]`). A model needs its measured drives (NaN without).
+    ///
+    /// ```
+    /// use hb_basis::{BasisKind, Harmonic};
+    /// use hb_model::{IdentifiedModel, ModelForm, Names, TermList};
+    ///
+    /// // θ1'' + 0.5 θ2''cos(θ1−θ2) + 2 sin θ1 = 0, the first equation of a two-link system.
+    /// let names = Names::new(["theta1", "theta2"], Vec::<String>::new())?;
+    /// let terms = TermList::parse_in("theta2''*cos(theta1-theta2), sin(theta1)", &names, 0)?;
+    /// let model = IdentifiedModel::new(
+    ///     BasisKind::from(Harmonic::new(1)?), ModelForm::from_terms(terms), 1.0, &[0.5, 2.0],
+    /// )?;
+    /// let mut row = [0.0; 2];
+    /// let rest = model.equation_at(0.0, &[0.3, -0.2], &[0.0, 0.0], None, &mut row);
+    /// assert_eq!(row, [1.0, 0.5 * 0.5f64.cos()]);
+    /// assert!((rest - 2.0 * 0.3f64.sin()).abs() < 1e-15);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn equation_at(&self, t: f64, q: &[f64], v: &[f64], sides: Option<&[f64]>, mass: &mut [f64]) -> f64 {
+        mass.fill(0.0);
+        let own = self.own();
+        mass[own] = 1.0;
+        let side = |c: usize| sides.and_then(|s| s.get(c).copied());
+        match &self.eval {
+            Evaluation::Paper(_) => {
+                let a = match side(own) {
+                    Some(s) => self.acceleration_side(Some(s), t, q[own], v[own]),
+                    None => self.acceleration_side(None, t, q[own], v[own]),
+                };
+                -a
+            }
+            Evaluation::General(e) => self.general_sum(e, &side, t, q, v, Some(mass)),
+        }
+    }
+
+    /// The coordinate whose equation this is (0 for a one-coordinate model).
+    pub fn own(&self) -> usize {
+        self.form.terms().map_or(0, TermList::own)
+    }
+
+    /// Whether a term has a factor in another coordinate, or an acceleration: the model is then
+    /// one equation of a system, simulated with it.
+    pub fn is_coupled(&self) -> bool {
+        matches!(&self.eval, Evaluation::General(e) if e.coupled)
+    }
+
+    /// Whether a factor of the equation switches at rest in the velocity of coordinate `c`
+    /// (`sign(q_c')`, `q_c'*|q_c'|`), with a non-zero coefficient.
+    pub fn switches_in(&self, c: usize) -> bool {
+        match &self.eval {
+            Evaluation::Paper(_) => false,
+            Evaluation::General(e) => e.terms.iter().any(|(k, term)| {
+                *k != 0.0
+                    && ((c == self.own() && term.velocity.switches())
+                        || term.coupling.factors().any(|f| {
+                            matches!(*f, Factor::Velocity { coordinate, function }
+                                if usize::from(coordinate) == c && function.switches())
+                        }))
+            }),
         }
     }
 
@@ -494,6 +661,16 @@ impl<B: Basis> IdentifiedModel<B> {
                 });
                 [-(e.stiffness + d), -e.damping]
             }
+            Evaluation::General(e) if e.coupled => {
+                // By central differences of the acceleration: the mass divides the rest.
+                let a = |x: f64, v: f64| self.acceleration_side(side, t, x, v);
+                let hx = 1e-6 * x.abs().max(1.0);
+                let hv = 1e-6 * v.abs().max(1.0);
+                [
+                    (a(x + hx, v) - a(x - hx, v)) / (2.0 * hx),
+                    (a(x, v + hv) - a(x, v - hv)) / (2.0 * hv),
+                ]
+            }
             Evaluation::General(e) => {
                 let (dc, ds) = e.drive_table(self.forcing_frequency * t);
                 let p = self.measured(e, t);
@@ -501,7 +678,7 @@ impl<B: Basis> IdentifiedModel<B> {
                     self.with_basis(xe, true, |dphi| {
                         let (mut dx, mut dv) = (0.0, 0.0);
                         for &(coefficient, term) in &e.terms {
-                            let cd = coefficient * drive_value(term.drive, &dc, &ds, p);
+                            let cd = coefficient * drive_value(term.drive, &dc, &ds, &p);
                             if term.position != PositionFactor::One {
                                 dx += cd
                                     * position_value(term.position, dphi, xe, true)
@@ -538,10 +715,7 @@ impl<B: Basis> SecondOrderSystem for IdentifiedModel<B> {
     fn switches_at_rest(&self) -> bool {
         match &self.eval {
             Evaluation::Paper(_) => false,
-            Evaluation::General(e) => e
-                .terms
-                .iter()
-                .any(|(c, term)| *c != 0.0 && term.velocity.switches()),
+            Evaluation::General(_) => self.switches_in(0),
         }
     }
 

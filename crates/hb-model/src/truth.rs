@@ -153,11 +153,7 @@ fn part(a: f64, b: f64) -> f64 {
 
 /// A term of a drive factor, a function of `x` and a function of `x'`.
 fn term(drive: DriveFactor, function: Option<XFunction>, velocity: VelocityFactor) -> TermSpec {
-    TermSpec {
-        drive,
-        function,
-        velocity,
-    }
+    TermSpec::of_one(drive, function, velocity)
 }
 
 /// The terms of the losses in a frame of rate `w`, those that are not zero: `sign(x')` = `μ W²`,

@@ -2,7 +2,9 @@
 //! are), the smallest basis and the domains, serialisation, and the velocity factors.
 
 use hb_basis::{Domain, Hat, Polynomial};
-use hb_model::{DriveFactor, PositionFactor, Term, TermError, TermList, TermSpec, VelocityFactor, XFunction};
+use hb_model::{
+    Coupling, DriveFactor, PositionFactor, Term, TermError, TermList, TermSpec, VelocityFactor, XFunction,
+};
 
 #[test]
 fn names_follow_the_vocabulary() {
@@ -12,6 +14,7 @@ fn names_follow_the_vocabulary() {
             drive,
             position,
             velocity,
+            coupling: Coupling::NONE,
         }
         .name(&names)
     };
@@ -55,7 +58,8 @@ fn parses_every_example() {
         TermSpec {
             drive: DriveFactor::One,
             function: None,
-            velocity: VelocityFactor::Linear
+            velocity: VelocityFactor::Linear,
+            coupling: Coupling::NONE
         }
     );
     assert_eq!(
@@ -63,7 +67,8 @@ fn parses_every_example() {
         TermSpec {
             drive: DriveFactor::One,
             function: Some(XFunction::Power(2)),
-            velocity: VelocityFactor::Linear
+            velocity: VelocityFactor::Linear,
+            coupling: Coupling::NONE
         }
     );
     assert_eq!(
@@ -71,7 +76,8 @@ fn parses_every_example() {
         TermSpec {
             drive: DriveFactor::Sin(2),
             function: Some(XFunction::Cos(1)),
-            velocity: VelocityFactor::One
+            velocity: VelocityFactor::One,
+            coupling: Coupling::NONE
         }
     );
     // Other spellings of the same terms: factors in any order, white space, explicit 1s.
@@ -111,11 +117,13 @@ fn braces_multiply_out_in_order() {
         nested.to_string(),
         "x', cos(3t)*x', x^2*sign(x'), cos(3t)*x^2*sign(x'), x^2, cos(3t)*x^2"
     );
-    // x'*x' is not in the vocabulary: the error is at the product's first factor in x'.
+    // x'^3*x' is not in the vocabulary: the error is at the product's first factor in x'.
     assert!(matches!(
-        TermList::parse("{x'}*{1, x'}"),
+        TermList::parse("{x'^3}*{1, x'}"),
         Err(TermError::TermProduct { at: 2, .. })
     ));
+    // x'*x' is x'^2, the square of the velocity (a centrifugal force's).
+    assert_eq!(TermList::parse("{x'}*{1, x'}").unwrap().names(), ["x'", "x'^2"]);
 }
 
 /// The position of an error: a 1-based character index into the spec.
@@ -136,7 +144,7 @@ fn errors_say_where() {
     assert_eq!(error_at("cos(2y)"), 6);
     assert_eq!(error_at("cos(0t)"), 5);
     assert_eq!(error_at("x^0"), 3);
-    assert_eq!(error_at("x'^2"), 4);
+    assert_eq!(error_at("x'^4"), 4);
     assert_eq!(error_at("{x', sin(x)"), 12);
     assert_eq!(error_at("sin(x) cos(x)"), 8);
     assert_eq!(error_at("2*sin(x)"), 1);
@@ -241,4 +249,123 @@ fn velocity_factors_and_their_derivatives() {
     assert_eq!(VelocityFactor::Sign.eval(-3.0), -1.0);
     assert!(VelocityFactor::Sign.eval(f64::NAN).is_nan());
     assert_eq!(VelocityFactor::Quadratic.eval(-2.0), -4.0);
+}
+
+/// Terms over several coordinates: names of the record's columns, factors in other coordinates
+/// and accelerations, printed in one order whatever the equation, and read back.
+#[test]
+fn terms_of_a_system_read_and_print_in_its_names() {
+    use hb_model::{Factor, Names};
+    let names = Names::new(["theta1", "theta2"], ["tau1", "tau2"]).unwrap();
+    let list = |spec: &str, own: usize| TermList::parse_in(spec, &names, own).unwrap();
+    // The same product is written the same way in both equations.
+    for own in [0, 1] {
+        let l = list(
+            "cos(theta1-theta2)*theta2'', theta2'^2 * sin(theta1-theta2), theta2'*sin(theta2)*theta1', \
+             sin(theta1), cos(theta2), tau1, tau2*cos(theta1), sign(theta1'), theta1'*|theta1'|",
+            own,
+        );
+        assert_eq!(
+            l.names(),
+            [
+                "theta2''*cos(theta1-theta2)",
+                "sin(theta1-theta2)*theta2'^2",
+                "sin(theta2)*theta1'*theta2'",
+                "sin(theta1)",
+                "cos(theta2)",
+                "tau1",
+                "tau2*cos(theta1)",
+                "sign(theta1')",
+                "theta1'*|theta1'|",
+            ],
+            "own {own}"
+        );
+        assert_eq!(TermList::parse_in(&l.to_string(), &names, own).unwrap(), l);
+        assert_eq!(TermList::from_names_in(&l.names(), &names, own).unwrap(), l);
+    }
+    // What is the own coordinate's and what another's.
+    let first = list("sin(theta1), sin(theta2), theta1', theta2'", 0);
+    let t = first.terms();
+    assert_eq!(t[0].function, Some(XFunction::Sin(1)));
+    assert!(t[0].coupling.is_empty() && !t[1].coupling.is_empty());
+    assert_eq!(t[2].velocity, VelocityFactor::Linear);
+    assert!(matches!(
+        t[3].coupling.factors().next(),
+        Some(Factor::Velocity {
+            coordinate: 1,
+            function: VelocityFactor::Linear
+        })
+    ));
+    // A drive by its column's name; harmonics and combinations.
+    let second = list(
+        "tau2, cos(2t)*sin(theta2), sin(theta1+2theta2), cos(theta2-theta1), theta1''",
+        1,
+    );
+    assert_eq!(second.measured_drives(), [1]);
+    assert_eq!(
+        second.names()[2..],
+        ["sin(theta1+2theta2)", "cos(theta1-theta2)", "theta1''"]
+    );
+    assert_eq!(second.terms()[4].coupling.acceleration(), Some(0));
+    // A mass matrix that depends on the state: the own acceleration times a function of it.
+    let own_mass = list("theta1''*cos(theta2), theta1''*cos(theta1)", 0);
+    assert_eq!(own_mass.terms()[0].coupling.acceleration(), Some(0));
+}
+
+#[test]
+fn terms_of_a_system_that_are_no_terms_are_refused_with_a_reason() {
+    use hb_model::Names;
+    let names = Names::new(["q1", "q2"], ["u"]).unwrap();
+    let refused = |spec: &str| TermList::parse_in(spec, &names, 0).unwrap_err().to_string();
+    // The own acceleration alone is the normalisation.
+    assert!(refused("q1''").contains("normalisation"), "{}", refused("q1''"));
+    // Accelerations multiply functions of the positions only, one at a time.
+    assert!(refused("q2''*q2'").contains("positions only"));
+    assert!(refused("q2''*cos(t)").contains("positions only"));
+    assert!(refused("q2''*q1''").contains("at most one acceleration"));
+    // −sin of the turned combination is not written with a leading minus.
+    assert!(refused("sin(q2-q1)").contains("turned"));
+    // cos of it is: the same as the turned one.
+    assert_eq!(
+        TermList::parse_in("cos(q2-q1)", &names, 0).unwrap().names(),
+        ["cos(q1-q2)"]
+    );
+    // Names the record does not have; two functions of one coordinate.
+    assert!(matches!(
+        TermList::parse_in("q3'", &names, 0),
+        Err(TermError::TermSyntax { at: 1, .. })
+    ));
+    assert!(refused("sin(q2)*cos(q2)").contains("one function"));
+    assert!(matches!(
+        TermList::parse_in("p", &names, 0),
+        Err(TermError::TermSyntax { .. })
+    ));
+    // Names that cannot be written in terms.
+    for bad in [
+        vec!["t"],
+        vec!["cos"],
+        vec!["hat3"],
+        vec!["q", "q"],
+        vec!["1q"],
+        vec![],
+    ] {
+        assert!(
+            matches!(
+                Names::new(bad.clone(), Vec::<String>::new()),
+                Err(TermError::BadName { .. })
+            ),
+            "{bad:?}"
+        );
+    }
+    assert!(matches!(Names::new(["q"], ["q"]), Err(TermError::BadName { .. })));
+    assert!(TermList::parse_in("q1'", &names, 2).is_err());
+}
+
+#[test]
+fn one_coordinate_terms_keep_their_names() {
+    // The one-coordinate spelling is the case of one coordinate named x.
+    let list = TermList::parse("x', x'^2, x''*cos(x), sin(x)*x'").unwrap();
+    assert_eq!(list.names(), ["x'", "x'^2", "x''*cos(x)", "sin(x)*x'"]);
+    assert!(list.is_coupled());
+    assert!(!TermList::parse("x', sin(x)").unwrap().is_coupled());
 }

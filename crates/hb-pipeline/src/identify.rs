@@ -8,9 +8,11 @@ use std::str::FromStr;
 
 use circle_signal::{Domain, Measured, Segment};
 use hb_basis::{Basis, BasisKind};
-use hb_model::{Forcing, Harmonics, MAX_DRIVE_HARMONIC, MeasuredDrive, ModelForm, TermList};
+use hb_model::{Forcing, Harmonics, MAX_DRIVE_HARMONIC, ModelForm, TermList};
 use hb_record::prepare::{Data, DriveFound, DriveSpec, GridData, WindowUnit, default_basis};
-use hb_solve::{BootstrapParams, LstsqSolver, NoiseCorrection, QrSolver, SelectParams, SvdSolver, WeakForm};
+use hb_solve::{
+    BootstrapParams, LstsqSolver, NoiseCorrection, QrSolver, SelectParams, Signals, SvdSolver, WeakForm,
+};
 use serde::{Deserialize, Serialize, Serializer};
 use upo_search::Windows;
 
@@ -562,13 +564,6 @@ impl IdentifyRequest {
             .with_weak_form(self.weak)
             .with_noise_correction(o.noise_sigma.unwrap_or_default())
             .with_solver(o.solver.solver());
-        if let Some(p) = &data.measured_drive {
-            spec = spec.with_measured_drive(MeasuredDrive::new(
-                p.clone(),
-                data.clock.start_time(),
-                data.clock.step(),
-            )?);
-        }
         if let Some(m) = o.harmonics {
             spec = spec.with_harmonics(Harmonics::Fixed(m))?;
         }
@@ -722,6 +717,7 @@ pub fn identify_data(
     observer.stage(Stage::Segments);
     let (segments, found) = request.segments(data, delay.unwrap_or(1), method)?;
     let measured = request.options.record.measured;
+    let drives: Vec<&[f64]> = data.measured_drive.iter().map(Vec::as_slice).collect();
     let mut drifted = None;
     let mut drift = None;
     if measured != Measured::Displacement {
@@ -729,6 +725,7 @@ pub fn identify_data(
         let (x, fit) = fit_drift(
             &setup,
             &data.x,
+            &drives,
             &data.pieces,
             &segments,
             measured,
@@ -749,8 +746,14 @@ pub fn identify_data(
         drift = Some(fit);
     }
     let x = drifted.as_deref().unwrap_or(&data.x);
+    let signals = Signals::one(x)
+        .with_drives(drives.clone())
+        .map_err(|source| RunError::Identify {
+            found: found.clone(),
+            source,
+        })?;
     let identification = setup
-        .identify_with_progress(x, &segments, |step| {
+        .identify_with_progress(signals, &segments, |step| {
             observer.stage(match step {
                 IdentifyStep::Assemble => Stage::Assemble,
                 IdentifyStep::Select => Stage::Select,

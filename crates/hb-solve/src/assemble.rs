@@ -9,11 +9,12 @@ use rayon::prelude::*;
 
 use crate::error::{AssemblyError, SolveError};
 use crate::params::IdentifyParams;
+use crate::signals::Signals;
 use crate::system::{Block, LinearSystem};
 use crate::system::{Layout, RowJob, layout, split_rows};
-use crate::velocity::{Series, VelocityTrend, cell_sign, velocity_into};
+use crate::velocity::{Series, VelocityTrend, acceleration_into, cell_sign, velocity_into};
 use hb_model::Forcing;
-use hb_model::{Column, DriveFactor, PositionFactor, Term, VelocityFactor};
+use hb_model::{Column, DriveFactor, Factor, MAX_COORDINATES, PositionFactor, Term, VelocityFactor};
 
 /// Per-worker buffers, reused over segments.
 #[derive(Debug, Clone)]
@@ -39,6 +40,15 @@ struct GeneralBuffers {
     xdot: Vec<f64>,
     /// The segment less its trend.
     detrended: Vec<f64>,
+    /// The own acceleration at every sample, when a term reads it.
+    xddot: Vec<f64>,
+    /// The other coordinates a term reads ([`Shared::coordinates`]): each one's samples over the
+    /// segment (continuous), velocity and acceleration.
+    other_x: Vec<Vec<f64>>,
+    other_v: Vec<Vec<f64>>,
+    other_a: Vec<Vec<f64>>,
+    /// A scratch series.
+    scratch: Vec<f64>,
 }
 
 /// Segments whose starts lie within this many samples share one table of the basis.
@@ -63,7 +73,7 @@ impl<'a> Rows<'a> {
 /// What every segment shares.
 struct Shared<'a, B: ?Sized> {
     basis: &'a B,
-    signal: &'a [f64],
+    signals: &'a Signals<'a>,
     params: &'a IdentifyParams,
     columns: &'a [Column],
     domain: Domain,
@@ -75,12 +85,14 @@ struct Shared<'a, B: ?Sized> {
     shifted: Vec<Vec<(usize, DriveFactor)>>,
     /// The other general columns.
     others: Vec<(usize, Term)>,
+    /// The other coordinates the terms read, in increasing order.
+    coordinates: Vec<usize>,
 }
 
 impl<'a, B: Basis + ?Sized> Shared<'a, B> {
     fn new(
         basis: &'a B,
-        signal: &'a [f64],
+        signals: &'a Signals<'a>,
         params: &'a IdentifyParams,
         columns: &'a [Column],
         domain: Domain,
@@ -94,7 +106,7 @@ impl<'a, B: Basis + ?Sized> Shared<'a, B> {
             match column {
                 Column::Auto(i) | Column::CosT(i) | Column::SinT(i) => used[i] = true,
                 Column::Product(t) => match (t.position, t.velocity) {
-                    (PositionFactor::Basis(i), VelocityFactor::One) => {
+                    (PositionFactor::Basis(i), VelocityFactor::One) if t.coupling.is_empty() => {
                         used[i] = true;
                         shifted[i].push((c, t.drive));
                     }
@@ -103,9 +115,17 @@ impl<'a, B: Basis + ?Sized> Shared<'a, B> {
                 _ => {}
             }
         }
+        let own = signals.own_index();
+        let mut coordinates: Vec<usize> = others
+            .iter()
+            .flat_map(|(_, t)| t.coupling.coordinates())
+            .filter(|&c| c != own)
+            .collect();
+        coordinates.sort_unstable();
+        coordinates.dedup();
         Self {
             basis,
-            signal,
+            signals,
             params,
             columns,
             domain,
@@ -113,6 +133,7 @@ impl<'a, B: Basis + ?Sized> Shared<'a, B> {
             used,
             shifted,
             others,
+            coordinates,
         }
     }
 }
@@ -125,12 +146,13 @@ impl<'a, B: Basis + ?Sized> Shared<'a, B> {
 /// it is. Segments are processed in parallel; FFT plans and buffers are reused.
 pub(crate) fn harmonic_rows<B: Basis + ?Sized>(
     basis: &B,
-    signal: &[f64],
+    signals: &Signals<'_>,
     segments: &[Segment],
     params: &IdentifyParams,
 ) -> Result<LinearSystem, SolveError> {
     refuse_measured_drive(params)?;
-    let layout = layout(basis, signal, segments, params)?;
+    let layout = layout(basis, signals, segments, params)?;
+    let signal = signals.own();
     let Layout {
         domain,
         ref names,
@@ -157,7 +179,7 @@ pub(crate) fn harmonic_rows<B: Basis + ?Sized>(
         v: Vec::new(),
         general: GeneralBuffers::default(),
     };
-    let shared = Shared::new(basis, signal, params, columns, domain, names);
+    let shared = Shared::new(basis, signals, params, columns, domain, names);
 
     let mut matrix = Mat::<f64>::zeros(rows, cols);
     let mut rhs = vec![0.0; rows];
@@ -266,7 +288,7 @@ fn fill_block<B: Basis + ?Sized>(
     let (k, l) = (seg.period(), seg.len());
     let big_w = clock.drive_angular_frequency();
     let omega = seg.fundamental(clock);
-    let raw = &sh.signal[seg.start()..=seg.start() + l];
+    let raw = &sh.signals.own()[seg.start()..=seg.start() + l];
 
     // Rotation and oscillation (paper section 2, x_ck = w_ck t + x_var).
     let split;
@@ -395,7 +417,7 @@ fn fill_block<B: Basis + ?Sized>(
                     DriveFactor::Sin(_) => sb,
                     DriveFactor::Cos(_) => cb,
                     // `shifted` holds harmonics k >= 2 only (and p is refused before assembly).
-                    DriveFactor::One | DriveFactor::Measured => spec.bins()[j],
+                    DriveFactor::One | DriveFactor::Measured(_) => spec.bins()[j],
                 };
                 put(Some(c), j, bin);
             }
@@ -471,7 +493,7 @@ impl SegmentView<'_> {
             DriveFactor::Cos(q) => phase(q).cos(),
             DriveFactor::Sin(q) => phase(q).sin(),
             // Refused before assembly (`refuse_measured_drive`): never a number here.
-            DriveFactor::Measured => f64::NAN,
+            DriveFactor::Measured(_) => f64::NAN,
         }
     }
 }
@@ -509,20 +531,49 @@ fn general_columns<B: Basis + ?Sized>(
 ) -> Result<(), SolveError> {
     let l = seg.osc.len();
     let (m, k) = (seg.m, seg.k);
-    if sh.others.iter().any(|(_, t)| t.velocity != VelocityFactor::One) {
-        let cutoff = sh.params.velocity_harmonics().count(k, l);
-        velocity_into(
-            plan,
-            seg.cont,
-            Series {
-                periods: k,
-                harmonics: cutoff,
-                step: seg.h,
-                trend: VelocityTrend::Line,
-            },
-            &mut buf.detrended,
-            &mut buf.xdot,
-        )?;
+    let coupled = sh.others.iter().any(|(_, t)| !t.coupling.is_empty());
+    let series = Series {
+        periods: k,
+        harmonics: sh.params.velocity_harmonics().count(k, l),
+        step: seg.h,
+        trend: VelocityTrend::Line,
+    };
+    if coupled || sh.others.iter().any(|(_, t)| t.velocity != VelocityFactor::One) {
+        velocity_into(plan, seg.cont, series, &mut buf.detrended, &mut buf.xdot)?;
+    }
+    let own = sh.signals.own_index();
+    if coupled {
+        // The orbit's other coordinates over the same samples: continuous, with the velocity and
+        // acceleration of their series (the rotation's line and the oscillation's derivatives).
+        acceleration_into(plan, &buf.xdot, seg.h, &mut buf.scratch, &mut buf.xddot)?;
+        buf.other_x.resize_with(sh.coordinates.len(), Vec::new);
+        buf.other_v.resize_with(sh.coordinates.len(), Vec::new);
+        buf.other_a.resize_with(sh.coordinates.len(), Vec::new);
+        for (i, &c) in sh.coordinates.iter().enumerate() {
+            let x = sh.signals.coordinate(c).expect("checked by the layout");
+            let raw = &x[seg.start..=seg.start + l];
+            match sh.signals.domain(c) {
+                Some(Domain::Circle) => unwrap_into(raw, &mut buf.other_x[i]),
+                _ => {
+                    buf.other_x[i].clear();
+                    buf.other_x[i].extend_from_slice(raw);
+                }
+            }
+            velocity_into(
+                plan,
+                &buf.other_x[i],
+                series,
+                &mut buf.detrended,
+                &mut buf.other_v[i],
+            )?;
+            acceleration_into(
+                plan,
+                &buf.other_v[i],
+                seg.h,
+                &mut buf.scratch,
+                &mut buf.other_a[i],
+            )?;
+        }
     }
     let not_finite = |term: &Term| {
         SolveError::Assembly(AssemblyError::NonFiniteTerm {
@@ -536,7 +587,7 @@ fn general_columns<B: Basis + ?Sized>(
             (PositionFactor::One, VelocityFactor::One) => match term.drive {
                 DriveFactor::One => a[(0, c)] = 1.0,
                 // Refused before assembly (`refuse_measured_drive`).
-                DriveFactor::Measured => return Err(measured_drive_refused(term.name(sh.names))),
+                DriveFactor::Measured(_) => return Err(measured_drive_refused(term.name(sh.names))),
                 DriveFactor::Cos(q) | DriveFactor::Sin(q) => {
                     let j = q as usize * k;
                     if j <= m {
@@ -552,19 +603,53 @@ fn general_columns<B: Basis + ?Sized>(
             },
             (position, velocity) => {
                 buf.g.clear();
-                buf.g.extend((0..l).map(|n| {
+                let (mut q, mut v) = ([0.0; MAX_COORDINATES], [0.0; MAX_COORDINATES]);
+                for n in 0..l {
                     let f = match position {
                         PositionFactor::One => 1.0,
                         PositionFactor::Basis(i) => phi.row(i, l)[n],
                         PositionFactor::Linear => seg.raw[n],
                     };
-                    let v = match velocity {
+                    let own_v = match velocity {
                         VelocityFactor::One => 1.0,
                         VelocityFactor::Sign => cell_sign(&buf.xdot, n, true),
                         _ => velocity.eval(buf.xdot[n]),
                     };
-                    seg.drive(term.drive, n) * f * v
-                }));
+                    let mut g = seg.drive(term.drive, n) * f * own_v;
+                    if !term.coupling.is_empty() {
+                        q[own] = seg.cont[n];
+                        v[own] = buf.xdot[n];
+                        for (i, &c) in sh.coordinates.iter().enumerate() {
+                            q[c] = buf.other_x[i][n];
+                            v[c] = buf.other_v[i][n];
+                        }
+                        for factor in term.coupling.factors() {
+                            g *= match *factor {
+                                Factor::Acceleration { coordinate } => {
+                                    let c = usize::from(coordinate);
+                                    if c == own {
+                                        buf.xddot[n]
+                                    } else {
+                                        let i = sh.coordinates.binary_search(&c).expect("read");
+                                        buf.other_a[i][n]
+                                    }
+                                }
+                                Factor::Velocity {
+                                    coordinate,
+                                    function: VelocityFactor::Sign,
+                                } => {
+                                    let i = sh
+                                        .coordinates
+                                        .binary_search(&usize::from(coordinate))
+                                        .expect("read");
+                                    cell_sign(&buf.other_v[i], n, true)
+                                }
+                                other => other.eval(&q, &v),
+                            };
+                        }
+                    }
+                    buf.g.push(g);
+                }
                 if buf.g.iter().any(|v| !v.is_finite()) {
                     return Err(not_finite(&term));
                 }

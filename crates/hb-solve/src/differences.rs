@@ -7,6 +7,7 @@ use hb_basis::{Basis, Domain};
 use crate::error::{AssemblyError, LstsqError, SolveError};
 use crate::method::Assembly;
 use crate::params::IdentifyParams;
+use crate::signals::Signals;
 use crate::system::{Block, LinearSystem};
 use crate::system::{Layout, layout};
 use hb_model::{Column, PositionFactor};
@@ -39,17 +40,22 @@ impl Assembly for FiniteDifferences {
     fn assemble(
         &self,
         basis: &dyn Basis,
-        signal: &[f64],
+        signals: &Signals<'_>,
         segments: &[Segment],
         params: &IdentifyParams,
     ) -> Result<LinearSystem, SolveError> {
-        let layout = layout(basis, signal, segments, params)?;
+        let layout = layout(basis, signals, segments, params)?;
         let Layout {
             domain, ref columns, ..
         } = layout;
+        if let Some(i) = layout.terms.iter().position(|t| !t.coupling.is_empty()) {
+            return Err(SolveError::Assembly(AssemblyError::TermNotSupported {
+                term: layout.term_names[i].clone(),
+                by: "the finite differences (a term in another coordinate or an acceleration: use the weak form)",
+            }));
+        }
+        let signal = signals.own();
         let clock = params.clock();
-        // The measured drive, when a term has it (checked by the layout).
-        let drive = params.measured_drive().map(|d| d.samples());
         let h = clock.step();
         let w = clock.drive_angular_frequency();
         // The rows of each segment: its samples whose stencil lies in the record.
@@ -107,7 +113,12 @@ impl Assembly for FiniteDifferences {
                                 PositionFactor::Basis(i) => phi[i],
                                 PositionFactor::Linear => y[k],
                             };
-                            let p = drive.map_or(f64::NAN, |p| p[n]);
+                            // The measured drive, when a term has it (checked by the layout).
+                            let p = t
+                                .drive
+                                .measured_index()
+                                .and_then(|d| signals.drive(d))
+                                .map_or(f64::NAN, |p| p[n]);
                             t.drive.eval(w * clock.time(n), p) * position * t.velocity.eval(d1)
                         }
                     };

@@ -33,13 +33,49 @@ pub enum AssemblyError {
         /// Its value.
         value: f64,
     },
-    /// A term has the measured drive `p` but the params hold no samples of it.
-    #[error(
-        "the term `{term}` has the measured drive p, but no samples of it were given (IdentifyParamsBuilder::measured_drive)"
-    )]
+    /// A term has a measured drive but no samples of it were given.
+    #[error("the term `{term}` has a measured drive, but no samples of it were given (Signals::with_drives)")]
     MissingDriveSamples {
-        /// The first term in `p`.
+        /// The first term in a measured drive.
         term: String,
+    },
+    /// A term reads a coordinate the record does not give.
+    #[error("the term `{term}` reads coordinate {coordinate}, but the record gives {given} coordinate(s)")]
+    MissingCoordinate {
+        /// The term.
+        term: String,
+        /// The coordinate's index.
+        coordinate: usize,
+        /// The coordinates given.
+        given: usize,
+    },
+    /// A coordinate of a system with another number of samples than the first.
+    #[error(
+        "coordinate {coordinate} has {len} samples but the first {record}: a system's coordinates share one grid"
+    )]
+    CoordinateLengthMismatch {
+        /// The coordinate's index.
+        coordinate: usize,
+        /// Its samples.
+        len: usize,
+        /// The first coordinate's samples.
+        record: usize,
+    },
+    /// A sample of another coordinate of the system on a segment is NaN or infinite.
+    #[error(
+        "segment {segment} (start {start}): sample {index} of coordinate {coordinate} is not finite ({value})"
+    )]
+    NonFiniteCoordinateSample {
+        /// Index of the segment in the list given.
+        segment: usize,
+        /// Its first sample.
+        start: usize,
+        /// The coordinate.
+        coordinate: usize,
+        /// Index of the bad sample in the record.
+        index: usize,
+        /// Its value.
+        value: f64,
     },
     /// The measured drive and the record have different numbers of samples.
     #[error(

@@ -115,6 +115,7 @@ mod noise;
 mod params;
 mod quality;
 mod select;
+mod signals;
 mod system;
 mod velocity;
 mod weak;
@@ -145,6 +146,7 @@ pub use quality::{
     HeldOut, ResidualLine, fit_quality, held_out,
 };
 pub use select::{DroppedTerm, SelectParams, Selection, SelectionStep, select_terms};
+pub use signals::Signals;
 pub use system::{Block, LinearSystem};
 pub use velocity::{VelocityTrend, velocity_series};
 pub use weak::WeakForm;
@@ -153,87 +155,93 @@ use circle_signal::{OrbitSource, Segment};
 use hb_basis::Basis;
 use hb_model::IdentifiedModel;
 
-/// The stacked system of `segments` of `signal` for a model on `basis` by `method`, with the
-/// params' noise correction applied to its columns: what every identification solves.
-pub fn build_system<B: Basis, A: Assembly + ?Sized>(
+/// The stacked system of `segments` of the record `signals` (a one-coordinate record's samples
+/// `&x` convert; a system's and the measured drives by [`Signals`]) for a model on `basis` by
+/// `method`, with the params' noise correction applied to its columns: what every
+/// identification solves.
+pub fn build_system<'a, B: Basis, A: Assembly + ?Sized>(
     basis: &B,
-    signal: &[f64],
+    signals: impl Into<Signals<'a>>,
     segments: &[Segment],
     params: &IdentifyParams,
     method: &A,
 ) -> Result<LinearSystem, SolveError> {
-    let mut system = method.assemble(basis, signal, segments, params)?;
-    correct_noise(basis, signal, params, &mut system)?;
+    let signals = signals.into();
+    let mut system = method.assemble(basis, &signals, segments, params)?;
+    correct_noise(basis, signals.own(), params, &mut system)?;
     Ok(system)
 }
 
-/// The paper's stacked system (eq. 16) of `segments` of `signal` for a model on `basis`, noise
+/// The paper's stacked system (eq. 16) of `segments` of `signals` for a model on `basis`, noise
 /// correction applied: [`build_system`] with [`HarmonicBalance`], for any basis.
 ///
 /// Segments must satisfy the [`Segment`] invariant for the clock's `P`; each gives `2 M_k + 1`
 /// equations (see [`Harmonics`]). On the circle each segment is unwrapped with its closing
 /// sample and split into rotation and oscillation ([`circle_signal::RotationSplit`]); on the line
 /// it is used as it is. Segments are processed in parallel; FFT plans and buffers are reused.
-pub fn assemble<B: Basis + ?Sized>(
+pub fn assemble<'a, B: Basis + ?Sized>(
     basis: &B,
-    signal: &[f64],
+    signals: impl Into<Signals<'a>>,
     segments: &[Segment],
     params: &IdentifyParams,
 ) -> Result<LinearSystem, SolveError> {
-    let mut system = assemble::harmonic_rows(basis, signal, segments, params)?;
-    correct_noise(basis, signal, params, &mut system)?;
+    let signals = signals.into();
+    let mut system = assemble::harmonic_rows(basis, &signals, segments, params)?;
+    correct_noise(basis, signals.own(), params, &mut system)?;
     Ok(system)
 }
 
-/// The weak form's stacked system of `segments` of `signal` for a model on `basis`, noise
+/// The weak form's stacked system of `segments` of `signals` for a model on `basis`, noise
 /// correction applied: [`build_system`] with `weak`, for any basis.
 ///
 /// Segments must satisfy the [`Segment`] invariant for the clock's `P` (including the closing
 /// sample, the window's last point) but need not be periodic: `upo_search::Windows` gives plain
 /// windows. `M` per segment is `params.harmonics().count(k, L)`. Segments are processed in
 /// parallel; the test functions are tabulated once per segment length.
-pub fn assemble_weak<B: Basis + ?Sized>(
+pub fn assemble_weak<'a, B: Basis + ?Sized>(
     basis: &B,
-    signal: &[f64],
+    signals: impl Into<Signals<'a>>,
     segments: &[Segment],
     params: &IdentifyParams,
     weak: &WeakForm,
 ) -> Result<LinearSystem, SolveError> {
-    let mut system = weak::weak_rows(basis, signal, segments, params, weak)?;
-    correct_noise(basis, signal, params, &mut system)?;
+    let signals = signals.into();
+    let mut system = weak::weak_rows(basis, &signals, segments, params, weak)?;
+    correct_noise(basis, signals.own(), params, &mut system)?;
     Ok(system)
 }
 
-/// Identifies a model on `basis` from `segments` of `signal` by `method` ([`HarmonicBalance`],
+/// Identifies a model on `basis` from `segments` of `signals` by `method` ([`HarmonicBalance`],
 /// [`WeakForm`] or [`FiniteDifferences`]): [`build_system`], then least squares by `solver`.
 ///
 /// Errors: [`SolveError::Lstsq(LstsqError::TooFewOrbits)`] when the segments give no more equations than unknowns,
 /// [`SolveError::Lstsq(LstsqError::RankDeficient)`] when they do not determine every unknown, and typed errors for
 /// bad segments and non-finite samples.
-pub fn identify<B: Basis, A: Assembly + ?Sized, S: LstsqSolver + ?Sized>(
+pub fn identify<'a, B: Basis, A: Assembly + ?Sized, S: LstsqSolver + ?Sized>(
     basis: B,
-    signal: &[f64],
+    signals: impl Into<Signals<'a>>,
     segments: &[Segment],
     params: &IdentifyParams,
     method: &A,
     solver: &S,
 ) -> Result<IdentifiedModel<B>, SolveError> {
-    let system = build_system(&basis, signal, segments, params, method)?;
+    let system = build_system(&basis, signals, segments, params, method)?;
     IdentifiedModel::fit(basis, params, &system, solver)
 }
 
 /// [`identify`] with the segments of an [`OrbitSource`] (e.g. `upo_search::CloseReturns` for the
-/// paper's method, `upo_search::Windows` for the weak form).
-pub fn identify_from_source<B: Basis, O: OrbitSource, A: Assembly + ?Sized, S: LstsqSolver + ?Sized>(
+/// paper's method, `upo_search::Windows` for the weak form) on the own coordinate.
+pub fn identify_from_source<'a, B: Basis, O: OrbitSource, A: Assembly + ?Sized, S: LstsqSolver + ?Sized>(
     basis: B,
-    signal: &[f64],
+    signals: impl Into<Signals<'a>>,
     source: &O,
     params: &IdentifyParams,
     method: &A,
     solver: &S,
 ) -> Result<IdentifiedModel<B>, SolveError> {
+    let signals = signals.into();
     let segments = source
-        .segments(signal)
+        .segments(signals.own())
         .map_err(|e| SolveError::Assembly(AssemblyError::Source(Box::new(e))))?;
-    identify(basis, signal, &segments, params, method, solver)
+    identify(basis, signals, &segments, params, method, solver)
 }

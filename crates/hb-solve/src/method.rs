@@ -9,6 +9,7 @@ use hb_basis::Basis;
 use crate::error::SolveError;
 
 use crate::params::IdentifyParams;
+use crate::signals::Signals;
 
 use crate::system::LinearSystem;
 
@@ -43,14 +44,14 @@ pub trait Assembly: fmt::Debug + Send + Sync {
         self.default_harmonics().reaching(form.highest_drive_harmonic())
     }
 
-    /// Assembles the stacked system of `segments` of `signal` for a model on `basis` with
-    /// `params`. Segments must satisfy the [`Segment`] invariant for the params' clock. The
+    /// Assembles the stacked system of `segments` of the record `signals` (its own coordinate,
+    /// the others and the measured drives its terms read) for a model on `basis` with `params`. Segments must satisfy the [`Segment`] invariant for the params' clock. The
     /// params' noise correction is not applied here but by [`crate::build_system`], the same way
     /// for every method.
     fn assemble(
         &self,
         basis: &dyn Basis,
-        signal: &[f64],
+        signals: &Signals<'_>,
         segments: &[Segment],
         params: &IdentifyParams,
     ) -> Result<LinearSystem, SolveError>;
@@ -79,11 +80,11 @@ impl Assembly for HarmonicBalance {
     fn assemble(
         &self,
         basis: &dyn Basis,
-        signal: &[f64],
+        signals: &Signals<'_>,
         segments: &[Segment],
         params: &IdentifyParams,
     ) -> Result<LinearSystem, SolveError> {
-        crate::assemble::harmonic_rows(basis, signal, segments, params)
+        crate::assemble::harmonic_rows(basis, signals, segments, params)
     }
 }
 
@@ -99,10 +100,10 @@ impl Assembly for WeakForm {
     fn assemble(
         &self,
         basis: &dyn Basis,
-        signal: &[f64],
+        signals: &Signals<'_>,
         segments: &[Segment],
         params: &IdentifyParams,
     ) -> Result<LinearSystem, SolveError> {
-        crate::weak::weak_rows(basis, signal, segments, params, self)
+        crate::weak::weak_rows(basis, signals, segments, params, self)
     }
 }

@@ -4,7 +4,7 @@
 use circle_signal::unwrap;
 use hb_basis::{Basis, Domain, FourierPlan};
 
-use hb_model::{Column, PositionFactor, VelocityFactor, columns};
+use hb_model::{Column, PositionFactor, VelocityFactor, columns, term_names};
 
 use crate::error::{AssemblyError, SolveError};
 use crate::params::{IdentifyParams, NoiseCorrection};
@@ -132,11 +132,21 @@ pub(crate) fn column_factors<B: Basis + ?Sized>(
                 continue;
             }
             Column::Product(t) => {
+                if !t.coupling.is_empty() {
+                    return Err(SolveError::Assembly(AssemblyError::NoiseCorrectionUnavailable {
+                        term: term_names(basis, params.form()).swap_remove(factors.len()),
+                        why: "the correction rescales functions of the own angle alone; a term in another \
+                              coordinate or an acceleration is not a rescaling",
+                    }));
+                }
                 match t.velocity {
                     // x' is linear in the data: its noise is independent of that of x at the same
                     // instant (stationary noise), so E[φ(x + n) (x' + n')] = E[φ(x + n)] x'.
                     VelocityFactor::One | VelocityFactor::Linear => {}
-                    VelocityFactor::Sign | VelocityFactor::Quadratic | VelocityFactor::Cubic => {
+                    VelocityFactor::Sign
+                    | VelocityFactor::Quadratic
+                    | VelocityFactor::Cubic
+                    | VelocityFactor::Square => {
                         return Err(SolveError::Assembly(AssemblyError::NoiseCorrectionUnavailable {
                             term: term.name(&names),
                             why: "the bias of a nonlinear function of x' under noise on the angle depends on \

@@ -3,7 +3,7 @@
 use std::fmt;
 
 use circle_signal::SampleClock;
-use hb_model::{Harmonics, MeasuredDrive, ModelForm};
+use hb_model::{Harmonics, ModelForm};
 use serde::{Deserialize, Serialize};
 
 use crate::error::SolveError;
@@ -120,8 +120,8 @@ impl fmt::Display for NoiseCorrection {
     }
 }
 
-/// Everything identification needs besides the basis, the record and the segments: the settings,
-/// and the samples of a measured drive when a term has the factor `p`.
+/// Everything identification needs besides the basis, the record ([`crate::Signals`], its
+/// measured drives among them) and the segments: the settings.
 ///
 /// Build with [`IdentifyParams::builder`]; [`IdentifyParamsBuilder::build`] validates.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -134,8 +134,6 @@ pub struct IdentifyParams {
     noise: NoiseCorrection,
     #[serde(default = "default_velocity_harmonics")]
     velocity_harmonics: Harmonics,
-    #[serde(skip)]
-    drive: Option<MeasuredDrive>,
 }
 
 fn default_velocity_harmonics() -> Harmonics {
@@ -175,7 +173,6 @@ pub struct IdentifyParamsBuilder {
     form: ModelForm,
     noise: NoiseCorrection,
     velocity_harmonics: Harmonics,
-    drive: Option<MeasuredDrive>,
 }
 
 impl IdentifyParams {
@@ -195,7 +192,6 @@ impl IdentifyParams {
             form: ModelForm::default(),
             noise: NoiseCorrection::None,
             velocity_harmonics: Self::DEFAULT_VELOCITY_HARMONICS,
-            drive: None,
         }
     }
 
@@ -225,11 +221,6 @@ impl IdentifyParams {
     pub fn velocity_harmonics(&self) -> Harmonics {
         self.velocity_harmonics
     }
-
-    /// The measured drive `p`, when given.
-    pub fn measured_drive(&self) -> Option<&MeasuredDrive> {
-        self.drive.as_ref()
-    }
 }
 
 impl IdentifyParamsBuilder {
@@ -258,13 +249,6 @@ impl IdentifyParamsBuilder {
         self
     }
 
-    /// The measured drive `p` of the form's terms, sampled with the record on its grid (checked
-    /// against the record and the segments by every assembly).
-    pub fn measured_drive(mut self, drive: MeasuredDrive) -> Self {
-        self.drive = Some(drive);
-        self
-    }
-
     /// Validates and builds.
     pub fn build(self) -> Result<IdentifyParams, SolveError> {
         Ok(IdentifyParams {
@@ -273,7 +257,6 @@ impl IdentifyParamsBuilder {
             form: self.form.validate()?,
             noise: self.noise.validate()?,
             velocity_harmonics: self.velocity_harmonics.validate()?,
-            drive: self.drive,
         })
     }
 }

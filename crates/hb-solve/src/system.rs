@@ -6,11 +6,12 @@ use faer::{Col, ColRef, Mat, MatMut, MatRef};
 use hb_basis::{Basis, Domain};
 use serde::{Deserialize, Serialize};
 
-use hb_model::{Column, Term, columns};
+use hb_model::{Column, Term, columns, term_names};
 
 use crate::error::{AssemblyError, LstsqError, SolveError};
 use crate::lstsq::{LstsqFit, LstsqSolver};
 use crate::params::IdentifyParams;
+use crate::signals::Signals;
 use hb_model::form::column_families;
 
 /// Where one segment's equations sit in the stacked system, and what was found on it.
@@ -196,26 +197,38 @@ pub(crate) struct Layout {
     pub(crate) counts: Vec<usize>,
     /// Total equations.
     pub(crate) rows: usize,
+    /// The unknowns' names, as the form names them.
+    pub(crate) term_names: Vec<String>,
 }
 
 /// Checks the model form against the basis and the segments against the signal, and counts the
 /// equations (enough of them for the unknowns).
 pub(crate) fn layout<B: Basis + ?Sized>(
     basis: &B,
-    signal: &[f64],
+    signals: &Signals<'_>,
     segments: &[Segment],
     params: &IdentifyParams,
 ) -> Result<Layout, SolveError> {
     let domain = basis.domain();
+    if let Some(record) = signals.domain(signals.own_index())
+        && record != domain
+    {
+        return Err(SolveError::Assembly(AssemblyError::DomainMismatch {
+            record,
+            basis: domain,
+        }));
+    }
     let names = basis.names();
     let terms = columns(basis, params.form())?;
     let columns = column_families(&terms);
-    let (counts, rows) = plan_rows(signal, segments, params)?;
-    check_drive(signal, segments, params)?;
+    let (counts, rows) = plan_rows(signals.own(), segments, params)?;
+    check_drive(signals, segments, params)?;
+    check_coordinates(signals, &terms, segments, params)?;
     check_enough(segments.len(), rows, terms.len(), params)?;
     Ok(Layout {
         domain,
         names,
+        term_names: term_names(basis, params.form()),
         terms,
         columns,
         counts,
@@ -226,7 +239,7 @@ pub(crate) fn layout<B: Basis + ?Sized>(
 impl Layout {
     /// The names of the unknowns, in column order.
     pub(crate) fn term_names(&self) -> Vec<String> {
-        self.terms.iter().map(|t| t.name(&self.names)).collect()
+        self.term_names.clone()
     }
 }
 
@@ -316,42 +329,92 @@ pub(crate) fn plan_rows(
     Ok((counts, rows))
 }
 
-/// When a term has the measured drive `p`: its samples are given, as many as the record's, and
-/// finite on every segment (which fit the record, [`plan_rows`]).
+/// When a term has a measured drive: its samples are given (as many as the record's, which
+/// [`Signals::with_drives`] checks) and finite on every segment (which fit the record,
+/// [`plan_rows`]).
 pub(crate) fn check_drive(
-    signal: &[f64],
+    signals: &Signals<'_>,
     segments: &[Segment],
     params: &IdentifyParams,
 ) -> Result<(), SolveError> {
-    let Some(term) = params.form().terms().and_then(|list| list.measured_term()) else {
+    let Some(list) = params.form().terms() else {
         return Ok(());
     };
-    let drive = params
-        .measured_drive()
-        .ok_or_else(|| {
+    for d in list.measured_drives() {
+        let drive = signals.drive(d).ok_or_else(|| {
             SolveError::Assembly(AssemblyError::MissingDriveSamples {
-                term: term.to_string(),
+                term: list.measured_term().unwrap_or_default(),
             })
-        })?
-        .samples();
-    if drive.len() != signal.len() {
-        return Err(SolveError::Assembly(AssemblyError::DriveLengthMismatch {
-            drive: drive.len(),
-            record: signal.len(),
-        }));
-    }
-    for (i, s) in segments.iter().enumerate() {
-        if let Some((j, &value)) = drive[s.start()..=s.closing()]
-            .iter()
-            .enumerate()
-            .find(|(_, v)| !v.is_finite())
-        {
-            return Err(SolveError::Assembly(AssemblyError::NonFiniteDriveSample {
-                segment: i,
-                start: s.start(),
-                index: s.start() + j,
-                value,
+        })?;
+        if drive.len() != signals.len() {
+            return Err(SolveError::Assembly(AssemblyError::DriveLengthMismatch {
+                drive: drive.len(),
+                record: signals.len(),
             }));
+        }
+        for (i, s) in segments.iter().enumerate() {
+            if let Some((j, &value)) = drive[s.start()..=s.closing()]
+                .iter()
+                .enumerate()
+                .find(|(_, v)| !v.is_finite())
+            {
+                return Err(SolveError::Assembly(AssemblyError::NonFiniteDriveSample {
+                    segment: i,
+                    start: s.start(),
+                    index: s.start() + j,
+                    value,
+                }));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// When a term reads other coordinates: they are given, with their domains, and finite on every
+/// segment.
+fn check_coordinates(
+    signals: &Signals<'_>,
+    terms: &[Term],
+    segments: &[Segment],
+    params: &IdentifyParams,
+) -> Result<(), SolveError> {
+    let mut read: Vec<usize> = terms.iter().flat_map(|t| t.coupling.coordinates()).collect();
+    read.sort_unstable();
+    read.dedup();
+    let own = signals.own_index();
+    for c in read.into_iter().filter(|&c| c != own) {
+        let missing = || {
+            let i = terms
+                .iter()
+                .position(|t| t.coupling.coordinates().contains(&c))
+                .unwrap_or(0);
+            let term = params
+                .form()
+                .terms()
+                .map_or_else(String::new, |list| list.name(i));
+            SolveError::Assembly(AssemblyError::MissingCoordinate {
+                term,
+                coordinate: c,
+                given: signals.coordinates(),
+            })
+        };
+        let (Some(x), Some(_)) = (signals.coordinate(c), signals.domain(c)) else {
+            return Err(missing());
+        };
+        for (i, s) in segments.iter().enumerate() {
+            if let Some((j, &value)) = x[s.start()..=s.closing()]
+                .iter()
+                .enumerate()
+                .find(|(_, v)| !v.is_finite())
+            {
+                return Err(SolveError::Assembly(AssemblyError::NonFiniteCoordinateSample {
+                    segment: i,
+                    start: s.start(),
+                    coordinate: c,
+                    index: s.start() + j,
+                    value,
+                }));
+            }
         }
     }
     Ok(())

@@ -243,6 +243,30 @@ pub(crate) fn velocity_into(
     Ok(())
 }
 
+/// The acceleration at the `L + 1` samples of an orbit from its velocity `v` there (from
+/// [`velocity_into`] with [`VelocityTrend::Line`]: the rotation's constant rate plus the
+/// derivative of the oscillation's series, periodic): the derivative of the series of `v[..L]`,
+/// all its harmonics (those of the velocity are already cut), in units of `step`; the closing
+/// sample is the periodic continuation.
+pub(crate) fn acceleration_into(
+    plan: &mut FourierPlan,
+    v: &[f64],
+    step: f64,
+    scratch: &mut Vec<f64>,
+    out: &mut Vec<f64>,
+) -> Result<(), SolveError> {
+    let l = v.len() - 1;
+    scratch.clear();
+    scratch.extend_from_slice(&v[..l]);
+    out.resize(l + 1, 0.0);
+    plan.derivative(scratch, l, &mut out[..l])?;
+    for a in &mut out[..l] {
+        *a /= step;
+    }
+    out[l] = out[0];
+    Ok(())
+}
+
 /// The mean of `sign(x')` over the cell of sample `n` (half a step on either side; the half
 /// inside at the ends), with `x'` linear between the samples `v`: a step function sampled at its
 /// points puts each jump at the nearest sample (an error of the order of the step in every

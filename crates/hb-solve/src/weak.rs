@@ -12,10 +12,11 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{AssemblyError, SolveError};
 use crate::params::IdentifyParams;
+use crate::signals::Signals;
 use crate::system::{Block, LinearSystem};
 use crate::system::{Layout, RowJob, layout, split_rows};
 use crate::velocity::{Series, VelocityTrend, cell_sign, velocity_into};
-use hb_model::{Column, DriveFactor, PositionFactor, Term, VelocityFactor};
+use hb_model::{Column, DriveFactor, Factor, MAX_COORDINATES, PositionFactor, Term, VelocityFactor};
 use hb_model::{Forcing, Harmonics};
 
 /// Parameters of the weak form: the order `p` of the window `w(τ) = sin^p(π τ / T_s)`.
@@ -224,6 +225,12 @@ struct Workspace {
     detrended: Vec<f64>,
     /// `(cos kW t_n, sin kW t_n)` of one sample for `k = 0..=` the highest drive harmonic.
     harmonics: Vec<(f64, f64)>,
+    /// The basis functions' derivatives at one sample, when an acceleration multiplies one.
+    dphi: Vec<f64>,
+    /// The other coordinates a term reads ([`Shared::others`]): the window of each, continuous
+    /// (unwrapped on the circle), and its velocity.
+    other_x: Vec<Vec<f64>>,
+    other_v: Vec<Vec<f64>>,
     planner: FourierPlanner,
 }
 
@@ -235,8 +242,11 @@ pub(crate) enum Mode {
     /// `−Σ ψ'_r g_c`: `g_c` is an antiderivative of the term (the damping: `x`).
     MinusDpsi,
     /// `−Σ ψ'_r g_c − Σ ψ_r g_s`: by parts with a drive factor, `g_c = D F` and `g_s = D' F` in
-    /// column `s` of the second block.
+    /// column `s` of the second block; or an acceleration times a function of the positions,
+    /// `g_c = f q_j'` and `g_s = (df/dt) q_j'`.
     ByParts(usize),
+    /// `Σ ψ''_r g_c`: another coordinate's acceleration alone, twice by parts, `g_c = q_j`.
+    DdPsi,
 }
 
 /// `Σ a_i b_i` (slices of equal length) in the vectors of `simd`, two partial sums: the inner
@@ -300,6 +310,7 @@ impl pulp::WithSimd for WindowRows<'_> {
                     Mode::ByParts(second) => {
                         -dot(simd, dpsi, column(c)) - dot(simd, psi, column(cols + second))
                     }
+                    Mode::DdPsi => dot(simd, ddpsi, column(c)),
                 };
             }
             *br = -dot(simd, ddpsi, x);
@@ -318,12 +329,12 @@ impl pulp::WithSimd for WindowRows<'_> {
 /// parallel; the test functions are tabulated once per segment length.
 pub(crate) fn weak_rows<B: Basis + ?Sized>(
     basis: &B,
-    signal: &[f64],
+    signals: &Signals<'_>,
     segments: &[Segment],
     params: &IdentifyParams,
     weak: &WeakForm,
 ) -> Result<LinearSystem, SolveError> {
-    let layout = layout(basis, signal, segments, params)?;
+    let layout = layout(basis, signals, segments, params)?;
     let Layout {
         domain,
         ref names,
@@ -353,6 +364,9 @@ pub(crate) fn weak_rows<B: Basis + ?Sized>(
         xdot: Vec::new(),
         detrended: Vec::new(),
         harmonics: Vec::new(),
+        dphi: vec![0.0; names.len()],
+        other_x: Vec::new(),
+        other_v: Vec::new(),
         planner: FourierPlanner::new(),
     };
 
@@ -364,6 +378,14 @@ pub(crate) fn weak_rows<B: Basis + ?Sized>(
     for column in columns {
         modes.push(match column {
             Column::Damping => Mode::MinusDpsi,
+            Column::Product(t) if !t.coupling.is_empty() => match t.coupling.acceleration() {
+                Some(_) if has_positions(t) => {
+                    second += 1;
+                    Mode::ByParts(second - 1)
+                }
+                Some(_) => Mode::DdPsi,
+                None => Mode::Psi,
+            },
             Column::Product(t) if t.velocity == VelocityFactor::Linear && !t.drive.is_measured() => {
                 if t.drive == DriveFactor::One {
                     Mode::MinusDpsi
@@ -375,11 +397,27 @@ pub(crate) fn weak_rows<B: Basis + ?Sized>(
             _ => Mode::Psi,
         });
     }
+    // The other coordinates the terms read, whose windows and velocities each segment takes.
+    let own = signals.own_index();
+    let mut others: Vec<usize> = columns
+        .iter()
+        .filter_map(|c| match c {
+            Column::Product(t) => Some(t.coupling.coordinates()),
+            _ => None,
+        })
+        .flatten()
+        .filter(|&c| c != own)
+        .collect();
+    others.sort_unstable();
+    others.dedup();
+    let coupled = columns
+        .iter()
+        .any(|c| matches!(c, Column::Product(t) if !t.coupling.is_empty()));
     let products =
         |f: &dyn Fn(&Term) -> bool| columns.iter().any(|c| matches!(c, Column::Product(t) if f(t)));
     let shared = Shared {
         basis,
-        signal,
+        signals,
         params,
         columns,
         domain,
@@ -397,12 +435,18 @@ pub(crate) fn weak_rows<B: Basis + ?Sized>(
         needs_anti: products(&|t| {
             t.velocity == VelocityFactor::Linear && matches!(t.position, PositionFactor::Basis(_))
         }),
-        needs_velocity: products(&|t| match t.velocity {
-            VelocityFactor::One => false,
-            VelocityFactor::Linear => t.drive.is_measured(),
-            _ => true,
+        needs_velocity: coupled
+            || products(&|t| match t.velocity {
+                VelocityFactor::One => false,
+                VelocityFactor::Linear => t.drive.is_measured(),
+                _ => true,
+            }),
+        needs_dphi: products(&|t| {
+            t.coupling.acceleration().is_some() && matches!(t.position, PositionFactor::Basis(_))
         }),
-        drive: params.measured_drive().map(|d| d.samples()),
+        drives: (0..signals.drives()).map(|d| signals.drive(d)).collect(),
+        others,
+        coupled,
     };
     let blocks: Vec<Block> = jobs
         .into_par_iter()
@@ -420,10 +464,18 @@ pub(crate) fn weak_rows<B: Basis + ?Sized>(
     Ok(LinearSystem::from_parts(matrix, rhs, layout.term_names(), blocks))
 }
 
+/// Whether a term has a function of a position (its own, or another coordinate's).
+fn has_positions(t: &Term) -> bool {
+    t.position != PositionFactor::One
+        || t.coupling
+            .factors()
+            .any(|f| matches!(f, Factor::Trig { .. } | Factor::Power { .. }))
+}
+
 /// What every segment shares.
 struct Shared<'a, B: ?Sized> {
     basis: &'a B,
-    signal: &'a [f64],
+    signals: &'a Signals<'a>,
     params: &'a IdentifyParams,
     columns: &'a [Column],
     domain: Domain,
@@ -439,9 +491,15 @@ struct Shared<'a, B: ?Sized> {
     needs_anti: bool,
     /// Whether a column needs the velocity at the samples.
     needs_velocity: bool,
-    /// The measured drive's samples, aligned with the signal's (checked by the layout when a
-    /// term has it).
-    drive: Option<&'a [f64]>,
+    /// Whether a column needs the derivatives of the basis (an acceleration times one).
+    needs_dphi: bool,
+    /// The measured drives' samples, aligned with the signal's (checked by the layout when a
+    /// term has one).
+    drives: Vec<Option<&'a [f64]>>,
+    /// The other coordinates a term reads, in increasing order.
+    others: Vec<usize>,
+    /// Whether a term reads another coordinate or an acceleration.
+    coupled: bool,
 }
 
 /// Fills one segment's rows; returns its block.
@@ -462,8 +520,14 @@ fn fill_block<B: Basis + ?Sized>(
     let seg = &segment;
     let clock = sh.params.clock();
     let samples = seg.len() + 1;
-    let raw = &sh.signal[seg.start()..seg.start() + samples];
+    let raw = &sh.signals.own()[seg.start()..seg.start() + samples];
     let cols = sh.columns.len();
+    let series = Series {
+        periods: seg.period(),
+        harmonics: sh.params.velocity_harmonics().count(seg.period(), seg.len()),
+        step: clock.step(),
+        trend: VelocityTrend::Quintic,
+    };
 
     // The continuous displacement of the window, less its mean (∫ψ' and ∫ψ'' of a constant
     // vanish, so the mean only adds rounding).
@@ -482,21 +546,33 @@ fn fill_block<B: Basis + ?Sized>(
     ws.xc.clear();
     ws.xc.extend(ws.x.iter().map(|v| v - mean));
     if sh.needs_velocity {
-        let cutoff = sh.params.velocity_harmonics().count(seg.period(), seg.len());
+        let plan = ws.planner.plan(seg.len())?;
+        velocity_into(plan, &ws.x, series, &mut ws.detrended, &mut ws.xdot)?;
+    }
+    // The other coordinates' windows, continuous, and their velocities.
+    ws.other_x.resize_with(sh.others.len(), Vec::new);
+    ws.other_v.resize_with(sh.others.len(), Vec::new);
+    for (k, &c) in sh.others.iter().enumerate() {
+        let x = sh.signals.coordinate(c).expect("checked by the layout");
+        let raw = &x[seg.start()..seg.start() + samples];
+        match sh.signals.domain(c) {
+            Some(Domain::Circle) => unwrap_into(raw, &mut ws.other_x[k]),
+            _ => {
+                ws.other_x[k].clear();
+                ws.other_x[k].extend_from_slice(raw);
+            }
+        }
         let plan = ws.planner.plan(seg.len())?;
         velocity_into(
             plan,
-            &ws.x,
-            Series {
-                periods: seg.period(),
-                harmonics: cutoff,
-                step: clock.step(),
-                trend: VelocityTrend::Quintic,
-            },
+            &ws.other_x[k],
+            series,
             &mut ws.detrended,
-            &mut ws.xdot,
+            &mut ws.other_v[k],
         )?;
     }
+    let own = sh.signals.own_index();
+    let (mut q, mut v) = ([0.0; MAX_COORDINATES], [0.0; MAX_COORDINATES]);
 
     // g: one column of samples per unknown; the forcing at every sample.
     let width = cols + sh.second;
@@ -531,6 +607,17 @@ fn fill_block<B: Basis + ?Sized>(
         if sh.needs_anti {
             sh.basis.eval_antiderivative(ws.x[n], &mut ws.anti);
         }
+        if sh.needs_dphi {
+            sh.basis.eval_deriv(xe, &mut ws.dphi);
+        }
+        if sh.coupled {
+            q[own] = ws.x[n];
+            v[own] = ws.xdot[n];
+            for (k, &c) in sh.others.iter().enumerate() {
+                q[c] = ws.other_x[k][n];
+                v[c] = ws.other_v[k][n];
+            }
+        }
         for (col, &column) in sh.columns.iter().enumerate() {
             ws.g[col * samples + n] = match column {
                 Column::Damping => ws.xc[n],
@@ -540,13 +627,89 @@ fn fill_block<B: Basis + ?Sized>(
                 Column::ForcingCos => c,
                 Column::ForcingSin => s,
                 Column::Stiffness => xr,
+                Column::Product(term) if !term.coupling.is_empty() => {
+                    let f = match term.position {
+                        PositionFactor::One => 1.0,
+                        PositionFactor::Basis(i) => ws.phi[i],
+                        PositionFactor::Linear => xr,
+                    };
+                    match (term.coupling.acceleration(), sh.modes[col]) {
+                        (Some(j), Mode::DdPsi) => q[j],
+                        (Some(j), Mode::ByParts(second)) => {
+                            // ∫ψ f q_j'' = −∫ψ' f q_j' − ∫ψ (df/dt) q_j'.
+                            let df = match term.position {
+                                PositionFactor::One => 0.0,
+                                PositionFactor::Basis(i) => ws.dphi[i],
+                                PositionFactor::Linear => 1.0,
+                            };
+                            let (mut g, mut rate) = (f, df * v[own]);
+                            for factor in term.coupling.factors() {
+                                if matches!(factor, Factor::Trig { .. } | Factor::Power { .. }) {
+                                    let value = factor.eval(&q, &v);
+                                    rate = rate * value + g * factor_rate(factor, &q, &v);
+                                    g *= value;
+                                }
+                            }
+                            ws.g[(cols + second) * samples + n] = rate * v[j];
+                            g * v[j]
+                        }
+                        _ => {
+                            let d = match term.drive {
+                                DriveFactor::One => 1.0,
+                                DriveFactor::Measured(i) => sh
+                                    .drives
+                                    .get(usize::from(i))
+                                    .copied()
+                                    .flatten()
+                                    .map_or(f64::NAN, |p| p[seg.start() + n]),
+                                DriveFactor::Cos(k) | DriveFactor::Sin(k) => {
+                                    let (ck, sk) = if k == 1 { (c, s) } else { ws.harmonics[k as usize] };
+                                    if matches!(term.drive, DriveFactor::Cos(_)) {
+                                        ck
+                                    } else {
+                                        sk
+                                    }
+                                }
+                            };
+                            let own_v = match term.velocity {
+                                VelocityFactor::One => 1.0,
+                                VelocityFactor::Sign => cell_sign(&ws.xdot, n, false),
+                                velocity => velocity.eval(ws.xdot[n]),
+                            };
+                            let mut g = d * f * own_v;
+                            for factor in term.coupling.factors() {
+                                g *= match *factor {
+                                    Factor::Velocity {
+                                        coordinate,
+                                        function: VelocityFactor::Sign,
+                                    } => {
+                                        let k = sh
+                                            .others
+                                            .binary_search(&usize::from(coordinate))
+                                            .expect("a coordinate the terms read");
+                                        cell_sign(&ws.other_v[k], n, false)
+                                    }
+                                    other => other.eval(&q, &v),
+                                };
+                            }
+                            g
+                        }
+                    }
+                }
                 Column::Product(term) => {
                     // The drive factor and its time derivative.
                     let (d, dd) = match term.drive {
                         DriveFactor::One => (1.0, 0.0),
                         // Its derivative is never needed: a term in p is never integrated by
                         // parts.
-                        DriveFactor::Measured => (sh.drive.map_or(f64::NAN, |p| p[seg.start() + n]), 0.0),
+                        DriveFactor::Measured(i) => (
+                            sh.drives
+                                .get(usize::from(i))
+                                .copied()
+                                .flatten()
+                                .map_or(f64::NAN, |p| p[seg.start() + n]),
+                            0.0,
+                        ),
                         DriveFactor::Cos(q) | DriveFactor::Sin(q) => {
                             let (cq, sq) = if q == 1 { (c, s) } else { ws.harmonics[q as usize] };
                             let qw = f64::from(q) * big_w;
@@ -585,6 +748,15 @@ fn fill_block<B: Basis + ?Sized>(
                     }
                 }
             };
+        }
+    }
+
+    // An acceleration alone is balanced as `Σ ψ'' q_j`: less its mean, like the left-hand side.
+    for (col, mode) in sh.modes.iter().enumerate() {
+        if *mode == Mode::DdPsi {
+            let g = &mut ws.g[col * samples..(col + 1) * samples];
+            let mean = g.iter().sum::<f64>() / samples as f64;
+            g.iter_mut().for_each(|x| *x -= mean);
         }
     }
 
@@ -630,6 +802,21 @@ fn fill_block<B: Basis + ?Sized>(
         winding,
         rotation_rate: rate,
     })
+}
+
+/// The time derivative of a factor of the positions, `Σ_c ∂f/∂q_c q_c'`.
+fn factor_rate(factor: &Factor, q: &[f64], v: &[f64]) -> f64 {
+    match *factor {
+        Factor::Trig { combination, .. } => combination
+            .terms()
+            .map(|(c, _)| factor.eval_dq(q, c) * v[c])
+            .sum(),
+        Factor::Power { coordinate, .. } => {
+            let c = usize::from(coordinate);
+            factor.eval_dq(q, c) * v[c]
+        }
+        Factor::Velocity { .. } | Factor::Acceleration { .. } => 0.0,
+    }
 }
 
 #[cfg(test)]

@@ -1090,7 +1090,7 @@ impl Case {
                 DriveFactor::Cos(j) => (f64::from(j) * big_w * t).cos(),
                 DriveFactor::Sin(j) => (f64::from(j) * big_w * t).sin(),
                 // The generated systems have no measured drive.
-                DriveFactor::Measured => f64::NAN,
+                DriveFactor::Measured(_) => f64::NAN,
             };
             let (position, dposition) = match term.position {
                 PositionFactor::One => (1.0, 0.0),
@@ -1104,6 +1104,7 @@ impl Case {
                 VelocityFactor::Sign => nonlinear.signum(),
                 VelocityFactor::Quadratic => nonlinear * nonlinear.abs(),
                 VelocityFactor::Cubic => nonlinear * nonlinear * nonlinear,
+                VelocityFactor::Square => nonlinear * nonlinear,
             };
             let g = lambda * drive * position * velocity;
             r += g;
@@ -1169,7 +1170,7 @@ impl Case {
                             DriveFactor::One => 1.0,
                             DriveFactor::Cos(j) => (f64::from(j) * big_w * t).cos(),
                             DriveFactor::Sin(j) => (f64::from(j) * big_w * t).sin(),
-                            DriveFactor::Measured => f64::NAN,
+                            DriveFactor::Measured(_) => f64::NAN,
                         };
                         let position = match term.position {
                             PositionFactor::One => 1.0,

@@ -5,6 +5,8 @@
 //! they share (faer, proptest, serde) are compiled once, not once per file.
 mod common;
 
+mod coupled;
+
 mod identification;
 mod measured_drive;
 mod quality;

@@ -5,7 +5,7 @@ use circle_signal::SampleClock;
 use hb_basis::{BasisKind, Domain, Polynomial};
 use hb_model::{IdentifiedModel, MeasuredDrive, ModelForm, TermList};
 use hb_solve::AssemblyError;
-use hb_solve::{HarmonicBalance, IdentifyParams, QrSolver, SolveError, WeakForm, identify};
+use hb_solve::{HarmonicBalance, IdentifyParams, QrSolver, Signals, SolveError, WeakForm, identify};
 use pendulum_sim::{
     PredictionConfig, PredictionRecord, SecondOrderSystem, SimulationConfig, Tolerances, prediction_starts,
     simulate, valid_prediction_times,
@@ -31,25 +31,37 @@ fn line_windows(clock: &SampleClock, x: &[f64]) -> Vec<circle_signal::Segment> {
         .unwrap()
 }
 
-/// The parameters of `form` on `clock` with the measured drive `p`.
-fn with_drive(clock: SampleClock, form: ModelForm, p: Vec<f64>) -> IdentifyParams {
-    IdentifyParams::builder(clock)
-        .form(form)
-        .measured_drive(MeasuredDrive::new(p, clock.start_time(), clock.step()).unwrap())
-        .build()
-        .unwrap()
+/// The parameters of `form` on `clock`, and the samples of the measured drive `p` that go with
+/// the record.
+struct Driven {
+    params: IdentifyParams,
+    p: Option<Vec<f64>>,
 }
 
-/// The weak form's fit (QR) of `params` over windows of `x` on the line, on the polynomial
+/// The parameters of `form` on `clock` with the measured drive `p`.
+fn with_drive(clock: SampleClock, form: ModelForm, p: Vec<f64>) -> Driven {
+    Driven {
+        params: IdentifyParams::builder(clock).form(form).build().unwrap(),
+        p: Some(p),
+    }
+}
+
+/// Parameters without a measured drive.
+fn undriven(params: IdentifyParams) -> Driven {
+    Driven { params, p: None }
+}
+
+/// The weak form's fit (QR) of `driven` over windows of `x` on the line, on the polynomial
 /// basis of `degree`.
-fn weak_fit(degree: usize, x: &[f64], params: &IdentifyParams) -> Result<IdentifiedModel, SolveError> {
+fn weak_fit(degree: usize, x: &[f64], driven: &Driven) -> Result<IdentifiedModel, SolveError> {
     let basis = BasisKind::from(Polynomial::new(degree).unwrap());
-    let segments = line_windows(params.clock(), x);
+    let segments = line_windows(driven.params.clock(), x);
+    let signals = Signals::one(x).with_drives(driven.p.iter().map(Vec::as_slice).collect())?;
     identify(
         basis,
-        x,
+        signals,
         &segments,
-        params,
+        &driven.params,
         &WeakForm::default(),
         &QrSolver::default(),
     )
@@ -92,7 +104,7 @@ fn a_drive_of_no_period_is_balanced_exactly_by_the_weak_form() {
         .form(ModelForm::from_terms(phase))
         .build()
         .unwrap();
-    let wrong = weak_fit(3, &x, &params).unwrap();
+    let wrong = weak_fit(3, &x, &undriven(params)).unwrap();
     assert!((wrong.coefficient("x").unwrap().value - k).abs() > 1e-3);
 }
 
@@ -129,21 +141,22 @@ fn missing_mismatched_or_broken_drive_samples_and_the_papers_method_are_refused(
     let segments = line_windows(&clock, &x);
     let basis = BasisKind::from(Polynomial::new(1).unwrap());
     let form = || ModelForm::from_terms("x', x, p".parse().unwrap());
-    let run = |params: &IdentifyParams, weak: bool| {
+    let run = |driven: &Driven, weak: bool| {
         if weak {
-            weak_fit(1, &x, params)
+            weak_fit(1, &x, driven)
         } else {
+            let signals = Signals::one(&x).with_drives(driven.p.iter().map(Vec::as_slice).collect())?;
             identify(
                 basis,
-                &x,
+                signals,
                 &segments,
-                params,
+                &driven.params,
                 &HarmonicBalance,
                 &QrSolver::default(),
             )
         }
     };
-    let without = IdentifyParams::builder(clock).form(form()).build().unwrap();
+    let without = undriven(IdentifyParams::builder(clock).form(form()).build().unwrap());
     assert!(
         matches!(run(&without, true), Err(SolveError::Assembly(AssemblyError::MissingDriveSamples { term })) if term == "p")
     );
@@ -255,10 +268,12 @@ fn a_model_in_the_measured_drive_is_simulated_with_its_recorded_drive() {
     let plain = weak_fit(
         3,
         &traj.theta,
-        &IdentifyParams::builder(clock)
-            .form(ModelForm::from_terms("x', x, x^3, cos(t)".parse().unwrap()))
-            .build()
-            .unwrap(),
+        &undriven(
+            IdentifyParams::builder(clock)
+                .form(ModelForm::from_terms("x', x, x^3, cos(t)".parse().unwrap()))
+                .build()
+                .unwrap(),
+        ),
     )
     .unwrap();
     let signal = MeasuredDrive::new(vec![0.0, 1.0], 0.0, 1.0).unwrap();

@@ -535,11 +535,8 @@ fn term_strategy() -> impl Strategy<Value = TermSpec> {
         Just(VelocityFactor::Quadratic),
         Just(VelocityFactor::Cubic),
     ];
-    (drive, function, velocity).prop_map(|(drive, function, velocity)| TermSpec {
-        drive,
-        function,
-        velocity,
-    })
+    (drive, function, velocity)
+        .prop_map(|(drive, function, velocity)| TermSpec::of_one(drive, function, velocity))
 }
 
 proptest! {

@@ -20,7 +20,7 @@
 use std::ops::Range;
 
 use circle_signal::{Measured, Segment};
-use hb_solve::SolveError;
+use hb_solve::{Signals, SolveError};
 
 use super::Setup;
 
@@ -55,17 +55,19 @@ pub struct DriftFit {
 /// explains best over `segments`, piece by piece, and returns `x` with it added. Nothing to
 /// find for a displacement record, or when the model has a constant term and the record was a
 /// velocity. The setup's bootstrap is not run. `progress(done, total)` is called after each
-/// identification.
+/// identification. `drives` are the record's measured drives, which the model's terms may read.
 pub fn fit_drift(
     setup: &Setup,
     x: &[f64],
+    drives: &[&[f64]],
     pieces: &[Range<usize>],
     segments: &[Segment],
     measured: Measured,
     mut progress: impl FnMut(usize, usize),
 ) -> Result<(Vec<f64>, DriftFit), SolveError> {
     let mut x = x.to_vec();
-    let (before, has_constant) = setup.unexplained(&x, segments)?;
+    let unexplained = |x: &[f64]| setup.unexplained(Signals::one(x).with_drives(drives.to_vec())?, segments);
+    let (before, has_constant) = unexplained(&x)?;
     let fit_slope = measured == Measured::Acceleration;
     let fit_offset = measured != Measured::Displacement && !has_constant;
     let unknowns = usize::from(fit_slope) + usize::from(fit_offset);
@@ -74,7 +76,7 @@ pub fn fit_drift(
     let mut objective = |x: &[f64]| -> Result<f64, SolveError> {
         evaluations += 1;
         progress(evaluations, total);
-        Ok(setup.unexplained(x, segments)?.0)
+        Ok(unexplained(x)?.0)
     };
     let mut drifts = vec![
         PieceDrift {
@@ -136,7 +138,7 @@ pub fn fit_drift(
             drift.offset = offset;
         }
     }
-    let after = setup.unexplained(&x, segments)?.0;
+    let after = unexplained(&x)?.0;
     Ok((
         x,
         DriftFit {

@@ -5,12 +5,12 @@ use std::fmt;
 
 use circle_signal::{SampleClock, Segment};
 use hb_basis::BasisKind;
-use hb_model::{Forcing, Harmonics, IdentifiedModel, MeasuredDrive, ModelForm, TermList};
+use hb_model::{Forcing, Harmonics, IdentifiedModel, ModelForm, TermList};
 use hb_solve::{
     Assembly, Bootstrap, BootstrapParams, EXPLAINED_WARNING_ORBITS, EXPLAINED_WARNING_WINDOWS, FitModel,
     FitQuality, HELD_OUT_FOLDS, HarmonicBalance, IdentifyParams, LinearSystem, LstsqSolver, NoiseCorrection,
-    QrSolver, SelectParams, Selection, SolveError, WeakForm, bootstrap_or_reason, build_system, fit_quality,
-    select_terms,
+    QrSolver, SelectParams, Selection, Signals, SolveError, WeakForm, bootstrap_or_reason, build_system,
+    fit_quality, select_terms,
 };
 
 use super::PipelineError;
@@ -114,7 +114,6 @@ pub struct ModelSpec {
     bootstrap: Option<BootstrapParams>,
     weak: WeakForm,
     selection: Option<SelectParams>,
-    drive: Option<MeasuredDrive>,
 }
 
 impl ModelSpec {
@@ -130,7 +129,6 @@ impl ModelSpec {
             bootstrap: None,
             weak: WeakForm::default(),
             selection: None,
-            drive: None,
         }
     }
 
@@ -180,14 +178,6 @@ impl ModelSpec {
         self
     }
 
-    /// The samples of the measured drive `p` of the form's terms, on the record's grid (sample
-    /// `n` of both at the same time; see [`hb_model::MeasuredDrive`]). Terms in `p` are balanced by
-    /// [`Method::Windowed`] only.
-    pub fn with_measured_drive(mut self, drive: MeasuredDrive) -> Self {
-        self.drive = Some(drive);
-        self
-    }
-
     /// The method.
     pub fn method(&self) -> Method {
         self.method
@@ -204,14 +194,11 @@ impl ModelSpec {
             Some(p) => Some((self.form.term_list(&self.basis)?, p)),
             None => None,
         };
-        let mut builder = IdentifyParams::builder(*clock)
+        let params = IdentifyParams::builder(*clock)
             .form(self.form)
             .harmonics(harmonics)
-            .noise_correction(self.noise);
-        if let Some(drive) = self.drive {
-            builder = builder.measured_drive(drive);
-        }
-        let params = builder.build()?;
+            .noise_correction(self.noise)
+            .build()?;
         Ok(Setup {
             method: self.method,
             basis: self.basis,
@@ -300,31 +287,40 @@ impl Setup {
         self.selection.as_ref().map(|(l, p)| (l, p))
     }
 
-    /// Assembles the rows of the method over `segments` of `signal` ([`build_system`]), selects
-    /// the terms when asked (then only the kept columns are solved), solves, and bootstraps.
+    /// Assembles the rows of the method over `segments` of `signals` ([`build_system`]: the own
+    /// coordinate's samples `&x`, or a system's coordinates and drives), selects the terms when
+    /// asked (then only the kept columns are solved), solves, and bootstraps.
     ///
     /// Errors: the assembly's, the solver's and the bootstrap's; with a selection also
     /// [`SolveError::Lstsq(LstsqError::TooFewOrbits)`] for fewer than two segments and
     /// [`SolveError::Select(SelectError::SelectionUndetermined)`] when a fold held out leaves the library
     /// undetermined.
-    pub fn identify(&self, signal: &[f64], segments: &[Segment]) -> Result<Identification, SolveError> {
-        self.identify_with_progress(signal, segments, |_| {})
+    pub fn identify<'a>(
+        &self,
+        signals: impl Into<Signals<'a>>,
+        segments: &[Segment],
+    ) -> Result<Identification, SolveError> {
+        self.identify_with_progress(signals, segments, |_| {})
     }
 
     /// The unexplained fraction of the fit over `segments` of `signal` (no bootstrap), and
     /// whether the model has a constant term `1`: what [`super::fit_drift`] minimises.
-    pub fn unexplained(&self, signal: &[f64], segments: &[Segment]) -> Result<(f64, bool), SolveError> {
-        let system = self.system(signal, segments)?;
+    pub fn unexplained<'a>(
+        &self,
+        signals: impl Into<Signals<'a>>,
+        segments: &[Segment],
+    ) -> Result<(f64, bool), SolveError> {
+        let system = self.system(&signals.into(), segments)?;
         let fit = system.solve(self.solver.as_ref())?;
         let constant = system.names().iter().any(|n| n == "1");
         Ok((fit_quality(&system, &fit.solution)?.unexplained, constant))
     }
 
-    /// The stacked rows of the method over `segments` of `signal` ([`build_system`]).
-    fn system(&self, signal: &[f64], segments: &[Segment]) -> Result<LinearSystem, SolveError> {
+    /// The stacked rows of the method over `segments` of `signals` ([`build_system`]).
+    fn system(&self, signals: &Signals<'_>, segments: &[Segment]) -> Result<LinearSystem, SolveError> {
         build_system(
             &self.basis,
-            signal,
+            signals,
             segments,
             &self.params,
             self.assembly.as_ref(),
@@ -332,14 +328,14 @@ impl Setup {
     }
 
     /// [`Setup::identify`], calling `progress` with each step as it starts.
-    pub fn identify_with_progress(
+    pub fn identify_with_progress<'a>(
         &self,
-        signal: &[f64],
+        signals: impl Into<Signals<'a>>,
         segments: &[Segment],
         mut progress: impl FnMut(IdentifyStep),
     ) -> Result<Identification, SolveError> {
         progress(IdentifyStep::Assemble);
-        let system = self.system(signal, segments)?;
+        let system = self.system(&signals.into(), segments)?;
         let (system, params, selection) = match &self.selection {
             Some((library, select)) => {
                 progress(IdentifyStep::Select);
@@ -391,7 +387,11 @@ impl Setup {
         let terms = library.terms();
         let selection = TermSelection {
             library: library.clone(),
-            kept: TermList::new(outcome.kept.iter().map(|&i| terms[i]).collect())?,
+            kept: TermList::new_in(
+                outcome.kept.iter().map(|&i| terms[i]).collect(),
+                library.names_in().clone(),
+                library.own(),
+            )?,
             outcome,
         };
         let kept = system.with_columns(&selection.outcome.kept)?;
@@ -404,15 +404,12 @@ impl Setup {
         {
             form = form.with_drive_column(column);
         }
-        let mut builder = IdentifyParams::builder(*self.params.clock())
+        let params = IdentifyParams::builder(*self.params.clock())
             .form(form)
             .harmonics(self.params.harmonics())
             .noise_correction(self.params.noise_correction())
-            .velocity_harmonics(self.params.velocity_harmonics());
-        if let Some(drive) = self.params.measured_drive() {
-            builder = builder.measured_drive(drive.clone());
-        }
-        let params = builder.build()?;
+            .velocity_harmonics(self.params.velocity_harmonics())
+            .build()?;
         Ok((kept, params, selection))
     }
 }
