@@ -150,6 +150,9 @@ pub enum ModelIoError {
         /// Which value.
         name: String,
     },
+    /// A saved system of several coordinates read as one model.
+    #[error("a saved system of several coordinates (format 5): read it as a system, not as one model")]
+    SavedSystem,
     /// JSON (de)serialisation failed.
     #[error("JSON: {0}")]
     Json(#[from] serde_json::Error),

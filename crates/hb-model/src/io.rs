@@ -27,7 +27,7 @@ pub const MODEL_MAGIC: [u8; 8] = *b"HBIDMODL";
 
 /// Coefficients serialised as an ordered map `name -> {value, std_error}`.
 #[derive(Debug, Clone, PartialEq)]
-struct CoefficientMap(Vec<Coefficient>);
+pub(crate) struct CoefficientMap(pub(crate) Vec<Coefficient>);
 
 #[derive(Serialize, Deserialize)]
 struct Estimate {
@@ -140,8 +140,11 @@ impl<B> From<ModelRecordV2<B>> for ModelRecord<B> {
     }
 }
 
-/// Whether this build reads format `version`.
+/// Whether this build reads format `version` as one model.
 fn check_version(version: u32) -> Result<(), ModelError> {
+    if version == crate::system::SYSTEM_VERSION {
+        return Err(ModelError::Io(ModelIoError::SavedSystem));
+    }
     if (MODEL_OLDEST_VERSION..=MODEL_VERSION).contains(&version) {
         Ok(())
     } else {
@@ -217,6 +220,13 @@ impl<B: Basis + DeserializeOwned> IdentifiedModel<B> {
     /// Reads a model written by [`to_json`](Self::to_json), checking that its terms match its basis
     /// and form.
     pub fn from_json(text: &str) -> Result<Self, ModelError> {
+        #[derive(Deserialize)]
+        struct Version {
+            version: u32,
+        }
+        if let Ok(v) = serde_json::from_str::<Version>(text) {
+            check_version(v.version)?;
+        }
         Self::from_record(serde_json::from_str(text)?)
     }
 

@@ -45,6 +45,7 @@ pub mod error;
 pub mod form;
 pub mod io;
 pub mod model;
+pub mod system;
 pub mod terms;
 pub mod truth;
 
@@ -53,6 +54,7 @@ pub use error::{ModelError, ModelIoError, TermError};
 pub use form::{Column, Forcing, Harmonics, ModelForm, columns, term_names};
 pub use io::{MODEL_FORMAT, MODEL_MAGIC, MODEL_OLDEST_VERSION, MODEL_VERSION};
 pub use model::{Coefficient, FitSummary, IdentifiedModel};
+pub use system::{IdentifiedSystem, SYSTEM_VERSION, SingularMass};
 pub use terms::{
     Combination, Coupling, DriveFactor, Factor, MAX_COORDINATES, MAX_COUPLING, MAX_DRIVE_HARMONIC,
     MAX_DRIVES, MAX_TERMS, Names, PositionFactor, Term, TermList, TermSpec, VelocityFactor, XFunction,

@@ -116,7 +116,13 @@ fn json_and_bytes_round_trip() {
 fn rejects_inconsistent_files() {
     let m = pendulum();
     let mut bytes = m.to_bytes().unwrap();
-    let foreign = MODEL_VERSION + 1;
+    // Format 5 is a system's: read as one model, it says so.
+    bytes[8..12].copy_from_slice(&hb_model::SYSTEM_VERSION.to_le_bytes());
+    assert!(matches!(
+        IdentifiedModel::<BasisKind>::from_bytes(&bytes),
+        Err(ModelError::Io(ModelIoError::SavedSystem))
+    ));
+    let foreign = hb_model::SYSTEM_VERSION + 1;
     bytes[8..12].copy_from_slice(&foreign.to_le_bytes());
     assert!(matches!(
         IdentifiedModel::<BasisKind>::from_bytes(&bytes),

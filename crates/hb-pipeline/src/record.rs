@@ -64,6 +64,114 @@ macro_rules! drive_text {
 drive_text!(DrivePeriod, DriveUnit::Period);
 drive_text!(DriveFrequency, DriveUnit::Frequency);
 
+/// Columns of a file by header name or 1-based position, written `A,B,C` (from Python a list of
+/// texts).
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct ColumnList(Vec<String>);
+
+impl ColumnList {
+    /// The columns, in order.
+    pub fn names(&self) -> &[String] {
+        &self.0
+    }
+
+    /// The number of columns.
+    pub fn len(&self) -> usize {
+        self.0.len()
+    }
+
+    /// Never true: a list names at least one column.
+    pub fn is_empty(&self) -> bool {
+        self.0.is_empty()
+    }
+}
+
+impl FromStr for ColumnList {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        let names: Vec<String> = s.split(',').map(|c| c.trim().to_owned()).collect();
+        if names.iter().any(String::is_empty) {
+            return Err("expected columns separated by commas, none empty".to_owned());
+        }
+        for (i, name) in names.iter().enumerate() {
+            name.parse::<Column>().map_err(|e| e.to_string())?;
+            if names[..i].contains(name) {
+                return Err(format!("the column '{name}' is named twice"));
+            }
+        }
+        Ok(Self(names))
+    }
+}
+
+impl fmt::Display for ColumnList {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.0.join(","))
+    }
+}
+
+/// Where each coordinate lives, written `circle` or `line` for all, or one per coordinate
+/// (`circle,circle,line`).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SignalList(Vec<Domain>);
+
+impl SignalList {
+    /// One domain for every coordinate.
+    pub fn all(domain: Domain) -> Self {
+        Self(vec![domain])
+    }
+
+    /// The domain of coordinate `i` (the one domain given for all, or the `i`-th).
+    pub fn of(&self, i: usize) -> Domain {
+        if self.0.len() == 1 { self.0[0] } else { self.0[i] }
+    }
+
+    /// The domain of the first coordinate.
+    pub fn first(&self) -> Domain {
+        self.0[0]
+    }
+
+    /// The number of domains given (1 for one for all).
+    pub fn len(&self) -> usize {
+        self.0.len()
+    }
+
+    /// Never true.
+    pub fn is_empty(&self) -> bool {
+        self.0.is_empty()
+    }
+}
+
+impl Default for SignalList {
+    fn default() -> Self {
+        Self::all(Domain::Circle)
+    }
+}
+
+impl From<Domain> for SignalList {
+    fn from(domain: Domain) -> Self {
+        Self::all(domain)
+    }
+}
+
+impl FromStr for SignalList {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        s.split(',')
+            .map(|d| d.trim().parse::<Domain>().map_err(|e| e.to_string()))
+            .collect::<Result<Vec<_>, _>>()
+            .map(Self)
+    }
+}
+
+impl fmt::Display for SignalList {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let texts: Vec<String> = self.0.iter().map(ToString::to_string).collect();
+        f.write_str(&texts.join(","))
+    }
+}
+
 /// The options of a record, as `hbid identify`, `embed`, `upos` and `report` take them and the
 /// Python functions of the same names. Defaults: an angle on the circle, measured as the
 /// displacement itself, nothing repaired, the drive's period 2π (the paper's time) unless given.
@@ -73,19 +181,27 @@ pub struct RecordOptions {
     /// The time column of a file, by header name or 1-based position.
     #[serde(with = "optional_text")]
     pub time_col: Option<String>,
-    /// The angle (or displacement) column of a file, by header name or 1-based position.
+    /// The angle (or displacement) column of a file, by header name or 1-based position: a
+    /// record of one coordinate.
     #[serde(with = "optional_text")]
     pub angle_col: Option<String>,
+    /// The columns of a file that each get an equation (`theta1,theta2`): a system of several
+    /// coordinates, named in terms by these names. One column is `angle_col`'s record.
+    #[serde(with = "optional_text")]
+    pub coords: Option<ColumnList>,
     /// The sampling step, for records without time stamps (the first sample at t = 0).
     pub dt: Option<f64>,
-    /// The column of a file that holds the measured drive `p(t)`, sampled with the angle.
+    /// The columns of a file that hold measured drives (`p(t)` for a record of one coordinate and
+    /// one drive, otherwise named in terms by their columns), sampled with the coordinates; they
+    /// get no equation.
     #[serde(with = "optional_text")]
-    pub drive_col: Option<String>,
+    pub drive_col: Option<ColumnList>,
     /// Replace isolated time-stamp glitches and encoder spikes (each named in a note).
     pub repair: bool,
-    /// An angle on the circle or a displacement on the line.
+    /// An angle on the circle or a displacement on the line: one for every coordinate, or one
+    /// per coordinate.
     #[serde(with = "text")]
-    pub signal: Domain,
+    pub signal: SignalList,
     /// What the sensor measured (on the line): the displacement, or its velocity or
     /// acceleration, integrated to the displacement.
     #[serde(with = "text")]
@@ -113,24 +229,101 @@ impl RecordOptions {
                 "give the drive by «drive_period» or by «drive_frequency», not both",
             ));
         }
-        for (name, col) in [
-            ("time_col", &self.time_col),
-            ("angle_col", &self.angle_col),
-            ("drive_col", &self.drive_col),
-        ] {
+        for (name, col) in [("time_col", &self.time_col), ("angle_col", &self.angle_col)] {
             if let Some(text) = col {
                 text.parse::<Column>()
                     .map_err(|e| OptionError::value(name, text, e))?;
             }
         }
-        if self.measured != Measured::Displacement && self.signal == Domain::Circle {
+        if self.angle_col.is_some() && self.coords.is_some() {
+            return Err(OptionError::new(
+                "coords",
+                "name the coordinates by «coords» or the one angle by «angle_col», not both",
+            ));
+        }
+        let n = self.coordinates();
+        if n > hb_model::MAX_COORDINATES {
+            return Err(OptionError::value(
+                "coords",
+                self.coords.as_ref().map(ToString::to_string).unwrap_or_default(),
+                format!("at most {} coordinates", hb_model::MAX_COORDINATES),
+            ));
+        }
+        if self.signal.len() != 1 && self.signal.len() != n {
+            return Err(OptionError::value(
+                "signal",
+                &self.signal,
+                format!("give one domain for all coordinates or one per coordinate ({n})"),
+            ));
+        }
+        if let (Some(coords), Some(drives)) = (&self.coords, &self.drive_col)
+            && let Some(both) = drives.names().iter().find(|d| coords.names().contains(d))
+        {
+            return Err(OptionError::value(
+                "drive_col",
+                both,
+                "is a coordinate («coords») too: a drive gets no equation",
+            ));
+        }
+        if let Some(drives) = &self.drive_col
+            && drives.len() > hb_model::MAX_DRIVES
+        {
+            return Err(OptionError::value(
+                "drive_col",
+                drives,
+                format!("at most {} measured drives", hb_model::MAX_DRIVES),
+            ));
+        }
+        if self.measured != Measured::Displacement && (0..n).any(|i| self.signal.of(i) == Domain::Circle) {
             return Err(OptionError::value(
                 "measured",
                 self.measured,
                 "a velocity or acceleration record is integrated to a displacement on the line: needs «signal=line»",
             ));
         }
+        self.names()?;
         Ok(())
+    }
+
+    /// The number of coordinates: those of `coords`, or one.
+    pub fn coordinates(&self) -> usize {
+        self.coords.as_ref().map_or(1, ColumnList::len)
+    }
+
+    /// The domain of every coordinate, in order.
+    pub fn domains(&self) -> Vec<Domain> {
+        (0..self.coordinates()).map(|i| self.signal.of(i)).collect()
+    }
+
+    /// The measured drives' columns, in order (none without `drive_col`).
+    pub fn drive_cols(&self) -> &[String] {
+        self.drive_col.as_ref().map_or(&[], |d| d.names())
+    }
+
+    /// The names terms are written in: a record of one coordinate is `x` with the drive `p`
+    /// (one drive) or the drives' columns; a system's coordinates and drives are their columns
+    /// (which must then be names that terms can spell).
+    pub fn names(&self) -> Result<hb_model::Names, OptionError> {
+        let drives = self.drive_cols();
+        let single = self.coordinates() == 1;
+        let coordinates: Vec<String> = match &self.coords {
+            Some(c) if !single => c.names().to_vec(),
+            _ => vec!["x".to_owned()],
+        };
+        let drives: Vec<String> = if single && drives.len() <= 1 {
+            drives.iter().map(|_| "p".to_owned()).collect()
+        } else {
+            drives.to_vec()
+        };
+        hb_model::Names::new(coordinates, drives.clone()).map_err(|e| {
+            let option = if single { "drive_col" } else { "coords" };
+            OptionError::new(
+                option,
+                format!(
+                    "{e}: the columns of a system are named in its terms (a file's header names such as theta1,                      tau1)"
+                ),
+            )
+        })
     }
 
     /// The drive given by `drive_period` or `drive_frequency`, if any.
@@ -158,11 +351,23 @@ impl RecordOptions {
                 .map(|t| t.parse::<Column>().map_err(|e| OptionError::value(name, t, e)))
                 .transpose()
         };
+        let list = |name: &str, columns: &[String]| -> Result<Vec<Column>, OptionError> {
+            columns
+                .iter()
+                .map(|t| t.parse::<Column>().map_err(|e| OptionError::value(name, t, e)))
+                .collect()
+        };
+        let coords = self.coords.as_ref().map(|c| c.names().to_vec()).unwrap_or_default();
+        let angle = match coords.first() {
+            Some(first) => Some(first.parse::<Column>().map_err(|e| OptionError::value("coords", first, e))?),
+            None => column("angle_col", &self.angle_col)?,
+        };
         Ok(ReadOptions {
             time: column("time_col", &self.time_col)?,
-            angle: column("angle_col", &self.angle_col)?,
+            angle,
             dt: self.dt,
-            drive: column("drive_col", &self.drive_col)?,
+            others: list("coords", coords.get(1..).unwrap_or_default())?,
+            drives: list("drive_col", self.drive_cols())?,
         })
     }
 }
@@ -174,14 +379,14 @@ pub enum Source<'a> {
     /// [`RecordOptions`] say.
     Path(&'a Path),
     /// Samples with their time stamps `t`, or (without `t`) the step of [`RecordOptions::dt`],
-    /// and the measured drive `p(t)` sampled with them, if any.
+    /// and the measured drives sampled with them, if any.
     Arrays {
-        /// The angle (or displacement) samples.
-        x: &'a [f64],
+        /// The samples of each coordinate (one for a record of one angle or displacement).
+        coords: Vec<&'a [f64]>,
         /// Their time stamps.
         t: Option<&'a [f64]>,
-        /// The measured drive, one sample per sample of `x`.
-        drive: Option<&'a [f64]>,
+        /// The measured drives, one sample per sample of each coordinate.
+        drives: Vec<&'a [f64]>,
     },
     /// A record on its grid already (read and conditioned before): only its drive is found.
     Grid(GridData),
@@ -198,22 +403,45 @@ fn source_name(source: &Source<'_>) -> String {
 
 /// The samples of `source` as a read record.
 fn arrays_record(
-    x: &[f64],
+    coords: &[&[f64]],
     t: Option<&[f64]>,
-    drive: Option<&[f64]>,
+    drives: &[&[f64]],
     options: &RecordOptions,
 ) -> Result<InputRecord, RunError> {
-    if options.time_col.is_some() || options.angle_col.is_some() || options.drive_col.is_some() {
+    if options.time_col.is_some() || options.angle_col.is_some() {
         let name = if options.time_col.is_some() {
             "time_col"
-        } else if options.angle_col.is_some() {
-            "angle_col"
         } else {
-            "drive_col"
+            "angle_col"
         };
         return Err(
             OptionError::sentence(name, "names a column of a file: give arrays, or a file to read").into(),
         );
+    }
+    let Some((&x, others)) = coords.split_first() else {
+        return Err(OptionError::new("x", "no coordinate given").into());
+    };
+    if coords.len() != options.coordinates() {
+        return Err(OptionError::new(
+            "coords",
+            format!(
+                "{} names for {} coordinates of the arrays: name each column",
+                options.coordinates(),
+                coords.len()
+            ),
+        )
+        .into());
+    }
+    if drives.len() != options.drive_cols().len() {
+        return Err(OptionError::new(
+            "drive_col",
+            format!(
+                "{} names for {} drives of the arrays: name each drive",
+                options.drive_cols().len(),
+                drives.len()
+            ),
+        )
+        .into());
     }
     let t = match (t, options.dt) {
         (Some(_), Some(_)) => {
@@ -240,38 +468,41 @@ fn arrays_record(
         }
         (None, Some(dt)) => (0..x.len()).map(|i| i as f64 * dt).collect(),
     };
-    if let Some(p) = drive
-        && p.len() != x.len()
-    {
-        return Err(OptionError::new(
-            "drive",
-            format!(
-                "{} drive samples for {} samples: give one per sample",
-                p.len(),
-                x.len()
-            ),
-        )
-        .into());
+    for (what, series) in others.iter().map(|o| ("coordinate", o)).chain(drives.iter().map(|d| ("drive", d))) {
+        if series.len() != x.len() {
+            return Err(OptionError::new(
+                if what == "drive" { "drive" } else { "x" },
+                format!(
+                    "{} {what} samples for {} samples: give one per sample",
+                    series.len(),
+                    x.len()
+                ),
+            )
+            .into());
+        }
     }
-    for (i, (&ti, &xi)) in t.iter().zip(x).enumerate() {
-        for (role, value) in [(Role::Time, ti), (Role::Angle, xi)] {
-            if !value.is_finite() {
-                return Err(RunError::Read {
-                    name: "the arrays".to_owned(),
-                    source: InputError::NonFinite {
-                        at: hb_record::input::Location::Sample(i + 1),
-                        role,
-                        value,
-                    },
-                });
-            }
+    let roles = std::iter::once(Role::Time)
+        .chain(coords.iter().map(|_| Role::Angle))
+        .chain(drives.iter().map(|_| Role::Drive));
+    let columns = std::iter::once(t.as_slice()).chain(coords.iter().copied()).chain(drives.iter().copied());
+    for (role, column) in roles.zip(columns) {
+        if let Some((i, &value)) = column.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return Err(RunError::Read {
+                name: "the arrays".to_owned(),
+                source: InputError::NonFinite {
+                    at: hb_record::input::Location::Sample(i + 1),
+                    role,
+                    value,
+                },
+            });
         }
     }
     Ok(InputRecord {
         t,
         theta: x.to_vec(),
+        others: others.iter().map(|o| o.to_vec()).collect(),
         lines: None,
-        drive: drive.map(<[f64]>::to_vec),
+        drives: drives.iter().map(|d| d.to_vec()).collect(),
     })
 }
 
@@ -294,9 +525,11 @@ pub fn condition_source(
                 source,
             })?
         }
-        Source::Arrays { x, t, drive } => arrays_record(x, t, drive, options)?,
+        Source::Arrays { coords, t, drives } => arrays_record(&coords, t, &drives, options)?,
     };
-    let prepare = PrepareOptions::new(options.signal)
+    let domains = options.domains();
+    let prepare = PrepareOptions::new(domains[0])
+        .with_others(domains[1..].to_vec())
         .with_repair(options.repair)
         .with_measured(options.measured);
     condition(record, &prepare, &mut |note| {

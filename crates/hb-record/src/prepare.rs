@@ -19,7 +19,7 @@
 //! // 8 samples per forcing period of 2 time units, with a gap of 3 samples.
 //! let t: Vec<f64> = (0..80).chain(83..160).map(|n| n as f64 * 0.25).collect();
 //! let theta = t.iter().map(|t| (std::f64::consts::PI * t).sin()).collect();
-//! let record = Record { t, theta, lines: None, drive: None };
+//! let record = Record { t, theta, ..Record::default() };
 //! let grid = condition(record, &PrepareOptions::new(Domain::Circle), &mut |_| {})?;
 //! assert_eq!(grid.pieces, [0..80, 83..160]);
 //! let data = grid.with_drive(DriveSpec::Period(2.0), &mut |_, _| {})?;
@@ -166,10 +166,12 @@ pub enum DriveFound {
 }
 
 /// How to condition a record.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub struct PrepareOptions {
     /// An angle on the circle (wrapped into `[-π, π)`) or a displacement on the line.
     pub signal: Domain,
+    /// The domains of the further coordinates ([`crate::input::Record::others`]), in order.
+    pub others: Vec<Domain>,
     /// Replace isolated time-stamp glitches by their grid time and isolated encoder spikes by the
     /// local prediction (without it, a glitch is an error and spikes are only reported).
     pub repair: bool,
@@ -183,9 +185,21 @@ impl PrepareOptions {
     pub fn new(signal: Domain) -> Self {
         Self {
             signal,
+            others: Vec::new(),
             repair: false,
             measured: Measured::Displacement,
         }
+    }
+
+    /// With further coordinates on these domains (see [`PrepareOptions::others`]).
+    pub fn with_others(mut self, others: Vec<Domain>) -> Self {
+        self.others = others;
+        self
+    }
+
+    /// The domain of every coordinate, the first one first.
+    pub fn domains(&self) -> Vec<Domain> {
+        std::iter::once(self.signal).chain(self.others.iter().copied()).collect()
     }
 
     /// A record of the velocity or acceleration of the displacement (see
@@ -224,6 +238,8 @@ pub enum Note {
     /// Isolated spikes (bit errors on the circle) or outliers (on the line: a sample or a short
     /// run far off its neighbours) found in the record, replaced when `repaired`.
     Spikes {
+        /// The coordinate they were found in (0, the first, for a record of one).
+        coordinate: usize,
         /// The spikes, indices in the record's grid.
         found: Vec<Spike>,
         /// Whether they were replaced by the local prediction.
@@ -272,10 +288,14 @@ impl fmt::Display for Note {
                 )
             }
             Note::Spikes {
+                coordinate,
                 found,
                 repaired,
                 domain,
             } => {
+                if *coordinate > 0 {
+                    write!(f, "coordinate {}: ", coordinate + 1)?;
+                }
                 let list: Vec<String> = found
                     .iter()
                     .take(5)
@@ -345,6 +365,23 @@ pub enum PrepareError {
     /// The clock is not whole after resampling.
     #[error(transparent)]
     Whole(CircleError),
+    /// Further coordinates read and their domains do not match.
+    #[error("{read} coordinate(s) were read but {domains} domain(s) given")]
+    Coordinates {
+        /// Coordinates read.
+        read: usize,
+        /// Domains given.
+        domains: usize,
+    },
+}
+
+/// A coordinate of a record beyond its first, on the record's grid (NaN in the gaps).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Channel {
+    /// The samples.
+    pub x: Vec<f64>,
+    /// What they are.
+    pub domain: Domain,
 }
 
 /// A record on its grid `t0 + n · dt`: read, fitted, wrapped (on the circle), spikes found.
@@ -354,14 +391,16 @@ pub struct GridData {
     pub t0: f64,
     /// The sampling step.
     pub dt: f64,
-    /// The samples on the grid (NaN in the gaps).
+    /// The samples of the first coordinate on the grid (NaN in the gaps).
     pub x: Vec<f64>,
     /// The ranges of `x` that hold data: one without gaps.
     pub pieces: Vec<Range<usize>>,
     /// What the samples are.
     pub domain: Domain,
-    /// The measured drive on the same grid (NaN in the gaps), when the record holds one.
-    pub drive: Option<Vec<f64>>,
+    /// The further coordinates on the same grid.
+    pub others: Vec<Channel>,
+    /// The measured drives on the same grid (NaN in the gaps), in the order read.
+    pub drives: Vec<Vec<f64>>,
     /// What was done to the record or found in it, in order.
     pub notes: Vec<Note>,
 }
@@ -383,9 +422,11 @@ pub struct Data {
     pub drive: DriveFound,
     /// The samples per forcing period of the record as read, when it was resampled to `p`.
     pub resampled_from: Option<f64>,
-    /// The measured drive `p(t)` on the same clock (resampled with the record; NaN in the gaps),
-    /// when the record holds one.
-    pub measured_drive: Option<Vec<f64>>,
+    /// The further coordinates on the same clock (resampled with the record).
+    pub others: Vec<Channel>,
+    /// The measured drives on the same clock (resampled with the record; NaN in the gaps), in
+    /// the order read.
+    pub drives: Vec<Vec<f64>>,
 }
 
 impl Data {
@@ -415,6 +456,18 @@ impl Data {
     pub fn longest(&self) -> &[f64] {
         &self.x[circle_signal::longest_piece(&self.pieces)]
     }
+
+    /// The first measured drive, when the record holds one.
+    pub fn measured_drive(&self) -> Option<&[f64]> {
+        self.drives.first().map(Vec::as_slice)
+    }
+
+    /// Every coordinate's samples and domain, the first one first.
+    pub fn coordinates(&self) -> Vec<(&[f64], Domain)> {
+        std::iter::once((self.x.as_slice(), self.domain))
+            .chain(self.others.iter().map(|c| (c.x.as_slice(), c.domain)))
+            .collect()
+    }
 }
 
 /// Fits the record's time stamps to a grid (pieces on one grid, NaN in the gaps), wraps it (on the
@@ -431,7 +484,14 @@ pub fn condition(
         kept.push(n);
     };
     let mut record = record;
-    let drive_read = record.drive.take();
+    let drives_read = std::mem::take(&mut record.drives);
+    let others_read = std::mem::take(&mut record.others);
+    if others_read.len() != options.others.len() {
+        return Err(PrepareError::Coordinates {
+            read: others_read.len() + 1,
+            domains: options.others.len() + 1,
+        });
+    }
     let grid = GridRecord::fit(
         record,
         &GridOptions {
@@ -453,18 +513,27 @@ pub fn condition(
         pieces.push(piece.first..piece.first + piece.samples.len());
         x.extend(piece.samples);
     }
-    // The drive's samples follow the record's in order: every sample read is in a piece, the
-    // pieces in the order of the samples.
-    let drive = drive_read.map(|read| {
-        let mut drive = vec![f64::NAN; x.len()];
+    // The drives' and further coordinates' samples follow the record's in order: every sample
+    // read is in a piece, the pieces in the order of the samples.
+    let on_grid = |read: Vec<f64>| {
+        let mut out = vec![f64::NAN; x.len()];
         let mut next = read.into_iter();
         for r in &pieces {
-            for (slot, value) in drive[r.clone()].iter_mut().zip(next.by_ref()) {
+            for (slot, value) in out[r.clone()].iter_mut().zip(next.by_ref()) {
                 *slot = value;
             }
         }
-        drive
-    });
+        out
+    };
+    let drives: Vec<Vec<f64>> = drives_read.into_iter().map(on_grid).collect();
+    let mut others: Vec<Channel> = others_read
+        .into_iter()
+        .zip(&options.others)
+        .map(|(read, &domain)| Channel {
+            x: on_grid(read),
+            domain,
+        })
+        .collect();
     if pieces.len() > 1 {
         let missing = x.len() - pieces.iter().map(Range::len).sum::<usize>();
         note(Note::Gaps {
@@ -472,28 +541,49 @@ pub fn condition(
             missing,
         });
     }
-    if options.signal == Domain::Circle {
-        let present: Vec<f64> = pieces.iter().flat_map(|r| x[r.clone()].iter().copied()).collect();
-        if present.iter().any(|v| !(-PI..PI).contains(v)) {
-            if angle_range(&present) == AngleRange::Unwrapped {
-                note(Note::Wrapped);
-            }
-            for r in &pieces {
-                for v in &mut x[r.clone()] {
-                    *v = circle_signal::wrap(*v);
+    let channels = std::iter::once((&mut x, options.signal)).chain(others.iter_mut().map(|c| (&mut c.x, c.domain)));
+    let mut wrapped = false;
+    for (coordinate, (x, domain)) in channels.enumerate() {
+        if domain == Domain::Circle {
+            let present: Vec<f64> = pieces.iter().flat_map(|r| x[r.clone()].iter().copied()).collect();
+            if present.iter().any(|v| !(-PI..PI).contains(v)) {
+                if angle_range(&present) == AngleRange::Unwrapped && !wrapped {
+                    note(Note::Wrapped);
+                    wrapped = true;
+                }
+                for r in &pieces {
+                    for v in &mut x[r.clone()] {
+                        *v = circle_signal::wrap(*v);
+                    }
                 }
             }
         }
-    }
-    if let Some(spikes) = spikes(&mut x, &pieces, options)? {
-        note(spikes);
+        let mut channel_options = options.clone();
+        channel_options.signal = domain;
+        if let Some(spikes) = spikes(x, &pieces, &channel_options)? {
+            note(match spikes {
+                Note::Spikes {
+                    found,
+                    repaired,
+                    domain,
+                    ..
+                } => Note::Spikes {
+                    coordinate,
+                    found,
+                    repaired,
+                    domain,
+                },
+                other => other,
+            });
+        }
+        if options.measured != Measured::Displacement {
+            if domain == Domain::Circle {
+                return Err(PrepareError::MeasuredOnCircle(options.measured));
+            }
+            *x = circle_signal::displacement(x, dt, options.measured, &pieces).map_err(PrepareError::Integrate)?;
+        }
     }
     if options.measured != Measured::Displacement {
-        if options.signal == Domain::Circle {
-            return Err(PrepareError::MeasuredOnCircle(options.measured));
-        }
-        x = circle_signal::displacement(&x, dt, options.measured, &pieces)
-            .map_err(PrepareError::Integrate)?;
         note(Note::Integrated(options.measured));
     }
     Ok(GridData {
@@ -502,7 +592,8 @@ pub fn condition(
         x,
         pieces,
         domain: options.signal,
-        drive,
+        others,
+        drives,
         notes: kept,
     })
 }
@@ -538,6 +629,7 @@ fn spikes(
         }));
     }
     Ok((!found.is_empty()).then_some(Note::Spikes {
+        coordinate: 0,
         found,
         repaired: options.repair,
         domain: options.signal,
@@ -582,7 +674,8 @@ impl GridData {
             x,
             pieces,
             domain,
-            drive: measured,
+            others,
+            drives,
             ..
         } = self;
         let longest = circle_signal::longest_piece(&pieces);
@@ -640,16 +733,29 @@ impl GridData {
                 (r.clock, r.samples, r.pieces, Some(clock.samples_per_period()))
             }
         };
-        // The measured drive on the same grid: resampled as the record (a signal on the line),
-        // onto the same pieces.
-        let measured_drive = match measured {
-            Some(p) if resampled_from.is_some() => {
-                let r = resample_pieces(&p, &pieces, &clock, Domain::Line).map_err(PrepareError::Resample)?;
-                debug_assert_eq!(r.pieces, out_pieces);
-                Some(r.samples)
+        // The measured drives and further coordinates on the same grid: resampled as the record
+        // (a drive as a signal on the line), onto the same pieces.
+        let resample = |x: Vec<f64>, domain: Domain| -> Result<Vec<f64>, PrepareError> {
+            if resampled_from.is_none() {
+                return Ok(x);
             }
-            other => other,
+            let r = resample_pieces(&x, &pieces, &clock, domain).map_err(PrepareError::Resample)?;
+            debug_assert_eq!(r.pieces, out_pieces);
+            Ok(r.samples)
         };
+        let drives = drives
+            .into_iter()
+            .map(|p| resample(p, Domain::Line))
+            .collect::<Result<Vec<_>, _>>()?;
+        let others = others
+            .into_iter()
+            .map(|c| {
+                Ok(Channel {
+                    x: resample(c.x, c.domain)?,
+                    domain: c.domain,
+                })
+            })
+            .collect::<Result<Vec<_>, PrepareError>>()?;
         let (clock, pieces) = (out_clock, out_pieces);
         let p = clock.require_whole().map_err(PrepareError::Whole)?;
         Ok(Data {
@@ -660,7 +766,8 @@ impl GridData {
             domain,
             drive: found,
             resampled_from,
-            measured_drive,
+            others,
+            drives,
         })
     }
 }

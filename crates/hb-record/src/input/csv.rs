@@ -21,7 +21,7 @@ pub(super) fn read<'a>(bytes: &'a [u8], options: &ReadOptions) -> Result<Record,
     let is_header = first_cells.iter().any(|c| number(c, separator).is_none());
     let header = is_header.then_some(&first_cells[..]);
     let columns = options.columns(header, width)?;
-    let Columns { time, angle, .. } = columns;
+    let Columns { time, angle, .. } = columns.clone();
     let field = |role, index| Field {
         index,
         // Until the data decide which column is the time, neither is called one.
@@ -37,10 +37,12 @@ pub(super) fn read<'a>(bytes: &'a [u8], options: &ReadOptions) -> Result<Record,
         time.column().map(|i| field(Role::Time, i)),
         field(Role::Angle, angle),
     );
-    let drive_field = columns.drive.map(|i| field(Role::Drive, i));
+    let other_fields: Vec<Field<'_>> = columns.others.iter().map(|&i| field(Role::Angle, i)).collect();
+    let drive_fields: Vec<Field<'_>> = columns.drives.iter().map(|&i| field(Role::Drive, i)).collect();
 
     let mut record = Record {
-        drive: drive_field.as_ref().map(|_| Vec::new()),
+        others: vec![Vec::new(); other_fields.len()],
+        drives: vec![Vec::new(); drive_fields.len()],
         ..Record::default()
     };
     let mut numbers = Vec::new();
@@ -65,8 +67,11 @@ pub(super) fn read<'a>(bytes: &'a [u8], options: &ReadOptions) -> Result<Record,
             record.t.push(time.value(cells, line)?);
         }
         record.theta.push(angle_field.value(cells, line)?);
-        if let (Some(field), Some(drive)) = (&drive_field, &mut record.drive) {
-            drive.push(field.value(cells, line)?);
+        for (field, values) in other_fields.iter().zip(&mut record.others) {
+            values.push(field.value(cells, line)?);
+        }
+        for (field, values) in drive_fields.iter().zip(&mut record.drives) {
+            values.push(field.value(cells, line)?);
         }
         numbers.push(line);
         Ok(())

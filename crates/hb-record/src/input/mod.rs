@@ -90,17 +90,20 @@ use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
 
-/// A record as read: sample times and the angle (or displacement) at each.
+/// A record as read: sample times and the angle (or displacement) at each, with the further
+/// coordinates and the measured drives asked for.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Record {
     /// Sample times.
     pub t: Vec<f64>,
-    /// The angle (or displacement) at each time.
+    /// The angle (or displacement) at each time: the first coordinate.
     pub theta: Vec<f64>,
+    /// The further coordinates at each time, in the order of [`ReadOptions::others`].
+    pub others: Vec<Vec<f64>>,
     /// For text input, the line of each sample (1-based, comments included), to name it in errors.
     pub lines: Option<Vec<u64>>,
-    /// The measured drive at each time, when its column was asked for ([`ReadOptions::drive`]).
-    pub drive: Option<Vec<f64>>,
+    /// The measured drives at each time, in the order of [`ReadOptions::drives`].
+    pub drives: Vec<Vec<f64>>,
 }
 
 /// A column chosen by header name or by 1-based position.
@@ -149,17 +152,26 @@ pub struct ReadOptions {
     pub angle: Option<Column>,
     /// A fixed sampling step instead of a time column.
     pub dt: Option<f64>,
-    /// A column read beside the angle: the measured drive `p(t)` (a shaker's base acceleration, a
-    /// motor's torque), sampled with it. Never the time or the angle column.
-    pub drive: Option<Column>,
+    /// Further coordinates read beside the angle (a double pendulum's second angle, a chain's
+    /// masses), each a column of its own.
+    pub others: Vec<Column>,
+    /// Columns read beside the coordinates: measured drives `p(t)` (a shaker's base
+    /// acceleration, a motor's torque), sampled with them. Never the time or a coordinate's
+    /// column.
+    pub drives: Vec<Column>,
 }
 
 impl ReadOptions {
     /// Checks the options on their own: a step positive and finite, not both a step and a time
     /// column, positions counted from 1.
     pub fn validate(&self) -> Result<(), InputError> {
-        for column in [&self.time, &self.angle, &self.drive] {
-            if let Some(Column::Position(0)) = column {
+        let chosen = [&self.time, &self.angle]
+            .into_iter()
+            .flatten()
+            .chain(&self.others)
+            .chain(&self.drives);
+        for column in chosen {
+            if let Column::Position(0) = column {
                 return Err(InputError::BadColumn {
                     given: "0".to_owned(),
                 });
@@ -230,37 +242,39 @@ impl ReadOptions {
                 })?
             }
         };
-        let drive = match &self.drive {
-            Some(chosen) => {
-                let index = find(Role::Drive, chosen.clone(), names, width)?;
-                let taken = if Some(index) == time.column() {
-                    Some(Role::Time)
-                } else if index == angle {
-                    Some(Role::Angle)
-                } else {
-                    None
-                };
-                if let Some(role) = taken {
+        // Every further column: found, and none of them a column already taken.
+        let mut taken: Vec<(usize, Role)> = time.column().map(|c| (c, Role::Time)).into_iter().collect();
+        taken.push((angle, Role::Angle));
+        let mut further = |role: Role, chosen: &[Column]| -> Result<Vec<usize>, InputError> {
+            let mut out = Vec::with_capacity(chosen.len());
+            for column in chosen {
+                let index = find(role, column.clone(), names, width)?;
+                if let Some(&(_, first)) = taken.iter().find(|(c, _)| *c == index) {
                     return Err(InputError::ColumnTwice {
-                        column: chosen.clone(),
-                        first: role,
-                        second: Role::Drive,
+                        column: column.clone(),
+                        first,
+                        second: role,
                     });
                 }
-                Some(index)
+                taken.push((index, role));
+                out.push(index);
             }
-            None => None,
+            Ok(out)
         };
+        let others = further(Role::Angle, &self.others)?;
+        let drives = further(Role::Drive, &self.drives)?;
         let order_from_data = names.is_none()
             && width == 2
             && self.time.is_none()
             && self.angle.is_none()
             && self.dt.is_none()
-            && self.drive.is_none();
+            && self.others.is_empty()
+            && self.drives.is_empty();
         Ok(Columns {
             time,
             angle,
-            drive,
+            others,
+            drives,
             order_from_data,
         })
     }
@@ -337,14 +351,16 @@ impl std::fmt::Display for Role {
 }
 
 /// Where a record's times and angles come from; columns count from 0.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub(crate) struct Columns {
     /// The times.
     pub(crate) time: Times,
     /// The angle column.
     pub(crate) angle: usize,
-    /// The measured drive's column, when asked for.
-    pub(crate) drive: Option<usize>,
+    /// The further coordinates' columns.
+    pub(crate) others: Vec<usize>,
+    /// The measured drives' columns.
+    pub(crate) drives: Vec<usize>,
     /// Two unnamed columns and nothing chosen: `time` and `angle` are columns 1 and 2 as read,
     /// and [`order_from_data`] swaps them when the data say the second is the time.
     pub(crate) order_from_data: bool,

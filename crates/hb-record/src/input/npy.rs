@@ -68,21 +68,29 @@ pub(super) fn read(bytes: &[u8], options: &ReadOptions) -> Result<Record, InputE
         Role::Time
     };
     check_finite(&t, time_role, &theta)?;
-    let drive = columns.drive.map(|c| array.column(c));
-    if let Some(drive) = &drive
-        && let Some((i, &value)) = drive.iter().enumerate().find(|(_, v)| !v.is_finite())
-    {
-        return Err(InputError::NonFinite {
-            at: Location::Sample(i + 1),
-            role: Role::Drive,
-            value,
-        });
-    }
+    let read = |role: Role, cs: &[usize]| -> Result<Vec<Vec<f64>>, InputError> {
+        cs.iter()
+            .map(|&c| {
+                let values = array.column(c);
+                match values.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+                    Some((i, &value)) => Err(InputError::NonFinite {
+                        at: Location::Sample(i + 1),
+                        role,
+                        value,
+                    }),
+                    None => Ok(values),
+                }
+            })
+            .collect()
+    };
+    let others = read(Role::Angle, &columns.others)?;
+    let drives = read(Role::Drive, &columns.drives)?;
     let mut record = Record {
         t,
         theta,
+        others,
         lines: None,
-        drive,
+        drives,
     };
     if columns.order_from_data {
         super::order_from_data(&mut record);

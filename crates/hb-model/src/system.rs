@@ -1,0 +1,415 @@
+//! A system of equations, one per coordinate: `q_i'' + Σ_k c_ik g_ik(t, q, q', q'') = 0`, each
+//! an [`IdentifiedModel`] whose terms are written in the system's [`Names`], solved for the
+//! accelerations through its mass matrix, and saved (format 5; a system of one coordinate is
+//! saved as the model it is, in format 4).
+
+use hb_basis::{Basis, BasisKind, Domain};
+use serde::{Deserialize, Serialize};
+
+use crate::drive::MeasuredDrive;
+use crate::error::{ModelError, ModelIoError, TermError};
+use crate::form::ModelForm;
+use crate::io::{CoefficientMap, MODEL_FORMAT, MODEL_MAGIC, MODEL_VERSION};
+use crate::model::{FitSummary, IdentifiedModel};
+use crate::terms::{MAX_COORDINATES, Names, TermList};
+
+/// The saved-system format version: a list of equations in the names of its coordinates and
+/// drives.
+pub const SYSTEM_VERSION: u32 = 5;
+
+/// The mass matrix of a system is singular (or nearly: a pivot below `1e-12` of the largest
+/// entry) at a state: its accelerations are not determined there.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+#[error("the mass matrix is singular at t = {t} (smallest pivot {pivot:e})")]
+pub struct SingularMass {
+    /// The time.
+    pub t: f64,
+    /// The smallest pivot of the elimination, relative to the largest entry.
+    pub pivot: f64,
+}
+
+/// A system of `n` coordinates with one equation each, in the [`Names`] of its record: equation
+/// `i` is a model ([`IdentifiedModel`]) of the own coordinate `i`, its terms possibly reading the
+/// other coordinates, their velocities and accelerations, and the measured drives.
+///
+/// The accelerations solve `M(t, q) q'' = −r(t, q, q')`, row `i` of `M` being `1` at `i` plus the
+/// coefficients of the terms of equation `i` in an acceleration ([`IdentifiedModel::equation_at`]).
+/// A record of one coordinate is the system of one equation ([`IdentifiedSystem::one`]).
+///
+/// ```
+/// use hb_basis::{BasisKind, Domain, Harmonic};
+/// use hb_model::{IdentifiedModel, IdentifiedSystem, ModelForm, Names, TermList};
+///
+/// // A double pendulum: θ1'' + 0.5 θ2''cos(θ1−θ2) + 0.5 θ2'² sin(θ1−θ2) + 2 sin θ1 = 0 and
+/// // θ2'' + θ1''cos(θ1−θ2) − θ1'² sin(θ1−θ2) + 2 sin θ2 = 0.
+/// let names = Names::new(["theta1", "theta2"], Vec::<String>::new())?;
+/// let basis = BasisKind::from(Harmonic::new(1)?);
+/// let equation = |own: usize, terms: &str, values: &[f64]| {
+///     let list = TermList::parse_in(terms, &names, own)?;
+///     IdentifiedModel::new(basis, ModelForm::from_terms(list), 1.0, values)
+/// };
+/// let system = IdentifiedSystem::new(
+///     names.clone(),
+///     vec![Domain::Circle; 2],
+///     vec![
+///         equation(0, "theta2''*cos(theta1-theta2), sin(theta1-theta2)*theta2'^2, sin(theta1)", &[0.5, 0.5, 2.0])?,
+///         equation(1, "theta1''*cos(theta1-theta2), sin(theta1-theta2)*theta1'^2, sin(theta2)", &[1.0, -1.0, 2.0])?,
+///     ],
+/// )?;
+/// let mut acc = [0.0; 2];
+/// system.accelerations(0.0, &[0.3, 0.0], &[0.0, 0.0], None, &mut acc)?;
+/// // M = [[1, 0.5 c], [c, 1]] with c = cos 0.3; r = [2 sin 0.3, 0].
+/// let c = 0.3f64.cos();
+/// let det = 1.0 - 0.5 * c * c;
+/// assert!((acc[0] + 2.0 * 0.3f64.sin() / det).abs() < 1e-14);
+/// let back = IdentifiedSystem::from_json(&system.to_json()?)?;
+/// assert_eq!(back, system);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Debug, Clone, PartialEq)]
+pub struct IdentifiedSystem<B = BasisKind> {
+    names: Names,
+    domains: Vec<Domain>,
+    equations: Vec<IdentifiedModel<B>>,
+}
+
+impl<B: Basis> IdentifiedSystem<B> {
+    /// The system of `equations` (equation `i` of coordinate `i`) over coordinates of `names`
+    /// on `domains`.
+    ///
+    /// Errors: as many equations and domains as coordinates, each equation's own coordinate
+    /// its place and its terms in these names (a one-coordinate model's terms are in the
+    /// one-coordinate names), its basis on its coordinate's domain, one drive frequency for
+    /// all.
+    pub fn new(names: Names, domains: Vec<Domain>, equations: Vec<IdentifiedModel<B>>) -> Result<Self, ModelError> {
+        let n = names.coordinates().len();
+        let invalid = |why: &'static str| ModelError::Term(TermError::InvalidForm { why });
+        if equations.len() != n || domains.len() != n || n > MAX_COORDINATES {
+            return Err(invalid("a system has one equation and one domain per coordinate"));
+        }
+        for (i, (model, &domain)) in equations.iter().zip(&domains).enumerate() {
+            if model.domain() != domain {
+                return Err(invalid("an equation's basis lives on its coordinate's domain"));
+            }
+            match model.form().terms() {
+                Some(list) if list.own() == i && list.names_in() == &names => {}
+                Some(list) if n == 1 && list.own() == 0 && list.names_in().is_default() => {}
+                None if n == 1 => {}
+                _ => {
+                    return Err(invalid(
+                        "equation i of a system is written in the system's names for its coordinate i",
+                    ));
+                }
+            }
+            if model.drive_angular_frequency() != equations[0].drive_angular_frequency() {
+                return Err(invalid("the equations of a system share one drive frequency"));
+            }
+        }
+        Ok(Self {
+            names,
+            domains,
+            equations,
+        })
+    }
+
+    /// The system of one model: a record of one coordinate `x`.
+    pub fn one(model: IdentifiedModel<B>) -> Self {
+        let names = model
+            .form()
+            .terms()
+            .map_or_else(Names::default, |l| l.names_in().clone());
+        Self {
+            names,
+            domains: vec![model.domain()],
+            equations: vec![model],
+        }
+    }
+
+    /// The names of the coordinates and drives.
+    pub fn names(&self) -> &Names {
+        &self.names
+    }
+
+    /// The domain of each coordinate.
+    pub fn domains(&self) -> &[Domain] {
+        &self.domains
+    }
+
+    /// The number of coordinates.
+    pub fn coordinates(&self) -> usize {
+        self.equations.len()
+    }
+
+    /// The equations, one per coordinate.
+    pub fn equations(&self) -> &[IdentifiedModel<B>] {
+        &self.equations
+    }
+
+    /// The equations, to consume.
+    pub fn into_equations(self) -> Vec<IdentifiedModel<B>> {
+        self.equations
+    }
+
+    /// Drive angular frequency `W` of its terms in `cos(kt)`, `sin(kt)`.
+    pub fn drive_angular_frequency(&self) -> f64 {
+        self.equations[0].drive_angular_frequency()
+    }
+
+    /// Whether a term reads a measured drive and the drives were not given.
+    pub fn needs_measured_drive(&self) -> bool {
+        self.equations.iter().any(IdentifiedModel::needs_measured_drive)
+    }
+
+    /// Whether an equation reads a measured drive.
+    pub fn has_measured_drive(&self) -> bool {
+        self.equations.iter().any(|m| m.form().has_measured_drive())
+    }
+
+    /// The system with the recorded drives of its record, in the order of its names' drives.
+    ///
+    /// Errors: as [`IdentifiedModel::with_measured_drives`], for an equation that reads one.
+    pub fn with_measured_drives(mut self, drives: Vec<MeasuredDrive>) -> Result<Self, ModelError> {
+        self.equations = self
+            .equations
+            .into_iter()
+            .map(|m| {
+                if m.form().has_measured_drive() {
+                    m.with_measured_drives(drives.clone())
+                } else {
+                    Ok(m)
+                }
+            })
+            .collect::<Result<_, _>>()?;
+        Ok(self)
+    }
+
+    /// Whether a factor switches at rest in the velocity of coordinate `c` in any equation.
+    pub fn switches_in(&self, c: usize) -> bool {
+        self.equations.iter().any(|m| m.switches_in(c))
+    }
+
+    /// The accelerations at `(t, q, v)` into `acc`: `M q'' = −r` solved by Gaussian elimination
+    /// with partial pivoting. `sides[c]` is the value of `sign(q_c')` (a branch's ±1, a held
+    /// value while `q_c` sticks; `None`: the sign of `v[c]`).
+    ///
+    /// Errors: [`SingularMass`] where a pivot falls below `1e-12` of the matrix's largest entry.
+    pub fn accelerations(
+        &self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        sides: Option<&[f64]>,
+        acc: &mut [f64],
+    ) -> Result<(), SingularMass> {
+        let n = self.equations.len();
+        let mut m = [[0.0; MAX_COORDINATES]; MAX_COORDINATES];
+        let mut r = [0.0; MAX_COORDINATES];
+        for (i, model) in self.equations.iter().enumerate() {
+            r[i] = -model.equation_at(t, q, v, sides, &mut m[i][..n]);
+        }
+        solve(&mut m, &mut r, n).map_err(|pivot| SingularMass { t, pivot })?;
+        acc[..n].copy_from_slice(&r[..n]);
+        Ok(())
+    }
+}
+
+/// Solves `m x = r` for the leading `n × n` block in place (`r` becomes `x`); the smallest
+/// pivot relative to the largest entry when it falls below `1e-12`.
+fn solve(
+    m: &mut [[f64; MAX_COORDINATES]; MAX_COORDINATES],
+    r: &mut [f64; MAX_COORDINATES],
+    n: usize,
+) -> Result<(), f64> {
+    let scale = (0..n)
+        .flat_map(|i| (0..n).map(move |j| (i, j)))
+        .map(|(i, j)| m[i][j].abs())
+        .fold(0.0, f64::max);
+    if !(scale.is_finite() && scale > 0.0) {
+        return Err(if scale.is_finite() { 0.0 } else { f64::NAN });
+    }
+    for c in 0..n {
+        let p = (c..n)
+            .max_by(|&a, &b| m[a][c].abs().total_cmp(&m[b][c].abs()))
+            .unwrap_or(c);
+        let pivot = m[p][c].abs() / scale;
+        if !(pivot >= 1e-12) {
+            return Err(pivot);
+        }
+        m.swap(c, p);
+        r.swap(c, p);
+        for i in c + 1..n {
+            let f = m[i][c] / m[c][c];
+            if f != 0.0 {
+                for j in c..n {
+                    m[i][j] -= f * m[c][j];
+                }
+                r[i] -= f * r[c];
+            }
+        }
+    }
+    for c in (0..n).rev() {
+        let tail: f64 = (c + 1..n).map(|j| m[c][j] * r[j]).sum();
+        r[c] = (r[c] - tail) / m[c][c];
+    }
+    Ok(())
+}
+
+/// One equation of a saved system: its terms by name in the system's names.
+#[derive(Serialize, Deserialize)]
+struct EquationRecord<B> {
+    coordinate: String,
+    basis: B,
+    terms: Vec<String>,
+    forcing_frequency: f64,
+    coefficients: CoefficientMap,
+    fit: Option<FitSummary>,
+}
+
+/// A saved system (format 5).
+#[derive(Serialize, Deserialize)]
+struct SystemRecord<B> {
+    format: String,
+    version: u32,
+    coordinates: Vec<String>,
+    domains: Vec<Domain>,
+    drives: Vec<String>,
+    equations: Vec<EquationRecord<B>>,
+}
+
+/// The version a saved text or file says it is, without reading the rest.
+#[derive(Deserialize)]
+struct Version {
+    version: u32,
+}
+
+impl<B: Basis + Clone + Serialize> IdentifiedSystem<B> {
+    fn record(&self) -> Result<SystemRecord<B>, ModelError> {
+        let equations = self
+            .equations
+            .iter()
+            .enumerate()
+            .map(|(i, m)| {
+                let list = m.form().terms().ok_or_else(|| {
+                    ModelError::Term(TermError::InvalidForm {
+                        why: "an equation of a system is a list of terms",
+                    })
+                })?;
+                Ok(EquationRecord {
+                    coordinate: self.names.coordinates()[i].clone(),
+                    basis: m.basis().clone(),
+                    terms: list.names(),
+                    forcing_frequency: m.drive_angular_frequency(),
+                    coefficients: CoefficientMap(m.coefficients().to_vec()),
+                    fit: m.summary().cloned(),
+                })
+            })
+            .collect::<Result<_, ModelError>>()?;
+        Ok(SystemRecord {
+            format: MODEL_FORMAT.to_owned(),
+            version: SYSTEM_VERSION,
+            coordinates: self.names.coordinates().to_vec(),
+            domains: self.domains.clone(),
+            drives: self.names.drives().to_vec(),
+            equations,
+        })
+    }
+
+    /// Pretty JSON: a system of one coordinate as its model ([`IdentifiedModel::to_json`],
+    /// format 4), a system of several as `{"format": "hbid-model", "version": 5,
+    /// "coordinates": [..], "domains": [..], "drives": [..], "equations": [{"coordinate": ..,
+    /// "basis": .., "terms": [..], "forcing_frequency": .., "coefficients": {..}, "fit": ..}]}`.
+    pub fn to_json(&self) -> Result<String, ModelError> {
+        if self.equations.len() == 1 {
+            return self.equations[0].to_json();
+        }
+        Ok(serde_json::to_string_pretty(&self.record()?)?)
+    }
+
+    /// Compact binary: [`MODEL_MAGIC`], the version as a little-endian `u32`, then postcard (a
+    /// system of one coordinate as its model).
+    pub fn to_bytes(&self) -> Result<Vec<u8>, ModelError> {
+        if self.equations.len() == 1 {
+            return self.equations[0].to_bytes();
+        }
+        let mut out = MODEL_MAGIC.to_vec();
+        out.extend_from_slice(&SYSTEM_VERSION.to_le_bytes());
+        Ok(postcard::to_extend(&self.record()?, out)?)
+    }
+}
+
+impl<B: Basis + Clone + serde::de::DeserializeOwned> IdentifiedSystem<B> {
+    fn from_record(r: SystemRecord<B>) -> Result<Self, ModelError> {
+        if r.format != MODEL_FORMAT {
+            return Err(ModelError::Io(ModelIoError::BadMagic));
+        }
+        let names = Names::new(r.coordinates.clone(), r.drives)?;
+        if r.equations.len() != names.coordinates().len() {
+            return Err(ModelError::Term(TermError::InvalidForm {
+                why: "a saved system has one equation per coordinate",
+            }));
+        }
+        let equations = r
+            .equations
+            .into_iter()
+            .enumerate()
+            .map(|(i, e)| {
+                if e.coordinate != r.coordinates[i] {
+                    return Err(ModelError::Term(TermError::InvalidForm {
+                        why: "the equations of a saved system are in the order of its coordinates",
+                    }));
+                }
+                let list = TermList::from_names_in(&e.terms, &names, i)?;
+                IdentifiedModel::from_coefficients(
+                    e.basis,
+                    ModelForm::from_terms(list),
+                    e.forcing_frequency,
+                    e.coefficients.0,
+                    e.fit,
+                )
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        Self::new(names, r.domains, equations)
+    }
+
+    /// Reads a system written by [`to_json`](Self::to_json), or any saved model (format 2 to 4)
+    /// as a system of one coordinate.
+    pub fn from_json(text: &str) -> Result<Self, ModelError> {
+        let version: Version = serde_json::from_str(text)?;
+        if version.version <= MODEL_VERSION {
+            return IdentifiedModel::from_json(text).map(Self::one);
+        }
+        if version.version != SYSTEM_VERSION {
+            return Err(ModelError::Io(ModelIoError::UnsupportedVersion {
+                found: version.version,
+                supported: SYSTEM_VERSION,
+            }));
+        }
+        Self::from_record(serde_json::from_str(text)?)
+    }
+
+    /// Reads a system written by [`to_bytes`](Self::to_bytes), or any saved model (format 2
+    /// to 4) as a system of one coordinate.
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self, ModelError> {
+        if bytes.len() < 12 || bytes[..8] != MODEL_MAGIC {
+            return Err(ModelError::Io(ModelIoError::BadMagic));
+        }
+        let version = u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]);
+        if version <= MODEL_VERSION {
+            return IdentifiedModel::from_bytes(bytes).map(Self::one);
+        }
+        if version != SYSTEM_VERSION {
+            return Err(ModelError::Io(ModelIoError::UnsupportedVersion {
+                found: version,
+                supported: SYSTEM_VERSION,
+            }));
+        }
+        let record: SystemRecord<B> = postcard::from_bytes(&bytes[12..])?;
+        if record.version != version {
+            return Err(ModelError::Io(ModelIoError::UnsupportedVersion {
+                found: record.version,
+                supported: SYSTEM_VERSION,
+            }));
+        }
+        Self::from_record(record)
+    }
+}
