@@ -81,7 +81,11 @@ impl<B: Basis> IdentifiedSystem<B> {
     /// its place and its terms in these names (a one-coordinate model's terms are in the
     /// one-coordinate names), its basis on its coordinate's domain, one drive frequency for
     /// all.
-    pub fn new(names: Names, domains: Vec<Domain>, equations: Vec<IdentifiedModel<B>>) -> Result<Self, ModelError> {
+    pub fn new(
+        names: Names,
+        domains: Vec<Domain>,
+        equations: Vec<IdentifiedModel<B>>,
+    ) -> Result<Self, ModelError> {
         let n = names.coordinates().len();
         let invalid = |why: &'static str| ModelError::Term(TermError::InvalidForm { why });
         if equations.len() != n || domains.len() != n || n > MAX_COORDINATES {

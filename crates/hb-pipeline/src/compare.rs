@@ -32,7 +32,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::RunError;
 use crate::observe::{Observer, Stage};
 use crate::options::{OptionError, from_object, optional_text, text};
-use crate::record::{RecordOptions, Source, condition_source};
+use crate::record::{ColumnList, RecordOptions, Source, condition_source};
 
 /// A range of samples of the record's grid, `A..B` (0-based, `B` excluded), or `A..` to the
 /// record's end. For a record without gaps the grid's samples are the file's rows.
@@ -134,9 +134,14 @@ pub struct CompareOptions {
     pub angle_col: Option<String>,
     /// The sampling step, for records without time stamps (the first sample at t = 0).
     pub dt: Option<f64>,
-    /// The column of the measured drive `p(t)`, for a model with terms in `p`.
+    /// The columns of the coordinates of a system's record, in the order of the model's
+    /// coordinates (default: the model's names).
     #[serde(with = "optional_text")]
-    pub drive_col: Option<String>,
+    pub coords: Option<ColumnList>,
+    /// The columns of the measured drives, for a model with terms in them (`p`, or a system's
+    /// drives in the order of its names).
+    #[serde(with = "optional_text")]
+    pub drive_col: Option<ColumnList>,
     /// Replace isolated time-stamp glitches and encoder spikes.
     pub repair: bool,
     /// An angle on the circle or a displacement on the line (default: the model's).
@@ -164,6 +169,7 @@ impl Default for CompareOptions {
             time_col: None,
             angle_col: None,
             dt: None,
+            coords: None,
             drive_col: None,
             repair: false,
             signal: None,
@@ -252,10 +258,11 @@ impl CompareOptions {
         RecordOptions {
             time_col: self.time_col.clone(),
             angle_col: self.angle_col.clone(),
+            coords: self.coords.clone(),
             dt: self.dt,
             drive_col: self.drive_col.clone(),
             repair: self.repair,
-            signal,
+            signal: signal.into(),
             measured: self.measured,
             drive_period: None,
             drive_frequency: None,
@@ -410,7 +417,7 @@ pub(crate) fn default_init(period_samples: f64, range: usize) -> usize {
 /// Checks that the record's drive and the model agree: a drive column for a model in `p`, none
 /// for a model without. Returns whether the model runs on the record's drive.
 fn check_drive(model: &IdentifiedModel, grid: &GridData, named: bool) -> Result<bool, RunError> {
-    match (&grid.drive, model.form().has_measured_drive()) {
+    match (grid.drives.first(), model.form().has_measured_drive()) {
         (Some(_), true) => Ok(true),
         (None, true) => Err(OptionError::new(
             "drive_col",
@@ -438,7 +445,7 @@ pub(crate) fn driven_on(
     start: usize,
     end: usize,
 ) -> Result<IdentifiedModel, RunError> {
-    match &grid.drive {
+    match grid.drives.first() {
         Some(p) if model.form().has_measured_drive() => {
             let signal =
                 MeasuredDrive::new(p[start..end].to_vec(), grid.t0 + start as f64 * grid.dt, grid.dt)?;

@@ -8,7 +8,10 @@ use std::str::FromStr;
 
 use circle_signal::{Domain, Measured, Segment};
 use hb_basis::{Basis, BasisKind};
-use hb_model::{Forcing, Harmonics, MAX_DRIVE_HARMONIC, ModelForm, TermList};
+use hb_model::{
+    Forcing, Harmonics, IdentifiedModel, IdentifiedSystem, MAX_DRIVE_HARMONIC, ModelForm, Names, TermError,
+    TermList,
+};
 use hb_record::prepare::{Data, DriveFound, DriveSpec, GridData, WindowUnit, default_basis};
 use hb_solve::{
     BootstrapParams, LstsqSolver, NoiseCorrection, QrSolver, SelectParams, Signals, SvdSolver, WeakForm,
@@ -98,6 +101,70 @@ impl fmt::Display for ForcingTerms {
     }
 }
 
+/// The model's terms as given: one list for every equation (`x', sin(x)`), or a list per
+/// coordinate by its name (`theta1: theta2''*cos(theta1-theta2), sin(theta1); theta2: ...`; from
+/// Python a dict of lists), each read in the record's names for its equation
+/// ([`TermList::parse_in`]). A coordinate without a list of its own takes the one for all, or
+/// the default library.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct TermsOption {
+    all: Option<String>,
+    per: Vec<(String, String)>,
+}
+
+impl TermsOption {
+    /// The list for the coordinate named `name`: its own, or the one for all.
+    pub fn for_coordinate(&self, name: &str) -> Option<&str> {
+        self.per
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, l)| l.as_str())
+            .or(self.all.as_deref())
+    }
+
+    /// The coordinates named with a list of their own.
+    pub fn named(&self) -> impl Iterator<Item = &str> {
+        self.per.iter().map(|(n, _)| n.as_str())
+    }
+}
+
+impl FromStr for TermsOption {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        let mut out = Self::default();
+        for part in s.split(';').map(str::trim).filter(|p| !p.is_empty()) {
+            match part.split_once(':') {
+                Some((name, list)) => {
+                    let name = name.trim().to_owned();
+                    if out.per.iter().any(|(n, _)| *n == name) {
+                        return Err(format!("the terms of '{name}' are given twice"));
+                    }
+                    out.per.push((name, list.trim().to_owned()));
+                }
+                None if out.all.is_none() => out.all = Some(part.to_owned()),
+                None => {
+                    return Err(
+                        "give one list for all equations, or one per coordinate as «name: list»".into(),
+                    );
+                }
+            }
+        }
+        if out.all.is_none() && out.per.is_empty() {
+            return Err("no terms given".into());
+        }
+        Ok(out)
+    }
+}
+
+impl fmt::Display for TermsOption {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let mut parts: Vec<String> = self.all.iter().cloned().collect();
+        parts.extend(self.per.iter().map(|(n, l)| format!("{n}: {l}")));
+        f.write_str(&parts.join("; "))
+    }
+}
+
 /// Every option of `hbid identify` as given, by the names of the command line (`_` for `-`) and of
 /// Python's keyword arguments, with their defaults. Checked by [`IdentifyRequest::new`].
 ///
@@ -154,9 +221,10 @@ pub struct IdentifyOptions {
     pub no_parametric: bool,
     /// Drive harmonics `1..=H` of the default model's drive terms.
     pub drive_harmonics: Option<u32>,
-    /// The model's terms instead of the default (a list, see [`TermList`]).
+    /// The model's terms instead of the default: a list ([`TermList`]) for every equation, or
+    /// one per coordinate ([`TermsOption`]).
     #[serde(with = "optional_text")]
-    pub terms: Option<TermList>,
+    pub terms: Option<TermsOption>,
     /// Model selection: the terms are a library of candidates, the kept ones refitted alone.
     pub select: bool,
     /// Folds of segments of the selection (at least 2).
@@ -246,6 +314,12 @@ pub struct IdentifyRequest {
     options: IdentifyOptions,
     drive: DriveSpec,
     basis: BasisKind,
+    /// The basis of each equation.
+    bases: Vec<BasisKind>,
+    /// The terms given for each equation, read in the record's names.
+    lists: Vec<Option<TermList>>,
+    /// The names terms are written in.
+    names: Names,
     weak: WeakForm,
     windows: WindowOptions,
     search: SearchOptions,
@@ -334,7 +408,6 @@ impl IdentifyRequest {
                 format!("must be between 1 and {MAX_DRIVE_HARMONIC}"),
             ));
         }
-        let domain = o.record.signal;
         let free = o.forcing == Some(ForcingTerms::None) && o.record.given_drive().is_none()
             || o.record.given_drive() == Some(DriveSpec::Free);
         let mut drive = o.record.drive(free);
@@ -378,15 +451,89 @@ impl IdentifyRequest {
                 "a free oscillation (no drive) has no periodic orbits: use «method=windowed»",
             ));
         }
-        let basis = match (&o.basis, &o.terms) {
-            (Some(b), _) => *b,
-            (None, Some(list)) => list
-                .smallest_basis()
-                .map_err(|e| OptionError::new("terms", e))?
-                .unwrap_or_else(|| default_basis(domain)),
-            (None, None) => default_basis(domain),
-        };
-        if let Some(list) = &o.terms {
+        let names = o.record.names()?;
+        let domains = o.record.domains();
+        let n = domains.len();
+        if n > 1 {
+            let preset = [
+                ("forcing", o.forcing.is_some()),
+                ("no_parametric", o.no_parametric),
+                ("drive_harmonics", o.drive_harmonics.is_some()),
+            ];
+            if let Some((name, _)) = preset.iter().find(|(_, given)| *given) {
+                return Err(OptionError::new(
+                    *name,
+                    "shapes the default model of one coordinate; a system's default library names its own terms \
+                     (or list them with «terms»)",
+                ));
+            }
+            let one_only = [
+                ("measured", o.record.measured != Measured::Displacement),
+                ("noise_sigma", o.noise_sigma.is_some()),
+                ("refine", o.refine),
+            ];
+            if let Some((name, _)) = one_only.iter().find(|(_, given)| *given) {
+                return Err(OptionError::new(
+                    *name,
+                    "is for a record of one coordinate, not a system of several («coords»)",
+                ));
+            }
+        }
+        // The list of each equation, read in the record's names for it.
+        let mut lists: Vec<Option<TermList>> = vec![None; n];
+        if let Some(terms) = &o.terms {
+            if let Some(unknown) = terms.named().find(|name| names.coordinate(name).is_none()) {
+                return Err(OptionError::new(
+                    "terms",
+                    format!(
+                        "names the coordinate '{unknown}', which has no equation (the coordinates are {})",
+                        names.coordinates().join(", ")
+                    ),
+                ));
+            }
+            for (i, slot) in lists.iter_mut().enumerate() {
+                if let Some(text) = terms.for_coordinate(&names.coordinates()[i]) {
+                    let list = TermList::parse_in(text, &names, i).map_err(|e| {
+                        let at = if n > 1 {
+                            format!("the equation of {}: ", names.coordinates()[i])
+                        } else {
+                            String::new()
+                        };
+                        OptionError::new("terms", format!("{at}{e}"))
+                    })?;
+                    *slot = Some(list);
+                }
+            }
+        }
+        let mut bases = Vec::with_capacity(n);
+        for (i, list) in lists.iter().enumerate() {
+            let domain = domains[i];
+            let basis = match (&o.basis, list) {
+                (Some(b), _) => *b,
+                (None, Some(list)) => list
+                    .smallest_basis()
+                    .map_err(|e| OptionError::new("terms", e))?
+                    .unwrap_or_else(|| default_basis(domain)),
+                (None, None) => default_basis(domain),
+            };
+            if basis.domain() != domain {
+                return Err(OptionError::value(
+                    "basis",
+                    basis.spec(),
+                    format!(
+                        "is a basis on the {}, but coordinate {} is on the {domain}",
+                        basis.domain(),
+                        i + 1
+                    ),
+                ));
+            }
+            bases.push(basis);
+        }
+        let basis = bases[0];
+        for (list, basis) in lists.iter().zip(&bases) {
+            let Some(list) = list else {
+                continue;
+            };
             if o.forcing == Some(ForcingTerms::Identified) {
                 return Err(OptionError::value(
                     "forcing",
@@ -407,9 +554,9 @@ impl IdentifyRequest {
                     "not with «terms»: name the harmonics' terms in the list (cos(2t)*sin(x))",
                 ));
             }
-            list.check_domain(domain)
+            list.check_domains(&domains)
                 .map_err(|e| OptionError::new("terms", e))?;
-            list.resolve(&basis)
+            list.resolve(basis)
                 .map_err(|e| OptionError::new("terms", format!("with the basis {}: {e}", basis.spec())))?;
             if matches!(drive, DriveSpec::Free | DriveSpec::Windows(_))
                 && let Some(t) = list.phase_term()
@@ -417,6 +564,17 @@ impl IdentifyRequest {
                 return Err(OptionError::new(
                     "terms",
                     format!("the term `{t}` has a drive factor, but the record has no periodic drive"),
+                ));
+            }
+            if let Some(t) = list.measured_term()
+                && o.record.drive_col.is_none()
+            {
+                return Err(OptionError::new(
+                    "terms",
+                    format!(
+                        "the term `{t}` has a measured drive: name the record's column that holds it with \
+                         «drive_col=»"
+                    ),
                 ));
             }
         }
@@ -441,6 +599,9 @@ impl IdentifyRequest {
         Ok(Self {
             drive,
             basis,
+            bases,
+            lists,
+            names,
             weak,
             windows,
             search,
@@ -466,10 +627,25 @@ impl IdentifyRequest {
         self.drive
     }
 
-    /// The basis of the unknown functions: the one given, or the smallest that holds the
-    /// functions of `x` of the terms, or the domain's default.
+    /// The basis of the unknown functions of the first (or only) coordinate: the one given, or
+    /// the smallest that holds the functions of `x` of the terms, or the domain's default.
     pub fn basis(&self) -> BasisKind {
         self.basis
+    }
+
+    /// The basis of the own coordinate's functions in the equation of coordinate `i`.
+    pub fn basis_of(&self, i: usize) -> BasisKind {
+        self.bases[i]
+    }
+
+    /// The number of equations: one per coordinate.
+    pub fn equations(&self) -> usize {
+        self.bases.len()
+    }
+
+    /// The names of the coordinates and drives, as terms are written in them.
+    pub fn names(&self) -> &Names {
+        &self.names
     }
 
     /// The windows of the weak form.
@@ -486,35 +662,36 @@ impl IdentifyRequest {
     /// default with the forcing, parametric and drive-harmonic options; a free oscillation has no
     /// drive terms.
     pub fn form(&self, data: &Data) -> Result<ModelForm, OptionError> {
+        self.form_of(data, 0)
+    }
+
+    /// The form of the equation of coordinate `i` on `data`: the terms given for it, or the
+    /// default (for a record of one coordinate the paper's preset with the forcing, parametric
+    /// and drive-harmonic options, for a system the library of [`system_library`]).
+    pub fn form_of(&self, data: &Data, i: usize) -> Result<ModelForm, OptionError> {
         let o = &self.options;
-        let measured = data.measured_drive.is_some();
+        let measured = !data.drives.is_empty();
         // Windows given in time or samples: no periodic drive, so no cos(t), sin(t) terms.
         let free = matches!(data.drive, DriveFound::Free { .. })
             || matches!(data.drive, DriveFound::Windows { .. }) && !measured;
-        let named = |form: ModelForm| match &o.record.drive_col {
-            Some(col) => form.with_drive_column(col.trim()),
-            None => form,
+        let named = |form: ModelForm| match o.record.drive_cols() {
+            [col] if self.equations() == 1 && form.has_measured_drive() => form.with_drive_column(col.trim()),
+            _ => form,
         };
-        if let Some(list) = &o.terms {
-            match (list.measured_term(), measured) {
-                (Some(t), false) => {
-                    return Err(OptionError::new(
-                        "terms",
-                        format!(
-                            "the term `{t}` has the measured drive p: name the record's column that holds it with \
-                             «drive_col=»"
-                        ),
-                    ));
-                }
-                (None, true) => {
-                    return Err(OptionError::new(
-                        "drive_col",
-                        "no term of «terms» has the measured drive p",
-                    ));
-                }
-                _ => {}
+        if let Some(list) = &self.lists[i] {
+            if measured && self.equations() == 1 && !list.has_measured_drive() {
+                return Err(OptionError::new(
+                    "drive_col",
+                    "no term of «terms» has the measured drive p",
+                ));
             }
             return Ok(named(ModelForm::from_terms(list.clone())));
+        }
+        if self.equations() > 1 {
+            let domains = o.record.domains();
+            let list = system_library(&self.names, &domains, i, !free && !measured)
+                .map_err(|e| OptionError::new("terms", e))?;
+            return Ok(ModelForm::from_terms(list));
         }
         let forcing = match (o.forcing, data.domain) {
             (Some(f), _) => f,
@@ -523,17 +700,19 @@ impl IdentifyRequest {
             (None, Domain::Line) => ForcingTerms::Identified,
         };
         if measured {
-            // The measured drive p in place of cos(t) and sin(t): x', {1,p}*B and p.
+            // The measured drives in place of cos(t) and sin(t): x', {1,p}*B and p.
             let functions = self.basis.names().join(",");
+            let drives = self.names.drives().join(",");
             let mut spec = if o.no_parametric {
                 format!("x', {{{functions}}}")
             } else {
-                format!("x', {{1,p}}*{{{functions}}}")
+                format!("x', {{1,{drives}}}*{{{functions}}}")
             };
             if forcing == ForcingTerms::Identified {
-                spec.push_str(", p");
+                spec.push_str(&format!(", {{{drives}}}"));
             }
-            let list = TermList::parse(&spec).map_err(|e| OptionError::new("drive_col", e))?;
+            let list =
+                TermList::parse_in(&spec, &self.names, 0).map_err(|e| OptionError::new("drive_col", e))?;
             if !list.has_measured_drive() {
                 return Err(OptionError::new(
                     "drive_col",
@@ -555,11 +734,17 @@ impl IdentifyRequest {
         Ok(form)
     }
 
-    /// What to identify by `method` (the request's own, or another for a report) on `data`.
+    /// What to identify by `method` (the request's own, or another for a report) on `data`: the
+    /// equation of its first (or only) coordinate.
     pub fn model_spec(&self, data: &Data, method: Method) -> Result<ModelSpec, RunError> {
+        self.equation_spec(data, method, 0)
+    }
+
+    /// What to identify by `method` on `data` for the equation of coordinate `i`.
+    pub fn equation_spec(&self, data: &Data, method: Method, i: usize) -> Result<ModelSpec, RunError> {
         let o = &self.options;
-        let form = self.form(data)?;
-        let mut spec = ModelSpec::new(method, self.basis)
+        let form = self.form_of(data, i)?;
+        let mut spec = ModelSpec::new(method, self.bases[i])
             .with_form(form)
             .with_weak_form(self.weak)
             .with_noise_correction(o.noise_sigma.unwrap_or_default())
@@ -638,6 +823,65 @@ impl IdentifyRequest {
     }
 }
 
+/// The default library of the equation of coordinate `own` of a system with `names` on
+/// `domains`, with a periodic drive (`cos(t)`, `sin(t)`) or not, documented in
+/// `docs/identification.md`:
+///
+/// - on the circle, what pendulum chains need: each angle's `sin` and `cos`, each other angle's
+///   acceleration times the `cos` of the difference, the other velocity squared times its `sin`,
+///   each velocity, and the drive (`cos(t)`, `sin(t)`, or each measured drive) alone and times
+///   each angle's `sin` and `cos`;
+/// - on the line, every monomial of degree 1 to 3 of the positions, each velocity, and each
+///   drive (`cos(t)`, `sin(t)` or the measured ones);
+/// - a system of both, the circle's terms of its angles and the line's of its positions.
+pub fn system_library(
+    names: &Names,
+    domains: &[Domain],
+    own: usize,
+    periodic: bool,
+) -> Result<TermList, TermError> {
+    let q = names.coordinates();
+    let angles: Vec<usize> = (0..q.len()).filter(|&c| domains[c] == Domain::Circle).collect();
+    let lines: Vec<usize> = (0..q.len()).filter(|&c| domains[c] == Domain::Line).collect();
+    let mut drives: Vec<String> = names.drives().to_vec();
+    if periodic {
+        drives.splice(0..0, ["cos(t)".to_owned(), "sin(t)".to_owned()]);
+    }
+    let mut terms: Vec<String> = Vec::new();
+    for &c in &angles {
+        terms.push(format!("sin({})", q[c]));
+        terms.push(format!("cos({})", q[c]));
+    }
+    if domains[own] == Domain::Circle {
+        for &c in angles.iter().filter(|&&c| c != own) {
+            let (a, b) = if own < c { (own, c) } else { (c, own) };
+            terms.push(format!("{}''*cos({}-{})", q[c], q[a], q[b]));
+            terms.push(format!("sin({}-{})*{}'^2", q[a], q[b], q[c]));
+        }
+    }
+    // Monomials of degree 1 to 3 of the positions on the line.
+    for (i, &a) in lines.iter().enumerate() {
+        terms.push(q[a].clone());
+        for (j, &b) in lines.iter().enumerate().skip(i) {
+            terms.push(format!("{}*{}", q[a], q[b]));
+            for &c in lines.iter().skip(j) {
+                terms.push(format!("{}*{}*{}", q[a], q[b], q[c]));
+            }
+        }
+    }
+    for c in 0..q.len() {
+        terms.push(format!("{}'", q[c]));
+    }
+    for d in &drives {
+        terms.push(d.clone());
+        for &c in &angles {
+            terms.push(format!("{d}*sin({})", q[c]));
+            terms.push(format!("{d}*cos({})", q[c]));
+        }
+    }
+    TermList::parse_in(&terms.join(", "), names, own)
+}
+
 impl Default for IdentifyRequest {
     fn default() -> Self {
         Self::new(IdentifyOptions::default()).expect("the default options are valid")
@@ -664,10 +908,13 @@ impl Serialize for IdentifyRequest {
 pub struct IdentifyReport {
     /// The method.
     pub method: Method,
-    /// The basis.
+    /// The basis of the first (or only) coordinate's functions.
     pub basis: BasisKind,
-    /// The model, its intervals, fit quality, warning and selection.
-    pub identification: Identification,
+    /// One equation per coordinate, in order: the model, its intervals, fit quality, warning
+    /// and selection.
+    pub equations: Vec<EquationReport>,
+    /// The names of the coordinates and drives, as the terms are written in them.
+    pub names: Names,
     /// The record as analysed.
     pub record: RecordSummary,
     /// The delay of the close-return search (`upo`).
@@ -681,6 +928,39 @@ pub struct IdentifyReport {
     /// What the output-error refinement did (`refine`); the model's coefficients are then the
     /// refined ones, and its fit measures, intervals and selection those of the weak form.
     pub refinement: Option<crate::refine::Refinement>,
+}
+
+/// The identification of one coordinate's equation.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EquationReport {
+    /// The coordinate's name.
+    pub coordinate: String,
+    /// The basis of its functions.
+    pub basis: BasisKind,
+    /// The model, its intervals, fit quality, warning and selection.
+    pub identification: Identification,
+}
+
+impl IdentifyReport {
+    /// The identification of the first (or only) coordinate's equation.
+    pub fn identification(&self) -> &Identification {
+        &self.equations[0].identification
+    }
+
+    /// The identified system, one equation per coordinate (a record of one coordinate is the
+    /// system of its model).
+    pub fn system(&self) -> Result<IdentifiedSystem, RunError> {
+        let models: Vec<IdentifiedModel> = self
+            .equations
+            .iter()
+            .map(|e| e.identification.model.clone())
+            .collect();
+        if models.len() == 1 {
+            return Ok(IdentifiedSystem::one(models.into_iter().next().expect("one")));
+        }
+        let domains = models.iter().map(IdentifiedModel::domain).collect();
+        Ok(IdentifiedSystem::new(self.names.clone(), domains, models)?)
+    }
 }
 
 /// The integrator's relative tolerance in the refinement (as `compare`'s default: the
@@ -709,7 +989,25 @@ pub fn identify_data(
     observer: &mut dyn Observer,
 ) -> Result<IdentifyReport, RunError> {
     let method = request.options.method;
-    let setup = request.model_spec(data, method)?.setup(&data.clock)?;
+    let n = request.equations();
+    if data.others.len() + 1 != n {
+        return Err(OptionError::new(
+            "coords",
+            format!(
+                "the record has {} coordinate(s), the request {n}",
+                data.others.len() + 1
+            ),
+        )
+        .into());
+    }
+    let setups = (0..n)
+        .map(|i| {
+            request
+                .equation_spec(data, method, i)?
+                .setup(&data.clock)
+                .map_err(RunError::from)
+        })
+        .collect::<Result<Vec<_>, RunError>>()?;
     let delay = match method {
         Method::Upo => Some(request.delay(data, observer)?),
         Method::Windowed => None,
@@ -717,13 +1015,13 @@ pub fn identify_data(
     observer.stage(Stage::Segments);
     let (segments, found) = request.segments(data, delay.unwrap_or(1), method)?;
     let measured = request.options.record.measured;
-    let drives: Vec<&[f64]> = data.measured_drive.iter().map(Vec::as_slice).collect();
+    let drives: Vec<&[f64]> = data.drives.iter().map(Vec::as_slice).collect();
     let mut drifted = None;
     let mut drift = None;
     if measured != Measured::Displacement {
         observer.stage(Stage::Drift);
         let (x, fit) = fit_drift(
-            &setup,
+            &setups[0],
             &data.x,
             &drives,
             &data.pieces,
@@ -746,33 +1044,54 @@ pub fn identify_data(
         drift = Some(fit);
     }
     let x = drifted.as_deref().unwrap_or(&data.x);
-    let signals = Signals::one(x)
-        .with_drives(drives.clone())
-        .map_err(|source| RunError::Identify {
-            found: found.clone(),
+    let mut coordinates = data.coordinates();
+    coordinates[0].0 = x;
+    let mut equations = Vec::with_capacity(n);
+    for (i, setup) in setups.iter().enumerate() {
+        let identify_error = |source| RunError::Identify {
+            found: if n > 1 {
+                format!("{found}, the equation of {}", request.names.coordinates()[i])
+            } else {
+                found.clone()
+            },
             source,
-        })?;
-    let identification = setup
-        .identify_with_progress(signals, &segments, |step| {
-            observer.stage(match step {
-                IdentifyStep::Assemble => Stage::Assemble,
-                IdentifyStep::Select => Stage::Select,
-                IdentifyStep::Solve => Stage::Solve,
-                IdentifyStep::Bootstrap => Stage::Bootstrap,
+        };
+        let signals = Signals::system(coordinates.clone(), i)
+            .and_then(|s| s.with_drives(drives.clone()))
+            .map_err(identify_error)?;
+        let identification = setup
+            .identify_with_progress(signals, &segments, |step| {
+                observer.stage(match step {
+                    IdentifyStep::Assemble => Stage::Assemble,
+                    IdentifyStep::Select => Stage::Select,
+                    IdentifyStep::Solve => Stage::Solve,
+                    IdentifyStep::Bootstrap => Stage::Bootstrap,
+                })
             })
-        })
-        .map_err(|source| RunError::Identify {
-            found: found.clone(),
-            source,
-        })?;
-    if let Some(why) = &identification.no_intervals {
-        observer.notice(&Notice::NoIntervals(why.clone()));
-    }
-    if let Some(w) = &identification.warning {
-        observer.notice(&Notice::Warning(w.clone()));
+            .map_err(identify_error)?;
+        let of = if n > 1 {
+            format!("the equation of {}: ", request.names.coordinates()[i])
+        } else {
+            String::new()
+        };
+        if let Some(why) = &identification.no_intervals {
+            observer.notice(&Notice::NoIntervals(format!("{of}{why}")));
+        }
+        if let Some(w) = &identification.warning {
+            observer.notice(&Notice::Warning(format!("{of}{w}")));
+        }
+        equations.push(EquationReport {
+            coordinate: request.names.coordinates()[i].clone(),
+            basis: request.bases[i],
+            identification,
+        });
     }
     if method == Method::Windowed && segments.len() < hb_solve::HELD_OUT_FOLDS {
-        let unknowns = identification.model.coefficients().len();
+        let unknowns = equations
+            .iter()
+            .map(|e| e.identification.model.coefficients().len())
+            .max()
+            .unwrap_or(0);
         observer.notice(&Notice::Warning(format!(
             "only {} window(s) ({found}) for {unknowns} unknowns: too few to check the fit on stretches it was \
              not fitted on, so its share explained says little; shorten the windows with «window», \
@@ -780,17 +1099,18 @@ pub fn identify_data(
             segments.len()
         )));
     }
-    let mut identification = identification;
     let mut refinement = None;
     if request.options.refine {
         observer.stage(Stage::Refine);
+        let identification = &mut equations[0].identification;
         let grid = GridData {
             t0: data.clock.start_time(),
             dt: data.clock.step(),
             x: x.to_vec(),
             pieces: data.pieces.clone(),
             domain: data.domain,
-            drive: data.measured_drive.clone(),
+            others: Vec::new(),
+            drives: data.drives.clone(),
             notes: Vec::new(),
         };
         let model = &identification.model;
@@ -826,13 +1146,14 @@ pub fn identify_data(
     Ok(IdentifyReport {
         method,
         basis: request.basis,
+        equations,
+        names: request.names.clone(),
         refinement,
         record: RecordSummary::of(data),
         delay,
         segments: segments.len(),
         found,
         drift,
-        identification,
     })
 }
 
@@ -961,9 +1282,101 @@ struct RefinementJson<'a> {
     start: Ordered<'a, f64>,
 }
 
+/// The JSON of one equation of a system: its terms, coefficients, standard errors, intervals,
+/// fit measures, warning and selection, term names as the grammar writes them.
+#[derive(Serialize)]
+struct EquationJson<'a> {
+    basis: String,
+    terms: Vec<&'a str>,
+    coefficients: Ordered<'a, f64>,
+    std_errors: Ordered<'a, f64>,
+    rows: Option<usize>,
+    condition_number: Option<f64>,
+    residual_rms: Option<f64>,
+    intervals: Option<Ordered<'a, [f64; 2]>>,
+    interval_level: Option<f64>,
+    resamples: Option<usize>,
+    no_intervals: Option<&'a str>,
+    explained: f64,
+    unexplained: f64,
+    held_out_explained: Option<f64>,
+    warning: Option<&'a str>,
+    selection: Option<SelectionJson<'a>>,
+}
+
+impl<'a> EquationJson<'a> {
+    fn of(e: &'a EquationReport) -> Self {
+        let id = &e.identification;
+        let coefficients = id.model.coefficients();
+        let summary = id.model.summary();
+        Self {
+            basis: e.basis.spec(),
+            terms: coefficients.iter().map(|c| c.name.as_str()).collect(),
+            coefficients: Ordered(coefficients.iter().map(|c| (c.name.as_str(), c.value)).collect()),
+            std_errors: Ordered(
+                coefficients
+                    .iter()
+                    .map(|c| (c.name.as_str(), c.std_error))
+                    .collect(),
+            ),
+            rows: summary.map(|s| s.rows),
+            condition_number: summary.map(|s| s.condition),
+            residual_rms: summary.map(|s| s.residual_rms),
+            intervals: id.intervals.as_ref().map(|b| {
+                Ordered(
+                    b.intervals
+                        .iter()
+                        .map(|i| (i.name.as_str(), [i.lower, i.upper]))
+                        .collect(),
+                )
+            }),
+            interval_level: id.intervals.as_ref().map(|b| b.level),
+            resamples: id.intervals.as_ref().map(|b| b.resamples),
+            no_intervals: id.no_intervals.as_deref(),
+            explained: id.quality.explained,
+            unexplained: id.quality.unexplained,
+            held_out_explained: id.quality.held_out.map(|h| h.explained),
+            warning: id.warning.as_deref(),
+            selection: id.selection.as_ref().map(SelectionJson::of),
+        }
+    }
+}
+
+/// The JSON of a system's identification: one entry per coordinate under `equations`, keyed
+/// by its name, and the record and run.
+#[derive(Serialize)]
+struct SystemJson<'a> {
+    method: &'static str,
+    coordinates: &'a [String],
+    drives: &'a [String],
+    equations: Ordered<'a, EquationJson<'a>>,
+    segments: usize,
+    delay: Option<usize>,
+    found: &'a str,
+    record: &'a RecordSummary,
+}
+
 impl Serialize for IdentifyReport {
     fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        let id = &self.identification;
+        if self.equations.len() > 1 {
+            return SystemJson {
+                method: self.method.name(),
+                coordinates: self.names.coordinates(),
+                drives: self.names.drives(),
+                equations: Ordered(
+                    self.equations
+                        .iter()
+                        .map(|e| (e.coordinate.as_str(), EquationJson::of(e)))
+                        .collect(),
+                ),
+                segments: self.segments,
+                delay: self.delay,
+                found: &self.found,
+                record: &self.record,
+            }
+            .serialize(s);
+        }
+        let id = self.identification();
         let model = &id.model;
         let coefficients = model.coefficients();
         let summary = model.summary();

@@ -35,9 +35,9 @@
 //! let table = hb_pipeline::simulate(&rig, &mut ())?.table();
 //! let (t, x): (Vec<f64>, Vec<f64>) = table.iter().map(|row| (row[0], row[1])).unzip();
 //! let request = IdentifyRequest::new(IdentifyOptions { bootstrap: 0, ..IdentifyOptions::default() })?;
-//! let source = Source::Arrays { x: &x, t: Some(&t), drive: None };
+//! let source = Source::Arrays { coords: vec![&x], t: Some(&t), drives: Vec::new() };
 //! let report = hb_pipeline::identify(source, &request, &mut ())?;
-//! let drive = report.identification.model.coefficient("sin(t)*cos(x)").unwrap().value;
+//! let drive = report.identification().model.coefficient("sin(t)*cos(x)").unwrap().value;
 //! assert!((drive + 1.52).abs() < 1e-5);
 //! assert_eq!(IdentifyRequest::from_json(serde_json::json!({"bootstrap": 0}))?, request);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
@@ -63,10 +63,14 @@ pub use compare::{
 pub use embed::{EmbedReport, EmbedRequest, OrbitOptions, UposReport, UposRequest, embed, upos};
 pub use error::{ErrorKind, RunError};
 pub use identify::{
-    ForcingTerms, IdentifyOptions, IdentifyReport, IdentifyRequest, SolverKind, identify, identify_data,
+    EquationReport, ForcingTerms, IdentifyOptions, IdentifyReport, IdentifyRequest, SolverKind, TermsOption,
+    identify, identify_data, system_library,
 };
 pub use observe::{Notice, Notices, Observer, Stage};
 pub use options::{OptionError, Spelling};
-pub use record::{DriveFrequency, DrivePeriod, RecordOptions, RecordSummary, Source, condition_source, load};
+pub use record::{
+    ColumnList, DriveFrequency, DrivePeriod, RecordOptions, RecordSummary, SignalList, Source,
+    condition_source, load,
+};
 pub use refine::{Refinement, refine};
 pub use simulate::{Rig, SimulateOptions, Simulation, Truth, simulate};

@@ -244,9 +244,15 @@ fn edit_distance(a: &str, b: &str) -> usize {
 }
 
 /// A value given as a number, a text or a list of texts, as its text: numbers as they print, a
-/// list joined by `, ` (a list of terms).
+/// list joined by `, ` (a list of terms), an object of such values as `key: value` parts
+/// joined by `; ` (the terms of each equation by its coordinate).
 fn as_text(value: Value) -> Result<String, String> {
     match value {
+        Value::Object(map) => map
+            .into_iter()
+            .map(|(k, v)| as_text(v).map(|v| format!("{k}: {v}")))
+            .collect::<Result<Vec<_>, _>>()
+            .map(|parts| parts.join("; ")),
         Value::String(s) => Ok(s),
         Value::Number(n) => Ok(n.to_string()),
         Value::Bool(b) => Ok(b.to_string()),

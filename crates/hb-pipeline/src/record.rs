@@ -310,8 +310,11 @@ impl RecordOptions {
             Some(c) if !single => c.names().to_vec(),
             _ => vec!["x".to_owned()],
         };
+        // One coordinate with at most one drive: the names of every list before several
+        // coordinates (`p` is a term's factor even before a drive is named, so that the error
+        // says to name it).
         let drives: Vec<String> = if single && drives.len() <= 1 {
-            drives.iter().map(|_| "p".to_owned()).collect()
+            vec!["p".to_owned()]
         } else {
             drives.to_vec()
         };
@@ -357,9 +360,17 @@ impl RecordOptions {
                 .map(|t| t.parse::<Column>().map_err(|e| OptionError::value(name, t, e)))
                 .collect()
         };
-        let coords = self.coords.as_ref().map(|c| c.names().to_vec()).unwrap_or_default();
+        let coords = self
+            .coords
+            .as_ref()
+            .map(|c| c.names().to_vec())
+            .unwrap_or_default();
         let angle = match coords.first() {
-            Some(first) => Some(first.parse::<Column>().map_err(|e| OptionError::value("coords", first, e))?),
+            Some(first) => Some(
+                first
+                    .parse::<Column>()
+                    .map_err(|e| OptionError::value("coords", first, e))?,
+            ),
             None => column("angle_col", &self.angle_col)?,
         };
         Ok(ReadOptions {
@@ -468,7 +479,11 @@ fn arrays_record(
         }
         (None, Some(dt)) => (0..x.len()).map(|i| i as f64 * dt).collect(),
     };
-    for (what, series) in others.iter().map(|o| ("coordinate", o)).chain(drives.iter().map(|d| ("drive", d))) {
+    for (what, series) in others
+        .iter()
+        .map(|o| ("coordinate", o))
+        .chain(drives.iter().map(|d| ("drive", d)))
+    {
         if series.len() != x.len() {
             return Err(OptionError::new(
                 if what == "drive" { "drive" } else { "x" },
@@ -484,7 +499,9 @@ fn arrays_record(
     let roles = std::iter::once(Role::Time)
         .chain(coords.iter().map(|_| Role::Angle))
         .chain(drives.iter().map(|_| Role::Drive));
-    let columns = std::iter::once(t.as_slice()).chain(coords.iter().copied()).chain(drives.iter().copied());
+    let columns = std::iter::once(t.as_slice())
+        .chain(coords.iter().copied())
+        .chain(drives.iter().copied());
     for (role, column) in roles.zip(columns) {
         if let Some((i, &value)) = column.iter().enumerate().find(|(_, v)| !v.is_finite()) {
             return Err(RunError::Read {

@@ -34,9 +34,9 @@ fn scores(omega: f64, dt: f64, len: usize, ranges: &[SampleRange]) -> Result<Vec
     })
     .unwrap();
     let source = Source::Arrays {
-        x: &x,
+        coords: vec![&x],
         t: None,
-        drive: None,
+        drives: Vec::new(),
     };
     Ok(compare(&at_rest(omega), source, &request, &mut ())?.ranges)
 }

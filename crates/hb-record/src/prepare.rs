@@ -199,7 +199,9 @@ impl PrepareOptions {
 
     /// The domain of every coordinate, the first one first.
     pub fn domains(&self) -> Vec<Domain> {
-        std::iter::once(self.signal).chain(self.others.iter().copied()).collect()
+        std::iter::once(self.signal)
+            .chain(self.others.iter().copied())
+            .collect()
     }
 
     /// A record of the velocity or acceleration of the displacement (see
@@ -541,7 +543,8 @@ pub fn condition(
             missing,
         });
     }
-    let channels = std::iter::once((&mut x, options.signal)).chain(others.iter_mut().map(|c| (&mut c.x, c.domain)));
+    let channels =
+        std::iter::once((&mut x, options.signal)).chain(others.iter_mut().map(|c| (&mut c.x, c.domain)));
     let mut wrapped = false;
     for (coordinate, (x, domain)) in channels.enumerate() {
         if domain == Domain::Circle {
@@ -580,7 +583,8 @@ pub fn condition(
             if domain == Domain::Circle {
                 return Err(PrepareError::MeasuredOnCircle(options.measured));
             }
-            *x = circle_signal::displacement(x, dt, options.measured, &pieces).map_err(PrepareError::Integrate)?;
+            *x = circle_signal::displacement(x, dt, options.measured, &pieces)
+                .map_err(PrepareError::Integrate)?;
         }
     }
     if options.measured != Measured::Displacement {

@@ -17,15 +17,15 @@ fn with(text: &str, options: ReadOptions) -> Result<Record, InputError> {
 #[test]
 fn reads_a_drive_column_beside_the_angle() {
     let drive = |c: &str| ReadOptions {
-        drive: Some(c.parse().unwrap()),
+        drives: vec![c.parse().unwrap()],
         ..Default::default()
     };
     let text = "t,theta,omega,acc\n0,0.1,0,5\n# c\n0.5,0.2,1,-6\n";
     for chosen in ["acc", "4"] {
         let r = with(text, drive(chosen)).unwrap();
-        assert_eq!((r.theta, r.drive), (vec![0.1, 0.2], Some(vec![5.0, -6.0])));
+        assert_eq!((r.theta, r.drives), (vec![0.1, 0.2], vec![vec![5.0, -6.0]]));
     }
-    assert_eq!(read(text).unwrap().drive, None);
+    assert!(read(text).unwrap().drives.is_empty());
     for taken in ["t", "theta", "1"] {
         assert!(matches!(
             with(text, drive(taken)),
@@ -48,7 +48,7 @@ fn reads_a_drive_column_beside_the_angle() {
     }
     // Two unnamed columns and a drive: no guessing of the order, the time is column 1.
     let r = with("0.1,0,7\n0.2,1,8\n", drive("3")).unwrap();
-    assert_eq!((r.t, r.drive), (vec![0.1, 0.2], Some(vec![7.0, 8.0])));
+    assert_eq!((r.t, r.drives), (vec![0.1, 0.2], vec![vec![7.0, 8.0]]));
     // .npy: rows (t, x, p).
     let f8: Vec<u8> = [0.0f64, 0.5, 9.0, 1.0, 0.6, f64::NAN]
         .iter()
@@ -67,7 +67,10 @@ fn reads_a_drive_column_beside_the_angle() {
         .flat_map(|v| v.to_le_bytes())
         .collect();
     let npy = npy_bytes("<f8", "(2, 3)", false, &f8);
-    assert_eq!(read_bytes(&npy, &drive("3")).unwrap().drive, Some(vec![9.0, 8.0]));
+    assert_eq!(
+        read_bytes(&npy, &drive("3")).unwrap().drives,
+        vec![vec![9.0, 8.0]]
+    );
 }
 
 #[test]

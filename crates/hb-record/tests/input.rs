@@ -16,7 +16,7 @@ fn options(time: Option<&str>, angle: Option<&str>, dt: Option<f64>) -> ReadOpti
         time: column(time),
         angle: column(angle),
         dt,
-        drive: None,
+        ..ReadOptions::default()
     }
 }
 
@@ -89,7 +89,7 @@ fn columns(options: &ReadOptions, names: Option<&[&str]>, width: usize) -> Resul
         Times::Column(column_of(&record.t))
     };
     let angle = column_of(&record.theta);
-    let drive = record.drive.as_deref().map(column_of);
+    let drive = record.drives.first().map(|d| column_of(d));
     let order_from_data = match time {
         Times::Step(_) => false,
         Times::Column(c) => {

@@ -12,6 +12,7 @@ fn the_spikes_note_speaks_of_bit_errors_on_the_circle_and_of_outliers_on_the_lin
     }];
     let note = |domain, repaired| {
         Note::Spikes {
+            coordinate: 0,
             found: found.clone(),
             repaired,
             domain,

@@ -272,7 +272,7 @@ proptest! {
         angle in column(),
         dt in step(),
     ) {
-        check_read(&bytes, &ReadOptions { time, angle, dt, drive: None })?;
+        check_read(&bytes, &ReadOptions { time, angle, dt, ..ReadOptions::default() })?;
     }
 
     /// A record written in any supported layout reads back to the same samples, each numbered by
@@ -343,7 +343,7 @@ proptest! {
                 time: Some(Column::Position(tc + 1)),
                 angle: Some(Column::Position(xc + 1)),
                 dt: None,
-                drive: None,
+                ..ReadOptions::default()
             };
             (options, column(tc), column(xc))
         };

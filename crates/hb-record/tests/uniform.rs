@@ -30,7 +30,7 @@ fn record(t: Vec<f64>) -> Record {
         theta: (0..t.len()).map(|i| i as f64).collect(),
         lines: Some((0..t.len() as u64).map(|i| i + 2).collect()),
         t,
-        drive: None,
+        ..Record::default()
     }
 }
 
@@ -700,7 +700,7 @@ fn check_fit(t0: f64, dt: f64, extra: usize, runs: &[(usize, usize)]) -> Result<
         t,
         theta: theta.clone(),
         lines: None,
-        drive: None,
+        ..Record::default()
     };
     let u = GridRecord::fit(rec, &GridOptions::default()).map_err(|e| TestCaseError::fail(e.to_string()))?;
     prop_assert_eq!(u.pieces.iter().map(|p| p.first).collect::<Vec<_>>(), firsts);

@@ -26,9 +26,9 @@ fn case(samples: usize, bootstrap: usize, noise: f64, seed: u64) -> Result<Strin
         ..IdentifyOptions::default()
     })?;
     let source = Source::Arrays {
-        x: &x,
+        coords: vec![&x],
         t: Some(&t),
-        drive: None,
+        drives: Vec::new(),
     };
     let report = hb_pipeline::identify(source, &request, &mut ())?;
     serde_json::to_string_pretty(&report).map_err(|e| hb_pipeline::OptionError::new("options", e).into())

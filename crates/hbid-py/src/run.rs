@@ -57,9 +57,9 @@ impl<'a> Samples<'a> {
         match (&self.path, self.x, &self.grid) {
             (Some(path), None, None) => Ok(Source::Path(path)),
             (None, Some(x), None) => Ok(Source::Arrays {
-                x,
+                coords: vec![x],
                 t: self.t,
-                drive: self.drive,
+                drives: self.drive.into_iter().collect(),
             }),
             (None, Some(x), Some(Grid(t0, dt, pieces, signal))) => {
                 let pieces: Vec<Range<usize>> = pieces.iter().map(|&(a, b)| a..b).collect();
@@ -79,7 +79,8 @@ impl<'a> Samples<'a> {
                     x: x.to_vec(),
                     pieces,
                     domain,
-                    drive: self.drive.map(<[f64]>::to_vec),
+                    others: Vec::new(),
+                    drives: self.drive.map(<[f64]>::to_vec).into_iter().collect(),
                     notes: Vec::new(),
                 }))
             }
@@ -153,7 +154,10 @@ pub fn condition<'py>(
     out.set_item("notes", notice_texts(&notices.0))?;
     out.set_item("time_repairs", time_repairs)?;
     out.set_item("spikes", spikes)?;
-    out.set_item("drive", grid.drive.map(|p| PyArray1::from_vec(py, p)))?;
+    out.set_item(
+        "drive",
+        grid.drives.into_iter().next().map(|p| PyArray1::from_vec(py, p)),
+    )?;
     out.set_item("x", PyArray1::from_vec(py, grid.x))?;
     Ok(out)
 }
@@ -181,8 +185,7 @@ pub fn identify<'py>(
             let json = serde_json::to_string_pretty(&report)
                 .map_err(|e| hb_pipeline::OptionError::new("options", e))?;
             let model = report
-                .identification
-                .model
+                .system()?
                 .to_bytes()
                 .map_err(hb_pipeline::RunError::Model)?;
             Ok::<_, hb_pipeline::RunError>((json, model))

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use anyhow::Context;
 use circle_signal::{Domain, Measured};
 use clap::Args;
-use hb_pipeline::{CompareOptions, CompareReport, CompareRequest, SampleRange, Source};
+use hb_pipeline::{ColumnList, CompareOptions, CompareReport, CompareRequest, SampleRange, Source};
 use hb_plot::{BLUE, Figure, ORANGE, RED, Series, Style};
 
 use super::data::choice;
@@ -30,11 +30,16 @@ pub struct CompareArgs {
     /// Sampling step, for records without a time column (the first sample is at t = 0).
     #[arg(long, allow_hyphen_values = true)]
     pub dt: Option<f64>,
-    /// The measured drive p(t), for a model with terms in p: a column of the record, by header name
-    /// or 1-based position. Between samples the model reads it from the interpolating cubic spline
-    /// of the samples (not-a-knot), which keeps a band-limited drive's amplitude and has no kink.
-    #[arg(long, value_name = "NAME|N")]
-    pub drive_col: Option<String>,
+    /// A system's coordinates: the record's columns in the order of the model's coordinates
+    /// [default: the model's names].
+    #[arg(long, value_name = "A,B[,..]", conflicts_with = "angle_col")]
+    pub coords: Option<ColumnList>,
+    /// The measured drives, for a model with terms in them: columns of the record, by header name
+    /// or 1-based position, in the order of the model's drives (a system's default: the model's
+    /// names). Between samples the model reads each from the interpolating cubic spline of the
+    /// samples (not-a-knot), which keeps a band-limited drive's amplitude and has no kink.
+    #[arg(long, value_name = "NAME|N[,..]")]
+    pub drive_col: Option<ColumnList>,
     /// Fix isolated time-stamp glitches and encoder spikes (each listed on stderr).
     #[arg(long)]
     pub repair: bool,
@@ -78,6 +83,7 @@ impl CompareArgs {
         CompareOptions {
             time_col: self.time_col.clone(),
             angle_col: self.angle_col.clone(),
+            coords: self.coords.clone(),
             dt: self.dt,
             drive_col: self.drive_col.clone(),
             repair: self.repair,

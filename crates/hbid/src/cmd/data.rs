@@ -3,9 +3,9 @@
 
 use std::path::PathBuf;
 
-use circle_signal::{Domain, Measured};
+use circle_signal::Measured;
 use clap::Args;
-use hb_pipeline::{DriveFrequency, DrivePeriod, OrbitOptions, RecordOptions, Source};
+use hb_pipeline::{ColumnList, DriveFrequency, DrivePeriod, OrbitOptions, RecordOptions, SignalList, Source};
 use upo_search::CloseReturns;
 
 /// A value among `names`, read by its type's `FromStr`: the help lists the names, a bad one is
@@ -27,29 +27,38 @@ pub struct InputArgs {
     /// Time column, by header name or 1-based position.
     #[arg(long, value_name = "NAME|N")]
     pub time_col: Option<String>,
-    /// Angle (or displacement) column, by header name or 1-based position.
-    #[arg(long, value_name = "NAME|N")]
+    /// Angle (or displacement) column, by header name or 1-based position: a record of one
+    /// coordinate (its terms name it x).
+    #[arg(long, value_name = "NAME|N", conflicts_with = "coords")]
     pub angle_col: Option<String>,
+    /// The columns that each get an equation, by header name: a system of several coordinates
+    /// (a double pendulum's theta1,theta2; a chain's x1,x2,x3), one time base. Terms name the
+    /// coordinates by these names (sin(theta1), theta2''*cos(theta1-theta2), x1^2*x2, q1'*q2').
+    #[arg(long, value_name = "A,B[,..]")]
+    pub coords: Option<ColumnList>,
     /// Sampling step, for records without a time column (the first sample is at t = 0).
     #[arg(long, allow_hyphen_values = true)]
     pub dt: Option<f64>,
-    /// The measured drive p(t): a column of the record (by header name or 1-based position), such
-    /// as a shaker's base acceleration or a motor's torque, sampled with the angle. Terms name it
-    /// `p` (`p`, `p*cos(x)`, `p*x'`); without --terms the default model has it in place of cos(t)
-    /// and sin(t): x', {1,p}*B and (with --forcing identified, the default on the line) p, B the
-    /// basis. The weak form balances it at every sample as measured, of any waveform; windows are
-    /// still counted in drive periods (--drive-period, or --drive-period none for periods of the
-    /// oscillation).
-    #[arg(long, value_name = "NAME|N", visible_alias = "forcing-col")]
-    pub drive_col: Option<String>,
+    /// Measured drives: columns of the record (by header name or 1-based position; several
+    /// separated by commas), such as a shaker's base acceleration or a motor's torques, sampled
+    /// with the coordinates; they get no equation. With one coordinate and one drive, terms name
+    /// it `p` (`p`, `p*cos(x)`, `p*x'`); otherwise by its column's name (tau1, tau2*cos(q1)).
+    /// Without --terms the one-coordinate default model has it in place of cos(t) and sin(t):
+    /// x', {1,p}*B and (with --forcing identified, the default on the line) p, B the basis. The
+    /// weak form balances it at every sample as measured, of any waveform; windows are still
+    /// counted in drive periods (--drive-period, or --drive-period none for periods of the
+    /// oscillation, or --window in the record's time).
+    #[arg(long, value_name = "NAME|N[,..]", visible_alias = "forcing-col")]
+    pub drive_col: Option<ColumnList>,
     /// Fix isolated time-stamp glitches (a stamp off the grid, repeated or going backwards, between
     /// two that fit) and encoder spikes, and list each fix on stderr.
     #[arg(long)]
     pub repair: bool,
     /// An angle on the circle (wrapped into [-π, π), unwrapped per orbit, circle metric) or a
-    /// displacement on the line (no wrapping, plain differences): circle or line.
-    #[arg(long, default_value_t = Domain::Circle, value_parser = choice::<Domain>(&["circle", "line"]))]
-    pub signal: Domain,
+    /// displacement on the line (no wrapping, plain differences): circle or line, for every
+    /// coordinate or one per coordinate of --coords (circle,line).
+    #[arg(long, value_name = "circle|line[,..]", default_value_t = SignalList::default())]
+    pub signal: SignalList,
     /// What the sensor measured, on the line: the displacement, or its velocity (a laser
     /// vibrometer) or acceleration (an accelerometer), integrated here to the displacement less
     /// its mean (velocity) or least-squares linear trend (acceleration). `identify` then finds
@@ -88,10 +97,11 @@ impl InputArgs {
         RecordOptions {
             time_col: self.time_col.clone(),
             angle_col: self.angle_col.clone(),
+            coords: self.coords.clone(),
             dt: self.dt,
             drive_col: self.drive_col.clone(),
             repair: self.repair,
-            signal: self.signal,
+            signal: self.signal.clone(),
             measured: self.measured,
             drive_period: self.drive_period.clone(),
             drive_frequency: self.drive_frequency.clone(),

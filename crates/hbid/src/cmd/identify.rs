@@ -5,9 +5,9 @@ use std::path::PathBuf;
 use anyhow::Context;
 use clap::Args;
 use hb_basis::BasisKind;
-use hb_model::{IdentifiedModel, TermList};
+use hb_model::{IdentifiedModel, IdentifiedSystem};
 use hb_pipeline::pipeline::{Method, TermSelection};
-use hb_pipeline::{ForcingTerms, IdentifyOptions, IdentifyReport, IdentifyRequest, SolverKind};
+use hb_pipeline::{ForcingTerms, IdentifyOptions, IdentifyReport, IdentifyRequest, SolverKind, TermsOption};
 use hb_solve::{BootstrapParams, NoiseCorrection, SelectParams, WeakForm};
 use upo_search::Windows;
 
@@ -104,13 +104,25 @@ pub struct IdentifyArgs {
     /// term may appear once. Without --basis the smallest basis that holds every function of x named
     /// is used (cos(2x): harmonic:2; x^3: poly:3; hat7: hat:8); with it, every function named must
     /// be in it. Terms are printed and saved with these names.
+    ///
+    /// With several coordinates (--coords theta1,theta2) terms name them and the drives by their
+    /// columns, and each equation q_i'' + sum_k c_k g_k = 0 may have its own list:
+    /// "theta1: theta2''*cos(theta1-theta2), sin(theta1-theta2)*theta2'^2, sin(theta1), theta1';
+    ///  theta2: theta1''*cos(theta1-theta2), sin(theta1-theta2)*theta1'^2, sin(theta2), theta2'"
+    /// (a list without a name serves the equations not named). Factors in other coordinates:
+    /// cos or sin of a whole combination of angles (cos(theta1-theta2), sin(q1+q2)), powers of
+    /// positions on the line (x1^2*x2), other velocities (theta2', theta2'^2, q1'*q2', sign(q2')),
+    /// and one acceleration times functions of the positions (theta2''*cos(theta1-theta2), or the
+    /// own one, q1''*cos(q2): a mass that depends on the state); the own acceleration alone is the
+    /// equation's normalisation. Without --terms a system takes the default library of
+    /// docs/identification.md ("Several coordinates").
     #[arg(
         long,
         value_name = "LIST",
         verbatim_doc_comment,
         conflicts_with_all = ["no_parametric", "drive_harmonics"]
     )]
-    pub terms: Option<TermList>,
+    pub terms: Option<TermsOption>,
     /// Model selection: the model's terms (--terms, or the default's with --drive-harmonics) are a
     /// library of candidates; a term is kept only if the model without it predicts held-out
     /// stretches of the record worse (backward elimination, cross-validated over contiguous folds
@@ -193,7 +205,7 @@ pub fn run(args: &IdentifyArgs, quiet: bool, timings: bool) -> anyhow::Result<()
     let report = hb_pipeline::identify(args.input.source(), &request, &mut console)?;
     console.finish();
     if let Some(path) = &args.save_model {
-        save_model(&report.identification.model, path)?;
+        save_system(&report.system()?, path)?;
     }
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
@@ -203,28 +215,55 @@ pub fn run(args: &IdentifyArgs, quiet: bool, timings: bool) -> anyhow::Result<()
     Ok(())
 }
 
-/// The identification as a table: the equation and selection, the fit, the coefficients.
+/// The identification as a table per equation: the equation and selection, the fit, the
+/// coefficients (a system's equations one after the other, each headed by its coordinate).
 pub fn print_report(report: &IdentifyReport) {
-    let id = &report.identification;
-    if let Some(selection) = &id.selection {
-        println!("{}", equation(&id.model));
+    let several = report.equations.len() > 1;
+    if several {
         println!(
-            "selected {} of {} candidate terms ({} folds of segments)",
-            selection.kept.len(),
-            selection.library.len(),
-            selection.outcome.folds
+            "method {}, {} coordinates ({}), {}",
+            report.method,
+            report.equations.len(),
+            report.names.coordinates().join(", "),
+            report.found
         );
     }
-    print_table(report);
-    if let Some(selection) = &id.selection {
-        print!("{}", dropped_lines(selection));
+    for (i, e) in report.equations.iter().enumerate() {
+        let id = &e.identification;
+        if several {
+            if i > 0 {
+                println!();
+            }
+            println!("== the equation of {}", e.coordinate);
+            println!("{}", equation_of(&e.coordinate, &id.model));
+        }
+        if let Some(selection) = &id.selection {
+            if !several {
+                println!("{}", equation(&id.model));
+            }
+            println!(
+                "selected {} of {} candidate terms ({} folds of segments)",
+                selection.kept.len(),
+                selection.library.len(),
+                selection.outcome.folds
+            );
+        }
+        print_table(report, e);
+        if let Some(selection) = &id.selection {
+            print!("{}", dropped_lines(selection));
+        }
     }
 }
 
 /// The model's equation on one line, its terms in order with signed coefficients:
 /// `x'' + 0.0301 x' + 0.0497 sign(x') - 1.52 sin(t)*cos(x) = 0`.
 pub fn equation(model: &IdentifiedModel) -> String {
-    let mut line = "x''".to_owned();
+    equation_of("x", model)
+}
+
+/// [`equation`] for the coordinate named `own`: `theta1'' + 0.5 theta2''*cos(theta1-theta2) ...`.
+pub fn equation_of(own: &str, model: &IdentifiedModel) -> String {
+    let mut line = format!("{own}''");
     for c in model.coefficients() {
         let sign = if c.value < 0.0 { '-' } else { '+' };
         line.push_str(&format!(" {sign} {} {}", significant(c.value.abs(), 4), c.name));
@@ -288,21 +327,22 @@ pub fn dropped_lines(selection: &TermSelection) -> String {
     text
 }
 
-/// Saves a model as JSON (`.json`) or compact binary (anything else), atomically.
-pub fn save_model(model: &IdentifiedModel, path: &std::path::Path) -> anyhow::Result<()> {
+/// Saves a system (a model of one coordinate as that model, format 4; several as format 5) as
+/// JSON (`.json`) or compact binary (anything else), atomically.
+pub fn save_system(system: &IdentifiedSystem, path: &std::path::Path) -> anyhow::Result<()> {
     let json = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("json"));
     let bytes = if json {
-        model.to_json()?.into_bytes()
+        system.to_json()?.into_bytes()
     } else {
-        model.to_bytes()?
+        system.to_bytes()?
     };
     hb_pipeline::output::write_atomically(path, |w| w.write_all(&bytes)).map_err(Into::into)
 }
 
-fn print_table(report: &IdentifyReport) {
-    let id = &report.identification;
+fn print_table(report: &IdentifyReport, e: &hb_pipeline::EquationReport) {
+    let id = &e.identification;
     let model = &id.model;
-    let (method, basis) = (report.method, report.basis.spec());
+    let (method, basis) = (report.method, e.basis.spec());
     let w = model
         .coefficients()
         .iter()

@@ -153,7 +153,7 @@ pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
     if record.measured != Measured::Displacement {
         let setup = request.model_spec(&data, Method::Windowed)?.setup(&data.clock)?;
         let (windows, found) = request.segments(&data, 1, Method::Windowed)?;
-        let drives: Vec<&[f64]> = data.measured_drive.iter().map(Vec::as_slice).collect();
+        let drives: Vec<&[f64]> = data.drives.iter().map(Vec::as_slice).collect();
         let (x, fit) = fit_drift(
             &setup,
             &data.x,

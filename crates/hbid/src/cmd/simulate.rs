@@ -8,7 +8,7 @@ use clap::{Args, ValueEnum};
 use hb_pipeline::simulate::{
     DriveKind, GapsText, HarmonicText, RangeKind, SystemKind, TimeOrigin, check_outputs, write_truth,
 };
-use hb_pipeline::{CompareOptions, CompareRequest, OptionError, Rig, SimulateOptions, Source};
+use hb_pipeline::{ColumnList, CompareOptions, CompareRequest, OptionError, Rig, SimulateOptions, Source};
 
 use crate::progress::Console;
 
@@ -209,8 +209,8 @@ pub struct SimulateArgs {
     dt: Option<f64>,
     /// The input's measured drive p(t), for a model with terms in p (by header name or 1-based
     /// position); read between samples from the C¹ cubic spline through them.
-    #[arg(long, value_name = "NAME|N", help_heading = MODEL)]
-    drive_col: Option<String>,
+    #[arg(long, value_name = "NAME|N[,..]", help_heading = MODEL)]
+    drive_col: Option<ColumnList>,
     /// Samples of the input that set the initial state of each piece [default: one period of the
     /// model's drive, at most a tenth of the record, at least 8]; 0 starts from --x0, --v0.
     #[arg(long, value_name = "N", help_heading = MODEL)]
