@@ -90,10 +90,13 @@
 #![deny(missing_docs)]
 
 mod dop853;
+mod double_pendulum;
+pub mod equations;
 mod error;
 pub mod frame;
 mod free_run;
 mod machine;
+pub mod multi;
 pub mod observe;
 mod oscillators;
 pub mod prediction;
@@ -105,10 +108,16 @@ mod validate;
 
 pub use circle_signal::Domain;
 pub use dop853::{Dop853, OdeSystem, Stats, Tolerances};
+pub use double_pendulum::DoublePendulum;
+pub use equations::NormalisedEquation;
 pub use error::SimError;
 pub use frame::{InFrame, RecordFrame};
 pub use free_run::{FreeRun, InitialState, fit_initial_state, free_run};
 pub use machine::{DriveHarmonic, DriveHarmonics, Losses};
+pub use multi::{
+    MAX_COORDINATES, MultiConfig, MultiFreeRun, MultiState, MultiSystem, MultiTrajectory, OneCoordinate,
+    SingularMass,
+};
 pub use oscillators::{Duffing, Pendulum};
 pub use prediction::{
     DecayEnvelope, PredictionConfig, PredictionRecord, PredictionTimes, TimeSummary, WindowPrediction,

@@ -1,8 +1,8 @@
 //! Deserialising a validated type runs its validation: an invalid value is rejected, a valid one
 //! round-trips.
 use pendulum_sim::{
-    CheckConfig, Domain, DriveHarmonic, DriveHarmonics, Duffing, Losses, LyapunovConfig, Pendulum,
-    ShootingConfig, SimulationConfig, Tolerances,
+    CheckConfig, Domain, DoublePendulum, DriveHarmonic, DriveHarmonics, Duffing, Losses, LyapunovConfig,
+    MultiConfig, MultiState, Pendulum, ShootingConfig, SimulationConfig, Tolerances,
 };
 use serde::Serialize;
 use serde::de::DeserializeOwned;
@@ -233,4 +233,42 @@ fn check_config() {
         json!([0.0, 0.0]),
         "must be the same",
     );
+}
+
+#[test]
+fn systems_of_several_coordinates() {
+    let p = DoublePendulum::new(0.3, 0.7, 0.8, 0.9, 0.04, -0.01).unwrap();
+    round_trips(&p);
+    assert_eq!(
+        serde_json::to_value(p).unwrap(),
+        json!({"mu": 0.3, "lambda": 0.7, "omega2": 0.8, "f": 0.9, "c1": 0.04, "c2": -0.01})
+    );
+    rejects(&p, &["mu"], json!(1.5), "invalid mu");
+    rejects(&p, &["lambda"], json!(0.0), "invalid lambda");
+}
+
+#[test]
+fn multi_config() {
+    let state = MultiState::new(&[2.0, 0.0], &[0.0, -0.5]).unwrap();
+    round_trips(&state);
+    assert_eq!(
+        serde_json::to_value(&state).unwrap(),
+        json!({"q": [2.0, 0.0], "v": [0.0, -0.5]})
+    );
+    rejects(&state, &["v"], json!([0.0]), "invalid velocities");
+    rejects(&state, &["q"], json!([]), "invalid coordinates");
+    let c = MultiConfig::new(state)
+        .with_samples(100)
+        .unwrap()
+        .with_samples_per_period(64)
+        .unwrap()
+        .with_phase(0.25)
+        .unwrap();
+    round_trips(&c);
+    let stepped = c.clone().with_sample_step(0.002).unwrap();
+    round_trips(&stepped);
+    rejects(&c, &["samples"], json!(0), "invalid samples");
+    rejects(&c, &["phase"], json!(1.0), "invalid phase");
+    rejects(&stepped, &["sample_step"], json!(0.0), "invalid sample step");
+    rejects(&c, &["initial", "q"], json!([1.0]), "invalid velocities");
 }

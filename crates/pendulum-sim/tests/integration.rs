@@ -9,6 +9,7 @@ mod deserialising;
 mod dop853;
 mod frame;
 mod free_run;
+mod multi;
 mod observe;
 mod oscillators;
 mod prediction;
