@@ -89,6 +89,7 @@
 //! ```
 #![deny(missing_docs)]
 
+mod arm;
 mod dop853;
 mod double_pendulum;
 pub mod equations;
@@ -100,12 +101,14 @@ pub mod multi;
 pub mod observe;
 mod oscillators;
 pub mod prediction;
+mod signal;
 mod simulate;
 mod switching;
 mod system;
 mod tableau;
 mod validate;
 
+pub use arm::{ArmParameters, Torque, TorqueDoublePendulum};
 pub use circle_signal::Domain;
 pub use dop853::{Dop853, OdeSystem, Stats, Tolerances};
 pub use double_pendulum::DoublePendulum;
@@ -123,6 +126,7 @@ pub use prediction::{
     DecayEnvelope, PredictionConfig, PredictionRecord, PredictionTimes, TimeSummary, WindowPrediction,
     decay_envelope, estimate_state, predict_window, prediction_starts, valid_prediction_times,
 };
+pub use signal::{MeasuredSignal, Sinusoid, SyntheticDrive};
 pub use simulate::{
     FirstOrder, LyapunovConfig, LyapunovEstimate, SimulationConfig, Tangent, Trajectory, largest_lyapunov,
     poincare_section, simulate, simulate_with_progress,

@@ -2,7 +2,8 @@
 //! round-trips.
 use pendulum_sim::{
     CheckConfig, Domain, DoublePendulum, DriveHarmonic, DriveHarmonics, Duffing, Losses, LyapunovConfig,
-    MultiConfig, MultiState, Pendulum, ShootingConfig, SimulationConfig, Tolerances,
+    MultiConfig, MultiState, Pendulum, ShootingConfig, SimulationConfig, Sinusoid, Tolerances, Torque,
+    TorqueDoublePendulum,
 };
 use serde::Serialize;
 use serde::de::DeserializeOwned;
@@ -245,6 +246,39 @@ fn systems_of_several_coordinates() {
     );
     rejects(&p, &["mu"], json!(1.5), "invalid mu");
     rejects(&p, &["lambda"], json!(0.0), "invalid lambda");
+
+    let arm = TorqueDoublePendulum::dfki().with_torques(
+        Torque::Sinusoids(vec![
+            Sinusoid::new(0.4, 10.0, 0.0).unwrap(),
+            Sinusoid::new(0.1, 3.0, 1.0).unwrap(),
+        ]),
+        Torque::None,
+    );
+    round_trips(&arm);
+    // The published file's names, the torques beside them.
+    let value = serde_json::to_value(&arm).unwrap();
+    assert_eq!(value["I1"], json!(0.053470810264216295));
+    assert_eq!(value["torque2"], json!("none"));
+    assert_eq!(value["torque1"]["sinusoids"][1]["phase"], json!(1.0));
+    // Without torques they default to none.
+    let mut bare = value.clone();
+    bare.as_object_mut().unwrap().remove("torque1");
+    bare.as_object_mut().unwrap().remove("torque2");
+    assert_eq!(
+        serde_json::from_value::<TorqueDoublePendulum>(bare).unwrap(),
+        TorqueDoublePendulum::dfki()
+    );
+    rejects(&arm, &["I2"], json!(0.001), "invalid I2");
+    rejects(&arm, &["gr"], json!(-6.0), "invalid gr");
+    rejects(&arm, &["cf1"], json!(-0.1), "invalid cf1");
+    // A measured torque is the caller's: written as such, read back missing (NaN), never zero.
+    let measured = arm
+        .clone()
+        .with_torques(Torque::None, Torque::measured(|t| t.cos()));
+    let back: TorqueDoublePendulum =
+        serde_json::from_str(&serde_json::to_string(&measured).unwrap()).unwrap();
+    assert!(matches!(&back.torques()[1], Torque::Measured(m) if m.is_missing()));
+    assert!(back.torques()[1].at(0.0).is_nan());
 }
 
 #[test]

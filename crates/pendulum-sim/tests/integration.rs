@@ -7,6 +7,7 @@
 //! they share (serde, the integrator) are compiled and linked once, not once per file.
 mod deserialising;
 mod dop853;
+mod double_pendulum;
 mod frame;
 mod free_run;
 mod multi;

@@ -342,10 +342,11 @@ fn refuses_what_it_cannot_run() {
     assert!(MultiState::new(&[0.0, 1.0], &[f64::NAN, 0.0]).is_err());
 }
 
-/// The systems can be shared between threads.
+/// The systems can be shared between threads, a measured drive included.
 #[test]
 fn systems_are_send_and_sync() {
     fn shared<T: Send + Sync>() {}
     shared::<pendulum_sim::DoublePendulum>();
+    shared::<pendulum_sim::TorqueDoublePendulum>();
     shared::<pendulum_sim::MultiConfig>();
 }
