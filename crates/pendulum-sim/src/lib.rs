@@ -90,6 +90,7 @@
 #![deny(missing_docs)]
 
 mod arm;
+mod coupled_duffing;
 mod dop853;
 mod double_pendulum;
 pub mod equations;
@@ -110,6 +111,7 @@ mod validate;
 
 pub use arm::{ArmParameters, Torque, TorqueDoublePendulum};
 pub use circle_signal::Domain;
+pub use coupled_duffing::{BaseAcceleration, CoupledDuffing};
 pub use dop853::{Dop853, OdeSystem, Stats, Tolerances};
 pub use double_pendulum::DoublePendulum;
 pub use equations::NormalisedEquation;

@@ -1,9 +1,9 @@
 //! Deserialising a validated type runs its validation: an invalid value is rejected, a valid one
 //! round-trips.
 use pendulum_sim::{
-    CheckConfig, Domain, DoublePendulum, DriveHarmonic, DriveHarmonics, Duffing, Losses, LyapunovConfig,
-    MultiConfig, MultiState, Pendulum, ShootingConfig, SimulationConfig, Sinusoid, Tolerances, Torque,
-    TorqueDoublePendulum,
+    CheckConfig, CoupledDuffing, Domain, DoublePendulum, DriveHarmonic, DriveHarmonics, Duffing, Losses,
+    LyapunovConfig, MultiConfig, MultiState, Pendulum, ShootingConfig, SimulationConfig, Sinusoid,
+    Tolerances, Torque, TorqueDoublePendulum,
 };
 use serde::Serialize;
 use serde::de::DeserializeOwned;
@@ -279,6 +279,22 @@ fn systems_of_several_coordinates() {
         serde_json::from_str(&serde_json::to_string(&measured).unwrap()).unwrap();
     assert!(matches!(&back.torques()[1], Torque::Measured(m) if m.is_missing()));
     assert!(back.torques()[1].at(0.0).is_nan());
+
+    let duffing = CoupledDuffing::two_wells().with_mass_ratio(1.5).unwrap();
+    round_trips(&duffing);
+    rejects(&duffing, &["mass_ratio"], json!(0.0), "invalid mass ratio");
+    rejects(
+        &duffing,
+        &["drive", "synthetic", "band"],
+        json!([3.0, 1.0]),
+        "invalid noise band",
+    );
+    rejects(
+        &duffing,
+        &["drive", "synthetic", "noise_rms"],
+        json!(-1.0),
+        "invalid noise rms",
+    );
 }
 
 #[test]

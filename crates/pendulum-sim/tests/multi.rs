@@ -348,5 +348,6 @@ fn systems_are_send_and_sync() {
     fn shared<T: Send + Sync>() {}
     shared::<pendulum_sim::DoublePendulum>();
     shared::<pendulum_sim::TorqueDoublePendulum>();
+    shared::<pendulum_sim::CoupledDuffing>();
     shared::<pendulum_sim::MultiConfig>();
 }
