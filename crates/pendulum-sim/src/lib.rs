@@ -31,7 +31,13 @@
 //! - a real machine's imperfections ([`Losses`]: dry friction `μ sign(x')`, quadratic drag
 //!   `d x'|x'|`, cubic damping `c₃ x'^3`; [`DriveHarmonics`]: harmonics `k = 2, 3, …` of the
 //!   drive), options of [`Pendulum`] and [`Duffing`] that leave them exactly as they were when
-//!   absent.
+//!   absent;
+//! - systems of several coordinates ([`multi`]): a [`MultiSystem`] gives its accelerations solved
+//!   from its mass matrix and is integrated by the same [`Dop853`] at the state's size `2n`,
+//!   sampled by the same code, and sticks at `q_c' = 0` by the rule below, one coordinate at a
+//!   time; the base-excited [`DoublePendulum`], the torque-driven [`TorqueDoublePendulum`] (the
+//!   DFKI arm) and the [`CoupledDuffing`] oscillators under a measured base acceleration, each
+//!   with its equations in the identification's form ([`equations`]).
 //!
 //! # Dry friction: integrating across `x' = 0`
 //!
