@@ -8,10 +8,10 @@
 //! solved for, `q'' = A(t, q, q')`: a mechanical system `M(q) q'' = f(t, q, q')` solves its mass
 //! matrix `M` (which does not depend on the velocities) at every evaluation, and says
 //! [`SingularMass`] where `M` cannot be solved. It is integrated as the first-order system of size
-//! `2n` with state `y = (q_1 … q_n, q_1' … q_n')` by the same [`Dop853`]
-//! (dispatched on `n` to the const size `2n`), and sampled as every one-coordinate system is: on
-//! a whole grid or at any step ([`simulate`], [`poincare_section`]), or at given times from one
-//! state, stopping with its reason ([`free_run`]).
+//! `2n` with state `y = (q_1 … q_n, q_1' … q_n')` by the same [`Dop853`] (dispatched on `n` to
+//! the const size `2n`), and sampled as every one-coordinate system is: on a whole grid or at any
+//! step ([`simulate`], [`poincare_section`]), or at given times from one state, stopping with its
+//! reason ([`free_run`]).
 //!
 //! # Dry friction, one coordinate at a time
 //!
@@ -40,8 +40,8 @@
 //! Decisions are made one coordinate at a time: an event changes the mode of the coordinate that
 //! caused it (and of any other that reached rest at the same instant), in the order of the
 //! coordinates. A smooth system (no coordinate switches) runs through exactly the steps of
-//! [`Dop853`] alone, and a one-coordinate system ([`OneCoordinate`]) through
-//! exactly the steps and numbers of the one-coordinate simulation.
+//! [`Dop853`] alone, and a one-coordinate system ([`OneCoordinate`]) through exactly the steps and
+//! numbers of the one-coordinate simulation.
 //!
 //! # Example
 //!
