@@ -439,50 +439,106 @@ impl<S: OdeSystem<N>, const N: usize> Dop853<S, N> {
         t_first: f64,
         dt: f64,
         count: usize,
-        mut sink: impl FnMut(usize, f64, &[f64; N]),
+        sink: impl FnMut(usize, f64, &[f64; N]),
     ) -> Result<(), SimError> {
-        if count == 0 {
-            return Ok(());
-        }
-        if !(dt > 0.0 && dt.is_finite()) {
-            return Err(SimError::InvalidParameter {
-                name: "dt",
-                value: dt,
-                why: "must be positive",
-            });
-        }
-        if t_first < self.t {
-            return Err(SimError::InvalidParameter {
-                name: "t_first",
-                value: t_first,
-                why: "must not be before the current time",
-            });
-        }
-        let t_end = t_first + (count - 1) as f64 * dt;
-        let mut n = 0;
-        // A sample exactly at the current time needs no step.
-        while n < count && t_first + n as f64 * dt == self.t {
-            let y = self.y;
-            sink(n, self.t, &y);
+        sample_on_grid(self, t_first, dt, count, sink)
+    }
+}
+
+/// An integration that moves forward one accepted step at a time, with an interpolant inside the
+/// last step: [`Dop853`] itself, and the flows across the switches of dry friction built on it.
+/// The samplers below are written once for all of them.
+pub(crate) trait Stepper<const N: usize> {
+    /// The current time.
+    fn now(&self) -> f64;
+    /// The current state.
+    fn state(&self) -> [f64; N];
+    /// Takes one accepted step, not going past `t_limit` (> current time); returns the new time.
+    fn advance(&mut self, t_limit: f64) -> Result<f64, SimError>;
+    /// The interpolated state at `t` inside the last step.
+    fn state_at(&mut self, t: f64) -> [f64; N];
+}
+
+impl<S: OdeSystem<N>, const N: usize> Stepper<N> for Dop853<S, N> {
+    fn now(&self) -> f64 {
+        self.t
+    }
+    fn state(&self) -> [f64; N] {
+        self.y
+    }
+    fn advance(&mut self, t_limit: f64) -> Result<f64, SimError> {
+        self.step(t_limit)
+    }
+    fn state_at(&mut self, t: f64) -> [f64; N] {
+        self.interpolate(t)
+    }
+}
+
+/// [`Dop853::sample_grid`] for any [`Stepper`]: the grid's step and start checked, then
+/// [`sample_at_times`] at `t_first + n · dt`.
+pub(crate) fn sample_on_grid<St: Stepper<N> + ?Sized, const N: usize>(
+    stepper: &mut St,
+    t_first: f64,
+    dt: f64,
+    count: usize,
+    sink: impl FnMut(usize, f64, &[f64; N]),
+) -> Result<(), SimError> {
+    if count == 0 {
+        return Ok(());
+    }
+    if !(dt > 0.0 && dt.is_finite()) {
+        return Err(SimError::InvalidParameter {
+            name: "dt",
+            value: dt,
+            why: "must be positive",
+        });
+    }
+    if t_first < stepper.now() {
+        return Err(SimError::InvalidParameter {
+            name: "t_first",
+            value: t_first,
+            why: "must not be before the current time",
+        });
+    }
+    sample_at_times(stepper, count, |n| t_first + n as f64 * dt, sink)
+}
+
+/// Integrates up to the last of the times `time(n)`, `n = 0..count` (non-decreasing, the first
+/// not before the current time), calling `sink(n, t_n, y(t_n))` for each in order, from dense
+/// output (or exactly at a step's end). The step sequence depends only on the last time.
+pub(crate) fn sample_at_times<St: Stepper<N> + ?Sized, const N: usize>(
+    stepper: &mut St,
+    count: usize,
+    time: impl Fn(usize) -> f64,
+    mut sink: impl FnMut(usize, f64, &[f64; N]),
+) -> Result<(), SimError> {
+    if count == 0 {
+        return Ok(());
+    }
+    let t_end = time(count - 1);
+    let mut n = 0;
+    // A sample exactly at the current time needs no step.
+    while n < count && time(n) == stepper.now() {
+        let y = stepper.state();
+        sink(n, stepper.now(), &y);
+        n += 1;
+    }
+    while n < count {
+        let t_new = stepper.advance(t_end)?;
+        while n < count {
+            let tn = time(n);
+            if tn > t_new {
+                break;
+            }
+            let y = stepper.state_at(tn);
+            if y.iter().any(|v| !v.is_finite()) {
+                return Err(SimError::NonFinite { t: tn });
+            }
+            sink(n, tn, &y);
             n += 1;
         }
-        while n < count {
-            let t_new = self.step(t_end)?;
-            loop {
-                let tn = t_first + n as f64 * dt;
-                if n >= count || tn > t_new {
-                    break;
-                }
-                let y = self.interpolate(tn);
-                if y.iter().any(|v| !v.is_finite()) {
-                    return Err(SimError::NonFinite { t: tn });
-                }
-                sink(n, tn, &y);
-                n += 1;
-            }
-        }
-        Ok(())
     }
+    Ok(())
 }
 
 /// The next representable `f64` above a non-negative finite `x`.

@@ -46,10 +46,51 @@ pub enum SimError {
         /// The samples needed.
         needed: usize,
     },
+    /// The mass matrix of a system of several coordinates cannot be solved at the state reached:
+    /// it is singular, or not positive definite ([`crate::SingularMass`]).
+    #[error("the mass matrix is singular at t = {t} (relative pivot {pivot:e})")]
+    SingularMass {
+        /// Time reached.
+        t: f64,
+        /// The pivot that failed, relative to the matrix's scale.
+        pivot: f64,
+    },
     /// The right-hand side or the solution became NaN or infinite.
     #[error("the solution is not finite at t = {t}")]
     NonFinite {
         /// Time reached.
         t: f64,
     },
+}
+
+/// An [`SimError::InvalidParameter`].
+pub(crate) fn invalid(name: &'static str, value: f64, why: &'static str) -> SimError {
+    SimError::InvalidParameter { name, value, why }
+}
+
+/// `value` if finite.
+pub(crate) fn finite(name: &'static str, value: f64) -> Result<f64, SimError> {
+    if value.is_finite() {
+        Ok(value)
+    } else {
+        Err(invalid(name, value, "must be finite"))
+    }
+}
+
+/// `value` if finite and `>= 0` (`-0.0` as `0.0`).
+pub(crate) fn non_negative(name: &'static str, value: f64) -> Result<f64, SimError> {
+    if value.is_finite() && value >= 0.0 {
+        Ok(value + 0.0)
+    } else {
+        Err(invalid(name, value, "must be finite and non-negative"))
+    }
+}
+
+/// `value` if finite and `> 0`.
+pub(crate) fn positive(name: &'static str, value: f64) -> Result<f64, SimError> {
+    if value.is_finite() && value > 0.0 {
+        Ok(value)
+    } else {
+        Err(invalid(name, value, "must be positive and finite"))
+    }
 }

@@ -63,8 +63,8 @@ impl FreeRun {
 
 /// Steps allowed per sample of a free run (plus a fixed allowance): far more than a smooth
 /// solution takes at any sampling rate, few enough that a runaway model stops in seconds.
-const STEPS_PER_SAMPLE: usize = 1_000;
-const STEPS_BASE: usize = 100_000;
+pub(crate) const STEPS_PER_SAMPLE: usize = 1_000;
+pub(crate) const STEPS_BASE: usize = 100_000;
 
 fn invalid(name: &'static str, value: f64, why: &'static str) -> SimError {
     SimError::InvalidParameter { name, value, why }

@@ -31,7 +31,13 @@
 //! - a real machine's imperfections ([`Losses`]: dry friction `μ sign(x')`, quadratic drag
 //!   `d x'|x'|`, cubic damping `c₃ x'^3`; [`DriveHarmonics`]: harmonics `k = 2, 3, …` of the
 //!   drive), options of [`Pendulum`] and [`Duffing`] that leave them exactly as they were when
-//!   absent.
+//!   absent;
+//! - systems of several coordinates ([`multi`]): a [`MultiSystem`] gives its accelerations solved
+//!   from its mass matrix and is integrated by the same [`Dop853`] at the state's size `2n`,
+//!   sampled by the same code, and sticks at `q_c' = 0` by the rule below, one coordinate at a
+//!   time; the base-excited [`DoublePendulum`], the torque-driven [`TorqueDoublePendulum`] (the
+//!   DFKI arm) and the [`CoupledDuffing`] oscillators under a measured base acceleration, each
+//!   with its equations in the identification's form ([`equations`]).
 //!
 //! # Dry friction: integrating across `x' = 0`
 //!
@@ -89,31 +95,46 @@
 //! ```
 #![deny(missing_docs)]
 
+mod arm;
+mod coupled_duffing;
 mod dop853;
+mod double_pendulum;
+pub mod equations;
 mod error;
 pub mod frame;
 mod free_run;
 mod machine;
+pub mod multi;
 pub mod observe;
 mod oscillators;
 pub mod prediction;
+mod signal;
 mod simulate;
 mod switching;
 mod system;
 mod tableau;
 mod validate;
 
+pub use arm::{ArmParameters, Torque, TorqueDoublePendulum};
 pub use circle_signal::Domain;
+pub use coupled_duffing::{BaseAcceleration, CoupledDuffing};
 pub use dop853::{Dop853, OdeSystem, Stats, Tolerances};
+pub use double_pendulum::DoublePendulum;
+pub use equations::NormalisedEquation;
 pub use error::SimError;
 pub use frame::{InFrame, RecordFrame};
 pub use free_run::{FreeRun, InitialState, fit_initial_state, free_run};
 pub use machine::{DriveHarmonic, DriveHarmonics, Losses};
+pub use multi::{
+    MAX_COORDINATES, MultiConfig, MultiFreeRun, MultiState, MultiSystem, MultiTrajectory, OneCoordinate,
+    SingularMass,
+};
 pub use oscillators::{Duffing, Pendulum};
 pub use prediction::{
     DecayEnvelope, PredictionConfig, PredictionRecord, PredictionTimes, TimeSummary, WindowPrediction,
     decay_envelope, estimate_state, predict_window, prediction_starts, valid_prediction_times,
 };
+pub use signal::{MeasuredSignal, Sinusoid, SyntheticDrive};
 pub use simulate::{
     FirstOrder, LyapunovConfig, LyapunovEstimate, SimulationConfig, Tangent, Trajectory, largest_lyapunov,
     poincare_section, simulate, simulate_with_progress,

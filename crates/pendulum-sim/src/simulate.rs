@@ -296,7 +296,7 @@ impl SimulationConfig {
         }
     }
     /// Time of the first kept sample.
-    fn first_sample_time(&self) -> f64 {
+    pub(crate) fn first_sample_time(&self) -> f64 {
         match self.sample_step {
             Some(_) => (self.phase + self.transient_periods as f64) * self.forcing_period,
             None => self.grid_time(self.transient_periods * self.samples_per_period),

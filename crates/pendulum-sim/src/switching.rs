@@ -23,7 +23,7 @@
 //! `diag(1, F_{−s}/F_s)` (both at `x' = 0`); at the onset of a stick their velocity part is
 //! zeroed (`diag(1, 0)`); at a release they are continuous.
 
-use crate::dop853::{Dop853, OdeSystem, Tolerances};
+use crate::dop853::{Dop853, OdeSystem, Stepper, Tolerances, sample_on_grid};
 use crate::error::SimError;
 use crate::system::{Branch, SecondOrderSystem};
 
@@ -114,9 +114,9 @@ fn scale_velocity_perturbations<const N: usize>(y: &mut [f64; N], factor: f64) {
 }
 
 /// Points at which a slip's velocity is looked at in each step.
-const SCAN_POINTS: usize = 8;
+pub(crate) const SCAN_POINTS: usize = 8;
 /// Scan points of a stick per step: a stuck step is at most this many scan spacings long.
-const STICK_SCANS_PER_STEP: f64 = 64.0;
+pub(crate) const STICK_SCANS_PER_STEP: f64 = 64.0;
 
 /// The adaptive DOP853 integration of a second-order system across `x' = 0` (see the
 /// [module documentation](self)): one accepted step at a time, each ending at the step's end or
@@ -217,32 +217,7 @@ impl<O: Switched<N>, const N: usize> Flow<O, N> {
     /// The first `x' = 0` of a slip on `branch` in the step `[t0, t1]`, and what follows it.
     fn reversal(&mut self, branch: Branch, t0: f64, t1: f64) -> Option<(f64, [f64; N], Mode)> {
         let s = branch.sign();
-        let mut before = t0;
-        let mut after = None;
-        for j in 1..=SCAN_POINTS {
-            let tj = if j == SCAN_POINTS {
-                t1
-            } else {
-                t0 + (t1 - t0) * j as f64 / SCAN_POINTS as f64
-            };
-            if s * self.ode.interpolate(tj)[1] <= 0.0 {
-                after = Some(tj);
-                break;
-            }
-            before = tj;
-        }
-        let mut after = after?;
-        loop {
-            let mid = before + 0.5 * (after - before);
-            if mid <= before || mid >= after {
-                break;
-            }
-            if s * self.ode.interpolate(mid)[1] > 0.0 {
-                before = mid;
-            } else {
-                after = mid;
-            }
-        }
+        let after = first_event(t0, t1, SCAN_POINTS, |t| s * self.ode.interpolate(t)[1] <= 0.0)?;
         let mut y = self.ode.interpolate(after);
         y[1] = 0.0;
         let system = &self.ode.system().on_mode().system;
@@ -276,32 +251,7 @@ impl<O: Switched<N>, const N: usize> Flow<O, N> {
         let scans = ((t1 - t0) / self.scan_step)
             .ceil()
             .clamp(1.0, STICK_SCANS_PER_STEP) as usize;
-        let mut before = t0;
-        let mut after = None;
-        for j in 1..=scans {
-            let tj = if j == scans {
-                t1
-            } else {
-                t0 + (t1 - t0) * j as f64 / scans as f64
-            };
-            if free(tj) {
-                after = Some(tj);
-                break;
-            }
-            before = tj;
-        }
-        let mut after = after?;
-        loop {
-            let mid = before + 0.5 * (after - before);
-            if mid <= before || mid >= after {
-                break;
-            }
-            if free(mid) {
-                after = mid;
-            } else {
-                before = mid;
-            }
-        }
+        let after = first_event(t0, t1, scans, free)?;
         let mode = leaving_rest(system, after, y[0], Branch::Forward);
         Some((after, y, mode))
     }
@@ -337,53 +287,63 @@ impl<O: Switched<N>, const N: usize> Flow<O, N> {
         t_first: f64,
         dt: f64,
         count: usize,
-        mut sink: impl FnMut(usize, f64, &[f64; N]),
+        sink: impl FnMut(usize, f64, &[f64; N]),
     ) -> Result<(), SimError> {
-        if count == 0 {
-            return Ok(());
-        }
-        if !(dt > 0.0 && dt.is_finite()) {
-            return Err(SimError::InvalidParameter {
-                name: "dt",
-                value: dt,
-                why: "must be positive",
-            });
-        }
-        if t_first < self.t() {
-            return Err(SimError::InvalidParameter {
-                name: "t_first",
-                value: t_first,
-                why: "must not be before the current time",
-            });
-        }
-        let t_end = t_first + (count - 1) as f64 * dt;
-        let mut n = 0;
-        while n < count && t_first + n as f64 * dt == self.t() {
-            let y = *self.y();
-            sink(n, self.t(), &y);
-            n += 1;
-        }
-        while n < count {
-            let t_new = self.step(t_end)?;
-            loop {
-                let tn = t_first + n as f64 * dt;
-                if n >= count || tn > t_new {
-                    break;
-                }
-                let y = self.interpolate(tn);
-                if y.iter().any(|v| !v.is_finite()) {
-                    return Err(SimError::NonFinite { t: tn });
-                }
-                sink(n, tn, &y);
-                n += 1;
-            }
-        }
-        Ok(())
+        sample_on_grid(self, t_first, dt, count, sink)
     }
 }
 
+impl<O: Switched<N>, const N: usize> Stepper<N> for Flow<O, N> {
+    fn now(&self) -> f64 {
+        self.t()
+    }
+    fn state(&self) -> [f64; N] {
+        *self.y()
+    }
+    fn advance(&mut self, t_limit: f64) -> Result<f64, SimError> {
+        self.step(t_limit)
+    }
+    fn state_at(&mut self, t: f64) -> [f64; N] {
+        self.interpolate(t)
+    }
+}
+
+/// The first time in a step `[t0, t1]` at which `hit` holds: looked for at `scans` equally spaced
+/// points after `t0` (the last one `t1` itself), then located by bisection between the last point
+/// where it does not hold and the first where it does, to the last bit of the time. `None` when it
+/// holds at none of the points.
+pub(crate) fn first_event(t0: f64, t1: f64, scans: usize, mut hit: impl FnMut(f64) -> bool) -> Option<f64> {
+    let mut before = t0;
+    let mut after = None;
+    for j in 1..=scans {
+        let tj = if j == scans {
+            t1
+        } else {
+            t0 + (t1 - t0) * j as f64 / scans as f64
+        };
+        if hit(tj) {
+            after = Some(tj);
+            break;
+        }
+        before = tj;
+    }
+    let mut after = after?;
+    loop {
+        let mid = before + 0.5 * (after - before);
+        if mid <= before || mid >= after {
+            break;
+        }
+        if hit(mid) {
+            after = mid;
+        } else {
+            before = mid;
+        }
+    }
+    Some(after)
+}
+
 /// The spacing of `f64` at `|t|` (at least at 1).
-fn ulp(t: f64) -> f64 {
+pub(crate) fn ulp(t: f64) -> f64 {
     let a = t.abs().max(1.0);
     f64::from_bits(a.to_bits() + 1) - a
 }

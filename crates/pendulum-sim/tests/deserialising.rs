@@ -1,8 +1,9 @@
 //! Deserialising a validated type runs its validation: an invalid value is rejected, a valid one
 //! round-trips.
 use pendulum_sim::{
-    CheckConfig, Domain, DriveHarmonic, DriveHarmonics, Duffing, Losses, LyapunovConfig, Pendulum,
-    ShootingConfig, SimulationConfig, Tolerances,
+    CheckConfig, CoupledDuffing, Domain, DoublePendulum, DriveHarmonic, DriveHarmonics, Duffing, Losses,
+    LyapunovConfig, MultiConfig, MultiState, Pendulum, ShootingConfig, SimulationConfig, Sinusoid,
+    Tolerances, Torque, TorqueDoublePendulum,
 };
 use serde::Serialize;
 use serde::de::DeserializeOwned;
@@ -233,4 +234,91 @@ fn check_config() {
         json!([0.0, 0.0]),
         "must be the same",
     );
+}
+
+#[test]
+fn systems_of_several_coordinates() {
+    let p = DoublePendulum::new(0.3, 0.7, 0.8, 0.9, 0.04, -0.01).unwrap();
+    round_trips(&p);
+    assert_eq!(
+        serde_json::to_value(p).unwrap(),
+        json!({"mu": 0.3, "lambda": 0.7, "omega2": 0.8, "f": 0.9, "c1": 0.04, "c2": -0.01})
+    );
+    rejects(&p, &["mu"], json!(1.5), "invalid mu");
+    rejects(&p, &["lambda"], json!(0.0), "invalid lambda");
+
+    let arm = TorqueDoublePendulum::dfki().with_torques(
+        Torque::Sinusoids(vec![
+            Sinusoid::new(0.4, 10.0, 0.0).unwrap(),
+            Sinusoid::new(0.1, 3.0, 1.0).unwrap(),
+        ]),
+        Torque::None,
+    );
+    round_trips(&arm);
+    // The published file's names, the torques beside them.
+    let value = serde_json::to_value(&arm).unwrap();
+    assert_eq!(value["I1"], json!(0.053470810264216295));
+    assert_eq!(value["torque2"], json!("none"));
+    assert_eq!(value["torque1"]["sinusoids"][1]["phase"], json!(1.0));
+    // Without torques they default to none.
+    let mut bare = value.clone();
+    bare.as_object_mut().unwrap().remove("torque1");
+    bare.as_object_mut().unwrap().remove("torque2");
+    assert_eq!(
+        serde_json::from_value::<TorqueDoublePendulum>(bare).unwrap(),
+        TorqueDoublePendulum::dfki()
+    );
+    rejects(&arm, &["I2"], json!(0.001), "invalid I2");
+    rejects(&arm, &["gr"], json!(-6.0), "invalid gr");
+    rejects(&arm, &["cf1"], json!(-0.1), "invalid cf1");
+    // A measured torque is the caller's: written as such, read back missing (NaN), never zero.
+    let measured = arm
+        .clone()
+        .with_torques(Torque::None, Torque::measured(|t| t.cos()));
+    let back: TorqueDoublePendulum =
+        serde_json::from_str(&serde_json::to_string(&measured).unwrap()).unwrap();
+    assert!(matches!(&back.torques()[1], Torque::Measured(m) if m.is_missing()));
+    assert!(back.torques()[1].at(0.0).is_nan());
+
+    let duffing = CoupledDuffing::two_wells().with_mass_ratio(1.5).unwrap();
+    round_trips(&duffing);
+    rejects(&duffing, &["mass_ratio"], json!(0.0), "invalid mass ratio");
+    rejects(
+        &duffing,
+        &["drive", "synthetic", "band"],
+        json!([3.0, 1.0]),
+        "invalid noise band",
+    );
+    rejects(
+        &duffing,
+        &["drive", "synthetic", "noise_rms"],
+        json!(-1.0),
+        "invalid noise rms",
+    );
+}
+
+#[test]
+fn multi_config() {
+    let state = MultiState::new(&[2.0, 0.0], &[0.0, -0.5]).unwrap();
+    round_trips(&state);
+    assert_eq!(
+        serde_json::to_value(&state).unwrap(),
+        json!({"q": [2.0, 0.0], "v": [0.0, -0.5]})
+    );
+    rejects(&state, &["v"], json!([0.0]), "invalid velocities");
+    rejects(&state, &["q"], json!([]), "invalid coordinates");
+    let c = MultiConfig::new(state)
+        .with_samples(100)
+        .unwrap()
+        .with_samples_per_period(64)
+        .unwrap()
+        .with_phase(0.25)
+        .unwrap();
+    round_trips(&c);
+    let stepped = c.clone().with_sample_step(0.002).unwrap();
+    round_trips(&stepped);
+    rejects(&c, &["samples"], json!(0), "invalid samples");
+    rejects(&c, &["phase"], json!(1.0), "invalid phase");
+    rejects(&stepped, &["sample_step"], json!(0.0), "invalid sample step");
+    rejects(&c, &["initial", "q"], json!([1.0]), "invalid velocities");
 }

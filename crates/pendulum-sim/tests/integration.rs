@@ -5,10 +5,13 @@
 //!
 //! One test binary for the whole package: each file is a module of this one, so the generics
 //! they share (serde, the integrator) are compiled and linked once, not once per file.
+mod coupled_duffing;
 mod deserialising;
 mod dop853;
+mod double_pendulum;
 mod frame;
 mod free_run;
+mod multi;
 mod observe;
 mod oscillators;
 mod prediction;
