@@ -4,6 +4,8 @@
 //! saved as the model it is, in format 4).
 
 use hb_basis::{Basis, BasisKind, Domain};
+pub use pendulum_sim::SingularMass;
+use pendulum_sim::MultiSystem;
 use serde::{Deserialize, Serialize};
 
 use crate::drive::MeasuredDrive;
@@ -16,17 +18,6 @@ use crate::terms::{MAX_COORDINATES, Names, TermList};
 /// The saved-system format version: a list of equations in the names of its coordinates and
 /// drives.
 pub const SYSTEM_VERSION: u32 = 5;
-
-/// The mass matrix of a system is singular (or nearly: a pivot below `1e-12` of the largest
-/// entry) at a state: its accelerations are not determined there.
-#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
-#[error("the mass matrix is singular at t = {t} (smallest pivot {pivot:e})")]
-pub struct SingularMass {
-    /// The time.
-    pub t: f64,
-    /// The smallest pivot of the elimination, relative to the largest entry.
-    pub pivot: f64,
-}
 
 /// A system of `n` coordinates with one equation each, in the [`Names`] of its record: equation
 /// `i` is a model ([`IdentifiedModel`]) of the own coordinate `i`, its terms possibly reading the
@@ -192,11 +183,13 @@ impl<B: Basis> IdentifiedSystem<B> {
         self.equations.iter().any(|m| m.switches_in(c))
     }
 
-    /// The accelerations at `(t, q, v)` into `acc`: `M q'' = −r` solved by Gaussian elimination
-    /// with partial pivoting. `sides[c]` is the value of `sign(q_c')` (a branch's ±1, a held
-    /// value while `q_c` sticks; `None`: the sign of `v[c]`).
+    /// The accelerations at `(t, q, v)` into `acc`: `M q'' = −r` solved by nalgebra's LU with
+    /// partial pivoting (the unused rows of its fixed 8 × 8 matrix are the identity's).
+    /// `sides[c]` is the value of `sign(q_c')` (a branch's ±1, a held value while `q_c` sticks;
+    /// `None`: the sign of `v[c]`).
     ///
-    /// Errors: [`SingularMass`] where a pivot falls below `1e-12` of the matrix's largest entry.
+    /// Errors: [`SingularMass`] where a pivot of the factorisation falls below
+    /// [`SINGULAR_PIVOT`] times the matrix's largest entry, or is not finite.
     pub fn accelerations(
         &self,
         t: f64,
@@ -206,56 +199,56 @@ impl<B: Basis> IdentifiedSystem<B> {
         acc: &mut [f64],
     ) -> Result<(), SingularMass> {
         let n = self.equations.len();
-        let mut m = [[0.0; MAX_COORDINATES]; MAX_COORDINATES];
-        let mut r = [0.0; MAX_COORDINATES];
+        let mut m = nalgebra::SMatrix::<f64, MAX_COORDINATES, MAX_COORDINATES>::identity();
+        let mut r = nalgebra::SVector::<f64, MAX_COORDINATES>::zeros();
+        let mut row = [0.0; MAX_COORDINATES];
         for (i, model) in self.equations.iter().enumerate() {
-            r[i] = -model.equation_at(t, q, v, sides, &mut m[i][..n]);
+            r[i] = -model.equation_at(t, q, v, sides, &mut row[..n]);
+            for (j, &value) in row[..n].iter().enumerate() {
+                m[(i, j)] = value;
+            }
         }
-        solve(&mut m, &mut r, n).map_err(|pivot| SingularMass { t, pivot })?;
-        acc[..n].copy_from_slice(&r[..n]);
+        let scale = m.amax();
+        let lu = m.lu();
+        let pivot = lu.u().diagonal().iter().map(|d| d.abs()).fold(f64::INFINITY, f64::min) / scale;
+        if !(pivot.is_finite() && pivot > SINGULAR_PIVOT) {
+            return Err(SingularMass { t, pivot });
+        }
+        let x = lu.solve(&r).ok_or(SingularMass { t, pivot })?;
+        acc[..n].copy_from_slice(&x.as_slice()[..n]);
         Ok(())
     }
 }
 
-/// Solves `m x = r` for the leading `n × n` block in place (`r` becomes `x`); the smallest
-/// pivot relative to the largest entry when it falls below `1e-12`.
-fn solve(
-    m: &mut [[f64; MAX_COORDINATES]; MAX_COORDINATES],
-    r: &mut [f64; MAX_COORDINATES],
-    n: usize,
-) -> Result<(), f64> {
-    let scale = (0..n)
-        .flat_map(|i| (0..n).map(move |j| (i, j)))
-        .map(|(i, j)| m[i][j].abs())
-        .fold(0.0, f64::max);
-    if !(scale.is_finite() && scale > 0.0) {
-        return Err(if scale.is_finite() { 0.0 } else { f64::NAN });
+/// The smallest pivot of a mass matrix's factorisation, relative to its largest entry, that
+/// [`IdentifiedSystem::accelerations`] divides by.
+pub const SINGULAR_PIVOT: f64 = 1e-12;
+
+/// Every system is simulated by `pendulum_sim`'s integrators of several coordinates, sticking
+/// at rest where its friction says so.
+impl<B: Basis> MultiSystem for IdentifiedSystem<B> {
+    fn coordinates(&self) -> usize {
+        self.equations.len()
     }
-    for c in 0..n {
-        let p = (c..n)
-            .max_by(|&a, &b| m[a][c].abs().total_cmp(&m[b][c].abs()))
-            .unwrap_or(c);
-        let pivot = m[p][c].abs() / scale;
-        if !(pivot >= 1e-12) {
-            return Err(pivot);
-        }
-        m.swap(c, p);
-        r.swap(c, p);
-        for i in c + 1..n {
-            let f = m[i][c] / m[c][c];
-            if f != 0.0 {
-                for j in c..n {
-                    m[i][j] -= f * m[c][j];
-                }
-                r[i] -= f * r[c];
-            }
-        }
+
+    fn accelerations(&self, t: f64, q: &[f64], v: &[f64], acc: &mut [f64]) -> Result<(), SingularMass> {
+        IdentifiedSystem::accelerations(self, t, q, v, None, acc)
     }
-    for c in (0..n).rev() {
-        let tail: f64 = (c + 1..n).map(|j| m[c][j] * r[j]).sum();
-        r[c] = (r[c] - tail) / m[c][c];
+
+    fn switches_at_rest(&self, c: usize) -> bool {
+        self.switches_in(c)
     }
-    Ok(())
+
+    fn accelerations_with_signs(
+        &self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        signs: &[f64],
+        acc: &mut [f64],
+    ) -> Result<(), SingularMass> {
+        IdentifiedSystem::accelerations(self, t, q, v, Some(signs), acc)
+    }
 }
 
 /// One equation of a saved system: its terms by name in the system's names.
@@ -293,11 +286,9 @@ impl<B: Basis + Clone + Serialize> IdentifiedSystem<B> {
             .iter()
             .enumerate()
             .map(|(i, m)| {
-                let list = m.form().terms().ok_or_else(|| {
-                    ModelError::Term(TermError::InvalidForm {
-                        why: "an equation of a system is a list of terms",
-                    })
-                })?;
+                let list = m.form().terms().ok_or(ModelError::Term(TermError::InvalidForm {
+                    why: "an equation of a system is a list of terms",
+                }))?;
                 Ok(EquationRecord {
                     coordinate: self.names.coordinates()[i].clone(),
                     basis: m.basis().clone(),

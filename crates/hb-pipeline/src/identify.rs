@@ -869,8 +869,8 @@ pub fn system_library(
             }
         }
     }
-    for c in 0..q.len() {
-        terms.push(format!("{}'", q[c]));
+    for name in q {
+        terms.push(format!("{name}'"));
     }
     for d in &drives {
         terms.push(d.clone());
