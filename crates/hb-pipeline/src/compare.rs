@@ -24,8 +24,9 @@ use std::fmt;
 use std::str::FromStr;
 
 use circle_signal::{Domain, Measured, wrap};
-use hb_model::{IdentifiedModel, MeasuredDrive};
+use hb_model::{IdentifiedModel, IdentifiedSystem, MeasuredDrive};
 use hb_record::prepare::GridData;
+use pendulum_sim::multi::{self, MultiState};
 use pendulum_sim::{Tolerances, fit_initial_state, free_run};
 use serde::{Deserialize, Serialize};
 
@@ -115,6 +116,49 @@ impl<'de> Deserialize<'de> for SampleRange {
     }
 }
 
+/// Numbers given as one or a list, written `a,b,c` (from Python a number or a list): a state
+/// component per coordinate.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Values(pub Vec<f64>);
+
+impl Values {
+    /// The one value of a one-coordinate state.
+    pub fn one(&self) -> Option<f64> {
+        match self.0[..] {
+            [v] => Some(v),
+            _ => None,
+        }
+    }
+}
+
+impl From<f64> for Values {
+    fn from(v: f64) -> Self {
+        Self(vec![v])
+    }
+}
+
+impl FromStr for Values {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        s.split(',')
+            .map(|v| {
+                v.trim()
+                    .parse::<f64>()
+                    .map_err(|_| format!("'{}' is not a number", v.trim()))
+            })
+            .collect::<Result<Vec<_>, _>>()
+            .map(Self)
+    }
+}
+
+impl fmt::Display for Values {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let texts: Vec<String> = self.0.iter().map(ToString::to_string).collect();
+        f.write_str(&texts.join(","))
+    }
+}
+
 /// Every option of `hbid compare` (and of Python's `hbid.compare`), by the command line's names
 /// with `_` for `-`. The record's options are those of `hbid identify` that say how to read it;
 /// its signal defaults to the model's.
@@ -155,10 +199,13 @@ pub struct CompareOptions {
     /// Samples at the start of each range (and after each gap) that set the initial state and
     /// are not scored.
     pub init: Option<usize>,
-    /// The initial position, instead of fitting it (with `v0`; the first piece of each range).
-    pub x0: Option<f64>,
-    /// The initial velocity, in the record's time unit (with `x0`).
-    pub v0: Option<f64>,
+    /// The initial position, instead of fitting it (with `v0`; the first piece of each range):
+    /// one per coordinate of a system, in its order.
+    #[serde(with = "optional_text")]
+    pub x0: Option<Values>,
+    /// The initial velocity, in the record's time unit (with `x0`): one per coordinate.
+    #[serde(with = "optional_text")]
+    pub v0: Option<Values>,
     /// Relative tolerance of the integrator (the absolute one is rtol/10).
     pub rtol: f64,
 }
@@ -212,18 +259,25 @@ impl CompareRequest {
                 format!("must be at least {}: a state has two components", Self::MIN_INIT),
             ));
         }
-        match (o.x0, o.v0) {
+        match (&o.x0, &o.v0) {
             (Some(_), None) | (None, Some(_)) => {
                 return Err(OptionError::new(
                     if o.x0.is_some() { "x0" } else { "v0" },
                     "give the initial state whole, «x0» with «v0», or neither to fit it to the record",
                 ));
             }
-            (Some(x), Some(_)) if !x.is_finite() => {
-                return Err(OptionError::value("x0", x, "the initial state must be finite"));
-            }
-            (Some(_), Some(v)) if !v.is_finite() => {
-                return Err(OptionError::value("v0", v, "the initial state must be finite"));
+            (Some(x), Some(v)) => {
+                for (name, values) in [("x0", x), ("v0", v)] {
+                    if let Some(bad) = values.0.iter().find(|v| !v.is_finite()) {
+                        return Err(OptionError::value(name, bad, "the initial state must be finite"));
+                    }
+                }
+                if x.0.len() != v.0.len() {
+                    return Err(OptionError::new(
+                        "v0",
+                        "give as many initial velocities as positions («x0»), one per coordinate",
+                    ));
+                }
             }
             _ => {}
         }
@@ -273,6 +327,10 @@ impl CompareOptions {
 /// The scores of one range.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct RangeScore {
+    /// The coordinate scored, for a system of several (each range has one entry per
+    /// coordinate); absent for a record of one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub coordinate: Option<String>,
     /// The range compared, `[start, end)` samples of the grid.
     pub range: [usize; 2],
     /// Samples that set the initial state of each piece (not scored).
@@ -327,9 +385,14 @@ pub struct CompareReport {
     pub signal: Domain,
     /// Whether the model was driven by the record's measured drive.
     pub measured_drive: bool,
-    /// One score per range, in the order given.
+    /// The coordinates of a system, in order (absent for a record of one).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub coordinates: Vec<String>,
+    /// One score per range, in the order given (for a system one per range and coordinate, the
+    /// coordinates of each range in order).
     pub ranges: Vec<RangeScore>,
-    /// The runs of each range, piece by piece (for plots and files; not in the JSON).
+    /// The runs of each entry of `ranges`, piece by piece (for plots and files; not in the
+    /// JSON).
     #[serde(skip)]
     pub runs: Vec<Vec<RunPiece>>,
 }
@@ -342,12 +405,32 @@ pub struct CompareReport {
 /// drive column, a drive column for a model without `p`, a range past the record's end); a
 /// simulation that cannot start ([`RunError::Simulation`]).
 pub fn compare(
+    system: &IdentifiedSystem,
+    source: Source<'_>,
+    request: &CompareRequest,
+    observer: &mut dyn Observer,
+) -> Result<CompareReport, RunError> {
+    match system.equations() {
+        [model] => compare_one(model, source, request, observer),
+        _ => compare_system(system, source, request, observer),
+    }
+}
+
+/// [`compare`] of a model of one coordinate.
+fn compare_one(
     model: &IdentifiedModel,
     source: Source<'_>,
     request: &CompareRequest,
     observer: &mut dyn Observer,
 ) -> Result<CompareReport, RunError> {
     let o = &request.options;
+    if let Some(x0) = &o.x0
+        && x0.one().is_none()
+    {
+        return Err(
+            OptionError::value("x0", x0, "the model has one coordinate: give one initial state").into(),
+        );
+    }
     let domain = o.signal.unwrap_or_else(|| model.domain());
     if domain != model.domain() {
         return Err(OptionError::value(
@@ -399,6 +482,243 @@ pub fn compare(
         step: grid.dt,
         signal: domain,
         measured_drive,
+        coordinates: Vec::new(),
+        ranges: scores,
+        runs,
+    })
+}
+
+/// [`compare`] of a system of several coordinates: the record's columns are the system's
+/// coordinates and drives by name unless `coords` and `drive_col` say otherwise; each range is
+/// run piece by piece from the state given, or fitted to every coordinate's first `init`
+/// samples ([`pendulum_sim::multi::fit_initial_state`]); each coordinate is scored on its own.
+fn compare_system(
+    system: &IdentifiedSystem,
+    source: Source<'_>,
+    request: &CompareRequest,
+    observer: &mut dyn Observer,
+) -> Result<CompareReport, RunError> {
+    let o = &request.options;
+    let names = system.names();
+    let n = system.coordinates();
+    let domains = system.domains().to_vec();
+    if let Some(signal) = o.signal
+        && domains.iter().any(|&d| d != signal)
+    {
+        return Err(OptionError::value(
+            "signal",
+            signal,
+            "the system's coordinates have their own domains: leave out «signal»",
+        )
+        .into());
+    }
+    if let Some(x0) = &o.x0
+        && x0.0.len() != n
+    {
+        return Err(OptionError::value(
+            "x0",
+            x0,
+            format!("give one initial position per coordinate of the system ({n})"),
+        )
+        .into());
+    }
+    let as_columns = |names: &[String]| {
+        names
+            .join(",")
+            .parse::<ColumnList>()
+            .map_err(|e| OptionError::new("coords", e))
+    };
+    let coords = match &o.coords {
+        Some(c) => c.clone(),
+        None => as_columns(names.coordinates())?,
+    };
+    if coords.len() != n {
+        return Err(OptionError::value(
+            "coords",
+            &coords,
+            format!(
+                "the system has {n} coordinates ({})",
+                names.coordinates().join(", ")
+            ),
+        )
+        .into());
+    }
+    let drives_needed = system.has_measured_drive();
+    let drive_col = match (&o.drive_col, drives_needed) {
+        (Some(d), true) => Some(d.clone()),
+        (None, true) => Some(as_columns(names.drives())?),
+        (Some(_), false) => {
+            return Err(OptionError::new(
+                "drive_col",
+                "the system has no term in a measured drive: it runs on its own drive, leave out «drive_col»",
+            )
+            .into());
+        }
+        (None, false) => None,
+    };
+    if let Some(d) = &drive_col
+        && d.len() != names.drives().len()
+    {
+        return Err(OptionError::value(
+            "drive_col",
+            d,
+            format!(
+                "the system reads {} drive(s) ({})",
+                names.drives().len(),
+                names.drives().join(", ")
+            ),
+        )
+        .into());
+    }
+    let record = RecordOptions {
+        time_col: o.time_col.clone(),
+        angle_col: None,
+        coords: Some(coords),
+        dt: o.dt,
+        drive_col,
+        repair: o.repair,
+        signal: domains
+            .iter()
+            .map(ToString::to_string)
+            .collect::<Vec<_>>()
+            .join(",")
+            .parse()
+            .map_err(|e: String| OptionError::new("signal", e))?,
+        measured: o.measured,
+        drive_period: None,
+        drive_frequency: None,
+    };
+    let grid = condition_source(source, &record, observer)?;
+    observer.stage(Stage::Simulate);
+    let len = grid.x.len();
+    let ranges: Vec<std::ops::Range<usize>> = if o.range.is_empty() {
+        vec![SampleRange::ALL.on(len)?]
+    } else {
+        o.range.iter().map(|r| r.on(len)).collect::<Result<_, _>>()?
+    };
+    let period = std::f64::consts::TAU / system.drive_angular_frequency() / grid.dt;
+    let given = o.x0.clone().zip(o.v0.clone());
+    let columns: Vec<&[f64]> = std::iter::once(grid.x.as_slice())
+        .chain(grid.others.iter().map(|c| c.x.as_slice()))
+        .collect();
+    let mut scores = Vec::with_capacity(ranges.len() * n);
+    let mut runs = Vec::with_capacity(ranges.len() * n);
+    let total: usize = ranges.iter().map(|r| r.len()).sum();
+    let mut done = 0;
+    for range in &ranges {
+        // A state given sets the range's start: every sample is scored.
+        let init = o.init.unwrap_or_else(|| {
+            if given.is_some() {
+                0
+            } else {
+                default_init(period, range.len())
+            }
+        });
+        let mut pieces: Vec<Vec<RunPiece>> = vec![Vec::new(); n];
+        let (mut skipped, mut stopped) = (0, None);
+        let mut states = Vec::new();
+        for piece in &grid.pieces {
+            let (start, end) = (piece.start.max(range.start), piece.end.min(range.end));
+            if start >= end {
+                continue;
+            }
+            let state_given = given.as_ref().filter(|_| start == range.start);
+            if state_given.is_none() && end - start <= init.max(1) {
+                skipped += 1;
+                continue;
+            }
+            let times: Vec<f64> = (start..end).map(|i| grid.t0 + i as f64 * grid.dt).collect();
+            let driven = match drives_needed {
+                true => system.clone().with_measured_drives(
+                    grid.drives
+                        .iter()
+                        .map(|p| MeasuredDrive::new(p[start..end].to_vec(), times[0], grid.dt))
+                        .collect::<Result<Vec<_>, _>>()?,
+                )?,
+                false => system.clone(),
+            };
+            let measured: Vec<&[f64]> = columns.iter().map(|c| &c[start..end]).collect();
+            let state = match state_given {
+                Some((x, v)) => MultiState::new(&x.0, &v.0).map(|s| (s, 0.0)),
+                None => {
+                    let first: Vec<&[f64]> = measured.iter().map(|m| &m[..init]).collect();
+                    multi::fit_initial_state(&driven, &first, &domains, &times[..init], request.tolerances)
+                        .map(|fit| (fit.state, fit.rms))
+                }
+            };
+            let run = match state {
+                Ok((state, rms)) => {
+                    let mut row: Vec<f64> = state.q().to_vec();
+                    row.extend_from_slice(state.v());
+                    row.push(rms);
+                    states.push(row);
+                    multi::free_run(&driven, &times, &state, request.tolerances)?
+                }
+                Err(why) => pendulum_sim::MultiFreeRun {
+                    q: vec![vec![f64::NAN; times.len()]; n],
+                    v: vec![vec![f64::NAN; times.len()]; n],
+                    stopped: Some(why),
+                },
+            };
+            if let (None, Some(why)) = (&stopped, &run.stopped) {
+                stopped = Some(format!("the system's run from sample {start} stopped: {why}"));
+            }
+            for (c, (q, v)) in run.q.into_iter().zip(run.v).enumerate() {
+                let y = measured[c];
+                let mut x = q;
+                if domains[c] == Domain::Circle {
+                    for (xi, yi) in x.iter_mut().zip(y) {
+                        if xi.is_finite() {
+                            *xi = yi + wrap(*xi - yi);
+                        }
+                    }
+                }
+                pieces[c].push(RunPiece {
+                    start,
+                    t: times.clone(),
+                    measured: y.to_vec(),
+                    x,
+                    v,
+                    init,
+                });
+            }
+        }
+        if pieces[0].is_empty() && stopped.is_none() {
+            return Err(OptionError::value(
+                "init",
+                init,
+                format!(
+                    "leaves no sample of the range {}..{} to score: its pieces between gaps are no longer",
+                    range.start, range.end
+                ),
+            )
+            .into());
+        }
+        for (c, coordinate_pieces) in pieces.into_iter().enumerate() {
+            let states_c: Vec<[f64; 3]> = states.iter().map(|s| [s[c], s[n + c], s[2 * n]]).collect();
+            let mut entry = score(
+                &coordinate_pieces,
+                domains[c],
+                [range.start, range.end],
+                init,
+                skipped,
+                states_c,
+                stopped.clone(),
+            );
+            entry.coordinate = Some(names.coordinates()[c].clone());
+            scores.push(entry);
+            runs.push(coordinate_pieces);
+        }
+        done += range.len();
+        observer.progress(done, total);
+    }
+    observer.stage(Stage::Compare);
+    Ok(CompareReport {
+        samples: grid.pieces.iter().map(|p| p.len()).sum(),
+        step: grid.dt,
+        signal: domains[0],
+        measured_drive: drives_needed,
+        coordinates: names.coordinates().to_vec(),
         ranges: scores,
         runs,
     })
@@ -483,7 +803,10 @@ fn run_range(
             continue;
         }
         // The state given is the state at the range's start: its piece is run whatever its length.
-        let given = match (o.x0, o.v0) {
+        let given = match (
+            o.x0.as_ref().and_then(Values::one),
+            o.v0.as_ref().and_then(Values::one),
+        ) {
             (Some(x), Some(v)) if start == range.start => Some([x, v]),
             _ => None,
         };
@@ -590,6 +913,7 @@ fn score(
         (None, None, None, None)
     };
     RangeScore {
+        coordinate: None,
         range,
         init,
         scored: n,
@@ -607,34 +931,38 @@ fn score(
 ///
 /// Errors: [`RunError::ModelFile`] naming the file, for a file that cannot be read or is not a
 /// model.
-pub fn read_model(path: &std::path::Path) -> Result<IdentifiedModel, RunError> {
+pub fn read_model(path: &std::path::Path) -> Result<IdentifiedSystem, RunError> {
     let named = |why: String| RunError::ModelFile {
         path: path.display().to_string(),
         why,
     };
     let bytes = std::fs::read(path).map_err(|e| named(e.to_string()))?;
     if bytes.starts_with(&hb_model::MODEL_MAGIC) {
-        return IdentifiedModel::from_bytes(&bytes).map_err(|e| named(crate::options::chain(&e)));
+        return IdentifiedSystem::from_bytes(&bytes).map_err(|e| named(crate::options::chain(&e)));
     }
     let text =
         String::from_utf8(bytes).map_err(|_| named("neither a binary model nor JSON text".to_owned()))?;
-    IdentifiedModel::from_json(&text).map_err(|e| named(crate::options::chain(&e)))
+    IdentifiedSystem::from_json(&text).map_err(|e| named(crate::options::chain(&e)))
 }
 
 /// A model's free run over a record, as `hbid simulate --model --input` writes it: the time, the
-/// simulated position and velocity at every sample of the ranges run (piece by piece, each from
-/// the state its first samples give).
+/// simulated positions and velocities at every sample of the ranges run (piece by piece, each
+/// from the state its first samples give).
 #[derive(Debug, Clone, PartialEq)]
 pub struct ModelRun {
-    /// `(t, x, v)` per sample, in order; none in the gaps.
-    pub rows: Vec<[f64; 3]>,
+    /// The columns: `t,x,v` for one coordinate, `t`, the coordinates, then their velocities
+    /// (`omega1`, ... on the circle, `v1`, ... on the line; `<name>'` for other names) for a
+    /// system.
+    pub columns: Vec<String>,
+    /// One row per sample, in order; none in the gaps.
+    pub rows: Vec<Vec<f64>>,
     /// Where and why the run stopped, if it did (its later rows are NaN).
     pub stopped: Option<String>,
 }
 
 impl ModelRun {
-    /// Writes the run as CSV with the header `t,x,v`, or as a samples × 3 `.npy` array (by the
-    /// file's extension), atomically; numbers in full precision.
+    /// Writes the run as CSV with its columns' header, or as a samples × columns `.npy` array (by
+    /// the file's extension), atomically; numbers in full precision.
     pub fn write(&self, path: &std::path::Path) -> Result<(), crate::output::OutputError> {
         use npyz::WriterBuilder;
         use std::io::Write;
@@ -643,7 +971,7 @@ impl ModelRun {
             if npy {
                 let mut writer = npyz::WriteOptions::<f64>::new()
                     .default_dtype()
-                    .shape(&[self.rows.len() as u64, 3])
+                    .shape(&[self.rows.len() as u64, self.columns.len() as u64])
                     .writer(w)
                     .begin_nd()?;
                 for row in &self.rows {
@@ -651,31 +979,60 @@ impl ModelRun {
                 }
                 return writer.finish();
             }
-            writeln!(w, "t,x,v")?;
-            for [t, x, v] in &self.rows {
-                writeln!(w, "{t},{x},{v}")?;
+            writeln!(w, "{}", self.columns.join(","))?;
+            for row in &self.rows {
+                let cells: Vec<String> = row.iter().map(ToString::to_string).collect();
+                writeln!(w, "{}", cells.join(","))?;
             }
             Ok(())
         })
     }
 }
 
-/// Runs `model` on the record of `source` as [`compare`] does and returns the simulated output.
+/// Runs `system` on the record of `source` as [`compare`] does and returns the simulated output.
 pub fn model_run(
-    model: &IdentifiedModel,
+    system: &IdentifiedSystem,
     source: Source<'_>,
     request: &CompareRequest,
     observer: &mut dyn Observer,
 ) -> Result<ModelRun, RunError> {
-    let report = compare(model, source, request, observer)?;
-    let rows = report
-        .runs
-        .iter()
-        .flatten()
-        .flat_map(|p| (0..p.t.len()).map(move |i| [p.t[i], p.x[i], p.v[i]]))
-        .collect();
+    let report = compare(system, source, request, observer)?;
     let stopped = report.ranges.iter().find_map(|r| r.stopped.clone());
-    Ok(ModelRun { rows, stopped })
+    let n = system.coordinates();
+    if n == 1 {
+        let rows = report
+            .runs
+            .iter()
+            .flatten()
+            .flat_map(|p| (0..p.t.len()).map(move |i| vec![p.t[i], p.x[i], p.v[i]]))
+            .collect();
+        return Ok(ModelRun {
+            columns: ["t", "x", "v"].map(String::from).to_vec(),
+            rows,
+            stopped,
+        });
+    }
+    let names = system.names().coordinates();
+    let mut columns = vec!["t".to_owned()];
+    columns.extend(names.iter().cloned());
+    columns.extend(names.iter().map(|q| format!("{q}'")));
+    // The entries of each range are its coordinates in order, their pieces alike.
+    let mut rows = Vec::new();
+    for entries in report.runs.chunks(n) {
+        for (p, piece) in entries[0].iter().enumerate() {
+            for i in 0..piece.t.len() {
+                let mut row = vec![piece.t[i]];
+                row.extend(entries.iter().map(|e| e[p].x[i]));
+                row.extend(entries.iter().map(|e| e[p].v[i]));
+                rows.push(row);
+            }
+        }
+    }
+    Ok(ModelRun {
+        columns,
+        rows,
+        stopped,
+    })
 }
 
 /// Runs `model` from `state = (x, x')` at `t[0]` over the times `t`, an even grid (stamps within
@@ -748,8 +1105,9 @@ pub fn run_on_times(
         (None, false) => model.clone(),
     };
     let run = free_run(&model, t[0], dt, t.len(), state, tolerances)?;
-    let rows = (0..t.len()).map(|n| [t[n], run.x[n], run.v[n]]).collect();
+    let rows = (0..t.len()).map(|n| vec![t[n], run.x[n], run.v[n]]).collect();
     Ok(ModelRun {
+        columns: ["t", "x", "v"].map(String::from).to_vec(),
         rows,
         stopped: run.stopped.map(|why| format!("the model's run stopped: {why}")),
     })

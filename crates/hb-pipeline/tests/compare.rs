@@ -4,7 +4,7 @@
 use std::f64::consts::TAU;
 
 use hb_basis::{BasisKind, Polynomial};
-use hb_model::{IdentifiedModel, ModelForm};
+use hb_model::{IdentifiedModel, IdentifiedSystem, ModelForm};
 use hb_pipeline::compare::RangeScore;
 use hb_pipeline::{CompareOptions, CompareRequest, RunError, SampleRange, Source, compare};
 
@@ -27,8 +27,8 @@ fn scores(omega: f64, dt: f64, len: usize, ranges: &[SampleRange]) -> Result<Vec
     let x = vec![0.0; len];
     let request = CompareRequest::new(CompareOptions {
         dt: Some(dt),
-        x0: Some(0.0),
-        v0: Some(0.0),
+        x0: Some(0.0.into()),
+        v0: Some(0.0.into()),
         range: ranges.to_vec(),
         ..CompareOptions::default()
     })
@@ -38,7 +38,7 @@ fn scores(omega: f64, dt: f64, len: usize, ranges: &[SampleRange]) -> Result<Vec
         t: None,
         drives: Vec::new(),
     };
-    Ok(compare(&at_rest(omega), source, &request, &mut ())?.ranges)
+    Ok(compare(&IdentifiedSystem::one(at_rest(omega)), source, &request, &mut ())?.ranges)
 }
 
 #[test]
@@ -69,8 +69,20 @@ fn options_are_checked() {
     let bad = |o: CompareOptions| CompareRequest::new(o).unwrap_err().option().to_owned();
     let d = CompareOptions::default;
     assert_eq!(bad(CompareOptions { init: Some(1), ..d() }), "init");
-    assert_eq!(bad(CompareOptions { x0: Some(1.0), ..d() }), "x0");
-    assert_eq!(bad(CompareOptions { v0: Some(1.0), ..d() }), "v0");
+    assert_eq!(
+        bad(CompareOptions {
+            x0: Some(1.0.into()),
+            ..d()
+        }),
+        "x0"
+    );
+    assert_eq!(
+        bad(CompareOptions {
+            v0: Some(1.0.into()),
+            ..d()
+        }),
+        "v0"
+    );
     assert_eq!(bad(CompareOptions { rtol: 0.0, ..d() }), "rtol");
     assert_eq!(
         bad(CompareOptions {

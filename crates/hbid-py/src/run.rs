@@ -314,7 +314,7 @@ pub fn compare<'py>(
     drive: Option<PyReadonlyArray1<'py, f64>>,
     grid: Option<Grid>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let model = hb_model::IdentifiedModel::from_bytes(model).map_err(|e| raise(Kind::Model, e))?;
+    let model = hb_model::IdentifiedSystem::from_bytes(model).map_err(|e| raise(Kind::Model, e))?;
     let request = CompareRequest::from_json(self::options(options)?).map_err(option_error)?;
     let samples = Samples::new(path, &x, &t, &drive, grid)?;
     let source = samples.source()?;
@@ -402,7 +402,7 @@ pub fn model_run<'py>(
             hb_pipeline::simulate::MODEL_TAKES_NO_RIG,
         )));
     }
-    let model = hb_model::IdentifiedModel::from_bytes(model).map_err(|e| raise(Kind::Model, e))?;
+    let model = hb_model::IdentifiedSystem::from_bytes(model).map_err(|e| raise(Kind::Model, e))?;
     let request = CompareRequest::from_json(self::options(options)?).map_err(option_error)?;
     hb_pipeline::simulate::check_model_state(&rig, request.options().x0.is_some()).map_err(option_error)?;
     let samples = Samples::new(path, &x, &t, &drive, grid)?;

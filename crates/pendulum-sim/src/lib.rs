@@ -126,8 +126,8 @@ pub use frame::{InFrame, RecordFrame};
 pub use free_run::{FreeRun, InitialState, fit_initial_state, free_run};
 pub use machine::{DriveHarmonic, DriveHarmonics, Losses};
 pub use multi::{
-    MAX_COORDINATES, MultiConfig, MultiFreeRun, MultiState, MultiSystem, MultiTrajectory, OneCoordinate,
-    SingularMass,
+    MAX_COORDINATES, MultiConfig, MultiFreeRun, MultiInitialState, MultiState, MultiSystem, MultiTrajectory,
+    OneCoordinate, SingularMass,
 };
 pub use oscillators::{Duffing, Pendulum};
 pub use prediction::{

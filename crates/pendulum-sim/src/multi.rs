@@ -75,6 +75,7 @@ use crate::free_run::{STEPS_BASE, STEPS_PER_SAMPLE};
 use crate::simulate::{SimulationConfig, Trajectory};
 use crate::switching::{Mode, SCAN_POINTS, STICK_SCANS_PER_STEP, first_event, ulp};
 use crate::system::{Branch, SecondOrderSystem};
+use circle_signal::Domain;
 
 /// The largest number of coordinates of a [`MultiSystem`] (its first-order state has twice as
 /// many components, each size compiled once).
@@ -1078,4 +1079,180 @@ impl<const N: usize> Stepper<N> for MultiFlow<'_, N> {
     fn state_at(&mut self, t: f64) -> [f64; N] {
         self.interpolate(t)
     }
+}
+
+/// An initial state of a system of several coordinates fitted to a record's first samples.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MultiInitialState {
+    /// The state `(q, q')` at the first sample.
+    pub state: MultiState,
+    /// Root mean square, over the coordinates and samples, of the free run's positions less the
+    /// samples it was fitted to.
+    pub rms: f64,
+    /// The samples it was fitted to.
+    pub samples: usize,
+}
+
+/// The state at `times[0]` whose free run of `system` over `times` best matches `samples` (one
+/// slice per coordinate, as many as `times`) in the least-squares sense, positions compared as
+/// each coordinate's [`Domain`] measures them (the shortest arc on the circle): the
+/// one-coordinate [`crate::fit_initial_state`] for `n` coordinates.
+///
+/// The search starts from the first samples and the slopes of the quadratics through the first
+/// few, and takes Levenberg–Marquardt steps with a central-difference Jacobian (`2n` unknowns);
+/// a state whose run stops inside the samples counts as infinitely bad.
+///
+/// Errors: [`SimError::RecordTooShort`] for fewer than 2 samples, [`SimError::InvalidParameter`]
+/// for samples of another count or not finite, and [`SimError::NonFinite`] when no state tried
+/// has a run that reaches the last sample.
+pub fn fit_initial_state<S: MultiSystem + ?Sized>(
+    system: &S,
+    samples: &[&[f64]],
+    domains: &[Domain],
+    times: &[f64],
+    tolerances: Tolerances,
+) -> Result<MultiInitialState, SimError> {
+    use nalgebra::{DMatrix, DVector};
+    let n = checked_coordinates(samples.len())?;
+    let len = times.len();
+    if len < 2 {
+        return Err(SimError::RecordTooShort { len, needed: 2 });
+    }
+    if domains.len() != n || system.coordinates() != n {
+        return Err(invalid(
+            "coordinates",
+            n as f64,
+            "samples, domains and the system must have as many",
+        ));
+    }
+    if let Some(s) = samples.iter().find(|s| s.len() != len) {
+        return Err(invalid("samples", s.len() as f64, "must be one per time"));
+    }
+    if let Some(&bad) = samples.iter().flat_map(|s| s.iter()).find(|v| !v.is_finite()) {
+        return Err(invalid("sample", bad, "must be finite"));
+    }
+    // Each coordinate unwrapped, so that the slopes and the residuals see continuous angles.
+    let y: Vec<Vec<f64>> = samples
+        .iter()
+        .zip(domains)
+        .map(|(s, &domain)| {
+            let mut y = Vec::with_capacity(len);
+            y.push(s[0]);
+            for i in 1..len {
+                let step = match domain {
+                    Domain::Circle => circle_signal::wrap(s[i] - s[i - 1]),
+                    Domain::Line => s[i] - s[i - 1],
+                };
+                y.push(y[i - 1] + step);
+            }
+            y
+        })
+        .collect();
+    let duration = times[len - 1] - times[0];
+    if !(duration.is_finite() && duration > 0.0) {
+        return Err(invalid("times", duration, "must span a positive, finite time"));
+    }
+    let scales: Vec<f64> = y
+        .iter()
+        .map(|y| {
+            let spread = y.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b))
+                - y.iter().fold(f64::INFINITY, |a, &b| a.min(b));
+            spread.max(y[0].abs() * 1e-3).max(f64::MIN_POSITIVE.sqrt())
+        })
+        .collect();
+    let residuals = |p: &[f64]| -> Option<Vec<f64>> {
+        let state = MultiState::new(&p[..n], &p[n..]).ok()?;
+        let run = free_run(system, times, &state, tolerances).ok()?;
+        if run.stopped.is_some() {
+            return None;
+        }
+        let r: Vec<f64> = (0..n)
+            .flat_map(|c| run.q[c].iter().zip(&y[c]).map(|(a, b)| a - b).collect::<Vec<_>>())
+            .collect();
+        r.iter().all(|v| v.is_finite()).then_some(r)
+    };
+    let cost = |r: &[f64]| r.iter().map(|v| v * v).sum::<f64>();
+    // The first guess: the first samples, and the slope at the first of the quadratic through
+    // the first three (the line through two).
+    let mut p: Vec<f64> = y.iter().map(|y| y[0]).collect();
+    for y in &y {
+        let slope = if len >= 3 {
+            let (h1, h2) = (times[1] - times[0], times[2] - times[0]);
+            let (d1, d2) = ((y[1] - y[0]) / h1, (y[2] - y[0]) / h2);
+            (d1 * h2 - d2 * h1) / (h2 - h1)
+        } else {
+            (y[1] - y[0]) / (times[1] - times[0])
+        };
+        p.push(if slope.is_finite() { slope } else { 0.0 });
+    }
+    let mut r = match residuals(&p) {
+        Some(r) => r,
+        None => {
+            p[n..].fill(0.0);
+            residuals(&p).ok_or(SimError::NonFinite { t: times[0] })?
+        }
+    };
+    let mut best = cost(&r);
+    let mut lambda = 1e-3;
+    let k = 2 * n;
+    for _ in 0..50 {
+        let mut jac = DMatrix::<f64>::zeros(r.len(), k);
+        let mut ok = true;
+        for j in 0..k {
+            let scale = if j < n {
+                scales[j]
+            } else {
+                scales[j - n] / duration
+            };
+            let h = 1e-6 * p[j].abs().max(scale);
+            let (mut up, mut down) = (p.clone(), p.clone());
+            up[j] += h;
+            down[j] -= h;
+            match (residuals(&up), residuals(&down)) {
+                (Some(a), Some(b)) => {
+                    for i in 0..r.len() {
+                        jac[(i, j)] = (a[i] - b[i]) / (2.0 * h);
+                    }
+                }
+                _ => ok = false,
+            }
+        }
+        if !ok {
+            break;
+        }
+        let jtj = jac.transpose() * &jac;
+        let g = jac.transpose() * DVector::from_column_slice(&r);
+        let mut improved = false;
+        for _ in 0..20 {
+            let mut a = jtj.clone();
+            for j in 0..k {
+                a[(j, j)] += lambda * jtj[(j, j)].max(f64::MIN_POSITIVE);
+            }
+            let Some(delta) = a.lu().solve(&(-&g)) else {
+                lambda *= 10.0;
+                continue;
+            };
+            let trial: Vec<f64> = p.iter().zip(delta.iter()).map(|(a, d)| a + d).collect();
+            match residuals(&trial) {
+                Some(rt) if cost(&rt) < best => {
+                    let gain = best - cost(&rt);
+                    p = trial;
+                    best = cost(&rt);
+                    r = rt;
+                    lambda = (lambda / 10.0).max(1e-12);
+                    improved = gain > 1e-14 * best.max(f64::MIN_POSITIVE);
+                    break;
+                }
+                _ => lambda *= 10.0,
+            }
+        }
+        if !improved {
+            break;
+        }
+    }
+    Ok(MultiInitialState {
+        state: MultiState::new(&p[..n], &p[n..])?,
+        rms: (best / (n * len) as f64).sqrt(),
+        samples: len,
+    })
 }

@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use anyhow::Context;
 use circle_signal::{Domain, Measured};
 use clap::Args;
+use hb_pipeline::compare::Values;
 use hb_pipeline::{ColumnList, CompareOptions, CompareReport, CompareRequest, SampleRange, Source};
 use hb_plot::{BLUE, Figure, ORANGE, RED, Series, Style};
 
@@ -60,12 +61,13 @@ pub struct CompareArgs {
     /// at least 8].
     #[arg(long, value_name = "N")]
     pub init: Option<usize>,
-    /// The initial position instead of fitting it (with --v0).
-    #[arg(long, allow_hyphen_values = true)]
-    pub x0: Option<f64>,
-    /// The initial velocity in the record's time unit (with --x0).
-    #[arg(long, allow_hyphen_values = true)]
-    pub v0: Option<f64>,
+    /// The initial position instead of fitting it (with --v0): one per coordinate of a system
+    /// (a,b); every sample of a range is then scored unless --init says otherwise.
+    #[arg(long, allow_hyphen_values = true, value_name = "X[,..]")]
+    pub x0: Option<Values>,
+    /// The initial velocity in the record's time unit (with --x0): one per coordinate.
+    #[arg(long, allow_hyphen_values = true, value_name = "V[,..]")]
+    pub v0: Option<Values>,
     /// Relative tolerance of the integrator (the absolute one is rtol/10).
     #[arg(long, default_value_t = CompareRequest::DEFAULT_RTOL, allow_hyphen_values = true)]
     pub rtol: f64,
@@ -91,8 +93,8 @@ impl CompareArgs {
             measured: self.measured,
             range: self.range.clone(),
             init: self.init,
-            x0: self.x0,
-            v0: self.v0,
+            x0: self.x0.clone(),
+            v0: self.v0.clone(),
             rtol: self.rtol,
         }
     }
@@ -138,13 +140,28 @@ pub fn table(report: &CompareReport) -> String {
         "free run of the model {drive}, {} samples, step {}; errors in {unit}\n\n",
         report.samples, report.step
     );
+    let w = report
+        .coordinates
+        .iter()
+        .map(|c| c.chars().count() + 1)
+        .max()
+        .unwrap_or(0);
     out.push_str(&format!(
-        "{:<18} {:>6} {:>9} {:>12} {:>10} {:>9} {:>12}\n",
-        "range", "init", "scored", "RMSE", "NRMSE", "fit %", "max error"
+        "{:<w$}{:<18} {:>6} {:>9} {:>12} {:>10} {:>9} {:>12}\n",
+        if w > 0 { "coordinate" } else { "" },
+        "range",
+        "init",
+        "scored",
+        "RMSE",
+        "NRMSE",
+        "fit %",
+        "max error",
+        w = w.max(if w > 0 { 11 } else { 0 })
     ));
     for r in &report.ranges {
         out.push_str(&format!(
-            "{:<18} {:>6} {:>9} {:>12} {:>10} {:>9} {:>12}\n",
+            "{:<w$}{:<18} {:>6} {:>9} {:>12} {:>10} {:>9} {:>12}\n",
+            r.coordinate.as_deref().unwrap_or(""),
             format!("{}..{}", r.range[0], r.range[1]),
             r.init,
             r.scored,
@@ -152,9 +169,10 @@ pub fn table(report: &CompareReport) -> String {
             cell(r.nrmse, |v| format!("{v:.4}")),
             cell(r.fit_percent, |v| format!("{v:.2}")),
             cell(r.max_error, |v| format!("{v:.3e}")),
+            w = w.max(if w > 0 { 11 } else { 0 })
         ));
     }
-    for r in &report.ranges {
+    for r in report.ranges.iter().step_by(report.coordinates.len().max(1)) {
         if let Some(why) = &r.stopped {
             out.push_str(&format!("\nrange {}..{}: {why}\n", r.range[0], r.range[1]));
         }

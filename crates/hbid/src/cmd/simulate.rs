@@ -331,8 +331,8 @@ fn model_request(args: &SimulateArgs) -> anyhow::Result<CompareRequest> {
         dt: args.dt,
         drive_col: args.drive_col.clone(),
         init: args.init.filter(|&n| n > 0),
-        x0: given.then_some(args.x0),
-        v0: given.then_some(args.v0),
+        x0: given.then_some(args.x0.into()),
+        v0: given.then_some(args.v0.into()),
         rtol: args.rtol,
         ..CompareOptions::default()
     })?)
