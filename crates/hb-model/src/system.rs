@@ -62,6 +62,18 @@ pub struct IdentifiedSystem<B = BasisKind> {
     names: Names,
     domains: Vec<Domain>,
     equations: Vec<IdentifiedModel<B>>,
+    /// The record's columns of the coordinates and of the drives, when they are not named as
+    /// the system names them.
+    columns: Option<Columns>,
+}
+
+/// The record's columns a system's coordinates and drives were read from.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Columns {
+    /// The coordinates' columns, in order.
+    pub coordinates: Vec<String>,
+    /// The drives' columns, in order.
+    pub drives: Vec<String>,
 }
 
 impl<B: Basis> IdentifiedSystem<B> {
@@ -104,6 +116,32 @@ impl<B: Basis> IdentifiedSystem<B> {
             names,
             domains,
             equations,
+            columns: None,
+        })
+    }
+
+    /// The same system with the record's `columns` its coordinates and drives were read from
+    /// (kept with the system, so that it is compared with records of the same columns).
+    ///
+    /// Errors: as many columns as coordinates and as drives.
+    pub fn with_columns(mut self, columns: Columns) -> Result<Self, ModelError> {
+        if columns.coordinates.len() != self.names.coordinates().len()
+            || columns.drives.len() != self.names.drives().len()
+        {
+            return Err(ModelError::Term(TermError::InvalidForm {
+                why: "a system's columns are one per coordinate and one per drive",
+            }));
+        }
+        self.columns = Some(columns);
+        Ok(self)
+    }
+
+    /// The record's columns of the coordinates and drives: those given with
+    /// [`with_columns`](Self::with_columns), or their names.
+    pub fn columns(&self) -> Columns {
+        self.columns.clone().unwrap_or_else(|| Columns {
+            coordinates: self.names.coordinates().to_vec(),
+            drives: self.names.drives().to_vec(),
         })
     }
 
@@ -117,6 +155,7 @@ impl<B: Basis> IdentifiedSystem<B> {
             names,
             domains: vec![model.domain()],
             equations: vec![model],
+            columns: None,
         }
     }
 
@@ -276,6 +315,8 @@ struct SystemRecord<B> {
     coordinates: Vec<String>,
     domains: Vec<Domain>,
     drives: Vec<String>,
+    #[serde(default)]
+    columns: Option<Columns>,
     equations: Vec<EquationRecord<B>>,
 }
 
@@ -311,6 +352,7 @@ impl<B: Basis + Clone + Serialize> IdentifiedSystem<B> {
             coordinates: self.names.coordinates().to_vec(),
             domains: self.domains.clone(),
             drives: self.names.drives().to_vec(),
+            columns: self.columns.clone(),
             equations,
         })
     }
@@ -369,7 +411,11 @@ impl<B: Basis + Clone + serde::de::DeserializeOwned> IdentifiedSystem<B> {
                 )
             })
             .collect::<Result<Vec<_>, _>>()?;
-        Self::new(names, r.domains, equations)
+        let system = Self::new(names, r.domains, equations)?;
+        match r.columns {
+            Some(columns) => system.with_columns(columns),
+            None => Ok(system),
+        }
     }
 
     /// Reads a system written by [`to_json`](Self::to_json), or any saved model (format 2 to 4)

@@ -522,15 +522,21 @@ fn compare_system(
         )
         .into());
     }
-    let as_columns = |names: &[String]| {
+    // The system's own columns, each under the name its terms give it.
+    let columns = system.columns();
+    let as_columns = |names: &[String], columns: &[String]| {
         names
+            .iter()
+            .zip(columns)
+            .map(|(n, c)| format!("{n}={c}"))
+            .collect::<Vec<_>>()
             .join(",")
             .parse::<ColumnList>()
             .map_err(|e| OptionError::new("coords", e))
     };
     let coords = match &o.coords {
         Some(c) => c.clone(),
-        None => as_columns(names.coordinates())?,
+        None => as_columns(names.coordinates(), &columns.coordinates)?,
     };
     if coords.len() != n {
         return Err(OptionError::value(
@@ -546,7 +552,7 @@ fn compare_system(
     let drives_needed = system.has_measured_drive();
     let drive_col = match (&o.drive_col, drives_needed) {
         (Some(d), true) => Some(d.clone()),
-        (None, true) => Some(as_columns(names.drives())?),
+        (None, true) => Some(as_columns(names.drives(), &columns.drives)?),
         (Some(_), false) => {
             return Err(OptionError::new(
                 "drive_col",

@@ -27,7 +27,7 @@ use crate::pipeline::{
     DriftFit, Identification, IdentifyStep, Method, ModelSpec, Record, SearchOptions, TermSelection,
     WindowOptions, fit_drift,
 };
-use crate::record::{RecordOptions, RecordSummary, Source, load};
+use crate::record::{RecordOptions, RecordSummary, Source, load, load_all};
 
 /// The least-squares solver, by name: `qr` (column-pivoted QR) or `svd` (thin SVD).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -915,6 +915,8 @@ pub struct IdentifyReport {
     pub equations: Vec<EquationReport>,
     /// The names of the coordinates and drives, as the terms are written in them.
     pub names: Names,
+    /// The record's columns of the coordinates and drives (for a system).
+    pub columns: Option<hb_model::Columns>,
     /// The record as analysed.
     pub record: RecordSummary,
     /// The delay of the close-return search (`upo`).
@@ -959,7 +961,11 @@ impl IdentifyReport {
             return Ok(IdentifiedSystem::one(models.into_iter().next().expect("one")));
         }
         let domains = models.iter().map(IdentifiedModel::domain).collect();
-        Ok(IdentifiedSystem::new(self.names.clone(), domains, models)?)
+        let system = IdentifiedSystem::new(self.names.clone(), domains, models)?;
+        Ok(match &self.columns {
+            Some(columns) => system.with_columns(columns.clone())?,
+            None => system,
+        })
     }
 }
 
@@ -979,6 +985,17 @@ pub fn identify(
     observer: &mut dyn Observer,
 ) -> Result<IdentifyReport, RunError> {
     let data = load(source, &request.options.record, request.drive, observer)?;
+    identify_data(&data, request, observer)
+}
+
+/// [`identify`] on several records of the same columns, one fit: each read and conditioned on
+/// its own and joined by [`load_all`] (a gap between each two, so no window or orbit spans two).
+pub fn identify_records(
+    sources: Vec<Source<'_>>,
+    request: &IdentifyRequest,
+    observer: &mut dyn Observer,
+) -> Result<IdentifyReport, RunError> {
+    let data = load_all(sources, &request.options.record, request.drive, observer)?;
     identify_data(&data, request, observer)
 }
 
@@ -1148,6 +1165,16 @@ pub fn identify_data(
         basis: request.basis,
         equations,
         names: request.names.clone(),
+        columns: (n > 1).then(|| hb_model::Columns {
+            coordinates: request
+                .options
+                .record
+                .coords
+                .as_ref()
+                .map(|c| c.columns().to_vec())
+                .unwrap_or_default(),
+            drives: request.options.record.drive_cols().to_vec(),
+        }),
         refinement,
         record: RecordSummary::of(data),
         delay,

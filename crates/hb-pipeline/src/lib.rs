@@ -64,7 +64,7 @@ pub use embed::{EmbedReport, EmbedRequest, OrbitOptions, UposReport, UposRequest
 pub use error::{ErrorKind, RunError};
 pub use identify::{
     EquationReport, ForcingTerms, IdentifyOptions, IdentifyReport, IdentifyRequest, SolverKind, TermsOption,
-    identify, identify_data, system_library,
+    identify, identify_data, identify_records, system_library,
 };
 pub use observe::{Notice, Notices, Observer, Stage};
 pub use options::{OptionError, Spelling};

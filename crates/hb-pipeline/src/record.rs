@@ -65,24 +65,33 @@ drive_text!(DrivePeriod, DriveUnit::Period);
 drive_text!(DriveFrequency, DriveUnit::Frequency);
 
 /// Columns of a file by header name or 1-based position, written `A,B,C` (from Python a list of
-/// texts).
+/// texts), each with the name terms call it: its own, or one given before it, `NAME=COLUMN`
+/// (`q1=pos_meas1,q2=pos_meas2`).
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
-pub struct ColumnList(Vec<String>);
+pub struct ColumnList {
+    names: Vec<String>,
+    columns: Vec<String>,
+}
 
 impl ColumnList {
-    /// The columns, in order.
+    /// The names terms call the columns, in order.
     pub fn names(&self) -> &[String] {
-        &self.0
+        &self.names
+    }
+
+    /// The columns of the file, in order.
+    pub fn columns(&self) -> &[String] {
+        &self.columns
     }
 
     /// The number of columns.
     pub fn len(&self) -> usize {
-        self.0.len()
+        self.columns.len()
     }
 
     /// Never true: a list names at least one column.
     pub fn is_empty(&self) -> bool {
-        self.0.is_empty()
+        self.columns.is_empty()
     }
 }
 
@@ -90,23 +99,40 @@ impl FromStr for ColumnList {
     type Err = String;
 
     fn from_str(s: &str) -> Result<Self, String> {
-        let names: Vec<String> = s.split(',').map(|c| c.trim().to_owned()).collect();
-        if names.iter().any(String::is_empty) {
-            return Err("expected columns separated by commas, none empty".to_owned());
-        }
-        for (i, name) in names.iter().enumerate() {
-            name.parse::<Column>().map_err(|e| e.to_string())?;
-            if names[..i].contains(name) {
-                return Err(format!("the column '{name}' is named twice"));
+        let mut out = Self::default();
+        for item in s.split(',') {
+            let (name, column) = match item.split_once('=') {
+                Some((name, column)) => (name.trim(), column.trim()),
+                None => (item.trim(), item.trim()),
+            };
+            if name.is_empty() || column.is_empty() {
+                return Err(
+                    "expected columns separated by commas (NAME=COLUMN to name one), none empty".to_owned(),
+                );
             }
+            column.parse::<Column>().map_err(|e| e.to_string())?;
+            if out.columns.iter().any(|c| c == column) {
+                return Err(format!("the column '{column}' is named twice"));
+            }
+            if out.names.iter().any(|n| n == name) {
+                return Err(format!("the name '{name}' is given twice"));
+            }
+            out.names.push(name.to_owned());
+            out.columns.push(column.to_owned());
         }
-        Ok(Self(names))
+        Ok(out)
     }
 }
 
 impl fmt::Display for ColumnList {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(&self.0.join(","))
+        let items: Vec<String> = self
+            .names
+            .iter()
+            .zip(&self.columns)
+            .map(|(n, c)| if n == c { c.clone() } else { format!("{n}={c}") })
+            .collect();
+        f.write_str(&items.join(","))
     }
 }
 
@@ -257,7 +283,7 @@ impl RecordOptions {
             ));
         }
         if let (Some(coords), Some(drives)) = (&self.coords, &self.drive_col)
-            && let Some(both) = drives.names().iter().find(|d| coords.names().contains(d))
+            && let Some(both) = drives.columns().iter().find(|d| coords.columns().contains(d))
         {
             return Err(OptionError::value(
                 "drive_col",
@@ -297,6 +323,11 @@ impl RecordOptions {
 
     /// The measured drives' columns, in order (none without `drive_col`).
     pub fn drive_cols(&self) -> &[String] {
+        self.drive_col.as_ref().map_or(&[], |d| d.columns())
+    }
+
+    /// The names terms call the measured drives, in order (their columns unless named).
+    pub fn drive_names(&self) -> &[String] {
         self.drive_col.as_ref().map_or(&[], |d| d.names())
     }
 
@@ -304,7 +335,7 @@ impl RecordOptions {
     /// (one drive) or the drives' columns; a system's coordinates and drives are their columns
     /// (which must then be names that terms can spell).
     pub fn names(&self) -> Result<hb_model::Names, OptionError> {
-        let drives = self.drive_cols();
+        let drives = self.drive_names();
         let single = self.coordinates() == 1;
         let coordinates: Vec<String> = match &self.coords {
             Some(c) if !single => c.names().to_vec(),
@@ -363,7 +394,7 @@ impl RecordOptions {
         let coords = self
             .coords
             .as_ref()
-            .map(|c| c.names().to_vec())
+            .map(|c| c.columns().to_vec())
             .unwrap_or_default();
         let angle = match coords.first() {
             Some(first) => Some(
@@ -590,6 +621,94 @@ pub fn load(
         observer.notice(&Notice::Resampled { from, to: data.p });
     }
     Ok(data)
+}
+
+/// The records of `sources`, each read, conditioned and its clock found as [`load`] does, joined
+/// into one on the first one's grid: each record is a piece of its own (or several, with its own
+/// gaps), after a gap of at least one drive period, so that no window or orbit spans two records
+/// and every stage sees one record. With a periodic drive each record keeps its own drive phase:
+/// it is placed a whole number of drive periods after its own time origin, which needs the
+/// records' time stamps to lie on one grid (the same step, and origins a whole number of steps
+/// apart); without one (a measured drive, no drive, windows in time) the records' time origins
+/// do not matter. One record is [`load`]'s.
+///
+/// Errors: records with other samples per period or steps more than 0.1 % apart, another
+/// number of coordinates or drives, and, with a periodic drive, origins off the first's grid.
+pub fn load_all(
+    sources: Vec<Source<'_>>,
+    options: &RecordOptions,
+    drive: DriveSpec,
+    observer: &mut dyn Observer,
+) -> Result<Data, RunError> {
+    let mut records = Vec::with_capacity(sources.len());
+    for source in sources {
+        records.push(load(source, options, drive, observer)?);
+    }
+    let mut records = records.into_iter();
+    let Some(mut joined) = records.next() else {
+        return Err(OptionError::new("file", "no record given").into());
+    };
+    let periodic = matches!(joined.drive, DriveFound::Given | DriveFound::Estimated(_));
+    let h = joined.clock.step();
+    for (i, data) in records.enumerate() {
+        let which = i + 2;
+        let differs = |what: String| -> RunError {
+            OptionError::new(
+                "file",
+                format!("record {which} {what}: records of one identification share one kind of grid"),
+            )
+            .into()
+        };
+        if data.p != joined.p {
+            return Err(differs(format!(
+                "has {} samples per period, the first {}",
+                data.p, joined.p
+            )));
+        }
+        if ((data.clock.step() - h) / h).abs() > 1e-3 {
+            return Err(differs(format!(
+                "has the step {}, the first {h}",
+                data.clock.step()
+            )));
+        }
+        if data.others.len() != joined.others.len() || data.drives.len() != joined.drives.len() {
+            return Err(differs("has other columns".to_owned()));
+        }
+        // A gap of at least one period; with a periodic drive as many samples more as put the
+        // record's first sample at its own time plus whole periods.
+        let end = joined.x.len();
+        let mut gap = joined.p;
+        if periodic {
+            let period = joined.clock.drive_period();
+            let at = joined.clock.time(end + gap);
+            let offset = (data.clock.start_time() - at).rem_euclid(period) / h;
+            let whole = offset.round();
+            if (offset - whole).abs() > 1e-3 {
+                return Err(differs(format!(
+                    "starts {} steps off the first's grid (modulo the drive period): with a periodic drive the \
+                     records' time stamps must lie on one grid (the same step and origins whole steps apart)",
+                    offset - offset.floor()
+                )));
+            }
+            gap += whole as usize % joined.p;
+        }
+        let shift = end + gap;
+        let pad = |v: &mut Vec<f64>, more: &[f64]| {
+            v.resize(shift, f64::NAN);
+            v.extend_from_slice(more);
+        };
+        pad(&mut joined.x, &data.x);
+        for (mine, theirs) in joined.others.iter_mut().zip(&data.others) {
+            pad(&mut mine.x, &theirs.x);
+        }
+        for (mine, theirs) in joined.drives.iter_mut().zip(&data.drives) {
+            pad(mine, theirs);
+        }
+        joined
+            .pieces
+            .extend(data.pieces.iter().map(|r| r.start + shift..r.end + shift));
+    }
+    Ok(joined)
 }
 
 /// What the record turned out to be, for the reports.

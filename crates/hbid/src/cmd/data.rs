@@ -22,8 +22,9 @@ where
 /// The record's options shared by the analysis subcommands.
 #[derive(Debug, Args)]
 pub struct InputArgs {
-    /// The record: text (cells separated by commas, semicolons, spaces or tabs; header with columns t and theta, or headerless time and angle in either order) or .npy; `-` reads standard input.
-    pub file: PathBuf,
+    /// The record: text (cells separated by commas, semicolons, spaces or tabs; header with columns t and theta, or headerless time and angle in either order) or .npy; `-` reads standard input. `identify` takes several records of the same columns and one fit: each is conditioned on its own and they are joined, a gap between each two.
+    #[arg(required = true, num_args = 1.., value_name = "FILE")]
+    pub files: Vec<PathBuf>,
     /// Time column, by header name or 1-based position.
     #[arg(long, value_name = "NAME|N")]
     pub time_col: Option<String>,
@@ -108,9 +109,22 @@ impl InputArgs {
         }
     }
 
-    /// Where the samples come from.
-    pub fn source(&self) -> Source<'_> {
-        Source::Path(&self.file)
+    /// Where the samples come from: the one record (a command that reads one).
+    pub fn source(&self) -> anyhow::Result<Source<'_>> {
+        match &self.files[..] {
+            [file] => Ok(Source::Path(file)),
+            _ => anyhow::bail!("this command reads one record; only `identify` joins several"),
+        }
+    }
+
+    /// The one record's path (a command that reads one).
+    pub fn file(&self) -> &std::path::Path {
+        &self.files[0]
+    }
+
+    /// Where the samples of every record come from.
+    pub fn sources(&self) -> Vec<Source<'_>> {
+        self.files.iter().map(|f| Source::Path(f)).collect()
     }
 }
 

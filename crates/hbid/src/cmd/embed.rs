@@ -52,7 +52,7 @@ pub fn run(args: &EmbedArgs, quiet: bool) -> anyhow::Result<()> {
     let request = args.request();
     request.check()?;
     let mut console = Console::new("embed", quiet, false);
-    let report: EmbedReport = hb_pipeline::embed(args.input.source(), &request, &mut console)?;
+    let report: EmbedReport = hb_pipeline::embed(args.input.source()?, &request, &mut console)?;
     console.finish();
     if args.json {
         println!("{}", serde_json::to_string(&report)?);

@@ -202,7 +202,7 @@ pub fn run(args: &IdentifyArgs, quiet: bool, timings: bool) -> anyhow::Result<()
         hb_pipeline::output::check_output_path(path).context("«save_model»")?;
     }
     let mut console = Console::new("identify", quiet, timings);
-    let report = hb_pipeline::identify(args.input.source(), &request, &mut console)?;
+    let report = hb_pipeline::identify_records(args.input.sources(), &request, &mut console)?;
     console.finish();
     if let Some(path) = &args.save_model {
         save_system(&report.system()?, path)?;

@@ -147,7 +147,7 @@ pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
         notices: Vec::new(),
     };
     let record = args.identify.input.options();
-    let mut data = hb_pipeline::load(args.identify.input.source(), &record, request.drive(), &mut kept)?;
+    let mut data = hb_pipeline::load(args.identify.input.source()?, &record, request.drive(), &mut kept)?;
     // A velocity or acceleration record's drift, found once by the weak form on windows, serves
     // every model of the report.
     if record.measured != Measured::Displacement {
@@ -222,7 +222,7 @@ fn write_report(
     writeln!(
         r,
         "# Identification report: {}\n",
-        args.identify.input.file.display()
+        args.identify.input.file().display()
     )?;
     writeln!(
         r,

@@ -26,7 +26,7 @@ pub fn run(args: &UposArgs, quiet: bool) -> anyhow::Result<()> {
     };
     request.check()?;
     let mut console = Console::new("orbits", quiet, false);
-    let report = hb_pipeline::upos(args.input.source(), &request, &mut console)?;
+    let report = hb_pipeline::upos(args.input.source()?, &request, &mut console)?;
     console.finish();
     if args.json {
         println!("{}", serde_json::to_string(&report)?);
