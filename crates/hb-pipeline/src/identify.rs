@@ -789,10 +789,20 @@ impl IdentifyRequest {
         let record = Record::from_data(data)?;
         Ok(match method {
             Method::Upo => {
+                if data.others.iter().any(|c| c.domain != data.domain) {
+                    return Err(OptionError::value(
+                        "method",
+                        "upo",
+                        "the close returns of a system are searched in one metric: its coordinates must all be \
+                         angles or all displacements (use «method=windowed»)",
+                    )
+                    .into());
+                }
+                let coordinates: Vec<&[f64]> = data.coordinates().into_iter().map(|(x, _)| x).collect();
                 let segments = self
                     .search
                     .close_returns(&record, delay)?
-                    .search_pieces(&data.x, &data.pieces)
+                    .search_system_pieces(&coordinates, &data.pieces)
                     .map_err(crate::pipeline::PipelineError::from)?;
                 let found = format!(
                     "{} orbit segments found at tolerance {}",

@@ -40,6 +40,10 @@ struct GeneralBuffers {
     xdot: Vec<f64>,
     /// The segment less its trend.
     detrended: Vec<f64>,
+    /// The samples of a second part of one term (by parts).
+    g2: Vec<f64>,
+    /// The basis functions' derivatives at one sample.
+    dphi: Vec<f64>,
     /// The own acceleration at every sample, when a term reads it.
     xddot: Vec<f64>,
     /// The other coordinates a term reads ([`Shared::coordinates`]): each one's samples over the
@@ -584,7 +588,7 @@ fn general_columns<B: Basis + ?Sized>(
     };
     for &(c, term) in &sh.others {
         match (term.position, term.velocity) {
-            (PositionFactor::One, VelocityFactor::One) => match term.drive {
+            (PositionFactor::One, VelocityFactor::One) if term.coupling.is_empty() => match term.drive {
                 DriveFactor::One => a[(0, c)] = 1.0,
                 // Refused before assembly (`refuse_measured_drive`).
                 DriveFactor::Measured(_) => return Err(measured_drive_refused(term.name(sh.names))),
@@ -601,6 +605,59 @@ fn general_columns<B: Basis + ?Sized>(
                     }
                 }
             },
+            (position, _) if term.coupling.acceleration().is_some() => {
+                // An acceleration times a function f of the positions, by parts over the orbit
+                // (whose series is periodic): the coefficients of (f q_j')' less those of
+                // f' q_j', so that only velocities are taken from the series — the second
+                // derivative of a series that does not quite close rings at its seam.
+                let j_acc = term.coupling.acceleration().expect("matched");
+                buf.g.clear();
+                buf.g2.clear();
+                let (mut q, mut v) = ([0.0; MAX_COORDINATES], [0.0; MAX_COORDINATES]);
+                buf.dphi.resize(sh.names.len(), 0.0);
+                for n in 0..l {
+                    q[own] = seg.cont[n];
+                    v[own] = buf.xdot[n];
+                    for (i, &c) in sh.coordinates.iter().enumerate() {
+                        q[c] = buf.other_x[i][n];
+                        v[c] = buf.other_v[i][n];
+                    }
+                    let (mut f, mut rate) = match position {
+                        PositionFactor::One => (1.0, 0.0),
+                        PositionFactor::Basis(i) => {
+                            let xe = if sh.domain == Domain::Circle {
+                                wrap(seg.cont[n])
+                            } else {
+                                seg.cont[n]
+                            };
+                            sh.basis.eval_deriv(xe, &mut buf.dphi);
+                            (phi.row(i, l)[n], buf.dphi[i] * v[own])
+                        }
+                        PositionFactor::Linear => (seg.cont[n], v[own]),
+                    };
+                    for factor in term.coupling.factors() {
+                        if matches!(factor, Factor::Trig { .. } | Factor::Power { .. }) {
+                            let value = factor.eval(&q, &v);
+                            let d: f64 = (0..MAX_COORDINATES).map(|c| factor.eval_dq(&q, c) * v[c]).sum();
+                            rate = rate * value + f * d;
+                            f *= value;
+                        }
+                    }
+                    buf.g.push(f * v[j_acc]);
+                    buf.g2.push(rate * v[j_acc]);
+                }
+                if buf.g.iter().chain(&buf.g2).any(|v| !v.is_finite()) {
+                    return Err(not_finite(&term));
+                }
+                let first: Vec<Complex64> = plan.transform(&buf.g)?.bins().to_vec();
+                let second = plan.transform(&buf.g2)?;
+                let omega = TAU / (l as f64 * seg.h);
+                put_bins(&mut a, c, m, l, |j| {
+                    let w = j as f64 * omega;
+                    let s = first[j];
+                    Complex64::new(-w * s.im, w * s.re) - second.bins()[j]
+                });
+            }
             (position, velocity) => {
                 buf.g.clear();
                 let (mut q, mut v) = ([0.0; MAX_COORDINATES], [0.0; MAX_COORDINATES]);

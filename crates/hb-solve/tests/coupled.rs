@@ -192,3 +192,89 @@ fn a_term_in_a_coordinate_the_record_lacks_is_refused() {
         Err(SolveError::Assembly(AssemblyError::DomainMismatch { .. }))
     ));
 }
+
+/// The paper's rows of terms in other coordinates on an exactly periodic orbit of two angles
+/// (one of them whirling) are the Fourier coefficients of the terms, the acceleration's taken by
+/// parts: each column against the coefficients of the term's closed form, summed on a grid 64
+/// times finer.
+#[test]
+fn harmonic_balance_columns_of_coupled_terms_are_their_fourier_coefficients() {
+    use hb_model::Harmonics;
+    let p = 64;
+    let clock = SampleClock::nondimensional(p).unwrap();
+    // One drive period: q1 swings, q2 whirls once.
+    let motion = |t: f64| {
+        let q = [
+            0.3 * t.sin() + 0.2 * (2.0 * t + 0.4).cos(),
+            t + 0.4 * (t + 0.3).sin(),
+        ];
+        let v = [
+            0.3 * t.cos() - 0.4 * (2.0 * t + 0.4).sin(),
+            1.0 + 0.4 * (t + 0.3).cos(),
+        ];
+        let a = [
+            -0.3 * t.sin() - 0.8 * (2.0 * t + 0.4).cos(),
+            -0.4 * (t + 0.3).sin(),
+        ];
+        (q, v, a)
+    };
+    let terms = [
+        "q2''*cos(q1-q2)",
+        "sin(q1-q2)*q2'^2",
+        "sin(q2)*q1'*q2'",
+        "q1''*cos(q2)",
+    ];
+    let value = |name: &str, t: f64| {
+        let (q, v, a) = motion(t);
+        match name {
+            "q2''*cos(q1-q2)" => a[1] * (q[0] - q[1]).cos(),
+            "sin(q1-q2)*q2'^2" => (q[0] - q[1]).sin() * v[1] * v[1],
+            "sin(q2)*q1'*q2'" => q[1].sin() * v[0] * v[1],
+            "q1''*cos(q2)" => a[0] * q[1].cos(),
+            other => panic!("{other}"),
+        }
+    };
+    let names = Names::new(["q1", "q2"], Vec::<String>::new()).unwrap();
+    let (q1, q2): (Vec<f64>, Vec<f64>) = (0..=p)
+        .map(|n| {
+            let (q, _, _) = motion(clock.time(n));
+            (wrap(q[0]), wrap(q[1]))
+        })
+        .unzip();
+    let segment = Segment::new(0, 1, &clock, 0.0, q1.len()).unwrap();
+    let m = 6;
+    let params = IdentifyParams::builder(clock)
+        .form(ModelForm::from_terms(
+            TermList::parse_in(&terms.join(", "), &names, 0).unwrap(),
+        ))
+        .harmonics(Harmonics::Fixed(m))
+        .velocity_harmonics(IdentifyParams::SYSTEM_VELOCITY_HARMONICS)
+        .build()
+        .unwrap();
+    let signals = Signals::system(vec![(&q1[..], Domain::Circle), (&q2[..], Domain::Circle)], 0).unwrap();
+    let system = hb_solve::assemble(&Harmonic::new(1).unwrap(), signals, &[segment], &params).unwrap();
+    let fine = 64 * p;
+    for (c, name) in terms.iter().enumerate() {
+        for j in 0..=m {
+            let (mut a, mut b) = (0.0, 0.0);
+            for n in 0..fine {
+                let t = std::f64::consts::TAU * n as f64 / fine as f64;
+                let g = value(name, t);
+                a += 2.0 * g * (j as f64 * t).cos() / fine as f64;
+                b += 2.0 * g * (j as f64 * t).sin() / fine as f64;
+            }
+            let rows = if j == 0 {
+                vec![(0, a / 2.0)]
+            } else {
+                vec![(2 * j - 1, a), (2 * j, b)]
+            };
+            for (row, want) in rows {
+                let got = system.matrix()[(row, c)];
+                assert!(
+                    (got - want).abs() < 1e-9,
+                    "{name}, harmonic {j}, row {row}: {got} vs {want}"
+                );
+            }
+        }
+    }
+}

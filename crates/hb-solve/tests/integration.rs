@@ -6,6 +6,7 @@
 mod common;
 
 mod coupled;
+mod double_pendulum;
 
 mod identification;
 mod measured_drive;

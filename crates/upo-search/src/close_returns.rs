@@ -254,6 +254,100 @@ impl CloseReturns {
         })
     }
 
+    /// The close-return segments of a system's record of several coordinates on one grid, in
+    /// pieces as [`search_pieces`](Self::search_pieces) takes them: a return is close when the
+    /// delay vectors of every coordinate return, its error the largest over the coordinates and
+    /// delays of the distance (paper eq. 19 on the circle, each coordinate's own) — the state of
+    /// the whole system returns, not one coordinate's projection of it. On the line each
+    /// coordinate's distance is measured against its own span (the tolerance is the fraction of
+    /// each span), reported in the first's. One coordinate is [`search_pieces`](Self::search_pieces).
+    ///
+    /// Errors as [`search_pieces`](Self::search_pieces) does, for any coordinate, and coordinates
+    /// of different lengths.
+    pub fn search_system_pieces(
+        &self,
+        coordinates: &[&[f64]],
+        pieces: &[Range<usize>],
+    ) -> Result<Vec<Segment>, UpoError> {
+        let Some((&first, _)) = coordinates.split_first() else {
+            return Err(UpoError::InvalidCount {
+                name: "coordinates",
+                value: 0,
+                why: "must be at least 1",
+            });
+        };
+        if coordinates.len() == 1 {
+            return self.search_pieces(first, pieces);
+        }
+        if let Some(other) = coordinates.iter().find(|c| c.len() != first.len()) {
+            return Err(UpoError::TooShort {
+                len: other.len(),
+                needed: first.len(),
+                period: self.max_period,
+            });
+        }
+        let mut scales = Vec::with_capacity(coordinates.len());
+        let mut eps = 0.0;
+        for (c, x) in coordinates.iter().enumerate() {
+            let input = self.pieces_input(x, pieces)?;
+            if c == 0 {
+                eps = input.tolerance;
+            }
+            // Each coordinate's distance in units of the first's tolerance.
+            scales.push(eps / input.tolerance);
+        }
+        let needed = self.needed()?;
+        let (p, lag_of) = (self.samples_per_period, |k: usize| k * self.samples_per_period);
+        let reach = (self.dimension - 1) * self.delay;
+        let error_at = |n: usize, lag: usize| -> f64 {
+            let mut e: f64 = 0.0;
+            for (x, &scale) in coordinates.iter().zip(&scales) {
+                for c in 0..self.dimension {
+                    let i = n + c * self.delay;
+                    let d = match self.domain {
+                        Domain::Circle => circle_signal::circle_distance(x[i + lag], x[i]),
+                        Domain::Line => (x[i + lag] - x[i]).abs(),
+                    };
+                    e = e.max(d * scale);
+                }
+            }
+            e
+        };
+        let mut segments = Vec::new();
+        for piece in pieces.iter().filter(|r| r.len() >= needed) {
+            let found: Vec<Vec<Segment>> = (1..=self.max_period)
+                .into_par_iter()
+                .map(|k| {
+                    let lag = lag_of(k);
+                    let count = piece.len() - lag - reach;
+                    let mut run = Run {
+                        best: None,
+                        segments: Vec::new(),
+                    };
+                    let emit = |out: &mut Vec<Segment>, (start, error): (usize, f64)| {
+                        let repeated = (1..k)
+                            .filter(|&j| k.is_multiple_of(j))
+                            .any(|j| error_at(start, j * p) < eps);
+                        if !repeated && let Ok(s) = Segment::new(start, k, &self.clock, error, first.len()) {
+                            out.push(s);
+                        }
+                    };
+                    let err: Vec<f64> = (piece.start..piece.start + count)
+                        .map(|n| error_at(n, lag))
+                        .collect();
+                    run.feed(piece.start, &err, eps, &emit);
+                    if let Some(last) = run.best.take() {
+                        emit(&mut run.segments, last);
+                    }
+                    run.segments
+                })
+                .collect();
+            segments.extend(found.into_iter().flatten());
+        }
+        segments.sort_by_key(|s| (s.period(), s.start()));
+        Ok(segments)
+    }
+
     /// Every piece long enough scanned on its own, the segments moved to the record's indices and
     /// sorted by period, then start.
     fn scan_pieces<D: Distance>(

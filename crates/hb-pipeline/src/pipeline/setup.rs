@@ -195,6 +195,7 @@ impl ModelSpec {
             None => None,
         };
         let params = IdentifyParams::builder(*clock)
+            .velocity_harmonics(IdentifyParams::default_velocity_harmonics_for(&self.form))
             .form(self.form)
             .harmonics(harmonics)
             .noise_correction(self.noise)
