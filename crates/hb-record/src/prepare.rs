@@ -1,8 +1,9 @@
 //! A record made ready for analysis, the one way every front end does it: time stamps fitted to a
-//! grid (pieces on one grid, NaN in the gaps), wrapped on the circle, encoder spikes found (and
-//! repaired on request), the drive given, estimated ([`hb_drive::estimate_forcing_period`]) or
-//! absent (a free oscillation, [`circle_signal::oscillation_period`]), and the record resampled
-//! once onto a whole number of samples per forcing period when needed.
+//! grid (pieces on one grid, NaN in the gaps, a logger's unsettled start or end left out of every
+//! column), wrapped on the circle, encoder spikes found (and repaired on request), the drive
+//! given, estimated ([`hb_drive::estimate_forcing_period`]) or absent (a free oscillation,
+//! [`circle_signal::oscillation_period`]), and the record resampled once onto a whole number of
+//! samples per forcing period when needed.
 //!
 //! Two steps, so that a front end can show a record before it knows the drive: [`condition`]
 //! (read record to [`GridData`]) and [`GridData::with_drive`] (to [`Data`], the record as every
