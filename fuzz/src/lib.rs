@@ -4,7 +4,10 @@
 
 use hb_basis::BasisKind;
 use hb_model::IdentifiedModel;
-use hb_record::input::{GridOptions, GridRecord, InputError, Location, Record, angle_range};
+use hb_record::input::{
+    GridOptions, GridRecord, InputError, Location, Record, RecordEnd, UNSETTLED_FRACTION, UNSETTLED_MAX,
+    angle_range,
+};
 use pendulum_sim::SecondOrderSystem;
 
 /// The number of lines of a text as the reader counts them (a last line without a line end
@@ -77,8 +80,9 @@ pub fn check_record(record: &Record, lines: Option<u64>) {
 }
 
 /// Fits a record's stamps to a grid and checks the result: every sample in exactly one piece, in
-/// order, the pieces apart by gaps, a finite positive step; repairs only when asked for, each at
-/// a sample of the record. An error must name a place in the record.
+/// order, but those of unsettled runs at the ends (each at most 1 % of the record and 50), the
+/// pieces apart by gaps, a finite positive step; repairs only when asked for, each at a sample of
+/// the record. An error must name a place in the record.
 pub fn fit_and_check(record: Record, repair: bool) {
     let n = record.t.len();
     let theta = record.theta.clone();
@@ -87,7 +91,29 @@ pub fn fit_and_check(record: Record, repair: bool) {
         Ok(grid) => {
             assert!(grid.dt.is_finite() && grid.dt > 0.0, "{}", grid.dt);
             assert!(grid.t0.is_finite(), "{}", grid.t0);
-            assert_eq!(grid.sample_count(), n);
+            let kept = grid.kept();
+            assert!(
+                kept.end <= n && grid.sample_count() == kept.len(),
+                "{kept:?} of {n}"
+            );
+            let ends: Vec<_> = grid
+                .unsettled
+                .iter()
+                .map(|r| (r.end, r.samples.clone()))
+                .collect();
+            let expected: Vec<_> = [(RecordEnd::Start, 0..kept.start), (RecordEnd::End, kept.end..n)]
+                .into_iter()
+                .filter(|(_, r)| !r.is_empty())
+                .collect();
+            assert_eq!(ends, expected, "the runs left out and the samples kept");
+            for run in &grid.unsettled {
+                let len = run.samples.len();
+                assert!(
+                    len >= 2 && len as f64 <= UNSETTLED_FRACTION * n as f64 && len <= UNSETTLED_MAX,
+                    "{run:?} of {n}"
+                );
+                assert!(!run.to_string().is_empty());
+            }
             assert_eq!(grid.pieces.first().map(|p| p.first), Some(0));
             for w in grid.pieces.windows(2) {
                 assert!(
@@ -101,7 +127,10 @@ pub fn fit_and_check(record: Record, repair: bool) {
                 .flat_map(|p| p.samples.iter().copied())
                 .collect();
             assert!(
-                joined.iter().zip(&theta).all(|(a, b)| a.to_bits() == b.to_bits()),
+                joined
+                    .iter()
+                    .zip(&theta[kept])
+                    .all(|(a, b)| a.to_bits() == b.to_bits()),
                 "the samples moved"
             );
             assert!(repair || grid.repaired.is_empty());
@@ -126,7 +155,12 @@ pub fn fit_and_check(record: Record, repair: bool) {
         }
         Err(e) => {
             assert!(!e.to_string().is_empty());
-            if let InputError::TimeGlitch { at, .. } | InputError::TimeNotIncreasing { at, .. } = &e {
+            let named = match &e {
+                InputError::TimeGlitch { at, .. } | InputError::TimeNotIncreasing { at, .. } => vec![*at],
+                InputError::TimeUnsettled { first, last, .. } => vec![*first, *last],
+                _ => Vec::new(),
+            };
+            for at in &named {
                 match (at, &numbers) {
                     (Location::Line(l), Some(numbers)) => assert!(numbers.contains(l), "{e:?}"),
                     (Location::Sample(s), None) => assert!((1..=n).contains(s), "{e:?}"),

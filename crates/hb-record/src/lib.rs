@@ -4,7 +4,8 @@
 //!
 //! - [`input`] reads a record as a data-acquisition program writes it (text with any separator,
 //!   with or without a header, or `.npy`) and fits its time stamps to one grid `t_0 + n h`: gaps
-//!   split it into pieces, isolated glitches are named (and replaced on request);
+//!   split it into pieces, isolated glitches are named (and replaced on request), a logger's
+//!   few samples at another rate before it settles (or as it stops) are left out;
 //! - [`prepare`] makes the read record what every stage of the identification takes: pieces on
 //!   one grid with NaN in the gaps, an angle wrapped into `[−π, π)`, encoder spikes found (and
 //!   replaced on request), a velocity or acceleration integrated to the displacement, the drive's

@@ -1,8 +1,9 @@
 //! A record made ready for analysis, the one way every front end does it: time stamps fitted to a
-//! grid (pieces on one grid, NaN in the gaps), wrapped on the circle, encoder spikes found (and
-//! repaired on request), the drive given, estimated ([`hb_drive::estimate_forcing_period`]) or
-//! absent (a free oscillation, [`circle_signal::oscillation_period`]), and the record resampled
-//! once onto a whole number of samples per forcing period when needed.
+//! grid (pieces on one grid, NaN in the gaps, a logger's unsettled start or end left out of every
+//! column), wrapped on the circle, encoder spikes found (and repaired on request), the drive
+//! given, estimated ([`hb_drive::estimate_forcing_period`]) or absent (a free oscillation,
+//! [`circle_signal::oscillation_period`]), and the record resampled once onto a whole number of
+//! samples per forcing period when needed.
 //!
 //! Two steps, so that a front end can show a record before it knows the drive: [`condition`]
 //! (read record to [`GridData`]) and [`GridData::with_drive`] (to [`Data`], the record as every
@@ -42,7 +43,7 @@ use hb_model::{Forcing, ModelForm};
 
 use crate::input::{
     AngleRange, GridOptions, GridRecord, GridReport, InputError, Record as InputRecord, TimeRepair,
-    angle_range,
+    Unsettled, angle_range,
 };
 
 /// What drives the record.
@@ -224,6 +225,9 @@ pub enum Note {
     /// How the time stamps sit on the grid, when worth a note ([`GridReport::is_notable`]): the
     /// clock that stamped them slips, or they deviate from the grid beyond their printing.
     Grid(GridReport),
+    /// Samples left out at an end of the record: stamped at another rate than the rest, before
+    /// the logger settled to its rate or after it left it.
+    Unsettled(Unsettled),
     /// A time stamp replaced by its grid time.
     TimeRepaired(TimeRepair),
     /// Gaps in the time stamps: the record is analysed in pieces.
@@ -269,6 +273,7 @@ impl fmt::Display for Note {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Note::Grid(report) => write!(f, "{report}"),
+            Note::Unsettled(run) => write!(f, "{run}"),
             Note::TimeRepaired(r) => {
                 write!(f, "{}: time {} replaced by its grid time {}", r.at, r.was, r.now)
             }
@@ -500,13 +505,16 @@ pub fn condition(
             repair: options.repair,
         },
     )?;
+    for run in &grid.unsettled {
+        note(Note::Unsettled(run.clone()));
+    }
     if grid.report.is_notable() {
         note(Note::Grid(grid.report.clone()));
     }
     for r in &grid.repaired {
         note(Note::TimeRepaired(*r));
     }
-    let (t0, dt) = (grid.t0, grid.dt);
+    let (t0, dt, read_kept) = (grid.t0, grid.dt, grid.kept());
     // One grid for every piece, NaN in the gaps.
     let mut x: Vec<f64> = Vec::new();
     let mut pieces = Vec::with_capacity(grid.pieces.len());
@@ -516,10 +524,11 @@ pub fn condition(
         x.extend(piece.samples);
     }
     // The drives' and further coordinates' samples follow the record's in order: every sample
-    // read is in a piece, the pieces in the order of the samples.
+    // read and kept (not in an unsettled run at an end) is in a piece, the pieces in the order
+    // of the samples.
     let on_grid = |read: Vec<f64>| {
         let mut out = vec![f64::NAN; x.len()];
-        let mut next = read.into_iter();
+        let mut next = read.into_iter().skip(read_kept.start).take(read_kept.len());
         for r in &pieces {
             for (slot, value) in out[r.clone()].iter_mut().zip(next.by_ref()) {
                 *slot = value;

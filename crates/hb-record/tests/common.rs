@@ -43,6 +43,7 @@ pub fn is_about_the_content(e: &InputError) -> bool {
         | InputError::TimeNotIncreasing { .. }
         | InputError::TimeGlitch { .. }
         | InputError::TimeUnresolved { .. }
+        | InputError::TimeUnsettled { .. }
         | InputError::TimeOverflow { .. }
         | InputError::BadForcingPeriod { .. } => false,
         // `InputError` is non-exhaustive: a variant added later is not about the content until

@@ -1,9 +1,10 @@
 //! The time stamps fitted to a grid: exact and printed clocks, gaps, glitches named or repaired,
-//! a logger's clock that slips by its printed unit, jittering stamps reported or refused, and
-//! properties of the fit over any stamps.
+//! a logger's clock that slips by its printed unit, jittering stamps reported or refused, a
+//! logger's unsettled start or end left out or refused, and properties of the fit over any
+//! stamps.
 use hb_record::input::{
-    GridOptions, GridRecord, InputError, JITTER_WARNING, LEVEL_WINDOW, Location, ReadOptions, Record,
-    StampFault, read_bytes,
+    GridOptions, GridRecord, GridReport, InputError, JITTER_WARNING, LEVEL_WINDOW, Location, ReadOptions,
+    Record, RecordEnd, StampFault, read_bytes,
 };
 use proptest::prelude::*;
 
@@ -768,4 +769,257 @@ proptest! {
     ) {
         check_fit(t0, dt, extra, &runs)?;
     }
+}
+
+/// A logger at 500 Hz from `T0`: `n` samples on the grid, each stamp jittering by 0.5 % of the
+/// step (normal, seeded, printed to 9 decimals), after samples stamped `head` steps apart (the
+/// last of them the step onto the grid) and followed by samples stamped `tail` steps apart (the
+/// first of them the step off the grid): a loop not yet (or no longer) at its rate. With it, the
+/// stamps of the grid alone.
+fn settling(n: usize, head: &[f64], tail: &[f64], seed: u64) -> (Vec<f64>, Vec<f64>) {
+    let dt = 2e-3;
+    let mut draws = Draws(seed);
+    let print = |t: f64| -> f64 { format!("{t:.9}").parse().unwrap() };
+    let grid: Vec<f64> = (0..n)
+        .map(|i| print(T0 + (i as f64 + 0.005 * draws.normal()) * dt))
+        .collect();
+    let mut t: Vec<f64> = (0..head.len())
+        .map(|j| print(grid[0] - head[j..].iter().sum::<f64>() * dt))
+        .collect();
+    t.extend(&grid);
+    t.extend((1..=tail.len()).map(|j| print(grid[n - 1] + tail[..j].iter().sum::<f64>() * dt)));
+    (t, grid)
+}
+
+/// The report of stamps fitted alone, as the record they are in names them: its sample `first`
+/// is their first, and it has line numbers or not.
+fn within(alone: &GridReport, first: usize, lines: bool) -> GridReport {
+    let Location::Line(line) = alone.max_at else {
+        unreachable!()
+    };
+    let i = line as usize - 2 + first;
+    GridReport {
+        max_at: if lines {
+            Location::Line(i as u64 + 2)
+        } else {
+            Location::Sample(i + 1)
+        },
+        ..alone.clone()
+    }
+}
+
+/// The DFKI double pendulum's start: five steps of 1.5 to 1.9 steps before the grid.
+const SETTLING: [f64; 5] = [1.5, 1.6, 1.7, 1.8, 1.9];
+
+#[test]
+fn a_logger_settling_to_its_rate_is_left_out_with_its_stamps_named() {
+    let n = 3_000;
+    let (t, grid) = settling(n, &SETTLING, &[], 11);
+    // Nothing else in the record: the rest is fitted as the grid's stamps alone are.
+    let alone = fit(grid.clone()).unwrap();
+    for options in [GridOptions::default(), GridOptions { repair: true }] {
+        let u = GridRecord::fit(record(t.clone()), &options).unwrap();
+        assert_eq!(u.unsettled.len(), 1, "{:?}", u.unsettled);
+        let run = &u.unsettled[0];
+        assert_eq!((run.end, run.samples.clone()), (RecordEnd::Start, 0..5));
+        assert_eq!((run.first, run.last), (Location::Line(2), Location::Line(6)));
+        assert_eq!((run.from, run.to), (t[0], t[4]));
+        assert_eq!(run.step, u.dt);
+        // The steps of the run, the one onto the grid included (its jitter of 0.5 % of a step).
+        assert!((run.shortest / u.dt - 1.5).abs() < 0.05, "{run:?}");
+        assert!((run.longest / u.dt - 1.9).abs() < 0.05, "{run:?}");
+        assert_eq!(u.kept(), 5..n + 5);
+        assert_eq!((u.pieces.len(), u.sample_count()), (1, n));
+        let values: Vec<f64> = (5..n + 5).map(|i| i as f64).collect();
+        assert_eq!(u.pieces[0].samples, values);
+        assert!(u.repaired.is_empty());
+        assert_eq!((u.t0, u.dt), (alone.t0, alone.dt));
+        assert_eq!(u.report, within(&alone.report, 5, true));
+        // The grid is the true one, within what the jitter allows.
+        assert!((u.dt - 2e-3).abs() < 1e-9, "{}", u.dt);
+        assert!((u.t0 - T0).abs() < 1e-6, "{}", u.t0);
+        let text = run.to_string();
+        assert_eq!(
+            text,
+            format!(
+                "the first 5 samples (line 2 to line 6, t = {} to {}) are left out: their time stamps are 1.5 \
+                 to 1.9 steps of 0.002 apart, off the grid of the rest (a logger settling to its rate)",
+                t[0], t[4]
+            )
+        );
+    }
+}
+
+#[test]
+fn a_logger_leaving_its_rate_at_the_end_is_left_out_too() {
+    let n = 3_000;
+    let tail: Vec<f64> = SETTLING.iter().rev().copied().collect();
+    let (t, grid) = settling(n, &[], &tail, 12);
+    let alone = fit(grid).unwrap();
+    let u = fit(t.clone()).unwrap();
+    assert_eq!(u.unsettled.len(), 1, "{:?}", u.unsettled);
+    let run = &u.unsettled[0];
+    assert_eq!((run.end, run.samples.clone()), (RecordEnd::End, n..n + 5));
+    assert_eq!(
+        (run.first, run.last),
+        (Location::Line(n as u64 + 2), Location::Line(n as u64 + 6))
+    );
+    assert_eq!((run.from, run.to), (t[n], t[n + 4]));
+    assert_eq!(u.kept(), 0..n);
+    assert_eq!((u.t0, u.dt, &u.report), (alone.t0, alone.dt, &alone.report));
+    assert!(
+        (u.t0 - T0).abs() < 1e-6 && (u.dt - 2e-3).abs() < 1e-9,
+        "{} {}",
+        u.t0,
+        u.dt
+    );
+    assert!(
+        run.to_string()
+            .starts_with(&format!("the last 5 samples (line {} to line {}", n + 2, n + 6))
+            && run
+                .to_string()
+                .ends_with("(a logger leaving its rate as it stops)"),
+        "{run}"
+    );
+
+    // Both ends, in a record without line numbers: its samples named by their place in it.
+    let (t, grid) = settling(n, &SETTLING, &tail, 13);
+    let alone = fit(grid).unwrap();
+    let rec = Record {
+        lines: None,
+        ..record(t)
+    };
+    let u = GridRecord::fit(rec, &GridOptions::default()).unwrap();
+    let ends: Vec<_> = u
+        .unsettled
+        .iter()
+        .map(|r| (r.end, r.samples.clone(), r.first, r.last))
+        .collect();
+    assert_eq!(
+        ends,
+        [
+            (RecordEnd::Start, 0..5, Location::Sample(1), Location::Sample(5)),
+            (
+                RecordEnd::End,
+                n + 5..n + 10,
+                Location::Sample(n + 6),
+                Location::Sample(n + 10)
+            ),
+        ]
+    );
+    assert_eq!(u.kept(), 5..n + 5);
+    assert_eq!(u.pieces[0].samples[0], 5.0);
+    assert_eq!((u.t0, u.dt), (alone.t0, alone.dt));
+    assert_eq!(u.report, within(&alone.report, 5, false));
+}
+
+#[test]
+fn a_longer_irregular_start_is_refused_naming_it() {
+    // 80 samples at 1.5 to 1.9 steps before 5 000 on the grid: more than the 50 left out.
+    let head: Vec<f64> = (0..80).map(|i| SETTLING[i % 5]).collect();
+    let (t, _) = settling(5_000, &head, &[], 14);
+    for options in [GridOptions::default(), GridOptions { repair: true }] {
+        match GridRecord::fit(record(t.clone()), &options) {
+            Err(
+                e @ InputError::TimeUnsettled {
+                    end: RecordEnd::Start,
+                    first: Location::Line(2),
+                    last: Location::Line(81),
+                    count: 80,
+                    bound: 50,
+                    ..
+                },
+            ) => {
+                let text = e.to_string();
+                assert!(
+                    text.starts_with(
+                        "line 2 to line 81: the first 80 time stamps are 1.5 to 1.9 steps of 0.002 apart, off \
+                         the grid of the rest: more than the 50 samples at an end of a record (1 % of it, and \
+                         at most 50)"
+                    ),
+                    "{text}"
+                );
+                assert!(
+                    text.ends_with("remove their rows; if they are, correct their time stamps"),
+                    "{text}"
+                );
+            }
+            other => panic!("{options:?}: {other:?}"),
+        }
+    }
+    // In a short record 1 % is fewer: 5 samples of 300 are too many.
+    let (t, _) = settling(300, &SETTLING, &[], 15);
+    assert!(matches!(
+        fit(t),
+        Err(InputError::TimeUnsettled {
+            count: 5,
+            bound: 3,
+            ..
+        })
+    ));
+}
+
+#[test]
+fn glitches_beside_a_settling_start_are_handled_as_before() {
+    let n = 3_000;
+    let (mut t, grid) = settling(n, &SETTLING, &[], 16);
+    // A stamp 0.45 step late in the middle: once the start is left out, an isolated glitch,
+    // named alone, and repaired on request.
+    t[1_005] += 0.45 * 2e-3;
+    match fit(t.clone()) {
+        Err(InputError::TimeGlitch {
+            at: Location::Line(1_007),
+            fault: StampFault::OffGrid,
+            isolated: true,
+            other_count: 0,
+            ..
+        }) => {}
+        other => panic!("{other:?}"),
+    }
+    let u = repair(t.clone()).unwrap();
+    let runs: Vec<_> = u.unsettled.iter().map(|r| (r.end, r.samples.clone())).collect();
+    assert_eq!(runs, [(RecordEnd::Start, 0..5)]);
+    assert_eq!(u.repaired.len(), 1);
+    assert_eq!(
+        (u.repaired[0].at, u.repaired[0].was),
+        (Location::Line(1_007), t[1_005])
+    );
+    assert!((u.repaired[0].now - grid[1_000]).abs() < 1e-4, "{:?}", u.repaired);
+    // Two side by side stay an error, with or without repair.
+    t[1_006] += 0.45 * 2e-3;
+    for options in [GridOptions::default(), GridOptions { repair: true }] {
+        assert!(matches!(
+            GridRecord::fit(record(t.clone()), &options),
+            Err(InputError::TimeGlitch {
+                at: Location::Line(1_007),
+                isolated: false,
+                ..
+            })
+        ));
+    }
+    // A single slow first step is one stamp off the grid: an isolated glitch, as anywhere, not
+    // a run left out.
+    let (t, grid) = settling(n, &[1.7], &[], 17);
+    assert!(matches!(
+        fit(t.clone()),
+        Err(InputError::TimeGlitch {
+            at: Location::Line(2),
+            isolated: true,
+            ..
+        })
+    ));
+    let u = repair(t).unwrap();
+    assert!(u.unsettled.is_empty() && u.repaired.len() == 1, "{u:?}");
+    assert!(
+        (u.repaired[0].now - (grid[0] - 2e-3)).abs() < 1e-4,
+        "{:?}",
+        u.repaired
+    );
+    // A clock going backwards at the start is a glitch of the clock, not a rate.
+    let mut t = settling(n, &SETTLING, &[], 18).0;
+    t.swap(1, 2);
+    assert!(matches!(
+        repair(t),
+        Err(InputError::TimeGlitch { isolated: false, .. })
+    ));
 }

@@ -6,7 +6,7 @@
 use std::fmt;
 use std::path::PathBuf;
 
-use super::{Column, Role, Separator};
+use super::{Column, RecordEnd, Role, Separator, UNSETTLED_FRACTION, UNSETTLED_MAX};
 
 /// Where in the input a value is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -200,6 +200,36 @@ pub enum InputError {
         /// How many glitches after this one are errors too (all of them, named or not).
         other_count: usize,
     },
+    /// A run of time stamps at an end of the record that do not fit the grid of the rest, as a
+    /// logger's before it settles to its rate (or after it leaves it), too long to leave out
+    /// ([`super::Unsettled`]): more than [`super::UNSETTLED_FRACTION`] of the record's samples or
+    /// [`super::UNSETTLED_MAX`].
+    #[error(
+        "{first} to {last}: the {} {count} time stamps are {} to {} steps of {} apart, off the grid of the rest: more than the {bound} samples at an end of a record ({}) that are left out as a logger settling to its rate; if these samples are not wanted, remove their rows; if they are, correct their time stamps",
+        .end.which(),
+        Rounded(*.shortest / *.dt).digits(2),
+        Rounded(*.longest / *.dt).digits(2),
+        Rounded(*.dt).digits(6),
+        unsettled_bound()
+    )]
+    TimeUnsettled {
+        /// Which end of the record.
+        end: RecordEnd,
+        /// Where the run's first sample is.
+        first: Location,
+        /// Where its last sample is.
+        last: Location,
+        /// The samples in the run.
+        count: usize,
+        /// The shortest step between its stamps, the step to the rest included.
+        shortest: f64,
+        /// The longest such step.
+        longest: f64,
+        /// The step of the grid of the rest.
+        dt: f64,
+        /// The most samples left out at an end of this record.
+        bound: usize,
+    },
     /// So many time stamps are off the grid or repeated that they cannot be glitches: the stamps
     /// do not resolve the samples (printed with too few decimals, or jittering).
     #[error(
@@ -340,4 +370,12 @@ fn scatter_hint(scatter: Option<f64>) -> String {
 /// The decimals of the stamps, for [`InputError::TimeUnresolved`].
 fn printed_hint(decimals: Option<u32>) -> String {
     decimals.map_or_else(String::new, |k| format!(" (they are written with {k} decimals)"))
+}
+
+/// The bound on a run left out at an end of a record, for [`InputError::TimeUnsettled`].
+fn unsettled_bound() -> String {
+    format!(
+        "{} % of it, and at most {UNSETTLED_MAX}",
+        Rounded(100.0 * UNSETTLED_FRACTION).digits(2)
+    )
 }

@@ -66,6 +66,11 @@
 //!   (the neighbours on both sides fit, one grid step away from it) and repair is asked for
 //!   ([`GridOptions::repair`]): then it is replaced by its grid time and listed in
 //!   [`GridRecord::repaired`]. Two glitches side by side, or one beside a gap, stay errors.
+//! - A logger's unsettled start or end: a run of stamps at an end of the record off the grid of
+//!   the rest, increasing at another rate (a loop not yet at its rate), holding glitches that
+//!   could not be repaired, is left out when it is at most 1 % of the samples and at most 50
+//!   ([`UNSETTLED_FRACTION`], [`UNSETTLED_MAX`]) and listed in [`GridRecord::unsettled`]
+//!   ([`GridRecord::kept`] the samples left); longer, it is [`InputError::TimeUnsettled`].
 //! - Stamps that do not resolve the samples (more than 5% of them, and at least 3, more than a
 //!   quarter step from their level or repeated: printed with too few decimals, or jittering by
 //!   more than about a tenth of a step) are [`InputError::TimeUnresolved`]: give the sampling
@@ -83,7 +88,7 @@ mod uniform;
 pub use error::{InputError, Location, StampFault};
 pub use uniform::{
     GRID_TOLERANCE, GridOptions, GridRecord, GridReport, JITTER_MIN_STAMPS, JITTER_SIGMAS, JITTER_WARNING,
-    LEVEL_WINDOW, Piece, Slip, TimeRepair,
+    LEVEL_WINDOW, Piece, RecordEnd, Slip, TimeRepair, UNSETTLED_FRACTION, UNSETTLED_MAX, Unsettled,
 };
 
 use std::io::Read;

@@ -39,6 +39,25 @@
 //! stamp's, and does not stand above the index level of the stamps that follow. An index level
 //! going up is a gap; any other stamp is a glitch.
 //!
+//! # A logger's unsettled start or end
+//!
+//! A data-acquisition loop often takes its first few samples (or its last) at another rate than
+//! the rest, before it settles: the DFKI double pendulum's records start with 4 to 6 steps of 1.4
+//! to 1.9 steps, then run at 500 Hz for 10 s. Those samples were not taken on the grid, so no
+//! grid time is theirs: repaired, they would move by up to half a step; kept as a piece of their
+//! own, they would be on the grid all the same. They are left out, and said to be
+//! ([`Unsettled`], in [`GridRecord::unsettled`]). The rest of the record begins at the first four
+//! stamps that fit one step apart and ends at the last four (a loop not at its rate puts a stamp
+//! on the grid by chance, not four one step apart); what lies before (or after) it is an
+//! unsettled run when its stamps increase, into the rest too (a stamp repeated or going
+//! backwards is a clock's glitch, not a rate), and it holds a glitch that is not isolated. A
+//! single stamp off the grid at an end is an isolated glitch, as anywhere, and a record that fits
+//! with or without repair is fitted as it always was: only a record refused until now has a run
+//! left out. A run of at most [`UNSETTLED_FRACTION`] of the samples and at most
+//! [`UNSETTLED_MAX`] is left out and the rest fitted on its own, as a record without those
+//! samples would be (its glitches named or repaired, its gaps split); a longer one is refused,
+//! [`InputError::TimeUnsettled`], naming it.
+//!
 //! # Tolerances, and what is refused
 //!
 //! - A stamp fits when it is within [`GRID_TOLERANCE`] (a quarter of a step) or a printed unit
@@ -55,6 +74,10 @@
 //!   from their level or repeated: the stamps do not resolve the samples ([`InputError::TimeUnresolved`], with the
 //!   scatter). A jitter of 10 % of the step (RMS, normal) puts 1.2 % of the stamps beyond a
 //!   quarter step and is accepted; one of 30 % puts 40 % there and is refused.
+//! - A run of stamps at an end of the record off the grid of the rest, as a logger's before it
+//!   settles, longer than [`UNSETTLED_FRACTION`] of the samples or [`UNSETTLED_MAX`]
+//!   ([`InputError::TimeUnsettled`]); a run so long that its stamps off the grid are more than
+//!   5 % of the record's is [`InputError::TimeUnresolved`], as above.
 //! - A level that holds for fewer than half of [`LEVEL_WINDOW`] stamps is not a slip: those
 //!   stamps are glitches, repaired only when isolated.
 //! - A slip is reported where a stamp's level moves from the mean level since the last slip by
@@ -102,6 +125,23 @@ pub const JITTER_WARNING: f64 = 0.05;
 /// it or those that start at it: a level that holds for more than half as many stamps is a slip
 /// of the clock, one that holds for fewer is a run of glitches.
 pub const LEVEL_WINDOW: usize = 33;
+
+/// The most samples left out at each end of a record as a logger's unsettled run (see
+/// [`Unsettled`]), as a fraction of the record's samples: whatever is left out, the record left
+/// is the record, 99 % of it.
+pub const UNSETTLED_FRACTION: f64 = 0.01;
+
+/// The most samples left out at each end of a record as a logger's unsettled run, however long
+/// the record (see [`UNSETTLED_FRACTION`]): a loop settles to its rate within a few dozen
+/// cycles (the DFKI double pendulum's within 6, at 500 Hz); a longer stretch at another rate is
+/// a part of the record to look at, not a start to drop.
+pub const UNSETTLED_MAX: usize = 50;
+
+/// The fewest stamps, one step apart and each fitting the grid, that begin (or end) the settled
+/// rest of a record. A logger not yet at its rate puts a stamp near the grid by chance, and the
+/// next one too at times, but its steps are not one step: two stamps that fit one step apart
+/// are rare, four in a row a logger at its rate.
+const SETTLED_STAMPS: usize = 4;
 
 /// More stamps than this fraction of the record (and at least [`UNRESOLVED_MIN`]) off their
 /// level or repeated are not glitches: the stamps do not resolve the samples.
@@ -169,6 +209,83 @@ pub struct TimeRepair {
     pub was: f64,
     /// Its grid time.
     pub now: f64,
+}
+
+/// Which end of a record.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RecordEnd {
+    /// Its first samples.
+    Start,
+    /// Its last samples.
+    End,
+}
+
+impl RecordEnd {
+    /// `first` or `last`, as the texts name the samples at this end.
+    pub fn which(self) -> &'static str {
+        match self {
+            RecordEnd::Start => "first",
+            RecordEnd::End => "last",
+        }
+    }
+}
+
+/// A run of samples at an end of a record whose time stamps do not fit the grid of the rest: a
+/// data-acquisition loop not yet at its rate when it started (or no longer at it as it
+/// stopped), its steps longer or shorter than the grid's. Its samples were not taken on the
+/// grid, so no grid time is theirs: they are left out of the record (not repaired, which would
+/// move them by up to half a step, nor kept as a piece, which would put them on the grid all the
+/// same), and a front end says so.
+///
+/// A run is left out when it is at most [`UNSETTLED_FRACTION`] of the record's samples and at
+/// most [`UNSETTLED_MAX`], its stamps increase, and it holds a glitch that could not be repaired
+/// (one stamp off the grid at an end, its neighbour fitting, is an isolated glitch, as
+/// anywhere): so it holds at least two samples, and a record that fits without it (with or
+/// without repair) is fitted as it always was. Longer, it is [`InputError::TimeUnsettled`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Unsettled {
+    /// Which end of the record.
+    pub end: RecordEnd,
+    /// The samples left out, counted from 0 in the record as read.
+    pub samples: std::ops::Range<usize>,
+    /// Where its first sample is.
+    pub first: Location,
+    /// Where its last sample is.
+    pub last: Location,
+    /// The time stamp of its first sample.
+    pub from: f64,
+    /// The time stamp of its last sample.
+    pub to: f64,
+    /// The shortest step between its stamps, the step to the rest's nearest stamp included.
+    pub shortest: f64,
+    /// The longest such step.
+    pub longest: f64,
+    /// The step of the grid of the rest.
+    pub step: f64,
+}
+
+/// What was left out and why, without the options of a front end.
+impl std::fmt::Display for Unsettled {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let why = match self.end {
+            RecordEnd::Start => "a logger settling to its rate",
+            RecordEnd::End => "a logger leaving its rate as it stops",
+        };
+        write!(
+            f,
+            "the {} {} samples ({} to {}, t = {} to {}) are left out: their time stamps are {} to {} steps of {} \
+             apart, off the grid of the rest ({why})",
+            self.end.which(),
+            self.samples.len(),
+            self.first,
+            self.last,
+            self.from,
+            self.to,
+            Rounded(self.shortest / self.step).digits(2),
+            Rounded(self.longest / self.step).digits(2),
+            Rounded(self.step).digits(6),
+        )
+    }
 }
 
 /// A run of samples without gaps.
@@ -338,16 +455,33 @@ pub struct GridRecord {
     pub repaired: Vec<TimeRepair>,
     /// How the stamps sit on the grid: deviations, jitter, slips of the clock.
     pub report: GridReport,
+    /// The runs of samples left out at the ends of the record, stamped before the logger settled
+    /// to its rate or after it left it, in order (empty when there is none).
+    pub unsettled: Vec<Unsettled>,
 }
 
 impl GridRecord {
     /// Fits the record's time stamps to a uniform grid (see the module docs), splits it at gaps,
-    /// repairs isolated glitches if asked, and reports how the stamps sit on the grid.
+    /// leaves out a logger's unsettled run at either end ([`Unsettled`]), repairs isolated
+    /// glitches if asked, and reports how the stamps sit on the grid.
     ///
     /// Errors: fewer than 2 samples; time decreasing in most steps; stamps that do not resolve
-    /// the samples ([`InputError::TimeUnresolved`]); a glitch not repaired
-    /// ([`InputError::TimeGlitch`]), the first in the record, naming the others.
+    /// the samples ([`InputError::TimeUnresolved`]); an unsettled run too long to leave out
+    /// ([`InputError::TimeUnsettled`]); a glitch not repaired ([`InputError::TimeGlitch`]), the
+    /// first in the record, naming the others.
     pub fn fit(record: Record, options: &GridOptions) -> Result<Self, InputError> {
+        Self::fit_from(record, options, 0, true)
+    }
+
+    /// [`GridRecord::fit`] of the samples of a record as read from its sample `before` on (for
+    /// the samples without a line, named by their place in the record as read), leaving out
+    /// unsettled runs at the ends when `settle`.
+    fn fit_from(
+        record: Record,
+        options: &GridOptions,
+        before: usize,
+        settle: bool,
+    ) -> Result<Self, InputError> {
         let Record { t, theta, lines, .. } = record;
         let n = t.len();
         if n < 2 {
@@ -355,7 +489,7 @@ impl GridRecord {
         }
         let at = |i: usize| match lines.as_ref().and_then(|lines| lines.get(i)) {
             Some(&line) => Location::Line(line),
-            None => Location::Sample(i + 1),
+            None => Location::Sample(before + i + 1),
         };
         let decimals = printed_decimals(&t);
         let unresolved = |off: usize, scatter: Option<f64>| InputError::TimeUnresolved {
@@ -541,6 +675,53 @@ impl GridRecord {
                 && (i + 1 == n || next_good)
                 && (i == 0 || i + 1 == n || index(i + 1) - index(i - 1) == 2.0)
         };
+        // A logger's unsettled start or end, when there are glitches at all: the rest is fitted
+        // on its own, as a record without those samples would be.
+        if settle && !bad.is_empty() {
+            let runs = unsettled(&t, &bad, index, isolated, &at);
+            let bound = ((UNSETTLED_FRACTION * n as f64) as usize).min(UNSETTLED_MAX);
+            if let Some(long) = runs.iter().find(|r| r.samples.len() > bound) {
+                return Err(InputError::TimeUnsettled {
+                    end: long.end,
+                    first: long.first,
+                    last: long.last,
+                    count: long.samples.len(),
+                    shortest: long.shortest,
+                    longest: long.longest,
+                    dt: line.b,
+                    bound,
+                });
+            }
+            if !runs.is_empty() {
+                let start = runs
+                    .iter()
+                    .find(|r| r.end == RecordEnd::Start)
+                    .map_or(0, |r| r.samples.end);
+                let stop = runs
+                    .iter()
+                    .find(|r| r.end == RecordEnd::End)
+                    .map_or(n, |r| r.samples.start);
+                let rest = Record {
+                    t: t[start..stop].to_vec(),
+                    theta: theta[start..stop].to_vec(),
+                    lines: lines
+                        .as_ref()
+                        .and_then(|lines| lines.get(start..stop))
+                        .map(<[u64]>::to_vec),
+                    ..Record::default()
+                };
+                let mut grid = Self::fit_from(rest, options, before + start, false)?;
+                grid.unsettled = runs
+                    .into_iter()
+                    .map(|r| Unsettled {
+                        samples: before + r.samples.start..before + r.samples.end,
+                        step: grid.dt,
+                        ..r
+                    })
+                    .collect();
+                return Ok(grid);
+            }
+        }
         let error = |p: usize| !(isolated(p) && options.repair);
         if let Some(p) = (0..bad.len()).find(|&p| error(p)) {
             let i = bad[p];
@@ -659,6 +840,7 @@ impl GridRecord {
             pieces,
             repaired,
             report,
+            unsettled: Vec::new(),
         })
     }
 
@@ -666,6 +848,75 @@ impl GridRecord {
     pub fn sample_count(&self) -> usize {
         self.pieces.iter().map(|p| p.samples.len()).sum()
     }
+
+    /// The samples of the record as read that the pieces hold, counted from 0: all of them but
+    /// the [`GridRecord::unsettled`] runs at its ends.
+    pub fn kept(&self) -> std::ops::Range<usize> {
+        let start = self
+            .unsettled
+            .iter()
+            .find(|r| r.end == RecordEnd::Start)
+            .map_or(0, |r| r.samples.end);
+        start..start + self.sample_count()
+    }
+}
+
+/// The unsettled runs at the ends of a record (see [`Unsettled`]), whatever their length, from
+/// its stamps `t`, the samples `bad` whose stamps are glitches (in order), each sample's grid
+/// index, whether the glitch `bad[p]` is isolated, and where each sample is; `samples` counted
+/// in `t`, `step` not set.
+///
+/// The rest begins at the first [`SETTLED_STAMPS`] stamps that fit one step apart and ends at
+/// the last ones; a run is what lies before (or after) it, when it holds a glitch that is not
+/// isolated and its stamps increase, into the rest too (a stamp repeated or going backwards is a
+/// clock's glitch, not a rate).
+fn unsettled(
+    t: &[f64],
+    bad: &[usize],
+    index: impl Fn(usize) -> f64,
+    isolated: impl Fn(usize) -> bool,
+    at: &impl Fn(usize) -> Location,
+) -> Vec<Unsettled> {
+    let n = t.len();
+    let good = |i: usize| bad.binary_search(&i).is_err();
+    let settled = |i: usize| {
+        i + SETTLED_STAMPS <= n
+            && (i..i + SETTLED_STAMPS).all(|j| good(j) && index(j) - index(i) == (j - i) as f64)
+    };
+    let Some(start) = (0..n).find(|&i| settled(i)) else {
+        return Vec::new();
+    };
+    let stop = (start..=n - SETTLED_STAMPS)
+        .rev()
+        .find(|&i| settled(i))
+        .map_or(n, |i| i + SETTLED_STAMPS);
+    // Each run with the steps from each of its stamps to the next, the one into the rest included.
+    [
+        (RecordEnd::Start, 0..start, 0..start),
+        (RecordEnd::End, stop..n, stop - 1..n - 1),
+    ]
+    .into_iter()
+    .filter(|(_, run, _)| !run.is_empty())
+    .filter(|(_, run, _)| (0..bad.len()).any(|p| run.contains(&bad[p]) && !isolated(p)))
+    .filter_map(|(end, run, steps)| {
+        let (shortest, longest) = steps
+            .map(|i| t[i + 1] - t[i])
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), s| {
+                (lo.min(s), hi.max(s))
+            });
+        (shortest > 0.0).then(|| Unsettled {
+            end,
+            first: at(run.start),
+            last: at(run.end - 1),
+            from: t[run.start],
+            to: t[run.end - 1],
+            samples: run,
+            shortest,
+            longest,
+            step: f64::NAN,
+        })
+    })
+    .collect()
 }
 
 /// The line `τ = a + n · b` through the stamps, `τ` counted from the first stamp of the first
