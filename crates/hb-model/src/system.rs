@@ -4,8 +4,8 @@
 //! saved as the model it is, in format 4).
 
 use hb_basis::{Basis, BasisKind, Domain};
-pub use pendulum_sim::SingularMass;
 use pendulum_sim::MultiSystem;
+pub use pendulum_sim::SingularMass;
 use serde::{Deserialize, Serialize};
 
 use crate::drive::MeasuredDrive;
@@ -210,7 +210,13 @@ impl<B: Basis> IdentifiedSystem<B> {
         }
         let scale = m.amax();
         let lu = m.lu();
-        let pivot = lu.u().diagonal().iter().map(|d| d.abs()).fold(f64::INFINITY, f64::min) / scale;
+        let pivot = lu
+            .u()
+            .diagonal()
+            .iter()
+            .map(|d| d.abs())
+            .fold(f64::INFINITY, f64::min)
+            / scale;
         if !(pivot.is_finite() && pivot > SINGULAR_PIVOT) {
             return Err(SingularMass { t, pivot });
         }
