@@ -12,6 +12,13 @@
 //! the velocity they hold: `μ sign(x')` with `W²`, `d x'|x'|` not at all, `c₃ x'^3` with `1/W`;
 //! harmonic `k` of the drive has its phase `k φ + φ_k` at the record's `t = 0`.
 //!
+//! A system of several coordinates gives its equations in the same grammar itself
+//! (`pendulum_sim`'s `normalised_equations`, written in the simulator's names `q1`, `x2`, `tau1`);
+//! [`system_equations`] reads them into a record's names and frame by the same rules, term by
+//! term: a coefficient scales with `rate` to the power two less the degree of its velocities and
+//! twice its accelerations, and a `cos` or `sin` of the drive's phase or of the angles is
+//! turned by the frame's phase and offset into its `cos` and `sin` parts.
+//!
 //! # Example
 //!
 //! ```
@@ -28,12 +35,12 @@
 //! ```
 
 use hb_basis::Basis;
-use pendulum_sim::{Duffing, Losses, Pendulum, RecordFrame};
+use pendulum_sim::{Duffing, Losses, NormalisedEquation, Pendulum, RecordFrame};
 
-use crate::error::ModelError;
+use crate::error::{ModelError, TermError};
 use crate::form::{ModelForm, columns};
 use crate::model::IdentifiedModel;
-use crate::terms::{DriveFactor, TermList, TermSpec, VelocityFactor, XFunction};
+use crate::terms::{Coupling, DriveFactor, Factor, Names, TermList, TermSpec, VelocityFactor, XFunction};
 
 /// An equation `ẍ + Σ c_i g_i = 0`: its terms, in order, and their coefficients.
 #[derive(Debug, Clone, PartialEq)]
@@ -48,6 +55,16 @@ impl Equation {
         let (specs, values): (Vec<TermSpec>, Vec<f64>) = terms.into_iter().unzip();
         Ok(Self {
             terms: TermList::new(specs)?,
+            values,
+        })
+    }
+
+    /// The equation of `terms` with their coefficients for the equation of coordinate `own` of a
+    /// record with `names`.
+    pub fn new_in(terms: Vec<(TermSpec, f64)>, names: Names, own: usize) -> Result<Self, ModelError> {
+        let (specs, values): (Vec<TermSpec>, Vec<f64>) = terms.into_iter().unzip();
+        Ok(Self {
+            terms: TermList::new_in(specs, names, own)?,
             values,
         })
     }
@@ -276,4 +293,257 @@ impl TrueEquation for Duffing {
         }
         Equation::new(out)
     }
+}
+
+/// The true equations of a system of several coordinates, one per coordinate in order, read
+/// from the simulator's `equations` (each `q_i'' + Σ c g = 0` in the simulator's names and
+/// non-dimensional time) into a record's `names` (its coordinates and measured drives, in the
+/// simulator's order) and `frame` (`τ = rate · t + phase`, each coordinate `x_c = q_c − offset`):
+///
+/// - a term's coefficient is multiplied by `rate^(2 − d)`, `d` the degree of its velocities
+///   (`x'` 1, `x'^2` and `x'*|x'|` 2, `x'^3` 3, `sign(x')` 0) plus 2 for an acceleration and 2 for a
+///   measured drive (written in the record as an acceleration is, `rate²` times the system's): a
+///   damping scales with the rate, a stiffness or a drive with its square, a centrifugal term or
+///   another coordinate's acceleration not at all;
+/// - `cos(kt)`, `sin(kt)` of the drive's phase turn by `k · phase`, and `cos`, `sin` of an angle or
+///   of a combination `Σ a_c q_c` by `offset · Σ a_c`, each into its `cos` and `sin` parts
+///   (`sin(A + δ) = sin A cos δ + cos A sin δ`), a product into every product of its parts;
+///   nothing turns by an angle of zero, so that a record in the simulator's own frame has the
+///   simulator's terms and coefficients bit for bit;
+/// - a power of a difference, `(x1-x2)^3`, which the grammar does not write, is written out by
+///   the binomial theorem (`x1^3`, `x1^2*x2`, `x1*x2^2`, `x2^3`);
+/// - terms that turn out equal are summed, in the order they first appear.
+///
+/// The simulator's names are those of its accelerations (`q1''` names `q1`) and, for the measured
+/// drives, the terms that are a name alone other than a coordinate's (`tau1`, `p`), in the order
+/// they first appear.
+///
+/// Errors: `names` with not as many coordinates or drives, a term the grammar does not read,
+/// and an offset of a coordinate the term holds a power or a hat of (a shifted position on the
+/// line needs lower powers, which the equation has not).
+///
+/// ```
+/// use hb_model::{Names, truth::system_equations};
+/// use pendulum_sim::{DoublePendulum, RecordFrame};
+///
+/// let pendulum = DoublePendulum::whirling();
+/// let names = Names::new(["theta1", "theta2"], Vec::<String>::new())?;
+/// let frame = RecordFrame::nondimensional().with_drive_frequency(2.0)?;
+/// let truth = system_equations(&pendulum.normalised_equations(), &names, &frame)?;
+/// let w = std::f64::consts::TAU * 2.0;
+/// assert_eq!(truth[0].value("theta1'"), Some(0.05 * w));
+/// assert_eq!(truth[0].value("sin(theta1-theta2)*theta2'^2"), Some(0.5));
+/// assert!((truth[1].value("sin(theta2)").unwrap() - 0.8 * w * w).abs() < 1e-12);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn system_equations(
+    equations: &[NormalisedEquation],
+    names: &Names,
+    frame: &RecordFrame,
+) -> Result<Vec<Equation>, ModelError> {
+    let source = simulator_names(equations)?;
+    if names.coordinates().len() != source.coordinates().len()
+        || names.drives().len() != source.drives().len()
+    {
+        return Err(ModelError::Term(TermError::BadName {
+            name: [names.coordinates(), names.drives()].concat().join(","),
+            why: "a system's record names each of its coordinates and measured drives once",
+        }));
+    }
+    equations
+        .iter()
+        .enumerate()
+        .map(|(own, equation)| {
+            let mut terms: Vec<(TermSpec, f64)> = Vec::new();
+            for &(name, value) in &equation.terms {
+                for (text, multiple) in written_out(name) {
+                    let list = TermList::from_names_in(&[text], &source, own)?;
+                    for (spec, factor) in in_frame(list.terms()[0], frame)? {
+                        let v = value * multiple * factor;
+                        match terms.iter_mut().find(|(s, _)| *s == spec) {
+                            Some((_, sum)) => *sum += v,
+                            None => terms.push((spec, v)),
+                        }
+                    }
+                }
+            }
+            let terms = terms.into_iter().map(|(s, v)| (s, plain(v))).collect();
+            Equation::new_in(terms, names.clone(), own)
+        })
+        .collect()
+}
+
+/// The names the simulator writes its equations in: the coordinates of the accelerations, the
+/// measured drives the terms that are a name alone other than a coordinate's.
+fn simulator_names(equations: &[NormalisedEquation]) -> Result<Names, ModelError> {
+    let coordinates: Vec<&str> = equations
+        .iter()
+        .map(|e| e.acceleration.strip_suffix("''").unwrap_or(e.acceleration))
+        .collect();
+    let mut drives: Vec<&str> = Vec::new();
+    for (name, _) in equations.iter().flat_map(|e| &e.terms) {
+        let alone = name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
+        if alone && !coordinates.contains(name) && !drives.contains(name) {
+            drives.push(name);
+        }
+    }
+    Ok(Names::new(coordinates, drives)?)
+}
+
+/// `name` as terms of the grammar with their multiples: itself, or a power of a sum or
+/// difference of two names written out by the binomial theorem.
+fn written_out(name: &str) -> Vec<(String, f64)> {
+    let binomial = || -> Option<Vec<(String, f64)>> {
+        let (inside, power) = name.strip_prefix('(')?.split_once(")^")?;
+        let n: i32 = power.parse().ok().filter(|n| (1..=8).contains(n))?;
+        let at = inside
+            .char_indices()
+            .skip(1)
+            .find(|&(_, c)| c == '+' || c == '-')?
+            .0;
+        let (a, b) = (inside[..at].trim(), inside[at + 1..].trim());
+        let sign = if inside[at..].starts_with('-') { -1.0 } else { 1.0 };
+        let power_of = |q: &str, k: i32| match k {
+            0 => None,
+            1 => Some(q.to_owned()),
+            k => Some(format!("{q}^{k}")),
+        };
+        let mut out = Vec::new();
+        let mut choose = 1.0;
+        for i in 0..=n {
+            let parts: Vec<String> = [power_of(a, n - i), power_of(b, i)]
+                .into_iter()
+                .flatten()
+                .collect();
+            out.push((parts.join("*"), choose * f64::powi(sign, i)));
+            choose = choose * f64::from(n - i) / f64::from(i + 1);
+        }
+        Some(out)
+    };
+    binomial().unwrap_or_else(|| vec![(name.to_owned(), 1.0)])
+}
+
+/// The degree of a velocity factor: how many velocities it multiplies (`sign` none).
+fn velocity_degree(v: VelocityFactor) -> i32 {
+    match v {
+        VelocityFactor::One | VelocityFactor::Sign => 0,
+        VelocityFactor::Linear => 1,
+        VelocityFactor::Square | VelocityFactor::Quadratic => 2,
+        VelocityFactor::Cubic => 3,
+    }
+}
+
+/// A `cos` or `sin` a frame turns: which one, by how much.
+#[derive(Clone, Copy)]
+enum Turned {
+    /// The drive factor, turned by `k · phase`.
+    Drive(u32, f64),
+    /// The function of the own coordinate, turned by `k · offset`.
+    Own(u32, f64),
+    /// The coupling factor of this index, turned by `offset · Σ a_c`.
+    Coupling(usize, f64),
+}
+
+/// The term `spec` in `frame`: the terms it becomes with their factors.
+fn in_frame(spec: TermSpec, frame: &RecordFrame) -> Result<Vec<(TermSpec, f64)>, ModelError> {
+    let (rate, phase, offset) = (frame.rate(), frame.phase(), frame.offset());
+    let factors: Vec<Factor> = spec.coupling.factors().copied().collect();
+    let mut degree = velocity_degree(spec.velocity);
+    if spec.drive.is_measured() {
+        degree += 2;
+    }
+    let mut turned: Vec<Turned> = Vec::new();
+    let shifted_line = || ModelError::InvalidParameter {
+        name: "zero offset",
+        value: offset,
+        why: "must be 0 for a position on the line or a hat: a shift adds lower powers",
+    };
+    if let DriveFactor::Cos(k) | DriveFactor::Sin(k) = spec.drive {
+        turned.push(Turned::Drive(k, f64::from(k) * phase));
+    }
+    match spec.function {
+        Some(XFunction::Cos(k) | XFunction::Sin(k)) => turned.push(Turned::Own(k, f64::from(k) * offset)),
+        Some(XFunction::Power(_) | XFunction::Hat(_)) if offset != 0.0 => return Err(shifted_line()),
+        _ => {}
+    }
+    for (i, f) in factors.iter().enumerate() {
+        match *f {
+            Factor::Trig { combination, .. } => {
+                let sum: i32 = combination.terms().map(|(_, a)| a).sum();
+                turned.push(Turned::Coupling(i, offset * f64::from(sum)));
+            }
+            Factor::Power { .. } if offset != 0.0 => return Err(shifted_line()),
+            Factor::Power { .. } => {}
+            Factor::Velocity { function, .. } => degree += velocity_degree(function),
+            Factor::Acceleration { .. } => degree += 2,
+        }
+    }
+    // Each product of parts as (drive, own function, coupling factors, factor).
+    let mut parts = vec![(spec.drive, spec.function, factors, rate.powi(2 - degree))];
+    for turn in turned {
+        let angle = match turn {
+            Turned::Drive(_, a) | Turned::Own(_, a) | Turned::Coupling(_, a) => a,
+        };
+        if angle == 0.0 {
+            continue;
+        }
+        let (sin_d, cos_d) = angle.sin_cos();
+        let mut next = Vec::with_capacity(2 * parts.len());
+        for (drive, function, factors, m) in parts {
+            // Whether the factor is a sine, and the term with it made the other function.
+            let (sine, flipped) = match turn {
+                Turned::Drive(k, _) => {
+                    let sine = matches!(drive, DriveFactor::Sin(_));
+                    let other = if sine {
+                        DriveFactor::Cos(k)
+                    } else {
+                        DriveFactor::Sin(k)
+                    };
+                    (sine, (other, function, factors.clone()))
+                }
+                Turned::Own(k, _) => {
+                    let sine = matches!(function, Some(XFunction::Sin(_)));
+                    let other = if sine {
+                        XFunction::Cos(k)
+                    } else {
+                        XFunction::Sin(k)
+                    };
+                    (sine, (drive, Some(other), factors.clone()))
+                }
+                Turned::Coupling(i, _) => {
+                    let Factor::Trig { sine, combination } = factors[i] else {
+                        unreachable!("only a cos or sin of angles is turned")
+                    };
+                    let mut other = factors.clone();
+                    other[i] = Factor::Trig {
+                        sine: !sine,
+                        combination,
+                    };
+                    (sine, (drive, function, other))
+                }
+            };
+            // cos(A + δ) = cos A cos δ − sin A sin δ;  sin(A + δ) = sin A cos δ + cos A sin δ.
+            let other_part = if sine { sin_d } else { -sin_d };
+            next.push((drive, function, factors, m * cos_d));
+            next.push((flipped.0, flipped.1, flipped.2, m * other_part));
+        }
+        parts = next;
+    }
+    parts
+        .into_iter()
+        .map(|(drive, function, factors, m)| {
+            let coupling = Coupling::new(factors).ok_or(ModelError::Term(TermError::InvalidForm {
+                why: "a term has too many factors in other coordinates",
+            }))?;
+            Ok((
+                TermSpec {
+                    drive,
+                    function,
+                    velocity: spec.velocity,
+                    coupling,
+                },
+                m,
+            ))
+        })
+        .collect()
 }

@@ -347,3 +347,202 @@ fn a_rig_record_in_seconds_satisfies_its_true_equation() {
         assert!(worst < 1e-6 * scale, "residual {worst:e} of {scale:e}");
     }
 }
+
+// ---------------------------------------------------------------------------------------------
+// Systems of several coordinates.
+
+mod systems {
+    use hb_basis::{BasisKind, Domain, Harmonic, Polynomial};
+    use hb_model::truth::{Equation, system_equations};
+    use hb_model::{IdentifiedModel, IdentifiedSystem, MeasuredDrive, ModelForm, Names};
+    use pendulum_sim::{
+        ArmParameters, BaseAcceleration, CoupledDuffing, DoublePendulum, InFrame, MultiSystem, RecordFrame,
+        Torque, TorqueDoublePendulum,
+    };
+
+    /// The truth as a system of the identification's models, the measured drives constant at
+    /// `drives`: evaluated by the identification's own code, independently of how it was written.
+    fn as_system(
+        truth: &[Equation],
+        names: &Names,
+        domain: Domain,
+        w: f64,
+        drives: &[f64],
+    ) -> IdentifiedSystem {
+        let equations = truth
+            .iter()
+            .map(|e| {
+                let basis = e.terms().smallest_basis().unwrap().unwrap_or(match domain {
+                    Domain::Circle => BasisKind::from(Harmonic::new(1).unwrap()),
+                    Domain::Line => BasisKind::from(Polynomial::new(1).unwrap()),
+                });
+                IdentifiedModel::new(basis, ModelForm::from_terms(e.terms().clone()), w, e.values()).unwrap()
+            })
+            .collect();
+        let system =
+            IdentifiedSystem::new(names.clone(), vec![domain; names.coordinates().len()], equations).unwrap();
+        if drives.is_empty() {
+            return system;
+        }
+        let measured = drives
+            .iter()
+            .map(|&d| MeasuredDrive::new(vec![d; 16], -100.0, 100.0).unwrap())
+            .collect();
+        system.with_measured_drives(measured).unwrap()
+    }
+
+    /// Largest difference of the accelerations of the truth and of the simulator in `frame`, over
+    /// states spread over the circle (or the line) and a range of times, relative to their size.
+    fn worst(truth: &IdentifiedSystem, system: &dyn MultiSystem, frame: RecordFrame) -> f64 {
+        let in_frame = InFrame::new(system, frame);
+        let mut worst: f64 = 0.0;
+        for i in 0..200 {
+            let x = i as f64;
+            let t = 0.37 * x;
+            let q = [(1.3 * x).sin() * 3.0, (0.7 * x + 1.0).cos() * 3.0];
+            let v = [2.0 * (0.9 * x).cos() + 0.1, -1.5 * (1.1 * x).sin() - 0.2];
+            let (mut a, mut b) = ([0.0; 2], [0.0; 2]);
+            truth.accelerations(t, &q, &v, None, &mut a).unwrap();
+            in_frame.accelerations(t, &q, &v, &mut b).unwrap();
+            for c in 0..2 {
+                worst = worst.max((a[c] - b[c]).abs() / (1.0 + b[c].abs()));
+            }
+        }
+        worst
+    }
+
+    #[test]
+    fn in_the_simulators_frame_the_terms_are_the_simulators() {
+        let pendulum = DoublePendulum::whirling();
+        let names = Names::new(["theta1", "theta2"], Vec::<String>::new()).unwrap();
+        let truth = system_equations(
+            &pendulum.normalised_equations(),
+            &names,
+            &RecordFrame::nondimensional(),
+        )
+        .unwrap();
+        for (equation, own) in truth.iter().zip(pendulum.normalised_equations()) {
+            let renamed: Vec<(String, f64)> = own
+                .terms
+                .iter()
+                .map(|&(n, v)| (n.replace("q1", "theta1").replace("q2", "theta2"), v))
+                .collect();
+            assert_eq!(equation.named(), renamed);
+        }
+        // The arm's measured torques keep their place and coefficient.
+        let arm = TorqueDoublePendulum::dfki();
+        let names = Names::new(["q1", "q2"], ["tau1", "tau2"]).unwrap();
+        let truth = system_equations(
+            &arm.normalised_equations(),
+            &names,
+            &RecordFrame::nondimensional(),
+        )
+        .unwrap();
+        for (equation, own) in truth.iter().zip(arm.normalised_equations()) {
+            let own: Vec<(String, f64)> = own.terms.iter().map(|&(n, v)| (n.to_owned(), v)).collect();
+            assert_eq!(equation.named(), own);
+        }
+    }
+
+    /// `(x1-x2)^3`, which the grammar does not write, is written out by the binomial theorem and
+    /// summed with the cubic stiffness of the own coordinate.
+    #[test]
+    fn a_power_of_a_difference_is_written_out() {
+        let d = CoupledDuffing::two_wells().with_mass_ratio(2.0).unwrap();
+        let (b, k3, rho) = (d.b(), d.k3(), d.mass_ratio());
+        let names = Names::new(["x1", "x2"], ["a"]).unwrap();
+        let truth =
+            system_equations(&d.normalised_equations(), &names, &RecordFrame::nondimensional()).unwrap();
+        let value = |e: usize, name: &str| truth[e].value(name).unwrap_or_else(|| panic!("{name}"));
+        assert_eq!(value(0, "x1^3"), b[0] + k3);
+        assert_eq!(value(0, "x1^2*x2"), -3.0 * k3);
+        assert_eq!(value(0, "x1*x2^2"), 3.0 * k3);
+        assert_eq!(value(0, "x2^3"), -k3);
+        assert_eq!(value(0, "a"), 1.0);
+        assert_eq!(value(1, "x2^3"), b[1] + k3 / rho);
+        assert_eq!(value(1, "x1^3"), -k3 / rho);
+        assert_eq!(value(1, "x1^2*x2"), 3.0 * k3 / rho);
+        assert_eq!(value(1, "x1*x2^2"), -3.0 * k3 / rho);
+        assert_eq!(truth[0].terms().len(), 8);
+    }
+
+    /// In a record's frame (seconds, a drive phase at `t = 0`, an encoder's zero off the bottom)
+    /// the truth accelerates as the simulator does in that frame: the rate, the phase and the
+    /// offset are read into every term, combinations of angles and the elbow's relative angle
+    /// included.
+    #[test]
+    fn in_a_records_frame_the_truth_accelerates_as_the_simulator() {
+        let frame = RecordFrame::nondimensional()
+            .with_drive_frequency(1.3)
+            .unwrap()
+            .with_phase(0.7)
+            .unwrap()
+            .with_offset(0.4)
+            .unwrap();
+        let w = frame.rate();
+        let pendulum = DoublePendulum::new(0.3, 0.8, 0.9, 0.7, 0.04, 0.06).unwrap();
+        let names = Names::new(["theta1", "theta2"], Vec::<String>::new()).unwrap();
+        let truth = system_equations(&pendulum.normalised_equations(), &names, &frame).unwrap();
+        // The offset and phase split sin and cos into both parts.
+        assert!(truth[0].value("cos(theta1)").is_some() && truth[0].value("cos(t)*sin(theta1)").is_some());
+        let e = worst(
+            &as_system(&truth, &names, Domain::Circle, w, &[]),
+            &pendulum,
+            frame,
+        );
+        assert!(e < 1e-11, "double pendulum: {e:e}");
+
+        // The arm in seconds (rate 1) with both encoders' zero off; constant torques, so that
+        // the measured drives are exact at any time.
+        let frame = RecordFrame::nondimensional().with_offset(-0.3).unwrap();
+        let arm = TorqueDoublePendulum::new(ArmParameters::DFKI_A0)
+            .unwrap()
+            .with_torques(
+                Torque::sinusoid(0.3, 0.0, std::f64::consts::FRAC_PI_2).unwrap(),
+                Torque::sinusoid(-0.2, 0.0, std::f64::consts::FRAC_PI_2).unwrap(),
+            );
+        let names = Names::new(["q1", "q2"], ["tau1", "tau2"]).unwrap();
+        let truth = system_equations(&arm.normalised_equations(), &names, &frame).unwrap();
+        assert!(truth[0].value("q1''*sin(q2)").is_some(), "{:?}", truth[0].named());
+        let e = worst(
+            &as_system(&truth, &names, Domain::Circle, 1.0, &[0.3, -0.2]),
+            &arm,
+            frame,
+        );
+        assert!(e < 1e-11, "arm: {e:e}");
+
+        // The coupled oscillators in seconds: the base's acceleration as the record writes it,
+        // rate² times the system's.
+        let frame = RecordFrame::nondimensional().with_drive_frequency(0.6).unwrap();
+        let w = frame.rate();
+        let coupled = CoupledDuffing::two_wells()
+            .with_mass_ratio(1.5)
+            .unwrap()
+            .with_drive(BaseAcceleration::measured(|_| 0.25));
+        let names = Names::new(["x1", "x2"], ["a"]).unwrap();
+        let truth = system_equations(&coupled.normalised_equations(), &names, &frame).unwrap();
+        let e = worst(
+            &as_system(&truth, &names, Domain::Line, w, &[w * w * 0.25]),
+            &coupled,
+            frame,
+        );
+        assert!(e < 1e-11, "coupled oscillators: {e:e}");
+    }
+
+    #[test]
+    fn a_shifted_position_on_the_line_and_mismatched_names_are_refused() {
+        let coupled = CoupledDuffing::two_wells();
+        let names = Names::new(["x1", "x2"], ["a"]).unwrap();
+        let shifted = RecordFrame::nondimensional().with_offset(0.1).unwrap();
+        let e = system_equations(&coupled.normalised_equations(), &names, &shifted).unwrap_err();
+        assert!(e.to_string().contains("zero offset"), "{e}");
+        let no_drive = Names::new(["x1", "x2"], Vec::<String>::new()).unwrap();
+        let e = system_equations(
+            &coupled.normalised_equations(),
+            &no_drive,
+            &RecordFrame::nondimensional(),
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("names each"), "{e}");
+    }
+}

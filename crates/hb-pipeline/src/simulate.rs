@@ -2,24 +2,34 @@
 //! Python's `hbid.simulate` make it (defaults: the paper's data set).
 //!
 //! The simulation, the time frame and every encoder effect are `pendulum_sim`'s
-//! ([`InFrame`], [`Encoder`], [`Gaps`]); this module only composes them from the options
-//! ([`SimulateOptions`] → [`Rig`], every combination checked), runs it ([`simulate`]) and writes
-//! the record and its true equation ([`Simulation::write`], [`Simulation::truth`]).
+//! ([`InFrame`], [`Encoder`], [`Gaps`], [`Jitter`]); this module only composes them from the
+//! options ([`SimulateOptions`] → [`Rig`], every combination checked), runs it ([`simulate`]) and
+//! writes the record and its true equation ([`Simulation::write`], [`Simulation::truth`]).
+//!
+//! Besides the one-coordinate pendulum and Duffing oscillator, three systems of two coordinates
+//! ([`SystemKind`]): the base-excited double pendulum, the torque-driven arm and two coupled
+//! Duffing oscillators. Their records hold every coordinate, then every velocity, then the drives
+//! that are measured inputs; each angle has its own encoder of the same settings, drawing from its
+//! own stream of the seed, so that the coordinates' errors differ while a seed gives one record.
+//! Their true equations are the simulator's (`normalised_equations`), read into the record's names
+//! and frame by `hb_model::truth::system_equations`, never written here.
 
-use std::f64::consts::TAU;
+use std::f64::consts::{FRAC_PI_2, TAU};
 use std::fmt;
 use std::io::Write;
 use std::path::Path;
 use std::str::FromStr;
 
+use circle_signal::Domain;
 use hb_basis::{Harmonic, Polynomial};
-use hb_model::TrueEquation;
-use hb_model::{Forcing, ModelForm};
+use hb_model::{Forcing, ModelForm, Names, TrueEquation};
 use npyz::WriterBuilder;
-use pendulum_sim::observe::{AngleRange, Encoder, Gaps};
+use pendulum_sim::observe::{AngleRange, Encoder, Gaps, Jitter};
 use pendulum_sim::{
-    DriveHarmonic, DriveHarmonics, Duffing, InFrame, Losses, Pendulum, RecordFrame, SecondOrderSystem,
-    SimulationConfig, Tolerances, Trajectory, simulate_with_progress,
+    ArmParameters, BaseAcceleration, CoupledDuffing, DoublePendulum, DriveHarmonic, DriveHarmonics, Duffing,
+    InFrame, Losses, MultiConfig, MultiState, MultiSystem, Pendulum, RecordFrame, SecondOrderSystem,
+    SimError, SimulationConfig, Sinusoid, SyntheticDrive, Tolerances, Torque, TorqueDoublePendulum,
+    Trajectory, simulate_with_progress,
 };
 use serde::{Deserialize, Serialize};
 
@@ -81,8 +91,62 @@ choice!(
         /// The two-well Duffing oscillator `x'' + c x' + a x + b x³ = f cos(t)` (columns `t,x,v`;
         /// never wrapped).
         Duffing = "duffing",
+        /// The double pendulum whose pivot is shaken horizontally like the paper's pendulum
+        /// (`pendulum_sim::DoublePendulum`), the absolute angles of its links from the hanging
+        /// position (columns `t,theta1,theta2,omega1,omega2`, and `p` with `write_drive`).
+        DoublePendulum = "double-pendulum",
+        /// The double pendulum driven by a torque at each joint like a robot arm, the DFKI
+        /// acrobot/pendubot (`pendulum_sim::TorqueDoublePendulum`), in seconds: the shoulder angle
+        /// and the elbow angle relative to link 1 (columns `t,q1,q2,v1,v2,tau1,tau2`).
+        Arm = "arm",
+        /// Two two-well Duffing oscillators coupled by a spring on a shaken base
+        /// (`pendulum_sim::CoupledDuffing`), the base's acceleration measured (columns
+        /// `t,x1,x2,v1,v2,a`; never wrapped).
+        CoupledDuffing = "coupled-duffing",
     }
 );
+
+impl SystemKind {
+    /// The number of coordinates.
+    pub fn coordinates(self) -> usize {
+        match self {
+            Self::Pendulum | Self::Duffing => 1,
+            Self::DoublePendulum | Self::Arm | Self::CoupledDuffing => 2,
+        }
+    }
+
+    /// Whether the coordinates are angles (on the circle) rather than positions on the line.
+    pub fn domain(self) -> Domain {
+        match self {
+            Self::Duffing | Self::CoupledDuffing => Domain::Line,
+            _ => Domain::Circle,
+        }
+    }
+
+    /// The names of the record's columns: the coordinates, their velocities, and the drives the
+    /// record may hold (written always for a measured input, with `write_drive` otherwise).
+    fn column_names(
+        self,
+    ) -> (
+        &'static [&'static str],
+        &'static [&'static str],
+        &'static [&'static str],
+    ) {
+        match self {
+            Self::Pendulum => (&["theta"], &["omega"], &["p"]),
+            Self::Duffing => (&["x"], &["v"], &["p"]),
+            Self::DoublePendulum => (&["theta1", "theta2"], &["omega1", "omega2"], &["p"]),
+            Self::Arm => (&["q1", "q2"], &["v1", "v2"], &["tau1", "tau2"]),
+            Self::CoupledDuffing => (&["x1", "x2"], &["v1", "v2"], &["a"]),
+        }
+    }
+
+    /// Whether the drives are measured inputs, written always (the arm's torques, the coupled
+    /// oscillators' base acceleration).
+    fn measured_input(self) -> bool {
+        matches!(self, Self::Arm | Self::CoupledDuffing)
+    }
+}
 
 choice!(
     /// Whether the system is driven.
@@ -177,26 +241,163 @@ impl fmt::Display for GapsText {
     }
 }
 
+/// A sinusoidal torque as text, `A:OMEGA[:PHASE]`: `A sin(OMEGA t + PHASE)` in N m, `OMEGA` in
+/// rad/s, `PHASE` in radians (default 0); or `none` for no torque.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TorqueText(pub Option<Sinusoid>);
+
+impl FromStr for TorqueText {
+    type Err = String;
+
+    fn from_str(text: &str) -> Result<Self, String> {
+        if text.trim() == "none" {
+            return Ok(Self(None));
+        }
+        let parts: Vec<&str> = text.split(':').map(str::trim).collect();
+        if !(2..=3).contains(&parts.len()) {
+            return Err(
+                "expected A:OMEGA[:PHASE] (N m, rad/s, rad), e.g. 0.4:10 or 0.8:10:1.5708, or none"
+                    .to_owned(),
+            );
+        }
+        let number = |s: &str| s.parse::<f64>().map_err(|_| format!("'{s}' is not a number"));
+        let phase = match parts.get(2) {
+            Some(p) => number(p)?,
+            None => 0.0,
+        };
+        Sinusoid::new(number(parts[0])?, number(parts[1])?, phase)
+            .map(|s| Self(Some(s)))
+            .map_err(|e| e.to_string())
+    }
+}
+
+impl fmt::Display for TorqueText {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match &self.0 {
+            None => f.write_str("none"),
+            Some(s) => write!(f, "{}:{}:{}", s.amplitude(), s.angular_frequency(), s.phase()),
+        }
+    }
+}
+
+/// Numbers as text, `A,B,...` (from Python also a list of numbers, or one number).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Numbers(pub Vec<f64>);
+
+impl FromStr for Numbers {
+    type Err = String;
+
+    fn from_str(text: &str) -> Result<Self, String> {
+        text.split(',')
+            .map(|s| {
+                s.trim().parse::<f64>().map_err(|_| {
+                    format!(
+                        "'{}' is not a number (expected numbers separated by commas)",
+                        s.trim()
+                    )
+                })
+            })
+            .collect::<Result<Vec<_>, _>>()
+            .map(Self)
+    }
+}
+
+impl fmt::Display for Numbers {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let texts: Vec<String> = self.0.iter().map(ToString::to_string).collect();
+        f.write_str(&texts.join(","))
+    }
+}
+
+impl Serialize for Numbers {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        self.0.serialize(s)
+    }
+}
+
+impl<'de> Deserialize<'de> for Numbers {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        use serde_json::Value;
+        let number = |v: &Value| {
+            v.as_f64()
+                .ok_or_else(|| serde::de::Error::custom(format!("expected a number, found {v}")))
+        };
+        match Value::deserialize(d)? {
+            Value::String(s) => s.parse().map_err(serde::de::Error::custom),
+            Value::Array(items) => items.iter().map(number).collect::<Result<_, _>>().map(Self),
+            v @ Value::Number(_) => Ok(Self(vec![number(&v)?])),
+            other => Err(serde::de::Error::custom(format!(
+                "expected numbers (a list, or a text such as '1,0'), found {other}"
+            ))),
+        }
+    }
+}
+
 /// Every option of `hbid simulate`, by the names of the command line (`_` for `-`) and of
 /// Python's keyword arguments, with their defaults (the paper's data set: 30000 samples, 25 per
 /// drive period 2π, after 200 periods, the angle wrapped into `[−π, π)`). Checked by
-/// [`Rig::new`].
+/// [`Rig::new`]; an option of one system set for another is refused, naming the systems it
+/// belongs to.
+///
+/// The systems of two coordinates default to: the double pendulum whirling
+/// (`DoublePendulum::WHIRLING`) from rest at `(2, 0)`, 30000 samples at 64 per drive period after
+/// 200 periods; the arm with DFKI design A.0's published parameters (its dry friction on), the
+/// torques of the DFKI record 00 (`0.4 sin 10t` at the shoulder, `0.8 cos 10t` at the elbow), from
+/// rest hanging, 5000 samples at 500 Hz from `t = 0`; the coupled oscillators
+/// (`CoupledDuffing::TWO_WELLS`) shaken by the built-in drive of seed 1 from rest at `(1, −0.9)`,
+/// 30000 samples at 32 per period 2π of the drive's first tone after 200 of them.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct SimulateOptions {
     /// The system.
     #[serde(with = "text")]
     pub system: SystemKind,
-    /// Drive amplitude `f` (default 1.52 for the pendulum, 0.3 for the Duffing oscillator).
+    /// Drive amplitude `f` (default 1.52 for the pendulum, 0.3 for the Duffing oscillator, 0.6
+    /// for the double pendulum).
     pub f: Option<f64>,
-    /// Damping `c` (default 0.03 for the pendulum, 0.25 for the Duffing oscillator).
+    /// Damping `c` (default 0.03 for the pendulum, 0.25 for the Duffing oscillator); of link 1
+    /// or oscillator 1 of a system (default 0.05 for the double pendulum, 0.25 for the coupled
+    /// oscillators).
     pub c: Option<f64>,
-    /// Pendulum: frequency ratio `r`, stiffness `1/r²` (default 0.8333).
+    /// Damping `c2` of link 2 or oscillator 2 (default 0.05 for the double pendulum, 0.2 for the
+    /// coupled oscillators).
+    pub c2: Option<f64>,
+    /// Pendulum: frequency ratio `r`, stiffness `1/r²` (default 0.8333); double pendulum: `ω² =
+    /// 1/r²` (default `ω² = 0.8`).
     pub r: Option<f64>,
-    /// Duffing: linear stiffness `a` (default −1).
+    /// Duffing: linear stiffness `a` (default −1; −1 for oscillator 1 of the coupled ones).
     pub a: Option<f64>,
-    /// Duffing: cubic stiffness `b` (default 1).
+    /// Duffing: cubic stiffness `b` (default 1; 1 for oscillator 1 of the coupled ones).
     pub b: Option<f64>,
+    /// Coupled oscillators: linear stiffness `a2` of oscillator 2 (default −0.8).
+    pub a2: Option<f64>,
+    /// Coupled oscillators: cubic stiffness `b2` of oscillator 2 (default 1.2).
+    pub b2: Option<f64>,
+    /// Coupled oscillators: the coupling spring's stiffness `k` (default 0.3).
+    pub coupling: Option<f64>,
+    /// Coupled oscillators: the coupling spring's cubic part `k3` (default 0.05).
+    pub coupling_cubic: Option<f64>,
+    /// Coupled oscillators: the mass ratio `m2/m1` (default 1).
+    pub mass_ratio: Option<f64>,
+    /// Coupled oscillators: the seed of the built-in base acceleration (default 1).
+    pub drive_seed: Option<u64>,
+    /// Double pendulum: the mass ratio `μ = m2/(m1+m2)` (default 0.5).
+    pub mu: Option<f64>,
+    /// Double pendulum: the length ratio `λ = l2/l1` (default 1).
+    pub length_ratio: Option<f64>,
+    /// Arm: the torque at the shoulder, sinusoids `A:OMEGA[:PHASE]` (N m, rad/s, rad) added, or
+    /// `none` (default `0.4:10`).
+    #[serde(with = "text_list")]
+    pub torque1: Vec<TorqueText>,
+    /// Arm: the torque at the elbow (default `0.8:10:π/2`, `0.8 cos 10t`).
+    #[serde(with = "text_list")]
+    pub torque2: Vec<TorqueText>,
+    /// Arm: the viscous friction of the joints `b1,b2` in N m s/rad (default the published
+    /// 0.001,0.001).
+    pub joint_damping: Option<Numbers>,
+    /// Arm: the dry friction of the joints `cf1,cf2` in N m (default the published 0.093,0.078;
+    /// `0,0` for none).
+    pub joint_friction: Option<Numbers>,
     /// Dry friction `μ sign(x')` in the model's time.
     pub friction: Option<f64>,
     /// Quadratic drag `d x'|x'|` in the model's time.
@@ -213,6 +414,11 @@ pub struct SimulateOptions {
     pub x0: f64,
     /// Initial velocity at the start of the integration, in the record's time unit.
     pub v0: f64,
+    /// A system's initial coordinates at the start of the integration, one per coordinate.
+    pub q0: Option<Numbers>,
+    /// A system's initial velocities, one per coordinate, in the record's time unit (default
+    /// at rest).
+    pub dq0: Option<Numbers>,
     /// Relative tolerance of the integrator (the absolute one is `rtol/10`).
     pub rtol: f64,
     /// Drive frequency in Hz: time in seconds. Without it, the model's own time (drive period 2π).
@@ -252,11 +458,15 @@ pub struct SimulateOptions {
     /// Gaps, `K:LEN`: K runs of LEN samples dropped at seeded places.
     #[serde(with = "optional_text")]
     pub gaps: Option<GapsText>,
+    /// Gaussian jitter of the written time stamps (standard deviation in the record's time unit);
+    /// the samples are those of the grid's instants.
+    pub jitter: Option<f64>,
     /// Time stamps printed with this many decimals.
     pub time_decimals: Option<usize>,
     /// Angle (or displacement) and velocity printed with this many decimals.
     pub decimals: Option<usize>,
-    /// Also write the drive `p(t)` as a fourth column `p`.
+    /// Also write the drive `p(t)` as a column `p` (the arm's and the coupled oscillators' drives
+    /// are written always).
     pub write_drive: bool,
 }
 
@@ -307,9 +517,22 @@ impl Default for SimulateOptions {
             system: SystemKind::Pendulum,
             f: None,
             c: None,
+            c2: None,
             r: None,
             a: None,
             b: None,
+            a2: None,
+            b2: None,
+            coupling: None,
+            coupling_cubic: None,
+            mass_ratio: None,
+            drive_seed: None,
+            mu: None,
+            length_ratio: None,
+            torque1: Vec::new(),
+            torque2: Vec::new(),
+            joint_damping: None,
+            joint_friction: None,
             friction: None,
             drag: None,
             cubic_damping: None,
@@ -317,6 +540,8 @@ impl Default for SimulateOptions {
             drive: DriveKind::Drive,
             x0: 0.1,
             v0: 0.0,
+            q0: None,
+            dq0: None,
             rtol: 1e-10,
             drive_frequency: None,
             sample_rate: None,
@@ -335,6 +560,7 @@ impl Default for SimulateOptions {
             seed: 0,
             unwrapped: false,
             gaps: None,
+            jitter: None,
             time_decimals: None,
             decimals: None,
             write_drive: false,
@@ -382,12 +608,18 @@ impl SimulateOptions {
 const MAX_DECIMALS: usize = 30;
 
 /// The system chosen, with its parameters checked.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub enum System {
     /// The pendulum.
     Pendulum(Pendulum),
     /// The Duffing oscillator.
     Duffing(Duffing),
+    /// The base-excited double pendulum.
+    DoublePendulum(DoublePendulum),
+    /// The torque-driven double pendulum.
+    Arm(TorqueDoublePendulum),
+    /// The coupled Duffing oscillators.
+    CoupledDuffing(CoupledDuffing),
 }
 
 impl System {
@@ -395,6 +627,9 @@ impl System {
         match self {
             Self::Pendulum(_) => "pendulum",
             Self::Duffing(_) => "duffing",
+            Self::DoublePendulum(_) => "double-pendulum",
+            Self::Arm(_) => "arm",
+            Self::CoupledDuffing(_) => "coupled-duffing",
         }
     }
 
@@ -403,6 +638,25 @@ impl System {
         let (losses, harmonics) = match self {
             Self::Pendulum(p) => (*p.losses(), *p.drive_harmonics()),
             Self::Duffing(d) => (*d.losses(), *d.drive_harmonics()),
+            Self::DoublePendulum(_) => {
+                return "theta1'' + mu lambda theta2'' cos(theta1-theta2) + mu lambda theta2'^2 sin(theta1-theta2) \
+                        + omega2 sin theta1 - f sin(t) cos theta1 + c1 theta1' = 0; theta2'' + (1/lambda) theta1'' \
+                        cos(theta1-theta2) - (1/lambda) theta1'^2 sin(theta1-theta2) + (omega2/lambda) sin theta2 \
+                        - (f/lambda) sin(t) cos theta2 + c2 theta2' = 0 (omega2 = 1/r^2)"
+                    .to_owned();
+            }
+            Self::Arm(_) => {
+                return "M(q) q'' + C(q, q') q' - G(q) + b q' + cf sign(q') = tau, in seconds, q1 the shoulder angle \
+                        from hanging and q2 the elbow angle relative to link 1 (DFKI's model with sign(q') for \
+                        atan(100 q'))"
+                    .to_owned();
+            }
+            Self::CoupledDuffing(_) => {
+                return "x1'' + c1 x1' + a1 x1 + b1 x1^3 + k (x1 - x2) + k3 (x1 - x2)^3 + a(t) = 0; x2'' + c2 x2' \
+                        + a2 x2 + b2 x2^3 - (k/rho) (x1 - x2) - (k3/rho) (x1 - x2)^3 + a(t) = 0 (a the base's \
+                        acceleration, rho = m2/m1)"
+                    .to_owned();
+            }
         };
         let mut dissipation = String::from("c x'");
         for (present, term) in [
@@ -420,18 +674,53 @@ impl System {
             (Self::Pendulum(_), true) => format!(
                 "x'' + {dissipation} + (1/r^2) sin x - f [sin(t) + sum_k ratio_k sin(k t + phase_k)] cos x = 0"
             ),
-            (Self::Duffing(_), false) => format!("x'' + {dissipation} + a x + b x^3 = f cos(t)"),
-            (Self::Duffing(_), true) => {
+            (_, false) => format!("x'' + {dissipation} + a x + b x^3 = f cos(t)"),
+            (_, true) => {
                 format!("x'' + {dissipation} + a x + b x^3 = f [cos(t) + sum_k ratio_k cos(k t + phase_k)]")
             }
         }
     }
 
-    /// The drive as it enters the equation at the system's time `tau`.
-    fn drive(&self, tau: f64) -> f64 {
+    /// The system of several coordinates, if it is one.
+    fn multi(&self) -> Option<&dyn MultiSystem> {
         match self {
-            System::Pendulum(p) => p.drive(tau),
-            System::Duffing(d) => d.drive(tau),
+            Self::Pendulum(_) | Self::Duffing(_) => None,
+            Self::DoublePendulum(p) => Some(p),
+            Self::Arm(a) => Some(a),
+            Self::CoupledDuffing(d) => Some(d),
+        }
+    }
+
+    /// The drives as they enter the equations, in the record's frame `frame` (the system's time
+    /// `frame.system_time(t)`), at the times `t`: a drive that is an acceleration (a base's, or
+    /// the forcing of the Duffing oscillator) is `rate²` times the system's, the arm's torques
+    /// are in N m at seconds already.
+    fn drives(&self, frame: &RecordFrame, t: &[f64]) -> Vec<Vec<f64>> {
+        let rate2 = frame.rate() * frame.rate();
+        let scaled = |drive: &dyn Fn(f64) -> f64| -> Vec<f64> {
+            t.iter().map(|&t| rate2 * drive(frame.system_time(t))).collect()
+        };
+        match self {
+            Self::Pendulum(p) => vec![scaled(&|tau| p.drive(tau))],
+            Self::Duffing(d) => vec![scaled(&|tau| d.drive(tau))],
+            Self::DoublePendulum(p) => vec![scaled(&|tau| p.drive(tau))],
+            Self::Arm(a) => a
+                .torques()
+                .iter()
+                .map(|torque| t.iter().map(|&t| torque.at(t)).collect())
+                .collect(),
+            Self::CoupledDuffing(d) => vec![scaled(&|tau| d.drive().at(tau))],
+        }
+    }
+
+    /// The parameters, as the simulator serialises them.
+    fn parameters(&self) -> Result<serde_json::Value, serde_json::Error> {
+        match self {
+            Self::Pendulum(p) => serde_json::to_value(p),
+            Self::Duffing(d) => serde_json::to_value(d),
+            Self::DoublePendulum(p) => serde_json::to_value(p),
+            Self::Arm(a) => serde_json::to_value(a),
+            Self::CoupledDuffing(d) => serde_json::to_value(d),
         }
     }
 }
@@ -447,13 +736,309 @@ pub struct Rig {
     config: SimulationConfig,
     /// The drive's phase at the first sample, radians in `[0, 2π)`.
     first_phase: f64,
+    /// The encoder of the angle, or of each angle from its own stream of the seed.
     encoder: Option<Encoder>,
     gaps: Option<Gaps>,
+    jitter: Option<Jitter>,
+    /// The initial state of a system of several coordinates.
+    initial: Option<MultiState>,
 }
 
 /// Wraps a library error as the error of `option`.
 fn on<E: std::error::Error>(option: &'static str) -> impl Fn(E) -> OptionError {
     move |e| OptionError::new(option, chain(&e))
+}
+
+/// A library's check of a parameter as the error of the option that set it (`names`: the
+/// library's name of each parameter and the option's), other errors as the system's.
+fn parameter(names: &'static [(&'static str, &'static str)]) -> impl Fn(SimError) -> OptionError {
+    move |e| match e {
+        SimError::InvalidParameter { name, value, why } => match names.iter().find(|(n, _)| *n == name) {
+            Some((_, option)) => OptionError::value(*option, value, why),
+            None => OptionError::new("system", chain(&e)),
+        },
+        e => OptionError::new("system", chain(&e)),
+    }
+}
+
+/// The double pendulum's defaults: from rest with link 1 at 2 rad, as
+/// `DoublePendulum::whirling` is documented, 64 samples per drive period (no angle moves more than
+/// 0.45 rad between samples).
+const DOUBLE_PENDULUM_START: [f64; 2] = [2.0, 0.0];
+const DOUBLE_PENDULUM_SAMPLES_PER_PERIOD: usize = 64;
+/// The coupled oscillators' defaults: from rest at `(1, −0.9)`, as `CoupledDuffing::two_wells` is
+/// documented; 32 samples per period `2π` of the drive's first tone, about 7 per period of the
+/// fastest part of its noise (angular frequency 3).
+const COUPLED_DUFFING_START: [f64; 2] = [1.0, -0.9];
+const COUPLED_DUFFING_SAMPLES_PER_PERIOD: usize = 32;
+const COUPLED_DUFFING_DRIVE_SEED: u64 = 1;
+/// The arm's defaults, those of DFKI's records: from rest hanging, 5000 samples at 500 Hz, the
+/// torques of record 00 (`0.4 sin 10t` at the shoulder, `0.8 cos 10t` at the elbow).
+const ARM_SAMPLE_RATE: f64 = 500.0;
+const ARM_SAMPLES: usize = 5000;
+const ARM_TORQUES: [(f64, f64, f64); 2] = [(0.4, 10.0, 0.0), (0.8, 10.0, FRAC_PI_2)];
+
+/// The systems an option set away from its default belongs to, and what it is; an option of
+/// one system set for another is refused, naming those it belongs to.
+fn check_belongs(o: &SimulateOptions) -> Result<(), OptionError> {
+    use SystemKind::{Arm, CoupledDuffing, DoublePendulum, Duffing, Pendulum};
+    let d = SimulateOptions::default();
+    const PERIODIC: &[SystemKind] = &[Pendulum, Duffing, DoublePendulum, CoupledDuffing];
+    const ANGLES: &[SystemKind] = &[Pendulum, DoublePendulum, Arm];
+    const ONE: &[SystemKind] = &[Pendulum, Duffing];
+    const SYSTEMS: &[SystemKind] = &[DoublePendulum, Arm, CoupledDuffing];
+    let encoder = "an angle encoder's, for a pendulum only (also «system=double-pendulum» or «system=arm»): a \
+                   displacement takes «noise»";
+    let table: [(&str, bool, &[SystemKind], &str); 32] = [
+        (
+            "f",
+            o.f.is_some(),
+            &[Pendulum, Duffing, DoublePendulum],
+            "the periodic drive's amplitude",
+        ),
+        (
+            "c",
+            o.c.is_some(),
+            PERIODIC,
+            "a damping in the model's time (the arm's is «joint_damping»)",
+        ),
+        (
+            "c2",
+            o.c2.is_some(),
+            &[DoublePendulum, CoupledDuffing],
+            "the damping of link 2 or oscillator 2",
+        ),
+        (
+            "r",
+            o.r.is_some(),
+            &[Pendulum, DoublePendulum],
+            "the pendulum's frequency ratio",
+        ),
+        (
+            "a",
+            o.a.is_some(),
+            &[Duffing, CoupledDuffing],
+            "a stiffness of the Duffing oscillator",
+        ),
+        (
+            "b",
+            o.b.is_some(),
+            &[Duffing, CoupledDuffing],
+            "a stiffness of the Duffing oscillator",
+        ),
+        (
+            "a2",
+            o.a2.is_some(),
+            &[CoupledDuffing],
+            "a stiffness of the coupled Duffing oscillator 2",
+        ),
+        (
+            "b2",
+            o.b2.is_some(),
+            &[CoupledDuffing],
+            "a stiffness of the coupled Duffing oscillator 2",
+        ),
+        (
+            "coupling",
+            o.coupling.is_some(),
+            &[CoupledDuffing],
+            "the coupling spring's stiffness",
+        ),
+        (
+            "coupling_cubic",
+            o.coupling_cubic.is_some(),
+            &[CoupledDuffing],
+            "the coupling spring's cubic part",
+        ),
+        (
+            "mass_ratio",
+            o.mass_ratio.is_some(),
+            &[CoupledDuffing],
+            "the coupled oscillators' mass ratio",
+        ),
+        (
+            "drive_seed",
+            o.drive_seed.is_some(),
+            &[CoupledDuffing],
+            "the seed of the built-in base acceleration",
+        ),
+        (
+            "mu",
+            o.mu.is_some(),
+            &[DoublePendulum],
+            "the double pendulum's mass ratio m2/(m1+m2)",
+        ),
+        (
+            "length_ratio",
+            o.length_ratio.is_some(),
+            &[DoublePendulum],
+            "the double pendulum's length ratio",
+        ),
+        (
+            "torque1",
+            !o.torque1.is_empty(),
+            &[Arm],
+            "a torque at a joint of the arm",
+        ),
+        (
+            "torque2",
+            !o.torque2.is_empty(),
+            &[Arm],
+            "a torque at a joint of the arm",
+        ),
+        (
+            "joint_damping",
+            o.joint_damping.is_some(),
+            &[Arm],
+            "the viscous friction of the arm's joints",
+        ),
+        (
+            "joint_friction",
+            o.joint_friction.is_some(),
+            &[Arm],
+            "the dry friction of the arm's joints",
+        ),
+        (
+            "friction",
+            o.friction.is_some(),
+            ONE,
+            "a loss of a system of one coordinate",
+        ),
+        (
+            "drag",
+            o.drag.is_some(),
+            ONE,
+            "a loss of a system of one coordinate",
+        ),
+        (
+            "cubic_damping",
+            o.cubic_damping.is_some(),
+            ONE,
+            "a loss of a system of one coordinate",
+        ),
+        (
+            "drive_harmonic",
+            !o.drive_harmonic.is_empty(),
+            ONE,
+            "a harmonic of the drive of one coordinate",
+        ),
+        (
+            "drive",
+            o.drive != d.drive,
+            &[Pendulum, Duffing, DoublePendulum],
+            "the periodic drive's switch",
+        ),
+        (
+            "x0",
+            o.x0 != d.x0,
+            ONE,
+            "the initial state of one coordinate (a system's is «q0»)",
+        ),
+        (
+            "v0",
+            o.v0 != d.v0,
+            ONE,
+            "the initial state of one coordinate (a system's is «dq0»)",
+        ),
+        (
+            "q0",
+            o.q0.is_some(),
+            SYSTEMS,
+            "the initial state of a system (one coordinate's is «x0»)",
+        ),
+        (
+            "dq0",
+            o.dq0.is_some(),
+            SYSTEMS,
+            "the initial state of a system (one coordinate's is «v0»)",
+        ),
+        (
+            "drive_frequency",
+            o.drive_frequency.is_some(),
+            PERIODIC,
+            "the time scale of a periodic drive (the arm's time is seconds)",
+        ),
+        (
+            "samples_per_period",
+            o.samples_per_period.is_some(),
+            PERIODIC,
+            "the sampling of a periodic drive (the arm's is «sample_rate»)",
+        ),
+        (
+            "transient_periods",
+            o.transient_periods.is_some(),
+            PERIODIC,
+            "drive periods dropped first (the arm starts at rest at t = 0)",
+        ),
+        (
+            "phase",
+            o.phase != d.phase,
+            PERIODIC,
+            "the drive's phase at the first sample",
+        ),
+        (
+            "raw_counts",
+            o.raw_counts,
+            &[Pendulum],
+            "the one angle's counts in one column",
+        ),
+    ];
+    for (name, set, systems, what) in table {
+        if set && !systems.contains(&o.system) {
+            let names: Vec<String> = systems.iter().map(|s| format!("«system={}»", s.name())).collect();
+            let list = match names.split_last() {
+                Some((last, [])) => last.clone(),
+                Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
+                None => String::new(),
+            };
+            return Err(OptionError::sentence(name, format!("is {what} ({list})")));
+        }
+    }
+    for (name, set) in [
+        ("counts", o.counts.is_some()),
+        ("zero_offset", o.zero_offset.is_some()),
+        ("bit_errors", o.bit_errors.is_some()),
+        ("angle_range", o.angle_range.is_some()),
+    ] {
+        if set && !ANGLES.contains(&o.system) {
+            return Err(OptionError::sentence(name, format!("is {encoder}")));
+        }
+    }
+    Ok(())
+}
+
+/// Two numbers of an option, or the defaults.
+fn pair(name: &'static str, given: &Option<Numbers>, default: [f64; 2]) -> Result<[f64; 2], OptionError> {
+    match given {
+        None => Ok(default),
+        Some(Numbers(v)) => match v.as_slice() {
+            &[a, b] => Ok([a, b]),
+            _ => Err(OptionError::value(
+                name,
+                Numbers(v.clone()),
+                "give two numbers, one per coordinate or joint",
+            )),
+        },
+    }
+}
+
+/// An arm's torque: the sinusoids given, or the default.
+fn torque(name: &'static str, given: &[TorqueText], default: (f64, f64, f64)) -> Result<Torque, OptionError> {
+    if given.is_empty() {
+        let (a, w, phase) = default;
+        return Torque::sinusoid(a, w, phase).map_err(on(name));
+    }
+    let sinusoids: Vec<Sinusoid> = given.iter().filter_map(|t| t.0).collect();
+    if sinusoids.is_empty() {
+        return Ok(Torque::None);
+    }
+    if sinusoids.len() != given.len() {
+        return Err(OptionError::sentence(
+            name,
+            "none is no torque: not with sinusoids",
+        ));
+    }
+    Ok(Torque::Sinusoids(sinusoids))
 }
 
 impl Rig {
@@ -462,7 +1047,13 @@ impl Rig {
         let system = Self::system(&options)?;
         let (frame, config, first_phase) = Self::timing(&options)?;
         let encoder = Self::encoder(&options)?;
+        let initial = Self::initial(&options)?;
         let gaps = options.gaps.map(|g| g.0.seeded(options.seed));
+        let jitter = options
+            .jitter
+            .map(|sigma| Jitter::new(sigma).map(|j| j.seeded(options.seed)))
+            .transpose()
+            .map_err(on("jitter"))?;
         for (name, decimals) in [
             ("decimals", options.decimals),
             ("time_decimals", options.time_decimals),
@@ -496,6 +1087,8 @@ impl Rig {
             first_phase,
             encoder,
             gaps,
+            jitter,
+            initial,
         })
     }
 
@@ -511,8 +1104,8 @@ impl Rig {
     }
 
     /// The system.
-    pub fn system_kind(&self) -> System {
-        self.system
+    pub fn system_kind(&self) -> &System {
+        &self.system
     }
 
     /// The simulation's configuration (sampling, transient, tolerances).
@@ -521,6 +1114,7 @@ impl Rig {
     }
 
     fn system(o: &SimulateOptions) -> Result<System, OptionError> {
+        check_belongs(o)?;
         if o.drive == DriveKind::None && o.f.is_some() {
             return Err(OptionError::sentence(
                 "f",
@@ -551,13 +1145,6 @@ impl Rig {
         let harmonics = DriveHarmonics::new(&list).map_err(on("drive_harmonic"))?;
         Ok(match o.system {
             SystemKind::Pendulum => {
-                if o.a.is_some() || o.b.is_some() {
-                    let name = if o.a.is_some() { "a" } else { "b" };
-                    return Err(OptionError::sentence(
-                        name,
-                        "is a stiffness of the Duffing oscillator («system=duffing»)",
-                    ));
-                }
                 let (f, c, r) = Pendulum::PAPER;
                 System::Pendulum(
                     Pendulum::new(amplitude(f), o.c.unwrap_or(c), o.r.unwrap_or(r))
@@ -567,25 +1154,6 @@ impl Rig {
                 )
             }
             SystemKind::Duffing => {
-                if o.r.is_some() {
-                    return Err(OptionError::sentence(
-                        "r",
-                        "is the pendulum's frequency ratio («system=pendulum»)",
-                    ));
-                }
-                let encoder_options = [
-                    ("counts", o.counts.is_some()),
-                    ("raw_counts", o.raw_counts),
-                    ("zero_offset", o.zero_offset.is_some()),
-                    ("bit_errors", o.bit_errors.is_some()),
-                    ("angle_range", o.angle_range.is_some()),
-                ];
-                if let Some((name, _)) = encoder_options.iter().find(|(_, set)| *set) {
-                    return Err(OptionError::sentence(
-                        *name,
-                        "is an angle encoder's: «system=pendulum» only (the Duffing displacement takes «noise»)",
-                    ));
-                }
                 let (c, a, b, f) = Duffing::TWO_WELL;
                 System::Duffing(
                     Duffing::new(o.c.unwrap_or(c), o.a.unwrap_or(a), o.b.unwrap_or(b), amplitude(f))
@@ -594,10 +1162,110 @@ impl Rig {
                         .with_drive_harmonics(harmonics),
                 )
             }
+            SystemKind::DoublePendulum => {
+                let (mu, lambda, omega2, f, c1, c2) = DoublePendulum::WHIRLING;
+                let omega2 = match o.r {
+                    None => omega2,
+                    Some(r) if r.is_finite() && r > 0.0 => 1.0 / (r * r),
+                    Some(r) => return Err(OptionError::value("r", r, "must be positive and finite")),
+                };
+                let names = &[
+                    ("mu", "mu"),
+                    ("lambda", "length_ratio"),
+                    ("omega2", "r"),
+                    ("f", "f"),
+                    ("c1", "c"),
+                    ("c2", "c2"),
+                ];
+                System::DoublePendulum(
+                    DoublePendulum::new(
+                        o.mu.unwrap_or(mu),
+                        o.length_ratio.unwrap_or(lambda),
+                        omega2,
+                        amplitude(f),
+                        o.c.unwrap_or(c1),
+                        o.c2.unwrap_or(c2),
+                    )
+                    .map_err(parameter(names))?,
+                )
+            }
+            SystemKind::Arm => {
+                let published = ArmParameters::DFKI_A0;
+                let [b1, b2] = pair("joint_damping", &o.joint_damping, [published.b1, published.b2])?;
+                let [cf1, cf2] = pair(
+                    "joint_friction",
+                    &o.joint_friction,
+                    [published.cf1, published.cf2],
+                )?;
+                let names = &[
+                    ("b1", "joint_damping"),
+                    ("b2", "joint_damping"),
+                    ("cf1", "joint_friction"),
+                    ("cf2", "joint_friction"),
+                ];
+                let arm = TorqueDoublePendulum::new(ArmParameters {
+                    b1,
+                    b2,
+                    cf1,
+                    cf2,
+                    ..published
+                })
+                .map_err(parameter(names))?;
+                System::Arm(arm.with_torques(
+                    torque("torque1", &o.torque1, ARM_TORQUES[0])?,
+                    torque("torque2", &o.torque2, ARM_TORQUES[1])?,
+                ))
+            }
+            SystemKind::CoupledDuffing => {
+                let (c, a, b, k, k3) = CoupledDuffing::TWO_WELLS;
+                let names = &[
+                    ("c1", "c"),
+                    ("c2", "c2"),
+                    ("a1", "a"),
+                    ("a2", "a2"),
+                    ("b1", "b"),
+                    ("b2", "b2"),
+                    ("k", "coupling"),
+                    ("k3", "coupling_cubic"),
+                    ("mass ratio", "mass_ratio"),
+                ];
+                let drive =
+                    SyntheticDrive::incommensurate(o.drive_seed.unwrap_or(COUPLED_DUFFING_DRIVE_SEED));
+                System::CoupledDuffing(
+                    CoupledDuffing::new(
+                        [o.c.unwrap_or(c[0]), o.c2.unwrap_or(c[1])],
+                        [o.a.unwrap_or(a[0]), o.a2.unwrap_or(a[1])],
+                        [o.b.unwrap_or(b[0]), o.b2.unwrap_or(b[1])],
+                        o.coupling.unwrap_or(k),
+                        o.coupling_cubic.unwrap_or(k3),
+                        BaseAcceleration::Synthetic(drive),
+                    )
+                    .and_then(|d| d.with_mass_ratio(o.mass_ratio.unwrap_or(1.0)))
+                    .map_err(parameter(names))?,
+                )
+            }
         })
     }
 
+    /// The initial state of a system of several coordinates (`None` for one coordinate, whose
+    /// state is `x0`, `v0`).
+    fn initial(o: &SimulateOptions) -> Result<Option<MultiState>, OptionError> {
+        let start = match o.system {
+            SystemKind::Pendulum | SystemKind::Duffing => return Ok(None),
+            SystemKind::DoublePendulum => DOUBLE_PENDULUM_START,
+            SystemKind::Arm => [0.0; 2],
+            SystemKind::CoupledDuffing => COUPLED_DUFFING_START,
+        };
+        let q = pair("q0", &o.q0, start)?;
+        let v = pair("dq0", &o.dq0, [0.0; 2])?;
+        let names = &[("initial coordinate", "q0"), ("initial velocity", "dq0")];
+        MultiState::new(&q, &v).map(Some).map_err(parameter(names))
+    }
+
     fn timing(o: &SimulateOptions) -> Result<(RecordFrame, SimulationConfig, f64), OptionError> {
+        if o.system == SystemKind::Arm {
+            return Self::arm_timing(o);
+        }
         let frame = match o.drive_frequency {
             None => RecordFrame::nondimensional(),
             Some(hz) => RecordFrame::nondimensional()
@@ -640,7 +1308,18 @@ impl Rig {
                     .with_samples_per_period(p)
                     .map_err(|e| OptionError::checked("samples_per_period", p, &e))?;
             }
-            (None, None) => {}
+            (None, None) => {
+                let own = match o.system {
+                    SystemKind::DoublePendulum => Some(DOUBLE_PENDULUM_SAMPLES_PER_PERIOD),
+                    SystemKind::CoupledDuffing => Some(COUPLED_DUFFING_SAMPLES_PER_PERIOD),
+                    _ => None,
+                };
+                if let Some(p) = own {
+                    config = config
+                        .with_samples_per_period(p)
+                        .map_err(|e| OptionError::checked("samples_per_period", p, &e))?;
+                }
+            }
         }
         let step = config.sample_step();
         let samples = match (o.samples, o.duration) {
@@ -677,6 +1356,45 @@ impl Rig {
                 Tolerances::relative(o.rtol).map_err(|e| OptionError::checked("rtol", o.rtol, &e))?,
             );
         Ok((frame, config, TAU * fraction))
+    }
+
+    /// The arm's time and sampling: seconds from `t = 0`, the first sample the initial state (no
+    /// drive period, so no transient and no phase), at `sample_rate` (default 500 Hz).
+    fn arm_timing(o: &SimulateOptions) -> Result<(RecordFrame, SimulationConfig, f64), OptionError> {
+        let rate = o.sample_rate.unwrap_or(ARM_SAMPLE_RATE);
+        if !(rate.is_finite() && rate > 0.0) {
+            return Err(OptionError::value(
+                "sample_rate",
+                rate,
+                "must be positive and finite",
+            ));
+        }
+        // The configuration's drive period is a unit of nothing here: a second.
+        let config = SimulationConfig::paper()
+            .with_drive_period(1.0)
+            .and_then(|c| c.with_sample_step(1.0 / rate))
+            .map_err(|e| OptionError::checked("sample_rate", rate, &e))?;
+        let samples = match (o.samples, o.duration) {
+            (Some(_), Some(_)) => {
+                return Err(OptionError::sentence(
+                    "samples",
+                    "and «duration» both set: give one",
+                ));
+            }
+            (Some(n), None) => n,
+            (None, Some(d)) => samples_in(d, config.sample_step())?,
+            (None, None) => ARM_SAMPLES,
+        };
+        let config = config
+            .with_samples(samples)
+            .map_err(|e| OptionError::checked("samples", samples, &e))?
+            .with_transient_periods(0)
+            .with_phase(0.0)
+            .map_err(|e| OptionError::checked("phase", 0.0, &e))?
+            .with_tolerances(
+                Tolerances::relative(o.rtol).map_err(|e| OptionError::checked("rtol", o.rtol, &e))?,
+            );
+        Ok((RecordFrame::nondimensional(), config, 0.0))
     }
 
     /// The encoder of the options, `None` for an ideal one (the angle is then only wrapped).
@@ -773,14 +1491,18 @@ pub enum Reported {
 #[derive(Debug, Clone)]
 pub struct Simulation {
     rig: Rig,
-    /// The time stamps, as written (before printing with `time_decimals`).
+    /// The time stamps, as written (jittered with `jitter`; before printing with
+    /// `time_decimals`).
     pub t: Vec<f64>,
-    /// The angle (or displacement, or counts) as recorded.
-    pub x: Reported,
-    /// The clean velocity, in the record's time unit.
-    pub v: Vec<f64>,
-    /// The drive `p(t)` as it enters the equation, in the record's time unit.
-    pub drive: Vec<f64>,
+    /// Each coordinate as recorded (the angle, displacement or counts; one for a system of one
+    /// coordinate).
+    pub coordinates: Vec<Reported>,
+    /// Each coordinate's clean velocity, in the record's time unit.
+    pub velocities: Vec<Vec<f64>>,
+    /// Each drive as it enters the equations, in the record's time unit, written or not
+    /// ([`Simulation::columns`] says): `p(t)` of a system of one coordinate or of the double
+    /// pendulum, the arm's torques `tau1`, `tau2`, the coupled oscillators' base acceleration `a`.
+    pub drives: Vec<Vec<f64>>,
     /// Whether each sample is kept (`false` inside a gap).
     pub kept: Vec<bool>,
 }
@@ -790,42 +1512,75 @@ pub fn simulate(rig: &Rig, observer: &mut dyn Observer) -> Result<Simulation, Ru
     observer.stage(Stage::Simulate);
     let config = &rig.config;
     let samples = config.samples();
-    let mut progress = |done: usize, total: usize| observer.progress(done, total);
-    let traj = match (rig.system, rig.options.drive_frequency) {
-        (System::Pendulum(p), None) => run(&p, config, &mut progress)?,
-        (System::Pendulum(p), Some(_)) => run(&InFrame::new(p, rig.frame), config, &mut progress)?,
-        (System::Duffing(d), None) => run(&d, config, &mut progress)?,
-        (System::Duffing(d), Some(_)) => run(&InFrame::new(d, rig.frame), config, &mut progress)?,
-    };
     let o = &rig.options;
-    let x = match (rig.system, rig.encoder) {
-        (System::Pendulum(_), None) if o.unwrapped => Reported::Values(traj.theta.clone()),
-        (System::Pendulum(_), None) => {
-            Reported::Values(traj.theta.iter().map(|&x| circle_signal::wrap(x)).collect())
+    let mut progress = |done: usize, total: usize| observer.progress(done, total);
+    let (times, coordinates, velocities) = match (&rig.system, &rig.initial) {
+        (System::Pendulum(_) | System::Duffing(_), _) => {
+            let traj = match (&rig.system, o.drive_frequency) {
+                (System::Pendulum(p), None) => run(p, config, &mut progress)?,
+                (System::Pendulum(p), Some(_)) => run(&InFrame::new(*p, rig.frame), config, &mut progress)?,
+                (System::Duffing(d), None) => run(d, config, &mut progress)?,
+                (System::Duffing(d), Some(_)) => run(&InFrame::new(*d, rig.frame), config, &mut progress)?,
+                _ => unreachable!("a system of one coordinate"),
+            };
+            let x = match (&rig.system, rig.encoder) {
+                (System::Pendulum(_), None) if o.unwrapped => Reported::Values(traj.theta.clone()),
+                (System::Pendulum(_), None) => {
+                    Reported::Values(traj.theta.iter().map(|&x| circle_signal::wrap(x)).collect())
+                }
+                (System::Pendulum(_), Some(e)) if o.raw_counts => Reported::Counts(
+                    e.observe_counts(&traj.theta)
+                        .ok_or_else(|| OptionError::sentence("raw_counts", "needs «counts»"))?,
+                ),
+                (System::Pendulum(_), Some(e)) if o.unwrapped => {
+                    Reported::Values(e.observe_continuous(&traj.theta))
+                }
+                (System::Pendulum(_), Some(e)) => Reported::Values(e.observe(&traj.theta)),
+                (_, None) => Reported::Values(traj.theta.clone()),
+                (_, Some(e)) => Reported::Values(e.observe_continuous(&traj.theta)),
+            };
+            (traj.t, vec![x], vec![traj.omega])
         }
-        (System::Pendulum(_), Some(e)) if o.raw_counts => Reported::Counts(
-            e.observe_counts(&traj.theta)
-                .ok_or_else(|| OptionError::sentence("raw_counts", "needs «counts»"))?,
-        ),
-        (System::Pendulum(_), Some(e)) if o.unwrapped => Reported::Values(e.observe_continuous(&traj.theta)),
-        (System::Pendulum(_), Some(e)) => Reported::Values(e.observe(&traj.theta)),
-        (System::Duffing(_), None) => Reported::Values(traj.theta.clone()),
-        (System::Duffing(_), Some(e)) => Reported::Values(e.observe_continuous(&traj.theta)),
+        (system, Some(initial)) => {
+            let system = system.multi().expect("a system of several coordinates");
+            let multi = MultiConfig::from_sampling(config.clone(), initial.clone());
+            let traj = pendulum_sim::multi::simulate_with_progress(
+                &InFrame::new(system, rig.frame),
+                &multi,
+                &mut progress,
+            )?;
+            let circle = o.system.domain() == Domain::Circle;
+            let coordinates = traj
+                .q
+                .iter()
+                .enumerate()
+                .map(|(c, q)| {
+                    // Each coordinate's encoder draws from its own stream of the seed.
+                    let encoder = rig.encoder.map(|e| e.with_stream(c as u64));
+                    Reported::Values(match encoder {
+                        None if circle && !o.unwrapped => q.iter().map(|&x| circle_signal::wrap(x)).collect(),
+                        None => q.clone(),
+                        Some(e) if circle && !o.unwrapped => e.observe(q),
+                        Some(e) => e.observe_continuous(q),
+                    })
+                })
+                .collect();
+            (traj.t, coordinates, traj.v)
+        }
+        (_, None) => unreachable!("a system of several coordinates has its initial state"),
     };
-    let t = match o.time_origin {
-        TimeOrigin::Drive => traj.t.clone(),
+    let mut t = match o.time_origin {
+        TimeOrigin::Drive => times.clone(),
         TimeOrigin::FirstSample => {
             let h = config.sample_step();
-            (0..traj.len()).map(|n| n as f64 * h).collect()
+            (0..times.len()).map(|n| n as f64 * h).collect()
         }
     };
-    // The drive in the record's frame: rate² times the system's, at the system's time.
-    let rate = rig.frame.rate();
-    let drive = traj
-        .t
-        .iter()
-        .map(|&t| rate * rate * rig.system.drive(rig.frame.system_time(t)))
-        .collect();
+    if let Some(jitter) = &rig.jitter {
+        t = jitter.apply(&t);
+    }
+    // The drives at the instants the samples were taken, in the simulation's frame.
+    let drives = rig.system.drives(&rig.frame, &times);
     let kept = match &rig.gaps {
         Some(g) => g.kept(samples).map_err(on("gaps"))?,
         None => vec![true; samples],
@@ -833,9 +1588,9 @@ pub fn simulate(rig: &Rig, observer: &mut dyn Observer) -> Result<Simulation, Ru
     Ok(Simulation {
         rig: rig.clone(),
         t,
-        x,
-        v: traj.omega,
-        drive,
+        coordinates,
+        velocities,
+        drives,
         kept,
     })
 }
@@ -870,15 +1625,25 @@ impl Simulation {
         &self.rig
     }
 
-    /// The columns written: time, value, velocity, and `p` with `write_drive`.
+    /// Whether the drives are written: always for a measured input, with `write_drive` otherwise.
+    fn writes_drives(&self) -> bool {
+        self.rig.options.write_drive || self.rig.options.system.measured_input()
+    }
+
+    /// The columns written: time, the coordinates, their velocities, and the drives that are
+    /// written (`t,theta,omega` and `p` with `write_drive` for the pendulum, `count` for `theta`
+    /// with `raw_counts`; `t,x,v[,p]`; `t,theta1,theta2,omega1,omega2[,p]`;
+    /// `t,q1,q2,v1,v2,tau1,tau2`; `t,x1,x2,v1,v2,a`).
     pub fn columns(&self) -> Vec<&'static str> {
-        let mut columns = match (self.rig.system, &self.x) {
-            (System::Duffing(_), _) => vec!["t", "x", "v"],
-            (System::Pendulum(_), Reported::Counts(_)) => vec!["t", "count", "omega"],
-            (System::Pendulum(_), Reported::Values(_)) => vec!["t", "theta", "omega"],
-        };
-        if self.rig.options.write_drive {
-            columns.push("p");
+        let (coordinates, velocities, drives) = self.rig.options.system.column_names();
+        let mut columns = vec!["t"];
+        match self.coordinates.first() {
+            Some(Reported::Counts(_)) => columns.push("count"),
+            _ => columns.extend(coordinates),
+        }
+        columns.extend(velocities);
+        if self.writes_drives() {
+            columns.extend(drives);
         }
         columns
     }
@@ -888,30 +1653,35 @@ impl Simulation {
         self.kept.iter().filter(|&&k| k).count()
     }
 
-    /// The record's rows as they are written, each `[t, x, v]` (and `p`), numbers as a reader of
-    /// the printed text gets them.
-    pub fn table(&self) -> Vec<Vec<f64>> {
+    /// The cells of sample `n` as `cell` prints each: the time stamp, each coordinate (a count as
+    /// it is), each velocity and each drive written.
+    fn cells<T>(&self, n: usize, cell: impl Fn(f64, Option<usize>) -> T, count: impl Fn(u32) -> T) -> Vec<T> {
         let (td, vd) = (self.rig.options.time_decimals, self.rig.options.decimals);
+        let mut row = vec![cell(self.t[n], td)];
+        row.extend(self.coordinates.iter().map(|x| match x {
+            Reported::Values(x) => cell(x[n], vd),
+            Reported::Counts(k) => count(k[n]),
+        }));
+        row.extend(self.velocities.iter().map(|v| cell(v[n], vd)));
+        if self.writes_drives() {
+            row.extend(self.drives.iter().map(|p| cell(p[n], vd)));
+        }
+        row
+    }
+
+    /// The record's rows as they are written, each `[t, x, v]` (and `p`; a system's coordinates,
+    /// velocities and drives in the order of [`Simulation::columns`]), numbers as a reader of the
+    /// printed text gets them.
+    pub fn table(&self) -> Vec<Vec<f64>> {
         (0..self.t.len())
             .filter(|&n| self.kept[n])
-            .map(|n| {
-                let x = match &self.x {
-                    Reported::Values(x) => printed(x[n], vd),
-                    Reported::Counts(k) => f64::from(k[n]),
-                };
-                let mut row = vec![printed(self.t[n], td), x, printed(self.v[n], vd)];
-                if self.rig.options.write_drive {
-                    row.push(printed(self.drive[n], vd));
-                }
-                row
-            })
+            .map(|n| self.cells(n, printed, f64::from))
             .collect()
     }
 
     /// Writes the record atomically: `.npy` (rows × columns, `f8`) or CSV (anything else).
     pub fn write(&self, path: &Path) -> Result<(), OutputError> {
         let npy = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("npy"));
-        let (td, vd) = (self.rig.options.time_decimals, self.rig.options.decimals);
         let columns = self.columns();
         if npy {
             let table = self.table();
@@ -930,28 +1700,15 @@ impl Simulation {
         write_atomically(path, |w: &mut dyn Write| {
             writeln!(w, "{}", columns.join(","))?;
             for n in (0..self.t.len()).filter(|&n| self.kept[n]) {
-                let x = match &self.x {
-                    Reported::Values(x) => printed_text(x[n], vd),
-                    Reported::Counts(k) => k[n].to_string(),
-                };
-                write!(
-                    w,
-                    "{},{x},{}",
-                    printed_text(self.t[n], td),
-                    printed_text(self.v[n], vd)
-                )?;
-                if self.rig.options.write_drive {
-                    writeln!(w, ",{}", printed_text(self.drive[n], vd))?;
-                } else {
-                    writeln!(w)?;
-                }
+                writeln!(w, "{}", self.cells(n, printed_text, |k| k.to_string()).join(","))?;
             }
             Ok(())
         })
     }
 
     /// The true equation the record satisfies, in the identification's form and the record's time
-    /// unit, with the drive, sampling and encoder settings.
+    /// unit, with the drive, sampling and encoder settings; for a system of several coordinates
+    /// one equation per coordinate.
     pub fn truth(&self) -> Result<Truth, RunError> {
         truth(&self.rig, self.rows(), self.columns())
     }
@@ -975,12 +1732,48 @@ pub fn check_outputs(out: Option<&Path>, truth: Option<&Path>) -> Result<(), Run
 #[derive(Debug, Clone, PartialEq)]
 pub struct Ordered(pub Vec<(String, f64)>);
 
+impl Ordered {
+    /// Whether there are none (a system of several coordinates has its coefficients per
+    /// equation).
+    pub fn is_empty(&self) -> bool {
+        self.0.is_empty()
+    }
+}
+
 impl Serialize for Ordered {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
         use serde::ser::SerializeMap;
         let mut map = s.serialize_map(Some(self.0.len()))?;
         for (name, value) in &self.0 {
             map.serialize_entry(name, value)?;
+        }
+        map.end()
+    }
+}
+
+/// The true equations of a system of several coordinates: for each coordinate, by its name in
+/// the record, the coefficients of `q'' + Σ c_i g_i = 0` in the record's names and time unit,
+/// written as `{"theta1": {"coefficients": {...}}, ...}`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Equations(pub Vec<(String, Ordered)>);
+
+impl Equations {
+    /// The coefficients of the equation of the coordinate `name`.
+    pub fn of(&self, name: &str) -> Option<&Ordered> {
+        self.0.iter().find(|(n, _)| n == name).map(|(_, c)| c)
+    }
+}
+
+impl Serialize for Equations {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        #[derive(Serialize)]
+        struct One<'a> {
+            coefficients: &'a Ordered,
+        }
+        let mut map = s.serialize_map(Some(self.0.len()))?;
+        for (name, coefficients) in &self.0 {
+            map.serialize_entry(name, &One { coefficients })?;
         }
         map.end()
     }
@@ -995,37 +1788,64 @@ pub struct Truth {
     /// The equation in the model's own time, and its parameters.
     equation: String,
     parameters: serde_json::Value,
+    /// `drive` or `none` for a periodic drive, `measured` for a drive written as a column.
     forcing: &'static str,
-    /// How `hbid identify` reads the record by default: signal, basis, forcing terms, column.
-    identify: IdentifyHint,
-    /// `x'' + Σ c_i g_i = 0` in the record's time unit and coordinate, every term of the layout.
+    /// How `hbid identify` reads the record: by default (signal, basis, forcing terms, column),
+    /// or for a system the options that identify its equations.
+    identify: Hint,
+    /// `x'' + Σ c_i g_i = 0` in the record's time unit and coordinate, every term of the layout
+    /// (a system of one coordinate).
+    #[serde(skip_serializing_if = "Ordered::is_empty")]
     pub coefficients: Ordered,
+    /// The equation of each coordinate (a system of several).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub equations: Option<Equations>,
     time_unit: &'static str,
-    /// Hz, `None` for the model's own time.
+    /// Hz, `None` for the model's own time (and for the arm, in seconds with no periodic drive).
     drive_frequency: Option<f64>,
-    forcing_period: f64,
+    /// The drive's period in the record's time unit (`None` for the arm).
+    forcing_period: Option<f64>,
     /// `dτ/dt`: the drive's angular frequency in the record's time unit.
     time_scale: f64,
     /// The drive's phase (radians) at the record's `t = 0`.
-    drive_phase_at_zero: f64,
+    drive_phase_at_zero: Option<f64>,
     /// The drive's phase (radians) at the first sample.
-    drive_phase_at_first_sample: f64,
+    drive_phase_at_first_sample: Option<f64>,
     time_origin: &'static str,
     first_sample_time: f64,
     sample_step: f64,
     sample_rate: f64,
-    samples_per_period: f64,
+    samples_per_period: Option<f64>,
     samples_simulated: usize,
     rows: usize,
     columns: Vec<&'static str>,
     transient_periods: usize,
-    initial: [f64; 2],
+    initial: Initial,
     noise_sigma: f64,
     encoder: Option<EncoderInfo>,
     gaps: Option<GapsInfo>,
+    /// The standard deviation of the time stamps' jitter.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    jitter: Option<f64>,
     seed: u64,
     time_decimals: Option<usize>,
     decimals: Option<usize>,
+}
+
+/// The initial state: `[x0, v0]` of one coordinate, `{"q": [...], "v": [...]}` of a system.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(untagged)]
+enum Initial {
+    One([f64; 2]),
+    System(MultiState),
+}
+
+/// How `hbid identify` reads the record.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(untagged)]
+enum Hint {
+    One(IdentifyHint),
+    System(SystemHint),
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -1039,6 +1859,26 @@ struct IdentifyHint {
     extra_terms: Vec<String>,
 }
 
+/// The options of `hbid identify` (and Python's `hbid.identify`) that identify a system's true
+/// equations from its record: its coordinates, their domain, the measured drives, the time scale
+/// of a drive in seconds, the windows' length where no periodic drive sets it, and the true
+/// equations' terms; `args` spells them for the command line.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+struct SystemHint {
+    coords: String,
+    signal: &'static str,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    drive_col: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    drive_frequency: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    drive_period: Option<&'static str>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    window: Option<f64>,
+    terms: String,
+    args: Vec<String>,
+}
+
 #[derive(Debug, Clone, PartialEq, Serialize)]
 struct EncoderInfo {
     counts: Option<u32>,
@@ -1048,6 +1888,10 @@ struct EncoderInfo {
     angle_range: &'static str,
     raw_counts: bool,
     unwrapped: bool,
+    /// The stream of the seed each angle's encoder draws from, in the order of the coordinates
+    /// (a system of several).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    streams: Option<Vec<u64>>,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -1058,23 +1902,24 @@ struct GapsInfo {
     starts: Vec<usize>,
 }
 
-fn truth(rig: &Rig, rows: usize, columns: Vec<&'static str>) -> Result<Truth, RunError> {
-    let o = &rig.options;
-    let encoder = rig.encoder;
-    let offset = encoder.map_or(0.0, |e| e.zero_offset());
-    let at_zero = match o.time_origin {
-        TimeOrigin::Drive => 0.0,
-        TimeOrigin::FirstSample => rig.first_phase,
-    };
-    let frame = rig.frame.with_phase(at_zero)?.with_offset(offset)?;
-    let (known, layout, parameters, mut hint) = match rig.system {
+/// Windows of the identification of a system without a periodic drive: three periods of the
+/// slowest torque (the arm), or of the base acceleration's first tone (the coupled oscillators),
+/// in the record's time unit.
+const HINT_WINDOW_PERIODS: f64 = 3.0;
+
+/// The coefficients, identification hint and equations of a system of one coordinate.
+fn one_truth(
+    system: &System,
+    frame: &RecordFrame,
+    columns: &[&'static str],
+) -> Result<(Hint, Ordered), RunError> {
+    let (known, layout, mut hint) = match system {
         System::Pendulum(p) => (
-            p.equation(&frame)?.named(),
+            p.equation(frame)?.named(),
             hb_model::term_names(
                 &Harmonic::new(1).map_err(hb_solve::SolveError::from)?,
                 &ModelForm::parametric(),
             ),
-            serde_json::to_value(p).map_err(|e| OptionError::new("system", e))?,
             IdentifyHint {
                 signal: "circle",
                 basis: "harmonic:1",
@@ -1084,12 +1929,11 @@ fn truth(rig: &Rig, rows: usize, columns: Vec<&'static str>) -> Result<Truth, Ru
             },
         ),
         System::Duffing(d) => (
-            d.equation(&frame)?.named(),
+            d.equation(frame)?.named(),
             hb_model::term_names(
                 &Polynomial::new(3).map_err(hb_solve::SolveError::from)?,
                 &ModelForm::parametric().with_forcing(Forcing::Identified),
             ),
-            serde_json::to_value(d).map_err(|e| OptionError::new("system", e))?,
             IdentifyHint {
                 signal: "line",
                 basis: "poly:3",
@@ -1098,6 +1942,7 @@ fn truth(rig: &Rig, rows: usize, columns: Vec<&'static str>) -> Result<Truth, Ru
                 extra_terms: Vec::new(),
             },
         ),
+        _ => unreachable!("a system of one coordinate"),
     };
     // Every term of the layout, then the rig's terms beyond it in the order of the equation.
     let mut coefficients: Vec<(String, f64)> = layout
@@ -1111,8 +1956,126 @@ fn truth(rig: &Rig, rows: usize, columns: Vec<&'static str>) -> Result<Truth, Ru
         hint.extra_terms.push(name.clone());
         coefficients.push((name, value));
     }
+    Ok((Hint::One(hint), Ordered(coefficients)))
+}
+
+/// The equations of a system of several coordinates in the record's names and `frame`, read from
+/// the simulator's (`normalised_equations`), and the options that identify them.
+fn system_truth(rig: &Rig, frame: &RecordFrame) -> Result<(Hint, Equations), RunError> {
+    let o = &rig.options;
+    let kind = o.system;
+    let (coordinates, _, drives) = kind.column_names();
+    // The double pendulum's drive is a function of the drive's phase, whether written or not.
+    let measured: &[&str] = if kind.measured_input() { drives } else { &[] };
+    let names = Names::new(coordinates.iter().copied(), measured.iter().copied())
+        .map_err(|e| OptionError::new("system", e))?;
+    let normalised = match &rig.system {
+        System::DoublePendulum(p) => p.normalised_equations(),
+        System::Arm(a) => a.normalised_equations(),
+        System::CoupledDuffing(d) => d.normalised_equations(),
+        _ => unreachable!("a system of several coordinates"),
+    };
+    let equations = hb_model::truth::system_equations(&normalised, &names, frame)?;
+    let free = o.drive == DriveKind::None;
+    let mut lists = Vec::new();
+    for (name, equation) in coordinates.iter().zip(&equations) {
+        // A free decay has no drive's phase to balance: its drive terms (all 0) are left out.
+        let list = equation.terms();
+        let terms: Vec<String> = (0..list.len())
+            .filter(|&i| !(free && equation.values()[i] == 0.0 && list.terms()[i].drive.needs_phase()))
+            .map(|i| list.name(i))
+            .collect();
+        lists.push(format!("{name}: {}", terms.join(", ")));
+    }
+    let window = match &rig.system {
+        System::Arm(a) => {
+            let slowest = a
+                .torques()
+                .iter()
+                .filter_map(|t| match t {
+                    Torque::Sinusoids(s) => s
+                        .iter()
+                        .map(|s| s.angular_frequency().abs())
+                        .filter(|&w| w > 0.0)
+                        .reduce(f64::min),
+                    _ => None,
+                })
+                .reduce(f64::min);
+            Some(slowest.map_or(1.0, |w| HINT_WINDOW_PERIODS * TAU / w))
+        }
+        System::CoupledDuffing(_) => Some(HINT_WINDOW_PERIODS * rig.frame.drive_period()),
+        _ => None,
+    };
+    let hint = SystemHint {
+        coords: coordinates.join(","),
+        signal: match kind.domain() {
+            Domain::Circle => "circle",
+            Domain::Line => "line",
+        },
+        drive_col: (!measured.is_empty()).then(|| measured.join(",")),
+        drive_frequency: if kind.measured_input() {
+            None
+        } else {
+            o.drive_frequency
+        },
+        drive_period: (free && kind == SystemKind::DoublePendulum).then_some("none"),
+        window,
+        terms: lists.join("; "),
+        args: Vec::new(),
+    };
+    let mut args = vec![
+        "--coords".to_owned(),
+        hint.coords.clone(),
+        "--signal".to_owned(),
+        hint.signal.to_owned(),
+    ];
+    if let Some(d) = &hint.drive_col {
+        args.extend(["--drive-col".to_owned(), d.clone()]);
+    }
+    if let Some(hz) = hint.drive_frequency {
+        args.extend(["--drive-frequency".to_owned(), hz.to_string()]);
+    }
+    if let Some(p) = hint.drive_period {
+        args.extend(["--drive-period".to_owned(), p.to_owned()]);
+    }
+    if let Some(w) = hint.window {
+        args.extend(["--window".to_owned(), w.to_string()]);
+    }
+    args.extend(["--terms".to_owned(), hint.terms.clone()]);
+    let named = coordinates
+        .iter()
+        .zip(&equations)
+        .map(|(name, e)| ((*name).to_owned(), Ordered(e.named())))
+        .collect();
+    Ok((Hint::System(SystemHint { args, ..hint }), Equations(named)))
+}
+
+fn truth(rig: &Rig, rows: usize, columns: Vec<&'static str>) -> Result<Truth, RunError> {
+    let o = &rig.options;
+    let encoder = rig.encoder;
+    let offset = encoder.map_or(0.0, |e| e.zero_offset());
+    let at_zero = match o.time_origin {
+        TimeOrigin::Drive => 0.0,
+        TimeOrigin::FirstSample => rig.first_phase,
+    };
+    let frame = rig.frame.with_phase(at_zero)?.with_offset(offset)?;
+    let (hint, coefficients, equations) = match &rig.system {
+        System::Pendulum(_) | System::Duffing(_) => {
+            let (hint, coefficients) = one_truth(&rig.system, &frame, &columns)?;
+            (hint, coefficients, None)
+        }
+        _ => {
+            let (hint, equations) = system_truth(rig, &frame)?;
+            (hint, Ordered(Vec::new()), Some(equations))
+        }
+    };
+    let parameters = rig
+        .system
+        .parameters()
+        .map_err(|e| OptionError::new("system", e))?;
     let config = &rig.config;
     let step = config.sample_step();
+    let periodic = o.system != SystemKind::Arm;
     let first_sample_time = match o.time_origin {
         TimeOrigin::Drive => config.sample_time(0),
         TimeOrigin::FirstSample => 0.0,
@@ -1122,18 +2085,17 @@ fn truth(rig: &Rig, rows: usize, columns: Vec<&'static str>) -> Result<Truth, Ru
         _ => "signed",
     };
     let sigma = encoder.map_or(0.0, |e| e.sigma());
-    let encoder_info = match rig.system {
-        System::Pendulum(_) => Some(EncoderInfo {
-            counts: encoder.and_then(|e| e.counts()),
-            zero_offset: offset,
-            bit_error_rate: encoder.map_or(0.0, |e| e.bit_error_rate()),
-            bit_error_bits: Encoder::BIT_ERROR_BITS,
-            angle_range: range,
-            raw_counts: o.raw_counts,
-            unwrapped: o.unwrapped,
-        }),
-        System::Duffing(_) => None,
-    };
+    let coordinates = o.system.coordinates();
+    let encoder_info = (o.system.domain() == Domain::Circle).then(|| EncoderInfo {
+        counts: encoder.and_then(|e| e.counts()),
+        zero_offset: offset,
+        bit_error_rate: encoder.map_or(0.0, |e| e.bit_error_rate()),
+        bit_error_bits: Encoder::BIT_ERROR_BITS,
+        angle_range: range,
+        raw_counts: o.raw_counts,
+        unwrapped: o.unwrapped,
+        streams: (coordinates > 1).then(|| (0..coordinates as u64).collect()),
+    });
     let gaps = match rig.gaps {
         Some(g) => Some(GapsInfo {
             count: g.count(),
@@ -1142,38 +2104,48 @@ fn truth(rig: &Rig, rows: usize, columns: Vec<&'static str>) -> Result<Truth, Ru
         }),
         None => None,
     };
+    let forcing = if o.system.measured_input() {
+        "measured"
+    } else {
+        o.drive.name()
+    };
     Ok(Truth {
         format: "hbid-truth",
         version: 1,
         system: rig.system.name(),
         equation: rig.system.equation(),
         parameters,
-        forcing: o.drive.name(),
+        forcing,
         identify: hint,
-        coefficients: Ordered(coefficients),
-        time_unit: if o.drive_frequency.is_some() {
+        coefficients,
+        equations,
+        time_unit: if o.drive_frequency.is_some() || !periodic {
             "s"
         } else {
             "nondimensional"
         },
         drive_frequency: o.drive_frequency,
-        forcing_period: config.drive_period(),
+        forcing_period: periodic.then(|| config.drive_period()),
         time_scale: rig.frame.rate(),
-        drive_phase_at_zero: at_zero,
-        drive_phase_at_first_sample: rig.first_phase,
+        drive_phase_at_zero: periodic.then_some(at_zero),
+        drive_phase_at_first_sample: periodic.then_some(rig.first_phase),
         time_origin: o.time_origin.name(),
         first_sample_time,
         sample_step: step,
         sample_rate: 1.0 / step,
-        samples_per_period: config.drive_period() / step,
+        samples_per_period: periodic.then(|| config.drive_period() / step),
         samples_simulated: config.samples(),
         rows,
         columns,
         transient_periods: config.transient_periods(),
-        initial: config.initial(),
+        initial: match &rig.initial {
+            Some(state) => Initial::System(state.clone()),
+            None => Initial::One(config.initial()),
+        },
         noise_sigma: sigma,
         encoder: encoder_info,
         gaps,
+        jitter: rig.jitter.map(|j| j.sigma()),
         seed: o.seed,
         time_decimals: o.time_decimals,
         decimals: o.decimals,

@@ -288,11 +288,20 @@ pub fn simulate<'py>(
         })
         .map_err(run_error)?;
     let column = |i: usize| PyArray1::from_vec(py, table.iter().map(|row| row[i]).collect());
+    // A record is `t`, its coordinates, their velocities, then its drives: `x` and `v` are the
+    // first coordinate and its velocity, `drive` the first drive written; `named` has every
+    // column by its name (a system's `theta2`, `tau2`, ...).
+    let n = rig.options().system.coordinates();
     let dict = PyDict::new(py);
     dict.set_item("t", column(0))?;
     dict.set_item("x", column(1))?;
-    dict.set_item("v", column(2))?;
-    dict.set_item("drive", (columns.len() > 3).then(|| column(3)))?;
+    dict.set_item("v", column(1 + n))?;
+    dict.set_item("drive", (columns.len() > 1 + 2 * n).then(|| column(1 + 2 * n)))?;
+    let named = PyDict::new(py);
+    for (i, name) in columns.iter().enumerate() {
+        named.set_item(*name, column(i))?;
+    }
+    dict.set_item("named", named)?;
     dict.set_item("columns", columns)?;
     dict.set_item("truth", truth_json)?;
     Ok(dict)

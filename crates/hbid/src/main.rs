@@ -29,7 +29,7 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
-    /// Simulate the base-excited pendulum or a two-well Duffing oscillator as a rig records it (defaults: the paper's data set).
+    /// Simulate the base-excited pendulum, a two-well Duffing oscillator or a system of two coordinates as a rig records it (defaults: the paper's data set).
     ///
     /// The pendulum x'' + c x' + (1/r²) sin x − f sin(t) cos x = 0 is written as CSV t,theta,omega
     /// (t,count,omega with --raw-counts), the Duffing oscillator x'' + c x' + a x + b x³ = f cos(t)
@@ -37,20 +37,29 @@ enum Command {
     /// options this is the paper's data set: 30000 samples, 25 per drive period 2π, after 200
     /// periods, the angle wrapped into [-π, π).
     ///
+    /// Systems of two coordinates (--system): the base-excited double pendulum
+    /// (t,theta1,theta2,omega1,omega2: absolute angles), the torque-driven arm in seconds
+    /// (t,q1,q2,v1,v2,tau1,tau2: q2 the elbow angle relative to link 1, the torques written as
+    /// drive columns) and two coupled Duffing oscillators on a shaken base (t,x1,x2,v1,v2,a: a the
+    /// base's acceleration). Each angle has its own encoder of the same settings, from its own
+    /// stream of --seed; --gaps drops the same rows of every column; --truth writes each
+    /// coordinate's equation under "equations" and the `hbid identify` options that identify them
+    /// under "identify".
+    ///
     /// Time: with --drive-frequency HZ the record is in seconds (the model's time is
     /// τ = 2π·f_drive·t, the drive has period 1/f_drive s, velocities are per second); the sample
     /// step is 1/--sample-rate (any ratio to the drive) or the drive period over
     /// --samples-per-period. Stamps are the integration's time (the drive is sin(2π f_drive t) at
     /// them) or, with --time-origin first-sample, n·h from 0 with the drive at phase --phase.
     ///
-    /// Encoder (pendulum): the encoder sees θ − --zero-offset, adds --noise, rounds to the nearest
+    /// Encoder (angles): the encoder sees θ − --zero-offset, adds --noise, rounds to the nearest
     /// of --counts per revolution, adds --bit-errors, and reports count·2π/N in --angle-range (or
     /// the count itself with --raw-counts). --gaps drops runs of samples; --time-decimals and
     /// --decimals print as a data acquisition does. --truth writes the equation the record
     /// satisfies in the identification's form x'' + Σ c_i g_i = 0, in the record's time unit
     /// (damping × 2π f_drive, stiffness and drive × (2π f_drive)²), term names as
     /// `hbid identify` prints them.
-    Simulate(cmd::simulate::SimulateArgs),
+    Simulate(Box<cmd::simulate::SimulateArgs>),
     /// Choose the delay (average mutual information) and check the embedding dimension (false nearest neighbours).
     Embed(cmd::embed::EmbedArgs),
     /// Find unstable periodic orbits by close returns.

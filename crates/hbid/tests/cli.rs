@@ -2770,3 +2770,226 @@ fn a_drive_the_library_cannot_express_marks_the_table() {
         assert!(!table.contains("NOT A DESCRIPTION"), "{table}");
     }
 }
+
+/// The systems of two coordinates write their documented columns as CSV and `.npy` (the same
+/// numbers), and the angles of a rig in seconds sampled in no whole ratio to the drive.
+#[test]
+fn simulate_systems_write_their_columns() {
+    let dir = scratch("systems-columns");
+    for (system, extra, header) in [
+        ("double-pendulum", vec![], "t,theta1,theta2,omega1,omega2"),
+        (
+            "double-pendulum",
+            vec![
+                "--drive-frequency",
+                "1.02",
+                "--sample-rate",
+                "100",
+                "--write-drive",
+            ],
+            "t,theta1,theta2,omega1,omega2,p",
+        ),
+        ("arm", vec![], "t,q1,q2,v1,v2,tau1,tau2"),
+        ("coupled-duffing", vec![], "t,x1,x2,v1,v2,a"),
+    ] {
+        let mut args = vec!["--system", system, "--samples", "400"];
+        args.extend(extra.iter().copied());
+        let csv = simulated(&dir, &format!("{system}.csv"), &args);
+        let npy = simulated(&dir, &format!("{system}.npy"), &args);
+        let (head, rows) = read_rows(&csv);
+        assert_eq!(head, header);
+        let width = header.split(',').count();
+        assert!(rows.len() == 400 && rows.iter().all(|r| r.len() == width));
+        let bytes = std::fs::read(&npy).unwrap();
+        let text = String::from_utf8_lossy(&bytes[10..128]);
+        assert!(text.contains(&format!("(400, {width}, )")), "{text}");
+        for (i, row) in rows.iter().enumerate().step_by(97) {
+            for (j, v) in row.iter().enumerate() {
+                let at = 128 + 8 * (width * i + j);
+                assert_eq!(f64::from_le_bytes(bytes[at..at + 8].try_into().unwrap()), *v);
+            }
+        }
+        if extra.contains(&"--sample-rate") {
+            assert!((rows[1][0] - rows[0][0] - 0.01).abs() < 1e-12);
+            assert!(
+                rows.iter()
+                    .all(|r| (-std::f64::consts::PI..std::f64::consts::PI).contains(&r[2]))
+            );
+        }
+    }
+}
+
+/// An option of another system, or a bad value of a system's own, fails on one line naming the
+/// flag (and the systems it belongs to), leaving no file.
+#[test]
+fn simulate_system_options_fail_cleanly() {
+    let dir = scratch("systems-bad");
+    let target = dir.join("never.csv");
+    let truth = dir.join("never.json");
+    for (args, mentions) in [
+        (vec!["--mu", "0.3"], "--mu is the double pendulum's mass ratio"),
+        (
+            vec!["--system", "arm", "--r", "1"],
+            "--system pendulum or --system double-pendulum",
+        ),
+        (
+            vec!["--system", "double-pendulum", "--torque1", "0.4:10"],
+            "--torque1",
+        ),
+        (vec!["--system", "arm", "--torque1", "0.4"], "a:omega[:phase]"),
+        (
+            vec!["--system", "arm", "--drive-frequency", "1"],
+            "--drive-frequency",
+        ),
+        (
+            vec!["--system", "coupled-duffing", "--counts", "4096"],
+            "angle encoder",
+        ),
+        (vec!["--system", "double-pendulum", "--x0", "1"], "--q0"),
+        (
+            vec!["--system", "double-pendulum", "--q0", "1"],
+            "--q0 1: give two numbers",
+        ),
+        (vec!["--system", "double-pendulum", "--q0", "1,x"], "not a number"),
+        (
+            vec!["--system", "coupled-duffing", "--coupling", "nan"],
+            "--coupling",
+        ),
+        (
+            vec!["--system", "arm", "--joint-friction", "-1,0"],
+            "--joint-friction",
+        ),
+        (vec!["--system", "arm", "--sample-rate", "0"], "--sample-rate 0"),
+        (vec!["--jitter", "-0.1"], "--jitter"),
+    ] {
+        let mut all = vec!["simulate", "--samples", "500"];
+        all.extend(args.iter().copied());
+        all.extend([
+            "--truth",
+            truth.to_str().unwrap(),
+            "--out",
+            target.to_str().unwrap(),
+        ]);
+        assert_clean_failure(&hbid(&all), &mentions.to_lowercase());
+        assert!(!target.exists() && !truth.exists(), "{args:?} left a file");
+    }
+}
+
+/// A seed gives one record, its encoders' errors, gaps and jitter included; gaps drop the same
+/// rows of every column.
+#[test]
+fn simulate_systems_are_seeded_and_gapped_row_by_row() {
+    let dir = scratch("systems-seeded");
+    let rig = [
+        "--system",
+        "arm",
+        "--samples",
+        "2000",
+        "--counts",
+        "4096",
+        "--bit-errors",
+        "0.01",
+        "--noise",
+        "0.002",
+        "--jitter",
+        "0.0001",
+        "--time-decimals",
+        "5",
+    ];
+    let with = |seed: &str, name: &str, more: &[&str]| {
+        let mut args = rig.to_vec();
+        args.extend(["--seed", seed]);
+        args.extend(more);
+        std::fs::read_to_string(simulated(&dir, name, &args)).unwrap()
+    };
+    let a = with("3", "a.csv", &[]);
+    assert_eq!(a, with("3", "b.csv", &[]));
+    assert_ne!(a, with("4", "c.csv", &[]));
+    let gapped = with("3", "d.csv", &["--gaps", "2:100"]);
+    let rows: Vec<&str> = a.lines().collect();
+    let kept: Vec<&str> = gapped.lines().collect();
+    assert_eq!(kept.len(), rows.len() - 200);
+    // Every kept row is the whole row of the record without gaps (stamps and columns alike).
+    let mut at = 0;
+    for row in &kept {
+        let found = rows[at..].iter().position(|r| r == row);
+        assert!(found.is_some(), "{row} is not a row of the record without gaps");
+        at += found.unwrap_or(0) + 1;
+    }
+}
+
+/// `identify` with the truth's options recovers the truth of a noise-free, whirling double
+/// pendulum at 64 samples per drive period (non-dimensional time).
+#[test]
+fn double_pendulum_truth_is_what_identify_recovers() {
+    let dir = scratch("double-pendulum-truth");
+    let truth = dir.join("truth.json");
+    let record = simulated(
+        &dir,
+        "dp.csv",
+        &[
+            "--system",
+            "double-pendulum",
+            "--samples",
+            "6400",
+            "--truth",
+            truth.to_str().unwrap(),
+        ],
+    );
+    // Measured: 4.8e-4 (sin(theta1-theta2)*theta1'^2; the coupled terms read velocities of the
+    // windows' Fourier series, 16 times the drive frequency at most); ten times that.
+    let worst = system_round_trip(&record, &truth);
+    assert!(worst < 5e-3, "worst relative error {worst:e}");
+}
+
+/// `identify` with the truth's options (`--drive-col a`, windows in time) recovers the truth of
+/// the noise-free coupled Duffing oscillators.
+#[test]
+fn coupled_duffing_truth_is_what_identify_recovers() {
+    let dir = scratch("coupled-duffing-truth");
+    let truth = dir.join("truth.json");
+    let record = simulated(
+        &dir,
+        "cd.csv",
+        &[
+            "--system",
+            "coupled-duffing",
+            "--samples",
+            "6400",
+            "--truth",
+            truth.to_str().unwrap(),
+        ],
+    );
+    let hint: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&truth).unwrap()).unwrap();
+    assert_eq!(hint["identify"]["drive_col"], "a");
+    // Measured: 1.7e-7; ten times that.
+    let worst = system_round_trip(&record, &truth);
+    assert!(worst < 2e-6, "worst relative error {worst:e}");
+}
+
+/// The largest relative error of the coefficients `hbid identify` gives with the truth's
+/// `identify.args` on `record`, against the truth's, every term of the truth identified.
+fn system_round_trip(record: &Path, truth: &Path) -> f64 {
+    let truth: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(truth).unwrap()).unwrap();
+    let hint: Vec<String> = serde_json::from_value(truth["identify"]["args"].clone()).unwrap();
+    let mut args = vec![record.to_str().unwrap()];
+    args.extend(hint.iter().map(String::as_str));
+    let mut all = vec!["identify", "--quiet", "--bootstrap", "0", "--json"];
+    all.extend(args);
+    let out = hbid(&all);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let identified: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let mut worst: f64 = 0.0;
+    for (coordinate, equation) in truth["equations"].as_object().unwrap() {
+        let expected = equation["coefficients"].as_object().unwrap();
+        let got = identified["equations"][coordinate]["coefficients"]
+            .as_object()
+            .unwrap();
+        assert_eq!(got.len(), expected.len(), "{coordinate}");
+        for (term, value) in expected {
+            let (e, g) = (value.as_f64().unwrap(), got[term].as_f64().unwrap());
+            worst = worst.max((g - e).abs() / e.abs());
+        }
+    }
+    worst
+}

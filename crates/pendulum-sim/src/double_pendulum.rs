@@ -154,6 +154,14 @@ impl DoublePendulum {
         self.c2
     }
 
+    /// The drive as it enters the equations at time `t`, `f sin t`: the pivot's acceleration is
+    /// its negative, `−f sin t`, and the equation of link `i` holds it as `−f sin(t) cos θi`
+    /// (divided by `λ` for link 2).
+    #[inline]
+    pub fn drive(&self, t: f64) -> f64 {
+        self.f * t.sin()
+    }
+
     /// The energy of the undamped, undriven pendulum divided by `(m1+m2) l1² Ω²`, zero hanging at
     /// rest: `E = ½ θ1'² + ½ μλ² θ2'² + μλ θ1'θ2' cos(θ1−θ2) + ω² (1 − cos θ1) + μλ ω² (1 − cos θ2)`.
     /// Conserved when `f = c1 = c2 = 0`.
@@ -210,7 +218,7 @@ impl MultiSystem for DoublePendulum {
         let (sd, cd) = (q[0] - q[1]).sin_cos();
         let (s1, c1) = q[0].sin_cos();
         let (s2, c2) = q[1].sin_cos();
-        let drive = self.f * t.sin();
+        let drive = self.drive(t);
         let r1 = -ml * sd * v[1] * v[1] - self.omega2 * s1 + drive * c1 - self.c1 * v[0];
         let r2 = il * (sd * v[0] * v[0] - self.omega2 * s2 + drive * c2) - self.c2 * v[1];
         let [a1, a2] = solve2([[1.0, ml * cd], [il * cd, 1.0]], [r1, r2], t)?;

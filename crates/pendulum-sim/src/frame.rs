@@ -17,7 +17,9 @@
 //! ẍ = rate² · F(rate · t + phase, x + offset, ẋ / rate).
 //! ```
 //!
-//! [`InFrame`] integrates that equation directly (its velocity is in the record's time unit). The
+//! [`InFrame`] integrates that equation directly (its velocity is in the record's time unit); a
+//! system of several coordinates ([`MultiSystem`]) reads the same in every coordinate,
+//! `q̈ = rate² · A(rate · t + phase, q + offset, q̇ / rate)`, the offset added to each. The
 //! same equation in the identification's terms, `ẍ + Σ c_i g_i(t, x, ẋ) = 0`, is written once, in
 //! the model's crate (`hb_model::truth`), from these systems and frames.
 //!
@@ -39,7 +41,7 @@
 use std::f64::consts::TAU;
 
 use crate::error::SimError;
-
+use crate::multi::{MAX_COORDINATES, MultiSystem, SingularMass};
 use crate::system::{Branch, SecondOrderSystem};
 
 /// How a record's time and coordinate relate to a system's non-dimensional ones:
@@ -217,5 +219,71 @@ impl<S: SecondOrderSystem> SecondOrderSystem for InFrame<S> {
             .system
             .jacobian_on(branch, rate * t + phase, x + offset, v / rate);
         [rate * rate * jx, rate * jv]
+    }
+}
+
+impl<S: MultiSystem> InFrame<S> {
+    /// The accelerations of the system in the frame, by `accelerate` (the system's plain
+    /// accelerations, or those with held signs): the state moved into the system's frame, the
+    /// result scaled by `rate²`.
+    #[inline]
+    fn in_frame(
+        &self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        acc: &mut [f64],
+        accelerate: impl FnOnce(f64, &[f64], &[f64], &mut [f64]) -> Result<(), SingularMass>,
+    ) -> Result<(), SingularMass> {
+        let RecordFrame { rate, phase, offset } = self.frame;
+        let n = q.len();
+        let mut qs = [0.0; MAX_COORDINATES];
+        let mut vs = [0.0; MAX_COORDINATES];
+        for (slot, &x) in qs.iter_mut().zip(q) {
+            *slot = x + offset;
+        }
+        for (slot, &x) in vs.iter_mut().zip(v) {
+            *slot = x / rate;
+        }
+        accelerate(rate * t + phase, &qs[..n], &vs[..n], acc)?;
+        for a in acc.iter_mut() {
+            *a *= rate * rate;
+        }
+        Ok(())
+    }
+}
+
+/// A system of several coordinates in a record's frame: `q̈ = rate² · A(rate · t + phase, q +
+/// offset, q̇ / rate)`, each coordinate moved by the same offset. A singular mass matrix is
+/// reported at the system's time.
+impl<S: MultiSystem> MultiSystem for InFrame<S> {
+    fn coordinates(&self) -> usize {
+        self.system.coordinates()
+    }
+
+    #[inline]
+    fn accelerations(&self, t: f64, q: &[f64], v: &[f64], acc: &mut [f64]) -> Result<(), SingularMass> {
+        self.in_frame(t, q, v, acc, |tau, q, v, acc| {
+            self.system.accelerations(tau, q, v, acc)
+        })
+    }
+
+    fn switches_at_rest(&self, c: usize) -> bool {
+        self.system.switches_at_rest(c)
+    }
+
+    /// The signs are the same in both frames: `rate > 0` keeps the sign of every velocity.
+    #[inline]
+    fn accelerations_with_signs(
+        &self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        signs: &[f64],
+        acc: &mut [f64],
+    ) -> Result<(), SingularMass> {
+        self.in_frame(t, q, v, acc, |tau, q, v, acc| {
+            self.system.accelerations_with_signs(tau, q, v, signs, acc)
+        })
     }
 }

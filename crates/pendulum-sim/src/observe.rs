@@ -34,7 +34,13 @@
 //! does not change the noise, and a shorter record gets the first samples' errors of a longer one.
 //!
 //! [`Gaps`] says which samples a data acquisition drops: `K` gaps of `L` samples each at seeded
-//! random places.
+//! random places. [`Jitter`] moves the time stamps a data acquisition writes off the instants the
+//! samples were taken at: seeded Gaussian errors of the clock.
+//!
+//! A record of several coordinates has one encoder per angle: the same settings, each drawing
+//! from its own stream of the seed ([`Encoder::with_stream`], stream `c` for coordinate `c`), so
+//! that the first coordinate's record is the one-coordinate record of that seed and the others'
+//! noise and bit errors are independent of it.
 //!
 //! [`Trajectory`]: crate::Trajectory
 
@@ -51,6 +57,8 @@ use crate::error::SimError;
 const BIT_ERROR_WORD: u128 = 1 << 66;
 /// Where the gaps' draws start in ChaCha8 stream 0 of their seed, in 32-bit words.
 const GAPS_WORD: u128 = 1 << 67;
+/// Where the time stamps' jitter is drawn from in ChaCha8 stream 0 of its seed, in 32-bit words.
+const JITTER_WORD: u128 = 1 << 68;
 
 /// How a standard normal number is drawn from the uniform stream.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
@@ -505,5 +513,67 @@ impl Gaps {
             kept[start..start + self.length].fill(false);
         }
         Ok(kept)
+    }
+}
+
+/// The jitter of a data acquisition's time stamps: each written stamp is the instant its sample
+/// was taken plus an independent Gaussian error of standard deviation `sigma` (in the record's
+/// time unit), as a logger whose clock is read a little early or late writes them; the samples
+/// themselves are those of the true instants.
+///
+/// The errors are drawn from ChaCha8 seeded with the seed, stream 0, from word `2^68`, one normal
+/// number per sample in sample order (so that they are independent of an encoder's noise and bit
+/// errors and of the gaps from the same seed, and a shorter record gets the first samples' errors
+/// of a longer one).
+///
+/// ```
+/// use pendulum_sim::observe::Jitter;
+///
+/// let t: Vec<f64> = (0..1000).map(|n| n as f64 * 0.002).collect();
+/// let stamps = Jitter::new(1e-5)?.seeded(3).apply(&t);
+/// assert!(stamps.iter().zip(&t).all(|(s, t)| (s - t).abs() < 1e-4));
+/// assert_eq!(stamps, Jitter::new(1e-5)?.seeded(3).apply(&t));
+/// # Ok::<(), pendulum_sim::SimError>(())
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Jitter {
+    sigma: f64,
+    seed: u64,
+}
+
+impl Jitter {
+    /// Jitter of standard deviation `sigma` (finite, `>= 0`), seed 0.
+    pub fn new(sigma: f64) -> Result<Self, SimError> {
+        if !(sigma.is_finite() && sigma >= 0.0) {
+            return Err(SimError::InvalidParameter {
+                name: "jitter standard deviation",
+                value: sigma,
+                why: "must be finite and >= 0",
+            });
+        }
+        Ok(Self { sigma, seed: 0 })
+    }
+
+    /// The seed of the errors.
+    pub fn seeded(mut self, seed: u64) -> Self {
+        self.seed = seed;
+        self
+    }
+
+    /// The standard deviation.
+    pub fn sigma(&self) -> f64 {
+        self.sigma
+    }
+    /// The seed.
+    pub fn seed(&self) -> u64 {
+        self.seed
+    }
+
+    /// The stamps written for samples taken at `t`.
+    pub fn apply(&self, t: &[f64]) -> Vec<f64> {
+        let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
+        rng.set_word_pos(JITTER_WORD);
+        let normal = Normal::new(0.0, self.sigma).expect("sigma checked finite and >= 0");
+        t.iter().map(|&t| t + normal.sample(&mut rng)).collect()
     }
 }

@@ -6,7 +6,8 @@ use std::path::{Path, PathBuf};
 
 use clap::{Args, ValueEnum};
 use hb_pipeline::simulate::{
-    DriveKind, GapsText, HarmonicText, RangeKind, SystemKind, TimeOrigin, check_outputs, write_truth,
+    DriveKind, GapsText, HarmonicText, Numbers, RangeKind, SystemKind, TimeOrigin, TorqueText, check_outputs,
+    write_truth,
 };
 use hb_pipeline::{ColumnList, CompareOptions, CompareRequest, OptionError, Rig, SimulateOptions, Source};
 
@@ -19,6 +20,16 @@ pub enum SystemArg {
     Pendulum,
     /// The two-well Duffing oscillator x'' + c x' + a x + b x³ = f cos(t) (columns t,x,v; never wrapped).
     Duffing,
+    /// The double pendulum whose pivot is shaken horizontally like the pendulum's, whirling
+    /// (columns t,theta1,theta2,omega1,omega2: the links' absolute angles; p with --write-drive).
+    DoublePendulum,
+    /// The double pendulum driven by a torque at each joint like a robot arm (DFKI's design A.0),
+    /// time in seconds (columns t,q1,q2,v1,v2,tau1,tau2: q2 the elbow angle relative to link 1,
+    /// the torques in N m).
+    Arm,
+    /// Two two-well Duffing oscillators coupled by a spring on a base shaken by a seeded
+    /// synthetic acceleration (columns t,x1,x2,v1,v2,a: a the base's acceleration; never wrapped).
+    CoupledDuffing,
 }
 
 /// Whether the system is driven.
@@ -51,8 +62,9 @@ pub enum TimeOriginArg {
 }
 
 const SYSTEM: &str = "System";
+const SYSTEMS: &str = "Systems of two coordinates";
 const TIME: &str = "Time and sampling";
-const ENCODER: &str = "Encoder (pendulum only)";
+const ENCODER: &str = "Encoder (angles: each of a system's with its own stream of the seed)";
 const NOISE: &str = "Noise and seed";
 const OUTPUT: &str = "Output";
 const MODEL: &str = "A saved model under a record's input";
@@ -63,19 +75,24 @@ pub struct SimulateArgs {
     /// The system.
     #[arg(long, value_enum, default_value_t = SystemArg::Pendulum, help_heading = SYSTEM)]
     system: SystemArg,
-    /// Forcing amplitude f [default: 1.52 for the pendulum, 0.3 for the Duffing oscillator].
+    /// Forcing amplitude f [default: 1.52 for the pendulum, 0.3 for the Duffing oscillator, 0.6
+    /// for the double pendulum (the pivot's acceleration is −f sin t)].
     #[arg(long, allow_hyphen_values = true, help_heading = SYSTEM)]
     f: Option<f64>,
-    /// Damping c [default: 0.03 for the pendulum, 0.25 for the Duffing oscillator].
+    /// Damping c [default: 0.03 for the pendulum, 0.25 for the Duffing oscillator]; of link 1 or
+    /// oscillator 1 of a system [default: 0.05 for the double pendulum, 0.25 for the coupled
+    /// oscillators].
     #[arg(long, allow_hyphen_values = true, help_heading = SYSTEM)]
     c: Option<f64>,
-    /// Pendulum: frequency ratio r (the stiffness is 1/r²) [default: 0.8333].
+    /// Pendulum: frequency ratio r (the stiffness is 1/r²) [default: 0.8333]; double pendulum:
+    /// ω² = g/(l1 Ω²) = 1/r² [default: ω² = 0.8].
     #[arg(long, allow_hyphen_values = true, help_heading = SYSTEM)]
     r: Option<f64>,
-    /// Duffing: linear stiffness a (negative for two wells) [default: -1].
+    /// Duffing: linear stiffness a (negative for two wells) [default: -1]; a1 of the coupled
+    /// oscillators [default: -1].
     #[arg(long, allow_hyphen_values = true, help_heading = SYSTEM)]
     a: Option<f64>,
-    /// Duffing: cubic stiffness b [default: 1].
+    /// Duffing: cubic stiffness b [default: 1]; b1 of the coupled oscillators [default: 1].
     #[arg(long, allow_hyphen_values = true, help_heading = SYSTEM)]
     b: Option<f64>,
     /// Dry (Coulomb) friction μ: the term μ sign(x') in the model's time (at rest the body sticks
@@ -96,6 +113,60 @@ pub struct SimulateArgs {
     /// `drive`, or `none` for a free decay (f = 0; the time unit stays the one --drive-frequency sets).
     #[arg(long, value_enum, visible_alias = "forcing", default_value_t = DriveArg::Drive, help_heading = SYSTEM)]
     drive: DriveArg,
+    /// Double pendulum and coupled oscillators: the damping c2 of link 2 or oscillator 2 [default:
+    /// 0.05 for the double pendulum, 0.2 for the coupled oscillators].
+    #[arg(long, allow_hyphen_values = true, help_heading = SYSTEMS)]
+    c2: Option<f64>,
+    /// Double pendulum: the mass ratio μ = m2/(m1+m2), in [0, 1] [default: 0.5].
+    #[arg(long, allow_hyphen_values = true, help_heading = SYSTEMS)]
+    mu: Option<f64>,
+    /// Double pendulum: the length ratio λ = l2/l1 [default: 1].
+    #[arg(long, value_name = "LAMBDA", allow_hyphen_values = true, help_heading = SYSTEMS)]
+    length_ratio: Option<f64>,
+    /// Arm: a sinusoidal torque at the shoulder, A:OMEGA[:PHASE] (repeatable, added): the torque
+    /// A sin(OMEGA t + PHASE) in N m, OMEGA in rad/s, PHASE in rad [default: 0]; `none` for a
+    /// passive joint [default: 0.4:10, DFKI's record 00].
+    #[arg(long, value_name = "A:OMEGA[:PHASE]", allow_hyphen_values = true, help_heading = SYSTEMS)]
+    torque1: Vec<TorqueText>,
+    /// Arm: a sinusoidal torque at the elbow, as --torque1 [default: 0.8:10:1.5707963267948966,
+    /// 0.8 cos 10t].
+    #[arg(long, value_name = "A:OMEGA[:PHASE]", allow_hyphen_values = true, help_heading = SYSTEMS)]
+    torque2: Vec<TorqueText>,
+    /// Arm: the joints' viscous friction b1,b2 in N m s/rad [default: 0.001,0.001, published].
+    #[arg(long, value_name = "B1,B2", allow_hyphen_values = true, help_heading = SYSTEMS)]
+    joint_damping: Option<Numbers>,
+    /// Arm: the joints' dry (Coulomb) friction cf1,cf2 in N m, cf sign(q') (a joint at rest sticks
+    /// while the torque on it stays within cf) [default: 0.093,0.078, published; 0,0 for none].
+    #[arg(long, value_name = "CF1,CF2", allow_hyphen_values = true, help_heading = SYSTEMS)]
+    joint_friction: Option<Numbers>,
+    /// Coupled oscillators: linear stiffness a2 of oscillator 2 [default: -0.8].
+    #[arg(long, allow_hyphen_values = true, help_heading = SYSTEMS)]
+    a2: Option<f64>,
+    /// Coupled oscillators: cubic stiffness b2 of oscillator 2 [default: 1.2].
+    #[arg(long, allow_hyphen_values = true, help_heading = SYSTEMS)]
+    b2: Option<f64>,
+    /// Coupled oscillators: the coupling spring's stiffness k, the force k (x1 − x2) [default: 0.3].
+    #[arg(long, value_name = "K", allow_hyphen_values = true, help_heading = SYSTEMS)]
+    coupling: Option<f64>,
+    /// Coupled oscillators: the coupling spring's cubic part k3, the force k3 (x1 − x2)³
+    /// [default: 0.05].
+    #[arg(long, value_name = "K3", allow_hyphen_values = true, help_heading = SYSTEMS)]
+    coupling_cubic: Option<f64>,
+    /// Coupled oscillators: the mass ratio m2/m1 [default: 1].
+    #[arg(long, allow_hyphen_values = true, help_heading = SYSTEMS)]
+    mass_ratio: Option<f64>,
+    /// Coupled oscillators: the seed of the base's acceleration, 0.3 sin t + 0.15 sin(√2 t + 1) +
+    /// 0.1 sin(φ t + 2) plus band-limited noise of rms 0.03 (written as column a) [default: 1].
+    #[arg(long, help_heading = SYSTEMS)]
+    drive_seed: Option<u64>,
+    /// A system's initial coordinates Q1,Q2 at the start of the integration [default: 2,0 for the
+    /// double pendulum, 0,0 for the arm, 1,-0.9 for the coupled oscillators].
+    #[arg(long, value_name = "Q1,Q2", allow_hyphen_values = true, help_heading = SYSTEMS)]
+    q0: Option<Numbers>,
+    /// A system's initial velocities V1,V2 in the record's time unit [default: 0,0].
+    #[arg(long, value_name = "V1,V2", allow_hyphen_values = true, help_heading = SYSTEMS)]
+    dq0: Option<Numbers>,
+
     /// Initial angle (or displacement) at the start of the integration.
     #[arg(long, visible_alias = "theta0", default_value_t = 0.1, allow_hyphen_values = true, help_heading = SYSTEM)]
     x0: f64,
@@ -107,23 +178,26 @@ pub struct SimulateArgs {
     rtol: f64,
 
     /// Drive frequency in Hz: time in seconds, the model's time τ = 2π·f_drive·t, velocities in per
-    /// second. Without it, time is the model's own (drive period 2π).
+    /// second (of the coupled oscillators: the frequency of the drive's first tone). Without it,
+    /// time is the model's own (drive period 2π). The arm's time is seconds already.
     #[arg(long, value_name = "HZ", allow_hyphen_values = true, help_heading = TIME)]
     drive_frequency: Option<f64>,
     /// Sample rate in Hz, any ratio to the drive (needs --drive-frequency; instead of
-    /// --samples-per-period).
+    /// --samples-per-period); the arm's sampling [default: 500].
     #[arg(long, value_name = "HZ", allow_hyphen_values = true, help_heading = TIME)]
     sample_rate: Option<f64>,
-    /// Samples per forcing period, a whole number [default: 25].
+    /// Samples per forcing period, a whole number [default: 25; 64 for the double pendulum, 32 for
+    /// the coupled oscillators].
     #[arg(long, help_heading = TIME)]
     samples_per_period: Option<usize>,
-    /// Samples written, before --gaps removes any [default: 30000].
+    /// Samples written, before --gaps removes any [default: 30000; 5000 for the arm].
     #[arg(long, help_heading = TIME)]
     samples: Option<usize>,
     /// Length of the record in its time unit instead of --samples: duration/step samples, rounded down.
     #[arg(long, value_name = "SECONDS", allow_hyphen_values = true, help_heading = TIME)]
     duration: Option<f64>,
-    /// Forcing periods integrated and dropped before the first sample [default: 200; 0 with --forcing none].
+    /// Forcing periods integrated and dropped before the first sample [default: 200; 0 with --forcing
+    /// none]. The arm starts at t = 0.
     #[arg(long, help_heading = TIME)]
     transient_periods: Option<usize>,
     /// Drive phase (radians) of the first sample: the first sample is that far into a drive period.
@@ -153,7 +227,7 @@ pub struct SimulateArgs {
     /// counts; the velocity stays clean.
     #[arg(long, value_name = "SIGMA", allow_hyphen_values = true, help_heading = NOISE)]
     noise: Option<f64>,
-    /// Seed of the noise, the bit errors and the gaps (ChaCha8).
+    /// Seed of the noise, the bit errors, the gaps and the jitter (ChaCha8).
     #[arg(long, default_value_t = 0, help_heading = NOISE)]
     seed: u64,
     /// Write the continuous angle instead of wrapping it (with --counts: the multi-turn count·2π/N).
@@ -164,6 +238,11 @@ pub struct SimulateArgs {
     /// sample; runs never touch): K:LEN, e.g. 3:50.
     #[arg(long, value_name = "K:LEN", help_heading = OUTPUT)]
     gaps: Option<GapsText>,
+    /// Gaussian jitter of the written time stamps, its standard deviation in the record's time unit
+    /// (seconds with --drive-frequency): a logger's clock read early or late; the samples are
+    /// those of the grid's instants (seeded by --seed).
+    #[arg(long, value_name = "SIGMA", allow_hyphen_values = true, help_heading = OUTPUT)]
+    jitter: Option<f64>,
     /// Print the time stamps with N decimals (as a data acquisition does).
     #[arg(long, value_name = "N", help_heading = OUTPUT)]
     time_decimals: Option<usize>,
@@ -178,11 +257,13 @@ pub struct SimulateArgs {
     /// the record's time unit (the pendulum's f·a(t), a(t) its base acceleration with its
     /// harmonics, the factor of cos x; the Duffing oscillator's f·(cos t + harmonics)), so that
     /// its term (`p*cos(x)` of the pendulum, `p` of the Duffing oscillator) has the coefficient
-    /// −1: the measured drive of `hbid identify --forcing-col p`. Printed like the angle.
+    /// −1: the measured drive of `hbid identify --forcing-col p`. Printed like the angle. The
+    /// double pendulum's p is f sin(t) times rate² (its terms p*cos(theta1), p*cos(theta2)); the
+    /// arm's torques and the coupled oscillators' base acceleration are written always.
     #[arg(long, help_heading = OUTPUT)]
     write_drive: bool,
-    /// Output file: `.npy` (samples × 3, or × 4 with --write-drive; f8, the numbers the CSV would
-    /// hold) or CSV (anything else).
+    /// Output file: `.npy` (samples × columns: 3, or 4 with --write-drive, for one coordinate; f8,
+    /// the numbers the CSV would hold) or CSV (anything else).
     #[arg(long, help_heading = OUTPUT)]
     out: PathBuf,
 
@@ -222,6 +303,9 @@ impl From<SystemArg> for SystemKind {
         match a {
             SystemArg::Pendulum => SystemKind::Pendulum,
             SystemArg::Duffing => SystemKind::Duffing,
+            SystemArg::DoublePendulum => SystemKind::DoublePendulum,
+            SystemArg::Arm => SystemKind::Arm,
+            SystemArg::CoupledDuffing => SystemKind::CoupledDuffing,
         }
     }
 }
@@ -260,9 +344,22 @@ impl SimulateArgs {
             system: self.system.into(),
             f: self.f,
             c: self.c,
+            c2: self.c2,
             r: self.r,
             a: self.a,
             b: self.b,
+            a2: self.a2,
+            b2: self.b2,
+            coupling: self.coupling,
+            coupling_cubic: self.coupling_cubic,
+            mass_ratio: self.mass_ratio,
+            drive_seed: self.drive_seed,
+            mu: self.mu,
+            length_ratio: self.length_ratio,
+            torque1: self.torque1.clone(),
+            torque2: self.torque2.clone(),
+            joint_damping: self.joint_damping.clone(),
+            joint_friction: self.joint_friction.clone(),
             friction: self.friction,
             drag: self.drag,
             cubic_damping: self.cubic_damping,
@@ -270,6 +367,8 @@ impl SimulateArgs {
             drive: self.drive.into(),
             x0: self.x0,
             v0: self.v0,
+            q0: self.q0.clone(),
+            dq0: self.dq0.clone(),
             rtol: self.rtol,
             drive_frequency: self.drive_frequency,
             sample_rate: self.sample_rate,
@@ -288,6 +387,7 @@ impl SimulateArgs {
             seed: self.seed,
             unwrapped: self.unwrapped,
             gaps: self.gaps,
+            jitter: self.jitter,
             time_decimals: self.time_decimals,
             decimals: self.decimals,
             write_drive: self.write_drive,
