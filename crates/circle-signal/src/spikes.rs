@@ -524,10 +524,11 @@ impl<'a> IntoIterator for &'a Spikes {
 /// numbers), the stretch (about 4300 positions: statistics and levels of each width, 300 kB),
 /// one bit per sample for the flags and a map of the flagged samples' bounds, and a copy of the
 /// record here (none for [`find_and_repair_spikes`]). Computing the local scales afresh from the
-/// residuals at each such sample, as before, took ten thousand operations each: 2.8 s per 10⁶
-/// samples of that record, 0.08 s now; 0.04 s per 10⁶ samples of a noisy vibrometer record or an
-/// encoder's, 0.06 s with a bit error per thousand samples and 0.08 s where the noise level
-/// changes within tens of samples (`docs/spikes.md` has the measurements).
+/// residuals at each such sample, as the search did before, took some ten thousand operations
+/// each: `3.2 · 10¹⁰` instructions per 10⁶ samples of that record, `7.8 · 10⁸` now. On the
+/// project's 2-core machine under load, per 10⁶ samples: 0.11 s for that record (3.2 s before),
+/// 0.06 s for a noisy vibrometer record or an encoder's, 0.11 s with a bit error per thousand
+/// samples and 0.1 s where the noise level changes within tens of samples (`docs/spikes.md`).
 ///
 /// # Example
 ///

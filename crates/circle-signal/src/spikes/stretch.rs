@@ -6,7 +6,8 @@
 //! residuals each time takes some ten thousand operations: about 200 residuals, three statistics
 //! at each position, 16 partners per level, three selections. Where the smooth motion's own
 //! residual stands out of its block (the paper's noise-free chaotic record at 25 samples per
-//! period: a fifth of its samples) that was 2 seconds per 10⁶ samples. Here each residual,
+//! period: a fifth of its samples) that was `3.2 · 10¹⁰` instructions, seconds, per 10⁶ samples
+//! (`docs/spikes.md`). Here each residual,
 //! statistic and level is computed once per stretch of a few thousand samples; the partners'
 //! maxima by a sliding maximum; and a lower bound of the local scale, the `r`-th largest of the
 //! maxima of the blocks of [`LEVEL_BLOCK`] levels inside the window (`r` of those blocks hold `r`
