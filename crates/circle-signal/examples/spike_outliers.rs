@@ -8,7 +8,8 @@
 //! cargo run --release -p circle-signal --example spike_outliers
 //! ```
 //!
-//! (`-- --quick` for a shorter run: one rate, one motion). The tables are in `docs/spikes.md`.
+//! (`-- --quick` for a shorter run: one rate, one motion; `-- --long` for the long records and
+//! their times alone). The tables are in `docs/spikes.md`.
 //! Everything is seeded.
 #![allow(clippy::print_stdout)]
 
@@ -37,6 +38,9 @@ const RESIDUAL: f64 = 1.394_433_963_956_97;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let quick = std::env::args().any(|a| a == "--quick");
+    if std::env::args().any(|a| a == "--long") {
+        return long_records();
+    }
     calibration(if quick { 200_000 } else { 2_000_000 });
     false_alarms_line(quick)?;
     false_alarms_circle(quick)?;
@@ -490,9 +494,54 @@ fn score(
     Ok((at.len(), whole, part, found.len() - inside))
 }
 
+/// The paper's pendulum `x'' + 0.03 x' + (1/0.8333²) sin x − 1.52 sin(t) cos x = 0`, chaotic,
+/// noise-free and wrapped: `n` samples at 25 per forcing period after 200 periods from `x = 0.1`,
+/// classical Runge–Kutta with 8 steps per sample.
+fn paper_long(n: usize) -> Vec<f64> {
+    let per_period = 25.0;
+    let h = std::f64::consts::TAU / per_period / 8.0;
+    let k = 1.0 / (0.8333 * 0.8333);
+    let f = |t: f64, x: f64, v: f64| (v, -0.03 * v - k * x.sin() + 1.52 * t.sin() * x.cos());
+    let (mut x, mut v, mut t) = (0.1, 0.0, 0.0);
+    let skip = 200 * 25;
+    let mut xs = Vec::with_capacity(n);
+    for i in 0..skip + n {
+        if i >= skip {
+            xs.push(circle_signal::wrap(x));
+        }
+        for _ in 0..8 {
+            let (k1x, k1v) = f(t, x, v);
+            let (k2x, k2v) = f(t + h / 2.0, x + h / 2.0 * k1x, v + h / 2.0 * k1v);
+            let (k3x, k3v) = f(t + h / 2.0, x + h / 2.0 * k2x, v + h / 2.0 * k2v);
+            let (k4x, k4v) = f(t + h, x + h * k3x, v + h * k3v);
+            x += h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
+            v += h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
+            t += h;
+        }
+    }
+    xs
+}
+
+/// The alarms of one search of `x` and the shortest time of three (the machine is shared: the
+/// shortest is the one least slowed by others).
+fn timed(
+    x: &[f64],
+    domain: Domain,
+    params: &SpikeParams,
+) -> Result<(usize, f64), Box<dyn std::error::Error>> {
+    let mut best = f64::INFINITY;
+    let mut found = 0;
+    for _ in 0..3 {
+        let t = Instant::now();
+        found = find_spikes(x, domain, params)?.len();
+        best = best.min(t.elapsed().as_secs_f64());
+    }
+    Ok((found, best))
+}
+
 fn long_records() -> Result<(), Box<dyn std::error::Error>> {
     println!("## Long records and time\n");
-    println!("| record | samples | alarms | time (s) |");
+    println!("| record | samples | alarms | time (s, shortest of 3) |");
     println!("|---|---|---|---|");
     let params = SpikeParams::new();
     for (name, noise) in [
@@ -500,32 +549,31 @@ fn long_records() -> Result<(), Box<dyn std::error::Error>> {
         ("vibrometer, speckle cell 1", VibrometerNoise::Speckle(1.0)),
     ] {
         let x = vibrometer(256.0, 2_000_000, 1e-2, noise, 5);
-        let t = Instant::now();
-        let found = find_spikes(&x, Domain::Line, &params)?.len();
-        println!(
-            "| {name} | {} | {found} | {:.3} |",
-            x.len(),
-            t.elapsed().as_secs_f64()
-        );
+        let (found, time) = timed(&x, Domain::Line, &params)?;
+        println!("| {name} | {} | {found} | {time:.3} |", x.len());
     }
     let quantum = SpikeParams::new().with_quantum(COUNT)?;
     let clean = Record::new(Motion::Whirl, 100.0, 2_000_000, 0.003, true, 6).wrapped();
-    let t = Instant::now();
-    let found = find_spikes(&clean, Domain::Circle, &quantum)?.len();
+    let (found, time) = timed(&clean, Domain::Circle, &quantum)?;
     println!(
-        "| encoder, whirl, σ = 0.003 | {} | {found} | {:.3} |",
-        clean.len(),
-        t.elapsed().as_secs_f64()
+        "| encoder, whirl, σ = 0.003 | {} | {found} | {time:.3} |",
+        clean.len()
     );
     let spikes = bit_errors(&positions(clean.len(), 1e-3, 5, 7), &[6, 7, 8, 9], 8);
     let x = inject(&clean, &spikes);
-    let t = Instant::now();
-    let found = find_spikes(&x, Domain::Circle, &quantum)?.len();
+    let (found, time) = timed(&x, Domain::Circle, &quantum)?;
     println!(
-        "| the same with {} bit errors | {} | {found} | {:.3} |",
+        "| the same with {} bit errors | {} | {found} | {time:.3} |",
         spikes.len(),
-        x.len(),
-        t.elapsed().as_secs_f64()
+        x.len()
+    );
+    // The paper's chaotic record, noise-free at 25 samples per period: where its smooth motion's
+    // residual stands out of its block (a fifth of the samples) the local scales are needed.
+    let paper = paper_long(1_000_000);
+    let (found, time) = timed(&paper, Domain::Circle, &params)?;
+    println!(
+        "| the paper's pendulum, noise-free, 25 per period | {} | {found} | {time:.3} |",
+        paper.len()
     );
     println!();
     Ok(())

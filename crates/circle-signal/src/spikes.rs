@@ -17,6 +17,10 @@ use serde::{Deserialize, Serialize};
 
 use crate::{CircleError, Domain, wrap};
 
+mod stretch;
+
+use stretch::{LEVEL_BLOCK, Stretch};
+
 /// The standard deviation of a Gaussian over its median absolute value, `1 / Φ⁻¹(3/4)`.
 const MAD_TO_SD: f64 = 1.482_602_218_505_602;
 
@@ -507,16 +511,24 @@ impl<'a> IntoIterator for &'a Spikes {
 ///
 /// # Cost
 ///
-/// `O(n)` time: the block scale is one pass computing each residual once and a selection (linear
-/// time) of the median of each `3 · block` window; the sweep computes each sample's statistics
-/// (`max_run` residuals), and around every sample whose statistic exceeds its block threshold the
-/// local scales (about 200 residuals, a few thousand comparisons) and a few dozen residuals per
-/// candidate. Memory: the scale's blocks (`n / block` numbers), a few hundred numbers of scratch,
+/// `O(n)` time with a small constant: the block scale is one pass computing each residual once
+/// and a selection (linear time) of the median of each `3 · block` window; the sweep reads each
+/// sample's statistics from a stretch of a few thousand samples where each residual is computed
+/// once more. Around a sample whose statistic exceeds its block threshold, the local scales come
+/// from the stretch's levels, each computed once (the partners' largest by a sliding maximum) and
+/// patched where a repair changes the record; a lower bound of the local threshold, the largest
+/// levels of blocks of 8 inside the window, settles most such samples (where the smooth motion's
+/// own residual stands out of its block: a fifth of the samples of the paper's noise-free
+/// chaotic record at 25 per period), and a selection among the 96 levels is made only where it
+/// does not; a few dozen residuals per candidate. Memory: the scale's blocks (`n / block`
+/// numbers), the stretch (about 4300 positions: statistics and levels of each width, 300 kB),
 /// one bit per sample for the flags and a map of the flagged samples' bounds, and a copy of the
-/// record here (none for [`find_and_repair_spikes`]). About 0.03 s per 10⁶ samples of a noisy
-/// vibrometer record, 0.04 s of an encoder's, 0.07 s with a bit error per thousand samples and
-/// 0.1 s where the noise level changes within tens of samples (the block scale alone: 0.02 s;
-/// `cargo run --release -p circle-signal --example spike_outliers`).
+/// record here (none for [`find_and_repair_spikes`]). Computing the local scales afresh from the
+/// residuals at each such sample, as the search did before, took some ten thousand operations
+/// each: `3.2 · 10¹⁰` instructions per 10⁶ samples of that record, `7.8 · 10⁸` now. On the
+/// project's 2-core machine under load, per 10⁶ samples: 0.11 s for that record (3.2 s before),
+/// 0.06 s for a noisy vibrometer record or an encoder's, 0.11 s with a bit error per thousand
+/// samples and 0.1 s where the noise level changes within tens of samples (`docs/spikes.md`).
 ///
 /// # Example
 ///
@@ -646,11 +658,8 @@ fn predict<G: Geometry>(x: &[f64], i: usize) -> (f64, f64) {
     let n = x.len();
     let d = G::diff;
     let (base, p) = if i >= 2 && i + 2 < n {
-        let base = x[i - 1];
-        let a = d(x[i - 2] - base);
-        let b = d(x[i + 1] - base);
-        let c = b + d(x[i + 2] - x[i + 1]);
-        (base, (4.0 * b - a - c) / 6.0)
+        let (r, p) = centred::<G>(&x[i - 2..i + 3]);
+        return (r, x[i - 1] + p);
     } else if i == 0 || i == n - 1 {
         // Cubic extrapolation from the next four: p = 4 x₁ − 6 x₂ + 4 x₃ − x₄.
         let s: isize = if i == 0 { 1 } else { -1 };
@@ -671,6 +680,29 @@ fn predict<G: Geometry>(x: &[f64], i: usize) -> (f64, f64) {
         (base, 0.25 * (u0 + u4) - u3)
     };
     (d(x[i] - base - p), base + p)
+}
+
+/// The centred residual of the middle one of five samples `w` and its prediction relative to
+/// `w[1]` (see [`predict`]).
+#[inline]
+fn centred<G: Geometry>(w: &[f64]) -> (f64, f64) {
+    let d = G::diff;
+    let &[x0, x1, x2, x3, x4] = w else {
+        unreachable!("five samples");
+    };
+    let a = d(x0 - x1);
+    let b = d(x3 - x1);
+    let c = b + d(x4 - x3);
+    let p = (4.0 * b - a - c) / 6.0;
+    (d(x2 - x1 - p), p)
+}
+
+/// The centred residuals of samples `from .. to` (all inside the record: `2 ≤ from`,
+/// `to ≤ n − 2`), appended to `out`.
+fn centred_residuals<G: Geometry>(x: &[f64], from: usize, to: usize, out: &mut Vec<f64>) {
+    if from < to {
+        out.extend(x[from - 2..to + 2].windows(5).map(|w| centred::<G>(w).0));
+    }
 }
 
 /// The noise gain of sample `i`'s prediction relative to the centred one: 6 at the ends, 1.5 next
@@ -706,6 +738,31 @@ fn stencil(n: usize, i: usize) -> [(usize, f64); 4] {
     }
 }
 
+/// The `rank`-th largest of `v` (by [`f64::total_cmp`]), `rank` from 1 to the length of `v`
+/// and at most [`MAX_LOCAL_RANK`]: one pass holding the largest `rank` in order, cheaper than a
+/// selection for the few a local scale ranks.
+fn largest(v: &[f64], rank: usize) -> f64 {
+    let mut top = [f64::NEG_INFINITY; MAX_LOCAL_RANK];
+    let top = &mut top[..rank];
+    top.copy_from_slice(&v[..rank]);
+    top.sort_unstable_by(|a, b| b.total_cmp(a));
+    for &value in &v[rank..] {
+        if value.total_cmp(&top[rank - 1]).is_le() {
+            continue;
+        }
+        let mut at = rank - 1;
+        while at > 0 && value.total_cmp(&top[at - 1]).is_gt() {
+            top[at] = top[at - 1];
+            at -= 1;
+        }
+        top[at] = value;
+    }
+    top[rank - 1]
+}
+
+/// The largest rank a local scale takes: the 6th largest of 96 levels.
+const MAX_LOCAL_RANK: usize = 2 * LOCAL_HALF_WINDOW / LOCAL_STEP;
+
 /// Median of a non-empty slice (the upper one of an even count), reordering it.
 fn median(v: &mut [f64]) -> f64 {
     let mid = v.len() / 2;
@@ -727,12 +784,20 @@ struct Search<'a, G> {
     /// unit (its prediction's noise gain times its threshold when it was flagged).
     bounds: BTreeMap<usize, f64>,
     spikes: Vec<Spike>,
-    /// Scratch for the local scale: the residuals around the outlier, a statistic at each
-    /// position, and the window's levels.
-    around: Vec<f64>,
-    stat: Vec<f64>,
+    /// The statistics and the local scale's levels of the stretch being swept.
+    stretch: Stretch,
+    /// Scratch for the local scale: the window's levels.
     window: Vec<f64>,
     _geometry: std::marker::PhantomData<G>,
+}
+
+/// The positions of a local scale's window: `left` and `right` of the outlier's (half-open), and
+/// the `steps` of [`LOCAL_STEP`] positions they hold.
+#[derive(Debug, Clone, Copy)]
+struct LocalWindow {
+    left: (usize, usize),
+    right: (usize, usize),
+    steps: usize,
 }
 
 /// A repair considered: one sample, or a run of `len` samples from `start` replaced together by
@@ -785,8 +850,7 @@ impl<'a, G: Geometry> Search<'a, G> {
             flagged: vec![0; n.div_ceil(64)],
             bounds: BTreeMap::new(),
             spikes: Vec::new(),
-            around: Vec::new(),
-            stat: Vec::new(),
+            stretch: Stretch::new(n, params.max_run),
             window: Vec::new(),
             _geometry: std::marker::PhantomData,
         };
@@ -814,25 +878,9 @@ impl<'a, G: Geometry> Search<'a, G> {
     /// over their noise gains for white noise (`m` up to the longest run; 0 where the record
     /// ends), which a run of `m` samples from `i` makes about as large as a single spike of its
     /// size makes its own residual.
-    fn statistics(&self, i: usize) -> [f64; MAX_RUN] {
-        let n = self.x.len();
-        let mut out = [0.0; MAX_RUN];
-        out[0] = self.weighted(i);
-        if i < 2 {
-            return out;
-        }
-        let mut sum = 0.0;
-        for m in 1..=self.max_run {
-            let j = i + m - 1;
-            if j + 3 > n {
-                break;
-            }
-            sum += predict::<G>(self.x, j).0;
-            if m >= 2 {
-                out[m - 1] = sum.abs() / SUM_GAINS[m - 1];
-            }
-        }
-        out
+    #[inline]
+    fn statistics(&mut self, i: usize) -> [f64; MAX_RUN] {
+        self.stretch.stats::<G>(self.x, i)
     }
 
     /// The block's threshold of sample `i` (the record's or the block's scale, and the floor).
@@ -852,81 +900,141 @@ impl<'a, G: Geometry> Search<'a, G> {
         raise / g
     }
 
-    /// The local thresholds of the statistics of width 1 to the longest run (see
-    /// [`statistics`](Self::statistics)) around an outlier whose residuals lie in `c − 2 ..=
-    /// c + width + 1`: `k` times the local scale of each statistic over the nearest positions
-    /// whose residuals are outside that (0 when the record is too short for the window).
-    fn local_thresholds(&mut self, c: usize, width: usize) -> [f64; MAX_RUN] {
-        let mut out = [0.0; MAX_RUN];
+    /// The window of the local scale of the statistic of width `m` around an outlier whose
+    /// residuals lie in `c − 2 ..= c + width + 1`: the positions nearest to it whose statistics
+    /// hold none of those residuals, up to [`LOCAL_HALF_WINDOW`] on each side, a multiple of
+    /// [`LOCAL_STEP`] (96 inside the record, down to 48 near its ends); `None` where the record is
+    /// too short for one.
+    fn local_window(&self, c: usize, width: usize, m: usize) -> Option<LocalWindow> {
         let n = self.x.len();
         let w = LOCAL_HALF_WINDOW;
-        // The residuals the window, its sums and the partners reach, centred ones only.
+        // The centred residuals the window, its sums and the partners reach.
         let gap = 2 * self.max_run + 3;
         let reach = w + width + 2 + gap + LOCAL_PARTNERS + 2 * self.max_run;
         let first = c.saturating_sub(reach).max(2);
         let last = (c + reach).min(n - 3);
         if last < first + 2 * LOCAL_STEP {
-            return out;
+            return None;
         }
-        let x = &*self.x;
-        self.around.clear();
-        self.around.extend((first..=last).map(|j| predict::<G>(x, j).0));
+        // The last position of a statistic of width m (its residuals up to `last`).
+        let top = last + 1 - m;
+        let (lo_out, hi_out) = ((c + 1).saturating_sub(2 + m), c + width + 1);
+        let left = lo_out.saturating_sub(first).min(w);
+        let right = top.saturating_sub(hi_out).min(w);
+        let count = ((left + right) / LOCAL_STEP * LOCAL_STEP).min(2 * w);
+        if count < 3 * LOCAL_STEP {
+            return None;
+        }
+        // Dropping the farthest positions, from the longer side.
+        let (mut left, mut right) = (left, right);
+        while left + right > count {
+            if left > right {
+                left -= 1;
+            } else {
+                right -= 1;
+            }
+        }
+        Some(LocalWindow {
+            left: (lo_out - left, lo_out),
+            right: (hi_out + 1, hi_out + 1 + right),
+            steps: count / LOCAL_STEP,
+        })
+    }
+
+    /// The windows of the statistics of width 1 to the longest run, with their levels made
+    /// available.
+    fn local_windows(&mut self, c: usize, width: usize) -> [Option<LocalWindow>; MAX_RUN] {
+        let mut windows = [None; MAX_RUN];
+        let (mut a, mut b) = (usize::MAX, 0);
         for m in 1..=self.max_run {
-            // The statistic at every position j (its residuals j ..= j + m − 1).
-            let gain = SUM_GAINS[m - 1];
-            let count = last + 2 - m - first;
-            self.stat.clear();
-            let mut sum: f64 = self.around[..m - 1].iter().sum();
-            for k in 0..count {
-                sum += self.around[k + m - 1];
-                self.stat.push(sum.abs() / gain);
-                sum -= self.around[k];
-            }
-            let stat = &self.stat;
-            let at = |j: usize| stat[j - first];
-            let top = first + count - 1;
-            // Each position counts at most as large as the largest of its partners `gap ..
-            // gap + LOCAL_PARTNERS` away on either side.
-            let level = |j: usize| {
-                let mut partner: f64 = 0.0;
-                for d in gap..gap + LOCAL_PARTNERS {
-                    if j >= first + d {
-                        partner = partner.max(at(j - d));
-                    }
-                    if j + d <= top {
-                        partner = partner.max(at(j + d));
-                    }
-                }
-                at(j).min(partner)
-            };
-            // The positions nearest to the outlier whose sums hold none of its residuals, up to
-            // w on each side: 96 inside the record, a multiple of 16 down to 48 near its ends.
-            let (lo_out, hi_out) = ((c + 1).saturating_sub(2 + m), c + width + 1);
-            let left = lo_out.saturating_sub(first).min(w);
-            let right = top.saturating_sub(hi_out).min(w);
-            let count = ((left + right) / LOCAL_STEP * LOCAL_STEP).min(2 * w);
-            if count < 3 * LOCAL_STEP {
-                continue;
-            }
-            // Dropping the farthest positions, from the longer side.
-            let (mut left, mut right) = (left, right);
-            while left + right > count {
-                if left > right {
-                    left -= 1;
-                } else {
-                    right -= 1;
+            windows[m - 1] = self.local_window(c, width, m);
+            if let Some(w) = windows[m - 1] {
+                for (from, to) in [w.left, w.right].into_iter().filter(|(from, to)| from < to) {
+                    a = a.min(from);
+                    b = b.max(to - 1);
                 }
             }
-            self.window.clear();
-            self.window.extend((lo_out - left..lo_out).map(level));
-            self.window.extend((hi_out + 1..=hi_out + right).map(level));
-            // The (count / 16)-th largest level.
-            let steps = count / LOCAL_STEP;
-            let rank = self.window.len() - steps;
-            let q = *self.window.select_nth_unstable_by(rank, f64::total_cmp).1;
-            out[m - 1] = self.k * q * LOCAL_KAPPA[steps - 3] / 6.0;
+        }
+        if a <= b {
+            self.stretch.ensure_levels::<G>(self.x, a, b);
+        }
+        windows
+    }
+
+    /// The threshold of a local scale `q` in a window of `steps` steps: `k q / c`.
+    #[inline]
+    fn local_threshold(&self, q: f64, steps: usize) -> f64 {
+        self.k * q * LOCAL_KAPPA[steps - 3] / 6.0
+    }
+
+    /// The local threshold of the statistic of width `m` over its window `w`: `k` times its
+    /// local scale, the `steps`-th largest level (the (count / 16)-th largest).
+    fn local_threshold_in(&mut self, w: LocalWindow, m: usize) -> f64 {
+        self.window.clear();
+        for (from, to) in [w.left, w.right] {
+            self.window.extend((from..to).map(|p| self.stretch.level(p, m)));
+        }
+        let q = largest(&self.window, w.steps);
+        self.local_threshold(q, w.steps)
+    }
+
+    /// The local thresholds of the statistics of width 1 to the longest run (see
+    /// [`statistics`](Self::statistics)) around an outlier whose residuals lie in `c − 2 ..=
+    /// c + width + 1`: `k` times the local scale of each statistic over its
+    /// [window](Self::local_window) (0 where there is none).
+    fn local_thresholds(&mut self, c: usize, width: usize) -> [f64; MAX_RUN] {
+        let mut out = [0.0; MAX_RUN];
+        let windows = self.local_windows(c, width);
+        for m in 1..=self.max_run {
+            if let Some(w) = windows[m - 1] {
+                out[m - 1] = self.local_threshold_in(w, m);
+            }
         }
         out
+    }
+
+    /// The local thresholds around `c` (as [`local_thresholds`](Self::local_thresholds)) of the
+    /// widths whose largest statistic among the samples tested, `above` (0 for none), can exceed
+    /// them; `∞` for the others, whose statistics cannot stand out of their local thresholds, and
+    /// `None` when none can.
+    ///
+    /// A width's statistics cannot when `above` is at most a lower bound of its threshold, taken
+    /// without a selection: the `steps`-th largest of the maxima of the blocks of
+    /// [`LEVEL_BLOCK`] levels that lie in the window (those blocks hold that many distinct levels
+    /// at least as large). This settles most of the samples of a smooth motion whose residual
+    /// stands out of its block.
+    fn local_thresholds_above(
+        &mut self,
+        c: usize,
+        width: usize,
+        above: [f64; MAX_RUN],
+    ) -> Option<[f64; MAX_RUN]> {
+        let windows = self.local_windows(c, width);
+        let mut out = [f64::INFINITY; MAX_RUN];
+        let mut any = false;
+        for m in 1..=self.max_run {
+            if above[m - 1] <= 0.0 {
+                continue;
+            }
+            let Some(w) = windows[m - 1] else {
+                // No window, no local threshold: the block's alone.
+                out[m - 1] = 0.0;
+                any = true;
+                continue;
+            };
+            let blocks = |(from, to): (usize, usize)| (from.div_ceil(LEVEL_BLOCK), to / LEVEL_BLOCK);
+            let settled = self
+                .stretch
+                .blocks_hold(blocks(w.left), blocks(w.right), m, w.steps, |most| {
+                    above[m - 1] <= self.local_threshold(most, w.steps)
+                });
+            if settled {
+                continue;
+            }
+            out[m - 1] = self.local_threshold_in(w, m);
+            any = true;
+        }
+        any.then_some(out)
     }
 
     #[inline]
@@ -937,6 +1045,7 @@ impl<'a, G: Geometry> Search<'a, G> {
     /// Flags sample `i` with the given replacement, its bound and its size.
     fn flag(&mut self, i: usize, size: f64, replacement: f64, bound: f64) {
         self.x[i] = replacement;
+        self.stretch.patch::<G>(self.x, i, i);
         self.flagged[i / 64] |= 1 << (i % 64);
         self.bounds.insert(i, bound);
         self.spikes.push(Spike {
@@ -1172,30 +1281,77 @@ impl<'a, G: Geometry> Search<'a, G> {
         }
     }
 
+    /// The first sample of `i .. to` that is not flagged and one of whose statistics exceeds its
+    /// block threshold, or `to`.
+    fn next_exceeding(&mut self, mut i: usize, to: usize) -> usize {
+        while i < to {
+            // The stretch that holds sample i.
+            self.statistics(i);
+            let (lo, stats) = self.stretch.held();
+            let end = to.min(lo + stats.len());
+            while i < end {
+                let b = i / self.block;
+                let threshold = self.thresholds[b];
+                let stop = end.min((b + 1) * self.block);
+                for (p, s) in (i..stop).zip(&stats[i - lo..stop - lo]) {
+                    if !s.iter().all(|&v| v <= threshold) && !self.is_flagged(p) {
+                        return p;
+                    }
+                }
+                i = stop;
+            }
+        }
+        to
+    }
+
     /// One sweep of samples `from .. to`.
     fn sweep(&mut self, from: usize, to: usize) {
         let n = self.x.len();
+        // What the sweep asks of the stretch ends short of its window's reach past `to`.
+        self.stretch
+            .set_horizon(to + PEAK_SEARCH + 2 * LOCAL_HALF_WINDOW + 8 * MAX_RUN);
         let mut i = from;
         while i < to {
-            if self.is_flagged(i) {
-                i += 1;
-                continue;
+            i = self.next_exceeding(i, to);
+            if i == to {
+                break;
             }
             let stats = self.statistics(i);
-            if stats.iter().all(|&v| v <= self.block_threshold(i)) {
-                i += 1;
-                continue;
-            }
             // The outlier that makes a statistic of sample i exceed is where the statistics
             // stand out most from their thresholds, among the samples whose residuals reach
             // i's: the block's and the local ones, the latter from the residuals around those.
-            let around = self.local_thresholds(i, PEAK_SEARCH + self.max_run);
-            let (mut c, mut t, mut peak) = (i, 1, 0.0);
-            for j in i..=(i + PEAK_SEARCH).min(n - 1) {
+            let last = (i + PEAK_SEARCH).min(n - 1);
+            let mut near = [[0.0; MAX_RUN]; PEAK_SEARCH + 1];
+            // The largest statistic of each width above its block threshold.
+            let mut above = [0.0_f64; MAX_RUN];
+            let (mut b, mut into) = (i / self.block, i % self.block);
+            for j in i..=last {
+                let threshold = self.thresholds[b];
+                (b, into) = if into + 1 == self.block {
+                    (b + 1, 0)
+                } else {
+                    (b, into + 1)
+                };
                 if self.is_flagged(j) {
                     continue;
                 }
-                let stats = if j == i { stats } else { self.statistics(j) };
+                near[j - i] = if j == i { stats } else { self.statistics(j) };
+                for (a, &v) in above.iter_mut().zip(&near[j - i]) {
+                    *a = a.max(if v > threshold { v } else { 0.0 });
+                }
+            }
+            // The local thresholds of the widths that can stand out of them (most of the samples
+            // of a smooth motion whose residual stands out of its block cannot).
+            let Some(around) = self.local_thresholds_above(i, PEAK_SEARCH + self.max_run, above) else {
+                i += 1;
+                continue;
+            };
+            let (mut c, mut t, mut peak) = (i, 1, 0.0);
+            for j in i..=last {
+                if self.is_flagged(j) {
+                    continue;
+                }
+                let stats = near[j - i];
                 for m in 1..=self.max_run {
                     let ratio = stats[m - 1] / self.block_threshold(j).max(around[m - 1]);
                     if ratio > peak {
@@ -1355,11 +1511,19 @@ const RUN_CLEARED: f64 = 0.5;
 fn scales<G: Geometry>(x: &[f64], block: usize) -> (f64, Vec<f64>) {
     let n = x.len();
     let blocks = n.div_ceil(block);
-    let fill = |b: usize, buf: &mut Vec<f64>| {
+    // The magnitudes as their bits: for numbers without a sign those order as the numbers do (as
+    // `f64::total_cmp` orders them), and integers are selected faster.
+    let fill = |b: usize, buf: &mut Vec<u64>| {
         buf.clear();
         let lo = (b * block).max(2);
         let hi = ((b + 1) * block).min(n - 2);
-        buf.extend((lo..hi).map(|i| predict::<G>(x, i).0.abs()));
+        if lo < hi {
+            buf.extend(
+                x[lo - 2..hi + 2]
+                    .windows(5)
+                    .map(|w| centred::<G>(w).0.abs().to_bits()),
+            );
+        }
     };
     let (mut prev, mut cur, mut next) = (
         Vec::with_capacity(block),
@@ -1376,14 +1540,14 @@ fn scales<G: Geometry>(x: &[f64], block: usize) -> (f64, Vec<f64>) {
         window.extend_from_slice(&cur);
         window.extend_from_slice(&next);
         // Never empty: block b or its predecessor holds centred residuals when n >= 7, block >= 5.
-        locals.push(median(&mut window));
+        let mid = window.len() / 2;
+        locals.push(f64::from_bits(*window.select_nth_unstable(mid).1));
         std::mem::swap(&mut prev, &mut cur);
         std::mem::swap(&mut cur, &mut next);
         fill(b + 2, &mut next);
     }
-    window.clear();
-    window.extend_from_slice(&locals);
-    (median(&mut window), locals)
+    let mut all = locals.clone();
+    (median(&mut all), locals)
 }
 
 #[cfg(test)]
@@ -1594,6 +1758,189 @@ mod tests {
                         clean[s.index]
                     );
                 }
+            }
+        }
+    }
+
+    /// The local thresholds as first written: the residuals, statistics (running sums) and levels
+    /// of the window computed afresh around the outlier, and a selection.
+    fn reference_local_thresholds<G: Geometry>(
+        x: &[f64],
+        max_run: usize,
+        k: f64,
+        c: usize,
+        width: usize,
+    ) -> [f64; MAX_RUN] {
+        let mut out = [0.0; MAX_RUN];
+        let n = x.len();
+        let w = LOCAL_HALF_WINDOW;
+        let gap = 2 * max_run + 3;
+        let reach = w + width + 2 + gap + LOCAL_PARTNERS + 2 * max_run;
+        let first = c.saturating_sub(reach).max(2);
+        let last = (c + reach).min(n - 3);
+        if last < first + 2 * LOCAL_STEP {
+            return out;
+        }
+        let around: Vec<f64> = (first..=last).map(|j| predict::<G>(x, j).0).collect();
+        for m in 1..=max_run {
+            let count = last + 2 - m - first;
+            let mut stat = Vec::new();
+            let mut sum: f64 = around[..m - 1].iter().sum();
+            for k in 0..count {
+                sum += around[k + m - 1];
+                stat.push(sum.abs() / SUM_GAINS[m - 1]);
+                sum -= around[k];
+            }
+            let at = |j: usize| stat[j - first];
+            let top = first + count - 1;
+            let level = |j: usize| {
+                let mut partner: f64 = 0.0;
+                for d in gap..gap + LOCAL_PARTNERS {
+                    if j >= first + d {
+                        partner = partner.max(at(j - d));
+                    }
+                    if j + d <= top {
+                        partner = partner.max(at(j + d));
+                    }
+                }
+                at(j).min(partner)
+            };
+            let (lo_out, hi_out) = ((c + 1).saturating_sub(2 + m), c + width + 1);
+            let left = lo_out.saturating_sub(first).min(w);
+            let right = top.saturating_sub(hi_out).min(w);
+            let count = ((left + right) / LOCAL_STEP * LOCAL_STEP).min(2 * w);
+            if count < 3 * LOCAL_STEP {
+                continue;
+            }
+            let (mut left, mut right) = (left, right);
+            while left + right > count {
+                if left > right {
+                    left -= 1;
+                } else {
+                    right -= 1;
+                }
+            }
+            let mut window: Vec<f64> = (lo_out - left..lo_out).map(level).collect();
+            window.extend((hi_out + 1..=hi_out + right).map(level));
+            let steps = count / LOCAL_STEP;
+            let rank = window.len() - steps;
+            let q = *window.select_nth_unstable_by(rank, f64::total_cmp).1;
+            out[m - 1] = k * q * LOCAL_KAPPA[steps - 3] / 6.0;
+        }
+        out
+    }
+
+    /// A search of `x` with no threshold of its own (the local scales do not read it).
+    fn bare_search<G: Geometry>(x: &mut [f64], max_run: usize) -> Search<'_, G> {
+        let n = x.len();
+        Search {
+            x,
+            thresholds: vec![f64::INFINITY; n],
+            block: 1,
+            k: SpikeParams::DEFAULT_THRESHOLD,
+            max_run,
+            flagged: vec![0; n.div_ceil(64)],
+            bounds: BTreeMap::new(),
+            spikes: Vec::new(),
+            stretch: Stretch::new(n, max_run),
+            window: Vec::new(),
+            _geometry: std::marker::PhantomData,
+        }
+    }
+
+    /// Checks the local thresholds of every position and a few widths against the reference, and
+    /// that the lower bounds settle only what the thresholds settle.
+    fn check_local_thresholds<G: Geometry>(search: &mut Search<'_, G>, what: &str) {
+        let n = search.x.len();
+        let max_run = search.max_run;
+        for width in [1, 2, max_run, PEAK_SEARCH + max_run] {
+            for c in 0..n {
+                let want = reference_local_thresholds::<G>(search.x, max_run, search.k, c, width);
+                let got = search.local_thresholds(c, width);
+                for m in 0..MAX_RUN {
+                    assert!(
+                        (got[m] - want[m]).abs() <= 1e-12 * want[m].abs(),
+                        "{what}: c {c} width {width} m {}: {} against {}",
+                        m + 1,
+                        got[m],
+                        want[m]
+                    );
+                }
+                // The statistics just below, at and above the thresholds (or anywhere when 0).
+                for factor in [0.5, 0.999, 1.0, 1.001, 3.0] {
+                    let above = want.map(|t| if t > 0.0 { factor * t } else { factor });
+                    let settled = search.local_thresholds_above(c, width, above);
+                    for m in 0..max_run {
+                        let exceeds = above[m] > got[m];
+                        match settled {
+                            None => assert!(!exceeds, "{what}: c {c} m {} settled", m + 1),
+                            Some(t) if t[m].is_infinite() => {
+                                assert!(!exceeds, "{what}: c {c} m {} passed over", m + 1)
+                            }
+                            Some(t) => assert_eq!(t[m], got[m], "{what}: c {c} m {}", m + 1),
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_stretch_gives_the_local_thresholds_as_computed_afresh() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        // Noise whose level changes along the record, with outliers and runs, on the line and
+        // on the circle (crossing ±π), and records short enough for the ends to cut the windows.
+        for (n, max_run) in [(900, 3), (900, 1), (300, MAX_RUN), (60, 3), (40, 2), (7, 3)] {
+            let base: Vec<f64> = (0..n)
+                .map(|i| {
+                    let level = 1e-3 * (1.0 + 4.0 * ((i as f64 / 70.0).sin()).powi(2));
+                    0.4 * (i as f64 * 0.05).sin() + level * (rng.random::<f64>() - 0.5)
+                })
+                .collect();
+            let mut line = base.clone();
+            for j in (17..n).step_by(113) {
+                line[j] += 0.05;
+            }
+            let mut circle: Vec<f64> = base
+                .iter()
+                .enumerate()
+                .map(|(i, v)| wrap(v + 0.3 * i as f64))
+                .collect();
+            for j in (29..n).step_by(97) {
+                circle[j] = wrap(circle[j] + PI);
+            }
+            let mut search = bare_search::<OnLine>(&mut line, max_run);
+            check_local_thresholds(&mut search, &format!("line, {n} samples"));
+            // Stretches as long as the record, and no longer than asked for (refilled at every
+            // position).
+            for short in [false, true] {
+                let what = format!("circle, {n} samples, short stretches {short}");
+                let mut copy = circle.clone();
+                let mut search = bare_search::<OnCircle>(&mut copy, max_run);
+                if short {
+                    search.stretch.set_horizon(0);
+                }
+                check_local_thresholds(&mut search, &what);
+                // Repairs change the record under the stretch: its statistics and levels follow.
+                for j in (5..n).step_by(61) {
+                    let (size, prediction) = predict::<OnCircle>(search.x, j);
+                    search.flag(j, size, OnCircle::point(prediction), 0.0);
+                    let (a, b) = (
+                        j.saturating_sub(2 * LOCAL_HALF_WINDOW),
+                        (j + 2 * LOCAL_HALF_WINDOW).min(n - 1),
+                    );
+                    let mut now = search.x.to_vec();
+                    let mut fresh = bare_search::<OnCircle>(&mut now, max_run);
+                    for c in a..=b {
+                        assert_eq!(
+                            search.statistics(c),
+                            fresh.statistics(c),
+                            "{what}: statistic at {c}"
+                        );
+                    }
+                }
+                check_local_thresholds(&mut search, &format!("{what}, repaired"));
             }
         }
     }

@@ -186,8 +186,10 @@ pub struct CompareOptions {
     /// drives in the order of its names).
     #[serde(with = "optional_text")]
     pub drive_col: Option<ColumnList>,
-    /// Replace isolated time-stamp glitches and encoder spikes.
+    /// Replace isolated time-stamp glitches and every encoder spike.
     pub repair: bool,
+    /// Keep every spike (a warning) instead of replacing them when few.
+    pub no_repair: bool,
     /// An angle on the circle or a displacement on the line (default: the model's).
     #[serde(with = "optional_text")]
     pub signal: Option<Domain>,
@@ -219,6 +221,7 @@ impl Default for CompareOptions {
             coords: None,
             drive_col: None,
             repair: false,
+            no_repair: false,
             signal: None,
             measured: Measured::Displacement,
             range: Vec::new(),
@@ -316,6 +319,7 @@ impl CompareOptions {
             dt: self.dt,
             drive_col: self.drive_col.clone(),
             repair: self.repair,
+            no_repair: self.no_repair,
             signal: signal.into(),
             measured: self.measured,
             drive_period: None,
@@ -583,6 +587,7 @@ fn compare_system(
         dt: o.dt,
         drive_col,
         repair: o.repair,
+        no_repair: o.no_repair,
         signal: domains
             .iter()
             .map(ToString::to_string)

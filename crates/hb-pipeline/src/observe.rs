@@ -129,8 +129,16 @@ impl fmt::Display for Notice {
         match self {
             Notice::Record(note) => {
                 write!(f, "{note}")?;
-                if let Note::Spikes { repaired: false, .. } = note {
-                    f.write_str("; run with «repair=True» to replace them")?;
+                match note {
+                    Note::Spikes { repaired: false, .. } => {
+                        f.write_str("; run with «repair=True» to replace them")?;
+                    }
+                    Note::Spikes {
+                        repaired: true,
+                        policy: hb_record::prepare::SpikePolicy::RepairFew,
+                        ..
+                    } => f.write_str("; run with «no_repair=True» to keep them")?,
+                    _ => {}
                 }
                 Ok(())
             }

@@ -9,7 +9,8 @@ use std::str::FromStr;
 use circle_signal::{Domain, Measured};
 use hb_record::input::{Column, InputError, ReadOptions, Record as InputRecord, Role, read_path};
 use hb_record::prepare::{
-    BadDrive, Data, DriveFound, DriveSpec, DriveUnit, GridData, PrepareError, PrepareOptions, condition,
+    BadDrive, Data, DriveFound, DriveSpec, DriveUnit, GridData, PrepareError, PrepareOptions, SpikePolicy,
+    condition,
 };
 use serde::{Deserialize, Serialize};
 
@@ -222,8 +223,11 @@ pub struct RecordOptions {
     /// get no equation.
     #[serde(with = "optional_text")]
     pub drive_col: Option<ColumnList>,
-    /// Replace isolated time-stamp glitches and encoder spikes (each named in a note).
+    /// Replace isolated time-stamp glitches and every encoder spike (each named in a note).
     pub repair: bool,
+    /// Keep every spike in the record (a warning) instead of replacing them when they are few
+    /// (at most one per 1000 samples; the default, said in a note).
+    pub no_repair: bool,
     /// An angle on the circle or a displacement on the line: one for every coordinate, or one
     /// per coordinate.
     #[serde(with = "text")]
@@ -260,6 +264,12 @@ impl RecordOptions {
                 text.parse::<Column>()
                     .map_err(|e| OptionError::value(name, text, e))?;
             }
+        }
+        if self.repair && self.no_repair {
+            return Err(OptionError::new(
+                "no_repair",
+                "give «repair» or «no_repair», not both",
+            ));
         }
         if self.angle_col.is_some() && self.coords.is_some() {
             return Err(OptionError::new(
@@ -579,6 +589,11 @@ pub fn condition_source(
     let prepare = PrepareOptions::new(domains[0])
         .with_others(domains[1..].to_vec())
         .with_repair(options.repair)
+        .with_spikes(if options.no_repair {
+            SpikePolicy::Keep
+        } else {
+            SpikePolicy::RepairFew
+        })
         .with_measured(options.measured);
     condition(record, &prepare, &mut |note| {
         observer.notice(&Notice::Record(note.clone()))

@@ -33,8 +33,8 @@ use std::fmt;
 use std::ops::Range;
 
 use circle_signal::{
-    CircleError, Domain, Measured, SampleClock, Spike, SpikeParams, find_and_repair_spikes, find_spikes,
-    resample_pieces,
+    CircleError, Domain, Measured, SampleClock, Spike, SpikeParams, Spikes, find_and_repair_spikes,
+    find_spikes, repair_spikes, resample_pieces,
 };
 use hb_basis::{BasisKind, Harmonic, Polynomial};
 
@@ -173,21 +173,26 @@ pub struct PrepareOptions {
     pub signal: Domain,
     /// The domains of the further coordinates ([`crate::input::Record::others`]), in order.
     pub others: Vec<Domain>,
-    /// Replace isolated time-stamp glitches by their grid time and isolated encoder spikes by the
-    /// local prediction (without it, a glitch is an error and spikes are only reported).
+    /// Replace isolated time-stamp glitches by their grid time and every isolated encoder spike by
+    /// the local prediction, whatever [`spikes`](Self::spikes) says (without it, a glitch is an
+    /// error).
     pub repair: bool,
+    /// What to do with the spikes without [`repair`](Self::repair): by default replace them when
+    /// they are few ([`SpikePolicy::RepairFew`]).
+    pub spikes: SpikePolicy,
     /// What the sensor measured: the displacement itself, or its velocity or acceleration (on the
     /// line only), integrated to the displacement by [`circle_signal::displacement`].
     pub measured: Measured,
 }
 
 impl PrepareOptions {
-    /// A record of `signal`, nothing repaired.
+    /// A record of `signal`: no time stamp repaired, spikes replaced when they are few.
     pub fn new(signal: Domain) -> Self {
         Self {
             signal,
             others: Vec::new(),
             repair: false,
+            spikes: SpikePolicy::RepairFew,
             measured: Measured::Displacement,
         }
     }
@@ -203,6 +208,12 @@ impl PrepareOptions {
         std::iter::once(self.signal)
             .chain(self.others.iter().copied())
             .collect()
+    }
+
+    /// With this policy for the spikes (see [`PrepareOptions::spikes`]).
+    pub fn with_spikes(mut self, spikes: SpikePolicy) -> Self {
+        self.spikes = spikes;
+        self
     }
 
     /// A record of the velocity or acceleration of the displacement (see
@@ -252,6 +263,8 @@ pub enum Note {
         repaired: bool,
         /// Where the record lives: on the circle an encoder's bit errors, on the line outliers.
         domain: Domain,
+        /// The policy they were met with: [`SpikePolicy::Repair`] when repairs were asked for.
+        policy: SpikePolicy,
     },
 }
 
@@ -299,6 +312,7 @@ impl fmt::Display for Note {
                 found,
                 repaired,
                 domain,
+                policy,
             } => {
                 if *coordinate > 0 {
                     write!(f, "coordinate {}: ", coordinate + 1)?;
@@ -313,10 +327,21 @@ impl fmt::Display for Note {
                     Domain::Circle => "isolated spike(s)",
                     Domain::Line => "outlier(s)",
                 };
+                let few = match policy {
+                    SpikePolicy::RepairFew if *repaired => format!(
+                        " (by default: at most one in {} samples)",
+                        SpikePolicy::FEW_ONE_IN
+                    ),
+                    SpikePolicy::RepairFew => format!(
+                        " (not replaced by default: more than one in {} samples)",
+                        SpikePolicy::FEW_ONE_IN
+                    ),
+                    _ => String::new(),
+                };
                 if *repaired {
                     write!(
                         f,
-                        "{} {what} replaced by the local prediction: {}{more}",
+                        "{} {what} replaced by the local prediction{few}: {}{more}",
                         found.len(),
                         list.join(", ")
                     )
@@ -327,7 +352,7 @@ impl fmt::Display for Note {
                     };
                     write!(
                         f,
-                        "{} {what}{why} in the record: {}{more}",
+                        "{} {what}{why} in the record{few}: {}{more}",
                         found.len(),
                         list.join(", ")
                     )
@@ -578,12 +603,14 @@ pub fn condition(
                     found,
                     repaired,
                     domain,
+                    policy,
                     ..
                 } => Note::Spikes {
                     coordinate,
                     found,
                     repaired,
                     domain,
+                    policy,
                 },
                 other => other,
             });
@@ -611,11 +638,50 @@ pub fn condition(
     })
 }
 
-/// Finds the isolated spikes (bit errors) of every piece, replacing them when asked. Pieces too
-/// short for the test are left as they are. A record rounded to a quantum (an encoder's counts)
-/// is tested with the floor of that quantum ([`SpikeParams::with_quantum`]): near rest such a
-/// record toggles between two counts, and without the floor each toggle is a spike (and a
-/// repair next to a half-turn bit error can take the wrong sample).
+/// What to do with the spikes (or outliers) a record is found to have.
+///
+/// A spike left in a record decides more than its one sample: on the circle one near half a turn
+/// is unwrapped into a false turn (and every sample after it is a turn off), and a few of them
+/// turn a free decay's windows into whirling ones; on the line an outlier is a jump of the
+/// velocity and acceleration the fit balances. A few isolated spikes are what an encoder's bit
+/// errors or a vibrometer's dropouts give, and their replacement by the local prediction is what
+/// the spike test is measured to do right (`docs/spikes.md`): so by default they are replaced
+/// when few, and a note lists them. Many spikes are something else (noise whose level changes
+/// within tens of samples, heavy tails, a record too coarse for its motion), which a warning
+/// leaves to the user.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SpikePolicy {
+    /// Replace them when they are few, at most one in [`FEW_ONE_IN`](Self::FEW_ONE_IN) samples
+    /// of the record (rounded up: one in a shorter record); otherwise report them only (a
+    /// warning).
+    #[default]
+    RepairFew,
+    /// Replace every one.
+    Repair,
+    /// Report them only (a warning), replacing none.
+    Keep,
+}
+
+impl SpikePolicy {
+    /// Spikes are few when there are at most one in this many samples: an encoder's bit errors
+    /// at the rates rigs show (10⁻⁴ in this project's rig records, 10⁻³ in the spike test's
+    /// measurements) are few; the test's false alarms where the noise level changes within tens
+    /// of samples (up to `7.5 · 10⁻⁴` per sample on a vibrometer's speckle, `docs/spikes.md`)
+    /// are replaced too, which puts the local prediction in place of an ordinary noisy sample.
+    pub const FEW_ONE_IN: usize = 1000;
+
+    /// Whether `spikes` in a record of `samples` are few: at most `⌈samples / FEW_ONE_IN⌉`.
+    pub fn few(spikes: usize, samples: usize) -> bool {
+        spikes <= samples.div_ceil(Self::FEW_ONE_IN)
+    }
+}
+
+/// Finds the isolated spikes (bit errors) of every piece and replaces them as the policy says
+/// ([`SpikePolicy`]; every one with [`PrepareOptions::repair`]), counting them over the whole
+/// record. Pieces too short for the test are left as they are. A record rounded to a quantum (an
+/// encoder's counts) is tested with the floor of that quantum ([`SpikeParams::with_quantum`]):
+/// near rest such a record toggles between two counts, and without the floor each toggle is a
+/// spike (and a repair next to a half-turn bit error can take the wrong sample).
 fn spikes(
     x: &mut [f64],
     pieces: &[Range<usize>],
@@ -627,10 +693,19 @@ fn spikes(
             .map_err(PrepareError::Spikes)?,
         None => SpikeParams::default(),
     };
+    let policy = if options.repair {
+        SpikePolicy::Repair
+    } else {
+        options.spikes
+    };
     let mut found: Vec<Spike> = Vec::new();
+    // Under RepairFew, each piece's spikes until they are counted over the record.
+    let mut pending: Vec<(Range<usize>, Spikes)> = Vec::new();
+    let mut searched = 0;
     for r in pieces.iter().filter(|r| r.len() >= SpikeParams::MIN_SAMPLES) {
         let piece = &mut x[r.clone()];
-        let spikes = if options.repair {
+        searched += piece.len();
+        let spikes = if policy == SpikePolicy::Repair {
             find_and_repair_spikes(piece, options.signal, &params)
         } else {
             find_spikes(piece, options.signal, &params)
@@ -640,12 +715,26 @@ fn spikes(
             index: s.index + r.start,
             ..*s
         }));
+        if policy == SpikePolicy::RepairFew && !spikes.is_empty() {
+            pending.push((r.clone(), spikes));
+        }
+    }
+    let repaired = match policy {
+        SpikePolicy::Repair => true,
+        SpikePolicy::Keep => false,
+        SpikePolicy::RepairFew => SpikePolicy::few(found.len(), searched),
+    };
+    if repaired {
+        for (r, spikes) in &pending {
+            repair_spikes(&mut x[r.clone()], spikes).map_err(PrepareError::Spikes)?;
+        }
     }
     Ok((!found.is_empty()).then_some(Note::Spikes {
         coordinate: 0,
         found,
-        repaired: options.repair,
+        repaired,
         domain: options.signal,
+        policy,
     }))
 }
 

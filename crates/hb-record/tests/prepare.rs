@@ -1,10 +1,13 @@
 //! The notes of preparing a record: what they say of spikes on the circle and of outliers on the
-//! line, found or replaced, and of a logger's unsettled start or end left out of every column.
+//! line, found or replaced, and of a logger's unsettled start or end left out of every column;
+//! and the spike policy: a free decay through a 4096-count encoder with a few bit errors, two of
+//! them half a turn, keeps its turns by default.
+use std::f64::consts::TAU;
 use std::path::Path;
 
-use circle_signal::{Domain, Spike};
+use circle_signal::{Domain, Spike, unwrap, wrap};
 use hb_record::input::{Column, Location, ReadOptions, Record, RecordEnd, Unsettled, read_path};
-use hb_record::prepare::{Note, PrepareOptions, condition};
+use hb_record::prepare::{DriveFound, DriveSpec, GridData, Note, PrepareOptions, SpikePolicy, condition};
 
 #[test]
 fn the_spikes_note_speaks_of_bit_errors_on_the_circle_and_of_outliers_on_the_line() {
@@ -19,6 +22,11 @@ fn the_spikes_note_speaks_of_bit_errors_on_the_circle_and_of_outliers_on_the_lin
             found: found.clone(),
             repaired,
             domain,
+            policy: if repaired {
+                SpikePolicy::Repair
+            } else {
+                SpikePolicy::Keep
+            },
         }
         .to_string()
     };
@@ -199,4 +207,235 @@ fn the_dfki_records_condition_with_their_first_samples_left_out() {
         );
         assert_eq!(grid.drives[0][0], first_drive[left_out], "{name}");
     }
+}
+
+#[test]
+fn the_spikes_note_says_when_they_were_replaced_by_default_and_when_they_were_too_many() {
+    let found = vec![Spike {
+        index: 41,
+        size: -3.1408,
+        replacement: 0.7,
+    }];
+    let note = |repaired| Note::Spikes {
+        coordinate: 0,
+        found: found.clone(),
+        repaired,
+        domain: Domain::Circle,
+        policy: SpikePolicy::RepairFew,
+    };
+    assert_eq!(
+        note(true).to_string(),
+        "1 isolated spike(s) replaced by the local prediction (by default: at most one in 1000 samples): \
+         sample 42 (-3.1408)"
+    );
+    assert!(!note(true).is_warning());
+    assert_eq!(
+        note(false).to_string(),
+        "1 isolated spike(s) (bit errors?) in the record (not replaced by default: more than one in 1000 \
+         samples): sample 42 (-3.1408)"
+    );
+    assert!(note(false).is_warning());
+}
+
+#[test]
+fn spikes_are_few_up_to_one_in_a_thousand_samples_rounded_up() {
+    assert!(SpikePolicy::few(0, 0));
+    assert!(SpikePolicy::few(1, 7));
+    assert!(!SpikePolicy::few(2, 7));
+    assert!(SpikePolicy::few(1, 1000));
+    assert!(!SpikePolicy::few(2, 1000));
+    assert!(SpikePolicy::few(2, 1001));
+    assert!(SpikePolicy::few(45, 45_000));
+    assert!(!SpikePolicy::few(46, 45_000));
+    assert_eq!(PrepareOptions::new(Domain::Circle).spikes, SpikePolicy::RepairFew);
+}
+
+/// The count of a 4096-count encoder.
+const COUNT: f64 = TAU / 4096.0;
+
+/// Samples per second of the decay, and its frequency (Hz).
+const RATE: f64 = 1000.0;
+const FREQUENCY: f64 = 1.3;
+
+/// A free decay as a rig logs it: 45 s at 1 kHz of a swing at 1.3 Hz decaying from 80 counts to 3
+/// of a 4096-count encoder whose zero is 0.7 rad off (near rest the angle toggles between
+/// counts), wrapped into [-π, π).
+fn decay() -> Vec<f64> {
+    let tau = 45.0 / (80.0_f64 / 3.0).ln();
+    (0..45_000)
+        .map(|n| {
+            let t = n as f64 / RATE;
+            let theta = 0.7 + 80.0 * COUNT * (-t / tau).exp() * (TAU * FREQUENCY * t).cos();
+            wrap((theta / COUNT).round() * COUNT)
+        })
+        .collect()
+}
+
+/// Bit errors at `(index, counts)`.
+fn with_bit_errors(clean: &[f64], errors: &[(usize, f64)]) -> Vec<f64> {
+    let mut x = clean.to_vec();
+    for &(i, counts) in errors {
+        x[i] = wrap(x[i] + counts * COUNT);
+    }
+    x
+}
+
+/// Where a half-turn bit error of `counts` (±2048) is unwrapped into a whole false turn, from
+/// sample `from` on: the steps into and out of it, each half a turn give or take the motion and
+/// the rounding, are taken as steps of the same sign.
+fn false_turn(clean: &[f64], from: usize, counts: f64) -> usize {
+    (from..clean.len() - 1)
+        .find(|&i| {
+            let spiked = wrap(clean[i] + counts * COUNT);
+            let u = unwrap(&[clean[i - 1], spiked, clean[i + 1]]);
+            ((u[2] - u[0]) / TAU).round() != 0.0
+        })
+        .expect("a sample where a half turn is a false one")
+}
+
+fn record(x: Vec<f64>) -> Record {
+    let t = (0..x.len()).map(|n| n as f64 / RATE).collect();
+    Record {
+        t,
+        theta: x,
+        ..Record::default()
+    }
+}
+
+fn conditioned(x: Vec<f64>, options: &PrepareOptions) -> GridData {
+    condition(record(x), options, &mut |_| {}).expect("the record is conditioned")
+}
+
+/// The windows of one period of the free oscillation whose unwrapped angle ends a whole turn
+/// from where it starts: whirling, where the decay only swings.
+fn whirling_windows(grid: GridData) -> (usize, usize) {
+    let data = grid
+        .with_drive(DriveSpec::Free, &mut |_, _| {})
+        .expect("the period of the oscillation");
+    let DriveFound::Free { samples } = data.drive else {
+        panic!("a free oscillation: {:?}", data.drive);
+    };
+    // The period is the swing's.
+    assert!(
+        (samples / (RATE / FREQUENCY) - 1.0).abs() < 0.01,
+        "{samples} samples per period"
+    );
+    let windows: Vec<_> = data.x.chunks_exact(data.p).collect();
+    let whirling = windows
+        .windows(2)
+        .filter(|pair| {
+            let mut w = pair[0].to_vec();
+            w.push(pair[1][0]);
+            let u = unwrap(&w);
+            ((u[u.len() - 1] - u[0]) / TAU).round() != 0.0
+        })
+        .count();
+    (whirling, windows.len() - 1)
+}
+
+#[test]
+fn a_free_decay_with_half_turn_spikes_keeps_its_turns_by_default() {
+    let clean = decay();
+    let (a, b) = (
+        false_turn(&clean, 3_000, 2048.0),
+        false_turn(&clean, 20_000, -2048.0),
+    );
+    let mut errors = vec![
+        (a, 2048.0),
+        (b, -2048.0),
+        (1_234, 64.0),
+        (9_876, -128.0),
+        (33_333, 256.0),
+    ];
+    let x = with_bit_errors(&clean, &errors);
+    errors.sort_by_key(|e| e.0);
+
+    // By default: found, replaced (a note, not a warning), every unwrapped sample where it was.
+    let grid = conditioned(x.clone(), &PrepareOptions::new(Domain::Circle));
+    let [
+        Note::Spikes {
+            found,
+            repaired,
+            policy,
+            ..
+        },
+    ] = grid.notes.as_slice()
+    else {
+        panic!("one note of spikes: {:?}", grid.notes);
+    };
+    assert!(*repaired);
+    assert_eq!(*policy, SpikePolicy::RepairFew);
+    assert_eq!(
+        found.iter().map(|s| s.index).collect::<Vec<_>>(),
+        errors.iter().map(|e| e.0).collect::<Vec<_>>()
+    );
+    for s in found {
+        assert!((s.replacement - clean[s.index]).abs() <= 2.0 * COUNT, "{s:?}");
+    }
+    let (u, c) = (unwrap(&grid.x), unwrap(&clean));
+    let off = u.iter().zip(&c).map(|(u, c)| (u - c).abs()).fold(0.0, f64::max);
+    assert!(off <= 2.0 * COUNT, "the unwrapped record departs by {off} rad");
+    assert_eq!(whirling_windows(grid), (0, 57));
+
+    // Kept, the half-turn spikes are false turns: windows of the swing come out whirling.
+    let kept = conditioned(
+        x,
+        &PrepareOptions::new(Domain::Circle).with_spikes(SpikePolicy::Keep),
+    );
+    assert!(
+        kept.notes
+            .iter()
+            .all(|n| !matches!(n, Note::Spikes { repaired: true, .. }))
+    );
+    assert!(kept.notes.iter().any(Note::is_warning));
+    let u = unwrap(&kept.x);
+    let turned = u.iter().zip(&c).filter(|(u, c)| (*u - *c).abs() > 6.0).count();
+    assert!(turned > 10_000, "{turned} unwrapped samples a turn off");
+    let (whirling, _) = whirling_windows(kept);
+    assert!(whirling >= 2, "{whirling} windows whirling");
+}
+
+#[test]
+fn more_spikes_than_one_in_a_thousand_samples_are_reported_not_replaced_by_default() {
+    let clean = decay();
+    // 50 bit errors of 512 counts in 45 000 samples, 450 apart.
+    let errors: Vec<(usize, f64)> = (0..50).map(|k| (500 + 900 * k, 512.0)).collect();
+    let x = with_bit_errors(&clean, &errors);
+    let grid = conditioned(x.clone(), &PrepareOptions::new(Domain::Circle));
+    let [note @ Note::Spikes { found, repaired, .. }] = grid.notes.as_slice() else {
+        panic!("one note of spikes: {:?}", grid.notes);
+    };
+    assert_eq!(found.len(), 50);
+    assert!(!repaired && note.is_warning());
+    assert_eq!(grid.x, x, "the record is left as read");
+    // With repairs asked for, every one is replaced.
+    let repaired = conditioned(x, &PrepareOptions::new(Domain::Circle).with_repair(true));
+    let [
+        Note::Spikes {
+            found,
+            repaired,
+            policy,
+            ..
+        },
+    ] = repaired.notes.as_slice()
+    else {
+        panic!("one note of spikes: {:?}", repaired.notes);
+    };
+    assert_eq!((found.len(), *repaired, *policy), (50, true, SpikePolicy::Repair));
+}
+
+#[test]
+fn a_half_turn_spike_in_a_short_record_is_replaced_by_default() {
+    // 700 samples: one spike is at most one in a thousand, rounded up.
+    let clean: Vec<f64> = decay()[..700].to_vec();
+    let a = false_turn(&clean, 300, 2048.0);
+    let grid = conditioned(
+        with_bit_errors(&clean, &[(a, 2048.0)]),
+        &PrepareOptions::new(Domain::Circle),
+    );
+    let [Note::Spikes { found, repaired, .. }] = grid.notes.as_slice() else {
+        panic!("one note of spikes: {:?}", grid.notes);
+    };
+    assert_eq!((found.len(), found[0].index, *repaired), (1, a, true));
+    assert!((grid.x[a] - clean[a]).abs() <= 2.0 * COUNT);
 }

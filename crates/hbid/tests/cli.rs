@@ -1338,19 +1338,23 @@ fn rig_records_are_identified_without_preprocessing() {
         truth.to_str().unwrap(),
     ]);
     let faulty = simulated(&dir, "faulty.csv", &args);
-    let warned = identify(&faulty, &["--forcing-frequency", "1.02"]);
-    let text = String::from_utf8_lossy(&warned.stderr).into_owned();
+    // The bit errors (2e-4 per sample) are few: replaced by default, and a note says so.
+    let default = identify(&faulty, &["--forcing-frequency", "1.02"]);
+    let text = String::from_utf8_lossy(&default.stderr).into_owned();
     assert!(text.contains("2 gap(s)") && text.contains("3 pieces"), "{text}");
-    assert!(text.contains("spike(s)") && text.contains("--repair"), "{text}");
+    assert!(
+        text.contains("spike(s) replaced by the local prediction (by default"),
+        "{text}"
+    );
     assert!(!text.contains("unwrapped angle"), "{text}");
     let repaired = identify(&faulty, &["--forcing-frequency", "1.02", "--repair"]);
     let text = String::from_utf8_lossy(&repaired.stderr).into_owned();
     assert!(text.contains("replaced by the local prediction"), "{text}");
-    let (before, after) = (
-        worst_relative_error(&truth, &warned.stdout),
+    let (by_default, asked) = (
+        worst_relative_error(&truth, &default.stdout),
         worst_relative_error(&truth, &repaired.stdout),
     );
-    assert!(after < 1e-4 && after < before, "{before:e} -> {after:e}");
+    assert!(by_default < 1e-4 && asked < 1e-4, "{by_default:e}, {asked:e}");
 
     // A free decay: no drive, windows in periods of the free oscillation.
     let truth = dir.join("free.json");

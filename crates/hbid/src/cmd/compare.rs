@@ -44,6 +44,10 @@ pub struct CompareArgs {
     /// Fix isolated time-stamp glitches and encoder spikes (each listed on stderr).
     #[arg(long)]
     pub repair: bool,
+    /// Keep every isolated spike in the record (warned of) instead of replacing them by the local
+    /// prediction when they are few (at most one per 1000 samples; the default, said in a note).
+    #[arg(long, conflicts_with = "repair")]
+    pub no_repair: bool,
     /// circle or line [default: the model's].
     #[arg(long, value_parser = choice::<Domain>(&["circle", "line"]))]
     pub signal: Option<Domain>,
@@ -89,6 +93,7 @@ impl CompareArgs {
             dt: self.dt,
             drive_col: self.drive_col.clone(),
             repair: self.repair,
+            no_repair: self.no_repair,
             signal: self.signal,
             measured: self.measured,
             range: self.range.clone(),

@@ -55,6 +55,10 @@ pub struct InputArgs {
     /// two that fit) and encoder spikes, and list each fix on stderr.
     #[arg(long)]
     pub repair: bool,
+    /// Keep every isolated spike in the record (warned of) instead of replacing them by the local
+    /// prediction when they are few (at most one per 1000 samples; the default, said in a note).
+    #[arg(long, conflicts_with = "repair")]
+    pub no_repair: bool,
     /// An angle on the circle (wrapped into [-π, π), unwrapped per orbit, circle metric) or a
     /// displacement on the line (no wrapping, plain differences): circle or line, for every
     /// coordinate or one per coordinate of --coords (circle,line).
@@ -102,6 +106,7 @@ impl InputArgs {
             dt: self.dt,
             drive_col: self.drive_col.clone(),
             repair: self.repair,
+            no_repair: self.no_repair,
             signal: self.signal.clone(),
             measured: self.measured,
             drive_period: self.drive_period.clone(),
