@@ -33,8 +33,8 @@ use std::fmt;
 use std::ops::Range;
 
 use circle_signal::{
-    CircleError, Domain, Measured, SampleClock, Spike, SpikeParams, Spikes, find_and_repair_spikes,
-    find_spikes, repair_spikes, resample_pieces,
+    CircleError, Domain, Measured, SampleClock, Spike, SpikeParams, find_and_repair_spikes, find_spikes,
+    resample_pieces,
 };
 use hb_basis::{BasisKind, Harmonic, Polynomial};
 
@@ -329,11 +329,12 @@ impl fmt::Display for Note {
                 };
                 let few = match policy {
                     SpikePolicy::RepairFew if *repaired => format!(
-                        " (by default: at most one in {} samples)",
+                        " (by default: larger than the record's steps, at most one in {} samples)",
                         SpikePolicy::FEW_ONE_IN
                     ),
                     SpikePolicy::RepairFew => format!(
-                        " (not replaced by default: more than one in {} samples)",
+                        " (not replaced by default: within the record's own steps, or more than one in {} \
+                         samples)",
                         SpikePolicy::FEW_ONE_IN
                     ),
                     _ => String::new(),
@@ -597,7 +598,7 @@ pub fn condition(
         }
         let mut channel_options = options.clone();
         channel_options.signal = domain;
-        if let Some(spikes) = spikes(x, &pieces, &channel_options)? {
+        for spikes in spikes(x, &pieces, &channel_options)? {
             note(match spikes {
                 Note::Spikes {
                     found,
@@ -674,6 +675,38 @@ impl SpikePolicy {
     pub fn few(spikes: usize, samples: usize) -> bool {
         spikes <= samples.div_ceil(Self::FEW_ONE_IN)
     }
+
+    /// The smallest size of a spike that [`SpikePolicy::RepairFew`] replaces: one that a lone
+    /// sample decides by, larger than the record's own motion from one sample to the next (the
+    /// 99th percentile of its steps, wrapped on the circle), and on the circle any of a quarter
+    /// turn or more (a jump the unwrapping may take for a turn). A bit error of the count's upper
+    /// bits, a vibrometer's dropout, is far larger than the motion between two samples; on a
+    /// clean record of fast motion (a whirling double pendulum at 64 samples per period) the
+    /// spike test flags runs of samples a few hundredths of a radian off the cubic where the
+    /// motion turns sharply, well inside its steps of tenths of a radian, and a repair there
+    /// would move true samples: those are kept and warned of.
+    pub fn decisive(x: &[f64], pieces: &[Range<usize>], domain: Domain) -> f64 {
+        let mut steps: Vec<f64> = pieces
+            .iter()
+            .flat_map(|r| {
+                x[r.clone()].windows(2).map(move |w| match domain {
+                    Domain::Circle => circle_signal::wrap(w[1] - w[0]).abs(),
+                    Domain::Line => (w[1] - w[0]).abs(),
+                })
+            })
+            .filter(|v| v.is_finite())
+            .collect();
+        let fastest = if steps.is_empty() {
+            0.0
+        } else {
+            let k = ((steps.len() - 1) as f64 * 0.99).round() as usize;
+            *steps.select_nth_unstable_by(k, f64::total_cmp).1
+        };
+        match domain {
+            Domain::Circle => fastest.min(std::f64::consts::FRAC_PI_2),
+            Domain::Line => fastest,
+        }
+    }
 }
 
 /// Finds the isolated spikes (bit errors) of every piece and replaces them as the policy says
@@ -686,7 +719,7 @@ fn spikes(
     x: &mut [f64],
     pieces: &[Range<usize>],
     options: &PrepareOptions,
-) -> Result<Option<Note>, PrepareError> {
+) -> Result<Vec<Note>, PrepareError> {
     let params = match quantum(x, pieces, options.signal) {
         Some(q) => SpikeParams::default()
             .with_quantum(q)
@@ -699,8 +732,6 @@ fn spikes(
         options.spikes
     };
     let mut found: Vec<Spike> = Vec::new();
-    // Under RepairFew, each piece's spikes until they are counted over the record.
-    let mut pending: Vec<(Range<usize>, Spikes)> = Vec::new();
     let mut searched = 0;
     for r in pieces.iter().filter(|r| r.len() >= SpikeParams::MIN_SAMPLES) {
         let piece = &mut x[r.clone()];
@@ -715,27 +746,42 @@ fn spikes(
             index: s.index + r.start,
             ..*s
         }));
-        if policy == SpikePolicy::RepairFew && !spikes.is_empty() {
-            pending.push((r.clone(), spikes));
-        }
     }
-    let repaired = match policy {
-        SpikePolicy::Repair => true,
-        SpikePolicy::Keep => false,
-        SpikePolicy::RepairFew => SpikePolicy::few(found.len(), searched),
-    };
-    if repaired {
-        for (r, spikes) in &pending {
-            repair_spikes(&mut x[r.clone()], spikes).map_err(PrepareError::Spikes)?;
-        }
-    }
-    Ok((!found.is_empty()).then_some(Note::Spikes {
+    let note = |found: Vec<Spike>, repaired: bool| Note::Spikes {
         coordinate: 0,
         found,
         repaired,
         domain: options.signal,
         policy,
-    }))
+    };
+    Ok(match policy {
+        SpikePolicy::Repair | SpikePolicy::Keep => {
+            let repaired = policy == SpikePolicy::Repair;
+            (!found.is_empty())
+                .then(|| note(found, repaired))
+                .into_iter()
+                .collect()
+        }
+        SpikePolicy::RepairFew => {
+            // Only the spikes a lone sample would decide by (a jump the unwrapping or the fit
+            // takes for motion), and only when they are few.
+            let decisive = SpikePolicy::decisive(x, pieces, options.signal);
+            let (mut replaced, mut kept): (Vec<Spike>, Vec<Spike>) =
+                found.into_iter().partition(|s| s.size.abs() >= decisive);
+            if !SpikePolicy::few(replaced.len(), searched) {
+                kept.append(&mut replaced);
+                kept.sort_by_key(|s| s.index);
+            }
+            for s in &replaced {
+                x[s.index] = s.replacement;
+            }
+            [(replaced, true), (kept, false)]
+                .into_iter()
+                .filter(|(f, _)| !f.is_empty())
+                .map(|(f, repaired)| note(f, repaired))
+                .collect()
+        }
+    })
 }
 
 /// The quantum a record is rounded to (an encoder's count, a converter's least step): the

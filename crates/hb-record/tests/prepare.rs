@@ -225,14 +225,14 @@ fn the_spikes_note_says_when_they_were_replaced_by_default_and_when_they_were_to
     };
     assert_eq!(
         note(true).to_string(),
-        "1 isolated spike(s) replaced by the local prediction (by default: at most one in 1000 samples): \
-         sample 42 (-3.1408)"
+        "1 isolated spike(s) replaced by the local prediction (by default: larger than the record's steps, at \
+         most one in 1000 samples): sample 42 (-3.1408)"
     );
     assert!(!note(true).is_warning());
     assert_eq!(
         note(false).to_string(),
-        "1 isolated spike(s) (bit errors?) in the record (not replaced by default: more than one in 1000 \
-         samples): sample 42 (-3.1408)"
+        "1 isolated spike(s) (bit errors?) in the record (not replaced by default: within the record's own \
+         steps, or more than one in 1000 samples): sample 42 (-3.1408)"
     );
     assert!(note(false).is_warning());
 }
@@ -350,7 +350,8 @@ fn a_free_decay_with_half_turn_spikes_keeps_its_turns_by_default() {
     let x = with_bit_errors(&clean, &errors);
     errors.sort_by_key(|e| e.0);
 
-    // By default: found, replaced (a note, not a warning), every unwrapped sample where it was.
+    // By default: found, replaced (a note, not a warning), every unwrapped sample where it was:
+    // each bit error is far larger than the decay's steps.
     let grid = conditioned(x.clone(), &PrepareOptions::new(Domain::Circle));
     let [
         Note::Spikes {

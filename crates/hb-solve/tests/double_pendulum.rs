@@ -90,7 +90,8 @@ fn the_papers_method_on_vector_orbits_of_the_double_pendulum() {
         .domain(Domain::Circle)
         .build()
         .unwrap();
-    let segments = search.search_system_pieces(&[&q1, &q2], &[0..q1.len()]).unwrap();
+    let whole = std::iter::once(0..q1.len()).collect::<Vec<_>>();
+    let segments = search.search_system_pieces(&[&q1, &q2], &whole).unwrap();
     assert!(segments.len() >= 20, "{} vector orbits", segments.len());
     let mut worst: f64 = 0.0;
     for (own, truth) in DoublePendulum::whirling()
