@@ -190,6 +190,11 @@ pub struct CompareOptions {
     pub repair: bool,
     /// Keep every spike (a warning) instead of replacing them when few.
     pub no_repair: bool,
+    /// The columns of the coordinates' measured velocities: each piece's free run then starts
+    /// from its first sample's measured state (positions and these velocities), every sample
+    /// scored, unless «x0» and «v0» are given.
+    #[serde(with = "optional_text")]
+    pub velocity_col: Option<ColumnList>,
     /// An angle on the circle or a displacement on the line (default: the model's).
     #[serde(with = "optional_text")]
     pub signal: Option<Domain>,
@@ -222,6 +227,7 @@ impl Default for CompareOptions {
             drive_col: None,
             repair: false,
             no_repair: false,
+            velocity_col: None,
             signal: None,
             measured: Measured::Displacement,
             range: Vec::new(),
@@ -292,7 +298,18 @@ impl CompareRequest {
                 "a velocity or acceleration record is integrated to a displacement on the line: needs «signal=line»",
             ));
         }
-        record.check()?;
+        // The velocity columns are counted against the system's coordinates, known once the
+        // model is read, unless the coordinates are named here.
+        let velocities_counted = o.coords.is_some();
+        RecordOptions {
+            velocity_col: if velocities_counted {
+                record.velocity_col.clone()
+            } else {
+                None
+            },
+            ..record
+        }
+        .check()?;
         let tolerances =
             Tolerances::new(o.rtol, o.rtol / 10.0).map_err(|e| OptionError::value("rtol", o.rtol, e))?;
         Ok(Self { options, tolerances })
@@ -320,6 +337,7 @@ impl CompareOptions {
             drive_col: self.drive_col.clone(),
             repair: self.repair,
             no_repair: self.no_repair,
+            velocity_col: self.velocity_col.clone(),
             signal: signal.into(),
             measured: self.measured,
             drive_period: None,
@@ -461,8 +479,16 @@ fn compare_one(
     let mut runs = Vec::with_capacity(ranges.len());
     let total: usize = ranges.iter().map(|r| r.len()).sum();
     let mut done = 0;
+    // A state given, or measured, sets the start: every sample is scored.
+    let measured_state = o.x0.is_none() && !grid.velocities.is_empty();
     for range in &ranges {
-        let init = o.init.unwrap_or_else(|| default_init(period, range.len()));
+        let init = o.init.unwrap_or_else(|| {
+            if measured_state {
+                0
+            } else {
+                default_init(period, range.len())
+            }
+        });
         let (score, pieces) = run_range(model, &grid, range.clone(), init, request)?;
         if score.scored == 0 && score.stopped.is_none() {
             return Err(OptionError::value(
@@ -588,6 +614,7 @@ fn compare_system(
         drive_col,
         repair: o.repair,
         no_repair: o.no_repair,
+        velocity_col: o.velocity_col.clone(),
         signal: domains
             .iter()
             .map(ToString::to_string)
@@ -616,10 +643,11 @@ fn compare_system(
     let mut runs = Vec::with_capacity(ranges.len() * n);
     let total: usize = ranges.iter().map(|r| r.len()).sum();
     let mut done = 0;
+    let measured_state = given.is_none() && !grid.velocities.is_empty();
     for range in &ranges {
-        // A state given sets the range's start: every sample is scored.
+        // A state given, or measured, sets the start: every sample is scored.
         let init = o.init.unwrap_or_else(|| {
-            if given.is_some() {
+            if given.is_some() || measured_state {
                 0
             } else {
                 default_init(period, range.len())
@@ -634,7 +662,9 @@ fn compare_system(
                 continue;
             }
             let state_given = given.as_ref().filter(|_| start == range.start);
-            if state_given.is_none() && end - start <= init.max(1) {
+            // A fit needs a sample beyond its own; a measured state needs none.
+            let needed = if measured_state { init } else { init.max(1) };
+            if state_given.is_none() && end - start <= needed {
                 skipped += 1;
                 continue;
             }
@@ -651,6 +681,11 @@ fn compare_system(
             let measured: Vec<&[f64]> = columns.iter().map(|c| &c[start..end]).collect();
             let state = match state_given {
                 Some((x, v)) => MultiState::new(&x.0, &v.0).map(|s| (s, 0.0)),
+                None if measured_state => {
+                    let q: Vec<f64> = measured.iter().map(|m| m[0]).collect();
+                    let v: Vec<f64> = grid.velocities.iter().map(|v| v[start]).collect();
+                    MultiState::new(&q, &v).map(|s| (s, 0.0))
+                }
                 None => {
                     let first: Vec<&[f64]> = measured.iter().map(|m| &m[..init]).collect();
                     multi::fit_initial_state(&driven, &first, &domains, &times[..init], request.tolerances)
@@ -821,6 +856,7 @@ fn run_range(
             (Some(x), Some(v)) if start == range.start => Some([x, v]),
             _ => None,
         };
+        let measured_state = given.is_none() && !grid.velocities.is_empty();
         if given.is_none() && end - start <= init {
             skipped += 1;
             continue;
@@ -830,6 +866,7 @@ fn run_range(
         let model = &driven_on(model, grid, start, end)?;
         let state = match given {
             Some(state) => Ok((state, 0.0)),
+            None if measured_state => Ok(([y[0], grid.velocities[0][start]], 0.0)),
             None => fit_initial_state(model, &y[..init], t0, grid.dt, domain, request.tolerances)
                 .map(|fit| (fit.state, fit.rms)),
         };

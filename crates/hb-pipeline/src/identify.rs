@@ -1138,6 +1138,7 @@ pub fn identify_data(
             domain: data.domain,
             others: Vec::new(),
             drives: data.drives.clone(),
+            velocities: Vec::new(),
             notes: Vec::new(),
         };
         let model = &identification.model;

@@ -223,6 +223,11 @@ pub struct RecordOptions {
     /// get no equation.
     #[serde(with = "optional_text")]
     pub drive_col: Option<ColumnList>,
+    /// The columns of the coordinates' measured velocities (a motor driver's, a tachometer's),
+    /// one per coordinate in their order: read with the record and conditioned on its grid;
+    /// `compare` starts a free run from the first sample's measured state.
+    #[serde(with = "optional_text")]
+    pub velocity_col: Option<ColumnList>,
     /// Replace isolated time-stamp glitches and every encoder spike (each named in a note).
     pub repair: bool,
     /// Keep every spike in the record (a warning) instead of replacing them when they are few
@@ -315,6 +320,15 @@ impl RecordOptions {
                 "measured",
                 self.measured,
                 "a velocity or acceleration record is integrated to a displacement on the line: needs «signal=line»",
+            ));
+        }
+        if let Some(v) = &self.velocity_col
+            && v.len() != n
+        {
+            return Err(OptionError::value(
+                "velocity_col",
+                v,
+                format!("give one velocity column per coordinate ({n})"),
             ));
         }
         self.names()?;
@@ -420,6 +434,10 @@ impl RecordOptions {
             dt: self.dt,
             others: list("coords", coords.get(1..).unwrap_or_default())?,
             drives: list("drive_col", self.drive_cols())?,
+            velocities: list(
+                "velocity_col",
+                self.velocity_col.as_ref().map_or(&[], |v| v.columns()),
+            )?,
         })
     }
 }
@@ -561,6 +579,7 @@ fn arrays_record(
         others: others.iter().map(|o| o.to_vec()).collect(),
         lines: None,
         drives: drives.iter().map(|d| d.to_vec()).collect(),
+        velocities: Vec::new(),
     })
 }
 
@@ -717,6 +736,9 @@ pub fn load_all(
             pad(&mut mine.x, &theirs.x);
         }
         for (mine, theirs) in joined.drives.iter_mut().zip(&data.drives) {
+            pad(mine, theirs);
+        }
+        for (mine, theirs) in joined.velocities.iter_mut().zip(&data.velocities) {
             pad(mine, theirs);
         }
         joined

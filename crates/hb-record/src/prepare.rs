@@ -434,6 +434,8 @@ pub struct GridData {
     pub others: Vec<Channel>,
     /// The measured drives on the same grid (NaN in the gaps), in the order read.
     pub drives: Vec<Vec<f64>>,
+    /// The coordinates' measured velocities on the same grid (NaN in the gaps), when read.
+    pub velocities: Vec<Vec<f64>>,
     /// What was done to the record or found in it, in order.
     pub notes: Vec<Note>,
 }
@@ -460,6 +462,9 @@ pub struct Data {
     /// The measured drives on the same clock (resampled with the record; NaN in the gaps), in
     /// the order read.
     pub drives: Vec<Vec<f64>>,
+    /// The coordinates' measured velocities on the same clock (resampled with the record), when
+    /// read.
+    pub velocities: Vec<Vec<f64>>,
 }
 
 impl Data {
@@ -518,6 +523,7 @@ pub fn condition(
     };
     let mut record = record;
     let drives_read = std::mem::take(&mut record.drives);
+    let velocities_read = std::mem::take(&mut record.velocities);
     let others_read = std::mem::take(&mut record.others);
     if others_read.len() != options.others.len() {
         return Err(PrepareError::Coordinates {
@@ -563,6 +569,7 @@ pub fn condition(
         out
     };
     let drives: Vec<Vec<f64>> = drives_read.into_iter().map(on_grid).collect();
+    let velocities: Vec<Vec<f64>> = velocities_read.into_iter().map(on_grid).collect();
     let mut others: Vec<Channel> = others_read
         .into_iter()
         .zip(&options.others)
@@ -635,6 +642,7 @@ pub fn condition(
         domain: options.signal,
         others,
         drives,
+        velocities,
         notes: kept,
     })
 }
@@ -824,6 +832,7 @@ impl GridData {
             domain,
             others,
             drives,
+            velocities,
             ..
         } = self;
         let longest = circle_signal::longest_piece(&pieces);
@@ -895,6 +904,10 @@ impl GridData {
             .into_iter()
             .map(|p| resample(p, Domain::Line))
             .collect::<Result<Vec<_>, _>>()?;
+        let velocities = velocities
+            .into_iter()
+            .map(|v| resample(v, Domain::Line))
+            .collect::<Result<Vec<_>, _>>()?;
         let others = others
             .into_iter()
             .map(|c| {
@@ -916,6 +929,7 @@ impl GridData {
             resampled_from,
             others,
             drives,
+            velocities,
         })
     }
 }

@@ -101,6 +101,7 @@ fn an_unsettled_start_and_end_are_left_out_of_every_column() {
         theta: place(1.0),
         others: vec![place(10.0)],
         drives: vec![place(-1.0)],
+        velocities: vec![place(5.0), place(6.0)],
         lines: Some((2..n as u64 + 2).collect()),
     };
     let options = PrepareOptions::new(Domain::Line).with_others(vec![Domain::Line]);
@@ -143,6 +144,10 @@ fn an_unsettled_start_and_end_are_left_out_of_every_column() {
         kept.iter().map(|v| 10.0 * v).collect::<Vec<_>>()
     );
     assert_eq!(grid.drives[0], kept.iter().map(|v| -v).collect::<Vec<_>>());
+    assert_eq!(
+        grid.velocities,
+        [5.0, 6.0].map(|k| kept.iter().map(|v| k * v).collect::<Vec<_>>())
+    );
 }
 
 /// The DFKI double pendulum's records (`trajectory_*.csv` in the shared benchmarks): each starts

@@ -81,6 +81,7 @@ impl<'a> Samples<'a> {
                     domain,
                     others: Vec::new(),
                     drives: self.drive.map(<[f64]>::to_vec).into_iter().collect(),
+                    velocities: Vec::new(),
                     notes: Vec::new(),
                 }))
             }

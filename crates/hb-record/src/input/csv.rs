@@ -39,10 +39,16 @@ pub(super) fn read<'a>(bytes: &'a [u8], options: &ReadOptions) -> Result<Record,
     );
     let other_fields: Vec<Field<'_>> = columns.others.iter().map(|&i| field(Role::Angle, i)).collect();
     let drive_fields: Vec<Field<'_>> = columns.drives.iter().map(|&i| field(Role::Drive, i)).collect();
+    let velocity_fields: Vec<Field<'_>> = columns
+        .velocities
+        .iter()
+        .map(|&i| field(Role::Velocity, i))
+        .collect();
 
     let mut record = Record {
         others: vec![Vec::new(); other_fields.len()],
         drives: vec![Vec::new(); drive_fields.len()],
+        velocities: vec![Vec::new(); velocity_fields.len()],
         ..Record::default()
     };
     let mut numbers = Vec::new();
@@ -71,6 +77,9 @@ pub(super) fn read<'a>(bytes: &'a [u8], options: &ReadOptions) -> Result<Record,
             values.push(field.value(cells, line)?);
         }
         for (field, values) in drive_fields.iter().zip(&mut record.drives) {
+            values.push(field.value(cells, line)?);
+        }
+        for (field, values) in velocity_fields.iter().zip(&mut record.velocities) {
             values.push(field.value(cells, line)?);
         }
         numbers.push(line);

@@ -272,6 +272,7 @@ impl Role {
             Role::Time => "the time",
             Role::Angle => "a value",
             Role::Drive => "a drive sample",
+            Role::Velocity => "a velocity",
         }
     }
 }

@@ -109,6 +109,8 @@ pub struct Record {
     pub lines: Option<Vec<u64>>,
     /// The measured drives at each time, in the order of [`ReadOptions::drives`].
     pub drives: Vec<Vec<f64>>,
+    /// The measured velocities at each time, in the order of [`ReadOptions::velocities`].
+    pub velocities: Vec<Vec<f64>>,
 }
 
 /// A column chosen by header name or by 1-based position.
@@ -164,6 +166,9 @@ pub struct ReadOptions {
     /// acceleration, a motor's torque), sampled with them. Never the time or a coordinate's
     /// column.
     pub drives: Vec<Column>,
+    /// Columns of the coordinates' measured velocities (a motor driver's, a tachometer's), one
+    /// per coordinate in their order, read beside them.
+    pub velocities: Vec<Column>,
 }
 
 impl ReadOptions {
@@ -174,7 +179,8 @@ impl ReadOptions {
             .into_iter()
             .flatten()
             .chain(&self.others)
-            .chain(&self.drives);
+            .chain(&self.drives)
+            .chain(&self.velocities);
         for column in chosen {
             if let Column::Position(0) = column {
                 return Err(InputError::BadColumn {
@@ -268,18 +274,21 @@ impl ReadOptions {
         };
         let others = further(Role::Angle, &self.others)?;
         let drives = further(Role::Drive, &self.drives)?;
+        let velocities = further(Role::Velocity, &self.velocities)?;
         let order_from_data = names.is_none()
             && width == 2
             && self.time.is_none()
             && self.angle.is_none()
             && self.dt.is_none()
             && self.others.is_empty()
-            && self.drives.is_empty();
+            && self.drives.is_empty()
+            && self.velocities.is_empty();
         Ok(Columns {
             time,
             angle,
             others,
             drives,
+            velocities,
             order_from_data,
         })
     }
@@ -343,6 +352,8 @@ pub enum Role {
     Angle,
     /// The measured drive.
     Drive,
+    /// A measured velocity.
+    Velocity,
 }
 
 impl std::fmt::Display for Role {
@@ -351,6 +362,7 @@ impl std::fmt::Display for Role {
             Role::Time => "time",
             Role::Angle => "angle",
             Role::Drive => "drive",
+            Role::Velocity => "velocity",
         })
     }
 }
@@ -366,6 +378,8 @@ pub(crate) struct Columns {
     pub(crate) others: Vec<usize>,
     /// The measured drives' columns.
     pub(crate) drives: Vec<usize>,
+    /// The measured velocities' columns.
+    pub(crate) velocities: Vec<usize>,
     /// Two unnamed columns and nothing chosen: `time` and `angle` are columns 1 and 2 as read,
     /// and [`order_from_data`] swaps them when the data say the second is the time.
     pub(crate) order_from_data: bool,

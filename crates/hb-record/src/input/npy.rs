@@ -85,12 +85,14 @@ pub(super) fn read(bytes: &[u8], options: &ReadOptions) -> Result<Record, InputE
     };
     let others = read(Role::Angle, &columns.others)?;
     let drives = read(Role::Drive, &columns.drives)?;
+    let velocities = read(Role::Velocity, &columns.velocities)?;
     let mut record = Record {
         t,
         theta,
         others,
         lines: None,
         drives,
+        velocities,
     };
     if columns.order_from_data {
         super::order_from_data(&mut record);

@@ -55,6 +55,11 @@ pub struct InputArgs {
     /// two that fit) and encoder spikes, and list each fix on stderr.
     #[arg(long)]
     pub repair: bool,
+    /// The coordinates' measured velocities (a motor driver's, a tachometer's): columns of the
+    /// record, one per coordinate in their order (NAME=COLUMN names one). `compare` starts each
+    /// free run from the first sample's measured state, every sample scored.
+    #[arg(long, value_name = "NAME|N[,..]")]
+    pub velocity_col: Option<ColumnList>,
     /// Keep every isolated spike in the record (warned of) instead of replacing them by the local
     /// prediction when they are few (at most one per 1000 samples; the default, said in a note).
     #[arg(long, conflicts_with = "repair")]
@@ -107,6 +112,7 @@ impl InputArgs {
             drive_col: self.drive_col.clone(),
             repair: self.repair,
             no_repair: self.no_repair,
+            velocity_col: self.velocity_col.clone(),
             signal: self.signal.clone(),
             measured: self.measured,
             drive_period: self.drive_period.clone(),
