@@ -249,7 +249,7 @@ pub struct CompareRequest {
 
 impl CompareRequest {
     /// The integrator's default relative tolerance.
-    pub const DEFAULT_RTOL: f64 = 1e-10;
+    pub const DEFAULT_RTOL: f64 = pendulum_sim::Tolerances::DEFAULT_RTOL;
     /// The fewest samples that set an initial state.
     pub const MIN_INIT: usize = 2;
 

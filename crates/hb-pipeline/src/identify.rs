@@ -981,7 +981,7 @@ impl IdentifyReport {
 
 /// The integrator's relative tolerance in the refinement (as `compare`'s default: the
 /// differences of free runs a millionth of a coefficient apart must stand above its error).
-pub const REFINE_RTOL: f64 = 1e-10;
+pub const REFINE_RTOL: f64 = pendulum_sim::Tolerances::DEFAULT_RTOL;
 /// The most Levenberg–Marquardt iterations of the refinement.
 pub const REFINE_ITERATIONS: usize = 30;
 

@@ -542,7 +542,7 @@ impl Default for SimulateOptions {
             v0: 0.0,
             q0: None,
             dq0: None,
-            rtol: 1e-10,
+            rtol: pendulum_sim::Tolerances::DEFAULT_RTOL,
             drive_frequency: None,
             sample_rate: None,
             samples_per_period: None,

@@ -84,11 +84,17 @@ impl Tolerances {
     }
 }
 
+impl Tolerances {
+    /// The relative tolerance every simulation and free run uses unless told otherwise, the one
+    /// place it is written: `1e-10` (the absolute one a tenth of it).
+    pub const DEFAULT_RTOL: f64 = 1e-10;
+}
+
 impl Default for Tolerances {
-    /// `rtol = 1e-10`, `atol = 1e-11`.
+    /// `rtol = `[`Tolerances::DEFAULT_RTOL`]` = 1e-10`, `atol = 1e-11`.
     fn default() -> Self {
         Self {
-            rtol: 1e-10,
+            rtol: Self::DEFAULT_RTOL,
             atol: 1e-11,
         }
     }
