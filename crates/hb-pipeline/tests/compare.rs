@@ -234,3 +234,23 @@ fn a_systems_run_refuses_a_state_or_drives_that_do_not_fit() {
         "even grid",
     );
 }
+
+/// Measured velocities are columns of a file: samples given as arrays with `velocity_col` are
+/// refused by name, not read without them.
+#[test]
+fn arrays_refuse_velocity_columns() {
+    let x: Vec<f64> = (0..200).map(|i| (f64::from(i) * 0.1).sin()).collect();
+    let options = hb_pipeline::RecordOptions {
+        dt: Some(0.1),
+        velocity_col: Some("v".parse().unwrap()),
+        ..Default::default()
+    };
+    let source = Source::Arrays {
+        coords: vec![&x],
+        t: None,
+        drives: Vec::new(),
+    };
+    let e = hb_pipeline::condition_source(source, &options, &mut ()).unwrap_err();
+    assert_eq!(e.kind(), hb_pipeline::ErrorKind::Options);
+    assert!(e.to_string().contains("velocity_col"), "{e}");
+}
