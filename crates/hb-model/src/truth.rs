@@ -355,7 +355,8 @@ pub fn system_equations(
         .enumerate()
         .map(|(own, equation)| {
             let mut terms: Vec<(TermSpec, f64)> = Vec::new();
-            for &(name, value) in &equation.terms {
+            for (name, value) in &equation.terms {
+                let (name, value) = (name.as_ref(), *value);
                 for (text, multiple) in written_out(name) {
                     let list = TermList::from_names_in(&[text], &source, own)?;
                     for (spec, factor) in in_frame(list.terms()[0], frame)? {
@@ -383,7 +384,8 @@ fn simulator_names(equations: &[NormalisedEquation]) -> Result<Names, ModelError
     let mut drives: Vec<&str> = Vec::new();
     for (name, _) in equations.iter().flat_map(|e| &e.terms) {
         let alone = name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
-        if alone && !coordinates.contains(name) && !drives.contains(name) {
+        let name = name.as_ref();
+        if alone && !coordinates.contains(&name) && !drives.contains(&name) {
             drives.push(name);
         }
     }

@@ -425,7 +425,7 @@ mod systems {
             let renamed: Vec<(String, f64)> = own
                 .terms
                 .iter()
-                .map(|&(n, v)| (n.replace("q1", "theta1").replace("q2", "theta2"), v))
+                .map(|(n, v)| (n.replace("q1", "theta1").replace("q2", "theta2"), *v))
                 .collect();
             assert_eq!(equation.named(), renamed);
         }
@@ -439,7 +439,7 @@ mod systems {
         )
         .unwrap();
         for (equation, own) in truth.iter().zip(arm.normalised_equations()) {
-            let own: Vec<(String, f64)> = own.terms.iter().map(|&(n, v)| (n.to_owned(), v)).collect();
+            let own: Vec<(String, f64)> = own.terms.iter().map(|(n, v)| (n.to_string(), *v)).collect();
             assert_eq!(equation.named(), own);
         }
     }

@@ -638,12 +638,20 @@ impl System {
         let (losses, harmonics) = match self {
             Self::Pendulum(p) => (*p.losses(), *p.drive_harmonics()),
             Self::Duffing(d) => (*d.losses(), *d.drive_harmonics()),
-            Self::DoublePendulum(_) => {
-                return "theta1'' + mu lambda theta2'' cos(theta1-theta2) + mu lambda theta2'^2 sin(theta1-theta2) \
+            Self::DoublePendulum(p) => {
+                let text = "theta1'' + mu lambda theta2'' cos(theta1-theta2) + mu lambda theta2'^2 sin(theta1-theta2) \
                         + omega2 sin theta1 - f sin(t) cos theta1 + c1 theta1' = 0; theta2'' + (1/lambda) theta1'' \
                         cos(theta1-theta2) - (1/lambda) theta1'^2 sin(theta1-theta2) + (omega2/lambda) sin theta2 \
-                        - (f/lambda) sin(t) cos theta2 + c2 theta2' = 0 (omega2 = 1/r^2)"
-                    .to_owned();
+                        - (f/lambda) sin(t) cos theta2 + c2 theta2' = 0 (omega2 = 1/r^2)";
+                return if p.drive_harmonics().is_none() {
+                    text.to_owned()
+                } else {
+                    text.replace("f sin(t)", "f [sin(t) + sum_k ratio_k sin(k t + phase_k)]")
+                        .replace(
+                            "(f/lambda) sin(t)",
+                            "(f/lambda) [sin(t) + sum_k ratio_k sin(k t + phase_k)]",
+                        )
+                };
             }
             Self::Arm(_) => {
                 return "M(q) q'' + C(q, q') q' - G(q) + b q' + cf sign(q') = tau, in seconds, q1 the shoulder angle \
@@ -919,8 +927,8 @@ fn check_belongs(o: &SimulateOptions) -> Result<(), OptionError> {
         (
             "drive_harmonic",
             !o.drive_harmonic.is_empty(),
-            ONE,
-            "a harmonic of the drive of one coordinate",
+            &[Pendulum, Duffing, DoublePendulum],
+            "a harmonic of a periodic drive",
         ),
         (
             "drive",
@@ -1186,7 +1194,8 @@ impl Rig {
                         o.c.unwrap_or(c1),
                         o.c2.unwrap_or(c2),
                     )
-                    .map_err(parameter(names))?,
+                    .map_err(parameter(names))?
+                    .with_drive_harmonics(harmonics),
                 )
             }
             SystemKind::Arm => {

@@ -46,7 +46,7 @@ fn every_coefficient_of_the_whirling_double_pendulum_comes_back_by_the_weak_form
         .iter()
         .enumerate()
     {
-        let spec: Vec<&str> = truth.terms.iter().map(|(name, _)| *name).collect();
+        let spec: Vec<&str> = truth.terms.iter().map(|(name, _)| name.as_ref()).collect();
         let list = TermList::parse_in(&spec.join(", "), &names, own).unwrap();
         let params = IdentifyParams::builder(clock)
             .form(ModelForm::from_terms(list))
@@ -99,7 +99,7 @@ fn the_papers_method_on_vector_orbits_of_the_double_pendulum() {
         .iter()
         .enumerate()
     {
-        let spec: Vec<&str> = truth.terms.iter().map(|(name, _)| *name).collect();
+        let spec: Vec<&str> = truth.terms.iter().map(|(name, _)| name.as_ref()).collect();
         let list = TermList::parse_in(&spec.join(", "), &names, own).unwrap();
         let params = IdentifyParams::builder(clock)
             .form(ModelForm::from_terms(list))

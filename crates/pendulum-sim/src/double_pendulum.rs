@@ -7,6 +7,7 @@ use crate::equations::{
     SIN_Q1_MINUS_Q2_Q1_D_SQ, SIN_Q1_MINUS_Q2_Q2_D_SQ, SIN_Q2, SIN_T_COS_Q1, SIN_T_COS_Q2,
 };
 use crate::error::{SimError, finite, invalid, non_negative, positive};
+use crate::machine::DriveHarmonics;
 use crate::multi::{MultiSystem, SingularMass, solve2};
 
 /// A double pendulum whose pivot is shaken horizontally, in the non-dimensional time of the
@@ -53,6 +54,7 @@ pub struct DoublePendulum {
     f: f64,
     c1: f64,
     c2: f64,
+    harmonics: DriveHarmonics,
 }
 
 /// The serialised form of [`DoublePendulum`].
@@ -64,12 +66,15 @@ struct DoublePendulumRaw {
     f: f64,
     c1: f64,
     c2: f64,
+    #[serde(default, skip_serializing_if = "DriveHarmonics::is_empty")]
+    harmonics: DriveHarmonics,
 }
 
 impl TryFrom<DoublePendulumRaw> for DoublePendulum {
     type Error = SimError;
     fn try_from(raw: DoublePendulumRaw) -> Result<Self, SimError> {
-        Self::new(raw.mu, raw.lambda, raw.omega2, raw.f, raw.c1, raw.c2)
+        Ok(Self::new(raw.mu, raw.lambda, raw.omega2, raw.f, raw.c1, raw.c2)?
+            .with_drive_harmonics(raw.harmonics))
     }
 }
 
@@ -82,6 +87,7 @@ impl From<DoublePendulum> for DoublePendulumRaw {
             f: p.f,
             c1: p.c1,
             c2: p.c2,
+            harmonics: p.harmonics,
         }
     }
 }
@@ -105,7 +111,22 @@ impl DoublePendulum {
             f: finite("f", f)?,
             c1: finite("c1", c1)?,
             c2: finite("c2", c2)?,
+            harmonics: DriveHarmonics::none(),
         })
+    }
+
+    /// The same pendulum whose base acceleration has the harmonics `harmonics` of the drive
+    /// beside its fundamental: the drive becomes `f (sin t + Σ ρ_k sin(k t + φ_k))`, as a real
+    /// shaker's does.
+    pub fn with_drive_harmonics(mut self, harmonics: DriveHarmonics) -> Self {
+        self.harmonics = harmonics;
+        self
+    }
+
+    /// The drive's harmonics beyond the fundamental ([`DriveHarmonics::none`] unless
+    /// [`with_drive_harmonics`](Self::with_drive_harmonics) gave some).
+    pub fn drive_harmonics(&self) -> &DriveHarmonics {
+        &self.harmonics
     }
 
     /// The chaotic whirling double pendulum [`DoublePendulum::WHIRLING`]. From `θ = (2, 0)` at
@@ -126,6 +147,7 @@ impl DoublePendulum {
             f,
             c1,
             c2,
+            harmonics: DriveHarmonics::none(),
         }
     }
 
@@ -154,12 +176,16 @@ impl DoublePendulum {
         self.c2
     }
 
-    /// The drive as it enters the equations at time `t`, `f sin t`: the pivot's acceleration is
-    /// its negative, `−f sin t`, and the equation of link `i` holds it as `−f sin(t) cos θi`
-    /// (divided by `λ` for link 2).
+    /// The drive as it enters the equations at time `t`, `f sin t` (plus `f Σ ρ_k sin(k t + φ_k)`
+    /// of its [harmonics](Self::drive_harmonics)): the pivot's acceleration is its negative, and
+    /// the equation of link `i` holds it as `−f sin(t) cos θi` (divided by `λ` for link 2).
     #[inline]
     pub fn drive(&self, t: f64) -> f64 {
-        self.f * t.sin()
+        if self.harmonics.has_terms() {
+            self.f * (t.sin() + self.harmonics.sin_sum(t))
+        } else {
+            self.f * t.sin()
+        }
     }
 
     /// The energy of the undamped, undriven pendulum divided by `(m1+m2) l1² Ω²`, zero hanging at
@@ -178,31 +204,51 @@ impl DoublePendulum {
     /// `q1'' + μλ q2''*cos(q1-q2) + μλ sin(q1-q2)*q2'^2 + ω² sin(q1) − f sin(t)*cos(q1) + c1 q1'`,
     /// equation 2 `q2'' + (1/λ) q1''*cos(q1-q2) − (1/λ) sin(q1-q2)*q1'^2 + (ω²/λ) sin(q2) −
     /// (f/λ) sin(t)*cos(q2) + c2 q2'`.
+    ///
+    /// A harmonic `ρ_k sin(k t + φ_k)` of the drive adds `−f ρ_k cos φ_k sin(kt)*cos(qi)` and
+    /// `−f ρ_k sin φ_k cos(kt)*cos(qi)` (divided by `λ` for link 2), both written even where one
+    /// is 0.
     pub fn normalised_equations(&self) -> Vec<NormalisedEquation> {
         let ml = self.mu * self.lambda;
         let il = 1.0 / self.lambda;
-        vec![
+        let mut equations = vec![
             NormalisedEquation {
                 acceleration: Q1_DD,
                 terms: vec![
-                    (Q2_DD_COS_Q1_MINUS_Q2, ml),
-                    (SIN_Q1_MINUS_Q2_Q2_D_SQ, ml),
-                    (SIN_Q1, self.omega2),
-                    (SIN_T_COS_Q1, -self.f),
-                    (Q1_D, self.c1),
+                    (Q2_DD_COS_Q1_MINUS_Q2.into(), ml),
+                    (SIN_Q1_MINUS_Q2_Q2_D_SQ.into(), ml),
+                    (SIN_Q1.into(), self.omega2),
+                    (SIN_T_COS_Q1.into(), -self.f),
+                    (Q1_D.into(), self.c1),
                 ],
             },
             NormalisedEquation {
                 acceleration: Q2_DD,
                 terms: vec![
-                    (Q1_DD_COS_Q1_MINUS_Q2, il),
-                    (SIN_Q1_MINUS_Q2_Q1_D_SQ, -il),
-                    (SIN_Q2, self.omega2 * il),
-                    (SIN_T_COS_Q2, -self.f * il),
-                    (Q2_D, self.c2),
+                    (Q1_DD_COS_Q1_MINUS_Q2.into(), il),
+                    (SIN_Q1_MINUS_Q2_Q1_D_SQ.into(), -il),
+                    (SIN_Q2.into(), self.omega2 * il),
+                    (SIN_T_COS_Q2.into(), -self.f * il),
+                    (Q2_D.into(), self.c2),
                 ],
             },
-        ]
+        ];
+        for h in self.harmonics.iter() {
+            let (k, (sp, cp)) = (h.k(), h.phase().sin_cos());
+            for (i, scale) in [(1, 1.0), (2, il)] {
+                equations[i - 1].terms.extend([
+                    (
+                        format!("sin({k}t)*cos(q{i})").into(),
+                        -self.f * h.ratio() * cp * scale,
+                    ),
+                    (
+                        format!("cos({k}t)*cos(q{i})").into(),
+                        -self.f * h.ratio() * sp * scale,
+                    ),
+                ]);
+            }
+        }
+        equations
     }
 }
 

@@ -13,6 +13,8 @@
 //! of the physical equation (a torque, a base acceleration) stands with a negative coefficient.
 //! [`NormalisedEquation`] lists them; the systems give theirs (`normalised_equations`).
 
+use std::borrow::Cow;
+
 use serde::Serialize;
 
 /// One equation `q_i'' + Σ_k c_k g_k = 0`: the name of its own acceleration and its terms with
@@ -21,14 +23,15 @@ use serde::Serialize;
 pub struct NormalisedEquation {
     /// The acceleration whose coefficient is 1, e.g. `q1''`.
     pub acceleration: &'static str,
-    /// `(name, coefficient)` of every other term, in a fixed order.
-    pub terms: Vec<(&'static str, f64)>,
+    /// `(name, coefficient)` of every other term, in a fixed order (a name written here once, or
+    /// made of them, such as a drive harmonic's `sin(2t)*cos(q1)`).
+    pub terms: Vec<(Cow<'static, str>, f64)>,
 }
 
 impl NormalisedEquation {
     /// The coefficient of the term named `name`, if the equation has it.
     pub fn coefficient(&self, name: &str) -> Option<f64> {
-        self.terms.iter().find(|(n, _)| *n == name).map(|&(_, c)| c)
+        self.terms.iter().find(|(n, _)| n == name).map(|&(_, c)| c)
     }
 }
 

@@ -142,7 +142,7 @@ fn the_normalised_equations_hold_at_the_accelerations() {
         system.accelerations(t, x, v, &mut a).unwrap();
         for eq in system.normalised_equations() {
             let own = value(eq.acceleration, t, x, v, &a);
-            let parts: Vec<f64> = eq.terms.iter().map(|&(n, c)| c * value(n, t, x, v, &a)).collect();
+            let parts: Vec<f64> = eq.terms.iter().map(|(n, c)| c * value(n, t, x, v, &a)).collect();
             let scale = parts.iter().fold(own.abs(), |m, p| m.max(p.abs()));
             let r = (own + parts.iter().sum::<f64>()) / scale;
             assert!(r.abs() < 1e-14, "{}, state {k}: residual {r:e}", eq.acceleration);

@@ -14,8 +14,9 @@ use pendulum_sim::equations::{
     SIN_Q2_Q1_D_Q2_D, SIN_Q2_Q1_D_SQ, SIN_Q2_Q2_D_SQ, SIN_T_COS_Q1, SIN_T_COS_Q2, TAU1, TAU2,
 };
 use pendulum_sim::{
-    ArmParameters, DoublePendulum, MultiConfig, MultiState, MultiSystem, NormalisedEquation, Pendulum,
-    SecondOrderSystem, SimulationConfig, Tolerances, Torque, TorqueDoublePendulum, free_run, multi, simulate,
+    ArmParameters, DoublePendulum, DriveHarmonic, DriveHarmonics, MultiConfig, MultiState, MultiSystem,
+    NormalisedEquation, Pendulum, SecondOrderSystem, SimulationConfig, Tolerances, Torque,
+    TorqueDoublePendulum, free_run, multi, simulate,
 };
 use proptest::prelude::*;
 
@@ -54,7 +55,17 @@ fn term(name: &str, t: f64, q: &[f64], v: &[f64], a: &[f64], tau: [f64; 2]) -> f
         n if n == SIN_Q1_MINUS_Q2_Q2_D_SQ => d.sin() * v[1] * v[1],
         n if n == SIN_T_COS_Q1 => t.sin() * q[0].cos(),
         n if n == SIN_T_COS_Q2 => t.sin() * q[1].cos(),
-        other => panic!("no term {other}"),
+        // A drive harmonic, `sin(kt)*cos(qi)` or `cos(kt)*cos(qi)`.
+        other => {
+            let (drive, angle) = other
+                .split_once("t)*cos(q")
+                .unwrap_or_else(|| panic!("no term {other}"));
+            let i: usize = angle.trim_end_matches(')').parse().unwrap();
+            let (f, k) = drive.split_at(4);
+            let k: f64 = k.parse().unwrap();
+            let d = if f == "sin(" { (k * t).sin() } else { (k * t).cos() };
+            d * q[i - 1].cos()
+        }
     }
 }
 
@@ -74,7 +85,7 @@ fn residuals(
             let parts: Vec<f64> = eq
                 .terms
                 .iter()
-                .map(|&(name, c)| c * term(name, t, q, v, a, tau))
+                .map(|(name, c)| c * term(name, t, q, v, a, tau))
                 .collect();
             let scale = parts.iter().fold(own.abs(), |m, p| m.max(p.abs()));
             (own + parts.iter().sum::<f64>()) / scale
@@ -93,6 +104,15 @@ const STATES: [([f64; 2], [f64; 2]); 5] = [
 #[test]
 fn the_normalised_equations_hold_at_the_accelerations() {
     let pendulum = DoublePendulum::new(0.3, 0.7, 0.8, 0.9, 0.04, 0.06).unwrap();
+    // A shaker's drive: a second and a third harmonic, out of phase.
+    let shaken = pendulum.with_drive_harmonics(
+        DriveHarmonics::new(&[
+            DriveHarmonic::new(2, 0.3, 0.5).unwrap(),
+            DriveHarmonic::new(3, 0.1, -1.0).unwrap(),
+        ])
+        .unwrap(),
+    );
+    assert_eq!(shaken.normalised_equations()[0].terms.len(), 5 + 4);
     let arm = TorqueDoublePendulum::dfki().with_torques(
         Torque::sinusoid(0.4, 10.0, 0.3).unwrap(),
         Torque::measured(|t| -0.6 * (5.0 * t).cos()),
@@ -104,6 +124,13 @@ fn the_normalised_equations_hold_at_the_accelerations() {
         for r in residuals(&pendulum.normalised_equations(), t, q, v, &a, [0.0; 2]) {
             assert!(r.abs() < 1e-14, "base-excited, state {k}: residual {r:e}");
         }
+        shaken.accelerations(t, q, v, &mut a).unwrap();
+        for r in residuals(&shaken.normalised_equations(), t, q, v, &a, [0.0; 2]) {
+            assert!(
+                r.abs() < 1e-14,
+                "base-excited with harmonics, state {k}: residual {r:e}"
+            );
+        }
         arm.accelerations(t, q, v, &mut a).unwrap();
         let tau = [arm.torques()[0].at(t), arm.torques()[1].at(t)];
         for r in residuals(&arm.normalised_equations(), t, q, v, &a, tau) {
@@ -111,9 +138,9 @@ fn the_normalised_equations_hold_at_the_accelerations() {
         }
     }
     // The terms each equation has, in the grammar's names, as the identification will fit them.
-    let names = |eqs: &[NormalisedEquation]| -> Vec<Vec<&str>> {
+    let names = |eqs: &[NormalisedEquation]| -> Vec<Vec<String>> {
         eqs.iter()
-            .map(|e| e.terms.iter().map(|(n, _)| *n).collect())
+            .map(|e| e.terms.iter().map(|(n, _)| n.to_string()).collect())
             .collect()
     };
     assert_eq!(

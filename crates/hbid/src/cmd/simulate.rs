@@ -106,8 +106,9 @@ pub struct SimulateArgs {
     #[arg(long, value_name = "C", allow_hyphen_values = true, help_heading = SYSTEM)]
     cubic_damping: Option<f64>,
     /// A harmonic of the drive, K:RATIO[:PHASE] (repeatable): harmonic K (2 to 16) with amplitude
-    /// RATIO times f and phase PHASE radians [default: 0], added to the pendulum's base acceleration
-    /// sin(t) as RATIO sin(K t + PHASE), or to the Duffing forcing cos(t) as RATIO cos(K t + PHASE).
+    /// RATIO times f and phase PHASE radians [default: 0], added to the pendulum's (or the double
+    /// pendulum's) base acceleration sin(t) as RATIO sin(K t + PHASE), or to the Duffing forcing
+    /// cos(t) as RATIO cos(K t + PHASE).
     #[arg(long, value_name = "K:RATIO[:PHASE]", help_heading = SYSTEM)]
     drive_harmonic: Vec<HarmonicText>,
     /// `drive`, or `none` for a free decay (f = 0; the time unit stays the one --drive-frequency sets).
