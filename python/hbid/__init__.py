@@ -30,6 +30,15 @@ The functions:
 - :func:`compare`: a saved model run freely under a record's measured input and scored against
   its measured output (:class:`Comparison`), the validation on held-out data.
 
+Several coordinates (a double pendulum's two angles, a robot arm's joints) are one system, one
+equation per coordinate, from the record to the saved model, its free run and its comparison::
+
+    sim = hbid.simulate(system="double-pendulum", samples=6400)
+    result = hbid.identify({"theta1": sim.named["theta1"], "theta2": sim.named["theta2"]},
+                           t=sim.t, terms={"theta1": "...", "theta2": "..."}, bootstrap=0)
+    result.equations["theta1"].coefficients
+    run = result.model.simulate(t=sim.t, x0=[...], v0=[...])   # t, theta1, theta2, theta1', theta2'
+
 Errors are the exceptions of :mod:`hbid.errors`, all :class:`HbidError`.
 """
 
@@ -39,8 +48,9 @@ from . import _hbid
 from ._common import HbidWarning
 from ._compare import Comparison, ModelRun, RangeScore, RunPiece, compare
 from ._embed import Embedding, Orbit, Orbits, embed, upos
-from ._identify import DroppedTerm, Identification, Selection, SelectionStep, identify
-from ._model import Model
+from ._equation import DroppedTerm, Equation, Selection, SelectionStep
+from ._identify import Identification, identify
+from ._model import Model, SystemRun
 from ._record import Record, read
 from ._simulate import Simulation, simulate
 from .errors import (
@@ -70,10 +80,12 @@ __all__ = [
     "ModelRun",
     "Simulation",
     "Identification",
+    "Equation",
     "Selection",
     "DroppedTerm",
     "SelectionStep",
     "Model",
+    "SystemRun",
     "Embedding",
     "Orbits",
     "Orbit",

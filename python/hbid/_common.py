@@ -7,7 +7,7 @@ from __future__ import annotations
 import json
 import os
 import warnings
-from typing import Any, Dict, Mapping, Optional, Tuple, Union
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -114,6 +114,61 @@ def column(col: Union[str, int, None], name: str) -> Optional[str]:
     if isinstance(col, bool) or not isinstance(col, (str, int, np.integer)):
         raise OptionsError(f"{name}: a column name or a 1-based position, not {col!r}")
     return str(col)
+
+
+ColumnsLike = Union[str, int, Sequence[Union[str, int]], Mapping[str, Union[str, int]], None]
+
+
+def columns(value: ColumnsLike, name: str) -> Union[str, List[str], None]:
+    """Columns of a file as the command line's ``A,B`` lists read them: one column (a header name
+    or a 1-based position), a sequence of them, or a mapping of the names terms call them to
+    their columns (``{"q1": "pos_meas1"}``, the command line's ``q1=pos_meas1``)."""
+    if value is None:
+        return None
+    if isinstance(value, Mapping):
+        items = []
+        for key, col in value.items():
+            if not isinstance(key, str):
+                raise OptionsError(f"{name}: the names must be texts, not {key!r}")
+            items.append(f"{key}={column(col, name)}")
+        return items
+    if isinstance(value, (str, int, np.integer)) and not isinstance(value, bool):
+        return str(value)
+    if isinstance(value, (list, tuple)):
+        return [column(v, name) for v in value]  # type: ignore[misc]
+    raise OptionsError(f"{name}: a column, a list of columns or a dict of names to columns, not {value!r}")
+
+
+def signals(value: Union[str, Sequence[str], None], name: str = "signal") -> Optional[str]:
+    """``signal=``: one domain for every coordinate, or one per coordinate (a sequence, or the
+    command line's ``circle,line``)."""
+    if value is None or isinstance(value, str):
+        return value
+    if isinstance(value, (list, tuple)) and all(isinstance(v, str) for v in value):
+        return ",".join(value)
+    raise OptionsError(f"{name}={value!r}: 'circle', 'line', or a list of them (one per coordinate)")
+
+
+def numbers(value: Any, name: str) -> Optional[str]:
+    """One number or a sequence of them (one per coordinate) as the command line's ``A,B``, each
+    exactly (the shortest text that reads back as the same float)."""
+    if value is None:
+        return None
+    items = list(value) if isinstance(value, (list, tuple, np.ndarray)) else [value]
+    out = []
+    for v in items:
+        if isinstance(v, (bool, np.bool_)):
+            raise OptionsError(f"{name}={value!r}: numbers, one per coordinate")
+        try:
+            f = float(v)
+        except (TypeError, ValueError):
+            raise OptionsError(f"{name}={value!r}: numbers, one per coordinate") from None
+        if not np.isfinite(f):
+            raise OptionsError(f"{name}={value!r}: must be finite")
+        out.append(repr(f))
+    if not out:
+        raise OptionsError(f"{name}: no value given")
+    return ",".join(out)
 
 
 def without(options: Dict[str, Any], *names: str) -> Tuple[Dict[str, Any], Dict[str, Any]]:

@@ -6,15 +6,15 @@ from __future__ import annotations
 
 import json
 import os
-from dataclasses import dataclass
-from typing import Any, Dict, Iterator, List, Optional, Sequence, Tuple, Union
+from dataclasses import dataclass, field
+from typing import Any, Dict, Iterator, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
 from . import _hbid
-from ._common import ArrayLike, PathLike, column, emit, options_json
+from ._common import ArrayLike, ColumnsLike, PathLike, column, columns, emit, numbers, options_json, signals
 from ._model import Model
-from ._record import source
+from ._record import Record, source
 from .errors import OptionsError
 
 #: The record's options of ``compare`` and their defaults (``signal``: the model's).
@@ -42,11 +42,15 @@ class RangeScore:
     max_error: Optional[float]
     """The largest difference."""
     initial_states: List[Tuple[float, float, float]]
-    """``(x, v, rms of the fit)`` of each piece run."""
+    """``(x, v, rms of the fit)`` of each piece run (of a system, this coordinate's position and
+    velocity, and the rms of the state's fit to every coordinate)."""
     skipped_pieces: int
     """Pieces between gaps too short to run."""
     stopped: Optional[str]
     """Where and why the model's run stopped, if it did."""
+    coordinate: Optional[str] = None
+    """The coordinate scored, for a system of several (each range has one score per
+    coordinate); None for a model of one."""
 
 
 @dataclass(frozen=True)
@@ -69,9 +73,10 @@ class RunPiece:
 
 @dataclass(frozen=True, eq=False)
 class Comparison:
-    """What :func:`compare` gives: one :class:`RangeScore` per range (``ranges``), the runs
-    themselves (``runs``, a list of :class:`RunPiece` per range, for plots), the notes, and the
-    report as ``hbid compare --json`` prints it (``report``)."""
+    """What :func:`compare` gives: one :class:`RangeScore` per range (``ranges``; of a system one
+    per range and coordinate, each range's coordinates in order), the runs themselves (``runs``,
+    a list of :class:`RunPiece` per entry of ``ranges``, for plots), the notes, and the report as
+    ``hbid compare --json`` prints it (``report``)."""
 
     ranges: List[RangeScore]
     runs: List[List[RunPiece]]
@@ -80,16 +85,26 @@ class Comparison:
     notes: List[str]
     report: Dict[str, Any]
     json_text: str
+    coordinates: List[str] = field(default_factory=list)
+    """The coordinates of a system, in order; empty for a model of one."""
 
     @property
     def rmse(self) -> List[Optional[float]]:
-        """The RMSE of each range."""
+        """The RMSE of each range (of a system, of each range and coordinate)."""
         return [r.rmse for r in self.ranges]
 
     @property
     def fit_percent(self) -> List[Optional[float]]:
-        """The fit percentage of each range."""
+        """The fit percentage of each range (of a system, of each range and coordinate)."""
         return [r.fit_percent for r in self.ranges]
+
+    @property
+    def by_coordinate(self) -> Dict[str, List[RangeScore]]:
+        """A system's scores by coordinate, each coordinate's ranges in order (``{"x": ranges}``
+        for a model of one)."""
+        if not self.coordinates:
+            return {"x": list(self.ranges)}
+        return {q: [r for r in self.ranges if r.coordinate == q] for q in self.coordinates}
 
     def to_json(self) -> str:
         """The report as ``hbid compare --json`` prints it."""
@@ -118,59 +133,86 @@ def _ranges(range: Union[str, Tuple[int, Optional[int]], Sequence[Any], None]) -
     return out
 
 
-def _model_bytes(model: Union[Model, PathLike]) -> bytes:
+def _model(model: Union[Model, PathLike]) -> Model:
     if isinstance(model, Model):
-        return model.to_bytes()
+        return model
     if isinstance(model, (str, os.PathLike)):
-        return Model.load(model).to_bytes()
+        return Model.load(model)
     raise OptionsError(f"model: a hbid.Model or the path of a saved model, not {type(model).__name__}")
+
+
+def _in_order(x: Any, model: Model) -> Any:
+    """A dict of arrays by coordinate in the order of the model's coordinates, whose names it
+    must be (compare reads the record's coordinates in the model's order)."""
+    if not isinstance(x, Mapping) or len(x) < 2:
+        return x
+    names = model.coordinates
+    if set(x) != set(names):
+        raise OptionsError(
+            f"x: the arrays are named {', '.join(map(str, x))}; the model's coordinates are {', '.join(names)}"
+        )
+    return {name: x[name] for name in names}
 
 
 def compare(
     model: Union[Model, PathLike],
-    x: Union[PathLike, ArrayLike, Any],
+    x: Union[PathLike, ArrayLike, Mapping[str, ArrayLike], Any],
     *,
     t: Optional[ArrayLike] = None,
     dt: Optional[float] = None,
-    drive: Optional[ArrayLike] = None,
+    drive: Union[ArrayLike, Mapping[str, ArrayLike], None] = None,
     time_col: Union[str, int, None] = None,
     angle_col: Union[str, int, None] = None,
-    drive_col: Union[str, int, None] = None,
+    coords: ColumnsLike = None,
+    drive_col: ColumnsLike = None,
+    velocity_col: ColumnsLike = None,
     repair: bool = False,
-    signal: Optional[str] = None,
+    no_repair: bool = False,
+    signal: Union[str, Sequence[str], None] = None,
     measured: str = "displacement",
     range: Union[str, Tuple[int, Optional[int]], Sequence[Any], None] = None,
     init: Optional[int] = None,
-    x0: Optional[float] = None,
-    v0: Optional[float] = None,
+    x0: Union[float, Sequence[float], None] = None,
+    v0: Union[float, Sequence[float], None] = None,
     rtol: float = 1e-10,
 ) -> Comparison:
     """Runs a saved model freely under a record's measured input and scores it against the
     record's measured output, as ``hbid compare`` does.
 
     Each range (and each piece of it between gaps) starts from the state whose free run best
-    matches its first ``init`` samples; the model is driven by the record's drive (a model with
-    terms in ``p``: give ``drive_col=`` or ``drive=``) or by its own drive on the record's clock;
-    the scores count the samples after them.
+    matches its first ``init`` samples (or from the measured state of ``velocity_col``); the
+    model is driven by the record's drive (a model with terms in ``p``: give ``drive_col=`` or
+    ``drive=``) or by its own drive on the record's clock; the scores count the samples after
+    them. A system of several coordinates is run on all of them at once and scored on each
+    (:attr:`Comparison.by_coordinate`); its record's columns are the system's own names unless
+    ``coords`` and ``drive_col`` say otherwise.
 
     Args:
         model: a :class:`Model`, or the path of a saved model.
         x: the record: a path (text or ``.npy``), a :class:`Record`, or the measured output's
-            samples (with ``t`` or ``dt``, and ``drive``).
+            samples (with ``t`` or ``dt``, and ``drive``): an array, or a dict of arrays by
+            coordinate for a system.
         t: the samples' times (with arrays).
         dt: the sampling step, for samples or a file without times.
-        drive: the measured drive's samples (with arrays).
+        drive: the measured drive's samples (with arrays), or a dict of them by drive name.
         time_col: a file's time column (name or 1-based position).
         angle_col: a file's output column (angle or displacement).
-        drive_col: a file's measured drive column.
-        repair: replace isolated time-stamp glitches and encoder spikes.
+        coords: a system's coordinates' columns in a file, in the order of its coordinates
+            (default: the columns it was identified from).
+        drive_col: a file's measured drive column (several: a list, in the order of the
+            system's drives).
+        velocity_col: a file's columns of the coordinates' measured velocities: each piece then
+            runs from its first sample's measured state, every sample scored.
+        repair: replace isolated time-stamp glitches and every spike.
+        no_repair: keep every spike instead of replacing the few large ones.
         signal: ``"circle"`` or ``"line"`` (default: the model's).
         measured: ``"displacement"``, ``"velocity"`` or ``"acceleration"`` (integrated).
         range: the samples compared: ``"A..B"`` (``"A.."`` to the end), ``(A, B)``, or a list
             of them, each scored on its own (default: the whole record).
         init: samples that set the initial state of each piece (default: one period of the
             model's drive, at most a tenth of the range, at least 8).
-        x0: the initial position instead of fitting it (with ``v0``).
+        x0: the initial position instead of fitting it (with ``v0``): one per coordinate of a
+            system.
         v0: the initial velocity, in the record's time unit (with ``x0``).
         rtol: the integrator's relative tolerance.
 
@@ -182,22 +224,38 @@ def compare(
         OptionsError: a bad option, or one that does not fit the model or the record.
         ModelError: the model cannot be read.
     """
+    saved = _model(model)
     options: Dict[str, Any] = dict(
         time_col=column(time_col, "time_col"),
         angle_col=column(angle_col, "angle_col"),
+        coords=columns(coords, "coords"),
         dt=dt,
-        drive_col=column(drive_col, "drive_col"),
+        drive_col=columns(drive_col, "drive_col"),
+        velocity_col=columns(velocity_col, "velocity_col"),
         repair=bool(repair),
-        signal=signal,
+        no_repair=bool(no_repair),
+        signal=signals(signal),
         measured=measured,
         range=_ranges(range),
         init=init,
-        x0=x0,
-        v0=v0,
+        x0=numbers(x0, "x0"),
+        v0=numbers(v0, "v0"),
         rtol=rtol,
     )
-    samples = source(x, t, drive, options, COMPARE_DEFAULTS)
-    d = _hbid.compare(_model_bytes(model), options_json(options), **samples)
+    samples = source(_in_order(x, saved), t, drive, options, COMPARE_DEFAULTS)
+    if saved.is_system:
+        if isinstance(x, Record):
+            # A system's coordinates keep their own domains: the record's come with its grid.
+            options.pop("signal", None)
+        if not isinstance(x, (Record, str, os.PathLike)):
+            # Arrays: the dict's names are the coordinates'; the system names its own drives.
+            options.pop("coords", None)
+            if isinstance(drive, Mapping):
+                options["drive_col"] = [n for n in saved.drives if n in drive] + [n for n in drive if n not in saved.drives]
+                samples["drive"] = [np.ascontiguousarray(drive[n], dtype=np.float64) for n in options["drive_col"]]
+            elif drive is not None and len(saved.drives) == 1:
+                options["drive_col"] = saved.drives
+    d = _hbid.compare(saved.to_bytes(), options_json(options), **samples)
     report = json.loads(d["json"])
     ranges = [
         RangeScore(
@@ -211,6 +269,7 @@ def compare(
             initial_states=[tuple(s) for s in r["initial_states"]],
             skipped_pieces=r["skipped_pieces"],
             stopped=r["stopped"],
+            coordinate=r.get("coordinate"),
         )
         for r in report["ranges"]
     ]
@@ -222,18 +281,25 @@ def compare(
         notes=emit(d["notes"]),
         report=report,
         json_text=d["json"],
+        coordinates=list(report.get("coordinates", [])),
     )
 
 
 @dataclass(frozen=True, eq=False)
 class ModelRun:
     """A saved model's free run: ``t, x, v = ...`` unpacks it; ``stopped`` says where and why the
-    run stopped, if it did (its later samples are NaN)."""
+    run stopped, if it did (its later samples are NaN). A system's run has every column by name
+    in ``named`` (``t``, the coordinates, their velocities ``q1'``, as ``columns`` lists them);
+    ``x`` and ``v`` are then its first coordinate and that one's velocity."""
 
     t: np.ndarray
     x: np.ndarray
     v: np.ndarray
     stopped: Optional[str]
+    columns: Tuple[str, ...] = ("t", "x", "v")
+    """The columns of the file ``out`` holds."""
+    named: Dict[str, np.ndarray] = field(default_factory=dict, repr=False)
+    """Every column by its name."""
 
     def __iter__(self) -> Iterator[np.ndarray]:
         return iter((self.t, self.x, self.v))
@@ -250,7 +316,7 @@ def run_model(
     time_col: Union[str, int, None],
     angle_col: Union[str, int, None],
     dt: Optional[float],
-    drive_col: Union[str, int, None],
+    drive_col: ColumnsLike,
     init: Optional[int],
     x0: float,
     v0: float,
@@ -263,7 +329,7 @@ def run_model(
         time_col=column(time_col, "time_col"),
         angle_col=column(angle_col, "angle_col"),
         dt=dt,
-        drive_col=column(drive_col, "drive_col"),
+        drive_col=columns(drive_col, "drive_col"),
         init=None if given else init,
         x0=x0 if given else None,
         v0=v0 if given else None,
@@ -271,11 +337,16 @@ def run_model(
     )
     samples = source(input, None, None, options, COMPARE_DEFAULTS)
     d = _hbid.model_run(
-        _model_bytes(model),
+        _model(model).to_bytes(),
         options_json(options),
         rig,
         out=None if out is None else os.fspath(out),
         **samples,
     )
     emit(d["notes"], stacklevel=4)
-    return ModelRun(t=d["t"], x=d["x"], v=d["v"], stopped=d["stopped"])
+    named = dict(zip(d["columns"], d["values"]))
+    n = (len(d["columns"]) - 1) // 2
+    values = d["values"]
+    return ModelRun(
+        t=values[0], x=values[1], v=values[1 + n], stopped=d["stopped"], columns=tuple(d["columns"]), named=named
+    )

@@ -5,12 +5,24 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass, field
-from typing import Any, Dict, List, NamedTuple, Optional, Union
+from typing import Any, Dict, List, Mapping, NamedTuple, Optional, Sequence, Union
 
 import numpy as np
 
 from . import _hbid
-from ._common import RECORD_RENAMED, ArrayLike, PathLike, column, drive_value, emit, options_json, renamed
+from ._common import (
+    RECORD_RENAMED,
+    ArrayLike,
+    ColumnsLike,
+    PathLike,
+    column,
+    columns,
+    drive_value,
+    emit,
+    options_json,
+    renamed,
+    signals,
+)
 from ._record import source
 from ._identify import RECORD_DEFAULTS
 
@@ -49,10 +61,13 @@ class Embedding:
 def _record_options(
     time_col: Any,
     angle_col: Any,
+    coords: ColumnsLike,
     dt: Optional[float],
-    drive_col: Any,
+    drive_col: ColumnsLike,
+    velocity_col: ColumnsLike,
     repair: bool,
-    signal: str,
+    no_repair: bool,
+    signal: Union[str, Sequence[str]],
     measured: str,
     drive_period: Any,
     drive_frequency: Any,
@@ -60,10 +75,13 @@ def _record_options(
     return dict(
         time_col=column(time_col, "time_col"),
         angle_col=column(angle_col, "angle_col"),
+        coords=columns(coords, "coords"),
         dt=None if dt is None else float(dt),
-        drive_col=column(drive_col, "drive_col"),
+        drive_col=columns(drive_col, "drive_col"),
+        velocity_col=columns(velocity_col, "velocity_col"),
         repair=bool(repair),
-        signal=signal,
+        no_repair=bool(no_repair),
+        signal=signals(signal),
         measured=measured,
         drive_period=drive_value(drive_period, "drive_period"),
         drive_frequency=drive_value(drive_frequency, "drive_frequency"),
@@ -75,12 +93,15 @@ def embed(
     *,
     t: Optional[ArrayLike] = None,
     dt: Optional[float] = None,
-    drive: Optional[ArrayLike] = None,
+    drive: Union[ArrayLike, Mapping[str, ArrayLike], None] = None,
     time_col: Union[str, int, None] = None,
     angle_col: Union[str, int, None] = None,
-    drive_col: Union[str, int, None] = None,
+    coords: ColumnsLike = None,
+    drive_col: ColumnsLike = None,
+    velocity_col: ColumnsLike = None,
     repair: bool = False,
-    signal: str = "circle",
+    no_repair: bool = False,
+    signal: Union[str, Sequence[str]] = "circle",
     measured: str = "displacement",
     drive_period: Union[float, str, None] = None,
     drive_frequency: Union[float, str, None] = None,
@@ -95,8 +116,9 @@ def embed(
     embedding dimension (false nearest neighbours), as ``hbid embed`` does.
 
     Args:
-        x, t, dt, drive, time_col, angle_col, drive_col, repair, signal, measured, drive_period,
-            drive_frequency: the record, as for :func:`identify`.
+        x, t, dt, drive, time_col, angle_col, coords, drive_col, velocity_col, repair,
+            no_repair, signal, measured, drive_period, drive_frequency: the record, as for
+            :func:`identify` (one file, a Record or arrays).
         max_lag: largest lag of the mutual information (default: two drive periods, at least 40).
         bins: equal boxes of the mutual-information histogram.
         max_dim: largest embedding dimension tested.
@@ -107,7 +129,18 @@ def embed(
         InputError, OptionsError, IdentificationError: as for :func:`identify`.
     """
     options = _record_options(
-        time_col, angle_col, dt, drive_col, repair, signal, measured, drive_period, drive_frequency
+        time_col,
+        angle_col,
+        coords,
+        dt,
+        drive_col,
+        velocity_col,
+        repair,
+        no_repair,
+        signal,
+        measured,
+        drive_period,
+        drive_frequency,
     )
     options.update(max_lag=max_lag, bins=bins, max_dim=max_dim, metric=metric, theiler=theiler)
     renamed("embed", old, RECORD_RENAMED, options)
@@ -185,12 +218,15 @@ def upos(
     *,
     t: Optional[ArrayLike] = None,
     dt: Optional[float] = None,
-    drive: Optional[ArrayLike] = None,
+    drive: Union[ArrayLike, Mapping[str, ArrayLike], None] = None,
     time_col: Union[str, int, None] = None,
     angle_col: Union[str, int, None] = None,
-    drive_col: Union[str, int, None] = None,
+    coords: ColumnsLike = None,
+    drive_col: ColumnsLike = None,
+    velocity_col: ColumnsLike = None,
     repair: bool = False,
-    signal: str = "circle",
+    no_repair: bool = False,
+    signal: Union[str, Sequence[str]] = "circle",
     measured: str = "displacement",
     drive_period: Union[float, str, None] = None,
     drive_frequency: Union[float, str, None] = None,
@@ -203,8 +239,9 @@ def upos(
     """Finds unstable periodic orbits by close returns, as ``hbid upos`` does.
 
     Args:
-        x, t, dt, drive, time_col, angle_col, drive_col, repair, signal, measured, drive_period,
-            drive_frequency: the record, as for :func:`identify`.
+        x, t, dt, drive, time_col, angle_col, coords, drive_col, velocity_col, repair,
+            no_repair, signal, measured, drive_period, drive_frequency: the record, as for
+            :func:`identify` (one file, a Record or arrays).
         tolerance: close-return tolerance, a fraction of the data's span.
         max_period: longest orbit period searched, in drive periods.
         dim: dimension of the delay vectors compared.
@@ -214,7 +251,18 @@ def upos(
         InputError, OptionsError, IdentificationError: as for :func:`identify`.
     """
     options = _record_options(
-        time_col, angle_col, dt, drive_col, repair, signal, measured, drive_period, drive_frequency
+        time_col,
+        angle_col,
+        coords,
+        dt,
+        drive_col,
+        velocity_col,
+        repair,
+        no_repair,
+        signal,
+        measured,
+        drive_period,
+        drive_frequency,
     )
     options.update(tolerance=tolerance, max_period=max_period, dim=dim, delay=delay)
     renamed("upos", old, RECORD_RENAMED, options)

@@ -1,6 +1,8 @@
 """Type stubs of the extension module ``hbid._hbid`` (Rust, PyO3). Use the documented wrappers
 of :mod:`hbid` instead: these take the options as a JSON object of the command line's option
-names (``_`` for ``-``) and return plain dicts, lists, arrays and ``bytes``."""
+names (``_`` for ``-``) and return plain dicts, lists, arrays and ``bytes``. Samples come as
+lists of arrays: one per coordinate (``x``), per measured drive (``drive``) and per coordinate's
+measured velocity (``velocity``, a record's grid only)."""
 
 from typing import Any, Dict, List, Optional, Tuple
 
@@ -16,35 +18,38 @@ def condition(
     options: str,
     *,
     path: Optional[str] = None,
-    x: Optional[Array] = None,
+    x: Optional[List[Array]] = None,
     t: Optional[Array] = None,
-    drive: Optional[Array] = None,
+    drive: Optional[List[Array]] = None,
 ) -> Dict[str, Any]: ...
 def identify(
     options: str,
     *,
-    path: Optional[str] = None,
-    x: Optional[Array] = None,
+    path: Optional[List[str]] = None,
+    x: Optional[List[Array]] = None,
     t: Optional[Array] = None,
-    drive: Optional[Array] = None,
+    drive: Optional[List[Array]] = None,
+    velocity: Optional[List[Array]] = None,
     grid: Optional[Grid] = None,
 ) -> Dict[str, Any]: ...
 def embed(
     options: str,
     *,
     path: Optional[str] = None,
-    x: Optional[Array] = None,
+    x: Optional[List[Array]] = None,
     t: Optional[Array] = None,
-    drive: Optional[Array] = None,
+    drive: Optional[List[Array]] = None,
+    velocity: Optional[List[Array]] = None,
     grid: Optional[Grid] = None,
 ) -> Dict[str, Any]: ...
 def upos(
     options: str,
     *,
     path: Optional[str] = None,
-    x: Optional[Array] = None,
+    x: Optional[List[Array]] = None,
     t: Optional[Array] = None,
-    drive: Optional[Array] = None,
+    drive: Optional[List[Array]] = None,
+    velocity: Optional[List[Array]] = None,
     grid: Optional[Grid] = None,
 ) -> Dict[str, Any]: ...
 def simulate(options: str, *, out: Optional[str] = None, truth: Optional[str] = None) -> Dict[str, Any]: ...
@@ -53,9 +58,10 @@ def compare(
     options: str,
     *,
     path: Optional[str] = None,
-    x: Optional[Array] = None,
+    x: Optional[List[Array]] = None,
     t: Optional[Array] = None,
-    drive: Optional[Array] = None,
+    drive: Optional[List[Array]] = None,
+    velocity: Optional[List[Array]] = None,
     grid: Optional[Grid] = None,
 ) -> Dict[str, Any]: ...
 def model_run(
@@ -64,9 +70,10 @@ def model_run(
     rig: str,
     *,
     path: Optional[str] = None,
-    x: Optional[Array] = None,
+    x: Optional[List[Array]] = None,
     t: Optional[Array] = None,
-    drive: Optional[Array] = None,
+    drive: Optional[List[Array]] = None,
+    velocity: Optional[List[Array]] = None,
     grid: Optional[Grid] = None,
     out: Optional[str] = None,
 ) -> Dict[str, Any]: ...
@@ -74,9 +81,9 @@ def model_run_on(
     model: bytes,
     t: Array,
     *,
-    x0: float,
-    v0: float,
-    drive: Optional[Array] = None,
+    x0: List[float],
+    v0: List[float],
+    drive: Optional[List[Array]] = None,
     rtol: float = 1e-10,
 ) -> Dict[str, Any]: ...
 def model_info(model: bytes) -> Dict[str, Any]: ...

@@ -6,98 +6,60 @@ import json
 import os
 import warnings
 from dataclasses import dataclass, field
-from typing import Any, Dict, List, Mapping, NamedTuple, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 from . import _hbid
 from ._common import (
     RECORD_RENAMED,
     ArrayLike,
+    ColumnsLike,
     PathLike,
     column,
+    columns,
     drive_value,
     emit,
     options_json,
     renamed,
+    signals,
 )
+from ._equation import DroppedTerm, Equation, Selection, SelectionStep, equation_text, flattened
 from ._record import source
-from ._model import Model, equation_text
+from ._model import Model
 from .errors import OptionsError
+
+__all__ = ["DroppedTerm", "Selection", "SelectionStep", "Identification", "identify"]
 
 #: The record's options with the command line's defaults (a Record fixes its own).
 RECORD_DEFAULTS: Dict[str, Any] = dict(
     time_col=None,
     angle_col=None,
+    coords=None,
     dt=None,
     drive_col=None,
+    velocity_col=None,
     repair=False,
+    no_repair=False,
     signal="circle",
     measured="displacement",
 )
 
 
-class DroppedTerm(NamedTuple):
-    """A candidate term the selection dropped, and why: the cross-validated fraction of the
-    held-out equations' right-hand side left unexplained by the model just without it and just
-    with it (the term removes less than the allowance)."""
-
-    term: str
-    unexplained_without: float
-    unexplained_with: float
-
-
-class SelectionStep(NamedTuple):
-    """One model of the backward elimination: the term removed to reach it (None for the whole
-    library), its number of terms, its cross-validated unexplained fraction and that score's
-    standard error over the folds."""
-
-    removed: Optional[str]
-    terms: int
-    unexplained: float
-    std_error: float
-
-
-@dataclass(frozen=True)
-class Selection:
-    """Which terms of a library of candidates the data support, as ``hbid identify --select``
-    chooses them: backward elimination scored by cross-validation over contiguous folds of
-    segments; the smallest model on the path within ``allowance`` of the best one is kept
-    (``allowance`` is the larger of the best score's standard error and the tolerance).
-
-    ``kept`` are the model's terms (in the library's order); ``dropped`` the others, in the
-    order they were removed.
-    """
-
-    library: List[str]
-    kept: List[str]
-    dropped: List[DroppedTerm]
-    folds: int
-    allowance: float
-    path: List[SelectionStep]
-
-    @classmethod
-    def _from_json(cls, d: Mapping[str, Any]) -> "Selection":
-        return cls(
-            library=list(d["library"]),
-            kept=list(d["kept"]),
-            dropped=[DroppedTerm(x["term"], x["unexplained_without"], x["unexplained_with"]) for x in d["dropped"]],
-            folds=d["folds"],
-            allowance=d["allowance"],
-            path=[SelectionStep(p["removed"], p["terms"], p["unexplained"], p["std_error"]) for p in d["path"]],
-        )
-
-
 @dataclass(frozen=True)
 class Identification:
-    """An identified equation of motion ``x'' + sum c_i g_i = 0`` with its uncertainties.
+    """An identified equation of motion ``x'' + sum c_i g_i = 0`` with its uncertainties, or a
+    system of them, one per coordinate (``identify(..., coords=...)``).
 
     ``coefficients``, ``std_errors`` and ``intervals`` are keyed by the command line's term names
-    (``x'``, ``sin(x)``, ``cos(t)*cos(x)``, ``hat3``, ...), in the model's order. :meth:`to_json`
-    is exactly what ``hbid identify --json`` prints. Results of the same record, settings and
-    seed are identical, whatever the machine's threads.
+    (``x'``, ``sin(x)``, ``cos(t)*cos(x)``, ``hat3``, ...), in the model's order. A system's
+    equations are in :attr:`equations`, by coordinate (``result.equations["theta1"]``, an
+    :class:`Equation` with its own coefficients, intervals and fit); its ``coefficients``,
+    ``std_errors`` and ``intervals`` hold every equation's, keyed ``"theta1: sin(theta1)"``.
+    :meth:`to_json` is exactly what ``hbid identify --json`` prints. Results of the same record,
+    settings and seed are identical, whatever the machine's threads.
     """
 
     coefficients: Dict[str, float]
-    """The coefficient of each term."""
+    """The coefficient of each term (of a system: of each equation's, ``"q1: term"``)."""
     std_errors: Dict[str, float]
     """The standard error of each coefficient (least squares)."""
     intervals: Optional[Dict[str, Tuple[float, float]]]
@@ -112,9 +74,10 @@ class Identification:
     method: str
     """``"windowed"`` or ``"upo"``."""
     basis: str
-    """The basis as named on the command line (``harmonic:1``, ``hat:8``, ``poly:3``)."""
+    """The basis as named on the command line (``harmonic:1``, ``hat:8``, ``poly:3``); of a
+    system, its first coordinate's (each one's in :attr:`equations`)."""
     signal: str
-    """``"circle"`` or ``"line"``."""
+    """``"circle"`` or ``"line"`` (of a system, its first coordinate's)."""
     segments: int
     """Orbit segments (``upo``) or windows (``windowed``) used."""
     delay: Optional[int]
@@ -138,6 +101,19 @@ class Identification:
     """The JSON of ``hbid identify --json``, read."""
     json_text: str = field(repr=False)
     """The JSON of ``hbid identify --json``."""
+    equations: Dict[str, Equation] = field(default_factory=dict, repr=False)
+    """Each coordinate's equation, in order: ``{"x": ...}`` for a record of one coordinate, a
+    system's by its coordinates' names."""
+
+    @property
+    def coordinates(self) -> List[str]:
+        """The coordinates, one equation each (``["x"]`` for a record of one)."""
+        return list(self.equations)
+
+    @property
+    def is_system(self) -> bool:
+        """Whether the record has several coordinates (``coords``)."""
+        return len(self.equations) > 1
 
     @property
     def refinement(self) -> Optional[Dict[str, Any]]:
@@ -148,56 +124,79 @@ class Identification:
 
     @property
     def equation(self) -> str:
-        """The equation, ``x'' + c_1*g_1 + ... = 0``, coefficients to 6 significant digits."""
+        """The equation, ``x'' + c_1*g_1 + ... = 0``, coefficients to 6 significant digits; a
+        system's equations one per line."""
+        if self.is_system:
+            return "\n".join(e.equation for e in self.equations.values())
         return equation_text(self.coefficients)
 
     @property
     def terms(self) -> List[str]:
-        """The model's terms, in its order (with ``select``, the kept ones)."""
+        """The model's terms, in its order (with ``select``, the kept ones); of a system every
+        equation's, as ``"q1: term"``."""
         return list(self.coefficients)
 
     @property
     def selection(self) -> Optional[Selection]:
-        """With ``select``: the library, the kept terms and why the others were dropped; else None."""
-        d = self.report["selection"]
+        """With ``select``: the library, the kept terms and why the others were dropped; else None
+        (of a system, each equation's :attr:`Equation.selection`)."""
+        d = self.report.get("selection")
         return None if d is None else Selection._from_json(d)
+
+    def _worst(self, name: str, pick: Any) -> Any:
+        """A fit measure: the report's, or over a system's equations the one ``pick`` chooses."""
+        if not self.is_system:
+            return self.report[name]
+        values = [getattr(e, name) for e in self.equations.values()]
+        values = [v for v in values if v is not None]
+        return pick(values) if values else None
 
     @property
     def explained(self) -> float:
-        """The fraction of the balanced acceleration the model explains, in [0, 1]."""
-        return self.report["explained"]
+        """The fraction of the balanced acceleration the model explains, in [0, 1] (of a
+        system, the least of its equations')."""
+        return self._worst("explained", min)
 
     @property
     def warning(self) -> Optional[str]:
-        """The command line's warning when the model explains too little, else None."""
-        return self.report["warning"]
+        """The command line's warning when the model explains too little, else None (of a
+        system, each equation's that has one, named by its coordinate)."""
+        if not self.is_system:
+            return self.report["warning"]
+        warnings_ = [f"the equation of {q}: {e.warning}" for q, e in self.equations.items() if e.warning]
+        return "; ".join(warnings_) or None
 
     @property
     def held_out_explained(self) -> Optional[float]:
         """The fraction explained on stretches of the record the model was not fitted on (fit on
         all folds of segments but one, scored on that one), beside :attr:`explained`; None when it
-        cannot be had."""
-        return self.report["held_out_explained"]
+        cannot be had (of a system, the least of its equations')."""
+        return self._worst("held_out_explained", min)
 
     @property
     def no_intervals(self) -> Optional[str]:
         """Why there are no bootstrap intervals although they were asked for, else None."""
-        return self.report.get("no_intervals")
+        if not self.is_system:
+            return self.report.get("no_intervals")
+        whys = [f"the equation of {q}: {e.no_intervals}" for q, e in self.equations.items() if e.no_intervals]
+        return "; ".join(whys) or None
 
     @property
     def condition_number(self) -> float:
-        """The condition number of the column-scaled system."""
-        return self.report["condition_number"]
+        """The condition number of the column-scaled system (of a system, the largest of its
+        equations')."""
+        return self._worst("condition_number", max)
 
     @property
     def residual_rms(self) -> float:
-        """The residual root mean square of the equations."""
-        return self.report["residual_rms"]
+        """The residual root mean square of the equations (of a system, the largest of its
+        equations')."""
+        return self._worst("residual_rms", max)
 
     @property
     def rows(self) -> int:
-        """Equations of the stacked system."""
-        return self.report["rows"]
+        """Equations of the stacked system (of a system, of all its equations)."""
+        return self._worst("rows", sum)
 
     @property
     def forcing_period(self) -> float:
@@ -228,6 +227,35 @@ class Identification:
     def _from(cls, d: Mapping[str, Any], notes: List[str]) -> "Identification":
         report = json.loads(d["json"])
         record = report["record"]
+        if "equations" in report:
+            equations = {q: Equation._from_json(q, e) for q, e in report["equations"].items()}
+            first = next(iter(report["equations"].values()))
+            intervals: Optional[Dict[str, Tuple[float, float]]] = None
+            if all(e.intervals is not None for e in equations.values()):
+                intervals = flattened({q: e.intervals for q, e in equations.items()})
+            return cls(
+                coefficients=flattened({q: e.coefficients for q, e in equations.items()}),
+                std_errors=flattened({q: e.std_errors for q, e in equations.items()}),
+                intervals=intervals,
+                interval_level=first["interval_level"],
+                resamples=first["resamples"] or 0,
+                model=Model(d["model"]),
+                method=report["method"],
+                basis=first["basis"],
+                signal=record["signal"],
+                segments=report["segments"],
+                delay=report["delay"],
+                drive_period=record["period"],
+                drive_period_uncertainty=record["period_uncertainty"],
+                drive=record["drive"],
+                samples_per_period=record["samples_per_period"],
+                resampled_from=record["resampled_from"],
+                summary=record["summary"],
+                notes=notes,
+                report=report,
+                json_text=d["json"],
+                equations=equations,
+            )
         intervals = report["intervals"]
         return cls(
             coefficients=dict(report["coefficients"]),
@@ -250,13 +278,27 @@ class Identification:
             notes=notes,
             report=report,
             json_text=d["json"],
+            equations={"x": Equation._from_json("x", report)},
         )
 
 
-def _terms(terms: Union[str, Sequence[str], None]) -> Optional[str]:
-    """``terms=`` as the list's text."""
+TermsLike = Union[str, Sequence[str], Mapping[str, Union[str, Sequence[str]]], None]
+
+
+def _terms(terms: TermsLike) -> Optional[str]:
+    """``terms=`` as the list's text: one list for every equation, or (a dict) one per
+    coordinate by its name, as ``--terms "q1: ...; q2: ..."`` writes them."""
     if terms is None or isinstance(terms, str):
         return terms
+    if isinstance(terms, Mapping):
+        parts = []
+        for name, items in terms.items():
+            if not isinstance(name, str) or not name.strip():
+                raise OptionsError(f"terms: the keys name coordinates (texts), not {name!r}")
+            parts.append(f"{name}: {_terms(items)}")
+        if not parts:
+            raise OptionsError("terms: an empty dict; give each coordinate's terms by its name")
+        return "; ".join(parts)
     try:
         items = list(terms)
     except TypeError:
@@ -284,16 +326,19 @@ def _select(select: Union[bool, Mapping[str, Any]], options: Dict[str, Any]) -> 
 
 
 def identify(
-    x: Union[PathLike, ArrayLike, Any],
+    x: Union[PathLike, Sequence[PathLike], ArrayLike, Mapping[str, ArrayLike], Any],
     *,
     t: Optional[ArrayLike] = None,
     dt: Optional[float] = None,
-    drive: Optional[ArrayLike] = None,
+    drive: Union[ArrayLike, Mapping[str, ArrayLike], None] = None,
     time_col: Union[str, int, None] = None,
     angle_col: Union[str, int, None] = None,
-    drive_col: Union[str, int, None] = None,
+    coords: ColumnsLike = None,
+    drive_col: ColumnsLike = None,
+    velocity_col: ColumnsLike = None,
     repair: bool = False,
-    signal: str = "circle",
+    no_repair: bool = False,
+    signal: Union[str, Sequence[str]] = "circle",
     measured: str = "displacement",
     drive_period: Union[float, str, None] = None,
     drive_frequency: Union[float, str, None] = None,
@@ -316,7 +361,7 @@ def identify(
     forcing: Optional[str] = None,
     no_parametric: bool = False,
     drive_harmonics: Optional[int] = None,
-    terms: Union[str, Sequence[str], None] = None,
+    terms: TermsLike = None,
     select: Union[bool, Mapping[str, Any]] = False,
     select_folds: int = 10,
     select_tolerance: float = 1e-6,
@@ -334,18 +379,34 @@ def identify(
     keyword is the option of ``hbid identify`` of the same name (``_`` for ``-``), with the same
     default; ``hbid identify --help`` says more of each.
 
+    A record of several coordinates (``coords``, or a dict of arrays) gets one equation per
+    coordinate, ``q_i'' + sum c_ik g_ik = 0``, whose terms name the coordinates and drives
+    (``sin(theta1)``, ``theta2''*cos(theta1-theta2)``, ``tau1``): :attr:`Identification.equations`
+    holds each, and the model is the system of them.
+
     Args:
-        x: a file (text or ``.npy``), a :class:`Record` from :func:`read`, or the samples (a 1-D
-            array, with ``t`` or ``dt``).
+        x: a file (text or ``.npy``), several files of the same columns (a list of paths: each
+            conditioned on its own, joined with a gap between each two, one fit), a
+            :class:`Record` from :func:`read`, or the samples: a 1-D array, or a dict of arrays
+            by coordinate name for several coordinates (with ``t`` or ``dt``).
         t: the time stamps of the samples.
         dt: or their sampling step (sample 0 at t = 0).
         drive: the measured drive p(t), one sample per sample of ``x`` (the array form of
-            ``drive_col``).
+            ``drive_col``), or a dict of such arrays by the names terms call them.
         time_col, angle_col: a file's time and angle (or displacement) columns.
+        coords: the columns of a file that each get an equation: a system of several
+            coordinates, its terms naming them (``["theta1", "theta2"]``, ``"q1=pos1,q2=pos2"``
+            or ``{"q1": "pos1", "q2": "pos2"}`` to name the columns otherwise).
         drive_col: a file's column of the measured drive p(t): terms in ``p`` (``p``,
-            ``p*cos(x)``, ``p*x'``) are balanced by the weak form as measured.
-        repair: replace isolated time-stamp glitches and spikes.
-        signal: ``"circle"`` (an angle) or ``"line"`` (a displacement); a Record's own.
+            ``p*cos(x)``, ``p*x'``) are balanced by the weak form as measured; several drives as
+            a list (or a dict of names to columns), named in terms by their names.
+        velocity_col: a file's columns of the coordinates' measured velocities, one per
+            coordinate (read with the record; :func:`compare` starts its runs from them).
+        repair: replace isolated time-stamp glitches and every spike.
+        no_repair: keep every spike (a warning) instead of replacing those larger than the
+            record's own steps when they are few (at most one in 1000 samples, the default).
+        signal: ``"circle"`` (an angle) or ``"line"`` (a displacement), for every coordinate or
+            one per coordinate (``["circle", "line"]``); a Record's own.
         measured: ``"displacement"``, or (on the line) ``"velocity"`` or ``"acceleration"``,
             integrated to the displacement (its drift fitted with the model); a Record's own.
         drive_period: the drive's period in the record's time unit (default 2 pi, the paper's
@@ -379,7 +440,9 @@ def identify(
         drive_harmonics: drive harmonics 1..H of the default model's drive terms.
         terms: the model's terms instead of the default, as ``hbid identify --terms`` reads
             them: a string such as ``"x', sign(x'), {1,cos(t),sin(t)}*{cos(x),sin(x)}"``, or a
-            sequence of such strings.
+            sequence of such strings; for a system one list for every equation, or a dict of
+            lists by coordinate (``{"q1": "...", "q2": "..."}``, the command line's
+            ``"q1: ...; q2: ..."``), a coordinate without one taking the default library.
         select: model selection: the model's terms are a library of candidates, those that
             predict held-out stretches of the record are kept and fitted alone
             (:attr:`Identification.selection` says which and why).
@@ -400,17 +463,20 @@ def identify(
 
     Raises:
         InputError: the record.
-        OptionsError: a bad argument.
+        OptionsError: a bad argument (a term naming a coordinate the record does not have, ...).
         IdentificationError: too few segments, a rank-deficient system, a drive that cannot be
             estimated.
     """
     options: Dict[str, Any] = dict(
         time_col=column(time_col, "time_col"),
         angle_col=column(angle_col, "angle_col"),
+        coords=columns(coords, "coords"),
         dt=None if dt is None else float(dt),
-        drive_col=column(drive_col, "drive_col"),
+        drive_col=columns(drive_col, "drive_col"),
+        velocity_col=columns(velocity_col, "velocity_col"),
         repair=bool(repair),
-        signal=signal,
+        no_repair=bool(no_repair),
+        signal=signals(signal),
         measured=measured,
         drive_period=drive_value(drive_period, "drive_period"),
         drive_frequency=drive_value(drive_frequency, "drive_frequency"),
@@ -446,7 +512,7 @@ def identify(
     renamed("identify", old, RECORD_RENAMED, options)
     for name in ("drive_period", "drive_frequency"):
         options[name] = drive_value(options[name], name)
-    samples = source(x, t, drive, options, RECORD_DEFAULTS)
+    samples = source(x, t, drive, options, RECORD_DEFAULTS, several_files=True)
     d = _hbid.identify(options_json(options), **samples)
     result = Identification._from(d, emit(d["notes"]))
     if save_model is not None:

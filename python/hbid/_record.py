@@ -5,12 +5,12 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass, field
-from typing import Any, Dict, List, Mapping, Optional, Tuple, Union
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
 from . import _hbid
-from ._common import ArrayLike, PathLike, array, column, emit, options_json
+from ._common import ArrayLike, ColumnsLike, PathLike, array, column, columns, emit, options_json, signals
 from .errors import OptionsError
 
 
@@ -22,13 +22,18 @@ class Record:
     (``(start, stop)`` sample ranges; ``x`` is NaN between them); an angle (``signal="circle"``)
     was wrapped into ``[-pi, pi)``; a velocity or acceleration (``measured``) was integrated to
     the displacement. ``notes`` lists what was done or found, as the command line prints it;
-    ``time_repairs`` the stamps replaced by their grid time (``(where, was, now)``) and ``spikes``
-    the isolated spikes found (``(index, size, replaced)``), both only repaired with
-    ``repair=True``. ``drive`` is the measured drive read with ``drive_col`` (on the same grid),
-    or None.
+    ``time_repairs`` the stamps replaced by their grid time (``(where, was, now)``, only with
+    ``repair=True``) and ``spikes`` the isolated spikes found (``(index, size, replaced)``: by
+    default those larger than the record's own steps are replaced when they are few, every one
+    with ``repair=True``, none with ``no_repair=True``). ``drive`` is the measured drive read
+    with ``drive_col`` (on the same grid), or None.
 
-    Pass it to :func:`identify`, :func:`embed` or :func:`upos` in place of a file or arrays: its
-    grid, signal, measured quantity and drive come with it.
+    A record of several coordinates (``coords``) has each one's samples in ``positions`` by the
+    names its terms call them (``x`` is the first's), its drives in ``drives`` and, read with
+    ``velocity_col``, the coordinates' measured velocities in ``velocities``.
+
+    Pass it to :func:`identify`, :func:`embed`, :func:`upos` or :func:`compare` in place of a
+    file or arrays: its grid, signal, measured quantity, coordinates and drives come with it.
     """
 
     x: np.ndarray
@@ -43,6 +48,19 @@ class Record:
     spikes: List[Tuple[int, float, bool]] = field(default_factory=list)
     drive: Optional[np.ndarray] = None
     path: Optional[str] = None
+    positions: Dict[str, np.ndarray] = field(default_factory=dict, repr=False)
+    """Every coordinate's samples on the grid, by the name terms call it (``{"x": x}`` for a
+    record of one)."""
+    drives: Dict[str, np.ndarray] = field(default_factory=dict, repr=False)
+    """The measured drives on the grid, by the names terms call them (``p`` for the one drive of
+    a record of one coordinate)."""
+    velocities: Dict[str, np.ndarray] = field(default_factory=dict, repr=False)
+    """The coordinates' measured velocities (``velocity_col``) on the grid, by coordinate."""
+    spikes_by_coordinate: Dict[str, List[Tuple[int, float, bool]]] = field(default_factory=dict, repr=False)
+    """The spikes found in each coordinate, ``(index, size, replaced)``."""
+    columns: Dict[str, Any] = field(default_factory=dict, repr=False)
+    """The options that named its columns (``coords``, ``drive_col``, ``velocity_col``), as it
+    was read: an identification of the record names them in its saved model."""
 
     @property
     def t(self) -> np.ndarray:
@@ -54,22 +72,40 @@ class Record:
         """The samples that hold data (gaps not counted)."""
         return sum(b - a for a, b in self.pieces)
 
+    @property
+    def coordinates(self) -> List[str]:
+        """The coordinates' names, in order (``["x"]`` for a record of one)."""
+        return list(self.positions) or ["x"]
+
+    @property
+    def signals(self) -> List[str]:
+        """The domain of each coordinate, ``"circle"`` or ``"line"``."""
+        given = self.signal.split(",")
+        return given if len(given) > 1 else given * len(self.coordinates)
+
     def __len__(self) -> int:
         return len(self.x)
 
     def __repr__(self) -> str:
         where = f"{self.path!r}, " if self.path else ""
         gaps = f", {len(self.pieces)} pieces" if len(self.pieces) > 1 else ""
+        several = f", coordinates {self.coordinates}" if len(self.coordinates) > 1 else ""
         return (
             f"Record({where}{self.samples} samples from t = {self.t0:g} every {self.dt:g}, "
-            f"signal={self.signal!r}{gaps}, {len(self.notes)} notes)"
+            f"signal={self.signal!r}{several}{gaps}, {len(self.notes)} notes)"
         )
 
     def _grid(self) -> Tuple[float, float, List[Tuple[int, int]], str]:
         return (float(self.t0), float(self.dt), [(int(a), int(b)) for a, b in self.pieces], self.signal)
 
 
-def _record(d: Any, path: Optional[str] = None) -> Record:
+def _record(d: Any, options: Mapping[str, Any], path: Optional[str] = None) -> Record:
+    names = list(d["names"])
+    coordinates = dict(zip(names, d["coords"]))
+    spikes = [(int(i), float(size), bool(replaced)) for i, size, replaced, _ in d["spikes"]]
+    by_coordinate: Dict[str, List[Tuple[int, float, bool]]] = {name: [] for name in names}
+    for i, size, replaced, c in d["spikes"]:
+        by_coordinate[names[c]].append((int(i), float(size), bool(replaced)))
     return Record(
         x=d["x"],
         t0=d["t0"],
@@ -80,23 +116,31 @@ def _record(d: Any, path: Optional[str] = None) -> Record:
         repaired=d["repaired"],
         notes=emit(d["notes"], stacklevel=4),
         time_repairs=[tuple(r) for r in d["time_repairs"]],
-        spikes=[tuple(s) for s in d["spikes"]],
+        spikes=spikes,
         drive=d["drive"],
         path=path,
+        positions=coordinates,
+        drives=dict(zip(d["drive_names"], d["drives"])),
+        velocities=dict(zip(names, d["velocities"])),
+        spikes_by_coordinate=by_coordinate,
+        columns={name: options[name] for name in ("coords", "drive_col", "velocity_col") if options.get(name) is not None},
     )
 
 
 def read(
-    path: Union[PathLike, ArrayLike],
+    path: Union[PathLike, ArrayLike, Mapping[str, ArrayLike]],
     *,
     t: Optional[ArrayLike] = None,
     dt: Optional[float] = None,
-    drive: Optional[ArrayLike] = None,
+    drive: Union[ArrayLike, Mapping[str, ArrayLike], None] = None,
     time_col: Union[str, int, None] = None,
     angle_col: Union[str, int, None] = None,
-    drive_col: Union[str, int, None] = None,
+    coords: ColumnsLike = None,
+    drive_col: ColumnsLike = None,
+    velocity_col: ColumnsLike = None,
     repair: bool = False,
-    signal: str = "circle",
+    no_repair: bool = False,
+    signal: Union[str, Sequence[str]] = "circle",
     measured: str = "displacement",
 ) -> Record:
     """Reads a record from a file (or takes it from arrays), as ``hbid`` reads one.
@@ -106,19 +150,27 @@ def read(
     ``.npy`` (a 1-D array of samples with ``dt``, or samples x channels). The time stamps are
     fitted to a uniform grid: gaps split the record into pieces, and an isolated glitch is an
     error unless ``repair=True`` replaces it by its grid time. Isolated spikes (an encoder's bit
-    errors, a sensor's outliers) are reported, and replaced with ``repair=True``.
+    errors, a sensor's outliers) are found: those larger than the record's own steps (an
+    encoder's upper bits) are replaced by default when they are few, the others reported with
+    a warning; ``repair=True`` replaces every one, ``no_repair=True`` none.
 
     Args:
-        path: the file; or an array of samples, with ``t`` or ``dt`` (and ``drive``).
+        path: the file; or an array of samples, with ``t`` or ``dt`` (and ``drive``); or, for
+            several coordinates, a dict of arrays by the names terms call them.
         t: the time stamps of the samples of an array.
         dt: the sampling step, for a record without time stamps (sample 0 at t = 0).
-        drive: the measured drive sampled with an array.
+        drive: the measured drive sampled with an array, or a dict of drives by name.
         time_col: the time column of a file, by header name or 1-based position.
         angle_col: the angle (or displacement) column, by name or 1-based position.
-        drive_col: the column of the measured drive p(t), by name or 1-based position.
-        repair: replace isolated time-stamp glitches and spikes (listed in the notes).
+        coords: the columns of a file that each get an equation (several coordinates): a list
+            of columns, ``"q1=pos1,q2=pos2"``, or a dict of names to columns.
+        drive_col: the column of the measured drive p(t), by name or 1-based position; several
+            drives as a list, or a dict of names to columns.
+        velocity_col: the columns of the coordinates' measured velocities, one per coordinate.
+        repair: replace isolated time-stamp glitches and every spike (listed in the notes).
+        no_repair: keep every spike (a warning), even those replaced by default.
         signal: ``"circle"`` for an angle (wrapped into ``[-pi, pi)``) or ``"line"`` for a
-            displacement.
+            displacement; for several coordinates one for all or a list, one per coordinate.
         measured: ``"displacement"``, or (on the line) ``"velocity"`` or ``"acceleration"``,
             integrated to the displacement.
 
@@ -129,43 +181,91 @@ def read(
         InputError: the file, its columns, its values or its time stamps.
         OptionsError: a bad argument.
     """
-    options = dict(
+    options: Dict[str, Any] = dict(
         time_col=column(time_col, "time_col"),
         angle_col=column(angle_col, "angle_col"),
-        drive_col=column(drive_col, "drive_col"),
+        coords=columns(coords, "coords"),
+        drive_col=columns(drive_col, "drive_col"),
+        velocity_col=columns(velocity_col, "velocity_col"),
         dt=None if dt is None else float(dt),
         repair=bool(repair),
-        signal=signal,
+        no_repair=bool(no_repair),
+        signal=signals(signal),
         measured=measured,
     )
     if isinstance(path, (str, os.PathLike)):
         if t is not None or drive is not None:
             raise OptionsError("a file carries its own time and drive: give no t or drive with a path")
         name = os.fspath(path)
-        return _record(_hbid.condition(options_json(options), path=name), name)
-    d = _hbid.condition(
-        options_json(options),
-        x=array(path, "x"),
-        t=None if t is None else array(t, "t"),
-        drive=None if drive is None else array(drive, "drive"),
-    )
-    return _record(d)
+        return _record(_hbid.condition(options_json(options), path=name), options, name)
+    args = _arrays(path, t, drive, options)
+    return _record(_hbid.condition(options_json(options), **args), options)
 
 
 #: The options of a record that a :class:`~hbid.Record` fixes when it is read.
-RECORD_FIXED = ("time_col", "angle_col", "dt", "drive_col", "repair")
+RECORD_FIXED = ("time_col", "angle_col", "coords", "dt", "drive_col", "velocity_col", "repair", "no_repair")
+
+
+def _is_path(x: Any) -> bool:
+    return isinstance(x, (str, os.PathLike))
+
+
+def _arrays(x: Any, t: Optional[ArrayLike], drive: Any, options: Dict[str, Any]) -> Dict[str, Any]:
+    """The extension's arguments of samples given as arrays: ``x`` one array (a coordinate) or a
+    dict of arrays by coordinate name, ``drive`` one array (``p``) or a dict by drive name; the
+    names become the options that name the columns of a file (``coords``, ``drive_col``)."""
+    if options.get("velocity_col") is not None:
+        raise OptionsError(
+            "velocity_col names columns of a file: read the file with it (hbid.read), or give the record's file"
+        )
+    if isinstance(x, Mapping):
+        if not x:
+            raise OptionsError("x: an empty dict; give each coordinate's samples by its name")
+        names = [str(name) for name in x]
+        given = options.get("coords")
+        if given is not None:
+            # coords may name the dict's coordinates, in the order of the equations.
+            order = [item.split("=")[0].strip() for item in (given.split(",") if isinstance(given, str) else given)]
+            if sorted(order) != sorted(names):
+                raise OptionsError(
+                    f"coords: names {', '.join(order)}, but the dict of arrays holds {', '.join(names)}"
+                )
+            names = order
+            x = {name: x[name] for name in names}
+        if len(names) > 1:
+            options["coords"] = names
+        samples = [array(v, f"x[{name!r}]") for name, v in x.items()]
+    else:
+        samples = [array(x, "x")]
+    args: Dict[str, Any] = dict(x=samples)
+    if t is not None:
+        args["t"] = array(t, "t")
+    if drive is not None:
+        if isinstance(drive, Mapping):
+            if options.get("drive_col") is not None:
+                raise OptionsError("drive_col: the dict of drives names them; give no drive_col with it")
+            options["drive_col"] = [str(name) for name in drive]
+            args["drive"] = [array(v, f"drive[{name!r}]") for name, v in drive.items()]
+        else:
+            # One drive: p for a record of one coordinate, or the name drive_col gives it.
+            if options.get("drive_col") is None:
+                options["drive_col"] = "p"
+            args["drive"] = [array(drive, "drive")]
+    return args
 
 
 def source(
     x: Any,
     t: Optional[ArrayLike],
-    drive: Optional[ArrayLike],
+    drive: Any,
     options: Dict[str, Any],
     defaults: Mapping[str, Any],
+    several_files: bool = False,
 ) -> Dict[str, Any]:
     """The extension's keyword arguments that say where the samples come from: ``path`` for a
-    file, ``x`` (with ``t`` and ``drive``) for arrays, ``x`` and ``grid`` for a Record, whose
-    own signal and measured quantity then hold (``options`` is updated)."""
+    file (a list of paths with ``several_files``), ``x`` (with ``t`` and ``drive``) for arrays,
+    ``x`` and ``grid`` for a Record, whose own signal, measured quantity, coordinates and drives
+    then hold (``options`` is updated)."""
     if isinstance(x, Record):
         for name in ("signal", "measured"):
             own = getattr(x, name)
@@ -175,22 +275,30 @@ def source(
                 )
             options[name] = own
         for name in RECORD_FIXED:
-            if options.get(name, defaults.get(name)) != defaults.get(name):
+            if options.get(name) not in (None, False):
                 raise OptionsError(f"{name}: the Record was read with its own; read it again to change it")
             options.pop(name, None)
         if t is not None or drive is not None:
             raise OptionsError("a Record carries its own time and drive: give no t or drive with it")
-        args: Dict[str, Any] = dict(x=array(x.x, "x"), grid=x._grid())
-        if x.drive is not None:
-            args["drive"] = array(x.drive, "drive")
+        options.update(x.columns)
+        positions = list(x.positions.values()) or [x.x]
+        args: Dict[str, Any] = dict(x=[array(p, "x") for p in positions], grid=x._grid())
+        drives = list(x.drives.values()) or ([] if x.drive is None else [x.drive])
+        if drives:
+            args["drive"] = [array(p, "drive") for p in drives]
+            if "drive_col" not in options:
+                options["drive_col"] = list(x.drives) if len(x.drives) > 1 else "p"
+        if x.velocities:
+            args["velocity"] = [array(v, "velocity") for v in x.velocities.values()]
         return args
-    if isinstance(x, (str, os.PathLike)):
+    if _is_path(x):
         if t is not None or drive is not None:
             raise OptionsError("a file carries its own time and drive: give no t or drive with a path")
-        return dict(path=os.fspath(x))
-    args = dict(x=array(x, "x"))
-    if t is not None:
-        args["t"] = array(t, "t")
-    if drive is not None:
-        args["drive"] = array(drive, "drive")
-    return args
+        return dict(path=[os.fspath(x)] if several_files else os.fspath(x))
+    if isinstance(x, (list, tuple)) and x and all(_is_path(p) for p in x):
+        if not several_files:
+            raise OptionsError("x: one record here; only identify joins several files")
+        if t is not None or drive is not None:
+            raise OptionsError("files carry their own time and drive: give no t or drive with paths")
+        return dict(path=[os.fspath(p) for p in x])
+    return _arrays(x, t, drive, options)

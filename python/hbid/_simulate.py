@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Dict, Iterator, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
 from . import _hbid
-from ._common import PathLike, options_json, renamed
+from ._common import ColumnsLike, PathLike, options_json, renamed
+from ._equation import flattened
 from .errors import OptionsError
 
 
@@ -35,14 +36,39 @@ class Simulation:
     drive: Optional[np.ndarray]
     """The drive p(t), with ``write_drive=True``."""
     columns: Tuple[str, ...]
-    """The columns ``hbid simulate`` writes (``t,theta,omega``, ``t,count,omega``, ``t,x,v``, and ``p``)."""
+    """The columns ``hbid simulate`` writes (``t,theta,omega``, ``t,count,omega``, ``t,x,v``, and
+    ``p``; a system's ``t``, its coordinates, their velocities and its drives:
+    ``t,theta1,theta2,omega1,omega2``)."""
     truth_file: Dict[str, Any]
     """The truth file ``hbid simulate --truth`` writes."""
+    named: Dict[str, np.ndarray] = field(default_factory=dict, repr=False)
+    """Every column by its name (``sim.named["theta2"]``)."""
 
     @property
     def truth(self) -> Dict[str, float]:
-        """The true coefficients, keyed by the identification's term names."""
+        """The true coefficients, keyed by the identification's term names (of a system every
+        equation's, ``"theta1: sin(theta1)"``, as :attr:`Identification.coefficients` keys
+        them)."""
+        if "equations" in self.truth_file:
+            return flattened({q: e["coefficients"] for q, e in self.truth_equations.items()})
         return dict(self.truth_file["coefficients"])
+
+    @property
+    def truth_equations(self) -> Dict[str, Dict[str, Any]]:
+        """A system's true equations by coordinate, each with its ``coefficients`` by term name;
+        of a system of one coordinate, ``{"x": {"coefficients": truth}}``."""
+        if "equations" in self.truth_file:
+            return {q: dict(e) for q, e in self.truth_file["equations"].items()}
+        return {"x": {"coefficients": dict(self.truth_file["coefficients"])}}
+
+    @property
+    def identify_options(self) -> Dict[str, Any]:
+        """The keywords of :func:`identify` that identify the truth's equations from this record
+        (the truth file's hint: a system's ``coords``, ``signal``, ``terms`` and drives), if it
+        has them."""
+        hint = dict(self.truth_file.get("identify") or {})
+        hint.pop("args", None)
+        return hint
 
     @property
     def drive_period(self) -> float:
@@ -78,12 +104,17 @@ def _gaps(gaps: Union[str, Sequence[int], None]) -> Optional[str]:
 
 
 def _harmonics(harmonics: Union[str, Sequence[Any], None]) -> list:
+    """Repeatable ``K:RATIO[:PHASE]`` (or ``A:OMEGA[:PHASE]``) options: a text, a tuple of
+    numbers, or a list of either."""
     if harmonics is None:
         return []
     if isinstance(harmonics, str):
         return [harmonics]
+    items = list(harmonics)
+    if items and all(isinstance(v, (int, float, np.integer, np.floating)) for v in items):
+        items = [tuple(items)]
     out = []
-    for h in harmonics:
+    for h in items:
         out.append(h if isinstance(h, str) else ":".join(str(v) for v in h))
     return out
 
@@ -101,6 +132,21 @@ def simulate(
     cubic_damping: Optional[float] = None,
     drive_harmonic: Union[str, Sequence[Any], None] = None,
     drive: str = "drive",
+    c2: Optional[float] = None,
+    mu: Optional[float] = None,
+    length_ratio: Optional[float] = None,
+    torque1: Union[str, Sequence[Any], None] = None,
+    torque2: Union[str, Sequence[Any], None] = None,
+    joint_damping: Union[str, Sequence[float], None] = None,
+    joint_friction: Union[str, Sequence[float], None] = None,
+    a2: Optional[float] = None,
+    b2: Optional[float] = None,
+    coupling: Optional[float] = None,
+    coupling_cubic: Optional[float] = None,
+    mass_ratio: Optional[float] = None,
+    drive_seed: Optional[int] = None,
+    q0: Union[str, Sequence[float], None] = None,
+    dq0: Union[str, Sequence[float], None] = None,
     x0: float = 0.1,
     v0: float = 0.0,
     rtol: float = 1e-10,
@@ -121,6 +167,7 @@ def simulate(
     seed: int = 0,
     unwrapped: bool = False,
     gaps: Union[str, Tuple[int, int], None] = None,
+    jitter: Optional[float] = None,
     time_decimals: Optional[int] = None,
     decimals: Optional[int] = None,
     truth: Optional[PathLike] = None,
@@ -131,7 +178,7 @@ def simulate(
     time_col: Union[str, int, None] = None,
     angle_col: Union[str, int, None] = None,
     dt: Optional[float] = None,
-    drive_col: Union[str, int, None] = None,
+    drive_col: ColumnsLike = None,
     init: Optional[int] = None,
     **old: Any,
 ) -> Any:
@@ -139,12 +186,16 @@ def simulate(
 
     The base-excited pendulum ``x'' + c x' + (1/r^2) sin x - f sin(t) cos x = 0`` or the
     two-well Duffing oscillator ``x'' + c x' + a x + b x^3 = f cos(t)``, with a rig's losses and
-    drive harmonics, sampled as a rig records it. Without options: 30000 samples, 25 per drive
+    drive harmonics, sampled as a rig records it; or a system of two coordinates: the double
+    pendulum on a shaken pivot, whirling (``"double-pendulum"``), a robot arm driven by a torque
+    at each joint (``"arm"``), or two coupled two-well Duffing oscillators on a shaken base
+    (``"coupled-duffing"``); :attr:`Simulation.named` has every column by name. Without options: 30000 samples, 25 per drive
     period 2 pi, after 200 periods, the angle wrapped into ``[-pi, pi)``. Every option is that of
     ``hbid simulate``, spelled with ``_`` for ``-`` (``hbid simulate --help`` says more of each).
 
     Args:
-        system: ``"pendulum"`` or ``"duffing"``.
+        system: ``"pendulum"``, ``"duffing"``, ``"double-pendulum"``, ``"arm"`` or
+            ``"coupled-duffing"``.
         f: drive amplitude (default 1.52 for the pendulum, 0.3 for Duffing).
         c: damping (default 0.03, or 0.25).
         r: pendulum: frequency ratio, stiffness 1/r^2 (default 0.8333).
@@ -156,6 +207,29 @@ def simulate(
         drive_harmonic: harmonics of the drive, ``"K:RATIO[:PHASE]"`` or ``(K, RATIO[, PHASE])``
             each (a list for several).
         drive: ``"drive"``, or ``"none"`` for a free decay (f = 0, no transient by default).
+        c2: double pendulum and coupled oscillators: the damping of link 2 or oscillator 2
+            (default 0.05, or 0.2).
+        mu: double pendulum: the mass ratio m2/(m1+m2), in [0, 1] (default 0.5).
+        length_ratio: double pendulum: the length ratio l2/l1 (default 1).
+        torque1: arm: the shoulder's torque, sinusoids ``"A:OMEGA[:PHASE]"`` (N m, rad/s, rad)
+            or ``(A, OMEGA[, PHASE])``, a list for several (added), or ``"none"`` (default
+            ``"0.4:10"``).
+        torque2: arm: the elbow's torque, as ``torque1`` (default ``0.8 cos 10t``).
+        joint_damping: arm: the joints' viscous friction ``(b1, b2)`` in N m s/rad (default the
+            published 0.001, 0.001).
+        joint_friction: arm: the joints' dry friction ``(cf1, cf2)`` in N m (default the
+            published 0.093, 0.078; ``(0, 0)`` for none).
+        a2: coupled oscillators: linear stiffness of oscillator 2 (default -0.8).
+        b2: coupled oscillators: cubic stiffness of oscillator 2 (default 1.2).
+        coupling: coupled oscillators: the coupling spring's stiffness k (default 0.3).
+        coupling_cubic: coupled oscillators: the coupling spring's cubic part k3 (default 0.05).
+        mass_ratio: coupled oscillators: the mass ratio m2/m1 (default 1).
+        drive_seed: coupled oscillators: the seed of the base's synthetic acceleration (default
+            1).
+        q0: a system's initial coordinates ``(q1, q2)`` at the start of the integration (default
+            (2, 0) for the double pendulum, (0, 0) for the arm, (1, -0.9) for the coupled
+            oscillators).
+        dq0: a system's initial velocities ``(v1, v2)`` (default at rest).
         x0: initial angle (or displacement) at the start of the integration.
         v0: initial velocity, in the record's time unit.
         rtol: relative tolerance of the integrator (absolute: rtol/10).
@@ -178,6 +252,8 @@ def simulate(
         seed: seed of the noise, the bit errors and the gaps.
         unwrapped: the continuous angle instead of the wrapped one.
         gaps: ``"K:LEN"`` or ``(K, LEN)``: drop K runs of LEN samples at seeded places.
+        jitter: Gaussian jitter of the written time stamps, its standard deviation in the
+            record's time unit (seeded by ``seed``).
         time_decimals: time stamps printed with this many decimals.
         decimals: angle (or displacement) and velocity printed with this many decimals.
         truth: also write the truth file here (JSON).
@@ -190,7 +266,8 @@ def simulate(
         time_col: the input's time column.
         angle_col: the input's output column (its first samples set the initial state).
         dt: the input's sampling step, for a record without times.
-        drive_col: the input's measured drive column, for a model with terms in ``p``.
+        drive_col: the input's measured drive column, for a model with terms in ``p`` (several
+            as a list, for a system's drives).
         init: samples of the input that set the initial state of each piece (default: one period
             of the model's drive, at most a tenth of the record, at least 8); 0 starts from
             ``x0``, ``v0``.
@@ -216,6 +293,21 @@ def simulate(
         cubic_damping=cubic_damping,
         drive_harmonic=_harmonics(drive_harmonic),
         drive=drive,
+        c2=c2,
+        mu=mu,
+        length_ratio=length_ratio,
+        torque1=_harmonics(torque1),
+        torque2=_harmonics(torque2),
+        joint_damping=joint_damping,
+        joint_friction=joint_friction,
+        a2=a2,
+        b2=b2,
+        coupling=coupling,
+        coupling_cubic=coupling_cubic,
+        mass_ratio=mass_ratio,
+        drive_seed=drive_seed,
+        q0=q0,
+        dq0=dq0,
         x0=x0,
         v0=v0,
         rtol=rtol,
@@ -236,6 +328,7 @@ def simulate(
         seed=seed,
         unwrapped=unwrapped,
         gaps=_gaps(gaps),
+        jitter=jitter,
         time_decimals=time_decimals,
         decimals=decimals,
         write_drive=write_drive,
@@ -286,4 +379,5 @@ def simulate(
         drive=d["drive"],
         columns=tuple(d["columns"]),
         truth_file=json.loads(d["truth"]),
+        named=dict(d["named"]),
     )

@@ -287,6 +287,9 @@ def test_bad_samples_raise_clear_errors(pendulum):
     with pytest.raises(hbid.OptionsError, match="one-dimensional"):
         hbid.identify(np.zeros((10, 2)), dt=0.1)
     with pytest.raises(hbid.OptionsError, match="not an array of numbers"):
+        hbid.identify(["a", 0.5], dt=0.1)
+    # A list of texts is a list of files (records joined into one fit).
+    with pytest.raises(hbid.InputError, match="a: cannot read"):
         hbid.identify(["a", "b"], dt=0.1)
     with pytest.raises(hbid.OptionsError, match="give the time stamps t= or the sampling step dt="):
         hbid.identify(pendulum.x)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import pickle
+import warnings
 
 import numpy as np
 import pytest
@@ -70,16 +71,50 @@ def test_a_glitch_is_an_error_unless_repaired(tmp_path, pendulum):
 
 
 def test_spikes_warn_and_are_replaced_with_repair(tmp_path, pendulum):
+    """By default a spike is replaced only when a lone sample would decide by it (larger than
+    the record's own steps, here 0.72 rad at the 99th percentile) and spikes are few (at most
+    one in 1000 samples): an encoder's bit errors of half a turn are, with a note; a spike within
+    the record's steps is kept with a warning. ``repair=True`` replaces every one,
+    ``no_repair=True`` none (a warning)."""
     x = pendulum.x.copy()
-    x[1234] = hbid_wrap(x[1234] + 1.0)
-    path = write_csv(tmp_path / "spike.csv", pendulum.t, x)
+    bit_errors = [1234, 2345]
+    for i in bit_errors:
+        x[i] = hbid_wrap(x[i] + np.pi)
+    path = write_csv(tmp_path / "bits.csv", pendulum.t, x)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", hbid.HbidWarning)
+        record = hbid.read(path)
+    assert [(s[0], s[2]) for s in record.spikes] == [(i, True) for i in bit_errors]
+    assert all(abs(abs(s[1]) - np.pi) < 0.05 for s in record.spikes)
+    assert np.abs(record.x[bit_errors] - pendulum.x[bit_errors]).max() < 0.05
+    assert "replaced by the local prediction (by default" in record.notes[0]
+    assert record.notes[0].endswith("run with no_repair=True to keep them")
     with pytest.warns(hbid.HbidWarning, match="repair=True"):
+        kept = hbid.read(path, no_repair=True)
+    assert [(s[0], s[2]) for s in kept.spikes] == [(i, False) for i in bit_errors]
+    np.testing.assert_array_equal(kept.x[bit_errors], x[bit_errors])
+
+    # Too many to be bit errors of a sound encoder (more than one in 1000 samples): kept.
+    many = pendulum.x.copy()
+    for i in range(300, 3000, 600):
+        many[i] = hbid_wrap(many[i] + np.pi)
+    with pytest.warns(hbid.HbidWarning, match="more than one in 1000 samples"):
+        record = hbid.read(write_csv(tmp_path / "many.csv", pendulum.t, many))
+    assert len(record.spikes) == 5 and not any(s[2] for s in record.spikes)
+
+    # Within the record's own steps: a sample the motion could reach, kept unless repair=True.
+    small = pendulum.x.copy()
+    small[1234] = hbid_wrap(small[1234] + 0.2)
+    path = write_csv(tmp_path / "small.csv", pendulum.t, small)
+    with pytest.warns(hbid.HbidWarning, match="within the record's own steps"):
         record = hbid.read(path)
     assert [s[0] for s in record.spikes] == [1234] and record.spikes[0][2] is False
-    assert record.x[1234] == x[1234]
+    assert record.x[1234] == small[1234]
     fixed = hbid.read(path, repair=True)
     assert fixed.spikes[0][:1] == (1234,) and fixed.spikes[0][2] is True
     assert abs(fixed.x[1234] - pendulum.x[1234]) < 0.05
+    with pytest.raises(hbid.OptionsError, match="not both"):
+        hbid.read(path, repair=True, no_repair=True)
 
 
 def hbid_wrap(v):

@@ -465,8 +465,10 @@ fn compare_one(
         )
         .into());
     }
+    // A drive given as an array is Python's `drive=`, even when its name comes with it.
+    let named = !matches!(source, Source::Arrays { .. });
     let grid = condition_source(source, &o.record_options(domain), observer)?;
-    let measured_drive = check_drive(model, &grid, o.drive_col.is_some())?;
+    let measured_drive = check_drive(model, &grid, named)?;
     observer.stage(Stage::Simulate);
     let len = grid.x.len();
     let ranges: Vec<std::ops::Range<usize>> = if o.range.is_empty() {
@@ -781,13 +783,20 @@ pub(crate) fn default_init(period_samples: f64, range: usize) -> usize {
 }
 
 /// Checks that the record's drive and the model agree: a drive column for a model in `p`, none
-/// for a model without. Returns whether the model runs on the record's drive.
+/// for a model without. `named`: the record is a file whose drive is named by `drive_col`, not
+/// samples given with their drive (Python's `drive=`), as the messages say. Returns whether the
+/// model runs on the record's drive.
 fn check_drive(model: &IdentifiedModel, grid: &GridData, named: bool) -> Result<bool, RunError> {
     match (grid.drives.first(), model.form().has_measured_drive()) {
         (Some(_), true) => Ok(true),
-        (None, true) => Err(OptionError::new(
+        (None, true) if named => Err(OptionError::new(
             "drive_col",
             "the model has terms in the measured drive p: name the record's drive column with «drive_col=»",
+        )
+        .into()),
+        (None, true) => Err(OptionError::new(
+            "drive",
+            "the model has terms in the measured drive p: give its samples with «drive=»",
         )
         .into()),
         (Some(_), false) => Err(OptionError::new(
@@ -1098,26 +1107,7 @@ pub fn run_on_times(
     state: [f64; 2],
     rtol: f64,
 ) -> Result<ModelRun, RunError> {
-    if t.len() < 2 {
-        return Err(OptionError::new("t", format!("{} time(s): at least 2 are needed", t.len())).into());
-    }
-    if let Some(bad) = t.iter().find(|v| !v.is_finite()) {
-        return Err(OptionError::value("t", bad, "every time must be finite").into());
-    }
-    let dt = (t[t.len() - 1] - t[0]) / (t.len() - 1) as f64;
-    if !(dt > 0.0 && dt.is_finite()) {
-        return Err(OptionError::new("t", "the times must increase").into());
-    }
-    if let Some(n) = (0..t.len()).find(|&n| (t[n] - (t[0] + n as f64 * dt)).abs() > 1e-6 * dt) {
-        return Err(OptionError::new(
-            "t",
-            format!(
-                "time {} (index {n}) is off the even grid of step {dt}: a model runs on a record's grid (read the record with hbid.read to fit its stamps)",
-                t[n]
-            ),
-        )
-        .into());
-    }
+    let dt = even_step(t)?;
     let tolerances = Tolerances::new(rtol, rtol / 10.0).map_err(|e| OptionError::value("rtol", rtol, e))?;
     let model = match (drive, model.form().has_measured_drive()) {
         (Some(p), true) => {
@@ -1158,5 +1148,143 @@ pub fn run_on_times(
         columns: ["t", "x", "v"].map(String::from).to_vec(),
         rows,
         stopped: run.stopped.map(|why| format!("the model's run stopped: {why}")),
+    })
+}
+
+/// The step of the times `t`, an even grid (stamps within 10⁻⁶ of a step of `t[0] + n · dt`) of
+/// at least 2 finite, increasing times.
+fn even_step(t: &[f64]) -> Result<f64, RunError> {
+    if t.len() < 2 {
+        return Err(OptionError::new("t", format!("{} time(s): at least 2 are needed", t.len())).into());
+    }
+    if let Some(bad) = t.iter().find(|v| !v.is_finite()) {
+        return Err(OptionError::value("t", bad, "every time must be finite").into());
+    }
+    let dt = (t[t.len() - 1] - t[0]) / (t.len() - 1) as f64;
+    if !(dt > 0.0 && dt.is_finite()) {
+        return Err(OptionError::new("t", "the times must increase").into());
+    }
+    if let Some(n) = (0..t.len()).find(|&n| (t[n] - (t[0] + n as f64 * dt)).abs() > 1e-6 * dt) {
+        return Err(OptionError::new(
+            "t",
+            format!(
+                "time {} (index {n}) is off the even grid of step {dt}: a model runs on a record's grid (read the record with hbid.read to fit its stamps)",
+                t[n]
+            ),
+        )
+        .into());
+    }
+    Ok(dt)
+}
+
+/// Runs `system` from the state `(x0, v0)` (one position and one velocity per coordinate) at
+/// `t[0]` over the times `t`, an even grid, driven by `drives` (one series per drive of the
+/// system's names, one sample per time, for a system with terms in measured drives; read
+/// between samples from [`MeasuredDrive`]'s spline): what Python's `Model.simulate(t=...,
+/// drive=..., x0=[...], v0=[...])` returns. The columns are those of [`model_run`]: `t`, the
+/// coordinates, then their velocities (`t,x,v` for a system of one coordinate, run by
+/// [`run_on_times`]). Nothing is fitted: no record's output is involved.
+///
+/// Errors: as [`run_on_times`], and a state or drives that are not one per coordinate or drive
+/// of the system.
+pub fn run_system_on_times(
+    system: &IdentifiedSystem,
+    t: &[f64],
+    drives: &[&[f64]],
+    x0: &[f64],
+    v0: &[f64],
+    rtol: f64,
+) -> Result<ModelRun, RunError> {
+    let n = system.coordinates();
+    for (name, values) in [("x0", x0), ("v0", v0)] {
+        if values.len() != n {
+            return Err(OptionError::new(
+                name,
+                format!(
+                    "{} value(s) for a system of {n} coordinate(s) ({}): give one per coordinate",
+                    values.len(),
+                    system.names().coordinates().join(", ")
+                ),
+            )
+            .into());
+        }
+        if let Some(bad) = values.iter().find(|v| !v.is_finite()) {
+            return Err(OptionError::value(name, bad, "the initial state must be finite").into());
+        }
+    }
+    if let [model] = system.equations() {
+        let drive = match drives {
+            [] => None,
+            [p] => Some(*p),
+            _ => {
+                return Err(OptionError::new(
+                    "drive",
+                    format!("{} drives for a model of one measured drive p", drives.len()),
+                )
+                .into());
+            }
+        };
+        return run_on_times(model, t, drive, [x0[0], v0[0]], rtol);
+    }
+    let dt = even_step(t)?;
+    let tolerances = Tolerances::new(rtol, rtol / 10.0).map_err(|e| OptionError::value("rtol", rtol, e))?;
+    let names = system.names();
+    let driven = match (drives.is_empty(), system.has_measured_drive()) {
+        (_, true) => {
+            if drives.len() != names.drives().len() {
+                return Err(OptionError::new(
+                    "drive",
+                    format!(
+                        "{} drive(s) for a system that reads {} ({}): give one series per drive",
+                        drives.len(),
+                        names.drives().len(),
+                        names.drives().join(", ")
+                    ),
+                )
+                .into());
+            }
+            let mut splines = Vec::with_capacity(drives.len());
+            for (p, name) in drives.iter().zip(names.drives()) {
+                if p.len() != t.len() {
+                    return Err(OptionError::new(
+                        "drive",
+                        format!(
+                            "{} samples of the drive {name} for {} times: give one per time",
+                            p.len(),
+                            t.len()
+                        ),
+                    )
+                    .into());
+                }
+                splines.push(MeasuredDrive::new(p.to_vec(), t[0], dt)?);
+            }
+            system.clone().with_measured_drives(splines)?
+        }
+        (true, false) => system.clone(),
+        (false, false) => {
+            return Err(OptionError::new(
+                "drive",
+                "the system has no term in a measured drive: it runs on its own drive",
+            )
+            .into());
+        }
+    };
+    let state = MultiState::new(x0, v0)?;
+    let run = multi::free_run(&driven, t, &state, tolerances)?;
+    let mut columns = vec!["t".to_owned()];
+    columns.extend(names.coordinates().iter().cloned());
+    columns.extend(names.coordinates().iter().map(|q| format!("{q}'")));
+    let rows = (0..t.len())
+        .map(|i| {
+            let mut row = vec![t[i]];
+            row.extend(run.q.iter().map(|q| q[i]));
+            row.extend(run.v.iter().map(|v| v[i]));
+            row
+        })
+        .collect();
+    Ok(ModelRun {
+        columns,
+        rows,
+        stopped: run.stopped.map(|why| format!("the system's run stopped: {why}")),
     })
 }

@@ -505,6 +505,12 @@ impl IdentifyRequest {
                 }
             }
         }
+        // A term that does not fit its coordinate's domain (`x^3` of an angle) is the list's
+        // error, before the basis it would imply is found on the wrong domain.
+        for list in lists.iter().flatten() {
+            list.check_domains(&domains)
+                .map_err(|e| OptionError::new("terms", e))?;
+        }
         let mut bases = Vec::with_capacity(n);
         for (i, list) in lists.iter().enumerate() {
             let domain = domains[i];
@@ -554,8 +560,6 @@ impl IdentifyRequest {
                     "not with «terms»: name the harmonics' terms in the list (cos(2t)*sin(x))",
                 ));
             }
-            list.check_domains(&domains)
-                .map_err(|e| OptionError::new("terms", e))?;
             list.resolve(basis)
                 .map_err(|e| OptionError::new("terms", format!("with the basis {}: {e}", basis.spec())))?;
             if matches!(drive, DriveSpec::Free | DriveSpec::Windows(_))

@@ -58,7 +58,7 @@ pub mod simulate;
 
 pub use compare::{
     CompareOptions, CompareReport, CompareRequest, ModelRun, SampleRange, compare, model_run, read_model,
-    run_on_times,
+    run_on_times, run_system_on_times,
 };
 pub use embed::{EmbedReport, EmbedRequest, OrbitOptions, UposReport, UposRequest, embed, upos};
 pub use error::{ErrorKind, RunError};

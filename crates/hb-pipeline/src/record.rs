@@ -488,6 +488,13 @@ fn arrays_record(
             OptionError::sentence(name, "names a column of a file: give arrays, or a file to read").into(),
         );
     }
+    if options.velocity_col.is_some() {
+        return Err(OptionError::sentence(
+            "velocity_col",
+            "names columns of a file: give arrays without it, or a file to read",
+        )
+        .into());
+    }
     let Some((&x, others)) = coords.split_first() else {
         return Err(OptionError::new("x", "no coordinate given").into());
     };

@@ -120,3 +120,137 @@ fn the_default_init_scales_with_the_drive_and_the_range() {
     assert_eq!(default_init(3.0, 1000), 8);
     assert_eq!(default_init(f64::INFINITY, 1000), 8);
 }
+
+/// The double pendulum of `hbid simulate --system double-pendulum` (its truth's equations,
+/// nondimensional time): the system a Python user runs with `Model.simulate(t=..., x0=[..],
+/// v0=[..])`.
+fn double_pendulum() -> IdentifiedSystem {
+    use hb_basis::{Domain, Harmonic};
+    use hb_model::{Names, TermList};
+    let names = Names::new(["theta1", "theta2"], Vec::<String>::new()).unwrap();
+    let basis = BasisKind::from(Harmonic::new(1).unwrap());
+    let equation = |own: usize, terms: &str, values: &[f64]| {
+        let list = TermList::parse_in(terms, &names, own).unwrap();
+        IdentifiedModel::new(basis, ModelForm::from_terms(list), 1.0, values).unwrap()
+    };
+    IdentifiedSystem::new(
+        names.clone(),
+        vec![Domain::Circle; 2],
+        vec![
+            equation(
+                0,
+                "theta2''*cos(theta1-theta2), sin(theta1-theta2)*theta2'^2, sin(theta1), sin(t)*cos(theta1), theta1'",
+                &[0.5, 0.5, 0.8, -0.6, 0.05],
+            ),
+            equation(
+                1,
+                "theta1''*cos(theta1-theta2), sin(theta1-theta2)*theta1'^2, sin(theta2), sin(t)*cos(theta2), theta2'",
+                &[1.0, -1.0, 0.8, -0.6, 0.05],
+            ),
+        ],
+    )
+    .unwrap()
+}
+
+/// A system run over given times from a given state is the free run `compare` (and `hbid
+/// simulate --model --input --init 0`) makes from that state on a record of those times: the
+/// same integrator, the same columns, and the record it was simulated as.
+#[test]
+fn a_system_runs_on_given_times_as_compare_runs_it() {
+    use hb_pipeline::{Rig, model_run, run_system_on_times};
+    let system = double_pendulum();
+    let rig = Rig::from_json(serde_json::json!({"system": "double-pendulum", "samples": 640})).unwrap();
+    let table = hb_pipeline::simulate(&rig, &mut ()).unwrap().table();
+    let column = |c: usize| -> Vec<f64> { table.iter().map(|row| row[c]).collect() };
+    let (t, q1, q2) = (column(0), column(1), column(2));
+    let (x0, v0) = ([q1[0], q2[0]], [table[0][3], table[0][4]]);
+    let run = run_system_on_times(&system, &t, &[], &x0, &v0, 1e-10).unwrap();
+    assert_eq!(run.columns, ["t", "theta1", "theta2", "theta1'", "theta2'"]);
+    assert_eq!(run.rows.len(), t.len());
+    assert!(run.stopped.is_none());
+
+    let values = |v: [f64; 2]| format!("{},{}", v[0], v[1]).parse().unwrap();
+    let request = CompareRequest::new(CompareOptions {
+        x0: Some(values(x0)),
+        v0: Some(values(v0)),
+        ..CompareOptions::default()
+    })
+    .unwrap();
+    let source = Source::Arrays {
+        coords: vec![&q1, &q2],
+        t: Some(&t),
+        drives: Vec::new(),
+    };
+    let compared = model_run(&system, source, &request, &mut ()).unwrap();
+    assert_eq!(compared.columns, run.columns);
+    let wrap = |a: f64| (a + std::f64::consts::PI).rem_euclid(TAU) - std::f64::consts::PI;
+    for (mine, theirs) in run.rows.iter().zip(&compared.rows) {
+        assert!((mine[0] - theirs[0]).abs() < 1e-9);
+        // compare puts the angles on the measured turn; velocities as run.
+        for c in 1..3 {
+            assert!(wrap(mine[c] - theirs[c]).abs() < 1e-9, "{mine:?} {theirs:?}");
+        }
+        for c in 3..5 {
+            assert!((mine[c] - theirs[c]).abs() < 1e-9, "{mine:?} {theirs:?}");
+        }
+    }
+    // The record is this system's: one drive period of its run is the record's.
+    for (row, sample) in run.rows.iter().zip(&table).take(64) {
+        assert!(wrap(row[1] - sample[1]).abs() < 1e-6 && wrap(row[2] - sample[2]).abs() < 1e-6);
+    }
+}
+
+/// A state or drives that are not one per coordinate or drive of the system, and times off an
+/// even grid, are the options' errors, by name.
+#[test]
+fn a_systems_run_refuses_a_state_or_drives_that_do_not_fit() {
+    use hb_pipeline::{ErrorKind, run_system_on_times};
+    let system = double_pendulum();
+    let t: Vec<f64> = (0..100).map(|i| f64::from(i) * 0.1).collect();
+    let refused = |result: Result<hb_pipeline::ModelRun, RunError>, option: &str| {
+        let e = result.unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::Options, "{e}");
+        assert!(e.to_string().contains(option), "{e}");
+    };
+    refused(
+        run_system_on_times(&system, &t, &[], &[0.1], &[0.0, 0.0], 1e-10),
+        "x0",
+    );
+    refused(
+        run_system_on_times(&system, &t, &[], &[0.1, 0.2], &[0.0], 1e-10),
+        "v0",
+    );
+    refused(
+        run_system_on_times(&system, &t, &[], &[0.1, f64::NAN], &[0.0, 0.0], 1e-10),
+        "x0",
+    );
+    refused(
+        run_system_on_times(&system, &t, &[&t], &[0.1, 0.2], &[0.0, 0.0], 1e-10),
+        "drive",
+    );
+    let uneven: Vec<f64> = t.iter().map(|v| v * v).collect();
+    refused(
+        run_system_on_times(&system, &uneven, &[], &[0.1, 0.2], &[0.0, 0.0], 1e-10),
+        "even grid",
+    );
+}
+
+/// Measured velocities are columns of a file: samples given as arrays with `velocity_col` are
+/// refused by name, not read without them.
+#[test]
+fn arrays_refuse_velocity_columns() {
+    let x: Vec<f64> = (0..200).map(|i| (f64::from(i) * 0.1).sin()).collect();
+    let options = hb_pipeline::RecordOptions {
+        dt: Some(0.1),
+        velocity_col: Some("v".parse().unwrap()),
+        ..Default::default()
+    };
+    let source = Source::Arrays {
+        coords: vec![&x],
+        t: None,
+        drives: Vec::new(),
+    };
+    let e = hb_pipeline::condition_source(source, &options, &mut ()).unwrap_err();
+    assert_eq!(e.kind(), hb_pipeline::ErrorKind::Options);
+    assert!(e.to_string().contains("velocity_col"), "{e}");
+}

@@ -1,16 +1,17 @@
-//! Identified models: their coefficients, saved and loaded as `hbid identify --save-model` does,
-//! and simulated by `pendulum_sim`. A model crosses into Python as its compact bytes
-//! ([`IdentifiedModel::to_bytes`]), so that it pickles as it is.
+//! Identified models and systems: their coefficients, saved and loaded as `hbid identify
+//! --save-model` does, and simulated by `pendulum_sim`. A model crosses into Python as its
+//! compact bytes ([`IdentifiedSystem::to_bytes`]: a model of one coordinate in format 4, a system
+//! of several in format 5), so that it pickles as it is.
 
 use std::io::Write;
 use std::path::PathBuf;
 
 use circle_signal::Domain;
-use hb_model::{IdentifiedModel, MODEL_MAGIC};
+use hb_model::{IdentifiedModel, IdentifiedSystem};
 use numpy::PyArray1;
 use pendulum_sim::{SimulationConfig, Tolerances, simulate};
 use pyo3::prelude::*;
-use pyo3::types::{PyBytes, PyDict};
+use pyo3::types::{PyBytes, PyDict, PyList};
 
 use crate::errors::{Kind, OrRaise};
 
@@ -22,61 +23,108 @@ type Arrays3<'py> = (
 );
 
 fn decode(bytes: &[u8]) -> PyResult<IdentifiedModel> {
-    IdentifiedModel::from_bytes(bytes).or_raise(Kind::Model)
+    match IdentifiedSystem::from_bytes(bytes)
+        .or_raise(Kind::Model)?
+        .into_equations()
+    {
+        equations if equations.len() == 1 => Ok(equations.into_iter().next().expect("one")),
+        equations => Err(crate::errors::raise(
+            Kind::Options,
+            format!(
+                "a system of {} coordinates runs over given times: Model.simulate(t=..., x0=[...], v0=[...])",
+                equations.len()
+            ),
+        )),
+    }
 }
 
-/// The coefficients, basis, signal, forcing frequency and fit summary of a model.
+fn decode_system(bytes: &[u8]) -> PyResult<IdentifiedSystem> {
+    IdentifiedSystem::from_bytes(bytes).or_raise(Kind::Model)
+}
+
+/// The summary of a model's fit, or None.
+fn summary<'py>(py: Python<'py>, model: &IdentifiedModel) -> PyResult<Option<Bound<'py, PyDict>>> {
+    let Some(s) = model.summary() else {
+        return Ok(None);
+    };
+    let summary = PyDict::new(py);
+    summary.set_item("solver", &s.solver)?;
+    summary.set_item("rows", s.rows)?;
+    summary.set_item("unknowns", s.unknowns)?;
+    summary.set_item("segments", s.segments)?;
+    summary.set_item("whirling_segments", s.whirling_segments)?;
+    summary.set_item("condition_number", s.condition)?;
+    summary.set_item("residual_rms", s.residual_rms)?;
+    summary.set_item("forcing_period", s.clock.drive_period())?;
+    summary.set_item("sample_step", s.clock.step())?;
+    Ok(Some(summary))
+}
+
+/// The coefficients `(name, value, standard error)` of a model, in its order.
+fn coefficients(model: &IdentifiedModel) -> Vec<(String, f64, f64)> {
+    model
+        .coefficients()
+        .iter()
+        .map(|c| (c.name.clone(), c.value, c.std_error))
+        .collect()
+}
+
+/// A model or system: its coordinates, measured drives and their domains, each equation's
+/// coefficients, basis and fit summary, and (the first equation's) coefficients, basis,
+/// signal, forcing frequency and fit summary as a model of one coordinate has them.
 #[pyfunction]
 pub fn model_info<'py>(py: Python<'py>, model: &[u8]) -> PyResult<Bound<'py, PyDict>> {
-    let model = decode(model)?;
+    let system = decode_system(model)?;
+    let names = system.names();
+    let first = &system.equations()[0];
     let out = PyDict::new(py);
+    out.set_item("coordinates", names.coordinates())?;
+    let drives: &[String] = if system.has_measured_drive() {
+        names.drives()
+    } else {
+        &[]
+    };
+    out.set_item("drives", drives)?;
     out.set_item(
-        "coefficients",
-        model
-            .coefficients()
-            .iter()
-            .map(|c| (c.name.clone(), c.value, c.std_error))
-            .collect::<Vec<_>>(),
+        "signals",
+        system.domains().iter().map(|d| d.name()).collect::<Vec<_>>(),
     )?;
-    out.set_item("basis", model.basis().to_string())?;
-    out.set_item("signal", model.domain().name())?;
-    out.set_item("forcing_frequency", model.drive_angular_frequency())?;
-    match model.summary() {
-        Some(s) => {
-            let summary = PyDict::new(py);
-            summary.set_item("solver", &s.solver)?;
-            summary.set_item("rows", s.rows)?;
-            summary.set_item("unknowns", s.unknowns)?;
-            summary.set_item("segments", s.segments)?;
-            summary.set_item("whirling_segments", s.whirling_segments)?;
-            summary.set_item("condition_number", s.condition)?;
-            summary.set_item("residual_rms", s.residual_rms)?;
-            summary.set_item("forcing_period", s.clock.drive_period())?;
-            summary.set_item("sample_step", s.clock.step())?;
-            out.set_item("summary", summary)?;
-        }
-        None => out.set_item("summary", py.None())?,
+    let equations = PyList::empty(py);
+    for (name, model) in names.coordinates().iter().zip(system.equations()) {
+        let e = PyDict::new(py);
+        e.set_item("coordinate", name)?;
+        e.set_item("coefficients", coefficients(model))?;
+        e.set_item("basis", model.basis().spec())?;
+        e.set_item("signal", model.domain().name())?;
+        e.set_item("summary", summary(py, model)?)?;
+        equations.append(e)?;
     }
+    out.set_item("equations", equations)?;
+    out.set_item("coefficients", coefficients(first))?;
+    out.set_item("basis", first.basis().to_string())?;
+    out.set_item("signal", first.domain().name())?;
+    out.set_item("forcing_frequency", system.drive_angular_frequency())?;
+    out.set_item("summary", summary(py, first)?)?;
     Ok(out)
 }
 
-/// The model as JSON (the file `--save-model model.json` writes).
+/// The model as JSON (the file `--save-model model.json` writes; a system's format 5).
 #[pyfunction]
 pub fn model_json(model: &[u8]) -> PyResult<String> {
-    decode(model)?.to_json().or_raise(Kind::Model)
+    decode_system(model)?.to_json().or_raise(Kind::Model)
 }
 
-/// A model read from JSON text (`model.json`).
+/// A model read from JSON text (`model.json`, a model or a system).
 #[pyfunction]
 pub fn model_from_json<'py>(py: Python<'py>, text: &str) -> PyResult<Bound<'py, PyBytes>> {
-    let model: IdentifiedModel = IdentifiedModel::from_json(text).or_raise(Kind::Model)?;
+    let model: IdentifiedSystem = IdentifiedSystem::from_json(text).or_raise(Kind::Model)?;
     Ok(PyBytes::new(py, &model.to_bytes().or_raise(Kind::Model)?))
 }
 
 /// Saves a model: JSON if the name ends in `.json`, compact binary otherwise, atomically.
 #[pyfunction]
 pub fn model_save(py: Python<'_>, model: &[u8], path: PathBuf) -> PyResult<()> {
-    let model = decode(model)?;
+    let model = decode_system(model)?;
     let json = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("json"));
     let bytes = if json {
         model.to_json().or_raise(Kind::Model)?.into_bytes()
@@ -92,29 +140,13 @@ pub fn model_save(py: Python<'_>, model: &[u8], path: PathBuf) -> PyResult<()> {
         })
 }
 
-/// Loads a model saved by `model_save` or `hbid identify --save-model` (JSON or binary).
+/// Loads a model saved by `model_save` or `hbid identify --save-model` (JSON or binary; a model
+/// of one coordinate or a system).
 #[pyfunction]
 pub fn model_load<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyBytes>> {
-    let bytes = py
-        .detach(|| std::fs::read(&path))
-        .map_err(|e| crate::errors::raise(Kind::Model, format!("{}: {e}", path.display())))?;
-    let named = |e: hb_model::ModelError| {
-        crate::errors::raise(
-            Kind::Model,
-            format!("{}: {}", path.display(), crate::errors::chain(&e)),
-        )
-    };
-    let model: IdentifiedModel = if bytes.starts_with(&MODEL_MAGIC) {
-        IdentifiedModel::from_bytes(&bytes).map_err(named)?
-    } else {
-        let text = String::from_utf8(bytes).map_err(|_| {
-            crate::errors::raise(
-                Kind::Model,
-                format!("{}: neither a binary model nor JSON text", path.display()),
-            )
-        })?;
-        IdentifiedModel::from_json(&text).map_err(named)?
-    };
+    let model = py
+        .detach(|| hb_pipeline::read_model(&path))
+        .map_err(crate::errors::run_error)?;
     Ok(PyBytes::new(py, &model.to_bytes().or_raise(Kind::Model)?))
 }
 

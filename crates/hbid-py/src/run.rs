@@ -1,19 +1,19 @@
 //! The requests of the application layer (`hb_pipeline`) from Python: the options arrive as a
 //! JSON object of the command line's option names (`_` for `-`), read by the layer's own
 //! request types (unknown names refused, every value checked there); the samples arrive as a
-//! file's path, as arrays, or as a record already on its grid. Each function releases the
+//! file's path (several for `identify`, joined into one record), as arrays (one per coordinate
+//! and per measured drive), or as a record already on its grid. Each function releases the
 //! interpreter while Rust works and returns plain values: the report's JSON text, arrays, a
 //! model's bytes, the notices as `(text, is_warning)`.
 
 use std::ops::Range;
 use std::path::PathBuf;
 
-use circle_signal::Domain;
 use hb_pipeline::{
-    CompareRequest, EmbedRequest, IdentifyRequest, Notice, Notices, RecordOptions, Rig, Source, Spelling,
-    UposRequest, condition_source,
+    CompareRequest, EmbedRequest, IdentifyRequest, Notice, Notices, RecordOptions, Rig, SignalList, Source,
+    Spelling, UposRequest, condition_source,
 };
-use hb_record::prepare::{GridData, Note};
+use hb_record::prepare::{Channel, GridData, Note};
 use numpy::{PyArray1, PyReadonlyArray1};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict, PyList};
@@ -21,49 +21,98 @@ use pyo3::types::{PyBytes, PyDict, PyList};
 use crate::errors::{Kind, option_error, raise, run_error};
 
 /// A record's grid as Python hands it back (from a `Record`): the time of sample 0, the sampling
-/// step, the ranges of samples that hold data `(start, stop)` and the signal (`circle`, `line`).
+/// step, the ranges of samples that hold data `(start, stop)` and the signal (`circle`, `line`,
+/// or one per coordinate, `circle,line`).
 #[derive(Debug, Clone, FromPyObject)]
 pub struct Grid(pub f64, pub f64, pub Vec<(usize, usize)>, pub String);
 
-/// The samples of a request, as Python passes them: a path, arrays, or a record on its grid.
+/// Arrays as Python passes them: one per coordinate, drive or velocity.
+type Arrays<'py> = Option<Vec<PyReadonlyArray1<'py, f64>>>;
+
+/// The samples of a request, as Python passes them: paths, arrays, or a record on its grid.
 struct Samples<'a> {
-    path: Option<PathBuf>,
-    x: Option<&'a [f64]>,
+    paths: Vec<PathBuf>,
+    /// One series per coordinate.
+    x: Vec<&'a [f64]>,
     t: Option<&'a [f64]>,
-    drive: Option<&'a [f64]>,
+    /// One series per measured drive.
+    drives: Vec<&'a [f64]>,
+    /// One series per coordinate's measured velocity (a record on its grid only).
+    velocities: Vec<&'a [f64]>,
     grid: Option<Grid>,
 }
 
 impl<'a> Samples<'a> {
-    /// The samples of a function's `path`, `x`, `t`, `drive` and `grid` arguments.
+    /// The samples of a function's `path`, `x`, `t`, `drive`, `velocity` and `grid` arguments.
     fn new(
-        path: Option<PathBuf>,
-        x: &'a Option<PyReadonlyArray1<'_, f64>>,
+        paths: Vec<PathBuf>,
+        x: &'a Arrays<'_>,
         t: &'a Option<PyReadonlyArray1<'_, f64>>,
-        drive: &'a Option<PyReadonlyArray1<'_, f64>>,
+        drive: &'a Arrays<'_>,
+        velocity: &'a Arrays<'_>,
         grid: Option<Grid>,
     ) -> PyResult<Self> {
         Ok(Self {
-            path,
-            x: optional(x)?,
+            paths,
+            x: slices(x)?,
             t: optional(t)?,
-            drive: optional(drive)?,
+            drives: slices(drive)?,
+            velocities: slices(velocity)?,
             grid,
         })
     }
 
-    /// The layer's source; a grid is checked here.
+    /// The layer's source of the one record; a grid is checked here.
     fn source(&self) -> PyResult<Source<'_>> {
-        match (&self.path, self.x, &self.grid) {
-            (Some(path), None, None) => Ok(Source::Path(path)),
-            (None, Some(x), None) => Ok(Source::Arrays {
-                coords: vec![x],
+        match &self.paths[..] {
+            [] => {}
+            [path] if self.x.is_empty() && self.grid.is_none() => return Ok(Source::Path(path)),
+            [_] => {
+                return Err(raise(
+                    Kind::Options,
+                    "give a path, or the samples x (with t, dt or a record's grid), not both",
+                ));
+            }
+            _ => {
+                return Err(raise(
+                    Kind::Options,
+                    "one record here: only identify joins several files",
+                ));
+            }
+        }
+        if !self.velocities.is_empty() && self.grid.is_none() {
+            return Err(raise(
+                Kind::Options,
+                "velocity_col names columns of a file: read the file with it (hbid.read)",
+            ));
+        }
+        match (&self.x[..], &self.grid) {
+            ([], _) => Err(raise(
+                Kind::Options,
+                "give a path, or the samples x (with t, dt or a record's grid)",
+            )),
+            (coords, None) => Ok(Source::Arrays {
+                coords: coords.to_vec(),
                 t: self.t,
-                drives: self.drive.into_iter().collect(),
+                drives: self.drives.clone(),
             }),
-            (None, Some(x), Some(Grid(t0, dt, pieces, signal))) => {
+            ([x, others @ ..], Some(Grid(t0, dt, pieces, signal))) => {
                 let pieces: Vec<Range<usize>> = pieces.iter().map(|&(a, b)| a..b).collect();
-                circle_signal::check_pieces(x, &pieces).map_err(|e| raise(Kind::Input, e))?;
+                for series in self.x.iter().chain(&self.drives).chain(&self.velocities) {
+                    if series.len() != x.len() {
+                        return Err(raise(
+                            Kind::Options,
+                            format!(
+                                "a record's series have {} and {} samples: one per sample of its grid",
+                                x.len(),
+                                series.len()
+                            ),
+                        ));
+                    }
+                }
+                for c in &self.x {
+                    circle_signal::check_pieces(c, &pieces).map_err(|e| raise(Kind::Input, e))?;
+                }
                 if !(dt.is_finite() && *dt > 0.0 && t0.is_finite()) {
                     return Err(raise(
                         Kind::Options,
@@ -72,25 +121,56 @@ impl<'a> Samples<'a> {
                         ),
                     ));
                 }
-                let domain: Domain = signal.parse().map_err(|e| raise(Kind::Options, e))?;
+                let signals: SignalList = signal.parse().map_err(|e: String| raise(Kind::Options, e))?;
+                if signals.len() != 1 && signals.len() != self.x.len() {
+                    return Err(raise(
+                        Kind::Options,
+                        format!(
+                            "a record's signal '{signal}' for {} coordinates: one for all or one per coordinate",
+                            self.x.len()
+                        ),
+                    ));
+                }
                 Ok(Source::Grid(GridData {
                     t0: *t0,
                     dt: *dt,
                     x: x.to_vec(),
                     pieces,
-                    domain,
-                    others: Vec::new(),
-                    drives: self.drive.map(<[f64]>::to_vec).into_iter().collect(),
-                    velocities: Vec::new(),
+                    domain: signals.first(),
+                    others: others
+                        .iter()
+                        .enumerate()
+                        .map(|(i, o)| Channel {
+                            x: o.to_vec(),
+                            domain: signals.of(i + 1),
+                        })
+                        .collect(),
+                    drives: self.drives.iter().map(|d| d.to_vec()).collect(),
+                    velocities: self.velocities.iter().map(|v| v.to_vec()).collect(),
                     notes: Vec::new(),
                 }))
             }
-            _ => Err(raise(
-                Kind::Options,
-                "give a path, or the samples x (with t, dt or a record's grid)",
-            )),
         }
     }
+
+    /// The layer's sources: each file's, or the one record's.
+    fn sources(&self) -> PyResult<Vec<Source<'_>>> {
+        match &self.paths[..] {
+            [_, _, ..] if self.x.is_empty() && self.grid.is_none() => {
+                Ok(self.paths.iter().map(|p| Source::Path(p)).collect())
+            }
+            _ => Ok(vec![self.source()?]),
+        }
+    }
+}
+
+/// The borrowed samples of optional arrays.
+fn slices<'a>(arrays: &'a Arrays<'_>) -> PyResult<Vec<&'a [f64]>> {
+    arrays
+        .iter()
+        .flatten()
+        .map(crate::slice)
+        .collect::<PyResult<Vec<_>>>()
 }
 
 /// The options object of a request.
@@ -112,20 +192,25 @@ fn optional<'a>(array: &'a Option<PyReadonlyArray1<'_, f64>>) -> PyResult<Option
 }
 
 /// Reads a record from a file, or takes it from arrays, and makes it ready as the command line
-/// does (grid, gaps, wrapping, spikes, integration): what `hbid.read` returns.
+/// does (grid, gaps, wrapping, spikes, integration): what `hbid.read` returns. `coords`,
+/// `drives` and `velocities` are every coordinate's, drive's and measured velocity's samples on
+/// the grid, `names` and `drive_names` the names terms call them; `spikes` are `(index, size,
+/// replaced, coordinate)`.
 #[pyfunction]
 #[pyo3(signature = (options, *, path=None, x=None, t=None, drive=None))]
 pub fn condition<'py>(
     py: Python<'py>,
     options: &str,
     path: Option<PathBuf>,
-    x: Option<PyReadonlyArray1<'py, f64>>,
+    x: Arrays<'py>,
     t: Option<PyReadonlyArray1<'py, f64>>,
-    drive: Option<PyReadonlyArray1<'py, f64>>,
+    drive: Arrays<'py>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let record: RecordOptions =
         hb_pipeline::options::from_object(self::options(options)?).map_err(option_error)?;
-    let samples = Samples::new(path, &x, &t, &drive, None)?;
+    let names = record.names().map_err(option_error)?;
+    let velocity: Arrays<'py> = None;
+    let samples = Samples::new(path.into_iter().collect(), &x, &t, &drive, &velocity, None)?;
     let source = samples.source()?;
     let mut notices = Notices::default();
     let grid = py
@@ -137,52 +222,87 @@ pub fn condition<'py>(
     for note in &grid.notes {
         match note {
             Note::TimeRepaired(r) => time_repairs.push((r.at.to_string(), r.was, r.now)),
-            Note::Spikes { found, repaired, .. } => {
-                spikes.extend(found.iter().map(|s| (s.index, s.size, *repaired)))
-            }
+            Note::Spikes {
+                found,
+                repaired,
+                coordinate,
+                ..
+            } => spikes.extend(found.iter().map(|s| (s.index, s.size, *repaired, *coordinate))),
             _ => {}
         }
     }
+    spikes.sort_by_key(|s| (s.3, s.0));
+    let domains: Vec<&str> = std::iter::once(grid.domain)
+        .chain(grid.others.iter().map(|c| c.domain))
+        .map(|d| d.name())
+        .collect();
+    let signal = if domains.iter().all(|d| *d == domains[0]) {
+        domains[0].to_owned()
+    } else {
+        domains.join(",")
+    };
     out.set_item("t0", grid.t0)?;
     out.set_item("dt", grid.dt)?;
     out.set_item(
         "pieces",
         PyList::new(py, grid.pieces.iter().map(|r| (r.start, r.end)))?,
     )?;
-    out.set_item("signal", grid.domain.name())?;
+    out.set_item("signal", signal)?;
     out.set_item("measured", record.measured.to_string())?;
     out.set_item("repaired", record.repair)?;
     out.set_item("notes", notice_texts(&notices.0))?;
     out.set_item("time_repairs", time_repairs)?;
     out.set_item("spikes", spikes)?;
+    out.set_item("names", names.coordinates())?;
     out.set_item(
-        "drive",
-        grid.drives.into_iter().next().map(|p| PyArray1::from_vec(py, p)),
+        "drive_names",
+        &names.drives()[..grid.drives.len().min(names.drives().len())],
+    )?;
+    out.set_item("drive", grid.drives.first().map(|p| PyArray1::from_slice(py, p)))?;
+    out.set_item(
+        "drives",
+        PyList::new(py, grid.drives.iter().map(|p| PyArray1::from_slice(py, p)))?,
+    )?;
+    out.set_item(
+        "velocities",
+        PyList::new(py, grid.velocities.iter().map(|v| PyArray1::from_slice(py, v)))?,
+    )?;
+    out.set_item(
+        "coords",
+        PyList::new(
+            py,
+            std::iter::once(grid.x.as_slice())
+                .chain(grid.others.iter().map(|c| c.x.as_slice()))
+                .map(|c| PyArray1::from_slice(py, c)),
+        )?,
     )?;
     out.set_item("x", PyArray1::from_vec(py, grid.x))?;
     Ok(out)
 }
 
-/// Identifies the equation of motion as `hbid identify --json` does: the report's JSON, the
-/// model's bytes and the notices.
+/// Identifies the equations of motion as `hbid identify --json` does: the report's JSON, the
+/// model's bytes (a system of several coordinates as a system) and the notices. Several `path`s
+/// are joined into one record, as the command line joins several files.
 #[pyfunction]
-#[pyo3(signature = (options, *, path=None, x=None, t=None, drive=None, grid=None))]
+#[pyo3(signature = (options, *, path=None, x=None, t=None, drive=None, velocity=None, grid=None))]
+#[allow(clippy::too_many_arguments)]
 pub fn identify<'py>(
     py: Python<'py>,
     options: &str,
-    path: Option<PathBuf>,
-    x: Option<PyReadonlyArray1<'py, f64>>,
+    path: Option<Vec<PathBuf>>,
+    x: Arrays<'py>,
     t: Option<PyReadonlyArray1<'py, f64>>,
-    drive: Option<PyReadonlyArray1<'py, f64>>,
+    drive: Arrays<'py>,
+    velocity: Arrays<'py>,
     grid: Option<Grid>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let request = IdentifyRequest::from_json(self::options(options)?).map_err(option_error)?;
-    let samples = Samples::new(path, &x, &t, &drive, grid)?;
-    let source = samples.source()?;
+    let samples = Samples::new(path.unwrap_or_default(), &x, &t, &drive, &velocity, grid)?;
+    let sources = samples.sources()?;
     let mut notices = Notices::default();
     let (json, model) = py
         .detach(|| {
-            let report = hb_pipeline::identify(source, &request, &mut notices)?;
+            let report = hb_pipeline::identify_records(sources, &request, &mut notices)?;
             let json = serde_json::to_string_pretty(&report)
                 .map_err(|e| hb_pipeline::OptionError::new("options", e))?;
             let model = report
@@ -201,18 +321,20 @@ pub fn identify<'py>(
 
 /// The delay and the embedding dimension, as `hbid embed --json` gives them.
 #[pyfunction]
-#[pyo3(signature = (options, *, path=None, x=None, t=None, drive=None, grid=None))]
+#[pyo3(signature = (options, *, path=None, x=None, t=None, drive=None, velocity=None, grid=None))]
+#[allow(clippy::too_many_arguments)]
 pub fn embed<'py>(
     py: Python<'py>,
     options: &str,
     path: Option<PathBuf>,
-    x: Option<PyReadonlyArray1<'py, f64>>,
+    x: Arrays<'py>,
     t: Option<PyReadonlyArray1<'py, f64>>,
-    drive: Option<PyReadonlyArray1<'py, f64>>,
+    drive: Arrays<'py>,
+    velocity: Arrays<'py>,
     grid: Option<Grid>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let request = EmbedRequest::from_json(self::options(options)?).map_err(option_error)?;
-    let samples = Samples::new(path, &x, &t, &drive, grid)?;
+    let samples = Samples::new(path.into_iter().collect(), &x, &t, &drive, &velocity, grid)?;
     let source = samples.source()?;
     let mut notices = Notices::default();
     let report = py
@@ -234,18 +356,20 @@ pub fn embed<'py>(
 
 /// Unstable periodic orbits by close returns, as `hbid upos --json` gives them.
 #[pyfunction]
-#[pyo3(signature = (options, *, path=None, x=None, t=None, drive=None, grid=None))]
+#[pyo3(signature = (options, *, path=None, x=None, t=None, drive=None, velocity=None, grid=None))]
+#[allow(clippy::too_many_arguments)]
 pub fn upos<'py>(
     py: Python<'py>,
     options: &str,
     path: Option<PathBuf>,
-    x: Option<PyReadonlyArray1<'py, f64>>,
+    x: Arrays<'py>,
     t: Option<PyReadonlyArray1<'py, f64>>,
-    drive: Option<PyReadonlyArray1<'py, f64>>,
+    drive: Arrays<'py>,
+    velocity: Arrays<'py>,
     grid: Option<Grid>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let request = UposRequest::from_json(self::options(options)?).map_err(option_error)?;
-    let samples = Samples::new(path, &x, &t, &drive, grid)?;
+    let samples = Samples::new(path.into_iter().collect(), &x, &t, &drive, &velocity, grid)?;
     let source = samples.source()?;
     let mut notices = Notices::default();
     let report = py
@@ -309,24 +433,26 @@ pub fn simulate<'py>(
 }
 
 /// A saved model (its bytes) run freely under a record's measured input and scored against its
-/// measured output, as `hbid compare --json` does: the report's JSON, each range's runs as
-/// `(start, init, t, measured, x, v)` pieces, and the notices.
+/// measured output, as `hbid compare --json` does: the report's JSON, each entry's runs as
+/// `(start, init, t, measured, x, v)` pieces (an entry per range, of a system per range and
+/// coordinate), and the notices.
 #[pyfunction]
-#[pyo3(signature = (model, options, *, path=None, x=None, t=None, drive=None, grid=None))]
+#[pyo3(signature = (model, options, *, path=None, x=None, t=None, drive=None, velocity=None, grid=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn compare<'py>(
     py: Python<'py>,
     model: &[u8],
     options: &str,
     path: Option<PathBuf>,
-    x: Option<PyReadonlyArray1<'py, f64>>,
+    x: Arrays<'py>,
     t: Option<PyReadonlyArray1<'py, f64>>,
-    drive: Option<PyReadonlyArray1<'py, f64>>,
+    drive: Arrays<'py>,
+    velocity: Arrays<'py>,
     grid: Option<Grid>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let model = hb_model::IdentifiedSystem::from_bytes(model).map_err(|e| raise(Kind::Model, e))?;
     let request = CompareRequest::from_json(self::options(options)?).map_err(option_error)?;
-    let samples = Samples::new(path, &x, &t, &drive, grid)?;
+    let samples = Samples::new(path.into_iter().collect(), &x, &t, &drive, &velocity, grid)?;
     let source = samples.source()?;
     let mut notices = Notices::default();
     let report = py
@@ -357,40 +483,48 @@ pub fn compare<'py>(
     Ok(out)
 }
 
-/// A saved model run from `(x0, v0)` over the even grid of times `t`, driven by `drive` (for a
-/// model with terms in p): `(t, x, v)` and why the run stopped, if it did.
+/// The columns of a run by name, as arrays: `columns` and `values` (one array per column).
+fn run_columns<'py>(py: Python<'py>, run: &hb_pipeline::ModelRun, out: &Bound<'py, PyDict>) -> PyResult<()> {
+    let column = |i: usize| PyArray1::from_vec(py, run.rows.iter().map(|row| row[i]).collect());
+    out.set_item("columns", &run.columns)?;
+    out.set_item("values", PyList::new(py, (0..run.columns.len()).map(column))?)?;
+    out.set_item("stopped", run.stopped.clone())?;
+    Ok(())
+}
+
+/// A saved model or system run from `(x0, v0)` (one position and velocity per coordinate) over
+/// the even grid of times `t`, driven by `drive` (one series per measured drive of the model, in
+/// the order of its names): the columns (`t`, the coordinates, their velocities) and why the
+/// run stopped, if it did.
 #[pyfunction]
 #[pyo3(signature = (model, t, *, x0, v0, drive=None, rtol=1e-10))]
 pub fn model_run_on<'py>(
     py: Python<'py>,
     model: &[u8],
     t: PyReadonlyArray1<'py, f64>,
-    x0: f64,
-    v0: f64,
-    drive: Option<PyReadonlyArray1<'py, f64>>,
+    x0: Vec<f64>,
+    v0: Vec<f64>,
+    drive: Arrays<'py>,
     rtol: f64,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let model = hb_model::IdentifiedModel::from_bytes(model).map_err(|e| raise(Kind::Model, e))?;
+    let system = hb_model::IdentifiedSystem::from_bytes(model).map_err(|e| raise(Kind::Model, e))?;
     let times = crate::slice(&t)?;
-    let drive = optional(&drive)?;
+    let drives = slices(&drive)?;
     let run = py
-        .detach(|| hb_pipeline::run_on_times(&model, times, drive, [x0, v0], rtol))
+        .detach(|| hb_pipeline::run_system_on_times(&system, times, &drives, &x0, &v0, rtol))
         .map_err(run_error)?;
-    let column = |i: usize| PyArray1::from_vec(py, run.rows.iter().map(|row| row[i]).collect());
     let out = PyDict::new(py);
-    out.set_item("t", column(0))?;
-    out.set_item("x", column(1))?;
-    out.set_item("v", column(2))?;
-    out.set_item("stopped", run.stopped.clone())?;
+    run_columns(py, &run, &out)?;
     Ok(out)
 }
 
 /// A saved model run over a record's grid under its measured drive, as `hbid simulate --model
-/// --input` does: `(t, x, v)` at every sample run and why the run stopped, if it did.
-/// `rig` holds the options of `simulate` for a built-in system: any set away from its default is
-/// refused, as the command line refuses it.
+/// --input` does: its columns at every sample run (`t,x,v`, or of a system `t`, the coordinates
+/// and their velocities) and why the run stopped, if it did. `rig` holds the options of
+/// `simulate` for a built-in system: any set away from its default is refused, as the command
+/// line refuses it.
 #[pyfunction]
-#[pyo3(signature = (model, options, rig, *, path=None, x=None, t=None, drive=None, grid=None, out=None))]
+#[pyo3(signature = (model, options, rig, *, path=None, x=None, t=None, drive=None, velocity=None, grid=None, out=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn model_run<'py>(
     py: Python<'py>,
@@ -398,9 +532,10 @@ pub fn model_run<'py>(
     options: &str,
     rig: &str,
     path: Option<PathBuf>,
-    x: Option<PyReadonlyArray1<'py, f64>>,
+    x: Arrays<'py>,
     t: Option<PyReadonlyArray1<'py, f64>>,
-    drive: Option<PyReadonlyArray1<'py, f64>>,
+    drive: Arrays<'py>,
+    velocity: Arrays<'py>,
     grid: Option<Grid>,
     out: Option<PathBuf>,
 ) -> PyResult<Bound<'py, PyDict>> {
@@ -415,7 +550,7 @@ pub fn model_run<'py>(
     let model = hb_model::IdentifiedSystem::from_bytes(model).map_err(|e| raise(Kind::Model, e))?;
     let request = CompareRequest::from_json(self::options(options)?).map_err(option_error)?;
     hb_pipeline::simulate::check_model_state(&rig, request.options().x0.is_some()).map_err(option_error)?;
-    let samples = Samples::new(path, &x, &t, &drive, grid)?;
+    let samples = Samples::new(path.into_iter().collect(), &x, &t, &drive, &velocity, grid)?;
     let source = samples.source()?;
     let mut notices = Notices::default();
     let run = py
@@ -430,12 +565,8 @@ pub fn model_run<'py>(
             Ok::<_, hb_pipeline::RunError>(run)
         })
         .map_err(run_error)?;
-    let column = |i: usize| PyArray1::from_vec(py, run.rows.iter().map(|row| row[i]).collect());
     let dict = PyDict::new(py);
-    dict.set_item("t", column(0))?;
-    dict.set_item("x", column(1))?;
-    dict.set_item("v", column(2))?;
-    dict.set_item("stopped", run.stopped.clone())?;
+    run_columns(py, &run, &dict)?;
     dict.set_item("notes", notice_texts(&notices.0))?;
     Ok(dict)
 }
