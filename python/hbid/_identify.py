@@ -8,6 +8,8 @@ import warnings
 from dataclasses import dataclass, field
 from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
+import numpy as np
+
 from . import _hbid
 from ._common import (
     RECORD_RENAMED,
@@ -114,6 +116,21 @@ class Identification:
     def is_system(self) -> bool:
         """Whether the record has several coordinates (``coords``)."""
         return len(self.equations) > 1
+
+    def matrix(self) -> Tuple[List[str], List[str], np.ndarray]:
+        """The coefficients as a matrix, equations by terms: ``(coordinates, terms, C)`` with
+        ``C[i, k]`` the coefficient of ``terms[k]`` in the equation of ``coordinates[i]``, 0 where
+        that equation has no such term; the terms are every equation's, in the order they first
+        appear. A record of one coordinate gives one row."""
+        terms: List[str] = []
+        for e in self.equations.values():
+            terms.extend(name for name in e.coefficients if name not in terms)
+        column = {name: k for k, name in enumerate(terms)}
+        c = np.zeros((len(self.equations), len(terms)))
+        for i, e in enumerate(self.equations.values()):
+            for name, value in e.coefficients.items():
+                c[i, column[name]] = value
+        return self.coordinates, terms, c
 
     @property
     def refinement(self) -> Optional[Dict[str, Any]]:

@@ -210,14 +210,53 @@ def _is_path(x: Any) -> bool:
     return isinstance(x, (str, os.PathLike))
 
 
+def _columns_by_name(values: Any, names: Any, what: str, option: str) -> Any:
+    """A two-dimensional array of shape (samples, columns) as a dict of its columns by the names
+    ``option`` gives (a list, or the command line's ``"a,b"``), one per column; anything else as
+    it is. A single column needs no name."""
+    if isinstance(values, Mapping) or _is_path(values):
+        return values
+    try:
+        a = np.asarray(values, dtype=np.float64)
+    except (TypeError, ValueError):
+        return values
+    if a.ndim != 2:
+        return values
+    columns = a.shape[1]
+    if names is None:
+        if columns == 1:
+            return a[:, 0]
+        raise OptionsError(
+            f"{what}: an array of {columns} columns (shape {a.shape}); name each with {option}=[...] "
+            f"(one name per column, in order)"
+        )
+    if isinstance(names, Mapping):
+        raise OptionsError(f"{option}: name the columns of an array with a list, not a dict")
+    listed = [str(n).split("=")[0].strip() for n in (names.split(",") if isinstance(names, str) else names)]
+    if len(listed) != columns:
+        raise OptionsError(
+            f"{option}: {len(listed)} name(s) for an array of {columns} columns (shape {a.shape}): give one per column"
+        )
+    if len(set(listed)) != len(listed):
+        raise OptionsError(f"{option}: a name given twice ({', '.join(listed)})")
+    return {name: np.ascontiguousarray(a[:, j]) for j, name in enumerate(listed)}
+
+
 def _arrays(x: Any, t: Optional[ArrayLike], drive: Any, options: Dict[str, Any]) -> Dict[str, Any]:
-    """The extension's arguments of samples given as arrays: ``x`` one array (a coordinate) or a
-    dict of arrays by coordinate name, ``drive`` one array (``p``) or a dict by drive name; the
-    names become the options that name the columns of a file (``coords``, ``drive_col``)."""
+    """The extension's arguments of samples given as arrays: ``x`` one array (a coordinate), a
+    dict of arrays by coordinate name or an array of shape (samples, coordinates) named by
+    ``coords``; ``drive`` one array (``p``), a dict by drive name or an array of shape (samples,
+    drives) named by ``drive_col``; the names become the options that name the columns of a
+    file (``coords``, ``drive_col``)."""
     if options.get("velocity_col") is not None:
         raise OptionsError(
             "velocity_col names columns of a file: read the file with it (hbid.read), or give the record's file"
         )
+    x = _columns_by_name(x, options.get("coords"), "x", "coords")
+    if drive is not None and not isinstance(drive, Mapping):
+        drive = _columns_by_name(drive, options.get("drive_col"), "drive", "drive_col")
+        if isinstance(drive, Mapping):
+            options.pop("drive_col", None)
     if isinstance(x, Mapping):
         if not x:
             raise OptionsError("x: an empty dict; give each coordinate's samples by its name")

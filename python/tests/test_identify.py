@@ -284,8 +284,11 @@ def test_bad_options_raise_clear_errors(pendulum, kwargs, error, message):
 
 
 def test_bad_samples_raise_clear_errors(pendulum):
-    with pytest.raises(hbid.OptionsError, match="one-dimensional"):
+    # An array of several columns is a record of several coordinates: they need their names.
+    with pytest.raises(hbid.OptionsError, match=r"x: an array of 2 columns \(shape \(10, 2\)\); name each with coords"):
         hbid.identify(np.zeros((10, 2)), dt=0.1)
+    with pytest.raises(hbid.OptionsError, match="one-dimensional"):
+        hbid.identify(np.zeros((10, 2, 2)), dt=0.1)
     with pytest.raises(hbid.OptionsError, match="not an array of numbers"):
         hbid.identify(["a", 0.5], dt=0.1)
     # A list of texts is a list of files (records joined into one fit).

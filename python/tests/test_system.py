@@ -279,3 +279,36 @@ def test_simulate_takes_the_systems_options():
         hbid.simulate(mu=0.3)
     with pytest.raises(hbid.OptionsError, match="q0"):
         hbid.simulate(system="double-pendulum", q0=(1.0, 0.0, 2.0))
+
+
+def test_arrays_of_samples_by_coordinates_and_the_matrix_of_coefficients(double_pendulum):
+    """A record as an array of shape (samples, coordinates) named by ``coords``, drives as an
+    array of shape (samples, drives) named by ``drive_col``: the same numbers as by name; the
+    coefficients as a matrix, equations by terms."""
+    sim, result = double_pendulum["sim"], double_pendulum["result"]
+    terms = {q: list(e["coefficients"]) for q, e in sim.truth_equations.items()}
+    samples = np.column_stack([sim.named["theta1"], sim.named["theta2"]])
+    by_columns = hbid.identify(samples, t=sim.t, coords=["theta1", "theta2"], terms=terms, bootstrap=0)
+    assert by_columns.coefficients == result.coefficients
+    coordinates, names, c = by_columns.matrix()
+    assert coordinates == ["theta1", "theta2"] and c.shape == (2, len(names))
+    for i, q in enumerate(coordinates):
+        for k, name in enumerate(names):
+            assert c[i, k] == by_columns.equations[q].coefficients.get(name, 0.0)
+    # Every term of either equation is a column: the coupling terms are each in one row only.
+    assert "theta2''*cos(theta1-theta2)" in names and c[1, names.index("theta2''*cos(theta1-theta2)")] == 0.0
+    with pytest.raises(hbid.OptionsError, match="name each with coords"):
+        hbid.identify(samples, t=sim.t, terms=terms, bootstrap=0)
+    with pytest.raises(hbid.OptionsError, match=r"coords: 3 name\(s\) for an array of 2 columns"):
+        hbid.identify(samples, t=sim.t, coords=["a", "b", "c"], bootstrap=0)
+
+    duffing = hbid.simulate(system="coupled-duffing", samples=4000)
+    hint = dict(duffing.identify_options)
+    hint.pop("coords"), hint.pop("drive_col")
+    x = np.column_stack([duffing.named["x1"], duffing.named["x2"]])
+    drives = duffing.named["a"][:, None]
+    one = hbid.identify(x, t=duffing.t, coords=["x1", "x2"], drive=drives, drive_col=["a"], bootstrap=0, **hint)
+    named = hbid.identify({"x1": x[:, 0], "x2": x[:, 1]}, t=duffing.t, drive={"a": drives[:, 0]}, bootstrap=0, **hint)
+    assert one.coefficients == named.coefficients
+    with pytest.raises(hbid.OptionsError, match=r"drive_col: 2 name\(s\) for an array of 1 columns"):
+        hbid.identify(x, t=duffing.t, coords=["x1", "x2"], drive=drives, drive_col=["a", "b"], bootstrap=0, **hint)
