@@ -640,7 +640,7 @@ pub fn run(exe: &Path, shared: &Path, work: &Path, python: Option<&str>) -> anyh
     writeln!(
         r,
         "**Deviation from the protocol.** The protocol starts the free run at row 0. The record reader leaves out \
-         each record's first {}–{} rows (logged before t = 0.016 s at 2.9–3.8 ms steps, before the logger settled \
+         each test record's first {}–{} rows (logged before t = 0.016 s at 2.9–3.8 ms steps, before the logger settled \
          to its 2 ms rate; it says so in a note), so here each run starts from the measured state of the first row \
          kept (row {} of `04`, {} of `05`, {} of `13`), its horizons counted from there; the later rows' time \
          stamps are placed on the even grid (they deviate from it by a few % of a step). The published model run \
@@ -711,7 +711,7 @@ pub fn run(exe: &Path, shared: &Path, work: &Path, python: Option<&str>) -> anyh
     if let Some(peer) = &peer {
         rows_.push(Row {
             label: format!(
-                "SINDy, pysindy {} run here ({} terms, threshold {})",
+                "SINDy, pysindy {} run here ({} terms kept of 2 × 55, threshold {})",
                 peer["version"].as_str().unwrap_or("?"),
                 peer["terms"].as_u64().unwrap_or(0),
                 peer["threshold"]
@@ -1064,6 +1064,7 @@ fn peer_failures(peer: &Value) -> String {
         .filter_map(|rec| {
             let v = &peer["rmse_rad"][*rec];
             v["failed"].as_str().map(|why| {
+                let why = why.trim_end_matches('.');
                 format!(
                     "{rec} at {} s ({why})",
                     v["failed_at_s"]
