@@ -900,7 +900,7 @@ pub fn run(exe: &Path, shared: &Path, work: &Path, python: Option<&str>) -> anyh
         r,
         "\nFor scale, the README's least-squares refit (b) of all nine combinations on the same training records \
          gives Ia 0.0973, I2 0.0223, mr1 0.309, mr2 0.0986 and Ir 6.19e-5, 0.81–0.93 of the published values, \
-         which it says cannot be reproduced from the stored records.\n"
+         and the README finds the published set not reproducible from the stored records.\n"
     )?;
 
     // The selection.
