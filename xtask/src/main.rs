@@ -92,8 +92,8 @@ enum Command {
         /// Also run the peers with this Python interpreter (`pip install -r
         /// xtask/peers/requirements.txt`): sysidentpy's polynomial NARX by FROLS in its published
         /// configuration on Silverbox and EMPS (about 2 minutes and 10 GB of memory for its
-        /// degree-3 Silverbox model), and pysindy's SINDy on the DFKI double pendulum (about 5
-        /// minutes).
+        /// degree-3 Silverbox model), and pysindy's SINDy on the DFKI double pendulum (about 3
+        /// minutes, most of it its free runs at the protocol's tolerance).
         #[arg(long, value_name = "PYTHON")]
         peer: Option<String>,
     },
