@@ -1,8 +1,9 @@
 //! `cargo xtask benchmarks`: the field's public benchmarks of `../shared/benchmarks` by their
 //! protocols. Each is identified by one `hbid identify` command on its training part and scored
 //! by `hbid compare` on its test parts (a free run under the test input, the first samples
-//! setting the state); a term selection from a wider library, on the training part alone, is
-//! scored beside the physical model. Writes `docs/benchmarks.md` and, with `--out DIR`,
+//! setting the state, or the measured state where the record has velocities); a term selection
+//! from a wider library, on the training part alone, is scored beside the physical model. The
+//! DFKI double pendulum is in `dfki.rs`. Writes `docs/benchmarks.md` and, with `--out DIR`,
 //! `DIR/benchmarks.json`.
 
 use std::fmt::Write as _;
@@ -14,7 +15,7 @@ use anyhow::{Context, bail};
 use serde_json::{Value, json};
 
 /// Runs `hbid` with `args`: its stdout as JSON, failing with its stderr.
-fn hbid(exe: &Path, args: &[String]) -> anyhow::Result<Value> {
+pub(crate) fn hbid(exe: &Path, args: &[String]) -> anyhow::Result<Value> {
     let (stdout, _) = crate::run_hbid(exe, args)?;
     serde_json::from_str(&stdout).with_context(|| format!("hbid {}: its JSON", args.join(" ")))
 }
@@ -114,7 +115,7 @@ fn scored(
     })
 }
 
-fn shown(v: Option<f64>, decimals: usize) -> String {
+pub(crate) fn shown(v: Option<f64>, decimals: usize) -> String {
     v.map_or_else(|| "—".to_owned(), |v| format!("{v:.decimals$}"))
 }
 
@@ -301,6 +302,9 @@ pub fn run(doc: &Path, out: Option<&Path>, work: &Path, python: Option<&str>) ->
         }
         None => None,
     };
+    let started = Instant::now();
+    let (dfki_section, dfki) = crate::dfki::run(&exe, &shared, work, python)?;
+    eprintln!("dfki: {:.1} s", started.elapsed().as_secs_f64());
 
     // Physical parameters: the equation x'' + Σ c_i g_i = 0 times the mass -1/c_p.
     let physical = |s: &Scored, names: &[(&str, &str)]| -> Vec<(String, f64)> {
@@ -337,7 +341,9 @@ pub fn run(doc: &Path, out: Option<&Path>, work: &Path, python: Option<&str>) ->
          Made by `cargo xtask benchmarks` ({}) from `../shared/benchmarks`, each by its protocol (the folder's \
          README): identified by one `hbid identify` command on the training part, scored by `hbid compare` on the \
          test parts, a free run of the model under the test record's measured input alone, the first samples of \
-         each test set setting its initial state and not scored. Beside the physical model, the terms selected \
+         each test set setting its initial state and not scored (on the DFKI double pendulum, whose records have \
+         the joints' velocities, its first sample's measured state, every sample scored). Beside the physical \
+         model, the terms selected \
          (`--select`, held-out cross-validation on the training part only) from a wider library; no modelling \
          choice looked at a test set. Wall times are of `hbid identify` with reading, this build.\n",
         crate::build_profile()
@@ -514,6 +520,7 @@ pub fn run(doc: &Path, out: Option<&Path>, work: &Path, python: Option<&str>) ->
     {
         writeln!(r, "| {name} | {value:.4} | {refined:.4} | {reference} |")?;
     }
+    r.push_str(&dfki_section);
     std::fs::write(doc, &r).with_context(|| doc.display().to_string())?;
     eprintln!("wrote {}", doc.display());
 
@@ -545,6 +552,7 @@ pub fn run(doc: &Path, out: Option<&Path>, work: &Path, python: Option<&str>) ->
                 },
             },
             "peer": peer,
+            "dfki": dfki,
         });
         let path = dir.join("benchmarks.json");
         std::fs::write(&path, serde_json::to_string_pretty(&summary)? + "\n")?;

@@ -5,6 +5,7 @@
 
 mod accuracy;
 mod benchmarks;
+mod dfki;
 mod identification;
 mod real_records;
 mod reproduce;
@@ -75,8 +76,9 @@ enum Command {
         #[arg(long, default_value = "target/real-records")]
         data: PathBuf,
     },
-    /// The field's public benchmarks (Silverbox, EMPS) by their protocols: identified on the
-    /// training part, scored by a free run on the test parts; writes `docs/benchmarks.md`.
+    /// The field's public benchmarks (Silverbox, EMPS, the DFKI double pendulum) by their
+    /// protocols: identified on the training part, scored by a free run on the test parts; writes
+    /// `docs/benchmarks.md`.
     Benchmarks {
         /// The report.
         #[arg(long, default_value = "docs/benchmarks.md")]
@@ -87,9 +89,11 @@ enum Command {
         /// Where the records cut from the benchmarks' files and the models are written.
         #[arg(long, default_value = "target/benchmarks")]
         work: PathBuf,
-        /// Also run the peer, sysidentpy's polynomial NARX by FROLS in its published
-        /// configuration, with this Python interpreter (`pip install -r xtask/peers/requirements.txt`;
-        /// about 2 minutes and 10 GB of memory for its degree-3 Silverbox model).
+        /// Also run the peers with this Python interpreter (`pip install -r
+        /// xtask/peers/requirements.txt`): sysidentpy's polynomial NARX by FROLS in its published
+        /// configuration on Silverbox and EMPS (about 2 minutes and 10 GB of memory for its
+        /// degree-3 Silverbox model), and pysindy's SINDy on the DFKI double pendulum (about 3
+        /// minutes, most of it its free runs at the protocol's tolerance).
         #[arg(long, value_name = "PYTHON")]
         peer: Option<String>,
     },

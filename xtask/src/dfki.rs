@@ -1,0 +1,1100 @@
+//! The DFKI double pendulum (design A.0 of the DFKI RIC Underactuated Lab's acrobot/pendubot,
+//! `../shared/benchmarks/dfki_double_pendulum`) by its protocol: the equations of both joints
+//! identified by one `hbid identify` on the training records, the window chosen by
+//! leave-one-training-record-out cross-validation, and each test record scored by `hbid compare`:
+//! a free run from its measured state under its measured torques, the RMSE of the wrapped angle
+//! error over the first 1 s and 2 s. Beside it: the published physical model run through the same
+//! free run, the physical combinations from the identified coefficients, a selection from the
+//! default library of systems, and (with `--peer`) SINDy by pysindy.
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Instant;
+
+use anyhow::{Context, bail};
+use hb_model::{Coefficient, IdentifiedModel, IdentifiedSystem};
+use rayon::prelude::*;
+use serde_json::{Map, Value, json};
+
+use crate::benchmarks::{hbid, shown};
+
+/// The protocol's training and test records.
+const TRAIN: [&str; 5] = ["00", "01", "02", "03", "12"];
+const TEST: [&str; 3] = ["04", "05", "13"];
+/// The windows of the cross-validation, s.
+const WINDOWS: [f64; 4] = [1.0, 1.5, 2.0, 3.0];
+/// The scored horizons: samples from the free run's first, at the records' 500 Hz (2.0001 ms
+/// steps, so 500 samples span t - t0 ≤ 1 s), and the whole record.
+const HORIZONS: [(&str, &str, &str); 3] = [
+    ("1s", "1 s", "0..500"),
+    ("2s", "2 s", "0..1000"),
+    ("whole", "whole record", "0.."),
+];
+const JOINTS: [&str; 2] = ["q1", "q2"];
+
+/// The rigid-body model of the README in this tool's terms: q1 from hanging, q2 relative to
+/// link 1; each equation `q_i'' + Σ c g = 0`, normalised by its own acceleration's constant
+/// coefficient.
+const TERMS: &str = "q1: q1''*cos(q2), q2'', q2''*cos(q2), sin(q2)*q1'*q2', sin(q2)*q2'^2, sin(q1), sin(q1+q2), \
+q1', sign(q1'), tau1; q2: q1'', q1''*cos(q2), sin(q2)*q1'^2, sin(q1+q2), q2', sign(q2'), tau2";
+
+/// How the records are read: the joint angles as coordinates, the measured torques as drives.
+const READ: [&str; 6] = [
+    "--time-col",
+    "time",
+    "--coords",
+    "q1=pos_meas1,q2=pos_meas2",
+    "--drive-col",
+    "tau1=tau_meas1,tau2=tau_meas2",
+];
+
+/// The README's free-run RMSE of the published model (in-sample: it was fitted on records that
+/// include the test records), rad: q1 at 1 s, 2 s, whole, then q2.
+const PUBLISHED: [[f64; 6]; 3] = [
+    [0.030, 0.124, 0.579, 0.122, 0.846, 1.410],
+    [0.026, 0.159, 0.542, 0.106, 0.831, 1.113],
+    [0.018, 0.027, 0.045, 0.053, 0.086, 0.066],
+];
+
+/// The README's held-out baselines: least-squares refits of the rigid-body model on the training
+/// records (by inverse dynamics on filtered derivatives), and the model that does not move.
+const BASELINES: [(&str, [[f64; 6]; 3]); 4] = [
+    (
+        "refit (a): 5 inertial combinations, friction fixed",
+        [
+            [0.016, 0.201, 1.425, 0.287, 1.155, 1.684],
+            [0.043, 0.165, 0.540, 0.343, 1.234, 1.451],
+            [0.026, 0.050, 0.182, 0.110, 0.220, 0.212],
+        ],
+    ),
+    (
+        "refit (b): all 9 combinations",
+        [
+            [0.016, 0.203, 0.540, 0.244, 0.958, 1.495],
+            [0.053, 0.211, 0.553, 0.269, 1.062, 1.276],
+            [0.057, 0.072, 0.122, 0.172, 0.192, 0.124],
+        ],
+    ),
+    (
+        "refit (c): one coefficient per term, each equation alone",
+        [
+            [0.031, 0.086, 0.529, 0.174, 0.687, 1.574],
+            [0.079, 0.141, 0.479, 0.214, 0.842, 1.115],
+            [0.045, 0.044, 0.047, 0.114, 0.113, 0.092],
+        ],
+    ),
+    (
+        "q = q(0) held",
+        [
+            [0.260, 0.270, 0.623, 1.000, 1.344, 1.476],
+            [0.270, 0.273, 0.510, 1.077, 1.347, 1.309],
+            [0.071, 0.107, 0.204, 0.381, 0.501, 0.565],
+        ],
+    ),
+];
+
+/// Free-run RMSE per horizon (HORIZONS) and joint; `None` where the run stopped.
+type Rmse = [[Option<f64>; 2]; 3];
+
+/// The scores of one model on the test records, in TEST's order.
+struct Scores {
+    rmse: Vec<Rmse>,
+    /// Why a run stopped, per record.
+    stopped: Vec<Option<String>>,
+}
+
+impl Scores {
+    fn json(&self) -> Value {
+        let mut m = Map::new();
+        for ((rec, r), stopped) in TEST.iter().zip(&self.rmse).zip(&self.stopped) {
+            let mut h = Map::new();
+            for ((key, _, _), v) in HORIZONS.iter().zip(r) {
+                h.insert((*key).into(), json!({"q1": v[0], "q2": v[1]}));
+            }
+            if let Some(why) = stopped {
+                h.insert("stopped".into(), json!(why));
+            }
+            m.insert((*rec).into(), Value::Object(h));
+        }
+        Value::Object(m)
+    }
+}
+
+/// One `hbid compare`: the RMSE per range and joint, the samples the record has on its grid,
+/// and why the run stopped if it did.
+type Compared = (Vec<[Option<f64>; 2]>, u64, Option<String>);
+
+/// A window's cross-validation: the window, each fold's (left-out record's) RMSE per joint, and
+/// the means over folds per joint.
+type Fold<'a> = (f64, Vec<(&'a str, [f64; 2])>, [f64; 2]);
+
+/// A table's row: a label and, per record, horizon and joint, an RMSE.
+struct Row {
+    label: String,
+    rmse: Vec<Rmse>,
+}
+
+fn path(data: &Path, rec: &str) -> PathBuf {
+    data.join(format!("trajectory_{rec}.csv"))
+}
+
+fn strings(args: &[&str]) -> Vec<String> {
+    args.iter().map(|s| s.to_string()).collect()
+}
+
+/// `hbid identify` on `records` with `extra` (the window, the terms or `--select`), the model
+/// saved to `model`: its JSON and wall time.
+fn identify(
+    exe: &Path,
+    data: &Path,
+    records: &[&str],
+    extra: &[String],
+    model: &Path,
+) -> anyhow::Result<(Value, f64)> {
+    let mut args = vec!["identify".to_owned()];
+    args.extend(records.iter().map(|r| path(data, r).display().to_string()));
+    args.extend(strings(&READ));
+    args.extend(extra.iter().cloned());
+    args.extend(strings(&["--bootstrap", "0", "--json", "--save-model"]));
+    args.push(model.display().to_string());
+    let started = Instant::now();
+    let found = hbid(exe, &args)?;
+    Ok((found, started.elapsed().as_secs_f64()))
+}
+
+/// `hbid compare` of `model` on record `rec` over `ranges`, from the first sample's measured
+/// state: the RMSE per range and joint, the samples the record has on its grid, and why the run
+/// stopped if it did.
+fn compare(exe: &Path, data: &Path, model: &Path, rec: &str, ranges: &[&str]) -> anyhow::Result<Compared> {
+    let mut args = vec![
+        "compare".to_owned(),
+        model.display().to_string(),
+        path(data, rec).display().to_string(),
+    ];
+    args.extend(strings(&READ));
+    args.extend(strings(&["--velocity-col", "vel_meas1,vel_meas2"]));
+    for r in ranges {
+        args.extend(strings(&["--range", r]));
+    }
+    args.push("--json".into());
+    let v = hbid(exe, &args)?;
+    let mut out = vec![[None; 2]; ranges.len()];
+    let mut stopped = None;
+    let all = v["ranges"].as_array().context("hbid compare: no ranges")?;
+    if all.len() != 2 * ranges.len() {
+        bail!(
+            "hbid compare: {} scores for {} ranges of 2 joints",
+            all.len(),
+            ranges.len()
+        );
+    }
+    for (i, r) in all.iter().enumerate() {
+        let joint = JOINTS
+            .iter()
+            .position(|j| r["coordinate"].as_str() == Some(j))
+            .context("hbid compare: a score of no joint")?;
+        out[i / 2][joint] = r["rmse"].as_f64();
+        if stopped.is_none() {
+            stopped = r["stopped"].as_str().map(str::to_owned);
+        }
+    }
+    Ok((out, v["samples"].as_u64().unwrap_or(0), stopped))
+}
+
+/// The scores of `model` on the test records at HORIZONS, and each record's samples on its grid.
+fn score(exe: &Path, data: &Path, model: &Path) -> anyhow::Result<(Scores, Vec<u64>)> {
+    let ranges: Vec<&str> = HORIZONS.iter().map(|h| h.2).collect();
+    // The records in parallel: each `hbid compare` is a process of one thread.
+    let runs = TEST
+        .par_iter()
+        .map(|rec| compare(exe, data, model, rec, &ranges))
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let (mut rmse, mut stopped, mut samples) = (Vec::new(), Vec::new(), Vec::new());
+    for (r, n, s) in runs {
+        rmse.push([r[0], r[1], r[2]]);
+        stopped.push(s);
+        samples.push(n);
+    }
+    Ok((Scores { rmse, stopped }, samples))
+}
+
+/// The published parameters (`model_2.0_parameters.yml`: one `name: value` a line).
+fn parameters(path: &Path) -> anyhow::Result<BTreeMap<String, f64>> {
+    let text = std::fs::read_to_string(path).with_context(|| path.display().to_string())?;
+    let mut p = BTreeMap::new();
+    for line in text.lines().filter(|l| !l.trim().is_empty()) {
+        let (k, v) = line
+            .split_once(':')
+            .with_context(|| format!("{}: {line}", path.display()))?;
+        p.insert(
+            k.trim().to_owned(),
+            v.trim().parse::<f64>().with_context(|| line.to_owned())?,
+        );
+    }
+    Ok(p)
+}
+
+/// The identifiable combinations of the README (Ia, I2, Ir, mr1, mr2, friction; l1, g, gr fixed).
+struct Physical {
+    ia: f64,
+    i2: f64,
+    ir: f64,
+    mr1: f64,
+    mr2: f64,
+    b: [f64; 2],
+    cf: [f64; 2],
+    l1: f64,
+    g: f64,
+    gr: f64,
+}
+
+impl Physical {
+    fn published(p: &BTreeMap<String, f64>) -> anyhow::Result<Self> {
+        let get = |k: &str| {
+            p.get(k)
+                .copied()
+                .with_context(|| format!("model_2.0_parameters.yml has no {k}"))
+        };
+        let l1 = get("l1")?;
+        Ok(Self {
+            ia: get("I1")? + get("m2")? * l1 * l1,
+            i2: get("I2")?,
+            ir: get("Ir")?,
+            mr1: get("m1")? * get("r1")? + get("m2")? * l1,
+            mr2: get("m2")? * get("r2")?,
+            b: [get("b1")?, get("b2")?],
+            cf: [get("cf1")?, get("cf2")?],
+            l1,
+            g: get("g")?,
+            gr: get("gr")?,
+        })
+    }
+
+    /// The constant parts of M11 and M22, by which each equation is normalised.
+    fn own(&self) -> [f64; 2] {
+        let gr2 = self.gr * self.gr;
+        [self.ia + self.i2 + (gr2 + 1.0) * self.ir, self.i2 + gr2 * self.ir]
+    }
+
+    /// The coefficients of TERMS' equations. The published Coulomb term cf·atan(100 q') is
+    /// cf·π/2·sign(q') beyond |q'| ≈ 0.1 rad/s (at 0.1 rad/s it is 0.94 of that): its `sign`
+    /// coefficient is cf·π/2.
+    fn coefficients(&self) -> [Vec<(&'static str, f64)>; 2] {
+        let [a1, a2] = self.own();
+        let (l1, g, gr) = (self.l1, self.g, self.gr);
+        let lm = l1 * self.mr2;
+        let coupling = self.i2 - gr * self.ir;
+        let coulomb = std::f64::consts::FRAC_PI_2;
+        [
+            vec![
+                ("q1''*cos(q2)", 2.0 * lm / a1),
+                ("q2''", coupling / a1),
+                ("q2''*cos(q2)", lm / a1),
+                ("sin(q2)*q1'*q2'", -2.0 * lm / a1),
+                ("sin(q2)*q2'^2", -lm / a1),
+                ("sin(q1)", g * self.mr1 / a1),
+                ("sin(q1+q2)", g * self.mr2 / a1),
+                ("q1'", self.b[0] / a1),
+                ("sign(q1')", self.cf[0] * coulomb / a1),
+                ("tau1", -1.0 / a1),
+            ],
+            vec![
+                ("q1''", coupling / a2),
+                ("q1''*cos(q2)", lm / a2),
+                ("sin(q2)*q1'^2", lm / a2),
+                ("sin(q1+q2)", g * self.mr2 / a2),
+                ("q2'", self.b[1] / a2),
+                ("sign(q2')", self.cf[1] * coulomb / a2),
+                ("tau2", -1.0 / a2),
+            ],
+        ]
+    }
+}
+
+/// The physical combinations that identified coefficients give, beside the published ones: the
+/// label, ours, the published value. Each equation's torque coefficient gives its normalisation
+/// (A1 = Ia + I2 + (gr²+1) Ir, A2 = I2 + gr² Ir); every other coefficient times it is a
+/// combination. mr2 appears in eight terms, each giving its own estimate; I2 and Ir follow from A2
+/// and eq2's I2 − gr Ir, Ia from A1.
+fn combinations(found: &Value, p: &Physical) -> Vec<(String, f64, f64)> {
+    let c = |eq: &str, term: &str| {
+        found["equations"][eq]["coefficients"][term]
+            .as_f64()
+            .unwrap_or(f64::NAN)
+    };
+    let (l1, g, gr) = (p.l1, p.g, p.gr);
+    let a1 = -1.0 / c("q1", "tau1");
+    let a2 = -1.0 / c("q2", "tau2");
+    let [pa1, pa2] = p.own();
+    let coupling = c("q2", "q1''") * a2;
+    let ir = (a2 - coupling) / (gr * gr + gr);
+    let i2 = a2 - gr * gr * ir;
+    let ia = a1 - i2 - (gr * gr + 1.0) * ir;
+    let coulomb = std::f64::consts::FRAC_PI_2;
+    let mut v = vec![
+        ("A1 = Ia + I2 + (gr²+1) Ir = −1/c(tau1)".to_owned(), a1, pa1),
+        ("A2 = I2 + gr² Ir = −1/c(tau2)".to_owned(), a2, pa2),
+        (
+            "I2 − gr Ir, eq1: c(q2'') A1".to_owned(),
+            c("q1", "q2''") * a1,
+            p.i2 - gr * p.ir,
+        ),
+        (
+            "I2 − gr Ir, eq2: c(q1'') A2".to_owned(),
+            coupling,
+            p.i2 - gr * p.ir,
+        ),
+        ("Ir, from A2 and eq2's I2 − gr Ir".to_owned(), ir, p.ir),
+        ("I2, from A2 and Ir".to_owned(), i2, p.i2),
+        ("Ia = I1 + m2 l1², from A1, I2 and Ir".to_owned(), ia, p.ia),
+        (
+            "mr1 = m1 r1 + m2 l1, eq1: c(sin(q1)) A1/g".to_owned(),
+            c("q1", "sin(q1)") * a1 / g,
+            p.mr1,
+        ),
+    ];
+    for (eq, term, factor) in [
+        ("q1", "q1''*cos(q2)", a1 / (2.0 * l1)),
+        ("q1", "q2''*cos(q2)", a1 / l1),
+        ("q1", "sin(q2)*q1'*q2'", -a1 / (2.0 * l1)),
+        ("q1", "sin(q2)*q2'^2", -a1 / l1),
+        ("q1", "sin(q1+q2)", a1 / g),
+        ("q2", "q1''*cos(q2)", a2 / l1),
+        ("q2", "sin(q2)*q1'^2", a2 / l1),
+        ("q2", "sin(q1+q2)", a2 / g),
+    ] {
+        v.push((
+            format!("mr2 = m2 r2, {}: {term}", eq_name(eq)),
+            c(eq, term) * factor,
+            p.mr2,
+        ));
+    }
+    v.extend([
+        ("b1, eq1: c(q1') A1".to_owned(), c("q1", "q1'") * a1, p.b[0]),
+        (
+            "cf1, eq1: c(sign(q1')) A1 / (π/2)".to_owned(),
+            c("q1", "sign(q1')") * a1 / coulomb,
+            p.cf[0],
+        ),
+        ("b2, eq2: c(q2') A2".to_owned(), c("q2", "q2'") * a2, p.b[1]),
+        (
+            "cf2, eq2: c(sign(q2')) A2 / (π/2)".to_owned(),
+            c("q2", "sign(q2')") * a2 / coulomb,
+            p.cf[1],
+        ),
+    ]);
+    v
+}
+
+fn eq_name(eq: &str) -> &'static str {
+    if eq == "q1" { "eq1" } else { "eq2" }
+}
+
+/// The published model in the saved form of the identified one (a saved system of format 5 with
+/// TERMS' equations): the same terms, basis and columns, the published coefficients, no fit.
+fn published_model(identified: &Path, p: &Physical, out: &Path) -> anyhow::Result<()> {
+    let text = std::fs::read_to_string(identified).with_context(|| identified.display().to_string())?;
+    let system: IdentifiedSystem = IdentifiedSystem::from_json(&text)?;
+    let mut equations = Vec::new();
+    for (eq, coefficients) in system.equations().iter().zip(p.coefficients()) {
+        if eq.coefficients().len() != coefficients.len() {
+            bail!(
+                "the saved model's equation has {} terms, the published one {}",
+                eq.coefficients().len(),
+                coefficients.len()
+            );
+        }
+        let coefficients = coefficients
+            .into_iter()
+            .map(|(name, value)| Coefficient {
+                name: name.to_owned(),
+                value,
+                std_error: 0.0,
+            })
+            .collect();
+        equations.push(IdentifiedModel::from_coefficients(
+            *eq.basis(),
+            eq.form().clone(),
+            eq.drive_angular_frequency(),
+            coefficients,
+            None,
+        )?);
+    }
+    let published = IdentifiedSystem::new(system.names().clone(), system.domains().to_vec(), equations)?
+        .with_columns(system.columns())?;
+    std::fs::write(out, published.to_json()? + "\n").with_context(|| out.display().to_string())
+}
+
+/// The rows of a record's CSV file (without its header).
+fn rows(path: &Path) -> anyhow::Result<u64> {
+    let text = std::fs::read_to_string(path).with_context(|| path.display().to_string())?;
+    Ok(text.lines().skip(1).filter(|l| !l.trim().is_empty()).count() as u64)
+}
+
+/// The peer (`xtask/peers/dfki_sindy.py`, SINDy by pysindy) run with `python`: its JSON.
+fn peer(python: &str, data: &Path, start: &[u64], work: &Path) -> anyhow::Result<Value> {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("peers/dfki_sindy.py");
+    let out = work.join("dfki-sindy.json");
+    let mut cmd = Command::new(python);
+    cmd.arg(&script);
+    for rec in TRAIN {
+        cmd.arg("--train").arg(path(data, rec));
+    }
+    for (rec, row) in TEST.iter().zip(start) {
+        cmd.arg("--test")
+            .arg(format!("{rec},{row},{}", path(data, rec).display()));
+    }
+    cmd.arg("--published").arg(data.join("model_2.0_parameters.yml"));
+    cmd.arg("--out").arg(&out);
+    let status = cmd
+        .status()
+        .with_context(|| format!("running {python} {}", script.display()))?;
+    if !status.success() {
+        bail!(
+            "{python} {} failed (is pysindy installed? `{python} -m pip install -r xtask/peers/requirements.txt`)",
+            script.display()
+        );
+    }
+    let text = std::fs::read_to_string(&out).with_context(|| out.display().to_string())?;
+    serde_json::from_str(&text).with_context(|| format!("{}: its JSON", out.display()))
+}
+
+/// The peer's scores in a table's form (its JSON has no whole-record figure).
+fn peer_rmse(v: &Value) -> Vec<Rmse> {
+    TEST.iter()
+        .map(|rec| {
+            let mut r: Rmse = [[None; 2]; 3];
+            for (h, (key, _, _)) in HORIZONS.iter().enumerate() {
+                for (j, q) in JOINTS.iter().enumerate() {
+                    r[h][j] = v[*rec][*key][*q].as_f64();
+                }
+            }
+            r
+        })
+        .collect()
+}
+
+/// The README's rows in a table's form.
+fn table_rmse(v: &[[f64; 6]; 3]) -> Vec<Rmse> {
+    v.iter()
+        .map(|r| {
+            let mut out: Rmse = [[None; 2]; 3];
+            for h in 0..3 {
+                out[h] = [Some(r[h]), Some(r[3 + h])];
+            }
+            out
+        })
+        .collect()
+}
+
+/// The terms and coefficients of each equation of an identification's JSON.
+fn equations(found: &Value) -> Value {
+    let mut m = Map::new();
+    for q in JOINTS {
+        let eq = &found["equations"][q];
+        let terms: Vec<&str> = eq["terms"]
+            .as_array()
+            .map(|t| t.iter().filter_map(Value::as_str).collect())
+            .unwrap_or_default();
+        let coefficients: Vec<Option<f64>> = terms.iter().map(|t| eq["coefficients"][*t].as_f64()).collect();
+        m.insert(q.into(), json!({"terms": terms, "coefficients": coefficients}));
+    }
+    Value::Object(m)
+}
+
+/// The command as shown: records by bare name, the terms quoted.
+fn shown_command(words: &[String]) -> String {
+    words
+        .iter()
+        .map(|w| {
+            if w.contains(' ') || w.contains('\'') {
+                format!("\"{w}\"")
+            } else {
+                w.clone()
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// Where `a` is below `b` and where above, per record and joint at a horizon (index into
+/// HORIZONS): the two lists of "q1 of 04".
+fn better_worse(a: &[Rmse], b: &[Rmse], h: usize) -> (Vec<String>, Vec<String>) {
+    let (mut better, mut worse) = (Vec::new(), Vec::new());
+    for (rec, (x, y)) in TEST.iter().zip(a.iter().zip(b)) {
+        for (j, q) in JOINTS.iter().enumerate() {
+            let place = format!("{q} of {rec}");
+            match (x[h][j], y[h][j]) {
+                (Some(x), Some(y)) if x < y => better.push(place),
+                (Some(_), Some(_)) | (None, Some(_)) => worse.push(place),
+                _ => {}
+            }
+        }
+    }
+    (better, worse)
+}
+
+fn listed(v: &[String]) -> String {
+    if v.is_empty() {
+        "none".to_owned()
+    } else {
+        v.join(", ")
+    }
+}
+
+/// Runs the benchmark: its section of `docs/benchmarks.md` and its entry of `benchmarks.json`.
+pub fn run(exe: &Path, shared: &Path, work: &Path, python: Option<&str>) -> anyhow::Result<(String, Value)> {
+    let data = shared.join("dfki_double_pendulum");
+    let p = Physical::published(&parameters(&data.join("model_2.0_parameters.yml"))?)?;
+    let terms = |window: f64| strings(&["--window", &window.to_string(), "--terms", TERMS]);
+
+    // The window: leave one training record out, fit on the other four, score the 1 s free run
+    // of the one left out; the mean over folds and joints.
+    eprintln!("dfki: cross-validation of the window");
+    // Every (window, fold) in parallel: each `hbid` is a process of one thread.
+    let jobs: Vec<(f64, usize)> = WINDOWS
+        .iter()
+        .flat_map(|&w| (0..TRAIN.len()).map(move |k| (w, k)))
+        .collect();
+    let scored = jobs
+        .par_iter()
+        .map(|&(window, k)| -> anyhow::Result<[f64; 2]> {
+            let left = TRAIN[k];
+            let fit: Vec<&str> = TRAIN
+                .iter()
+                .enumerate()
+                .filter(|&(i, _)| i != k)
+                .map(|(_, r)| *r)
+                .collect();
+            let model = work.join(format!("dfki-cv-{window}-{left}.json"));
+            identify(exe, &data, &fit, &terms(window), &model)?;
+            let (r, _, _) = compare(exe, &data, &model, left, &[HORIZONS[0].2])?;
+            // A run that stopped counts π, the protocol's figure for every sample it misses.
+            Ok(r[0].map(|v| v.unwrap_or(std::f64::consts::PI)))
+        })
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let mut cv: Vec<Fold> = Vec::new();
+    for (i, window) in WINDOWS.iter().enumerate() {
+        let folds: Vec<(&str, [f64; 2])> = TRAIN
+            .iter()
+            .enumerate()
+            .map(|(k, rec)| (*rec, scored[i * TRAIN.len() + k]))
+            .collect();
+        let mean = |j: usize| folds.iter().map(|f| f.1[j]).sum::<f64>() / folds.len() as f64;
+        let means = [mean(0), mean(1)];
+        cv.push((*window, folds, means));
+    }
+    let mean_of = |c: &Fold| (c.2[0] + c.2[1]) / 2.0;
+    let window = cv
+        .iter()
+        .min_by(|a, b| mean_of(a).total_cmp(&mean_of(b)))
+        .map(|c| c.0)
+        .context("no window")?;
+
+    eprintln!("dfki: identification (window {window} s) and free runs");
+    let model = work.join("dfki.json");
+    let extra = terms(window);
+    let (found, seconds) = identify(exe, &data, &TRAIN, &extra, &model)?;
+    let (ours, samples) = score(exe, &data, &model)?;
+    let published_path = work.join("dfki-published.json");
+    published_model(&model, &p, &published_path)?;
+    let (published_rerun, _) = score(exe, &data, &published_path)?;
+    let select_path = work.join("dfki-selected.json");
+    let select_extra = strings(&["--window", &window.to_string(), "--select"]);
+    let (selected, select_seconds) = identify(exe, &data, &TRAIN, &select_extra, &select_path)?;
+    let (select_scores, _) = score(exe, &data, &select_path)?;
+
+    // The rows the reader left out at each test record's start: the free run's first row.
+    let mut start = Vec::new();
+    for (rec, n) in TEST.iter().zip(&samples) {
+        start.push(rows(&path(&data, rec))?.saturating_sub(*n));
+    }
+    let peer = match python {
+        Some(python) => {
+            eprintln!("dfki: pysindy");
+            Some(peer(python, &data, &start, work)?)
+        }
+        None => None,
+    };
+
+    let combos = combinations(&found, &p);
+    let published_coefficients = p.coefficients();
+
+    // The section.
+    let mut r = String::new();
+    writeln!(r, "\n## DFKI double pendulum (RMSE of the free run, rad)\n")?;
+    writeln!(
+        r,
+        "The measured double pendulum of the DFKI RIC Underactuated Lab (design A.0, `dfki_double_pendulum`): both \
+         joints motor-driven by sinusoidal torques, angles, velocities and the drivers' measured torques logged at \
+         500 Hz (2.0001 ms steps), ten seconds a record. By its protocol: modelling decisions on the training \
+         records `00`, `01`, `02`, `03`, `12` alone; the test records `04` and `05` whirl (link 2 goes over the top, \
+         which no training record shows) and `13` has a passive shoulder with the elbow at a frequency the training \
+         set lacks. Each test record is scored by a free run from its measured state (`pos_meas`, `vel_meas`: \
+         `--velocity-col`, every sample scored) under the measured torques `tau_meas` (a not-a-knot cubic spline), \
+         DOP853 at rtol 1e-10: the RMSE of the angle error wrapped into [−π, π), per joint, over the first 1 s \
+         (500 samples) and 2 s (1000 samples), the protocol's primary figures.\n"
+    )?;
+    writeln!(
+        r,
+        "**Deviation from the protocol.** The protocol starts the free run at row 0. The record reader leaves out \
+         each test record's first {}–{} rows (logged before t = 0.016 s at 2.9–3.8 ms steps, before the logger settled \
+         to its 2 ms rate; it says so in a note), so here each run starts from the measured state of the first row \
+         kept (row {} of `04`, {} of `05`, {} of `13`), its horizons counted from there; the later rows' time \
+         stamps are placed on the even grid (they deviate from it by a few % of a step). The published model run \
+         here (its row below) differs from the README's figures for it by the start and by the Coulomb term's \
+         form: by at most {:.3} rad at 1 s and 2 s on `13`, which stays in the training range.\n",
+        start.iter().min().copied().unwrap_or(0),
+        start.iter().max().copied().unwrap_or(0),
+        start[0],
+        start[1],
+        start[2],
+        (0..2)
+            .flat_map(|h| (0..2).map(move |j| (h, j)))
+            .filter_map(|(h, j)| published_rerun.rmse[2][h][j].map(|v| (v - PUBLISHED[2][j * 3 + h]).abs()))
+            .fold(0.0, f64::max),
+    )?;
+    writeln!(
+        r,
+        "The model is the README's rigid-body model (q1 from hanging, q2 relative to link 1) with one free \
+         coefficient per term, each equation `q_i'' + Σ c g = 0` normalised by its own acceleration's constant \
+         part; the Coulomb friction is `sign(q')` (the free run sticks at rest). The window of the weak form was \
+         chosen by leave-one-training-record-out cross-validation: fitted on four training records, the 1 s free \
+         run of the fifth scored, the mean over the five folds and both joints; the window with the smallest mean \
+         ({window} s) was then used on all five.\n"
+    )?;
+    writeln!(
+        r,
+        "| window | q1, mean of 5 folds | q2 | mean |\n| ---: | ---: | ---: | ---: |"
+    )?;
+    for (w, _, m) in &cv {
+        let mark = if *w == window { " (chosen)" } else { "" };
+        writeln!(
+            r,
+            "| {w} s{mark} | {:.4} | {:.4} | {:.4} |",
+            m[0],
+            m[1],
+            (m[0] + m[1]) / 2.0
+        )?;
+    }
+    writeln!(r)?;
+
+    // The score tables, one per horizon.
+    let mut rows_: Vec<Row> = vec![
+        Row {
+            label: format!(
+                "physical, one coefficient per term ({} + {} terms, {window} s windows)",
+                found["equations"]["q1"]["terms"].as_array().map_or(0, Vec::len),
+                found["equations"]["q2"]["terms"].as_array().map_or(0, Vec::len)
+            ),
+            rmse: ours.rmse.clone(),
+        },
+        Row {
+            label: format!(
+                "selected from the default library of systems ({} + {} terms)",
+                selected["equations"]["q1"]["terms"]
+                    .as_array()
+                    .map_or(0, Vec::len),
+                selected["equations"]["q2"]["terms"]
+                    .as_array()
+                    .map_or(0, Vec::len)
+            ),
+            rmse: select_scores.rmse.clone(),
+        },
+        Row {
+            label: "published model (model_2.0) run here, Coulomb as cf·π/2·sign(q')".into(),
+            rmse: published_rerun.rmse.clone(),
+        },
+    ];
+    if let Some(peer) = &peer {
+        rows_.push(Row {
+            label: format!(
+                "SINDy, pysindy {} run here ({} terms kept of 2 × 55, threshold {})",
+                peer["version"].as_str().unwrap_or("?"),
+                peer["terms"].as_u64().unwrap_or(0),
+                peer["threshold"]
+                    .as_f64()
+                    .map_or_else(|| "?".to_owned(), |t| t.to_string())
+            ),
+            rmse: peer_rmse(&peer["rmse_rad"]),
+        });
+        rows_.push(Row {
+            label: "published model by the protocol (Python: row 0, cf·atan(100 q'))".into(),
+            rmse: peer_rmse(&published_protocol(peer, "row_0")),
+        });
+    }
+    rows_.push(Row {
+        label: "published model, the README's figures (in-sample: fitted on records that include 04, 05, 13)"
+            .into(),
+        rmse: table_rmse(&PUBLISHED),
+    });
+    for (label, v) in &BASELINES {
+        rows_.push(Row {
+            label: format!("README, held out: {label}"),
+            rmse: table_rmse(v),
+        });
+    }
+    for (h, (_, name, _)) in HORIZONS.iter().enumerate() {
+        if h == 2 {
+            writeln!(
+                r,
+                "Whole record (context only: on the whirling records 04 and 05 it is not reproducible to better than \
+                 a few tenths of a radian, the README says, and is near that of a model that does not move):\n"
+            )?;
+        } else {
+            writeln!(r, "Free run, first {name}:\n")?;
+        }
+        writeln!(
+            r,
+            "| model | 04 q1 | 04 q2 | 05 q1 | 05 q2 | 13 q1 | 13 q2 |\n| --- | ---: | ---: | ---: | ---: | ---: | ---: |"
+        )?;
+        for row in &rows_ {
+            let cells: Vec<String> = row
+                .rmse
+                .iter()
+                .flat_map(|x| x[h].iter().map(|v| shown(*v, 3)))
+                .collect();
+            if cells.iter().all(|c| c == "—") {
+                continue;
+            }
+            writeln!(r, "| {} | {} |", row.label, cells.join(" | "))?;
+        }
+        writeln!(r)?;
+    }
+    for (i, why) in ours.stopped.iter().enumerate() {
+        if let Some(why) = why {
+            writeln!(r, "This model's run on {} stopped: {why}.\n", TEST[i])?;
+        }
+    }
+
+    // What is better and what is worse.
+    let published_rows = table_rmse(&PUBLISHED);
+    let (b1, w1) = better_worse(&ours.rmse, &published_rows, 0);
+    let (b2, w2) = better_worse(&ours.rmse, &published_rows, 1);
+    let (rb1, rw1) = better_worse(&ours.rmse, &published_rerun.rmse, 0);
+    let best_refit: Vec<Rmse> = (0..3)
+        .map(|i| {
+            let mut out: Rmse = [[None; 2]; 3];
+            for h in 0..3 {
+                for j in 0..2 {
+                    out[h][j] = BASELINES[..3]
+                        .iter()
+                        .map(|(_, v)| v[i][j * 3 + h])
+                        .min_by(f64::total_cmp);
+                }
+            }
+            out
+        })
+        .collect();
+    let (fb1, fw1) = better_worse(&ours.rmse, &best_refit, 0);
+    let (fb2, fw2) = better_worse(&ours.rmse, &best_refit, 1);
+    writeln!(
+        r,
+        "Against the published model's own figures (in-sample for it), at 1 s the physical model identified here is lower on {} and higher on \
+         {}; at 2 s lower on {} and higher on {}. Against the published model run here from the same state, at 1 s \
+         lower on {} and higher on {}. Against the best of the README's three held-out refits on the same training \
+         records, taken per cell, at 1 s lower on {} and higher on {}; at 2 s lower on {} and higher on {}.\n",
+        listed(&b1),
+        listed(&w1),
+        listed(&b2),
+        listed(&w2),
+        listed(&rb1),
+        listed(&rw1),
+        listed(&fb1),
+        listed(&fw1),
+        listed(&fb2),
+        listed(&fw2),
+    )?;
+    if let Some(peer) = &peer {
+        let sindy = peer_rmse(&peer["rmse_rad"]);
+        let (sb1, sw1) = better_worse(&ours.rmse, &sindy, 0);
+        let (sb2, sw2) = better_worse(&ours.rmse, &sindy, 1);
+        writeln!(
+            r,
+            "Against SINDy run here from the same state: at 1 s lower on {} and higher on {}; at 2 s lower on {} and \
+             higher on {}.\n",
+            listed(&sb1),
+            listed(&sw1),
+            listed(&sb2),
+            listed(&sw2),
+        )?;
+    }
+
+    let mut identify_words = vec!["identify".to_owned()];
+    identify_words.extend(TRAIN.iter().map(|r| format!("trajectory_{r}.csv")));
+    identify_words.extend(strings(&READ));
+    identify_words.extend(extra.iter().cloned());
+    let mut compare_words = strings(&["compare", "dfki.json", "trajectory_04.csv"]);
+    compare_words.extend(strings(&READ));
+    compare_words.extend(strings(&["--velocity-col", "vel_meas1,vel_meas2"]));
+    for h in HORIZONS {
+        compare_words.extend(strings(&["--range", h.2]));
+    }
+    writeln!(
+        r,
+        "```\nhbid {} --save-model dfki.json\nhbid {}\n```\n",
+        shown_command(&identify_words),
+        shown_command(&compare_words)
+    )?;
+    writeln!(
+        r,
+        "Identification with reading (five records of 5 000 samples): {seconds:.2} s; the selection {select_seconds:.2} s \
+         (this build).\n"
+    )?;
+
+    // Coefficients beside the published ones.
+    writeln!(
+        r,
+        "Coefficients of `q_i'' + Σ c g = 0` beside those of the published parameters (`model_2.0_parameters.yml`) \
+         in the same form: each equation divided by the constant part of its own mass-matrix entry (A1 = Ia + I2 + \
+         (gr²+1) Ir, A2 = I2 + gr² Ir). The published Coulomb term cf·atan(100 q') is cf·π/2·sign(q') beyond \
+         |q'| ≈ 0.1 rad/s (0.94 of it at 0.1 rad/s), so its `sign` coefficient is cf·π/2 / A.\n"
+    )?;
+    writeln!(
+        r,
+        "| equation | term | this model | published | ratio |\n| --- | --- | ---: | ---: | ---: |"
+    )?;
+    for (q, coefficients) in JOINTS.iter().zip(&published_coefficients) {
+        for (term, published) in coefficients {
+            let ours = found["equations"][*q]["coefficients"][*term].as_f64();
+            writeln!(
+                r,
+                "| {} | `{term}` | {} | {published:.4} | {} |",
+                eq_name(q),
+                shown(ours, 4),
+                shown(ours.map(|v| v / published), 2)
+            )?;
+        }
+    }
+    writeln!(
+        r,
+        "\nThe physical combinations they give (SI units: kg m², kg m, N m s/rad, N m; l1 = {} m, g = {} m/s², gr = {} \
+         fixed), beside the published ones. The per-term fit does not tie the terms that share a parameter, so mr2 \
+         comes out of eight terms with eight values:\n",
+        p.l1, p.g, p.gr
+    )?;
+    writeln!(
+        r,
+        "| combination | this model | published | ratio |\n| --- | ---: | ---: | ---: |"
+    )?;
+    // Four significant digits: Ir is a ten-thousandth of the others.
+    let digits = |v: f64| {
+        if v.abs() < 1e-3 {
+            format!("{v:.3e}")
+        } else {
+            format!("{v:.5}")
+        }
+    };
+    for (label, ours, published) in &combos {
+        writeln!(
+            r,
+            "| {label} | {} | {} | {:.2} |",
+            digits(*ours),
+            digits(*published),
+            ours / published
+        )?;
+    }
+    writeln!(
+        r,
+        "\nFor scale, the README's least-squares refit (b) of all nine combinations on the same training records \
+         gives Ia 0.0973, I2 0.0223, mr1 0.309, mr2 0.0986 and Ir 6.19e-5, 0.81–0.93 of the published values, \
+         and the README finds the published set not reproducible from the stored records.\n"
+    )?;
+
+    // The selection.
+    let kept = |q: &str| -> String {
+        selected["equations"][q]["terms"]
+            .as_array()
+            .map(|t| t.iter().filter_map(Value::as_str).collect::<Vec<_>>().join(", "))
+            .unwrap_or_default()
+    };
+    let library = selected["equations"]["q1"]["selection"]["library"]
+        .as_array()
+        .map_or(0, Vec::len);
+    writeln!(
+        r,
+        "Selected: `hbid identify` with `--select` and no `--terms`, from the default library of systems ({library} \
+         candidates an equation: sines and cosines of each angle, the other coordinate's acceleration times \
+         cos(q1−q2) and its squared velocity times sin(q1−q2), both velocities, the torques and the torques times \
+         the sines and cosines). That library is written for two links in absolute angles; this rig's q2 is \
+         relative to link 1, so the model's own couplings (q2''·cos q2, sin(q1+q2), ...) are not among its \
+         candidates. It kept q1: `{}`; q2: `{}`.\n",
+        kept("q1"),
+        kept("q2")
+    )?;
+
+    if let Some(peer) = &peer {
+        writeln!(
+            r,
+            "The peer ran in this command (`--peer PYTHON`, `xtask/peers/dfki_sindy.py`): pysindy's SINDy with \
+             control, on the same training records from the same first kept rows, the state (q1, q2, q1', q2') with \
+             the measured velocities and their smoothed finite differences as its derivative, the torques as \
+             control; a library of {} functions (sin and cos of q1, q2 and q1+q2, the velocities' polynomial of \
+             degree 2, the torques, and the products of the angles' functions with each); STLSQ's threshold chosen \
+             from {} by the same leave-one-training-record-out 1 s free run (chosen: {}). Its free run: the same \
+             state, torques by a not-a-knot spline, DOP853 at rtol = atol = 1e-10; a run that fails counts π for \
+             each remaining sample. It kept {} terms; its fit took {:.1} s.{}\n",
+            peer["library"].as_array().map_or(0, Vec::len),
+            peer["cv"]
+                .as_array()
+                .map(|c| c
+                    .iter()
+                    .filter_map(|c| c["threshold"].as_f64())
+                    .map(|t| t.to_string())
+                    .collect::<Vec<_>>()
+                    .join(", "))
+                .unwrap_or_default(),
+            peer["threshold"]
+                .as_f64()
+                .map_or_else(|| "?".to_owned(), |t| t.to_string()),
+            peer["terms"].as_u64().unwrap_or(0),
+            peer["fit_seconds"].as_f64().unwrap_or(f64::NAN),
+            peer_failures(peer),
+        )?;
+        let protocol = published_protocol(peer, "row_0");
+        let from_start = published_protocol(peer, "start_row");
+        let pairs = |a: &dyn Fn(&str, &str, &str) -> Option<f64>,
+                     b: &dyn Fn(&str, &str, &str) -> Option<f64>| {
+            TEST.iter()
+                .flat_map(|rec| ["1s", "2s"].map(|h| (*rec, h)))
+                .flat_map(|(rec, h)| JOINTS.map(|q| (rec, h, q)))
+                .filter_map(|(rec, h, q)| Some((a(rec, h, q)? - b(rec, h, q)?).abs()))
+                .fold(0.0, f64::max)
+        };
+        let of = |v: &Value| {
+            let v = v.clone();
+            move |rec: &str, h: &str, q: &str| v[rec][h][q].as_f64()
+        };
+        let readme = |rec: &str, h: &str, q: &str| {
+            let i = TEST.iter().position(|r| *r == rec)?;
+            let j = JOINTS.iter().position(|x| *x == q)?;
+            Some(PUBLISHED[i][j * 3 + usize::from(h == "2s")])
+        };
+        let rerun = Value::Object(
+            TEST.iter()
+                .zip(&published_rerun.rmse)
+                .map(|(rec, v)| {
+                    (
+                        (*rec).to_owned(),
+                        json!({"1s": {"q1": v[0][0], "q2": v[0][1]}, "2s": {"q1": v[1][0], "q2": v[1][1]}}),
+                    )
+                })
+                .collect(),
+        );
+        let (reproduced, start_moves, form_moves) = (
+            pairs(&of(&protocol), &readme),
+            pairs(&of(&from_start), &of(&protocol)),
+            pairs(&of(&rerun), &of(&from_start)),
+        );
+        writeln!(
+            r,
+            "The published model by the protocol itself (in the peer's Python: row 0, cf·atan(100 q'), DOP853 at \
+             rtol = atol = 1e-10) reproduces the README's figures to within {reproduced:.3} rad at 1 s and 2 s. \
+             Started from the first row kept instead, as here, it moves by up to {start_moves:.3} rad; with the \
+             Coulomb term as cf·π/2·sign(q') in this tool's free run from that row, by up to {form_moves:.3} rad \
+             more: {}.\n",
+            if start_moves > form_moves {
+                "the start row, more than the Coulomb term's form, separates the published model's row run here \
+                 from the README's"
+            } else {
+                "the Coulomb term's form, more than the start row, separates the published model's row run here \
+                 from the README's"
+            }
+        )?;
+    }
+
+    let cv_json: Vec<Value> = cv
+        .iter()
+        .map(|(w, folds, m)| {
+            let folds: Map<String, Value> = folds
+                .iter()
+                .map(|(rec, v)| ((*rec).to_owned(), json!({"q1": v[0], "q2": v[1]})))
+                .collect();
+            json!({"window_s": w, "q1": m[0], "q2": m[1], "mean": (m[0] + m[1]) / 2.0, "folds": folds})
+        })
+        .collect();
+    let published_json: Map<String, Value> = TEST
+        .iter()
+        .zip(PUBLISHED)
+        .map(|(rec, v)| {
+            (
+                (*rec).to_owned(),
+                json!({"1s": {"q1": v[0], "q2": v[3]}, "2s": {"q1": v[1], "q2": v[4]}, "whole": {"q1": v[2], "q2": v[5]}}),
+            )
+        })
+        .collect();
+    let published_coefficients_json: Map<String, Value> = JOINTS
+        .iter()
+        .zip(&published_coefficients)
+        .map(|(q, c)| {
+            (
+                (*q).to_owned(),
+                json!({"terms": c.iter().map(|x| x.0).collect::<Vec<_>>(), "coefficients": c.iter().map(|x| x.1).collect::<Vec<_>>()}),
+            )
+        })
+        .collect();
+    let summary = json!({
+        "window_s": window,
+        "cv": {"horizon_s": 1, "folds": TRAIN, "by_window": cv_json, "chosen_window_s": window},
+        "start_rows": TEST.iter().zip(&start).map(|(r, s)| ((*r).to_owned(), json!(s))).collect::<Map<String, Value>>(),
+        "equations": equations(&found),
+        "rmse_rad": ours.json(),
+        "published": published_json,
+        "published_model_rerun": {
+            "equations": Value::Object(published_coefficients_json),
+            "coulomb": "cf*pi/2*sign(q') for cf*atan(100 q')",
+            "rmse_rad": published_rerun.json(),
+        },
+        "physical": combos.iter().map(|(l, o, p)| json!({"combination": l, "ours": o, "published": p})).collect::<Vec<_>>(),
+        "select": {
+            "equations": equations(&selected),
+            "rmse_rad": select_scores.json(),
+            "seconds": select_seconds,
+        },
+        "seconds": seconds,
+        "peer": peer,
+    });
+    Ok((r, summary))
+}
+
+/// The published model's scores by the protocol from the peer's JSON (`row_0` or `start_row`),
+/// keyed by record.
+fn published_protocol(peer: &Value, which: &str) -> Value {
+    let mut m = Map::new();
+    for rec in TEST {
+        m.insert(
+            rec.into(),
+            peer["published_model_by_protocol"][rec][which].clone(),
+        );
+    }
+    Value::Object(m)
+}
+
+/// Where the peer's free runs failed, as a sentence (empty when none did).
+fn peer_failures(peer: &Value) -> String {
+    let failed: Vec<String> = TEST
+        .iter()
+        .filter_map(|rec| {
+            let v = &peer["rmse_rad"][*rec];
+            v["failed"].as_str().map(|why| {
+                let why = why.trim_end_matches('.');
+                format!(
+                    "{rec} at {} s ({why})",
+                    v["failed_at_s"]
+                        .as_f64()
+                        .map_or_else(|| "?".to_owned(), |t| format!("{t:.2}"))
+                )
+            })
+        })
+        .collect();
+    if failed.is_empty() {
+        String::new()
+    } else {
+        format!(
+            " Its free run failed on {}: π counted from there.",
+            failed.join("; ")
+        )
+    }
+}
