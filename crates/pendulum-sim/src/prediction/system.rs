@@ -183,8 +183,9 @@ pub struct SystemWindowPrediction {
     pub left: Option<usize>,
 }
 
-/// The system integrated from `state` at sample `start` ([`free_run`] at the record's times) and
-/// compared with every coordinate of the record sample by sample until one leaves its
+/// The system integrated from `state` at sample `start` ([`free_run`] at the record's times, in
+/// stretches of one, two, four… drive periods, each from the state where the one before ended)
+/// and compared with every coordinate of the record sample by sample until one leaves its
 /// tolerance, the horizon passes, or the record ends or has a gap in any coordinate.
 ///
 /// A system whose integration fails (a singular mass matrix, a blow-up, a step size that
@@ -237,20 +238,34 @@ pub fn predict_system_window<S: MultiSystem + ?Sized>(
     if let Some(n) = (start + 1..=last).find(|&n| !record.finite_at(n)) {
         last = n - 1;
     }
-    let times: Vec<f64> = (start..=last).map(|n| clock.time(n)).collect();
-    let run = free_run(system, &times, state, config.tolerances)?;
-    for (i, n) in (start + 1..=last).enumerate() {
-        if run.q.iter().any(|q| !q[i + 1].is_finite()) {
-            return Ok(window(clock.time(n - 1) - t0, false, None));
+    // Stretches that double in length from one drive period, each from the state where the one
+    // before ended: a window that leaves the record early does not pay for its whole horizon.
+    let mut from = start;
+    let mut current = state.clone();
+    let mut stretch = (clock.samples_per_period().round() as usize).max(1);
+    while from < last {
+        let to = from.saturating_add(stretch).min(last);
+        let times: Vec<f64> = (from..=to).map(|n| clock.time(n)).collect();
+        let run = free_run(system, &times, &current, config.tolerances)?;
+        for (i, n) in (from + 1..=to).enumerate() {
+            if run.q.iter().chain(&run.v).any(|x| !x[i + 1].is_finite()) {
+                return Ok(window(clock.time(n - 1) - t0, false, None));
+            }
+            let (ratio, c) = record.ratio(run.q.iter().map(|q| q[i + 1]), n, &deltas);
+            if ratio > 1.0 {
+                // Linear in the ratio between the last sample within the tolerance and this one.
+                let fraction = (1.0 - previous) / (ratio - previous);
+                let crossing = clock.time(n - 1) + fraction * clock.step();
+                return Ok(window(crossing - t0, false, Some(c)));
+            }
+            previous = ratio;
         }
-        let (ratio, c) = record.ratio(run.q.iter().map(|q| q[i + 1]), n, &deltas);
-        if ratio > 1.0 {
-            // Linear in the ratio between the last sample within the tolerance and this one.
-            let fraction = (1.0 - previous) / (ratio - previous);
-            let crossing = clock.time(n - 1) + fraction * clock.step();
-            return Ok(window(crossing - t0, false, Some(c)));
-        }
-        previous = ratio;
+        let end = to - from;
+        let q: Vec<f64> = run.q.iter().map(|q| q[end]).collect();
+        let v: Vec<f64> = run.v.iter().map(|v| v[end]).collect();
+        current = MultiState::new(&q, &v)?;
+        from = to;
+        stretch = stretch.saturating_mul(2);
     }
     Ok(window(clock.time(last) - t0, true, None))
 }
