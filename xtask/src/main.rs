@@ -5,6 +5,7 @@
 
 mod accuracy;
 mod benchmarks;
+mod double_pendulum;
 mod identification;
 mod real_records;
 mod reproduce;
