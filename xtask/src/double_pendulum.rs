@@ -280,8 +280,8 @@ pub fn section(out: &Path, quick: bool, times: &mut Timings, report: &mut String
     }
     writeln!(
         report,
-        "The identified systems are saved beside this report: {} (`hbid compare` and \
-         `hb_model::IdentifiedSystem::from_json` read them).\n",
+        "The identified systems are saved beside this report: {} (`hbid compare`, `hbid report --model` and \
+         `hb_model::IdentifiedSystem::from_json` read them; their coordinates are named q1, q2).\n",
         models
             .iter()
             .map(|m| format!("`{}`", m.file))
