@@ -6,6 +6,7 @@
 mod accuracy;
 mod benchmarks;
 mod dfki;
+mod double_pendulum;
 mod identification;
 mod real_records;
 mod reproduce;

@@ -77,7 +77,7 @@ fn models() -> anyhow::Result<[(&'static str, &'static str, Method, BasisKind); 
 
 /// Wall time of each stage, for the report.
 #[derive(Default)]
-struct Timings {
+pub(crate) struct Timings {
     done: Vec<(&'static str, Duration)>,
     current: Option<(&'static str, Instant, ProgressBar)>,
 }
@@ -129,7 +129,7 @@ impl Timings {
     }
 
     /// Runs `work` as a stage and records its wall time.
-    fn stage<T>(
+    pub(crate) fn stage<T>(
         &mut self,
         name: &'static str,
         work: impl FnOnce() -> anyhow::Result<T>,
@@ -333,6 +333,10 @@ pub fn run(out: &Path, quick: bool) -> anyhow::Result<()> {
         Ok(())
     })?;
 
+    // The paper's next step, one link up: its section follows the pendulum's figures.
+    let mut double_pendulum = String::new();
+    crate::double_pendulum::section(out, quick, &mut times, &mut double_pendulum)?;
+
     // The report.
     writeln!(report, "# Reproduction of Liang & Feeny, base-excited pendulum\n")?;
     writeln!(
@@ -385,6 +389,7 @@ pub fn run(out: &Path, quick: bool) -> anyhow::Result<()> {
     for (file, caption) in &figures {
         writeln!(report, "![{caption}]({file})\n\n{caption}\n")?;
     }
+    report.push_str(&double_pendulum);
     writeln!(report, "## Wall time of each stage\n")?;
     writeln!(report, "| stage | seconds |\n| --- | --- |")?;
     for (name, took) in &times.done {

@@ -7,3 +7,4 @@ mod cli;
 mod compare;
 mod free_decay;
 mod logger_clock;
+mod report_system;

@@ -25,7 +25,8 @@
 //!   shooting (with Floquet multipliers), [`section_energy_distance`] between Poincaré sections,
 //!   and the [`whirling_fraction`];
 //! - validation that needs no true equation ([`prediction`]): the [`valid_prediction_times`] of a
-//!   model started from a record's own state, and the [`decay_envelope`] of a free decay;
+//!   model started from a record's own state (of a system of several coordinates too,
+//!   [`prediction::system_valid_prediction_times`]), and the [`decay_envelope`] of a free decay;
 //! - [`observe`]: what an encoder reports of the simulated angle (zero offset, seeded noise,
 //!   counts per turn, bit errors, the wrap) and where a record has gaps;
 //! - a real machine's imperfections ([`Losses`]: dry friction `μ sign(x')`, quadratic drag

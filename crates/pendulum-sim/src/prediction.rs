@@ -70,6 +70,13 @@ use crate::simulate::FirstOrder;
 use crate::switching::{Flow, OnMode};
 use crate::system::SecondOrderSystem;
 
+mod system;
+
+pub use system::{
+    SystemPredictionRecord, SystemPredictionTimes, SystemWindowPrediction, estimate_system_state,
+    predict_system_window, system_prediction_starts, system_valid_prediction_times,
+};
+
 /// Degree of the local polynomial that gives the state at a sample.
 const FIT_DEGREE: usize = 4;
 /// Steps an integration of one window may take before it counts as a failure of the model.
@@ -385,9 +392,22 @@ pub fn prediction_starts(
     record: &PredictionRecord<'_>,
     config: &PredictionConfig,
 ) -> Result<Vec<usize>, SimError> {
-    let len = record.samples.len();
     let m = config.half_width(&record.clock);
-    let room = config.horizon_samples(&record.clock);
+    spread_starts(record.samples.len(), &record.clock, config, |n| {
+        local_fit(record.samples, n, m, record.domain).is_some()
+    })
+}
+
+/// `config.windows()` starts spread evenly over a record of `len` samples on `clock` (see
+/// [`prediction_starts`]), those where `has_state` says no state can be estimated skipped.
+fn spread_starts(
+    len: usize,
+    clock: &SampleClock,
+    config: &PredictionConfig,
+    has_state: impl Fn(usize) -> bool,
+) -> Result<Vec<usize>, SimError> {
+    let m = config.half_width(clock);
+    let room = config.horizon_samples(clock);
     let too_short = SimError::RecordTooShort {
         len,
         needed: 2 * m + 1,
@@ -410,7 +430,7 @@ pub fn prediction_starts(
                 first + ((last - first) as f64 * i as f64 / (w - 1) as f64).round() as usize
             }
         })
-        .filter(|&n| local_fit(record.samples, n, m, record.domain).is_some())
+        .filter(|&n| has_state(n))
         .collect();
     starts.dedup();
     if starts.is_empty() {

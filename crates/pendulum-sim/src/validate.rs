@@ -419,18 +419,27 @@ pub fn section_energy_distance(a: &[[f64; 2]], b: &[[f64; 2]]) -> Option<f64> {
 
 /// The energy distance `2 E|X − Y| − E|X − X'| − E|Y − Y'|` between two samples of points in
 /// R^D with Euclidean distances, estimated without bias (see [`section_energy_distance`]). `None`
-/// when either sample has fewer than two points.
-pub fn energy_distance<const D: usize>(a: &[[f64; D]], b: &[[f64; D]]) -> Option<f64> {
+/// when either sample has fewer than two points. The points are fixed arrays (`[f64; D]`) or
+/// slices of one length, such as the sections of a system whose number of coordinates is known
+/// only at run time.
+pub fn energy_distance<P: AsRef<[f64]>>(a: &[P], b: &[P]) -> Option<f64> {
     if a.len() < 2 || b.len() < 2 {
         return None;
     }
-    let dist = |p: &[f64; D], q: &[f64; D]| p.iter().zip(q).map(|(x, y)| (x - y).powi(2)).sum::<f64>().sqrt();
+    let dist = |p: &P, q: &P| {
+        p.as_ref()
+            .iter()
+            .zip(q.as_ref())
+            .map(|(x, y)| (x - y).powi(2))
+            .sum::<f64>()
+            .sqrt()
+    };
     let cross: f64 = a
         .iter()
         .map(|p| b.iter().map(|q| dist(p, q)).sum::<f64>())
         .sum::<f64>()
         / (a.len() * b.len()) as f64;
-    let within = |e: &[[f64; D]]| -> f64 {
+    let within = |e: &[P]| -> f64 {
         let mut s = 0.0;
         for i in 0..e.len() {
             for j in i + 1..e.len() {

@@ -5,7 +5,7 @@ use std::f64::consts::TAU;
 
 use pendulum_sim::{
     CheckConfig, Domain, Pendulum, PeriodicOrbit, SecondOrderSystem, ShootingConfig, check_model,
-    periodic_orbits, section_energy_distance, whirling_fraction,
+    energy_distance, periodic_orbits, section_energy_distance, whirling_fraction,
 };
 
 #[test]
@@ -123,4 +123,26 @@ fn energy_distance_separates_and_ignores_turns() {
     // For a pure shift δ of a wide distribution, E ≈ 2|δ| minus the spread's share: clearly > 0.
     assert!(section_energy_distance(&a, &shifted).unwrap() > 0.05);
     assert_eq!(section_energy_distance(&a[..1], &a), None);
+}
+
+/// Points whose dimension is known only at run time (a system's section) give what arrays do.
+#[test]
+fn energy_distance_takes_points_of_any_length() {
+    let a: Vec<[f64; 4]> = (0..200)
+        .map(|i| {
+            let s = i as f64;
+            [
+                (s * 0.37).sin(),
+                (s * 0.11).cos(),
+                (s * 0.53).sin(),
+                (s * 0.07).cos(),
+            ]
+        })
+        .collect();
+    let b: Vec<[f64; 4]> = a.iter().map(|p| [p[0], p[1] + 0.3, p[2], p[3]]).collect();
+    let as_vec = |points: &[[f64; 4]]| points.iter().map(|p| p.to_vec()).collect::<Vec<Vec<f64>>>();
+    let arrays = energy_distance(&a, &b).unwrap();
+    assert!(arrays > 0.01);
+    assert_eq!(energy_distance(&as_vec(&a), &as_vec(&b)), Some(arrays));
+    assert_eq!(energy_distance(&as_vec(&a[..1]), &as_vec(&b)), None);
 }

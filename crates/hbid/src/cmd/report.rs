@@ -1,5 +1,6 @@
 //! `hbid report`: embed → orbits → identify (both methods) → validate on the user's own record,
-//! as a Markdown report with figures.
+//! as a Markdown report with figures; a system of several coordinates and a saved model have
+//! their own report ([`super::report_system`]).
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -32,6 +33,12 @@ pub struct ReportArgs {
     /// Drive periods simulated for each model's Poincaré section and Lyapunov exponent.
     #[arg(long, default_value_t = 2000)]
     pub validation_periods: usize,
+    /// A saved model or system (`hbid identify --save-model`, JSON or binary) to report against
+    /// the record instead of identifying one: its equations' coefficients and fit, its free run
+    /// against the record coordinate by coordinate (`hbid compare`'s) and its valid prediction
+    /// time. A system's columns are its own names unless --coords names them.
+    #[arg(long, value_name = "PATH", conflicts_with_all = ["terms", "method", "basis", "select", "refine"])]
+    pub model: Option<PathBuf>,
 }
 
 /// The methods of the report, in its order.
@@ -99,9 +106,9 @@ fn naming_options(error: PipelineError) -> anyhow::Error {
 }
 
 /// The console, and the notices kept for the report's text.
-struct Kept {
-    console: Console,
-    notices: Vec<Notice>,
+pub(super) struct Kept {
+    pub(super) console: Console,
+    pub(super) notices: Vec<Notice>,
 }
 
 impl Observer for Kept {
@@ -125,6 +132,10 @@ pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
             "--validation-periods {} must be at least 10",
             args.validation_periods
         );
+    }
+    // A system of several coordinates, or a saved model: its own report.
+    if args.model.is_some() || args.identify.input.coords.as_ref().is_some_and(|c| c.len() > 1) {
+        return super::report_system::run(args, quiet);
     }
     let request = args.identify.request()?;
     if let Some(col) = &args.identify.input.drive_col {
