@@ -134,7 +134,7 @@ fn true_terms(truth: &DoublePendulum) -> String {
         .iter()
         .zip(NAMES)
         .map(|(e, name)| {
-            let terms: Vec<&str> = e.terms.iter().map(|(term, _)| *term).collect();
+            let terms: Vec<&str> = e.terms.iter().map(|(term, _)| term.as_ref()).collect();
             format!("{name}: {}", terms.join(", "))
         })
         .collect::<Vec<_>>()
