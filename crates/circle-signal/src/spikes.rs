@@ -788,6 +788,9 @@ struct Search<'a, G> {
     stretch: Stretch,
     /// Scratch for the local scale: the window's levels.
     window: Vec<f64>,
+    /// The peaks (sample and width) whose outlier the sweep has rejected since the record last
+    /// changed: found again from a later sample, the same peak is rejected again.
+    rejected: Vec<(usize, usize)>,
     _geometry: std::marker::PhantomData<G>,
 }
 
@@ -852,6 +855,7 @@ impl<'a, G: Geometry> Search<'a, G> {
             spikes: Vec::new(),
             stretch: Stretch::new(n, params.max_run),
             window: Vec::new(),
+            rejected: Vec::new(),
             _geometry: std::marker::PhantomData,
         };
         search.search();
@@ -1047,6 +1051,7 @@ impl<'a, G: Geometry> Search<'a, G> {
         self.x[i] = replacement;
         self.stretch.patch::<G>(self.x, i, i);
         self.flagged[i / 64] |= 1 << (i % 64);
+        self.rejected.clear();
         self.bounds.insert(i, bound);
         self.spikes.push(Spike {
             index: i,
@@ -1304,12 +1309,20 @@ impl<'a, G: Geometry> Search<'a, G> {
         to
     }
 
+    /// Notes that the outlier of the peak at `c` with width `t` was rejected at sample `i`
+    /// (the peaks before `i` are left out: the sweep has passed them).
+    fn reject(&mut self, i: usize, c: usize, t: usize) {
+        self.rejected.retain(|&(j, _)| j >= i);
+        self.rejected.push((c, t));
+    }
+
     /// One sweep of samples `from .. to`.
     fn sweep(&mut self, from: usize, to: usize) {
         let n = self.x.len();
         // What the sweep asks of the stretch ends short of its window's reach past `to`.
         self.stretch
             .set_horizon(to + PEAK_SEARCH + 2 * LOCAL_HALF_WINDOW + 8 * MAX_RUN);
+        self.rejected.clear();
         let mut i = from;
         while i < to {
             i = self.next_exceeding(i, to);
@@ -1363,10 +1376,18 @@ impl<'a, G: Geometry> Search<'a, G> {
                 i += 1;
                 continue;
             }
+            // A peak rejected since the record last changed is rejected again: what follows
+            // depends on the peak and the record alone (a later sample finds the same peak
+            // while it is within reach, up to seven times).
+            if self.rejected.contains(&(c, t)) {
+                i += 1;
+                continue;
+            }
             // The thresholds there: the local ones from the residuals nearest to the peak's.
             let local = self.local_thresholds(c, t);
             let own = |s: &Self, j: usize, m: usize| s.block_threshold(j).max(local[m - 1]);
             if self.statistics(c)[t - 1] <= own(self, c, t) {
+                self.reject(i, c, t);
                 i += 1;
                 continue;
             }
@@ -1387,6 +1408,7 @@ impl<'a, G: Geometry> Search<'a, G> {
                 (span, runs) = again;
             }
             let Some(chosen) = chosen else {
+                self.reject(i, c, t);
                 i += 1;
                 continue;
             };
@@ -1395,6 +1417,7 @@ impl<'a, G: Geometry> Search<'a, G> {
             // (a burst of fast motion in a noise-free record) only moves to the neighbours.
             let before = self.energy(window);
             if self.energy_after_repair(chosen, window) > CLEARED * before {
+                self.reject(i, c, t);
                 i += 1;
                 continue;
             }
@@ -1844,6 +1867,7 @@ mod tests {
             spikes: Vec::new(),
             stretch: Stretch::new(n, max_run),
             window: Vec::new(),
+            rejected: Vec::new(),
             _geometry: std::marker::PhantomData,
         }
     }
