@@ -791,6 +791,11 @@ struct Search<'a, G> {
     /// The peaks (sample and width) whose outlier the sweep has rejected since the record last
     /// changed: found again from a later sample, the same peak is rejected again.
     rejected: Vec<(usize, usize)>,
+    /// The residuals of samples `held_from ..` of the record as it stands (none after a
+    /// repair): the choice of an outlier reads each residual around it many times, with a
+    /// candidate's samples replaced and without.
+    held: Vec<f64>,
+    held_from: usize,
     _geometry: std::marker::PhantomData<G>,
 }
 
@@ -856,6 +861,8 @@ impl<'a, G: Geometry> Search<'a, G> {
             stretch: Stretch::new(n, params.max_run),
             window: Vec::new(),
             rejected: Vec::new(),
+            held: Vec::new(),
+            held_from: 0,
             _geometry: std::marker::PhantomData,
         };
         search.search();
@@ -873,8 +880,28 @@ impl<'a, G: Geometry> Search<'a, G> {
     /// `|r_i|` over the noise gain of its prediction, comparable between neighbours.
     #[inline]
     fn weighted(&self, i: usize) -> f64 {
-        let (r, _) = predict::<G>(self.x, i);
-        r.abs() / gain(self.x.len(), i)
+        self.residual(i).abs() / gain(self.x.len(), i)
+    }
+
+    /// The residual of sample `i` (as [`predict`] gives it), from those held when it is.
+    #[inline]
+    fn residual(&self, i: usize) -> f64 {
+        match self.held.get(i.wrapping_sub(self.held_from)) {
+            Some(&r) => r,
+            None => predict::<G>(self.x, i).0,
+        }
+    }
+
+    /// Holds the residuals of samples `from ..= to` (clamped to the record) of the record as it
+    /// stands, until the next repair or the next call.
+    fn hold_residuals(&mut self, from: usize, to: usize) {
+        let to = to.min(self.x.len() - 1);
+        self.held.clear();
+        self.held_from = from;
+        if from <= to {
+            let x = &*self.x;
+            self.held.extend((from..=to).map(|j| predict::<G>(x, j).0));
+        }
     }
 
     /// The statistics of sample `i` by width `m` (index `m − 1`): its weighted residual
@@ -1052,6 +1079,7 @@ impl<'a, G: Geometry> Search<'a, G> {
         self.stretch.patch::<G>(self.x, i, i);
         self.flagged[i / 64] |= 1 << (i % 64);
         self.rejected.clear();
+        self.held.clear();
         self.bounds.insert(i, bound);
         self.spikes.push(Spike {
             index: i,
@@ -1090,7 +1118,7 @@ impl<'a, G: Geometry> Search<'a, G> {
         // reach and two more on each side, from which any departure of the run's samples
         // cancels (the fourth differences of a local bump sum to zero).
         let (lo, hi) = (a.saturating_sub(4).max(2), (b + 4).min(n - 3));
-        let smooth = ((lo..=hi).map(|j| predict::<G>(self.x, j).0).sum::<f64>() / (hi + 1 - lo) as f64).abs();
+        let smooth = ((lo..=hi).map(|j| self.residual(j)).sum::<f64>() / (hi + 1 - lo) as f64).abs();
         let mut least = f64::INFINITY;
         for (p, &(r, _)) in res.iter().enumerate().take(c.len) {
             let w = run_weights(c.len, p);
@@ -1138,10 +1166,21 @@ impl<'a, G: Geometry> Search<'a, G> {
     }
 
     /// The same with the candidate's samples replaced by their predictions (the record is left
-    /// as it was).
+    /// as it was). The residuals the candidate's samples do not enter are the record's (those
+    /// held, when they are).
     fn energy_after_repair(&mut self, c: Candidate, window: (usize, usize)) -> f64 {
         let old = self.apply(c);
-        let energy = self.energy(window);
+        let n = self.x.len();
+        let energy = (window.0..=window.1)
+            .map(|m| {
+                let r = if reaches(n, m, c) {
+                    predict::<G>(self.x, m).0
+                } else {
+                    self.residual(m)
+                };
+                (r.abs() / gain(n, m)).powi(2)
+            })
+            .sum();
         self.restore(c, old);
         energy
     }
@@ -1179,6 +1218,12 @@ impl<'a, G: Geometry> Search<'a, G> {
     ) -> Option<Candidate> {
         let n = self.x.len();
         let window = footprint(n, span);
+        // The residuals every candidate's energy and test read: the window's, those a run's
+        // smooth motion is taken from, and the wider window of a run against a single sample.
+        self.hold_residuals(
+            window.0.min(runs.0).saturating_sub(2 + 2 * MAX_RUN),
+            window.1.max(runs.1) + 2 + 2 * MAX_RUN,
+        );
         // The single samples, and whether each exceeds its threshold.
         let mut single: Option<(Candidate, f64, f64)> = None;
         let mut any_single: Option<(Candidate, f64)> = None;
@@ -1487,6 +1532,21 @@ fn footprint(n: usize, span: (usize, usize)) -> (usize, usize) {
         if span.0 <= 4 { 0 } else { span.0 - 2 },
         if span.1 + 5 >= n { n - 1 } else { span.1 + 2 },
     )
+}
+
+/// Whether the residual of sample `m` (as [`predict`] gives it) reads a sample of candidate `c`:
+/// sample `m` and its four neighbours inside the record, samples 0 to 4 for samples 0 and 1 and
+/// the last five for the last two.
+#[inline]
+fn reaches(n: usize, m: usize, c: Candidate) -> bool {
+    let (lo, hi) = if m >= 2 && m + 2 < n {
+        (m - 2, m + 2)
+    } else if m < 2 {
+        (0, 4)
+    } else {
+        (n - 5, n - 1)
+    };
+    lo <= c.end() && c.start <= hi
 }
 
 /// Weights of the cubic through the samples at `−2, −1, len, len + 1` (relative to a run's
@@ -1868,6 +1928,8 @@ mod tests {
             stretch: Stretch::new(n, max_run),
             window: Vec::new(),
             rejected: Vec::new(),
+            held: Vec::new(),
+            held_from: 0,
             _geometry: std::marker::PhantomData,
         }
     }
