@@ -738,26 +738,35 @@ fn stencil(n: usize, i: usize) -> [(usize, f64); 4] {
     }
 }
 
-/// The `rank`-th largest of `v` (by [`f64::total_cmp`]), `rank` from 1 to the length of `v`
-/// and at most [`MAX_LOCAL_RANK`]: one pass holding the largest `rank` in order, cheaper than a
-/// selection for the few a local scale ranks.
-fn largest(v: &[f64], rank: usize) -> f64 {
+/// The `rank` largest of `values` (by [`f64::total_cmp`]) in decreasing order, `rank` from 1
+/// to the number of values and at most [`MAX_LOCAL_RANK`]: one pass holding the largest `rank`
+/// in order, cheaper than a selection for the few a local scale ranks.
+fn largest(mut values: impl Iterator<Item = f64>, rank: usize) -> [f64; MAX_LOCAL_RANK] {
     let mut top = [f64::NEG_INFINITY; MAX_LOCAL_RANK];
-    let top = &mut top[..rank];
-    top.copy_from_slice(&v[..rank]);
-    top.sort_unstable_by(|a, b| b.total_cmp(a));
-    for &value in &v[rank..] {
-        if value.total_cmp(&top[rank - 1]).is_le() {
-            continue;
-        }
-        let mut at = rank - 1;
-        while at > 0 && value.total_cmp(&top[at - 1]).is_gt() {
-            top[at] = top[at - 1];
-            at -= 1;
-        }
-        top[at] = value;
+    for (slot, value) in top[..rank].iter_mut().zip(values.by_ref()) {
+        *slot = value;
     }
-    top[rank - 1]
+    top[..rank].sort_unstable_by(|a, b| b.total_cmp(a));
+    for value in values {
+        push_largest(&mut top[..rank], value);
+    }
+    top
+}
+
+/// Puts `value` among the largest `top` (decreasing by [`f64::total_cmp`]) if it is larger than
+/// the last, which then leaves.
+#[inline]
+fn push_largest(top: &mut [f64], value: f64) {
+    let rank = top.len();
+    if value.total_cmp(&top[rank - 1]).is_le() {
+        return;
+    }
+    let mut at = rank - 1;
+    while at > 0 && value.total_cmp(&top[at - 1]).is_gt() {
+        top[at] = top[at - 1];
+        at -= 1;
+    }
+    top[at] = value;
 }
 
 /// The largest rank a local scale takes: the 6th largest of 96 levels.
@@ -786,8 +795,11 @@ struct Search<'a, G> {
     spikes: Vec<Spike>,
     /// The statistics and the local scale's levels of the stretch being swept.
     stretch: Stretch,
-    /// Scratch for the local scale: the window's levels.
-    window: Vec<f64>,
+    /// Per width of an outlier's residuals (up to [`RANKED_WIDTHS`]) and width of a statistic:
+    /// the window last ranked for its local scale and its largest levels, which the next window
+    /// of the same widths, the same one moved on by a few positions, is ranked from (none after
+    /// a repair).
+    ranked: [[Option<Ranked>; MAX_RUN]; RANKED_WIDTHS],
     /// The peaks (sample and width) whose outlier the sweep has rejected since the record last
     /// changed: found again from a later sample, the same peak is rejected again.
     rejected: Vec<(usize, usize)>,
@@ -807,6 +819,22 @@ struct LocalWindow {
     right: (usize, usize),
     steps: usize,
 }
+
+/// The largest levels of a local scale's window (the first `window.steps` of `top`, decreasing
+/// by [`f64::total_cmp`]).
+#[derive(Debug, Clone, Copy)]
+struct Ranked {
+    window: LocalWindow,
+    top: [f64; MAX_LOCAL_RANK],
+}
+
+/// The widths of an outlier's residuals whose local windows are ranked from the last one: the
+/// sweep's search for a peak ([`PEAK_SEARCH`] + the longest run) and each peak's own width.
+const RANKED_WIDTHS: usize = PEAK_SEARCH + MAX_RUN + 1;
+
+/// The farthest a window moves on and is still ranked from the last one, in positions: beyond
+/// it, ranking the window afresh costs about as much.
+const SLIDE: usize = 8;
 
 /// A repair considered: one sample, or a run of `len` samples from `start` replaced together by
 /// the cubic through the two samples on each side.
@@ -859,7 +887,7 @@ impl<'a, G: Geometry> Search<'a, G> {
             bounds: BTreeMap::new(),
             spikes: Vec::new(),
             stretch: Stretch::new(n, params.max_run),
-            window: Vec::new(),
+            ranked: [[None; MAX_RUN]; RANKED_WIDTHS],
             rejected: Vec::new(),
             held: Vec::new(),
             held_from: 0,
@@ -998,15 +1026,68 @@ impl<'a, G: Geometry> Search<'a, G> {
         self.k * q * LOCAL_KAPPA[steps - 3] / 6.0
     }
 
-    /// The local threshold of the statistic of width `m` over its window `w`: `k` times its
-    /// local scale, the `steps`-th largest level (the (count / 16)-th largest).
-    fn local_threshold_in(&mut self, w: LocalWindow, m: usize) -> f64 {
-        self.window.clear();
-        for (from, to) in [w.left, w.right] {
-            self.window.extend((from..to).map(|p| self.stretch.level(p, m)));
-        }
-        let q = largest(&self.window, w.steps);
+    /// The local threshold of the statistic of width `m` over its window `w` (of an outlier of
+    /// width `width`): `k` times its local scale, the `steps`-th largest level (the
+    /// (count / 16)-th largest).
+    fn local_threshold_in(&mut self, w: LocalWindow, width: usize, m: usize) -> f64 {
+        let q = match self.slide(w, width, m) {
+            Some(q) => q,
+            None => self.rank(w, width, m),
+        };
         self.local_threshold(q, w.steps)
+    }
+
+    /// The `steps`-th largest level of width `m` in window `w`, ranked afresh (and kept for the
+    /// next window of an outlier of width `width`).
+    fn rank(&mut self, w: LocalWindow, width: usize, m: usize) -> f64 {
+        let stretch = &self.stretch;
+        let levels = [w.left, w.right]
+            .into_iter()
+            .flat_map(|(from, to)| from..to)
+            .map(|p| stretch.level(p, m));
+        let top = largest(levels, w.steps);
+        if let Some(slots) = self.ranked.get_mut(width) {
+            slots[m - 1] = Some(Ranked { window: w, top });
+        }
+        top[w.steps - 1]
+    }
+
+    /// The `steps`-th largest level of width `m` in window `w`, from the window last ranked for
+    /// an outlier of width `width` when `w` is that one moved on by at most [`SLIDE`] positions
+    /// and no level that leaves it is among its largest; `None` otherwise. The largest levels of
+    /// the last window are then all in `w`, and every other level of `w` they leave out is at most
+    /// as large, so the largest of `w` are the largest of those and of the levels that enter.
+    fn slide(&mut self, w: LocalWindow, width: usize, m: usize) -> Option<f64> {
+        let stretch = &self.stretch;
+        let slot = self.ranked.get_mut(width)?[m - 1].as_mut()?;
+        let o = slot.window;
+        let len = |(from, to): (usize, usize)| to - from;
+        if o.steps != w.steps || len(o.left) != len(w.left) || len(o.right) != len(w.right) {
+            return None;
+        }
+        let d = w.left.0.checked_sub(o.left.0)?;
+        // The levels that leave and enter are apart from those that stay (and from the gap
+        // between the two sides) and held by the stretch.
+        if w.right.0.checked_sub(o.right.0)? != d
+            || d > SLIDE
+            || d > len(o.left).min(len(o.right))
+            || o.left.1 + d > o.right.0
+            || !stretch.holds_levels(o.left.0, w.right.1 - 1)
+        {
+            return None;
+        }
+        let rank = w.steps;
+        let last = slot.top[rank - 1];
+        let mut leaving = (o.left.0..w.left.0).chain(o.right.0..w.right.0);
+        if leaving.any(|p| stretch.level(p, m).total_cmp(&last).is_ge()) {
+            return None;
+        }
+        let mut top = slot.top;
+        for p in (o.left.1..w.left.1).chain(o.right.1..w.right.1) {
+            push_largest(&mut top[..rank], stretch.level(p, m));
+        }
+        *slot = Ranked { window: w, top };
+        Some(top[rank - 1])
     }
 
     /// The local thresholds of the statistics of width 1 to the longest run (see
@@ -1018,7 +1099,7 @@ impl<'a, G: Geometry> Search<'a, G> {
         let windows = self.local_windows(c, width);
         for m in 1..=self.max_run {
             if let Some(w) = windows[m - 1] {
-                out[m - 1] = self.local_threshold_in(w, m);
+                out[m - 1] = self.local_threshold_in(w, width, m);
             }
         }
         out
@@ -1029,8 +1110,9 @@ impl<'a, G: Geometry> Search<'a, G> {
     /// them; `∞` for the others, whose statistics cannot stand out of their local thresholds, and
     /// `None` when none can.
     ///
-    /// A width's statistics cannot when `above` is at most a lower bound of its threshold, taken
-    /// without a selection: the `steps`-th largest of the maxima of the blocks of
+    /// A width's statistics cannot when `above` is at most its threshold, where that is found
+    /// cheaply from the last window's ([`slide`](Self::slide)), or at most a lower bound of it,
+    /// taken without a selection: the `steps`-th largest of the maxima of the blocks of
     /// [`LEVEL_BLOCK`] levels that lie in the window (those blocks hold that many distinct levels
     /// at least as large). This settles most of the samples of a smooth motion whose residual
     /// stands out of its block.
@@ -1053,6 +1135,14 @@ impl<'a, G: Geometry> Search<'a, G> {
                 any = true;
                 continue;
             };
+            if let Some(q) = self.slide(w, width, m) {
+                let threshold = self.local_threshold(q, w.steps);
+                if above[m - 1] > threshold {
+                    out[m - 1] = threshold;
+                    any = true;
+                }
+                continue;
+            }
             let blocks = |(from, to): (usize, usize)| (from.div_ceil(LEVEL_BLOCK), to / LEVEL_BLOCK);
             let settled = self
                 .stretch
@@ -1062,7 +1152,8 @@ impl<'a, G: Geometry> Search<'a, G> {
             if settled {
                 continue;
             }
-            out[m - 1] = self.local_threshold_in(w, m);
+            let q = self.rank(w, width, m);
+            out[m - 1] = self.local_threshold(q, w.steps);
             any = true;
         }
         any.then_some(out)
@@ -1080,6 +1171,7 @@ impl<'a, G: Geometry> Search<'a, G> {
         self.flagged[i / 64] |= 1 << (i % 64);
         self.rejected.clear();
         self.held.clear();
+        self.ranked = [[None; MAX_RUN]; RANKED_WIDTHS];
         self.bounds.insert(i, bound);
         self.spikes.push(Spike {
             index: i,
@@ -1926,7 +2018,7 @@ mod tests {
             bounds: BTreeMap::new(),
             spikes: Vec::new(),
             stretch: Stretch::new(n, max_run),
-            window: Vec::new(),
+            ranked: [[None; MAX_RUN]; RANKED_WIDTHS],
             rejected: Vec::new(),
             held: Vec::new(),
             held_from: 0,

@@ -121,6 +121,12 @@ impl Stretch {
         }
     }
 
+    /// Whether the levels of positions `a ..= b` are held.
+    pub(super) fn holds_levels(&self, a: usize, b: usize) -> bool {
+        let (lo, hi) = self.level_range();
+        self.levels_ready && lo <= a && b < hi
+    }
+
     /// The level of the statistic of width `m` at `p` (made available by
     /// [`ensure_levels`](Self::ensure_levels)).
     #[inline]
