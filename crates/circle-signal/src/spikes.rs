@@ -580,13 +580,19 @@ pub fn find_and_repair_spikes(
             needed: SpikeParams::MIN_SAMPLES,
         });
     }
+    Ok(search(x, domain, params, true))
+}
+
+/// The search of [`find_and_repair_spikes`] on a record it takes, with or without the
+/// `shortcuts` that spare it work (the same outliers either way; the tests compare them).
+fn search(x: &mut [f64], domain: Domain, params: &SpikeParams, shortcuts: bool) -> Spikes {
     match domain {
-        Domain::Circle => Search::<OnCircle>::run(x, params, TAU),
+        Domain::Circle => Search::<OnCircle>::run(x, params, TAU, shortcuts),
         Domain::Line => {
             let (lo, hi) = x.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
                 (lo.min(v), hi.max(v))
             });
-            Search::<OnLine>::run(x, params, hi - lo)
+            Search::<OnLine>::run(x, params, hi - lo, shortcuts)
         }
     }
 }
@@ -808,6 +814,9 @@ struct Search<'a, G> {
     /// candidate's samples replaced and without.
     held: Vec<f64>,
     held_from: usize,
+    /// Whether the search spares itself work by the rejected peaks, the held residuals and the
+    /// ranked windows (always but in the tests, which compare the outliers found without them).
+    shortcuts: bool,
     _geometry: std::marker::PhantomData<G>,
 }
 
@@ -851,7 +860,7 @@ impl Candidate {
 }
 
 impl<'a, G: Geometry> Search<'a, G> {
-    fn run(x: &'a mut [f64], params: &SpikeParams, span: f64) -> Result<Spikes, CircleError> {
+    fn run(x: &'a mut [f64], params: &SpikeParams, span: f64, shortcuts: bool) -> Spikes {
         let n = x.len();
         let floor = params.floor.unwrap_or(SpikeParams::DEFAULT_FLOOR_FRACTION * span);
         let block = params.block;
@@ -859,13 +868,13 @@ impl<'a, G: Geometry> Search<'a, G> {
         let scale = MAD_TO_SD * record_median;
         if floor.is_nan() || floor <= 0.0 {
             // A constant record on the line: nothing departs from anything.
-            return Ok(Spikes {
+            return Spikes {
                 spikes: Vec::new(),
                 len: n,
                 domain: G::DOMAIN,
                 scale,
                 floor,
-            });
+            };
         }
         // A block's median is used where it stands out of the record's by three of its own
         // standard deviations (relative `MEDIAN_SPREAD / √(3 block)` for Gaussian residuals).
@@ -891,18 +900,19 @@ impl<'a, G: Geometry> Search<'a, G> {
             rejected: Vec::new(),
             held: Vec::new(),
             held_from: 0,
+            shortcuts,
             _geometry: std::marker::PhantomData,
         };
         search.search();
         let mut spikes = search.spikes;
         spikes.sort_unstable_by_key(|s| s.index);
-        Ok(Spikes {
+        Spikes {
             spikes,
             len: n,
             domain: G::DOMAIN,
             scale,
             floor,
-        })
+        }
     }
 
     /// `|r_i|` over the noise gain of its prediction, comparable between neighbours.
@@ -926,7 +936,7 @@ impl<'a, G: Geometry> Search<'a, G> {
         let to = to.min(self.x.len() - 1);
         self.held.clear();
         self.held_from = from;
-        if from <= to {
+        if from <= to && self.shortcuts {
             let x = &*self.x;
             self.held.extend((from..=to).map(|j| predict::<G>(x, j).0));
         }
@@ -1058,6 +1068,9 @@ impl<'a, G: Geometry> Search<'a, G> {
     /// the last window are then all in `w`, and every other level of `w` they leave out is at most
     /// as large, so the largest of `w` are the largest of those and of the levels that enter.
     fn slide(&mut self, w: LocalWindow, width: usize, m: usize) -> Option<f64> {
+        if !self.shortcuts {
+            return None;
+        }
         let stretch = &self.stretch;
         let slot = self.ranked.get_mut(width)?[m - 1].as_mut()?;
         let o = slot.window;
@@ -1516,7 +1529,7 @@ impl<'a, G: Geometry> Search<'a, G> {
             // A peak rejected since the record last changed is rejected again: what follows
             // depends on the peak and the record alone (a later sample finds the same peak
             // while it is within reach, up to seven times).
-            if self.rejected.contains(&(c, t)) {
+            if self.shortcuts && self.rejected.contains(&(c, t)) {
                 i += 1;
                 continue;
             }
@@ -2022,6 +2035,7 @@ mod tests {
             rejected: Vec::new(),
             held: Vec::new(),
             held_from: 0,
+            shortcuts: true,
             _geometry: std::marker::PhantomData,
         }
     }
@@ -2035,6 +2049,15 @@ mod tests {
             for c in 0..n {
                 let want = reference_local_thresholds::<G>(search.x, max_run, search.k, c, width);
                 let got = search.local_thresholds(c, width);
+                // Ranked from the last window where that is cheap, afresh otherwise: the same.
+                search.shortcuts = false;
+                let afresh = search.local_thresholds(c, width);
+                search.shortcuts = true;
+                assert_eq!(
+                    got.map(f64::to_bits),
+                    afresh.map(f64::to_bits),
+                    "{what}: c {c} width {width}"
+                );
                 for m in 0..MAX_RUN {
                     assert!(
                         (got[m] - want[m]).abs() <= 1e-12 * want[m].abs(),
@@ -2061,6 +2084,102 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// The search without its shortcuts, and with them: the same outliers, sizes, replacements,
+    /// scale and repaired record, to the bit.
+    fn assert_shortcuts_change_nothing(x: &[f64], domain: Domain, params: &SpikeParams, what: &str) {
+        let (mut with, mut without) = (x.to_vec(), x.to_vec());
+        let fast = search(&mut with, domain, params, true);
+        let plain = search(&mut without, domain, params, false);
+        let bits = |s: &Spikes| -> Vec<(usize, u64, u64)> {
+            s.iter()
+                .map(|s| (s.index, s.size.to_bits(), s.replacement.to_bits()))
+                .collect()
+        };
+        assert_eq!(bits(&fast), bits(&plain), "{what}: the outliers");
+        assert_eq!(
+            fast.scale().to_bits(),
+            plain.scale().to_bits(),
+            "{what}: the scale"
+        );
+        assert!(
+            with.iter().zip(&without).all(|(a, b)| a.to_bits() == b.to_bits()),
+            "{what}: the repaired record"
+        );
+    }
+
+    #[test]
+    fn the_shortcuts_find_what_the_search_finds_without_them() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(17);
+        let n = 30_000;
+        let h = TAU / 64.0;
+        let q = TAU / 4096.0;
+        // Whirling angles at 64 samples per period whose motion turns sharply, as a whirling
+        // double pendulum's does: the search rejects the same peaks from many samples (the
+        // first), or flags thousands of its turns (the second).
+        let turns: Vec<f64> = (0..n)
+            .map(|i| {
+                let t = i as f64 * h;
+                t + 2.0 * (3.0 * t.sin()).tanh()
+            })
+            .collect();
+        let steep: Vec<f64> = (0..n)
+            .map(|i| {
+                let t = i as f64 * h;
+                wrap(0.3 * t + 1.5 * (8.0 * t.sin()).tanh() + 0.2 * (2.3 * t).sin())
+            })
+            .collect();
+        // With bit errors of 64 to 2048 counts and dropouts of one to three samples, wrapped, and
+        // through a 4096-count encoder.
+        let mut broken = turns.clone();
+        for j in (300..n).step_by(1531) {
+            broken[j] += f64::from(64 << (j % 6)) * q;
+        }
+        for (j, len) in [(1000, 2), (7000, 3), (15_000, 1), (21_000, 2)] {
+            broken[j..j + len].fill(0.0);
+        }
+        let counts: Vec<f64> = broken.iter().map(|v| wrap((v / q).round() * q)).collect();
+        let turns: Vec<f64> = turns.iter().map(|&v| wrap(v)).collect();
+        let broken: Vec<f64> = broken.iter().map(|&v| wrap(v)).collect();
+        // Noise whose level changes within tens of samples, with outliers and runs, on the line.
+        let mut noisy: Vec<f64> = (0..n)
+            .map(|i| {
+                let level = 1e-3 * (1.0 + 4.0 * ((i as f64 / 70.0).sin()).powi(2));
+                0.4 * (i as f64 * 0.05).sin() + level * (rng.random::<f64>() - 0.5)
+            })
+            .collect();
+        for j in (17..n).step_by(613) {
+            noisy[j] += 0.05;
+        }
+        for j in (400..n).step_by(2777) {
+            noisy[j..j + 2].fill(-0.3);
+        }
+        for params in [
+            SpikeParams::new(),
+            SpikeParams::new().with_max_run(1).unwrap(),
+            SpikeParams::new()
+                .with_max_run(MAX_RUN)
+                .and_then(|p| p.with_threshold(4.0))
+                .unwrap(),
+        ] {
+            let what = format!("{params:?}");
+            for (x, domain, name) in [
+                (&turns, Domain::Circle, "sharp turns"),
+                (
+                    &broken,
+                    Domain::Circle,
+                    "sharp turns with bit errors and dropouts",
+                ),
+                (&steep, Domain::Circle, "steep turns"),
+                (&noisy, Domain::Line, "noise"),
+            ] {
+                assert_shortcuts_change_nothing(x, domain, &params, &format!("{name}, {what}"));
+            }
+        }
+        let quantum = SpikeParams::new().with_quantum(q).unwrap();
+        assert_shortcuts_change_nothing(&counts, Domain::Circle, &quantum, "encoder");
     }
 
     #[test]
