@@ -812,7 +812,7 @@ struct Search<'a, G> {
     /// The residuals of samples `held_from ..` of the record as it stands (none after a
     /// repair): the choice of an outlier reads each residual around it many times, with a
     /// candidate's samples replaced and without.
-    held: Vec<f64>,
+    held: Vec<Held>,
     held_from: usize,
     /// Whether the search spares itself work by the rejected peaks, the held residuals and the
     /// ranked windows (always but in the tests, which compare the outliers found without them).
@@ -827,6 +827,14 @@ struct LocalWindow {
     left: (usize, usize),
     right: (usize, usize),
     steps: usize,
+}
+
+/// A residual held for the choice of an outlier, and its term of an energy (its square over the
+/// squared noise gain).
+#[derive(Debug, Clone, Copy)]
+struct Held {
+    residual: f64,
+    term: f64,
 }
 
 /// The largest levels of a local scale's window (the first `window.steps` of `top`, decreasing
@@ -925,8 +933,18 @@ impl<'a, G: Geometry> Search<'a, G> {
     #[inline]
     fn residual(&self, i: usize) -> f64 {
         match self.held.get(i.wrapping_sub(self.held_from)) {
-            Some(&r) => r,
+            Some(held) => held.residual,
             None => predict::<G>(self.x, i).0,
+        }
+    }
+
+    /// The squared weighted residual of sample `i`, its term of an [`energy`](Self::energy),
+    /// from those held when it is.
+    #[inline]
+    fn term(&self, i: usize) -> f64 {
+        match self.held.get(i.wrapping_sub(self.held_from)) {
+            Some(held) => held.term,
+            None => self.weighted(i).powi(2),
         }
     }
 
@@ -938,7 +956,14 @@ impl<'a, G: Geometry> Search<'a, G> {
         self.held_from = from;
         if from <= to && self.shortcuts {
             let x = &*self.x;
-            self.held.extend((from..=to).map(|j| predict::<G>(x, j).0));
+            let n = x.len();
+            self.held.extend((from..=to).map(|j| {
+                let residual = predict::<G>(x, j).0;
+                Held {
+                    residual,
+                    term: (residual.abs() / gain(n, j)).powi(2),
+                }
+            }));
         }
     }
 
@@ -1267,7 +1292,7 @@ impl<'a, G: Geometry> Search<'a, G> {
 
     /// The sum of the squared weighted residuals over `window` (inclusive).
     fn energy(&self, window: (usize, usize)) -> f64 {
-        (window.0..=window.1).map(|m| self.weighted(m).powi(2)).sum()
+        (window.0..=window.1).map(|m| self.term(m)).sum()
     }
 
     /// The same with the candidate's samples replaced by their predictions (the record is left
@@ -1278,12 +1303,11 @@ impl<'a, G: Geometry> Search<'a, G> {
         let n = self.x.len();
         let energy = (window.0..=window.1)
             .map(|m| {
-                let r = if reaches(n, m, c) {
-                    predict::<G>(self.x, m).0
+                if reaches(n, m, c) {
+                    (predict::<G>(self.x, m).0.abs() / gain(n, m)).powi(2)
                 } else {
-                    self.residual(m)
-                };
-                (r.abs() / gain(n, m)).powi(2)
+                    self.term(m)
+                }
             })
             .sum();
         self.restore(c, old);
