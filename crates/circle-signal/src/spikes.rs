@@ -745,10 +745,10 @@ fn stencil(n: usize, i: usize) -> [(usize, f64); 4] {
 }
 
 /// The `rank` largest of `values` (by [`f64::total_cmp`]) in decreasing order, `rank` from 1
-/// to the number of values and at most [`MAX_LOCAL_RANK`]: one pass holding the largest `rank`
-/// in order, cheaper than a selection for the few a local scale ranks.
-fn largest(mut values: impl Iterator<Item = f64>, rank: usize) -> [f64; MAX_LOCAL_RANK] {
-    let mut top = [f64::NEG_INFINITY; MAX_LOCAL_RANK];
+/// to the number of values and at most [`KEPT`]: one pass holding the largest `rank` in order,
+/// cheaper than a selection for the few a local scale ranks.
+fn largest(mut values: impl Iterator<Item = f64>, rank: usize) -> [f64; KEPT] {
+    let mut top = [f64::NEG_INFINITY; KEPT];
     for (slot, value) in top[..rank].iter_mut().zip(values.by_ref()) {
         *slot = value;
     }
@@ -837,13 +837,19 @@ struct Held {
     term: f64,
 }
 
-/// The largest levels of a local scale's window (the first `window.steps` of `top`, decreasing
-/// by [`f64::total_cmp`]).
+/// The largest levels of a local scale's window: the first `kept` of `top`, decreasing by
+/// [`f64::total_cmp`], at least `window.steps` of them; every other level of the window is at
+/// most as large as the last of them.
 #[derive(Debug, Clone, Copy)]
 struct Ranked {
     window: LocalWindow,
-    top: [f64; MAX_LOCAL_RANK],
+    top: [f64; KEPT],
+    kept: usize,
 }
+
+/// The levels a window ranked afresh keeps: twice the largest rank, so that as the window moves
+/// on, some of its largest can leave it before it must be ranked afresh.
+const KEPT: usize = 2 * MAX_LOCAL_RANK;
 
 /// The widths of an outlier's residuals whose local windows are ranked from the last one: the
 /// sweep's search for a peak ([`PEAK_SEARCH`] + the longest run) and each peak's own width.
@@ -851,7 +857,7 @@ const RANKED_WIDTHS: usize = PEAK_SEARCH + MAX_RUN + 1;
 
 /// The farthest a window moves on and is still ranked from the last one, in positions: beyond
 /// it, ranking the window afresh costs about as much.
-const SLIDE: usize = 8;
+const SLIDE: usize = 16;
 
 /// A repair considered: one sample, or a run of `len` samples from `start` replaced together by
 /// the cubic through the two samples on each side.
@@ -1076,22 +1082,22 @@ impl<'a, G: Geometry> Search<'a, G> {
     /// next window of an outlier of width `width`).
     fn rank(&mut self, w: LocalWindow, width: usize, m: usize) -> f64 {
         let stretch = &self.stretch;
-        let levels = [w.left, w.right]
-            .into_iter()
-            .flat_map(|(from, to)| from..to)
-            .map(|p| stretch.level(p, m));
-        let top = largest(levels, w.steps);
+        let (left, right) = (stretch.levels(w.left), stretch.levels(w.right));
+        let kept = KEPT.min(left.len() + right.len());
+        let top = largest(left.iter().chain(right).map(|l| l[m - 1]), kept);
         if let Some(slots) = self.ranked.get_mut(width) {
-            slots[m - 1] = Some(Ranked { window: w, top });
+            slots[m - 1] = Some(Ranked { window: w, top, kept });
         }
         top[w.steps - 1]
     }
 
-    /// The `steps`-th largest level of width `m` in window `w`, from the window last ranked for
-    /// an outlier of width `width` when `w` is that one moved on by at most [`SLIDE`] positions
-    /// and no level that leaves it is among its largest; `None` otherwise. The largest levels of
-    /// the last window are then all in `w`, and every other level of `w` they leave out is at most
-    /// as large, so the largest of `w` are the largest of those and of the levels that enter.
+    /// The `steps`-th largest level of width `m` in window `w`, from the largest levels kept of
+    /// the window last ranked for an outlier of width `width`, when `w` is that one moved on by
+    /// at most [`SLIDE`] positions and enough of them stay; `None` otherwise. A level that leaves
+    /// and is at least the last kept is one of those kept (every other is at most as large) and
+    /// leaves them; one that enters joins them if it is at least the last of them (when they are
+    /// fewer than [`KEPT`]) or larger than it (the last then leaving them); every level left out
+    /// is then still at most the last kept.
     fn slide(&mut self, w: LocalWindow, width: usize, m: usize) -> Option<f64> {
         if !self.shortcuts {
             return None;
@@ -1115,16 +1121,36 @@ impl<'a, G: Geometry> Search<'a, G> {
             return None;
         }
         let rank = w.steps;
-        let last = slot.top[rank - 1];
-        let mut leaving = (o.left.0..w.left.0).chain(o.right.0..w.right.0);
-        if leaving.any(|p| stretch.level(p, m).total_cmp(&last).is_ge()) {
-            return None;
+        let (mut top, mut kept) = (slot.top, slot.kept);
+        let leaving = [(o.left.0, w.left.0), (o.right.0, w.right.0)];
+        for level in leaving.into_iter().flat_map(|r| stretch.levels(r)) {
+            let v = level[m - 1];
+            if v.total_cmp(&top[kept - 1]).is_lt() {
+                continue;
+            }
+            let at = top[..kept].iter().position(|t| t.total_cmp(&v).is_eq())?;
+            top.copy_within(at + 1..kept, at);
+            kept -= 1;
+            if kept < rank {
+                return None;
+            }
         }
-        let mut top = slot.top;
-        for p in (o.left.1..w.left.1).chain(o.right.1..w.right.1) {
-            push_largest(&mut top[..rank], stretch.level(p, m));
+        let entering = [(o.left.1, w.left.1), (o.right.1, w.right.1)];
+        for level in entering.into_iter().flat_map(|r| stretch.levels(r)) {
+            let v = level[m - 1];
+            if kept == KEPT {
+                push_largest(&mut top, v);
+            } else if v.total_cmp(&top[kept - 1]).is_ge() {
+                let mut at = kept;
+                while at > 0 && v.total_cmp(&top[at - 1]).is_gt() {
+                    top[at] = top[at - 1];
+                    at -= 1;
+                }
+                top[at] = v;
+                kept += 1;
+            }
         }
-        *slot = Ranked { window: w, top };
+        *slot = Ranked { window: w, top, kept };
         Some(top[rank - 1])
     }
 
