@@ -809,11 +809,18 @@ struct Search<'a, G> {
     /// The peaks (sample and width) whose outlier the sweep has rejected since the record last
     /// changed: found again from a later sample, the same peak is rejected again.
     rejected: Vec<(usize, usize)>,
-    /// The residuals of samples `held_from ..` of the record as it stands (none after a
-    /// repair): the choice of an outlier reads each residual around it many times, with a
-    /// candidate's samples replaced and without.
-    held: Vec<Held>,
-    held_from: usize,
+    /// Per sample `i` (at `i % HELD`, with `i`): its residual in the record as it stands and
+    /// its term of an energy (none after a repair). The choices of outliers read each residual
+    /// around them many times, with a candidate's samples replaced and without.
+    held: Vec<(usize, Held)>,
+    /// Per sample `j` inside the record (at `j % HELD`, with `j`): the terms of an energy of
+    /// samples `j − 2 ..= j + 2` with sample `j` replaced by its prediction (none after a
+    /// repair): the choices of outliers around nearby peaks consider the same samples.
+    repaired: Vec<(usize, [f64; 5])>,
+    /// The terms of an energy over `window` in the record as it stands (when `window` is
+    /// `Some`; none after a repair): every candidate of a choice is weighed over one window.
+    terms: Vec<f64>,
+    window: Option<(usize, usize)>,
     /// Whether the search spares itself work by the rejected peaks, the held residuals and the
     /// ranked windows (always but in the tests, which compare the outliers found without them).
     shortcuts: bool,
@@ -831,11 +838,15 @@ struct LocalWindow {
 
 /// A residual held for the choice of an outlier, and its term of an energy (its square over the
 /// squared noise gain).
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, Default)]
 struct Held {
     residual: f64,
     term: f64,
 }
+
+/// Samples whose residuals, and whose repairs' terms, the search holds at once: more than a
+/// choice of an outlier reads.
+const HELD: usize = 128;
 
 /// The largest levels of a local scale's window: the first `kept` of `top`, decreasing by
 /// [`f64::total_cmp`], at least `window.steps` of them; every other level of the window is at
@@ -912,8 +923,10 @@ impl<'a, G: Geometry> Search<'a, G> {
             stretch: Stretch::new(n, params.max_run),
             ranked: [[None; MAX_RUN]; RANKED_WIDTHS],
             rejected: Vec::new(),
-            held: Vec::new(),
-            held_from: 0,
+            held: vec![(usize::MAX, Held::default()); HELD],
+            repaired: vec![(usize::MAX, [0.0; 5]); HELD],
+            terms: Vec::new(),
+            window: None,
             shortcuts,
             _geometry: std::marker::PhantomData,
         };
@@ -938,9 +951,9 @@ impl<'a, G: Geometry> Search<'a, G> {
     /// The residual of sample `i` (as [`predict`] gives it), from those held when it is.
     #[inline]
     fn residual(&self, i: usize) -> f64 {
-        match self.held.get(i.wrapping_sub(self.held_from)) {
-            Some(held) => held.residual,
-            None => predict::<G>(self.x, i).0,
+        match self.held[i % HELD] {
+            (at, held) if at == i => held.residual,
+            _ => predict::<G>(self.x, i).0,
         }
     }
 
@@ -948,29 +961,48 @@ impl<'a, G: Geometry> Search<'a, G> {
     /// from those held when it is.
     #[inline]
     fn term(&self, i: usize) -> f64 {
-        match self.held.get(i.wrapping_sub(self.held_from)) {
-            Some(held) => held.term,
-            None => self.weighted(i).powi(2),
+        match self.held[i % HELD] {
+            (at, held) if at == i => held.term,
+            _ => self.weighted(i).powi(2),
         }
     }
 
     /// Holds the residuals of samples `from ..= to` (clamped to the record) of the record as it
-    /// stands, until the next repair or the next call.
+    /// stands (those not held already), until the next repair.
     fn hold_residuals(&mut self, from: usize, to: usize) {
-        let to = to.min(self.x.len() - 1);
-        self.held.clear();
-        self.held_from = from;
-        if from <= to && self.shortcuts {
-            let x = &*self.x;
-            let n = x.len();
-            self.held.extend((from..=to).map(|j| {
-                let residual = predict::<G>(x, j).0;
-                Held {
-                    residual,
-                    term: (residual.abs() / gain(n, j)).powi(2),
-                }
-            }));
+        if !self.shortcuts {
+            return;
         }
+        let x = &*self.x;
+        let n = x.len();
+        for j in from..=to.min(n - 1) {
+            let slot = &mut self.held[j % HELD];
+            if slot.0 != j {
+                let residual = predict::<G>(x, j).0;
+                let term = (residual.abs() / gain(n, j)).powi(2);
+                *slot = (j, Held { residual, term });
+            }
+        }
+    }
+
+    /// The terms of an energy of samples `j − 2 ..= j + 2` with sample `j` (inside the record,
+    /// 5 to `n − 6`) replaced by its prediction, held until the next repair.
+    fn repaired_terms(&mut self, j: usize) -> [f64; 5] {
+        if let (at, terms) = self.repaired[j % HELD]
+            && at == j
+        {
+            return terms;
+        }
+        let c = Candidate { start: j, len: 1 };
+        let old = self.apply(c);
+        let n = self.x.len();
+        let terms = std::array::from_fn(|k| {
+            let m = j + k - 2;
+            (predict::<G>(self.x, m).0.abs() / gain(n, m)).powi(2)
+        });
+        self.restore(c, old);
+        self.repaired[j % HELD] = (j, terms);
+        terms
     }
 
     /// The statistics of sample `i` by width `m` (index `m − 1`): its weighted residual
@@ -1234,7 +1266,9 @@ impl<'a, G: Geometry> Search<'a, G> {
         self.stretch.patch::<G>(self.x, i, i);
         self.flagged[i / 64] |= 1 << (i % 64);
         self.rejected.clear();
-        self.held.clear();
+        self.held.fill((usize::MAX, Held::default()));
+        self.repaired.fill((usize::MAX, [0.0; 5]));
+        self.window = None;
         self.ranked = [[None; MAX_RUN]; RANKED_WIDTHS];
         self.bounds.insert(i, bound);
         self.spikes.push(Spike {
@@ -1325,8 +1359,32 @@ impl<'a, G: Geometry> Search<'a, G> {
     /// as it was). The residuals the candidate's samples do not enter are the record's (those
     /// held, when they are).
     fn energy_after_repair(&mut self, c: Candidate, window: (usize, usize)) -> f64 {
-        let old = self.apply(c);
         let n = self.x.len();
+        if self.shortcuts && c.start >= 5 && c.end() + 6 <= n {
+            // The residuals it reaches are those of c.start − 2 ..= c.end + 2, all inside the
+            // record: the window's terms with those replaced, in order.
+            if self.window != Some(window) {
+                self.terms.clear();
+                for m in window.0..=window.1 {
+                    let term = self.term(m);
+                    self.terms.push(term);
+                }
+                self.window = Some(window);
+            }
+            let first = c.start - 2;
+            if c.len == 1 {
+                let repaired = self.repaired_terms(c.start);
+                return sum_replaced(&self.terms, window.0, first, &repaired);
+            }
+            let old = self.apply(c);
+            let mut repaired = [0.0; MAX_RUN + 4];
+            for (slot, m) in repaired.iter_mut().zip(first..=c.end() + 2) {
+                *slot = (predict::<G>(self.x, m).0.abs() / gain(n, m)).powi(2);
+            }
+            self.restore(c, old);
+            return sum_replaced(&self.terms, window.0, first, &repaired[..c.len + 4]);
+        }
+        let old = self.apply(c);
         let energy = (window.0..=window.1)
             .map(|m| {
                 if reaches(n, m, c) {
@@ -1687,6 +1745,19 @@ fn footprint(n: usize, span: (usize, usize)) -> (usize, usize) {
         if span.0 <= 4 { 0 } else { span.0 - 2 },
         if span.1 + 5 >= n { n - 1 } else { span.1 + 2 },
     )
+}
+
+/// The sum, in order, of `terms` (those of samples `from ..`) with the terms of samples `at ..`
+/// replaced by `replaced` where they overlap.
+fn sum_replaced(terms: &[f64], from: usize, at: usize, replaced: &[f64]) -> f64 {
+    let a = at.clamp(from, from + terms.len()) - from;
+    let replaced = &replaced[(from.saturating_sub(at)).min(replaced.len())..];
+    let b = (a + replaced.len()).min(terms.len());
+    terms[..a]
+        .iter()
+        .chain(&replaced[..b - a])
+        .chain(&terms[b..])
+        .sum()
 }
 
 /// Whether the residual of sample `m` (as [`predict`] gives it) reads a sample of candidate `c`:
@@ -2083,8 +2154,10 @@ mod tests {
             stretch: Stretch::new(n, max_run),
             ranked: [[None; MAX_RUN]; RANKED_WIDTHS],
             rejected: Vec::new(),
-            held: Vec::new(),
-            held_from: 0,
+            held: vec![(usize::MAX, Held::default()); HELD],
+            repaired: vec![(usize::MAX, [0.0; 5]); HELD],
+            terms: Vec::new(),
+            window: None,
             shortcuts: true,
             _geometry: std::marker::PhantomData,
         }
@@ -2157,6 +2230,27 @@ mod tests {
             with.iter().zip(&without).all(|(a, b)| a.to_bits() == b.to_bits()),
             "{what}: the repaired record"
         );
+    }
+
+    #[test]
+    fn a_sum_with_terms_replaced_is_the_sum_in_order() {
+        let terms: Vec<f64> = (0..9).map(|k| 0.1 * f64::from(k) + 1e-17).collect();
+        let replaced = [3.3, 1e-9, 7.0, 0.25, 1e5];
+        for at in 0..20 {
+            for len in 0..=replaced.len() {
+                let naive: f64 = (5..14)
+                    .map(|m| {
+                        if (at..at + len).contains(&m) {
+                            replaced[m - at]
+                        } else {
+                            terms[m - 5]
+                        }
+                    })
+                    .sum();
+                let fast = sum_replaced(&terms, 5, at, &replaced[..len]);
+                assert_eq!(fast.to_bits(), naive.to_bits(), "at {at}, {len} replaced");
+            }
+        }
     }
 
     #[test]
