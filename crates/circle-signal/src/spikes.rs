@@ -12,6 +12,7 @@
 
 use std::collections::BTreeMap;
 use std::f64::consts::{PI, TAU};
+use std::sync::LazyLock;
 
 use serde::{Deserialize, Serialize};
 
@@ -813,10 +814,11 @@ struct Search<'a, G> {
     /// its term of an energy (none after a repair). The choices of outliers read each residual
     /// around them many times, with a candidate's samples replaced and without.
     held: Vec<(usize, Held)>,
-    /// Per sample `j` inside the record (at `j % HELD`, with `j`): the terms of an energy of
-    /// samples `j − 2 ..= j + 2` with sample `j` replaced by its prediction (none after a
-    /// repair): the choices of outliers around nearby peaks consider the same samples.
-    repaired: Vec<(usize, [f64; 5])>,
+    /// Per candidate inside the record (at `start % HELD` and its length, with `start`): the
+    /// terms of an energy of samples `start − 2 ..= end + 2` with its samples replaced by their
+    /// predictions (none after a repair): the choices of outliers around nearby peaks consider
+    /// the same candidates.
+    repaired: Vec<(usize, [f64; MAX_RUN + 4])>,
     /// The terms of an energy over `window` in the record as it stands (when `window` is
     /// `Some`; none after a repair): every candidate of a choice is weighed over one window.
     terms: Vec<f64>,
@@ -924,7 +926,7 @@ impl<'a, G: Geometry> Search<'a, G> {
             ranked: [[None; MAX_RUN]; RANKED_WIDTHS],
             rejected: Vec::new(),
             held: vec![(usize::MAX, Held::default()); HELD],
-            repaired: vec![(usize::MAX, [0.0; 5]); HELD],
+            repaired: vec![(usize::MAX, [0.0; MAX_RUN + 4]); HELD * MAX_RUN],
             terms: Vec::new(),
             window: None,
             shortcuts,
@@ -985,23 +987,24 @@ impl<'a, G: Geometry> Search<'a, G> {
         }
     }
 
-    /// The terms of an energy of samples `j − 2 ..= j + 2` with sample `j` (inside the record,
-    /// 5 to `n − 6`) replaced by its prediction, held until the next repair.
-    fn repaired_terms(&mut self, j: usize) -> [f64; 5] {
-        if let (at, terms) = self.repaired[j % HELD]
-            && at == j
+    /// The terms of an energy of samples `c.start − 2 ..= c.end + 2` with the candidate's samples
+    /// (inside the record, 5 to `n − 6`) replaced by their predictions, held until the next
+    /// repair.
+    fn repaired_terms(&mut self, c: Candidate) -> [f64; MAX_RUN + 4] {
+        let slot = (c.start % HELD) * MAX_RUN + c.len - 1;
+        if let (at, terms) = self.repaired[slot]
+            && at == c.start
         {
             return terms;
         }
-        let c = Candidate { start: j, len: 1 };
         let old = self.apply(c);
         let n = self.x.len();
-        let terms = std::array::from_fn(|k| {
-            let m = j + k - 2;
-            (predict::<G>(self.x, m).0.abs() / gain(n, m)).powi(2)
-        });
+        let mut terms = [0.0; MAX_RUN + 4];
+        for (term, m) in terms.iter_mut().zip(c.start - 2..=c.end() + 2) {
+            *term = (predict::<G>(self.x, m).0.abs() / gain(n, m)).powi(2);
+        }
         self.restore(c, old);
-        self.repaired[j % HELD] = (j, terms);
+        self.repaired[slot] = (c.start, terms);
         terms
     }
 
@@ -1267,7 +1270,7 @@ impl<'a, G: Geometry> Search<'a, G> {
         self.flagged[i / 64] |= 1 << (i % 64);
         self.rejected.clear();
         self.held.fill((usize::MAX, Held::default()));
-        self.repaired.fill((usize::MAX, [0.0; 5]));
+        self.repaired.fill((usize::MAX, [0.0; MAX_RUN + 4]));
         self.window = None;
         self.ranked = [[None; MAX_RUN]; RANKED_WIDTHS];
         self.bounds.insert(i, bound);
@@ -1290,7 +1293,7 @@ impl<'a, G: Geometry> Search<'a, G> {
         let u_after = d(x[b + 1] - base);
         let u_after2 = u_after + d(x[b + 2] - x[b + 1]);
         for (p, slot) in out.iter_mut().enumerate().take(c.len) {
-            let w = run_weights(c.len, p);
+            let w = run_cubic(c.len, p).weights;
             let pred = w[0] * u_before + w[2] * u_after + w[3] * u_after2;
             *slot = (d(x[a + p] - base - pred), G::point(base + pred));
         }
@@ -1311,8 +1314,8 @@ impl<'a, G: Geometry> Search<'a, G> {
         let smooth = ((lo..=hi).map(|j| self.residual(j)).sum::<f64>() / (hi + 1 - lo) as f64).abs();
         let mut least = f64::INFINITY;
         for (p, &(r, _)) in res.iter().enumerate().take(c.len) {
-            let w = run_weights(c.len, p);
-            let g = run_gain(c.len, p);
+            let cubic = run_cubic(c.len, p);
+            let (w, g) = (cubic.weights, cubic.gain);
             let stencil = [
                 (nodes[0], w[0].abs()),
                 (nodes[1], w[1].abs()),
@@ -1320,7 +1323,7 @@ impl<'a, G: Geometry> Search<'a, G> {
                 (nodes[3], w[3].abs()),
             ];
             // The run's prediction misses a smooth motion by `run_smooth_gain` times its residual.
-            let v = (r.abs() - run_smooth_gain(c.len, p) * smooth).max(0.0) / g;
+            let v = (r.abs() - cubic.smooth_gain * smooth).max(0.0) / g;
             if !(v > own && v > own + self.raise(&stencil, g)) {
                 return None;
             }
@@ -1371,18 +1374,8 @@ impl<'a, G: Geometry> Search<'a, G> {
                 }
                 self.window = Some(window);
             }
-            let first = c.start - 2;
-            if c.len == 1 {
-                let repaired = self.repaired_terms(c.start);
-                return sum_replaced(&self.terms, window.0, first, &repaired);
-            }
-            let old = self.apply(c);
-            let mut repaired = [0.0; MAX_RUN + 4];
-            for (slot, m) in repaired.iter_mut().zip(first..=c.end() + 2) {
-                *slot = (predict::<G>(self.x, m).0.abs() / gain(n, m)).powi(2);
-            }
-            self.restore(c, old);
-            return sum_replaced(&self.terms, window.0, first, &repaired[..c.len + 4]);
+            let repaired = self.repaired_terms(c);
+            return sum_replaced(&self.terms, window.0, c.start - 2, &repaired[..c.len + 4]);
         }
         let old = self.apply(c);
         let energy = (window.0..=window.1)
@@ -1687,7 +1680,7 @@ impl<'a, G: Geometry> Search<'a, G> {
                 let res = self.run_residuals(chosen);
                 for (p, &(size, replacement)) in res.iter().enumerate().take(chosen.len) {
                     let j = chosen.start + p;
-                    let bound = run_gain(chosen.len, p) * own(self, j, chosen.len);
+                    let bound = run_cubic(chosen.len, p).gain * own(self, j, chosen.len);
                     self.flag(j, size, replacement, bound);
                 }
             }
@@ -1773,6 +1766,39 @@ fn reaches(n: usize, m: usize, c: Candidate) -> bool {
         (n - 5, n - 1)
     };
     lo <= c.end() && c.start <= hi
+}
+
+/// A run's prediction at one of its samples: its weights ([`run_weights`]), noise gain
+/// ([`run_gain`]) and what it misses of a smooth motion ([`run_smooth_gain`]).
+#[derive(Debug, Clone, Copy, Default)]
+struct RunCubic {
+    weights: [f64; 4],
+    gain: f64,
+    smooth_gain: f64,
+}
+
+/// The runs' predictions, computed once: `[len − 1][p]` for sample `p` of a run of `len`.
+static RUN_CUBICS: LazyLock<[[RunCubic; MAX_RUN]; MAX_RUN]> = LazyLock::new(|| {
+    std::array::from_fn(|l| {
+        std::array::from_fn(|p| {
+            let len = l + 1;
+            if p < len {
+                RunCubic {
+                    weights: run_weights(len, p),
+                    gain: run_gain(len, p),
+                    smooth_gain: run_smooth_gain(len, p),
+                }
+            } else {
+                RunCubic::default()
+            }
+        })
+    })
+});
+
+/// The prediction of a run of `len` at its sample `p` ([`RUN_CUBICS`]).
+#[inline]
+fn run_cubic(len: usize, p: usize) -> RunCubic {
+    RUN_CUBICS[len - 1][p]
 }
 
 /// Weights of the cubic through the samples at `−2, −1, len, len + 1` (relative to a run's
@@ -2155,7 +2181,7 @@ mod tests {
             ranked: [[None; MAX_RUN]; RANKED_WIDTHS],
             rejected: Vec::new(),
             held: vec![(usize::MAX, Held::default()); HELD],
-            repaired: vec![(usize::MAX, [0.0; 5]); HELD],
+            repaired: vec![(usize::MAX, [0.0; MAX_RUN + 4]); HELD * MAX_RUN],
             terms: Vec::new(),
             window: None,
             shortcuts: true,
