@@ -802,11 +802,10 @@ struct Search<'a, G> {
     spikes: Vec<Spike>,
     /// The statistics and the local scale's levels of the stretch being swept.
     stretch: Stretch,
-    /// Per width of an outlier's residuals (up to [`RANKED_WIDTHS`]) and width of a statistic:
-    /// the window last ranked for its local scale and its largest levels, which the next window
-    /// of the same widths, the same one moved on by a few positions, is ranked from (none after
-    /// a repair).
-    ranked: [[Option<Ranked>; MAX_RUN]; RANKED_WIDTHS],
+    /// Per use ([`SEARCHING`] or [`PEAK`]) and width of a statistic: the window last ranked for
+    /// its local scale and its largest levels, which the next window, mostly the same positions,
+    /// is ranked from (none after a repair).
+    ranked: [[Option<Ranked>; MAX_RUN]; 2],
     /// The peaks (sample and width) whose outlier the sweep has rejected since the record last
     /// changed: found again from a later sample, the same peak is rejected again.
     rejected: Vec<(usize, usize)>,
@@ -864,13 +863,17 @@ struct Ranked {
 /// on, some of its largest can leave it before it must be ranked afresh.
 const KEPT: usize = 2 * MAX_LOCAL_RANK;
 
-/// The widths of an outlier's residuals whose local windows are ranked from the last one: the
-/// sweep's search for a peak ([`PEAK_SEARCH`] + the longest run) and each peak's own width.
-const RANKED_WIDTHS: usize = PEAK_SEARCH + MAX_RUN + 1;
+/// The local windows of the sweep's search for a peak, which move on with the sample searched
+/// from.
+const SEARCHING: usize = 0;
 
-/// The farthest a window moves on and is still ranked from the last one, in positions: beyond
-/// it, ranking the window afresh costs about as much.
-const SLIDE: usize = 16;
+/// The local windows of a peak: near the search's (the peak is among the next few samples), and
+/// near the last peak's when that was near.
+const PEAK: usize = 1;
+
+/// The most levels that leave and enter a window ranked from the last one: beyond them, ranking
+/// the window afresh costs about as much.
+const SLIDE: usize = 48;
 
 /// A repair considered: one sample, or a run of `len` samples from `start` replaced together by
 /// the cubic through the two samples on each side.
@@ -923,7 +926,7 @@ impl<'a, G: Geometry> Search<'a, G> {
             bounds: BTreeMap::new(),
             spikes: Vec::new(),
             stretch: Stretch::new(n, params.max_run),
-            ranked: [[None; MAX_RUN]; RANKED_WIDTHS],
+            ranked: [[None; MAX_RUN]; 2],
             rejected: Vec::new(),
             held: vec![(usize::MAX, Held::default()); HELD],
             repaired: vec![(usize::MAX, [0.0; MAX_RUN + 4]); HELD * MAX_RUN],
@@ -1102,91 +1105,104 @@ impl<'a, G: Geometry> Search<'a, G> {
         self.k * q * LOCAL_KAPPA[steps - 3] / 6.0
     }
 
-    /// The local threshold of the statistic of width `m` over its window `w` (of an outlier of
-    /// width `width`): `k` times its local scale, the `steps`-th largest level (the
-    /// (count / 16)-th largest).
-    fn local_threshold_in(&mut self, w: LocalWindow, width: usize, m: usize) -> f64 {
-        let q = match self.slide(w, width, m) {
+    /// The local threshold of the statistic of width `m` over its window `w`: `k` times its
+    /// local scale, the `steps`-th largest level (the (count / 16)-th largest).
+    fn local_threshold_in(&mut self, w: LocalWindow, m: usize, using: usize) -> f64 {
+        let q = match self.slide(w, m, using) {
             Some(q) => q,
-            None => self.rank(w, width, m),
+            None => self.rank(w, m, using),
         };
         self.local_threshold(q, w.steps)
     }
 
     /// The `steps`-th largest level of width `m` in window `w`, ranked afresh (and kept for the
-    /// next window of an outlier of width `width`).
-    fn rank(&mut self, w: LocalWindow, width: usize, m: usize) -> f64 {
+    /// next window).
+    fn rank(&mut self, w: LocalWindow, m: usize, using: usize) -> f64 {
         let stretch = &self.stretch;
         let (left, right) = (stretch.levels(w.left), stretch.levels(w.right));
         let kept = KEPT.min(left.len() + right.len());
         let top = largest(left.iter().chain(right).map(|l| l[m - 1]), kept);
-        if let Some(slots) = self.ranked.get_mut(width) {
-            slots[m - 1] = Some(Ranked { window: w, top, kept });
-        }
+        self.ranked[using][m - 1] = Some(Ranked { window: w, top, kept });
         top[w.steps - 1]
     }
 
     /// The `steps`-th largest level of width `m` in window `w`, from the largest levels kept of
-    /// the window last ranked for an outlier of width `width`, when `w` is that one moved on by
-    /// at most [`SLIDE`] positions and enough of them stay; `None` otherwise. A level that leaves
-    /// and is at least the last kept is one of those kept (every other is at most as large) and
-    /// leaves them; one that enters joins them if it is at least the last of them (when they are
-    /// fewer than [`KEPT`]) or larger than it (the last then leaving them); every level left out
-    /// is then still at most the last kept.
-    fn slide(&mut self, w: LocalWindow, width: usize, m: usize) -> Option<f64> {
+    /// the window last ranked for width `m`, when at most [`SLIDE`] levels leave and enter and
+    /// enough of those kept stay; `None` otherwise. A level that leaves and is at least the last
+    /// kept is one of those kept (every other is at most as large) and leaves them; one that
+    /// enters joins them if it is at least the last of them (when they are fewer than [`KEPT`])
+    /// or larger than it (the last then leaving them); every level left out is then still at
+    /// most the last kept.
+    fn slide(&mut self, w: LocalWindow, m: usize, using: usize) -> Option<f64> {
         if !self.shortcuts {
             return None;
         }
-        let stretch = &self.stretch;
-        let slot = self.ranked.get_mut(width)?[m - 1].as_mut()?;
-        let o = slot.window;
-        let len = |(from, to): (usize, usize)| to - from;
-        if o.steps != w.steps || len(o.left) != len(w.left) || len(o.right) != len(w.right) {
-            return None;
-        }
-        let d = w.left.0.checked_sub(o.left.0)?;
-        // The levels that leave and enter are apart from those that stay (and from the gap
-        // between the two sides) and held by the stretch.
-        if w.right.0.checked_sub(o.right.0)? != d
-            || d > SLIDE
-            || d > len(o.left).min(len(o.right))
-            || o.left.1 + d > o.right.0
-            || !stretch.holds_levels(o.left.0, w.right.1 - 1)
+        let near = |slot: &Option<Ranked>| {
+            let (leaving, entering) = moved(slot.as_ref()?.window, w);
+            (leaving.count() + entering.count() <= SLIDE).then_some((leaving, entering))
+        };
+        // A peak's window from the last peak's, or else from the search's.
+        let (leaving, entering) = match near(&self.ranked[using][m - 1]) {
+            Some(moved) => moved,
+            None if using == PEAK => {
+                let moved = near(&self.ranked[SEARCHING][m - 1])?;
+                self.ranked[PEAK][m - 1] = self.ranked[SEARCHING][m - 1];
+                moved
+            }
+            None => return None,
+        };
+        let (leaving, entering) = (leaving.as_slice(), entering.as_slice());
+        // The levels that leave are held by the stretch (those that enter are, in `w`).
+        if let (Some(first), Some(last)) = (leaving.first(), leaving.last())
+            && !self.stretch.holds_levels(first.0, last.1 - 1)
         {
             return None;
         }
+        let stretch = &self.stretch;
+        let slot = self.ranked[using][m - 1].as_mut()?;
+        let (top, kept) = (&mut slot.top, &mut slot.kept);
         let rank = w.steps;
-        let (mut top, mut kept) = (slot.top, slot.kept);
-        let leaving = [(o.left.0, w.left.0), (o.right.0, w.right.0)];
-        for level in leaving.into_iter().flat_map(|r| stretch.levels(r)) {
-            let v = level[m - 1];
-            if v.total_cmp(&top[kept - 1]).is_lt() {
-                continue;
-            }
-            let at = top[..kept].iter().position(|t| t.total_cmp(&v).is_eq())?;
-            top.copy_within(at + 1..kept, at);
-            kept -= 1;
-            if kept < rank {
-                return None;
-            }
-        }
-        let entering = [(o.left.1, w.left.1), (o.right.1, w.right.1)];
-        for level in entering.into_iter().flat_map(|r| stretch.levels(r)) {
-            let v = level[m - 1];
-            if kept == KEPT {
-                push_largest(&mut top, v);
-            } else if v.total_cmp(&top[kept - 1]).is_ge() {
-                let mut at = kept;
-                while at > 0 && v.total_cmp(&top[at - 1]).is_gt() {
-                    top[at] = top[at - 1];
-                    at -= 1;
+        for &range in leaving {
+            for level in stretch.levels(range) {
+                let v = level[m - 1];
+                if v.total_cmp(&top[*kept - 1]).is_lt() {
+                    continue;
                 }
-                top[at] = v;
-                kept += 1;
+                // Among those kept (every level left out is at most the last of them).
+                let Some(at) = top[..*kept].iter().position(|t| t.total_cmp(&v).is_eq()) else {
+                    self.ranked[using][m - 1] = None;
+                    return None;
+                };
+                top.copy_within(at + 1..*kept, at);
+                *kept -= 1;
+                if *kept < rank {
+                    self.ranked[using][m - 1] = None;
+                    return None;
+                }
             }
         }
-        *slot = Ranked { window: w, top, kept };
-        Some(top[rank - 1])
+        for &range in entering {
+            for level in stretch.levels(range) {
+                let v = level[m - 1];
+                if *kept == KEPT {
+                    push_largest(top, v);
+                } else if v.total_cmp(&top[*kept - 1]).is_ge() {
+                    let mut at = *kept;
+                    while at > 0 && v.total_cmp(&top[at - 1]).is_gt() {
+                        top[at] = top[at - 1];
+                        at -= 1;
+                    }
+                    top[at] = v;
+                    *kept += 1;
+                }
+            }
+        }
+        if *kept < rank {
+            self.ranked[using][m - 1] = None;
+            return None;
+        }
+        slot.window = w;
+        Some(slot.top[rank - 1])
     }
 
     /// The local thresholds of the statistics of width 1 to the longest run (see
@@ -1198,7 +1214,7 @@ impl<'a, G: Geometry> Search<'a, G> {
         let windows = self.local_windows(c, width);
         for m in 1..=self.max_run {
             if let Some(w) = windows[m - 1] {
-                out[m - 1] = self.local_threshold_in(w, width, m);
+                out[m - 1] = self.local_threshold_in(w, m, PEAK);
             }
         }
         out
@@ -1234,7 +1250,7 @@ impl<'a, G: Geometry> Search<'a, G> {
                 any = true;
                 continue;
             };
-            if let Some(q) = self.slide(w, width, m) {
+            if let Some(q) = self.slide(w, m, SEARCHING) {
                 let threshold = self.local_threshold(q, w.steps);
                 if above[m - 1] > threshold {
                     out[m - 1] = threshold;
@@ -1251,7 +1267,7 @@ impl<'a, G: Geometry> Search<'a, G> {
             if settled {
                 continue;
             }
-            let q = self.rank(w, width, m);
+            let q = self.rank(w, m, SEARCHING);
             out[m - 1] = self.local_threshold(q, w.steps);
             any = true;
         }
@@ -1272,7 +1288,7 @@ impl<'a, G: Geometry> Search<'a, G> {
         self.held.fill((usize::MAX, Held::default()));
         self.repaired.fill((usize::MAX, [0.0; MAX_RUN + 4]));
         self.window = None;
-        self.ranked = [[None; MAX_RUN]; RANKED_WIDTHS];
+        self.ranked = [[None; MAX_RUN]; 2];
         self.bounds.insert(i, bound);
         self.spikes.push(Spike {
             index: i,
@@ -1740,6 +1756,80 @@ fn footprint(n: usize, span: (usize, usize)) -> (usize, usize) {
     )
 }
 
+/// Ordered, disjoint, non-empty half-open ranges of positions: the first `len` of `ranges`.
+#[derive(Debug, Clone, Copy, Default)]
+struct Ranges {
+    ranges: [(usize, usize); 6],
+    len: usize,
+}
+
+impl Ranges {
+    fn push(&mut self, range: (usize, usize)) {
+        self.ranges[self.len] = range;
+        self.len += 1;
+    }
+
+    fn as_slice(&self) -> &[(usize, usize)] {
+        &self.ranges[..self.len]
+    }
+
+    /// The positions they hold.
+    fn count(&self) -> usize {
+        self.as_slice().iter().map(|(a, b)| b - a).sum()
+    }
+}
+
+/// The positions that leave window `o` and those that enter it as it becomes `w` (see
+/// [`minus`]): where both sides move on by the same few positions, the first few of each side
+/// and the next few past each.
+fn moved(o: LocalWindow, w: LocalWindow) -> (Ranges, Ranges) {
+    let len = |(from, to): (usize, usize)| to - from;
+    if let Some(d) = w.left.0.checked_sub(o.left.0)
+        && w.right.0.checked_sub(o.right.0) == Some(d)
+        && len(o.left) == len(w.left)
+        && len(o.right) == len(w.right)
+        && d <= len(o.left).min(len(o.right))
+        && o.left.1 + d <= o.right.0
+    {
+        let (mut leaving, mut entering) = (Ranges::default(), Ranges::default());
+        if d > 0 {
+            for (from, to) in [(o.left.0, w.left.0), (o.right.0, w.right.0)] {
+                leaving.push((from, to));
+            }
+            for (from, to) in [(o.left.1, w.left.1), (o.right.1, w.right.1)] {
+                entering.push((from, to));
+            }
+        }
+        return (leaving, entering);
+    }
+    let (old, new) = ([o.left, o.right], [w.left, w.right]);
+    (minus(old, new), minus(new, old))
+}
+
+/// The positions of `x` that are not in `y` (each two ordered, disjoint, half-open ranges of
+/// positions; each range of `x` leaves at most three).
+fn minus(x: [(usize, usize); 2], y: [(usize, usize); 2]) -> Ranges {
+    let mut out = Ranges::default();
+    for (mut from, to) in x {
+        for (a, b) in y {
+            if from >= to {
+                break;
+            }
+            if b <= from || a >= to || a >= b {
+                continue;
+            }
+            if a > from {
+                out.push((from, a));
+            }
+            from = b;
+        }
+        if from < to {
+            out.push((from, to));
+        }
+    }
+    out
+}
+
 /// The sum, in order, of `terms` (those of samples `from ..`) with the terms of samples `at ..`
 /// replaced by `replaced` where they overlap.
 fn sum_replaced(terms: &[f64], from: usize, at: usize, replaced: &[f64]) -> f64 {
@@ -2178,7 +2268,7 @@ mod tests {
             bounds: BTreeMap::new(),
             spikes: Vec::new(),
             stretch: Stretch::new(n, max_run),
-            ranked: [[None; MAX_RUN]; RANKED_WIDTHS],
+            ranked: [[None; MAX_RUN]; 2],
             rejected: Vec::new(),
             held: vec![(usize::MAX, Held::default()); HELD],
             repaired: vec![(usize::MAX, [0.0; MAX_RUN + 4]); HELD * MAX_RUN],
@@ -2256,6 +2346,53 @@ mod tests {
             with.iter().zip(&without).all(|(a, b)| a.to_bits() == b.to_bits()),
             "{what}: the repaired record"
         );
+    }
+
+    #[test]
+    fn the_positions_that_leave_and_enter_a_moving_window() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let window = |rng: &mut rand_chacha::ChaCha8Rng| {
+            let a = rng.random_range(0..40);
+            let b = a + rng.random_range(0..20);
+            let c = b + rng.random_range(0..20);
+            let d = c + rng.random_range(0..20);
+            LocalWindow {
+                left: (a, b),
+                right: (c, d),
+                steps: 3,
+            }
+        };
+        let positions =
+            |w: LocalWindow| -> Vec<usize> { (w.left.0..w.left.1).chain(w.right.0..w.right.1).collect() };
+        let listed = |r: Ranges| -> Vec<usize> { r.as_slice().iter().flat_map(|&(a, b)| a..b).collect() };
+        for case in 0..2000 {
+            let o = window(&mut rng);
+            // Moved on by a few positions, or anywhere.
+            let w = if case % 2 == 0 {
+                let d = rng.random_range(0..12);
+                LocalWindow {
+                    left: (o.left.0 + d, o.left.1 + d),
+                    right: (o.right.0 + d, o.right.1 + d),
+                    steps: 3,
+                }
+            } else {
+                window(&mut rng)
+            };
+            let (leaving, entering) = moved(o, w);
+            let (old, new) = (positions(o), positions(w));
+            let want_leaving: Vec<usize> = old.iter().copied().filter(|p| !new.contains(p)).collect();
+            let want_entering: Vec<usize> = new.iter().copied().filter(|p| !old.contains(p)).collect();
+            assert_eq!(listed(leaving), want_leaving, "{o:?} to {w:?}");
+            assert_eq!(listed(entering), want_entering, "{o:?} to {w:?}");
+            assert!(
+                leaving
+                    .as_slice()
+                    .iter()
+                    .chain(entering.as_slice())
+                    .all(|(a, b)| a < b)
+            );
+        }
     }
 
     #[test]
