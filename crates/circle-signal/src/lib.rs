@@ -205,7 +205,14 @@ pub enum CircleError {
 /// NaN and infinities give NaN.
 #[inline]
 pub fn wrap(theta: f64) -> f64 {
-    let mut r = (theta + PI).rem_euclid(TAU);
+    let shifted = theta + PI;
+    // Inside one turn the remainder is the number itself (exactly: a remainder is exact): the
+    // same result without the division (`rem_euclid` is a call of `fmod`), for the many angles
+    // that are wrapped already.
+    if (0.0..TAU).contains(&shifted) {
+        return shifted - PI;
+    }
+    let mut r = shifted.rem_euclid(TAU);
     // `rem_euclid` may round up to exactly 2π for tiny negative arguments.
     if r >= TAU {
         r -= TAU;

@@ -12,6 +12,7 @@
 
 use std::collections::BTreeMap;
 use std::f64::consts::{PI, TAU};
+use std::sync::LazyLock;
 
 use serde::{Deserialize, Serialize};
 
@@ -580,13 +581,19 @@ pub fn find_and_repair_spikes(
             needed: SpikeParams::MIN_SAMPLES,
         });
     }
+    Ok(search(x, domain, params, true))
+}
+
+/// The search of [`find_and_repair_spikes`] on a record it takes, with or without the
+/// `shortcuts` that spare it work (the same outliers either way; the tests compare them).
+fn search(x: &mut [f64], domain: Domain, params: &SpikeParams, shortcuts: bool) -> Spikes {
     match domain {
-        Domain::Circle => Search::<OnCircle>::run(x, params, TAU),
+        Domain::Circle => Search::<OnCircle>::run(x, params, TAU, shortcuts),
         Domain::Line => {
             let (lo, hi) = x.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
                 (lo.min(v), hi.max(v))
             });
-            Search::<OnLine>::run(x, params, hi - lo)
+            Search::<OnLine>::run(x, params, hi - lo, shortcuts)
         }
     }
 }
@@ -738,26 +745,35 @@ fn stencil(n: usize, i: usize) -> [(usize, f64); 4] {
     }
 }
 
-/// The `rank`-th largest of `v` (by [`f64::total_cmp`]), `rank` from 1 to the length of `v`
-/// and at most [`MAX_LOCAL_RANK`]: one pass holding the largest `rank` in order, cheaper than a
-/// selection for the few a local scale ranks.
-fn largest(v: &[f64], rank: usize) -> f64 {
-    let mut top = [f64::NEG_INFINITY; MAX_LOCAL_RANK];
-    let top = &mut top[..rank];
-    top.copy_from_slice(&v[..rank]);
-    top.sort_unstable_by(|a, b| b.total_cmp(a));
-    for &value in &v[rank..] {
-        if value.total_cmp(&top[rank - 1]).is_le() {
-            continue;
-        }
-        let mut at = rank - 1;
-        while at > 0 && value.total_cmp(&top[at - 1]).is_gt() {
-            top[at] = top[at - 1];
-            at -= 1;
-        }
-        top[at] = value;
+/// The `rank` largest of `values` (by [`f64::total_cmp`]) in decreasing order, `rank` from 1
+/// to the number of values and at most [`KEPT`]: one pass holding the largest `rank` in order,
+/// cheaper than a selection for the few a local scale ranks.
+fn largest(mut values: impl Iterator<Item = f64>, rank: usize) -> [f64; KEPT] {
+    let mut top = [f64::NEG_INFINITY; KEPT];
+    for (slot, value) in top[..rank].iter_mut().zip(values.by_ref()) {
+        *slot = value;
     }
-    top[rank - 1]
+    top[..rank].sort_unstable_by(|a, b| b.total_cmp(a));
+    for value in values {
+        push_largest(&mut top[..rank], value);
+    }
+    top
+}
+
+/// Puts `value` among the largest `top` (decreasing by [`f64::total_cmp`]) if it is larger than
+/// the last, which then leaves.
+#[inline]
+fn push_largest(top: &mut [f64], value: f64) {
+    let rank = top.len();
+    if value.total_cmp(&top[rank - 1]).is_le() {
+        return;
+    }
+    let mut at = rank - 1;
+    while at > 0 && value.total_cmp(&top[at - 1]).is_gt() {
+        top[at] = top[at - 1];
+        at -= 1;
+    }
+    top[at] = value;
 }
 
 /// The largest rank a local scale takes: the 6th largest of 96 levels.
@@ -786,8 +802,29 @@ struct Search<'a, G> {
     spikes: Vec<Spike>,
     /// The statistics and the local scale's levels of the stretch being swept.
     stretch: Stretch,
-    /// Scratch for the local scale: the window's levels.
-    window: Vec<f64>,
+    /// Per use ([`SEARCHING`] or [`PEAK`]) and width of a statistic: the window last ranked for
+    /// its local scale and its largest levels, which the next window, mostly the same positions,
+    /// is ranked from (none after a repair).
+    ranked: [[Option<Ranked>; MAX_RUN]; 2],
+    /// The peaks (sample and width) whose outlier the sweep has rejected since the record last
+    /// changed: found again from a later sample, the same peak is rejected again.
+    rejected: Vec<(usize, usize)>,
+    /// Per sample `i` (at `i % HELD`, with `i`): its residual in the record as it stands and
+    /// its term of an energy (none after a repair). The choices of outliers read each residual
+    /// around them many times, with a candidate's samples replaced and without.
+    held: Vec<(usize, Held)>,
+    /// Per candidate inside the record (at `start % HELD` and its length, with `start`): the
+    /// terms of an energy of samples `start − 2 ..= end + 2` with its samples replaced by their
+    /// predictions (none after a repair): the choices of outliers around nearby peaks consider
+    /// the same candidates.
+    repaired: Vec<(usize, [f64; MAX_RUN + 4])>,
+    /// The terms of an energy over `window` in the record as it stands (when `window` is
+    /// `Some`; none after a repair): every candidate of a choice is weighed over one window.
+    terms: Vec<f64>,
+    window: Option<(usize, usize)>,
+    /// Whether the search spares itself work by the rejected peaks, the held residuals and the
+    /// ranked windows (always but in the tests, which compare the outliers found without them).
+    shortcuts: bool,
     _geometry: std::marker::PhantomData<G>,
 }
 
@@ -799,6 +836,44 @@ struct LocalWindow {
     right: (usize, usize),
     steps: usize,
 }
+
+/// A residual held for the choice of an outlier, and its term of an energy (its square over the
+/// squared noise gain).
+#[derive(Debug, Clone, Copy, Default)]
+struct Held {
+    residual: f64,
+    term: f64,
+}
+
+/// Samples whose residuals, and whose repairs' terms, the search holds at once: more than a
+/// choice of an outlier reads.
+const HELD: usize = 128;
+
+/// The largest levels of a local scale's window: the first `kept` of `top`, decreasing by
+/// [`f64::total_cmp`], at least `window.steps` of them; every other level of the window is at
+/// most as large as the last of them.
+#[derive(Debug, Clone, Copy)]
+struct Ranked {
+    window: LocalWindow,
+    top: [f64; KEPT],
+    kept: usize,
+}
+
+/// The levels a window ranked afresh keeps: twice the largest rank, so that as the window moves
+/// on, some of its largest can leave it before it must be ranked afresh.
+const KEPT: usize = 2 * MAX_LOCAL_RANK;
+
+/// The local windows of the sweep's search for a peak, which move on with the sample searched
+/// from.
+const SEARCHING: usize = 0;
+
+/// The local windows of a peak: near the search's (the peak is among the next few samples), and
+/// near the last peak's when that was near.
+const PEAK: usize = 1;
+
+/// The most levels that leave and enter a window ranked from the last one: beyond them, ranking
+/// the window afresh costs about as much.
+const SLIDE: usize = 48;
 
 /// A repair considered: one sample, or a run of `len` samples from `start` replaced together by
 /// the cubic through the two samples on each side.
@@ -815,7 +890,7 @@ impl Candidate {
 }
 
 impl<'a, G: Geometry> Search<'a, G> {
-    fn run(x: &'a mut [f64], params: &SpikeParams, span: f64) -> Result<Spikes, CircleError> {
+    fn run(x: &'a mut [f64], params: &SpikeParams, span: f64, shortcuts: bool) -> Spikes {
         let n = x.len();
         let floor = params.floor.unwrap_or(SpikeParams::DEFAULT_FLOOR_FRACTION * span);
         let block = params.block;
@@ -823,13 +898,13 @@ impl<'a, G: Geometry> Search<'a, G> {
         let scale = MAD_TO_SD * record_median;
         if floor.is_nan() || floor <= 0.0 {
             // A constant record on the line: nothing departs from anything.
-            return Ok(Spikes {
+            return Spikes {
                 spikes: Vec::new(),
                 len: n,
                 domain: G::DOMAIN,
                 scale,
                 floor,
-            });
+            };
         }
         // A block's median is used where it stands out of the record's by three of its own
         // standard deviations (relative `MEDIAN_SPREAD / √(3 block)` for Gaussian residuals).
@@ -851,26 +926,89 @@ impl<'a, G: Geometry> Search<'a, G> {
             bounds: BTreeMap::new(),
             spikes: Vec::new(),
             stretch: Stretch::new(n, params.max_run),
-            window: Vec::new(),
+            ranked: [[None; MAX_RUN]; 2],
+            rejected: Vec::new(),
+            held: vec![(usize::MAX, Held::default()); HELD],
+            repaired: vec![(usize::MAX, [0.0; MAX_RUN + 4]); HELD * MAX_RUN],
+            terms: Vec::new(),
+            window: None,
+            shortcuts,
             _geometry: std::marker::PhantomData,
         };
         search.search();
         let mut spikes = search.spikes;
         spikes.sort_unstable_by_key(|s| s.index);
-        Ok(Spikes {
+        Spikes {
             spikes,
             len: n,
             domain: G::DOMAIN,
             scale,
             floor,
-        })
+        }
     }
 
     /// `|r_i|` over the noise gain of its prediction, comparable between neighbours.
     #[inline]
     fn weighted(&self, i: usize) -> f64 {
-        let (r, _) = predict::<G>(self.x, i);
-        r.abs() / gain(self.x.len(), i)
+        self.residual(i).abs() / gain(self.x.len(), i)
+    }
+
+    /// The residual of sample `i` (as [`predict`] gives it), from those held when it is.
+    #[inline]
+    fn residual(&self, i: usize) -> f64 {
+        match self.held[i % HELD] {
+            (at, held) if at == i => held.residual,
+            _ => predict::<G>(self.x, i).0,
+        }
+    }
+
+    /// The squared weighted residual of sample `i`, its term of an [`energy`](Self::energy),
+    /// from those held when it is.
+    #[inline]
+    fn term(&self, i: usize) -> f64 {
+        match self.held[i % HELD] {
+            (at, held) if at == i => held.term,
+            _ => self.weighted(i).powi(2),
+        }
+    }
+
+    /// Holds the residuals of samples `from ..= to` (clamped to the record) of the record as it
+    /// stands (those not held already), until the next repair.
+    fn hold_residuals(&mut self, from: usize, to: usize) {
+        if !self.shortcuts {
+            return;
+        }
+        let x = &*self.x;
+        let n = x.len();
+        for j in from..=to.min(n - 1) {
+            let slot = &mut self.held[j % HELD];
+            if slot.0 != j {
+                let residual = predict::<G>(x, j).0;
+                let term = (residual.abs() / gain(n, j)).powi(2);
+                *slot = (j, Held { residual, term });
+            }
+        }
+    }
+
+    /// The terms of an energy of samples `c.start − 2 ..= c.end + 2` with the candidate's samples
+    /// (inside the record, 5 to `n − 6`) replaced by their predictions, held until the next
+    /// repair.
+    fn repaired_terms(&mut self, c: Candidate) -> [f64; MAX_RUN + 4] {
+        let slot = (c.start % HELD) * MAX_RUN + c.len - 1;
+        if let (at, terms) = self.repaired[slot]
+            && at == c.start
+        {
+            return terms;
+        }
+        let old = self.apply(c);
+        let n = self.x.len();
+        let mut terms = [0.0; MAX_RUN + 4];
+        for (term, m) in terms.iter_mut().zip(c.start - 2..=c.end() + 2) {
+            *term = (predict::<G>(self.x, m).0.abs() / gain(n, m)).powi(2);
+        }
+        self.restore(c, old);
+        self.repaired[slot] = (c.start, terms);
+        terms
     }
 
     /// The statistics of sample `i` by width `m` (index `m − 1`): its weighted residual
@@ -969,13 +1107,102 @@ impl<'a, G: Geometry> Search<'a, G> {
 
     /// The local threshold of the statistic of width `m` over its window `w`: `k` times its
     /// local scale, the `steps`-th largest level (the (count / 16)-th largest).
-    fn local_threshold_in(&mut self, w: LocalWindow, m: usize) -> f64 {
-        self.window.clear();
-        for (from, to) in [w.left, w.right] {
-            self.window.extend((from..to).map(|p| self.stretch.level(p, m)));
-        }
-        let q = largest(&self.window, w.steps);
+    fn local_threshold_in(&mut self, w: LocalWindow, m: usize, using: usize) -> f64 {
+        let q = match self.slide(w, m, using) {
+            Some(q) => q,
+            None => self.rank(w, m, using),
+        };
         self.local_threshold(q, w.steps)
+    }
+
+    /// The `steps`-th largest level of width `m` in window `w`, ranked afresh (and kept for the
+    /// next window).
+    fn rank(&mut self, w: LocalWindow, m: usize, using: usize) -> f64 {
+        let stretch = &self.stretch;
+        let (left, right) = (stretch.levels(w.left), stretch.levels(w.right));
+        let kept = KEPT.min(left.len() + right.len());
+        let top = largest(left.iter().chain(right).map(|l| l[m - 1]), kept);
+        self.ranked[using][m - 1] = Some(Ranked { window: w, top, kept });
+        top[w.steps - 1]
+    }
+
+    /// The `steps`-th largest level of width `m` in window `w`, from the largest levels kept of
+    /// the window last ranked for width `m`, when at most [`SLIDE`] levels leave and enter and
+    /// enough of those kept stay; `None` otherwise. A level that leaves and is at least the last
+    /// kept is one of those kept (every other is at most as large) and leaves them; one that
+    /// enters joins them if it is at least the last of them (when they are fewer than [`KEPT`])
+    /// or larger than it (the last then leaving them); every level left out is then still at
+    /// most the last kept.
+    fn slide(&mut self, w: LocalWindow, m: usize, using: usize) -> Option<f64> {
+        if !self.shortcuts {
+            return None;
+        }
+        let near = |slot: &Option<Ranked>| {
+            let (leaving, entering) = moved(slot.as_ref()?.window, w);
+            (leaving.count() + entering.count() <= SLIDE).then_some((leaving, entering))
+        };
+        // A peak's window from the last peak's, or else from the search's.
+        let (leaving, entering) = match near(&self.ranked[using][m - 1]) {
+            Some(moved) => moved,
+            None if using == PEAK => {
+                let moved = near(&self.ranked[SEARCHING][m - 1])?;
+                self.ranked[PEAK][m - 1] = self.ranked[SEARCHING][m - 1];
+                moved
+            }
+            None => return None,
+        };
+        let (leaving, entering) = (leaving.as_slice(), entering.as_slice());
+        // The levels that leave are held by the stretch (those that enter are, in `w`).
+        if let (Some(first), Some(last)) = (leaving.first(), leaving.last())
+            && !self.stretch.holds_levels(first.0, last.1 - 1)
+        {
+            return None;
+        }
+        let stretch = &self.stretch;
+        let slot = self.ranked[using][m - 1].as_mut()?;
+        let (top, kept) = (&mut slot.top, &mut slot.kept);
+        let rank = w.steps;
+        for &range in leaving {
+            for level in stretch.levels(range) {
+                let v = level[m - 1];
+                if v.total_cmp(&top[*kept - 1]).is_lt() {
+                    continue;
+                }
+                // Among those kept (every level left out is at most the last of them).
+                let Some(at) = top[..*kept].iter().position(|t| t.total_cmp(&v).is_eq()) else {
+                    self.ranked[using][m - 1] = None;
+                    return None;
+                };
+                top.copy_within(at + 1..*kept, at);
+                *kept -= 1;
+                if *kept < rank {
+                    self.ranked[using][m - 1] = None;
+                    return None;
+                }
+            }
+        }
+        for &range in entering {
+            for level in stretch.levels(range) {
+                let v = level[m - 1];
+                if *kept == KEPT {
+                    push_largest(top, v);
+                } else if v.total_cmp(&top[*kept - 1]).is_ge() {
+                    let mut at = *kept;
+                    while at > 0 && v.total_cmp(&top[at - 1]).is_gt() {
+                        top[at] = top[at - 1];
+                        at -= 1;
+                    }
+                    top[at] = v;
+                    *kept += 1;
+                }
+            }
+        }
+        if *kept < rank {
+            self.ranked[using][m - 1] = None;
+            return None;
+        }
+        slot.window = w;
+        Some(slot.top[rank - 1])
     }
 
     /// The local thresholds of the statistics of width 1 to the longest run (see
@@ -987,7 +1214,7 @@ impl<'a, G: Geometry> Search<'a, G> {
         let windows = self.local_windows(c, width);
         for m in 1..=self.max_run {
             if let Some(w) = windows[m - 1] {
-                out[m - 1] = self.local_threshold_in(w, m);
+                out[m - 1] = self.local_threshold_in(w, m, PEAK);
             }
         }
         out
@@ -998,8 +1225,9 @@ impl<'a, G: Geometry> Search<'a, G> {
     /// them; `∞` for the others, whose statistics cannot stand out of their local thresholds, and
     /// `None` when none can.
     ///
-    /// A width's statistics cannot when `above` is at most a lower bound of its threshold, taken
-    /// without a selection: the `steps`-th largest of the maxima of the blocks of
+    /// A width's statistics cannot when `above` is at most its threshold, where that is found
+    /// cheaply from the last window's ([`slide`](Self::slide)), or at most a lower bound of it,
+    /// taken without a selection: the `steps`-th largest of the maxima of the blocks of
     /// [`LEVEL_BLOCK`] levels that lie in the window (those blocks hold that many distinct levels
     /// at least as large). This settles most of the samples of a smooth motion whose residual
     /// stands out of its block.
@@ -1022,6 +1250,14 @@ impl<'a, G: Geometry> Search<'a, G> {
                 any = true;
                 continue;
             };
+            if let Some(q) = self.slide(w, m, SEARCHING) {
+                let threshold = self.local_threshold(q, w.steps);
+                if above[m - 1] > threshold {
+                    out[m - 1] = threshold;
+                    any = true;
+                }
+                continue;
+            }
             let blocks = |(from, to): (usize, usize)| (from.div_ceil(LEVEL_BLOCK), to / LEVEL_BLOCK);
             let settled = self
                 .stretch
@@ -1031,7 +1267,8 @@ impl<'a, G: Geometry> Search<'a, G> {
             if settled {
                 continue;
             }
-            out[m - 1] = self.local_threshold_in(w, m);
+            let q = self.rank(w, m, SEARCHING);
+            out[m - 1] = self.local_threshold(q, w.steps);
             any = true;
         }
         any.then_some(out)
@@ -1047,6 +1284,11 @@ impl<'a, G: Geometry> Search<'a, G> {
         self.x[i] = replacement;
         self.stretch.patch::<G>(self.x, i, i);
         self.flagged[i / 64] |= 1 << (i % 64);
+        self.rejected.clear();
+        self.held.fill((usize::MAX, Held::default()));
+        self.repaired.fill((usize::MAX, [0.0; MAX_RUN + 4]));
+        self.window = None;
+        self.ranked = [[None; MAX_RUN]; 2];
         self.bounds.insert(i, bound);
         self.spikes.push(Spike {
             index: i,
@@ -1067,7 +1309,7 @@ impl<'a, G: Geometry> Search<'a, G> {
         let u_after = d(x[b + 1] - base);
         let u_after2 = u_after + d(x[b + 2] - x[b + 1]);
         for (p, slot) in out.iter_mut().enumerate().take(c.len) {
-            let w = run_weights(c.len, p);
+            let w = run_cubic(c.len, p).weights;
             let pred = w[0] * u_before + w[2] * u_after + w[3] * u_after2;
             *slot = (d(x[a + p] - base - pred), G::point(base + pred));
         }
@@ -1085,11 +1327,11 @@ impl<'a, G: Geometry> Search<'a, G> {
         // reach and two more on each side, from which any departure of the run's samples
         // cancels (the fourth differences of a local bump sum to zero).
         let (lo, hi) = (a.saturating_sub(4).max(2), (b + 4).min(n - 3));
-        let smooth = ((lo..=hi).map(|j| predict::<G>(self.x, j).0).sum::<f64>() / (hi + 1 - lo) as f64).abs();
+        let smooth = ((lo..=hi).map(|j| self.residual(j)).sum::<f64>() / (hi + 1 - lo) as f64).abs();
         let mut least = f64::INFINITY;
         for (p, &(r, _)) in res.iter().enumerate().take(c.len) {
-            let w = run_weights(c.len, p);
-            let g = run_gain(c.len, p);
+            let cubic = run_cubic(c.len, p);
+            let (w, g) = (cubic.weights, cubic.gain);
             let stencil = [
                 (nodes[0], w[0].abs()),
                 (nodes[1], w[1].abs()),
@@ -1097,7 +1339,7 @@ impl<'a, G: Geometry> Search<'a, G> {
                 (nodes[3], w[3].abs()),
             ];
             // The run's prediction misses a smooth motion by `run_smooth_gain` times its residual.
-            let v = (r.abs() - run_smooth_gain(c.len, p) * smooth).max(0.0) / g;
+            let v = (r.abs() - cubic.smooth_gain * smooth).max(0.0) / g;
             if !(v > own && v > own + self.raise(&stencil, g)) {
                 return None;
             }
@@ -1129,14 +1371,38 @@ impl<'a, G: Geometry> Search<'a, G> {
 
     /// The sum of the squared weighted residuals over `window` (inclusive).
     fn energy(&self, window: (usize, usize)) -> f64 {
-        (window.0..=window.1).map(|m| self.weighted(m).powi(2)).sum()
+        (window.0..=window.1).map(|m| self.term(m)).sum()
     }
 
     /// The same with the candidate's samples replaced by their predictions (the record is left
-    /// as it was).
+    /// as it was). The residuals the candidate's samples do not enter are the record's (those
+    /// held, when they are).
     fn energy_after_repair(&mut self, c: Candidate, window: (usize, usize)) -> f64 {
+        let n = self.x.len();
+        if self.shortcuts && c.start >= 5 && c.end() + 6 <= n {
+            // The residuals it reaches are those of c.start − 2 ..= c.end + 2, all inside the
+            // record: the window's terms with those replaced, in order.
+            if self.window != Some(window) {
+                self.terms.clear();
+                for m in window.0..=window.1 {
+                    let term = self.term(m);
+                    self.terms.push(term);
+                }
+                self.window = Some(window);
+            }
+            let repaired = self.repaired_terms(c);
+            return sum_replaced(&self.terms, window.0, c.start - 2, &repaired[..c.len + 4]);
+        }
         let old = self.apply(c);
-        let energy = self.energy(window);
+        let energy = (window.0..=window.1)
+            .map(|m| {
+                if reaches(n, m, c) {
+                    (predict::<G>(self.x, m).0.abs() / gain(n, m)).powi(2)
+                } else {
+                    self.term(m)
+                }
+            })
+            .sum();
         self.restore(c, old);
         energy
     }
@@ -1174,6 +1440,12 @@ impl<'a, G: Geometry> Search<'a, G> {
     ) -> Option<Candidate> {
         let n = self.x.len();
         let window = footprint(n, span);
+        // The residuals every candidate's energy and test read: the window's, those a run's
+        // smooth motion is taken from, and the wider window of a run against a single sample.
+        self.hold_residuals(
+            window.0.min(runs.0).saturating_sub(2 + 2 * MAX_RUN),
+            window.1.max(runs.1) + 2 + 2 * MAX_RUN,
+        );
         // The single samples, and whether each exceeds its threshold.
         let mut single: Option<(Candidate, f64, f64)> = None;
         let mut any_single: Option<(Candidate, f64)> = None;
@@ -1304,12 +1576,20 @@ impl<'a, G: Geometry> Search<'a, G> {
         to
     }
 
+    /// Notes that the outlier of the peak at `c` with width `t` was rejected at sample `i`
+    /// (the peaks before `i` are left out: the sweep has passed them).
+    fn reject(&mut self, i: usize, c: usize, t: usize) {
+        self.rejected.retain(|&(j, _)| j >= i);
+        self.rejected.push((c, t));
+    }
+
     /// One sweep of samples `from .. to`.
     fn sweep(&mut self, from: usize, to: usize) {
         let n = self.x.len();
         // What the sweep asks of the stretch ends short of its window's reach past `to`.
         self.stretch
             .set_horizon(to + PEAK_SEARCH + 2 * LOCAL_HALF_WINDOW + 8 * MAX_RUN);
+        self.rejected.clear();
         let mut i = from;
         while i < to {
             i = self.next_exceeding(i, to);
@@ -1363,10 +1643,18 @@ impl<'a, G: Geometry> Search<'a, G> {
                 i += 1;
                 continue;
             }
+            // A peak rejected since the record last changed is rejected again: what follows
+            // depends on the peak and the record alone (a later sample finds the same peak
+            // while it is within reach, up to seven times).
+            if self.shortcuts && self.rejected.contains(&(c, t)) {
+                i += 1;
+                continue;
+            }
             // The thresholds there: the local ones from the residuals nearest to the peak's.
             let local = self.local_thresholds(c, t);
             let own = |s: &Self, j: usize, m: usize| s.block_threshold(j).max(local[m - 1]);
             if self.statistics(c)[t - 1] <= own(self, c, t) {
+                self.reject(i, c, t);
                 i += 1;
                 continue;
             }
@@ -1387,6 +1675,7 @@ impl<'a, G: Geometry> Search<'a, G> {
                 (span, runs) = again;
             }
             let Some(chosen) = chosen else {
+                self.reject(i, c, t);
                 i += 1;
                 continue;
             };
@@ -1395,6 +1684,7 @@ impl<'a, G: Geometry> Search<'a, G> {
             // (a burst of fast motion in a noise-free record) only moves to the neighbours.
             let before = self.energy(window);
             if self.energy_after_repair(chosen, window) > CLEARED * before {
+                self.reject(i, c, t);
                 i += 1;
                 continue;
             }
@@ -1406,7 +1696,7 @@ impl<'a, G: Geometry> Search<'a, G> {
                 let res = self.run_residuals(chosen);
                 for (p, &(size, replacement)) in res.iter().enumerate().take(chosen.len) {
                     let j = chosen.start + p;
-                    let bound = run_gain(chosen.len, p) * own(self, j, chosen.len);
+                    let bound = run_cubic(chosen.len, p).gain * own(self, j, chosen.len);
                     self.flag(j, size, replacement, bound);
                 }
             }
@@ -1464,6 +1754,141 @@ fn footprint(n: usize, span: (usize, usize)) -> (usize, usize) {
         if span.0 <= 4 { 0 } else { span.0 - 2 },
         if span.1 + 5 >= n { n - 1 } else { span.1 + 2 },
     )
+}
+
+/// Ordered, disjoint, non-empty half-open ranges of positions: the first `len` of `ranges`.
+#[derive(Debug, Clone, Copy, Default)]
+struct Ranges {
+    ranges: [(usize, usize); 6],
+    len: usize,
+}
+
+impl Ranges {
+    fn push(&mut self, range: (usize, usize)) {
+        self.ranges[self.len] = range;
+        self.len += 1;
+    }
+
+    fn as_slice(&self) -> &[(usize, usize)] {
+        &self.ranges[..self.len]
+    }
+
+    /// The positions they hold.
+    fn count(&self) -> usize {
+        self.as_slice().iter().map(|(a, b)| b - a).sum()
+    }
+}
+
+/// The positions that leave window `o` and those that enter it as it becomes `w` (see
+/// [`minus`]): where both sides move on by the same few positions, the first few of each side
+/// and the next few past each.
+fn moved(o: LocalWindow, w: LocalWindow) -> (Ranges, Ranges) {
+    let len = |(from, to): (usize, usize)| to - from;
+    if let Some(d) = w.left.0.checked_sub(o.left.0)
+        && w.right.0.checked_sub(o.right.0) == Some(d)
+        && len(o.left) == len(w.left)
+        && len(o.right) == len(w.right)
+        && d <= len(o.left).min(len(o.right))
+        && o.left.1 + d <= o.right.0
+    {
+        let (mut leaving, mut entering) = (Ranges::default(), Ranges::default());
+        if d > 0 {
+            for (from, to) in [(o.left.0, w.left.0), (o.right.0, w.right.0)] {
+                leaving.push((from, to));
+            }
+            for (from, to) in [(o.left.1, w.left.1), (o.right.1, w.right.1)] {
+                entering.push((from, to));
+            }
+        }
+        return (leaving, entering);
+    }
+    let (old, new) = ([o.left, o.right], [w.left, w.right]);
+    (minus(old, new), minus(new, old))
+}
+
+/// The positions of `x` that are not in `y` (each two ordered, disjoint, half-open ranges of
+/// positions; each range of `x` leaves at most three).
+fn minus(x: [(usize, usize); 2], y: [(usize, usize); 2]) -> Ranges {
+    let mut out = Ranges::default();
+    for (mut from, to) in x {
+        for (a, b) in y {
+            if from >= to {
+                break;
+            }
+            if b <= from || a >= to || a >= b {
+                continue;
+            }
+            if a > from {
+                out.push((from, a));
+            }
+            from = b;
+        }
+        if from < to {
+            out.push((from, to));
+        }
+    }
+    out
+}
+
+/// The sum, in order, of `terms` (those of samples `from ..`) with the terms of samples `at ..`
+/// replaced by `replaced` where they overlap.
+fn sum_replaced(terms: &[f64], from: usize, at: usize, replaced: &[f64]) -> f64 {
+    let a = at.clamp(from, from + terms.len()) - from;
+    let replaced = &replaced[(from.saturating_sub(at)).min(replaced.len())..];
+    let b = (a + replaced.len()).min(terms.len());
+    terms[..a]
+        .iter()
+        .chain(&replaced[..b - a])
+        .chain(&terms[b..])
+        .sum()
+}
+
+/// Whether the residual of sample `m` (as [`predict`] gives it) reads a sample of candidate `c`:
+/// sample `m` and its four neighbours inside the record, samples 0 to 4 for samples 0 and 1 and
+/// the last five for the last two.
+#[inline]
+fn reaches(n: usize, m: usize, c: Candidate) -> bool {
+    let (lo, hi) = if m >= 2 && m + 2 < n {
+        (m - 2, m + 2)
+    } else if m < 2 {
+        (0, 4)
+    } else {
+        (n - 5, n - 1)
+    };
+    lo <= c.end() && c.start <= hi
+}
+
+/// A run's prediction at one of its samples: its weights ([`run_weights`]), noise gain
+/// ([`run_gain`]) and what it misses of a smooth motion ([`run_smooth_gain`]).
+#[derive(Debug, Clone, Copy, Default)]
+struct RunCubic {
+    weights: [f64; 4],
+    gain: f64,
+    smooth_gain: f64,
+}
+
+/// The runs' predictions, computed once: `[len − 1][p]` for sample `p` of a run of `len`.
+static RUN_CUBICS: LazyLock<[[RunCubic; MAX_RUN]; MAX_RUN]> = LazyLock::new(|| {
+    std::array::from_fn(|l| {
+        std::array::from_fn(|p| {
+            let len = l + 1;
+            if p < len {
+                RunCubic {
+                    weights: run_weights(len, p),
+                    gain: run_gain(len, p),
+                    smooth_gain: run_smooth_gain(len, p),
+                }
+            } else {
+                RunCubic::default()
+            }
+        })
+    })
+});
+
+/// The prediction of a run of `len` at its sample `p` ([`RUN_CUBICS`]).
+#[inline]
+fn run_cubic(len: usize, p: usize) -> RunCubic {
+    RUN_CUBICS[len - 1][p]
 }
 
 /// Weights of the cubic through the samples at `−2, −1, len, len + 1` (relative to a run's
@@ -1843,7 +2268,13 @@ mod tests {
             bounds: BTreeMap::new(),
             spikes: Vec::new(),
             stretch: Stretch::new(n, max_run),
-            window: Vec::new(),
+            ranked: [[None; MAX_RUN]; 2],
+            rejected: Vec::new(),
+            held: vec![(usize::MAX, Held::default()); HELD],
+            repaired: vec![(usize::MAX, [0.0; MAX_RUN + 4]); HELD * MAX_RUN],
+            terms: Vec::new(),
+            window: None,
+            shortcuts: true,
             _geometry: std::marker::PhantomData,
         }
     }
@@ -1857,6 +2288,15 @@ mod tests {
             for c in 0..n {
                 let want = reference_local_thresholds::<G>(search.x, max_run, search.k, c, width);
                 let got = search.local_thresholds(c, width);
+                // Ranked from the last window where that is cheap, afresh otherwise: the same.
+                search.shortcuts = false;
+                let afresh = search.local_thresholds(c, width);
+                search.shortcuts = true;
+                assert_eq!(
+                    got.map(f64::to_bits),
+                    afresh.map(f64::to_bits),
+                    "{what}: c {c} width {width}"
+                );
                 for m in 0..MAX_RUN {
                     assert!(
                         (got[m] - want[m]).abs() <= 1e-12 * want[m].abs(),
@@ -1883,6 +2323,170 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// The search without its shortcuts, and with them: the same outliers, sizes, replacements,
+    /// scale and repaired record, to the bit.
+    fn assert_shortcuts_change_nothing(x: &[f64], domain: Domain, params: &SpikeParams, what: &str) {
+        let (mut with, mut without) = (x.to_vec(), x.to_vec());
+        let fast = search(&mut with, domain, params, true);
+        let plain = search(&mut without, domain, params, false);
+        let bits = |s: &Spikes| -> Vec<(usize, u64, u64)> {
+            s.iter()
+                .map(|s| (s.index, s.size.to_bits(), s.replacement.to_bits()))
+                .collect()
+        };
+        assert_eq!(bits(&fast), bits(&plain), "{what}: the outliers");
+        assert_eq!(
+            fast.scale().to_bits(),
+            plain.scale().to_bits(),
+            "{what}: the scale"
+        );
+        assert!(
+            with.iter().zip(&without).all(|(a, b)| a.to_bits() == b.to_bits()),
+            "{what}: the repaired record"
+        );
+    }
+
+    #[test]
+    fn the_positions_that_leave_and_enter_a_moving_window() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let window = |rng: &mut rand_chacha::ChaCha8Rng| {
+            let a = rng.random_range(0..40);
+            let b = a + rng.random_range(0..20);
+            let c = b + rng.random_range(0..20);
+            let d = c + rng.random_range(0..20);
+            LocalWindow {
+                left: (a, b),
+                right: (c, d),
+                steps: 3,
+            }
+        };
+        let positions =
+            |w: LocalWindow| -> Vec<usize> { (w.left.0..w.left.1).chain(w.right.0..w.right.1).collect() };
+        let listed = |r: Ranges| -> Vec<usize> { r.as_slice().iter().flat_map(|&(a, b)| a..b).collect() };
+        for case in 0..2000 {
+            let o = window(&mut rng);
+            // Moved on by a few positions, or anywhere.
+            let w = if case % 2 == 0 {
+                let d = rng.random_range(0..12);
+                LocalWindow {
+                    left: (o.left.0 + d, o.left.1 + d),
+                    right: (o.right.0 + d, o.right.1 + d),
+                    steps: 3,
+                }
+            } else {
+                window(&mut rng)
+            };
+            let (leaving, entering) = moved(o, w);
+            let (old, new) = (positions(o), positions(w));
+            let want_leaving: Vec<usize> = old.iter().copied().filter(|p| !new.contains(p)).collect();
+            let want_entering: Vec<usize> = new.iter().copied().filter(|p| !old.contains(p)).collect();
+            assert_eq!(listed(leaving), want_leaving, "{o:?} to {w:?}");
+            assert_eq!(listed(entering), want_entering, "{o:?} to {w:?}");
+            assert!(
+                leaving
+                    .as_slice()
+                    .iter()
+                    .chain(entering.as_slice())
+                    .all(|(a, b)| a < b)
+            );
+        }
+    }
+
+    #[test]
+    fn a_sum_with_terms_replaced_is_the_sum_in_order() {
+        let terms: Vec<f64> = (0..9).map(|k| 0.1 * f64::from(k) + 1e-17).collect();
+        let replaced = [3.3, 1e-9, 7.0, 0.25, 1e5];
+        for at in 0..20 {
+            for len in 0..=replaced.len() {
+                let naive: f64 = (5..14)
+                    .map(|m| {
+                        if (at..at + len).contains(&m) {
+                            replaced[m - at]
+                        } else {
+                            terms[m - 5]
+                        }
+                    })
+                    .sum();
+                let fast = sum_replaced(&terms, 5, at, &replaced[..len]);
+                assert_eq!(fast.to_bits(), naive.to_bits(), "at {at}, {len} replaced");
+            }
+        }
+    }
+
+    #[test]
+    fn the_shortcuts_find_what_the_search_finds_without_them() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(17);
+        let n = 30_000;
+        let h = TAU / 64.0;
+        let q = TAU / 4096.0;
+        // Whirling angles at 64 samples per period whose motion turns sharply, as a whirling
+        // double pendulum's does: the search rejects the same peaks from many samples (the
+        // first), or flags thousands of its turns (the second).
+        let turns: Vec<f64> = (0..n)
+            .map(|i| {
+                let t = i as f64 * h;
+                t + 2.0 * (3.0 * t.sin()).tanh()
+            })
+            .collect();
+        let steep: Vec<f64> = (0..n)
+            .map(|i| {
+                let t = i as f64 * h;
+                wrap(0.3 * t + 1.5 * (8.0 * t.sin()).tanh() + 0.2 * (2.3 * t).sin())
+            })
+            .collect();
+        // With bit errors of 64 to 2048 counts and dropouts of one to three samples, wrapped, and
+        // through a 4096-count encoder.
+        let mut broken = turns.clone();
+        for j in (300..n).step_by(1531) {
+            broken[j] += f64::from(64 << (j % 6)) * q;
+        }
+        for (j, len) in [(1000, 2), (7000, 3), (15_000, 1), (21_000, 2)] {
+            broken[j..j + len].fill(0.0);
+        }
+        let counts: Vec<f64> = broken.iter().map(|v| wrap((v / q).round() * q)).collect();
+        let turns: Vec<f64> = turns.iter().map(|&v| wrap(v)).collect();
+        let broken: Vec<f64> = broken.iter().map(|&v| wrap(v)).collect();
+        // Noise whose level changes within tens of samples, with outliers and runs, on the line.
+        let mut noisy: Vec<f64> = (0..n)
+            .map(|i| {
+                let level = 1e-3 * (1.0 + 4.0 * ((i as f64 / 70.0).sin()).powi(2));
+                0.4 * (i as f64 * 0.05).sin() + level * (rng.random::<f64>() - 0.5)
+            })
+            .collect();
+        for j in (17..n).step_by(613) {
+            noisy[j] += 0.05;
+        }
+        for j in (400..n).step_by(2777) {
+            noisy[j..j + 2].fill(-0.3);
+        }
+        for params in [
+            SpikeParams::new(),
+            SpikeParams::new().with_max_run(1).unwrap(),
+            SpikeParams::new()
+                .with_max_run(MAX_RUN)
+                .and_then(|p| p.with_threshold(4.0))
+                .unwrap(),
+        ] {
+            let what = format!("{params:?}");
+            for (x, domain, name) in [
+                (&turns, Domain::Circle, "sharp turns"),
+                (
+                    &broken,
+                    Domain::Circle,
+                    "sharp turns with bit errors and dropouts",
+                ),
+                (&steep, Domain::Circle, "steep turns"),
+                (&noisy, Domain::Line, "noise"),
+            ] {
+                assert_shortcuts_change_nothing(x, domain, &params, &format!("{name}, {what}"));
+            }
+        }
+        let quantum = SpikeParams::new().with_quantum(q).unwrap();
+        assert_shortcuts_change_nothing(&counts, Domain::Circle, &quantum, "encoder");
     }
 
     #[test]

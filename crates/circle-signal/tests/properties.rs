@@ -7,7 +7,44 @@ fn wrapped() -> impl Strategy<Value = f64> {
     (-PI..PI).prop_map(|x| x)
 }
 
+/// `wrap` as its documentation defines it, the remainder always taken.
+fn wrap_by_remainder(theta: f64) -> f64 {
+    let mut r = (theta + PI).rem_euclid(TAU);
+    if r >= TAU {
+        r -= TAU;
+    }
+    r - PI
+}
+
+#[test]
+fn wrap_skips_the_remainder_without_changing_a_bit() {
+    // Around the ends of the turn (where the sum with π rounds), zero of either sign, far away,
+    // and the values that are no numbers.
+    let mut values = vec![0.0, -0.0, PI, -PI, TAU, -TAU, 3.0 * PI, -3.0 * PI, 1e300, -1e300];
+    for edge in [PI, -PI, TAU, -TAU, 0.0] {
+        let mut up = edge;
+        let mut down = edge;
+        for _ in 0..64 {
+            up = up.next_up();
+            down = down.next_down();
+            values.extend([up, down]);
+        }
+    }
+    for v in values {
+        assert_eq!(wrap(v).to_bits(), wrap_by_remainder(v).to_bits(), "{v:e}");
+    }
+    for v in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+        assert!(wrap(v).is_nan());
+    }
+}
+
 proptest! {
+    #[test]
+    fn wrap_is_the_remainder_to_the_bit(x in -1e3..1e3f64, wrapped in -PI..PI) {
+        prop_assert_eq!(wrap(x).to_bits(), wrap_by_remainder(x).to_bits());
+        prop_assert_eq!(wrap(wrapped).to_bits(), wrap_by_remainder(wrapped).to_bits());
+    }
+
     #[test]
     fn wrap_is_in_range_and_idempotent(x in -1e6..1e6f64) {
         let w = wrap(x);

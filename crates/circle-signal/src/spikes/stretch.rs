@@ -121,11 +121,21 @@ impl Stretch {
         }
     }
 
-    /// The level of the statistic of width `m` at `p` (made available by
-    /// [`ensure_levels`](Self::ensure_levels)).
+    /// Whether the levels of positions `a ..= b` are held.
+    pub(super) fn holds_levels(&self, a: usize, b: usize) -> bool {
+        let (lo, hi) = self.level_range();
+        self.levels_ready && lo <= a && b < hi
+    }
+
+    /// The levels of positions `from .. to` (made available by
+    /// [`ensure_levels`](Self::ensure_levels); none when `from .. to` is empty, wherever it is).
     #[inline]
-    pub(super) fn level(&self, p: usize, m: usize) -> f64 {
-        self.levels[p - self.lo][m - 1]
+    pub(super) fn levels(&self, (from, to): (usize, usize)) -> &[[f64; MAX_RUN]] {
+        if from < to {
+            &self.levels[from - self.lo..to - self.lo]
+        } else {
+            &[]
+        }
     }
 
     /// Whether at least `rank` of the blocks `left.0 .. left.1` and `right.0 .. right.1` have a
