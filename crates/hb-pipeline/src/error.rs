@@ -34,13 +34,17 @@ pub enum RunError {
     #[error(transparent)]
     Options(#[from] OptionError),
     /// Reading the record, or fitting its time stamps to a grid.
-    #[error("{name}: {source}{}", input_fix(source))]
+    #[error("{name}: {source}{}", read_fix(source, *coords))]
     Read {
         /// The file (or `the arrays`).
         name: String,
-        /// What went wrong.
+        /// What went wrong (boxed: the largest of the errors).
         #[source]
-        source: InputError,
+        source: Box<InputError>,
+        /// Whether the coordinates' columns were named as a list («coords»: a system's, or a
+        /// saved system's own names): a missing coordinate is chosen there, not with
+        /// «angle_col».
+        coords: bool,
     },
     /// Conditioning the record (spikes, integration).
     #[error(transparent)]
@@ -142,6 +146,17 @@ fn input_fix(error: &InputError) -> &'static str {
         InputError::TimeGlitch { isolated: true, .. } => "; run with «repair=True» to fix isolated glitches",
         InputError::TimeGlitch { isolated: false, .. } | InputError::TimeUnresolved { .. } => " with «dt=»",
         _ => "",
+    }
+}
+
+/// The options that fix a read error: those of [`input_fix`], but a missing coordinate of a
+/// record read by «coords» is chosen with «coords» (the angle's column is its first).
+fn read_fix(error: &InputError, coords: bool) -> &'static str {
+    match error {
+        InputError::MissingColumn {
+            role: Role::Angle, ..
+        } if coords => "; choose the coordinates' columns with «coords=»",
+        error => input_fix(error),
     }
 }
 

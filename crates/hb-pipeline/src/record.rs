@@ -572,11 +572,12 @@ fn arrays_record(
         if let Some((i, &value)) = column.iter().enumerate().find(|(_, v)| !v.is_finite()) {
             return Err(RunError::Read {
                 name: "the arrays".to_owned(),
-                source: InputError::NonFinite {
+                coords: options.coords.is_some(),
+                source: Box::new(InputError::NonFinite {
                     at: hb_record::input::Location::Sample(i + 1),
                     role,
                     value,
-                },
+                }),
             });
         }
     }
@@ -606,7 +607,8 @@ pub fn condition_source(
             observer.stage(Stage::Read);
             read_path(path, &options.read_options()?).map_err(|source| RunError::Read {
                 name: name.clone(),
-                source,
+                source: Box::new(source),
+                coords: options.coords.is_some(),
             })?
         }
         Source::Arrays { coords, t, drives } => arrays_record(&coords, t, &drives, options)?,
@@ -625,7 +627,11 @@ pub fn condition_source(
         observer.notice(&Notice::Record(note.clone()))
     })
     .map_err(|e| match e {
-        PrepareError::Input(source) => RunError::Read { name, source },
+        PrepareError::Input(source) => RunError::Read {
+            name,
+            source: Box::new(source),
+            coords: options.coords.is_some(),
+        },
         e => RunError::Prepare(e),
     })
 }

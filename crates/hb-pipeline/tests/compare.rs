@@ -254,3 +254,35 @@ fn arrays_refuse_velocity_columns() {
     assert_eq!(e.kind(), hb_pipeline::ErrorKind::Options);
     assert!(e.to_string().contains("velocity_col"), "{e}");
 }
+
+/// A record without one of the columns named by `coords` is fixed with `coords`, which names
+/// every coordinate's column (a saved system's own names, when it is read without them), not
+/// with `angle_col`, which names only a single coordinate's; a missing single angle still is.
+#[test]
+fn a_missing_coordinate_names_the_option_that_chooses_it() {
+    let dir = std::env::temp_dir().join(format!("hb-pipeline-missing-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("one.csv");
+    std::fs::write(&path, "t,theta1\n0,0.1\n0.1,0.2\n0.2,0.25\n0.3,0.2\n").unwrap();
+    let read = |options: hb_pipeline::RecordOptions| {
+        let e = hb_pipeline::condition_source(Source::Path(&path), &options, &mut ()).unwrap_err();
+        assert_eq!(e.kind(), hb_pipeline::ErrorKind::Input, "{e}");
+        hb_pipeline::Spelling::CommandLine.render(&e.to_string())
+    };
+    let system = read(hb_pipeline::RecordOptions {
+        coords: Some("theta1,theta2".parse().unwrap()),
+        ..Default::default()
+    });
+    assert!(system.contains("'theta2'"), "{system}");
+    assert!(system.contains("with --coords"), "{system}");
+    assert!(!system.contains("angle-col"), "{system}");
+    let one = read(hb_pipeline::RecordOptions {
+        angle_col: Some("theta2".to_owned()),
+        ..Default::default()
+    });
+    assert!(
+        one.contains("'theta2'") && one.contains("with --angle-col"),
+        "{one}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

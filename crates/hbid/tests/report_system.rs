@@ -286,6 +286,14 @@ fn bad_input_leaves_no_report() {
         &out,
         "theta1",
     );
+    // One of them missing: the columns are chosen with --coords (a system's), not --angle-col.
+    let half = dir.join("half.csv");
+    std::fs::write(&half, "t,theta1\n0,0.1\n0.1,0.2\n0.2,0.25\n0.3,0.2\n").unwrap();
+    assert_refused(
+        &["report", s(&half), "--model", s(&model), "--out", o],
+        &out,
+        "no angle column 'theta2' in the input (columns: t,theta1); choose the coordinates' columns with --coords",
+    );
     // Columns that are not in the record.
     assert_refused(
         &["report", r, "--coords", "theta1,nosuch", "--out", o],
