@@ -1,7 +1,8 @@
 //! `hbid report` of a system of several coordinates (`--coords`), or of a saved model
 //! (`--model`): the equations' coefficients, the residuals of their fit, each model's free run
-//! against the record (`hbid compare`'s) coordinate by coordinate, and its valid prediction time,
-//! as a Markdown report with figures.
+//! against the record (`hbid compare`'s) coordinate by coordinate, the phase portraits and
+//! Poincaré sections of the record beside each model's ([`attractor`]), and its valid prediction
+//! time, as a Markdown report with figures.
 //!
 //! Every number is computed before the first file is written: a run that fails (a bad option, a
 //! record that does not fit the model) leaves no report behind, and README.md is written last.

@@ -59,6 +59,9 @@ pub(super) struct RecordAttractor {
     /// The section once per drive period at phase 0 (`t` a whole multiple of `T`): its times and
     /// states, or why there is none.
     section: Result<Vec<(f64, State)>, String>,
+    /// Where each model's long run starts: the first point of the section, or without one the
+    /// record's first state.
+    start: Option<(f64, State)>,
 }
 
 /// One model's side: its phase portrait and section.
@@ -196,12 +199,17 @@ fn record_attractor(system: &IdentifiedSystem, grid: &GridData) -> RecordAttract
         (None, Some(why)) => Err(format!("no velocities of the record: {why}")),
         (None, None) => Ok(record_section(&states, grid, period, domains)),
     };
+    let start = match &section {
+        Ok(points) => points.first().cloned(),
+        Err(_) => (0..len).find_map(|i| Some((grid.t0 + i as f64 * grid.dt, states.at(i)?))),
+    };
     RecordAttractor {
         portrait,
         velocities: states.velocities(),
         portrait_periods: shown_samples as f64 * grid.dt / period,
         period,
         section,
+        start,
     }
 }
 
@@ -333,10 +341,6 @@ pub(super) fn measure(
 ) -> anyhow::Result<Attractors> {
     let record = record_attractor(&entries[0].system, grid);
     let no_section = no_section(&entries[0].system);
-    let start = match &record.section {
-        Ok(points) => points.first().map(|(t, s)| (*t, s.as_slice())),
-        Err(_) => None,
-    };
     let models = entries
         .iter()
         .zip(measured)
@@ -344,12 +348,18 @@ pub(super) fn measure(
             if entry.system.has_measured_drive() {
                 return Ok(run_over_record(entry, m, &record, grid.dt));
             }
-            match start {
-                Some(start) => long_run(&entry.system, start, record.period),
+            match &record.start {
+                Some((t, state)) => {
+                    let mut run = long_run(&entry.system, (*t, state), record.period)?;
+                    if no_section.is_some() {
+                        run.section = None;
+                    }
+                    Ok(run)
+                }
                 None => Ok(ModelAttractor {
                     portrait: vec![Vec::new(); entry.system.coordinates()],
                     section: None,
-                    stopped: Some("the record has no state at a whole drive period to start from".to_owned()),
+                    stopped: Some("the record has no state to start from".to_owned()),
                 }),
             }
         })
@@ -437,11 +447,16 @@ pub(super) fn section(
     let record = &a.record;
     writeln!(r, "## Phase portraits and Poincaré sections\n")?;
     let velocities = match record.velocities {
-        Velocities::Measured => "its measured velocity columns",
-        Velocities::Estimated => {
-            "the local polynomial of degree 4 through the samples within a twelfth of a drive period, as the \
-             prediction test below estimates them"
-        }
+        Velocities::Measured => "its measured velocity columns".to_owned(),
+        Velocities::Estimated => format!(
+            "the local polynomial of degree 4 through the samples within a twelfth of {}, as the prediction test \
+             below estimates them",
+            if a.no_section.is_some() {
+                "T"
+            } else {
+                "a drive period"
+            }
+        ),
     };
     let run = match &a.no_section {
         Some(_) if system.has_measured_drive() => {
@@ -449,21 +464,30 @@ pub(super) fn section(
              free run above)"
                 .to_owned()
         }
-        _ => format!(
+        Some(_) => format!(
+            "each model's long run from the record's first state: {TRANSIENT_PERIODS} periods T left out as \
+             transient, then {RUN_PERIODS} periods at {RUN_SAMPLES_PER_PERIOD} samples per period"
+        ),
+        None => format!(
             "each model's long run on its own drive: from the record's state at its first whole drive period, \
              {TRANSIENT_PERIODS} periods of transient left out, then {RUN_PERIODS} periods at \
              {RUN_SAMPLES_PER_PERIOD} samples per period"
         ),
     };
     let span = if a.no_section.is_some() {
-        format!("{:.2} units of time", record.portrait_periods * record.period)
+        format!(
+            "{:.2} units of time ({:.0} periods T = {:.4} of the record's clock, which has no drive period)",
+            record.portrait_periods * record.period,
+            record.portrait_periods,
+            record.period
+        )
     } else {
         format!("{:.0} drive periods", record.portrait_periods)
     };
     writeln!(
         r,
-        "Each coordinate against its velocity{}: the record's first {span} (velocities from {velocities}) beside \
-         {run}.\n",
+        "Each coordinate against its velocity{}: the record's first {span}, its velocities from {velocities}, \
+         beside {run}.\n",
         if domains.contains(&Domain::Circle) {
             " (an angle wrapped into [−π, π))"
         } else {
