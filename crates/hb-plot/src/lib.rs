@@ -34,6 +34,29 @@
 //!     Err(hb_plot::PlotError::Draw { path, .. }) => assert_eq!(path, nowhere),
 //!     other => panic!("{other:?}"),
 //! }
+//!
+//! // Two panels side by side on common axes: the sine beside its double.
+//! let double = Figure {
+//!     title: "twice",
+//!     series: vec![Series {
+//!         label: "",
+//!         points: (0..100).map(|n| (n as f64 * 0.1, 2.0 * (n as f64 * 0.1).sin())).collect(),
+//!         style: Style::Dots(1),
+//!         color: BLUE,
+//!     }],
+//!     ..figure
+//! };
+//! let sine = Figure {
+//!     series: vec![Series {
+//!         label: "",
+//!         points: (0..100).map(|n| (n as f64 * 0.1, (n as f64 * 0.1).sin())).collect(),
+//!         style: Style::Dots(1),
+//!         color: BLUE,
+//!     }],
+//!     ..double
+//! };
+//! hb_plot::save_row(&[sine, double], &dir.join("row.svg"))?;
+//! assert!(std::fs::metadata(dir.join("row.svg"))?.len() > 0);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 #![deny(missing_docs)]
@@ -105,10 +128,13 @@ pub struct Figure<'a> {
     pub y_range: Option<(f64, f64)>,
 }
 
-fn extent(series: &[Series<'_>], pick: impl Fn(&(f64, f64)) -> f64) -> (f64, f64) {
+fn extent<'a, S: std::borrow::Borrow<Series<'a>>>(
+    series: &[S],
+    pick: impl Fn(&(f64, f64)) -> f64,
+) -> (f64, f64) {
     let (lo, hi) = series
         .iter()
-        .flat_map(|s| s.points.iter().map(&pick))
+        .flat_map(|s| s.borrow().points.iter().map(&pick))
         .filter(|v| v.is_finite())
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
             (lo.min(v), hi.max(v))
@@ -134,14 +160,74 @@ fn split_line(points: &[(f64, f64)], threshold: f64) -> Vec<Vec<(f64, f64)>> {
     pieces
 }
 
+/// The size of one figure (one panel) in pixels.
+const PANEL: (u32, u32) = (900, 650);
+/// The size of each panel of a row ([`save_row`]).
+const ROW_PANEL: (u32, u32) = (640, 600);
+
+/// The ranges of a chart's axes: `(x0, x1)` and `(y0, y1)`.
+type Ranges = ((f64, f64), (f64, f64));
+
+/// Draws `panels` side by side, each in its own chart, into `path` (`.png` or `.svg`, by
+/// extension), each panel 640×600 pixels. The panels share their axes: a range a panel does not
+/// give is the extent of every panel's data, so that the panels can be read against each other.
+pub fn save_row(panels: &[Figure<'_>], path: &Path) -> Result<(), PlotError> {
+    let all: Vec<&Series<'_>> = panels.iter().flat_map(|f| &f.series).collect();
+    let x = extent(&all, |p| p.0);
+    let y = extent(&all, |p| p.1);
+    let ranges: Vec<Ranges> = panels
+        .iter()
+        .map(|f| (f.x_range.unwrap_or(x), f.y_range.unwrap_or(y)))
+        .collect();
+    let size = (ROW_PANEL.0 * panels.len().max(1) as u32, ROW_PANEL.1);
+    fn draw<DB: DrawingBackend>(
+        root: DrawingArea<DB, plotters::coord::Shift>,
+        panels: &[Figure<'_>],
+        ranges: &[Ranges],
+    ) -> Result<(), BackendError>
+    where
+        DB::ErrorType: 'static,
+    {
+        root.fill(&WHITE).map_err(area_error::<DB>)?;
+        let areas = root.split_evenly((1, panels.len().max(1)));
+        for ((panel, area), &(x, y)) in panels.iter().zip(&areas).zip(ranges) {
+            panel.draw_in(area, x, y)?;
+        }
+        root.present().map_err(area_error::<DB>)?;
+        Ok(())
+    }
+    let svg = path.extension().is_some_and(|e| e == "svg");
+    let drawn = if svg {
+        draw(SVGBackend::new(path, size).into_drawing_area(), panels, &ranges)
+    } else {
+        draw(
+            BitMapBackend::new(path, size).into_drawing_area(),
+            panels,
+            &ranges,
+        )
+    };
+    drawn.map_err(|source| PlotError::Draw {
+        path: path.to_owned(),
+        source,
+    })
+}
+
+/// A drawing area's error, boxed.
+fn area_error<DB: DrawingBackend>(e: DrawingAreaErrorKind<DB::ErrorType>) -> BackendError
+where
+    DB::ErrorType: 'static,
+{
+    Box::new(e)
+}
+
 impl Figure<'_> {
     /// Draws the figure into `path` (`.png` or `.svg`, by extension), 900×650 pixels.
     pub fn save(&self, path: &Path) -> Result<(), PlotError> {
         let svg = path.extension().is_some_and(|e| e == "svg");
         let drawn = if svg {
-            self.draw(SVGBackend::new(path, (900, 650)).into_drawing_area())
+            self.draw(SVGBackend::new(path, PANEL).into_drawing_area())
         } else {
-            self.draw(BitMapBackend::new(path, (900, 650)).into_drawing_area())
+            self.draw(BitMapBackend::new(path, PANEL).into_drawing_area())
         };
         drawn.map_err(|source| PlotError::Draw {
             path: path.to_owned(),
@@ -156,11 +242,26 @@ impl Figure<'_> {
     where
         DB::ErrorType: 'static,
     {
-        let err = |e: DrawingAreaErrorKind<DB::ErrorType>| -> BackendError { Box::new(e) };
-        root.fill(&WHITE).map_err(err)?;
-        let (x0, x1) = self.x_range.unwrap_or_else(|| extent(&self.series, |p| p.0));
-        let (y0, y1) = self.y_range.unwrap_or_else(|| extent(&self.series, |p| p.1));
-        let mut chart = ChartBuilder::on(&root)
+        root.fill(&WHITE).map_err(area_error::<DB>)?;
+        let x = self.x_range.unwrap_or_else(|| extent(&self.series, |p| p.0));
+        let y = self.y_range.unwrap_or_else(|| extent(&self.series, |p| p.1));
+        self.draw_in(&root, x, y)?;
+        root.present().map_err(area_error::<DB>)?;
+        Ok(())
+    }
+
+    /// Draws the chart into `root` (already filled) on the ranges `x` and `y`.
+    fn draw_in<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, plotters::coord::Shift>,
+        (x0, x1): (f64, f64),
+        (y0, y1): (f64, f64),
+    ) -> Result<(), BackendError>
+    where
+        DB::ErrorType: 'static,
+    {
+        let err = area_error::<DB>;
+        let mut chart = ChartBuilder::on(root)
             .caption(self.title, ("sans-serif", 24))
             .margin(12)
             .x_label_area_size(45)
@@ -204,7 +305,6 @@ impl Figure<'_> {
                 .draw()
                 .map_err(err)?;
         }
-        root.present().map_err(err)?;
         Ok(())
     }
 }

@@ -1,8 +1,9 @@
 //! `hbid report` of a system of several coordinates: a double pendulum's record made by `hbid
 //! simulate`, identified with `--coords` by both methods or read from a model saved by `hbid
 //! identify --save-model`, reported with each equation's coefficients, the residuals, each
-//! coordinate's free run against the record and the valid prediction time; bad input fails with
-//! one line and leaves no report.
+//! coordinate's free run against the record, the phase portraits and Poincaré sections of the
+//! record beside the models' and the valid prediction time; a system driven by a measured drive
+//! has no section and says so; bad input fails with one line and leaves no report.
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -60,8 +61,17 @@ fn double_pendulum(dir: &Path) -> (PathBuf, String, serde_json::Value) {
 }
 
 /// Every figure README.md shows exists and is a PNG of some size, and every PNG of the folder
-/// is shown; the report ends with its figures.
+/// is shown; the report ends with its figures, the last the valid prediction time's.
 fn assert_complete(dir: &Path) -> String {
+    let text = assert_figures(dir);
+    let last = text.trim_end().lines().last().unwrap();
+    assert!(last.ends_with(" the record's own state."), "ends with: {last}");
+    text
+}
+
+/// Every figure README.md shows exists and is a PNG of some size, and every PNG of the folder
+/// is shown.
+fn assert_figures(dir: &Path) -> String {
     let text = std::fs::read_to_string(dir.join("README.md")).unwrap();
     let shown: Vec<&str> = text
         .lines()
@@ -83,9 +93,39 @@ fn assert_complete(dir: &Path) -> String {
             assert!(shown.contains(&name.as_str()), "{name} not in the report");
         }
     }
-    let last = text.trim_end().lines().last().unwrap();
-    assert!(last.ends_with(" the record's own state."), "ends with: {last}");
     text
+}
+
+/// The phase portrait and the Poincaré sections of every coordinate, and in the angles' torus,
+/// as figures; each model's section as far from the record's as the record's halves are from
+/// each other, give or take the estimate's scatter at these sizes.
+fn assert_sections(dir: &Path, text: &str, models: &[&str]) {
+    assert!(text.contains("## Phase portraits and Poincaré sections"));
+    for figure in [
+        "portrait_theta1.png",
+        "portrait_theta2.png",
+        "section_theta1.png",
+        "section_theta2.png",
+        "section_theta1_theta2.png",
+    ] {
+        assert!(text.contains(&format!("]({figure})")), "{figure} not shown");
+    }
+    assert!(text.contains("| model | section points | energy distance to the record's section |"));
+    let sections = json(&dir.join("sections.json"));
+    let floor = sections["floor"].as_f64().unwrap();
+    assert!(sections["record_points"].as_u64().unwrap() > 400, "{sections}");
+    let rows = sections["models"].as_array().unwrap();
+    assert_eq!(rows.len(), models.len());
+    for (row, model) in rows.iter().zip(models) {
+        assert_eq!(row["model"], *model);
+        assert_eq!(row["points"], 300);
+        let distance = row["distance"].as_f64().unwrap();
+        assert!(distance.abs() < 0.05 && floor.abs() < 0.05, "{sections}");
+        assert!(
+            text.contains(&format!("| {model} | 300 | {distance:.2e} |")),
+            "{model}'s distance not in the report"
+        );
+    }
 }
 
 /// The coefficient of `term` in the table of the equation of `coordinate` under `heading`.
@@ -119,6 +159,7 @@ fn report_identifies_a_double_pendulum_by_both_methods() {
         s(&out),
     ]);
     let text = assert_complete(&out);
+    assert_sections(&out, &text, &["upo", "windowed"]);
     for needle in [
         "A system of 2 coordinates (theta1, theta2)",
         "## Identified system: upo",
@@ -200,6 +241,7 @@ fn report_of_a_saved_system() {
     let out = dir.join("report");
     ok(&["report", s(&record), "--model", s(&model), "--out", s(&out)]);
     let text = assert_complete(&out);
+    assert_sections(&out, &text, &["model"]);
     assert!(text.contains("(2 coordinate(s): theta1, theta2)"), "{text}");
     assert!(text.contains("## The model: the saved model"));
     let want = truth["equations"]["theta2"]["coefficients"]["sin(theta2)"]
@@ -229,6 +271,72 @@ fn report_of_a_saved_system() {
         s(&out),
     ]);
     assert_complete(&out);
+}
+
+/// Two coupled Duffing oscillators on a shaken base, driven by its measured acceleration `a`
+/// alone: each coordinate's phase portrait beside each model's free run under the measured drive,
+/// and no stroboscopic section (the drive has no period), said in the report, not failed on.
+#[test]
+fn a_system_driven_by_a_measured_drive_has_no_stroboscopic_section() {
+    let dir = scratch("measured");
+    let record = dir.join("cd.csv");
+    let truth = dir.join("cd.json");
+    ok(&[
+        "simulate",
+        "--system",
+        "coupled-duffing",
+        "--samples",
+        "4000",
+        "--truth",
+        s(&truth),
+        "--out",
+        s(&record),
+    ]);
+    let identify = json(&truth)["identify"].clone();
+    let out = dir.join("report");
+    ok(&[
+        "report",
+        s(&record),
+        "--coords",
+        "x1,x2",
+        "--signal",
+        "line",
+        "--drive-col",
+        "a",
+        "--window",
+        &identify["window"].as_f64().unwrap().to_string(),
+        "--terms",
+        identify["terms"].as_str().unwrap(),
+        "--bootstrap",
+        "0",
+        "--out",
+        s(&out),
+    ]);
+    let text = assert_figures(&out);
+    assert!(
+        text.contains(
+            "There is no stroboscopic section: the system is driven by the record's measured drive (a), which has \
+             no period"
+        ),
+        "{text}"
+    );
+    assert!(text.contains("driven by the record's measured drives"), "{text}");
+    for coordinate in ["x1", "x2"] {
+        assert!(
+            text.contains(&format!("](portrait_{coordinate}.png)")),
+            "{coordinate}"
+        );
+        assert!(!out.join(format!("section_{coordinate}.png")).exists());
+    }
+    assert!(!out.join("section_x1_x2.png").exists());
+    let sections = json(&out.join("sections.json"));
+    assert!(
+        sections["no_section"]
+            .as_str()
+            .unwrap()
+            .contains("measured drive")
+    );
+    assert!(sections.get("models").is_none());
 }
 
 /// One line on stderr naming the problem, a failing status, and no report: not README.md, not a

@@ -30,13 +30,16 @@ pub struct ReportArgs {
     /// Folder of the report (created if missing; README.md, figures and the models go there).
     #[arg(long)]
     pub out: PathBuf,
-    /// Drive periods simulated for each model's Poincaré section and Lyapunov exponent.
+    /// Drive periods simulated for each model's Poincaré section and Lyapunov exponent (a record
+    /// of one coordinate; the report of a system or a saved model runs each model 300 periods
+    /// after 100 of transient).
     #[arg(long, default_value_t = 2000)]
     pub validation_periods: usize,
     /// A saved model or system (`hbid identify --save-model`, JSON or binary) to report against
     /// the record instead of identifying one: its equations' coefficients and fit, its free run
-    /// against the record coordinate by coordinate (`hbid compare`'s) and its valid prediction
-    /// time. A system's columns are its own names unless --coords names them.
+    /// against the record coordinate by coordinate (`hbid compare`'s), its phase portraits and
+    /// Poincaré sections beside the record's, and its valid prediction time. A system's columns
+    /// are its own names unless --coords names them.
     #[arg(long, value_name = "PATH", conflicts_with_all = ["terms", "method", "basis", "select", "refine"])]
     pub model: Option<PathBuf>,
 }

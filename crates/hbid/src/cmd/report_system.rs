@@ -1,7 +1,8 @@
 //! `hbid report` of a system of several coordinates (`--coords`), or of a saved model
 //! (`--model`): the equations' coefficients, the residuals of their fit, each model's free run
-//! against the record (`hbid compare`'s) coordinate by coordinate, and its valid prediction time,
-//! as a Markdown report with figures.
+//! against the record (`hbid compare`'s) coordinate by coordinate, the phase portraits and
+//! Poincaré sections of the record beside each model's ([`attractor`]), and its valid prediction
+//! time, as a Markdown report with figures.
 //!
 //! Every number is computed before the first file is written: a run that fails (a bad option, a
 //! record that does not fit the model) leaves no report behind, and README.md is written last.
@@ -26,6 +27,8 @@ use pendulum_sim::prediction::{
 
 use super::report::{Kept, ReportArgs};
 use crate::progress::Console;
+
+mod attractor;
 
 /// Drive periods of each free-run figure, from the end of the state's fit.
 const SHOWN_PERIODS: f64 = 20.0;
@@ -129,14 +132,19 @@ pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
         .iter()
         .map(|e| measure(args, e, &grid, &mut kept))
         .collect::<anyhow::Result<Vec<_>>>()?;
+    let attractors = attractor::measure(&entries, &measured, &grid)?;
     let Kept { console, notices } = kept;
     console.finish();
-    let notes: Vec<String> = notices
-        .iter()
-        .filter(|n| !matches!(n, Notice::Resampled { .. } | Notice::Record(_)))
-        .map(|n| Spelling::CommandLine.render(&n.to_string()))
+    // The summary, then the notes, each a paragraph.
+    let intro: Vec<String> = std::iter::once(summary)
+        .chain(
+            notices
+                .iter()
+                .filter(|n| !matches!(n, Notice::Resampled { .. } | Notice::Record(_)))
+                .map(|n| Spelling::CommandLine.render(&n.to_string())),
+        )
         .collect();
-    write(args, file, &summary, &notes, &entries, &missing, &measured)
+    write(args, file, &intro, &entries, &missing, &measured, &attractors)
 }
 
 /// The record's options that read the coordinates of `system` (and its measured drives) as
@@ -256,24 +264,24 @@ fn prediction(
         .map_err(|e| e.to_string()))
 }
 
-/// Writes the figures, `compare.json`, `prediction.json`, the models and README.md (last).
+/// Writes the figures, `compare.json`, `sections.json`, `prediction.json`, the models and
+/// README.md (last).
 fn write(
     args: &ReportArgs,
     file: &Path,
-    summary: &str,
-    notes: &[String],
+    intro: &[String],
     entries: &[Entry],
     missing: &[(Method, &str, anyhow::Error)],
     measured: &[Measured],
+    attractors: &attractor::Attractors,
 ) -> anyhow::Result<()> {
     let out = &args.out;
     std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
     let mut r = String::new();
     let mut figures: Vec<(String, String)> = Vec::new();
     writeln!(r, "# Identification report: {}\n", file.display())?;
-    writeln!(r, "{summary}\n")?;
-    for note in notes {
-        writeln!(r, "{note}\n")?;
+    for paragraph in intro {
+        writeln!(r, "{paragraph}\n")?;
     }
     for (method, how, error) in missing {
         writeln!(r, "## Identified system: {} ({how})\n", method.name())?;
@@ -288,6 +296,7 @@ fn write(
     }
     residuals_section(&mut r, entries)?;
     compare_section(&mut r, &mut figures, out, entries, measured)?;
+    attractor::section(&mut r, &mut figures, out, entries, attractors)?;
     prediction_section(&mut r, &mut figures, out, entries, measured)?;
     writeln!(r, "## Figures\n")?;
     for (file, caption) in &figures {
