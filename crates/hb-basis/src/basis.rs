@@ -647,6 +647,22 @@ impl From<Polynomial> for BasisKind {
 }
 
 impl BasisKind {
+    /// The basis of the unknown functions when none is chosen: `harmonic:1` on the circle (the
+    /// pendulum's sin and cos), `poly:3` on the line (Duffing's cubic).
+    ///
+    /// ```
+    /// use hb_basis::{BasisKind, Domain};
+    ///
+    /// assert_eq!(BasisKind::default_for(Domain::Circle).spec(), "harmonic:1");
+    /// assert_eq!(BasisKind::default_for(Domain::Line).spec(), "poly:3");
+    /// ```
+    pub fn default_for(domain: Domain) -> Self {
+        match domain {
+            Domain::Circle => Self::Harmonic(Harmonic { order: 1 }),
+            Domain::Line => Self::Polynomial(Polynomial { degree: 3 }),
+        }
+    }
+
     fn inner(&self) -> &dyn Basis {
         match self {
             Self::Harmonic(b) => b,

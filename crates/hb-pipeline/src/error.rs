@@ -49,9 +49,12 @@ pub enum RunError {
     /// Conditioning the record (spikes, integration).
     #[error(transparent)]
     Prepare(PrepareError),
-    /// The drive's period: estimated, or of the free oscillation, or its clock.
+    /// The drive's period: of the free oscillation, or its clock.
     #[error("{}", drive_text(.0))]
     Drive(#[source] PrepareError),
+    /// The drive's period to estimate: the search's range, or no period found.
+    #[error(transparent)]
+    DriveEstimate(crate::drive::DriveError),
     /// A stage of the analysis (embedding, segments, validation).
     #[error(transparent)]
     Pipeline(#[from] PipelineError),
@@ -109,7 +112,9 @@ impl RunError {
             RunError::Read { .. } => ErrorKind::Input,
             RunError::Prepare(PrepareError::MeasuredOnCircle(_)) => ErrorKind::Options,
             RunError::Prepare(_) => ErrorKind::Input,
-            RunError::Drive(PrepareError::DriveSearch(_) | PrepareError::Clock(_)) => ErrorKind::Options,
+            RunError::Drive(PrepareError::Clock(_)) => ErrorKind::Options,
+            RunError::DriveEstimate(crate::drive::DriveError::Search(_)) => ErrorKind::Options,
+            RunError::DriveEstimate(_) => ErrorKind::Identification,
             RunError::Drive(PrepareError::Input(_)) => ErrorKind::Input,
             RunError::Drive(_) => ErrorKind::Identification,
             // Options are checked before the run: what fails in it is the record's.
@@ -165,10 +170,6 @@ fn drive_text(error: &PrepareError) -> String {
     match error {
         PrepareError::FreePeriod(_) => {
             "no drive («drive_period=none»): the period of the free oscillation".to_owned()
-        }
-        PrepareError::DriveEstimate(_) => "estimating the drive's period".to_owned(),
-        PrepareError::DriveSearch(_) => {
-            "the drive's search range («drive_period», «drive_frequency»)".to_owned()
         }
         PrepareError::Clock(_) => "the drive's period («drive_period», «drive_frequency»)".to_owned(),
         PrepareError::Resample(_) => "resampling onto a whole number of samples per period".to_owned(),

@@ -12,13 +12,14 @@ use hb_model::{
     Forcing, Harmonics, IdentifiedModel, IdentifiedSystem, MAX_DRIVE_HARMONIC, ModelForm, Names, TermError,
     TermList,
 };
-use hb_record::prepare::{Data, DriveFound, DriveSpec, GridData, WindowUnit, default_basis};
+use hb_record::prepare::{Data, DriveFound, GridData, WindowUnit};
 use hb_solve::{
     BootstrapParams, LstsqSolver, NoiseCorrection, QrSolver, SelectParams, Signals, SvdSolver, WeakForm,
 };
 use serde::{Deserialize, Serialize, Serializer};
 use upo_search::Windows;
 
+use crate::drive::DriveSpec;
 use crate::embed::{OrbitOptions, first_minimum};
 use crate::error::RunError;
 use crate::observe::{Notice, Observer, Stage};
@@ -519,8 +520,8 @@ impl IdentifyRequest {
                 (None, Some(list)) => list
                     .smallest_basis()
                     .map_err(|e| OptionError::new("terms", e))?
-                    .unwrap_or_else(|| default_basis(domain)),
-                (None, None) => default_basis(domain),
+                    .unwrap_or_else(|| BasisKind::default_for(domain)),
+                (None, None) => BasisKind::default_for(domain),
             };
             if basis.domain() != domain {
                 return Err(OptionError::value(

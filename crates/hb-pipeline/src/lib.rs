@@ -45,6 +45,7 @@
 #![deny(missing_docs)]
 
 pub mod compare;
+pub mod drive;
 pub mod embed;
 pub mod error;
 pub mod identify;
@@ -60,6 +61,7 @@ pub use compare::{
     CompareOptions, CompareReport, CompareRequest, ModelRun, SampleRange, compare, model_run, read_model,
     run_on_times, run_system_on_times,
 };
+pub use drive::{DriveSpec, DriveUnit};
 pub use embed::{EmbedReport, EmbedRequest, OrbitOptions, UposReport, UposRequest, embed, upos};
 pub use error::{ErrorKind, RunError};
 pub use identify::{

@@ -8,12 +8,10 @@ use std::str::FromStr;
 
 use circle_signal::{Domain, Measured};
 use hb_record::input::{Column, InputError, ReadOptions, Record as InputRecord, Role, read_path};
-use hb_record::prepare::{
-    BadDrive, Data, DriveFound, DriveSpec, DriveUnit, GridData, PrepareError, PrepareOptions, SpikePolicy,
-    condition,
-};
+use hb_record::prepare::{Data, DriveFound, GridData, PrepareError, PrepareOptions, SpikePolicy, condition};
 use serde::{Deserialize, Serialize};
 
+use crate::drive::{BadDrive, DriveSpec, DriveUnit};
 use crate::error::RunError;
 use crate::observe::{Notice, Observer, Stage};
 use crate::options::{OptionError, optional_text, text};
@@ -649,12 +647,15 @@ pub fn load(
     if matches!(drive, DriveSpec::Auto(_)) {
         observer.stage(Stage::Drive);
     }
-    let data = grid
-        .with_drive(drive, &mut |done, total| observer.progress(done, total))
-        .map_err(RunError::Drive)?;
+    let (period, estimate) = drive
+        .resolve(&grid, &mut |done, total| observer.progress(done, total))
+        .map_err(RunError::DriveEstimate)?;
+    if let Some(estimate) = estimate {
+        observer.notice(&Notice::DriveEstimated(estimate));
+    }
+    let data = grid.with_period(period).map_err(RunError::Drive)?;
     match &data.drive {
-        DriveFound::Given => {}
-        DriveFound::Estimated(e) => observer.notice(&Notice::DriveEstimated(e.as_ref().clone())),
+        DriveFound::Given | DriveFound::Estimated { .. } => {}
         DriveFound::Free { samples } => observer.notice(&Notice::FreePeriod {
             samples: *samples,
             used: data.p,
@@ -695,7 +696,7 @@ pub fn load_all(
     let Some(mut joined) = records.next() else {
         return Err(OptionError::new("file", "no record given").into());
     };
-    let periodic = matches!(joined.drive, DriveFound::Given | DriveFound::Estimated(_));
+    let periodic = matches!(joined.drive, DriveFound::Given | DriveFound::Estimated { .. });
     let h = joined.clock.step();
     for (i, data) in records.enumerate() {
         let which = i + 2;
@@ -796,7 +797,7 @@ impl RecordSummary {
     pub fn of(data: &Data) -> Self {
         let (drive, uncertainty) = match &data.drive {
             DriveFound::Given => ("given", None),
-            DriveFound::Estimated(e) => ("estimated", Some(e.period_uncertainty)),
+            DriveFound::Estimated { uncertainty } => ("estimated", Some(*uncertainty)),
             DriveFound::Free { .. } => ("free", None),
             DriveFound::Windows { .. } => ("windows", None),
         };

@@ -9,8 +9,11 @@
 //! - [`prepare`] makes the read record what every stage of the identification takes: pieces on
 //!   one grid with NaN in the gaps, an angle wrapped into `[−π, π)`, encoder spikes found (and
 //!   replaced on request), a velocity or acceleration integrated to the displacement, the drive's
-//!   period given, estimated or absent (a free oscillation), and the record resampled once onto a
-//!   whole number of samples per period when needed.
+//!   period given (or estimated above this crate) or absent (a free oscillation), and the record
+//!   resampled once onto a whole number of samples per period when needed.
+//!
+//! The crate sits on the vocabulary crate (`circle-signal`) alone: reading a record builds no
+//! solver, model or integrator.
 //!
 //! Nothing here prints: what was done to a record is reported as [`prepare::Note`]s through a
 //! callback and kept in the result. Files are read only when a caller names one
@@ -21,7 +24,7 @@
 //! ```
 //! use circle_signal::Domain;
 //! use hb_record::input::read_csv;
-//! use hb_record::prepare::{DriveSpec, PrepareOptions, condition};
+//! use hb_record::prepare::{PeriodSource, PrepareOptions, condition};
 //!
 //! // 8 samples per drive period of 2 s, an angle.
 //! let mut csv = String::from("t,theta\n");
@@ -31,7 +34,7 @@
 //! }
 //! let record = read_csv(csv.as_bytes())?;
 //! let grid = condition(record, &PrepareOptions::new(Domain::Circle), &mut |_| {})?;
-//! let data = grid.with_drive(DriveSpec::Period(2.0), &mut |_, _| {})?;
+//! let data = grid.with_period(PeriodSource::Given(2.0))?;
 //! assert_eq!(data.p, 8);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```

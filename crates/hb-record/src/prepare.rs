@@ -1,13 +1,14 @@
 //! A record made ready for analysis, the one way every front end does it: time stamps fitted to a
 //! grid (pieces on one grid, NaN in the gaps, a logger's unsettled start or end left out of every
 //! column), wrapped on the circle, encoder spikes found (and repaired on request), the drive
-//! given, estimated ([`hb_drive::estimate_forcing_period`]) or absent (a free oscillation,
-//! [`circle_signal::oscillation_period`]), and the record resampled once onto a whole number of
-//! samples per forcing period when needed.
+//! given (or estimated by the caller, from [`GridData`]), or absent (a free oscillation, whose
+//! period [`circle_signal::oscillation_period`] measures), and the record resampled once onto a
+//! whole number of samples per drive period when needed.
 //!
 //! Two steps, so that a front end can show a record before it knows the drive: [`condition`]
-//! (read record to [`GridData`]) and [`GridData::with_drive`] (to [`Data`], the record as every
-//! stage takes it). Nothing here prints: what was done to the record is reported as [`Note`]s,
+//! (read record to [`GridData`]) and [`GridData::with_period`] (to [`Data`], the record as every
+//! stage takes it). Estimating a drive's period is a weak-form fit, the solver's business: it is
+//! done above this crate (`hb_drive`), which reads no model and builds no solver. Nothing here prints: what was done to the record is reported as [`Note`]s,
 //! through a callback as each happens and kept in the result.
 //!
 //! # Example
@@ -15,7 +16,7 @@
 //! ```
 //! use circle_signal::Domain;
 //! use hb_record::input::Record;
-//! use hb_record::prepare::{DriveSpec, PrepareOptions, condition};
+//! use hb_record::prepare::{PeriodSource, PrepareOptions, condition};
 //!
 //! // 8 samples per forcing period of 2 time units, with a gap of 3 samples.
 //! let t: Vec<f64> = (0..80).chain(83..160).map(|n| n as f64 * 0.25).collect();
@@ -23,7 +24,7 @@
 //! let record = Record { t, theta, ..Record::default() };
 //! let grid = condition(record, &PrepareOptions::new(Domain::Circle), &mut |_| {})?;
 //! assert_eq!(grid.pieces, [0..80, 83..160]);
-//! let data = grid.with_drive(DriveSpec::Period(2.0), &mut |_, _| {})?;
+//! let data = grid.with_period(PeriodSource::Given(2.0))?;
 //! assert_eq!(data.p, 8);
 //! # Ok::<(), hb_record::prepare::PrepareError>(())
 //! ```
@@ -32,27 +33,27 @@ use std::f64::consts::PI;
 use std::fmt;
 use std::ops::Range;
 
-use circle_signal::{
-    CircleError, Domain, Measured, SampleClock, Spike, SpikeParams, find_and_repair_spikes, find_spikes,
-    resample_pieces,
-};
-use hb_basis::{BasisKind, Harmonic, Polynomial};
-
-use hb_drive::{DriveEstimate, DriveSearch, DriveSearchError, PeriodRange, estimate_forcing_period};
-use hb_model::{Forcing, ModelForm};
-
 use crate::input::{
     AngleRange, GridOptions, GridRecord, GridReport, InputError, Record as InputRecord, TimeRepair,
     Unsettled, angle_range,
 };
+use circle_signal::{
+    CircleError, Domain, Measured, SampleClock, Spike, SpikeParams, find_and_repair_spikes, find_spikes,
+    resample_pieces,
+};
 
-/// What drives the record.
+/// Where the windows' unit, a drive period, comes from.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum DriveSpec {
+pub enum PeriodSource {
     /// A known drive period, in the record's time unit.
-    Period(f64),
-    /// A drive period to estimate from the record, within this range if given.
-    Auto(Option<PeriodRange>),
+    Given(f64),
+    /// A drive period estimated from the record (by the caller), with its standard uncertainty.
+    Estimated {
+        /// The period, in the record's time unit.
+        period: f64,
+        /// Its standard uncertainty.
+        uncertainty: f64,
+    },
     /// No drive: a free oscillation, whose mean period is the unit of the windows.
     Free,
     /// No periodic drive (none, or a measured one with no period): the unit of the windows given
@@ -70,90 +71,16 @@ pub enum WindowUnit {
     Samples(usize),
 }
 
-/// How a drive is given in text: by its period or by its frequency.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum DriveUnit {
-    /// A period in the record's time unit (`T`, and `auto:A..B` between periods A and B).
-    Period,
-    /// A frequency in cycles per time unit of the record, hertz for seconds (`F`, and
-    /// `auto:A..B` between frequencies A and B).
-    Frequency,
-}
-
-/// A drive given in text that is none of `T`, `auto`, `auto:A..B` or `none`.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("{reason}")]
-pub struct BadDrive {
-    /// The text.
-    pub text: String,
-    /// What is wrong with it.
-    pub reason: String,
-}
-
-impl DriveSpec {
-    /// Reads a drive as the command line and Python give it, by its period or its frequency
-    /// (`unit`): a positive number, `auto` (estimated from the record), `auto:A..B` (estimated
-    /// between A and B) or `none` (a free oscillation).
-    ///
-    /// ```
-    /// use hb_record::prepare::{DriveSpec, DriveUnit};
-    ///
-    /// assert_eq!(DriveSpec::parse("4", DriveUnit::Frequency)?, DriveSpec::Period(0.25));
-    /// assert_eq!(DriveSpec::parse("none", DriveUnit::Period)?, DriveSpec::Free);
-    /// assert!(matches!(DriveSpec::parse("auto:0.5..2", DriveUnit::Frequency)?, DriveSpec::Auto(Some(_))));
-    /// assert!(DriveSpec::parse("-1", DriveUnit::Period).is_err());
-    /// # Ok::<(), hb_record::prepare::BadDrive>(())
-    /// ```
-    pub fn parse(text: &str, unit: DriveUnit) -> Result<Self, BadDrive> {
-        let bad = |reason: String| BadDrive {
-            text: text.to_owned(),
-            reason,
-        };
-        let number = |s: &str| -> Result<f64, BadDrive> {
-            let v: f64 = s
-                .trim()
-                .parse()
-                .map_err(|_| bad(format!("'{}' is not a number", s.trim())))?;
-            if !(v.is_finite() && v > 0.0) {
-                return Err(bad(format!("{v} must be positive and finite")));
-            }
-            Ok(v)
-        };
-        let trimmed = text.trim();
-        if trimmed.eq_ignore_ascii_case("none") {
-            return Ok(Self::Free);
-        }
-        if let Some(rest) = trimmed.strip_prefix("auto") {
-            if rest.is_empty() {
-                return Ok(Self::Auto(None));
-            }
-            let (a, b) = rest
-                .strip_prefix(':')
-                .and_then(|r| r.split_once(".."))
-                .ok_or_else(|| bad("expected a number, auto, auto:A..B or none".to_owned()))?;
-            let (a, b) = (number(a)?, number(b)?);
-            let range = match unit {
-                DriveUnit::Period => PeriodRange::periods(a, b),
-                DriveUnit::Frequency => PeriodRange::frequencies(a, b),
-            }
-            .map_err(|e| bad(e.to_string()))?;
-            return Ok(Self::Auto(Some(range)));
-        }
-        let v = number(trimmed)?;
-        Ok(Self::Period(match unit {
-            DriveUnit::Period => v,
-            DriveUnit::Frequency => 1.0 / v,
-        }))
-    }
-}
-
 /// Where a record's time unit for the analysis came from.
 #[derive(Debug, Clone, PartialEq)]
 pub enum DriveFound {
     /// The forcing period given.
     Given,
     /// Estimated from the record.
-    Estimated(Box<DriveEstimate>),
+    Estimated {
+        /// The estimate's standard uncertainty.
+        uncertainty: f64,
+    },
     /// No drive: the mean period of the free oscillation, in samples.
     Free {
         /// The measured mean period, in samples (the clock's period is its nearest whole number).
@@ -383,12 +310,6 @@ pub enum PrepareError {
     /// The period of a free oscillation could not be measured.
     #[error("the period of the free oscillation")]
     FreePeriod(#[source] CircleError),
-    /// The drive search's options.
-    #[error(transparent)]
-    DriveSearch(DriveSearchError),
-    /// The forcing period could not be estimated.
-    #[error("estimating the forcing period")]
-    DriveEstimate(#[source] DriveSearchError),
     /// No clock with this forcing period and step.
     #[error("the forcing period")]
     Clock(#[source] CircleError),
@@ -817,13 +738,9 @@ fn quantum(x: &[f64], pieces: &[Range<usize>], domain: Domain) -> Option<f64> {
 }
 
 impl GridData {
-    /// The record's clock found by `drive`, the record resampled onto a whole number of samples
-    /// per forcing period when needed. `progress` follows the estimate of the drive, if any.
-    pub fn with_drive(
-        self,
-        drive: DriveSpec,
-        progress: &mut dyn FnMut(usize, usize),
-    ) -> Result<Data, PrepareError> {
+    /// The record's clock with the period of `source` as the windows' unit, the record resampled
+    /// onto a whole number of samples per period when needed.
+    pub fn with_period(self, source: PeriodSource) -> Result<Data, PrepareError> {
         let GridData {
             t0,
             dt,
@@ -835,46 +752,24 @@ impl GridData {
             velocities,
             ..
         } = self;
-        let longest = circle_signal::longest_piece(&pieces);
-        let (period, found) = match drive {
-            DriveSpec::Period(t) => (t, DriveFound::Given),
-            DriveSpec::Free => {
-                let samples = circle_signal::oscillation_period(&x[longest.clone()], domain)
+        let (period, found) = match source {
+            PeriodSource::Given(t) => (t, DriveFound::Given),
+            PeriodSource::Estimated { period, uncertainty } => {
+                (period, DriveFound::Estimated { uncertainty })
+            }
+            PeriodSource::Free => {
+                let longest = circle_signal::longest_piece(&pieces);
+                let samples = circle_signal::oscillation_period(&x[longest], domain)
                     .map_err(PrepareError::FreePeriod)?;
                 let whole = samples.round().max(2.0);
                 (whole * dt, DriveFound::Free { samples })
             }
-            DriveSpec::Windows(unit) => {
+            PeriodSource::Windows(unit) => {
                 let samples = match unit {
                     WindowUnit::Time(length) => (length / dt).round().clamp(2.0, 1e12) as usize,
                     WindowUnit::Samples(n) => n.max(2),
                 };
                 (samples as f64 * dt, DriveFound::Windows { samples })
-            }
-            DriveSpec::Auto(range) => {
-                let mut search = DriveSearch::builder();
-                if let Some(range) = range {
-                    search = search.range(range);
-                }
-                let search = search.build().map_err(PrepareError::DriveSearch)?;
-                let basis = default_basis(domain);
-                let form = match domain {
-                    Domain::Circle => ModelForm::parametric(),
-                    Domain::Line => ModelForm::parametric().with_forcing(Forcing::Identified),
-                };
-                let piece_t0 = t0 + longest.start as f64 * dt;
-                let estimate = estimate_forcing_period(
-                    &x[longest.clone()],
-                    dt,
-                    piece_t0,
-                    domain,
-                    &search,
-                    &basis,
-                    &form,
-                    &mut *progress,
-                )
-                .map_err(PrepareError::DriveEstimate)?;
-                (estimate.period, DriveFound::Estimated(Box::new(estimate)))
             }
         };
         if !(period.is_finite() && period > 0.0) {
@@ -931,14 +826,5 @@ impl GridData {
             drives,
             velocities,
         })
-    }
-}
-
-/// The basis of the unknown functions when none is chosen: harmonic:1 on the circle, poly:3 on
-/// the line.
-pub fn default_basis(domain: Domain) -> BasisKind {
-    match domain {
-        Domain::Circle => BasisKind::from(Harmonic::new(1).expect("order 1 is valid")),
-        Domain::Line => BasisKind::from(Polynomial::new(3).expect("degree 3 is valid")),
     }
 }

@@ -7,7 +7,7 @@ use std::path::Path;
 
 use circle_signal::{Domain, Spike, unwrap, wrap};
 use hb_record::input::{Column, Location, ReadOptions, Record, RecordEnd, Unsettled, read_path};
-use hb_record::prepare::{DriveFound, DriveSpec, GridData, Note, PrepareOptions, SpikePolicy, condition};
+use hb_record::prepare::{DriveFound, GridData, Note, PeriodSource, PrepareOptions, SpikePolicy, condition};
 
 #[test]
 fn the_spikes_note_speaks_of_bit_errors_on_the_circle_and_of_outliers_on_the_line() {
@@ -315,7 +315,7 @@ fn conditioned(x: Vec<f64>, options: &PrepareOptions) -> GridData {
 /// from where it starts: whirling, where the decay only swings.
 fn whirling_windows(grid: GridData) -> (usize, usize) {
     let data = grid
-        .with_drive(DriveSpec::Free, &mut |_, _| {})
+        .with_period(PeriodSource::Free)
         .expect("the period of the oscillation");
     let DriveFound::Free { samples } = data.drive else {
         panic!("a free oscillation: {:?}", data.drive);

@@ -9,6 +9,7 @@ use anyhow::Context;
 use circle_signal::Measured;
 use clap::Args;
 use embedding::EmbeddingError;
+use hb_pipeline::DriveSpec;
 use hb_pipeline::pipeline::{
     EmbedOptions, Identification, InitialState, Method, Outcome, Pipeline, PipelineError, PipelineOptions,
     PredictionOptions, Record, RecordComparison, Stage, TermSelection, Validation, ValidationOptions,
@@ -16,7 +17,7 @@ use hb_pipeline::pipeline::{
 };
 use hb_pipeline::{IdentifyRequest, Notice, Observer, Spelling};
 use hb_plot::{BLUE, Figure, GREY, ORANGE, RED, Series, Style, add_figure};
-use hb_record::prepare::{Data, DriveSpec};
+use hb_record::prepare::Data;
 use pendulum_sim::Domain;
 
 use super::identify::IdentifyArgs;
