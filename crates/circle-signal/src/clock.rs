@@ -6,14 +6,14 @@ use serde::{Deserialize, Serialize};
 
 use crate::CircleError;
 
-/// How a record is sampled relative to its drive: forcing period `T`, sample step `h`, and the
+/// How a record is sampled relative to its drive: drive period `T`, sample step `h`, and the
 /// absolute time `t_0` of sample 0, so that sample `n` is at `t_n = t_0 + n h`.
 ///
 /// The one description of time that every stage takes, made once from the record and the forcing
 /// period. The forcing angular frequency is `W = 2π / T`; the paper's non-dimensional time is
-/// `T = 2π` (`W = 1`). The number of samples per forcing period, `T / h`, need not be whole
+/// `T = 2π` (`W = 1`). The number of samples per drive period, `T / h`, need not be whole
 /// ([`samples_per_period`](Self::samples_per_period) gives it exactly, e.g. 490.196 for a drive of
-/// 1.02 Hz sampled at 500 Hz); the stages that cut the record into whole forcing periods (close
+/// 1.02 Hz sampled at 500 Hz); the stages that cut the record into whole drive periods (close
 /// returns, periodic windows, the paper's Fourier rows) ask for
 /// [`whole_samples_per_period`](Self::whole_samples_per_period) and say so when there is none.
 ///
@@ -28,7 +28,7 @@ use crate::CircleError;
 /// ```
 /// use circle_signal::SampleClock;
 ///
-/// // The paper: 25 samples per non-dimensional forcing period 2π.
+/// // The paper: 25 samples per non-dimensional drive period 2π.
 /// let paper = SampleClock::nondimensional(25)?;
 /// assert_eq!(paper.whole_samples_per_period(), Some(25));
 /// assert!((paper.step() - std::f64::consts::TAU / 25.0).abs() < 1e-15);
@@ -42,7 +42,7 @@ use crate::CircleError;
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(try_from = "ClockRaw", into = "ClockRaw")]
 pub struct SampleClock {
-    forcing_period: f64,
+    drive_period: f64,
     step: f64,
     start_time: f64,
     /// `Some(P)` when `T = P h` (within the tolerance, and then exactly `h = T / P`).
@@ -53,10 +53,10 @@ impl SampleClock {
     /// Relative tolerance within which `T / h` is taken as a whole number of samples.
     pub const WHOLE_TOLERANCE: f64 = 1e-6;
 
-    /// `P >= 2` samples per forcing period of length `T > 0` (in the data's time unit): step
+    /// `P >= 2` samples per drive period of length `T > 0` (in the data's time unit): step
     /// `h = T / P`, `t_0 = 0`. Set the time of sample 0 with [`with_start_time`](Self::with_start_time).
-    pub fn new(forcing_period: f64, samples_per_period: usize) -> Result<Self, CircleError> {
-        check_period(forcing_period)?;
+    pub fn new(drive_period: f64, samples_per_period: usize) -> Result<Self, CircleError> {
+        check_period(drive_period)?;
         if samples_per_period < 2 {
             return Err(CircleError::InvalidParameter {
                 name: "samples per forcing period",
@@ -65,18 +65,18 @@ impl SampleClock {
             });
         }
         Ok(Self {
-            forcing_period,
-            step: forcing_period / samples_per_period as f64,
+            drive_period,
+            step: drive_period / samples_per_period as f64,
             start_time: 0.0,
             whole: Some(samples_per_period),
         })
     }
 
-    /// A forcing period `T > 0` sampled every `h > 0` (same time unit), with at least two samples
+    /// A drive period `T > 0` sampled every `h > 0` (same time unit), with at least two samples
     /// per period and `t_0 = 0`. When `T / h` is within [`WHOLE_TOLERANCE`](Self::WHOLE_TOLERANCE)
     /// of a whole `P`, this is [`SampleClock::new`]`(T, P)`.
-    pub fn from_step(forcing_period: f64, step: f64) -> Result<Self, CircleError> {
-        check_period(forcing_period)?;
+    pub fn from_step(drive_period: f64, step: f64) -> Result<Self, CircleError> {
+        check_period(drive_period)?;
         if !(step.is_finite() && step > 0.0) {
             return Err(CircleError::InvalidParameter {
                 name: "sample step",
@@ -84,7 +84,7 @@ impl SampleClock {
                 why: "must be positive and finite",
             });
         }
-        let ratio = forcing_period / step;
+        let ratio = drive_period / step;
         if ratio.is_nan() || ratio < 2.0 - 2.0 * Self::WHOLE_TOLERANCE {
             return Err(CircleError::InvalidParameter {
                 name: "samples per forcing period",
@@ -94,17 +94,17 @@ impl SampleClock {
         }
         let whole = ratio.round();
         if (ratio - whole).abs() <= Self::WHOLE_TOLERANCE * ratio && whole <= usize::MAX as f64 {
-            return Self::new(forcing_period, whole as usize);
+            return Self::new(drive_period, whole as usize);
         }
         Ok(Self {
-            forcing_period,
+            drive_period,
             step,
             start_time: 0.0,
             whole: None,
         })
     }
 
-    /// The paper's non-dimensional time: forcing period `2π`, `P` samples per period, `t_0 = 0`.
+    /// The paper's non-dimensional time: drive period `2π`, `P` samples per period, `t_0 = 0`.
     pub fn nondimensional(samples_per_period: usize) -> Result<Self, CircleError> {
         Self::new(TAU, samples_per_period)
     }
@@ -124,17 +124,17 @@ impl SampleClock {
 
     /// The drive's period `T`, in the record's time unit.
     pub fn drive_period(&self) -> f64 {
-        self.forcing_period
+        self.drive_period
     }
 
     /// The drive's frequency `1 / T`, in cycles per time unit (hertz for seconds).
     pub fn drive_frequency(&self) -> f64 {
-        1.0 / self.forcing_period
+        1.0 / self.drive_period
     }
 
     /// The drive's angular frequency `W = 2π / T`, in radians per time unit.
     pub fn drive_angular_frequency(&self) -> f64 {
-        TAU / self.forcing_period
+        TAU / self.drive_period
     }
 
     /// Sample step `h`.
@@ -152,20 +152,20 @@ impl SampleClock {
         self.start_time + n as f64 * self.step
     }
 
-    /// Samples per forcing period, `T / h`, whole or not.
+    /// Samples per drive period, `T / h`, whole or not.
     pub fn samples_per_period(&self) -> f64 {
         match self.whole {
             Some(p) => p as f64,
-            None => self.forcing_period / self.step,
+            None => self.drive_period / self.step,
         }
     }
 
-    /// `P` when a forcing period is a whole number of samples, `None` otherwise.
+    /// `P` when a drive period is a whole number of samples, `None` otherwise.
     pub fn whole_samples_per_period(&self) -> Option<usize> {
         self.whole
     }
 
-    /// `P` when a forcing period is a whole number of samples, or
+    /// `P` when a drive period is a whole number of samples, or
     /// [`CircleError::NotWholePeriod`]: for the stages that cut a record into whole periods.
     pub fn require_whole(&self) -> Result<usize, CircleError> {
         self.whole.ok_or(CircleError::NotWholePeriod {
@@ -174,13 +174,13 @@ impl SampleClock {
     }
 }
 
-fn check_period(forcing_period: f64) -> Result<(), CircleError> {
-    if forcing_period.is_finite() && forcing_period > 0.0 {
+fn check_period(drive_period: f64) -> Result<(), CircleError> {
+    if drive_period.is_finite() && drive_period > 0.0 {
         Ok(())
     } else {
         Err(CircleError::InvalidParameter {
             name: "forcing period",
-            value: forcing_period,
+            value: drive_period,
             why: "must be positive and finite",
         })
     }
@@ -202,7 +202,7 @@ struct ClockRaw {
 impl From<SampleClock> for ClockRaw {
     fn from(c: SampleClock) -> Self {
         Self {
-            forcing_period: c.forcing_period,
+            forcing_period: c.drive_period,
             samples_per_period: c.whole,
             step: c.whole.is_none().then_some(c.step),
             start_time: c.start_time,

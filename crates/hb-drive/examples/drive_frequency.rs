@@ -25,7 +25,7 @@ use std::time::Instant;
 
 use circle_signal::{Domain, SampleClock, resample_to_whole, wrap};
 use hb_basis::Harmonic;
-use hb_drive::{DriveEstimate, DriveSearch, PeriodRange, RangeSource, estimate_forcing_period};
+use hb_drive::{DriveEstimate, DriveSearch, PeriodRange, RangeSource, estimate_drive_period};
 use hb_model::ModelForm;
 use pendulum_sim::observe::Encoder;
 use pendulum_sim::{Dop853, FirstOrder, Pendulum, Tolerances};
@@ -74,7 +74,7 @@ fn estimate_with(
 ) -> Result<(DriveEstimate, f64), Box<dyn Error>> {
     let basis = Harmonic::new(1)?;
     let start = Instant::now();
-    let found = estimate_forcing_period(
+    let found = estimate_drive_period(
         x,
         step,
         t0,

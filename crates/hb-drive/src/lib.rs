@@ -1,5 +1,5 @@
 //! The drive's period of a forced oscillator, estimated from its record alone: the period whose
-//! drive terms make the weak form's equations fit best ([`estimate_forcing_period`]), searched by
+//! drive terms make the weak form's equations fit best ([`estimate_drive_period`]), searched by
 //! a multi-resolution scan and variable-projection Gauss–Newton over a range
 //! ([`PeriodRange`], [`DriveSearch`]), with a cluster-robust uncertainty ([`DriveEstimate`]); and
 //! the dominant period of a signal ([`dominant_period`]), the range's default. The module
@@ -14,7 +14,7 @@
 //! ```
 //! use circle_signal::Domain;
 //! use hb_basis::Harmonic;
-//! use hb_drive::{DriveSearch, PeriodRange, estimate_forcing_period};
+//! use hb_drive::{DriveSearch, PeriodRange, estimate_drive_period};
 //! use hb_model::ModelForm;
 //! use pendulum_sim::{Pendulum, SimulationConfig, simulate};
 //!
@@ -24,7 +24,7 @@
 //! let x = trajectory.wrapped();
 //! let search = DriveSearch::builder().range(PeriodRange::periods(5.0, 8.0)?).build()?;
 //! let step = std::f64::consts::TAU / 25.0;
-//! let estimate = estimate_forcing_period(
+//! let estimate = estimate_drive_period(
 //!     &x, step, trajectory.t[0], Domain::Circle, &search, &Harmonic::new(1)?,
 //!     &ModelForm::parametric(), &mut |_, _| {},
 //! )?;
@@ -39,5 +39,5 @@ pub mod search;
 pub use error::DriveSearchError;
 pub use search::{
     DriveEstimate, DriveSearch, DriveSearchBuilder, MIN_SAMPLES_PER_PERIOD, PeriodRange, RangeSource,
-    RefinedCandidate, ScanPoint, dominant_period, estimate_forcing_period,
+    RefinedCandidate, ScanPoint, dominant_period, estimate_drive_period,
 };

@@ -202,7 +202,7 @@ impl PeriodRange {
     }
 }
 
-/// Parameters of [`estimate_forcing_period`]; build with [`DriveSearch::builder`], which
+/// Parameters of [`estimate_drive_period`]; build with [`DriveSearch::builder`], which
 /// validates (and so does deserialising).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(try_from = "DriveSearchRaw")]
@@ -733,7 +733,7 @@ pub fn dominant_period(
 ///
 /// ```
 /// use hb_basis::Polynomial;
-/// use hb_drive::{DriveSearch, PeriodRange, estimate_forcing_period};
+/// use hb_drive::{DriveSearch, PeriodRange, estimate_drive_period};
 /// use hb_model::{Forcing, ModelForm};
 /// use circle_signal::Domain;
 ///
@@ -752,12 +752,12 @@ pub fn dominant_period(
 ///     .collect();
 /// let search = DriveSearch::builder().range(PeriodRange::periods(1.0, 2.0)?).build()?;
 /// let form = ModelForm::externally_forced(Forcing::Identified);
-/// let found = estimate_forcing_period(&x, h, 0.3, Domain::Line, &search, &Polynomial::new(1)?, &form, &mut |_, _| {})?;
+/// let found = estimate_drive_period(&x, h, 0.3, Domain::Line, &search, &Polynomial::new(1)?, &form, &mut |_, _| {})?;
 /// assert!((found.period / 1.37 - 1.0).abs() < 1e-8);
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 #[allow(clippy::too_many_arguments)]
-pub fn estimate_forcing_period<B: Basis + ?Sized>(
+pub fn estimate_drive_period<B: Basis + ?Sized>(
     x: &[f64],
     step: f64,
     start_time: f64,

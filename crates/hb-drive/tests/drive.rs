@@ -6,7 +6,7 @@ use circle_signal::wrap;
 use hb_basis::{Harmonic, Polynomial};
 use hb_drive::DriveSearchError;
 use hb_drive::{
-    DriveEstimate, DriveSearch, PeriodRange, RangeSource, dominant_period, estimate_forcing_period,
+    DriveEstimate, DriveSearch, PeriodRange, RangeSource, dominant_period, estimate_drive_period,
 };
 use hb_model::{Forcing, Harmonics, ModelForm};
 use hb_solve::{AssemblyError, SolveError};
@@ -51,7 +51,7 @@ fn search(period: f64, below: f64, above: f64) -> DriveSearch {
 
 fn on_circle(x: &[f64], step: f64, t0: f64, search: &DriveSearch) -> Result<DriveEstimate, DriveSearchError> {
     let basis = Harmonic::new(1).unwrap();
-    estimate_forcing_period(
+    estimate_drive_period(
         x,
         step,
         t0,
@@ -198,8 +198,7 @@ fn duffing_on_the_line() {
     let basis = Polynomial::new(3).unwrap();
     let form = ModelForm::externally_forced(Forcing::Identified);
     for s in [search(period, 0.5, 2.0), DriveSearch::default()] {
-        let found =
-            estimate_forcing_period(&x, step, t0, Domain::Line, &s, &basis, &form, |_, _| {}).unwrap();
+        let found = estimate_drive_period(&x, step, t0, Domain::Line, &s, &basis, &form, |_, _| {}).unwrap();
         let e = relative_error(&found, period);
         assert!(e.abs() < 1e-8, "{:?}: {e:e}", found.range_source);
         if s.range().is_none() {
@@ -216,7 +215,7 @@ fn default_range_and_progress() {
     let (t0, step, theta) = pendulum(TAU, 25.0, 1200.0);
     let x: Vec<f64> = theta.iter().map(|&v| wrap(v)).collect();
     let mut calls: Vec<(usize, usize)> = Vec::new();
-    let found = estimate_forcing_period(
+    let found = estimate_drive_period(
         &x,
         step,
         t0,
@@ -248,7 +247,7 @@ fn bad_input_is_refused() {
     let s = search(TAU, 0.5, 2.0);
     let basis = Harmonic::new(1).unwrap();
     let run = |x: &[f64], step: f64, domain: Domain, s: &DriveSearch, form: &ModelForm| {
-        estimate_forcing_period(x, step, t0, domain, s, &basis, form, |_, _| {})
+        estimate_drive_period(x, step, t0, domain, s, &basis, form, |_, _| {})
     };
     let parametric = ModelForm::parametric();
     let no_drive = ModelForm::parametric().without_parametric_terms();
@@ -306,7 +305,7 @@ fn known_forcing_and_a_basis_chosen_at_run_time() {
     let basis: Box<dyn hb_basis::Basis> =
         Box::new(hb_basis::BasisKind::Polynomial(Polynomial::new(1).unwrap()));
     let form = ModelForm::externally_forced(Forcing::Known { cos: -1.0, sin: 0.0 });
-    let found = estimate_forcing_period(
+    let found = estimate_drive_period(
         &x,
         h,
         t0,
@@ -328,7 +327,7 @@ fn the_drive_estimate_refuses_general_terms() {
     let form =
         ModelForm::from_terms(hb_model::TermList::parse("x', sign(x'), sin(x), sin(t)*cos(x)").unwrap());
     let x: Vec<f64> = (0..4000).map(|n| wrap(0.3 * (0.25 * n as f64).sin())).collect();
-    let result = estimate_forcing_period(
+    let result = estimate_drive_period(
         &x,
         TAU / 25.0,
         0.0,

@@ -163,13 +163,9 @@ const STACK: usize = 64;
 
 impl<B: Basis> IdentifiedModel<B> {
     /// A model with given coefficient `values` in the order of [`crate::term_names`] (e.g. the
-    /// true system, to compare with an identified one), forcing frequency `W` and no fit summary.
-    pub fn new(
-        basis: B,
-        form: ModelForm,
-        forcing_frequency: f64,
-        values: &[f64],
-    ) -> Result<Self, ModelError> {
+    /// true system, to compare with an identified one), drive angular frequency `W` and no fit
+    /// summary.
+    pub fn new(basis: B, form: ModelForm, drive_frequency: f64, values: &[f64]) -> Result<Self, ModelError> {
         let form = form.validate()?;
         let layout = columns(&basis, &form)?;
         let names = term_names(&basis, &form);
@@ -188,23 +184,23 @@ impl<B: Basis> IdentifiedModel<B> {
                 std_error: 0.0,
             })
             .collect();
-        Self::from_coefficients(basis, form, forcing_frequency, coefficients, None)
+        Self::from_coefficients(basis, form, drive_frequency, coefficients, None)
     }
 
     /// A model of `coefficients` (named as the layout of `basis` and `form` names them, in its
-    /// order or a list's), drive angular frequency `forcing_frequency` and fit `summary`:
+    /// order or a list's), drive angular frequency `drive_frequency` and fit `summary`:
     /// checks the names against the basis and form and arranges the values for evaluation.
     pub fn from_coefficients(
         basis: B,
         form: ModelForm,
-        forcing_frequency: f64,
+        drive_frequency: f64,
         coefficients: Vec<Coefficient>,
         summary: Option<FitSummary>,
     ) -> Result<Self, ModelError> {
-        if !(forcing_frequency.is_finite() && forcing_frequency > 0.0) {
+        if !(drive_frequency.is_finite() && drive_frequency > 0.0) {
             return Err(ModelError::InvalidParameter {
                 name: "forcing frequency",
-                value: forcing_frequency,
+                value: drive_frequency,
                 why: "must be positive and finite",
             });
         }
@@ -295,7 +291,7 @@ impl<B: Basis> IdentifiedModel<B> {
         Ok(Self {
             basis,
             form,
-            forcing_frequency,
+            forcing_frequency: drive_frequency,
             coefficients,
             summary,
             eval,

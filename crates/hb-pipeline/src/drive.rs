@@ -7,7 +7,7 @@
 
 use circle_signal::Domain;
 use hb_basis::BasisKind;
-use hb_drive::{DriveEstimate, DriveSearch, DriveSearchError, PeriodRange, estimate_forcing_period};
+use hb_drive::{DriveEstimate, DriveSearch, DriveSearchError, PeriodRange, estimate_drive_period};
 use hb_model::{Forcing, ModelForm};
 use hb_record::prepare::{GridData, PeriodSource, WindowUnit};
 
@@ -158,7 +158,7 @@ pub fn estimate(
     };
     let longest = circle_signal::longest_piece(&grid.pieces);
     let piece_t0 = grid.t0 + longest.start as f64 * grid.dt;
-    estimate_forcing_period(
+    estimate_drive_period(
         &grid.x[longest],
         grid.dt,
         piece_t0,

@@ -175,7 +175,7 @@ pub struct SimulateArgs {
     #[arg(long, visible_alias = "omega0", default_value_t = 0.0, allow_hyphen_values = true, help_heading = SYSTEM)]
     v0: f64,
     /// Relative tolerance of the integrator (the absolute one is rtol/10).
-    #[arg(long, default_value_t = 1e-10, allow_hyphen_values = true, help_heading = SYSTEM)]
+    #[arg(long, default_value_t = pendulum_sim::Tolerances::DEFAULT_RTOL, allow_hyphen_values = true, help_heading = SYSTEM)]
     rtol: f64,
 
     /// Drive frequency in Hz: time in seconds, the model's time τ = 2π·f_drive·t, velocities in per
