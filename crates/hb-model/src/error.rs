@@ -22,7 +22,7 @@ pub enum TermError {
         /// What was found there.
         found: String,
         /// What was expected.
-        expected: &'static str,
+        expected: std::borrow::Cow<'static, str>,
     },
     /// Factors that do not make a term together.
     #[error("term list \"{spec}\": the product at character {at} is not a term: {why}")]

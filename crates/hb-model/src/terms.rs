@@ -1030,7 +1030,7 @@ impl FromStr for TermSpec {
                 spec: text.to_owned(),
                 at: text.chars().count() + 1,
                 found: format!("{} terms", list.len()),
-                expected: "one term",
+                expected: "one term".into(),
             }),
         }
     }
@@ -1092,6 +1092,14 @@ impl TermList {
     /// a coordinate.
     pub fn parse_in(spec: &str, names: &Names, own: usize) -> Result<Self, TermError> {
         check_own(names, own)?;
+        if spec.trim().is_empty() {
+            return Err(TermError::TermSyntax {
+                spec: spec.to_owned(),
+                at: 1,
+                found: "no term".to_owned(),
+                expected: "at least one term: an equation without terms has nothing to fit".into(),
+            });
+        }
         let products = Parser::new(spec, names).list()?;
         let mut terms: Vec<TermSpec> = Vec::with_capacity(products.len());
         for product in products {
@@ -1123,7 +1131,7 @@ impl TermList {
                 spec: String::new(),
                 at: 1,
                 found: "nothing".to_owned(),
-                expected: "at least one term",
+                expected: "at least one term".into(),
             });
         }
         if terms.len() > MAX_TERMS {
@@ -1144,7 +1152,7 @@ impl TermList {
                     spec: named,
                     at: 1,
                     found: "0".to_owned(),
-                    expected: "a whole number at least 1",
+                    expected: "a whole number at least 1".into(),
                 });
             }
             if let Some(d) = t.drive.measured_index()
@@ -1512,7 +1520,7 @@ impl TermList {
                         spec: text.clone(),
                         at: text.chars().count() + 1,
                         found: format!("{} terms", one.len()),
-                        expected: "one term",
+                        expected: "one term".into(),
                     });
                 }
             }
@@ -1809,7 +1817,7 @@ impl<'a> Parser<'a> {
         self.chars.get(self.next).map_or(self.end, |&(at, _)| at)
     }
 
-    fn error(&self, expected: &'static str) -> TermError {
+    fn error(&self, expected: impl Into<std::borrow::Cow<'static, str>>) -> TermError {
         let found = match self.peek() {
             None => "the end".to_owned(),
             Some(_) => {
@@ -1821,7 +1829,7 @@ impl<'a> Parser<'a> {
             spec: self.spec.to_owned(),
             at: self.at(),
             found,
-            expected,
+            expected: expected.into(),
         }
     }
 
@@ -1860,7 +1868,7 @@ impl<'a> Parser<'a> {
                     spec: self.spec.to_owned(),
                     at,
                     found: "a number too large".to_owned(),
-                    expected: "a whole number below 2^32",
+                    expected: "a whole number below 2^32".into(),
                 });
             }
             self.next += 1;
@@ -2016,11 +2024,22 @@ impl<'a> Parser<'a> {
                 }
                 _ => {
                     self.next = at;
-                    return Err(self.error(if first {
-                        "t (the drive's phase) or x, as in cos(2t) or sin(x)"
-                    } else {
-                        "a coordinate's name"
-                    }));
+                    let names = self.names.coordinates();
+                    return Err(match (first, names) {
+                        (true, [x]) if x == "x" => {
+                            self.error("t (the drive's phase) or x, as in cos(2t) or sin(x)")
+                        }
+                        (true, [x]) => self.error(format!(
+                            "t (the drive's phase) or the coordinate {x}, as in cos(2t) or sin({x})"
+                        )),
+                        (true, _) => self.error(format!(
+                            "t (the drive's phase) or a coordinate ({}), as in cos(2t) or sin({}-{})",
+                            names.join(", "),
+                            names[0],
+                            names[1]
+                        )),
+                        (false, _) => self.error(format!("a coordinate's name ({})", names.join(", "))),
+                    });
                 }
             }
             first = false;

@@ -336,6 +336,13 @@ fn terms_of_a_system_that_are_no_terms_are_refused_with_a_reason() {
         Err(TermError::TermSyntax { at: 1, .. })
     ));
     assert!(refused("sin(q2)*cos(q2)").contains("one function"));
+    // A name inside sin(..) that is no coordinate: the message lists the record's coordinates.
+    let unknown = refused("sin(q3)");
+    assert!(unknown.contains("a coordinate (q1, q2)"), "{unknown}");
+    assert!(refused("sin(q1+q3)").contains("a coordinate's name (q1, q2)"));
+    // An equation without terms says so rather than asking for a factor.
+    assert!(refused("").contains("an equation without terms"));
+    assert!(refused("  ").contains("an equation without terms"));
     assert!(matches!(
         TermList::parse_in("p", &names, 0),
         Err(TermError::TermSyntax { .. })

@@ -984,6 +984,60 @@ impl IdentifyReport {
     }
 }
 
+/// The most samples of a record at which [`check_mass_matrix`] solves the identified mass matrix
+/// (every sample of a shorter record; evenly spread over a longer one).
+const MASS_CHECKS: usize = 20_000;
+
+/// That the identified system's mass matrix can be solved at the record's states, as its free
+/// run solves it at every step ([`IdentifiedSystem::accelerations`], whose pivot criterion it
+/// uses): terms that leave the accelerations undetermined on the record (a coordinate's column
+/// the copy of another's, whose equations then explain each other's acceleration) are an error
+/// naming the terms and the columns, never a model whose every run stops.
+fn check_mass_matrix(
+    equations: &[EquationReport],
+    request: &IdentifyRequest,
+    data: &Data,
+    coordinates: &[(&[f64], Domain)],
+) -> Result<(), RunError> {
+    let models: Vec<IdentifiedModel> = equations.iter().map(|e| e.identification.model.clone()).collect();
+    let domains = models.iter().map(IdentifiedModel::domain).collect();
+    let system = IdentifiedSystem::new(request.names.clone(), domains, models)?;
+    let n = coordinates.len();
+    let samples: usize = data.pieces.iter().map(|p| p.len()).sum();
+    let stride = samples.div_ceil(MASS_CHECKS).max(1);
+    let (mut q, v, mut acc) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    for piece in &data.pieces {
+        for k in piece.clone().step_by(stride) {
+            for (qi, (x, _)) in q.iter_mut().zip(coordinates) {
+                *qi = x[k];
+            }
+            let t = data.clock.time(k);
+            if let Err(singular) = system.accelerations(t, &q, &v, None, &mut acc) {
+                let names = request.names.coordinates();
+                let state: Vec<String> = names
+                    .iter()
+                    .zip(&q)
+                    .map(|(c, x)| format!("{c} = {x:.4}"))
+                    .collect();
+                return Err(OptionError::new(
+                    "terms",
+                    format!(
+                        "the identified mass matrix is singular at t = {t} ({}; smallest pivot {:.1e} of its largest \
+                         entry): the acceleration terms leave the accelerations of {} undetermined on the record, and \
+                         every free run of the model would stop there; is one coordinate's column («coords») a copy \
+                         of another's?",
+                        state.join(", "),
+                        singular.pivot,
+                        names.join(", ")
+                    ),
+                )
+                .into());
+            }
+        }
+    }
+    Ok(())
+}
+
 /// The integrator's relative tolerance in the refinement (as `compare`'s default: the
 /// differences of free runs a millionth of a coefficient apart must stand above its error).
 pub const REFINE_RTOL: f64 = pendulum_sim::Tolerances::DEFAULT_RTOL;
@@ -1117,6 +1171,9 @@ pub fn identify_data(
             basis: request.bases[i],
             identification,
         });
+    }
+    if n > 1 {
+        check_mass_matrix(&equations, request, data, &coordinates)?;
     }
     if method == Method::Windowed && segments.len() < hb_solve::HELD_OUT_FOLDS {
         let unknowns = equations

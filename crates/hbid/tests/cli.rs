@@ -3143,3 +3143,95 @@ fn coupled_oscillators_are_selected_and_predict_the_other_half() {
         assert!(nrmse < 1e-2, "{}: NRMSE {nrmse}", range["coordinate"]);
     }
 }
+
+/// Every bad input of a system the issue lists is a one-line error naming the option (and the
+/// column), never a panic or a table: a coordinate missing or named twice, a term naming an
+/// unknown column, an equation without terms, a drive that is also a coordinate, the own
+/// acceleration as a bare term, a mass matrix singular at the record's states (a column the copy
+/// of another), and records with other columns in one fit.
+#[test]
+fn a_systems_bad_inputs_are_one_line_errors() {
+    let dir = scratch("system-bad-inputs");
+    let record = simulated(
+        &dir,
+        "dp.csv",
+        &["--system", "double-pendulum", "--samples", "3200"],
+    );
+    let duffing = simulated(
+        &dir,
+        "cd.csv",
+        &["--system", "coupled-duffing", "--samples", "3200"],
+    );
+    // The same record with a copy of theta1's column, as a duplicated encoder channel is logged.
+    let text = std::fs::read_to_string(&record).unwrap();
+    let mut lines = text.lines();
+    let mut copied = format!("{},copy\n", lines.next().unwrap());
+    for line in lines {
+        let theta1 = line.split(',').nth(1).unwrap();
+        copied.push_str(&format!("{line},{theta1}\n"));
+    }
+    let copy = dir.join("copy.csv");
+    std::fs::write(&copy, copied).unwrap();
+    let (record, duffing, copy) = (
+        record.to_str().unwrap(),
+        duffing.to_str().unwrap(),
+        copy.to_str().unwrap(),
+    );
+    let cases: [(&[&str], &str); 8] = [
+        (&[record, "--coords", "theta1,theta3"], "--coords"),
+        (&[record, "--coords", "theta1,theta1"], "named twice"),
+        (
+            &[record, "--coords", "theta1,theta2", "--terms", "sin(theta3)"],
+            "a coordinate (theta1, theta2)",
+        ),
+        (
+            &[
+                record,
+                "--coords",
+                "theta1,theta2",
+                "--terms",
+                "theta1: sin(theta1); theta2:",
+            ],
+            "an equation without terms",
+        ),
+        (
+            &[record, "--coords", "theta1,theta2", "--drive-col", "theta2"],
+            "is a coordinate (--coords) too",
+        ),
+        (
+            &[
+                record,
+                "--coords",
+                "theta1,theta2",
+                "--terms",
+                "theta1: theta1'', sin(theta1); theta2: sin(theta2)",
+            ],
+            "own acceleration alone",
+        ),
+        (
+            &[
+                copy,
+                "--coords",
+                "theta1,copy",
+                "--terms",
+                "theta1: copy'', sin(theta1); copy: theta1'', sin(copy)",
+            ],
+            "mass matrix is singular",
+        ),
+        (&[record, duffing, "--coords", "theta1,theta2"], "--coords"),
+    ];
+    for (args, mentions) in cases {
+        let mut all = vec!["identify"];
+        all.extend_from_slice(args);
+        all.extend_from_slice(&["--bootstrap", "0"]);
+        let out = hbid(&all);
+        let err = String::from_utf8_lossy(&out.stderr);
+        // The record's own notes (spikes found, kept) may come before; the error is one line.
+        let errors: Vec<&str> = err.lines().filter(|l| l.starts_with("error")).collect();
+        assert!(!out.status.success() && !err.contains("panicked"), "{args:?}: {err}");
+        assert_eq!(errors.len(), 1, "{args:?}: one error line expected: {err}");
+        assert!(errors[0].contains(mentions), "{args:?}: '{mentions}' not in: {err}");
+        assert!(err.trim_end().ends_with(errors[0]), "{args:?}: the error is not the last line: {err}");
+        assert!(out.stdout.is_empty(), "{args:?} printed a result");
+    }
+}
