@@ -4,7 +4,7 @@
 use circle_signal::SampleClock;
 use hb_basis::{BasisKind, Harmonic, Hat};
 use hb_model::{Forcing, Harmonics, ModelForm};
-use hb_pipeline::pipeline::{IdentifyStep, Method, ModelSpec, PipelineError};
+use hb_pipeline::pipeline::{IdentifyStep, Method, ModelSpec};
 use hb_solve::{
     BootstrapParams, IdentifyParams, LstsqError, NoiseCorrection, QrSolver, SelectParams, SolveError,
     SvdSolver, WeakForm, identify,
@@ -167,7 +167,7 @@ fn selection_errors_are_typed() {
             .with_form(stiff)
             .with_selection(SelectParams::default())
             .setup(&clock),
-        Err(PipelineError::Model(hb_model::ModelError::Term(
+        Err(SolveError::Model(hb_model::ModelError::Term(
             hb_model::TermError::InvalidForm { .. }
         )))
     ));
@@ -178,13 +178,16 @@ fn bad_settings_fail_when_set_or_on_the_clock() {
     let basis = BasisKind::from(Harmonic::new(1).unwrap());
     assert!(matches!(
         ModelSpec::new(Method::Upo, basis).with_harmonics(Harmonics::Fixed(0)),
-        Err(PipelineError::Model(_))
+        Err(SolveError::Model(_))
     ));
     let spec =
         ModelSpec::new(Method::Upo, basis).with_noise_correction(NoiseCorrection::Given { sigma: -1.0 });
     assert!(matches!(
         spec.setup(&SampleClock::nondimensional(25).unwrap()),
-        Err(PipelineError::Solve(_))
+        Err(SolveError::InvalidParameter {
+            name: "noise sigma",
+            ..
+        })
     ));
     assert_eq!(Method::Upo.to_string(), "upo");
     assert_eq!(Method::Windowed.name(), "windowed");

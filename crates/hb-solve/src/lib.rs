@@ -43,6 +43,10 @@
 //!   measured angle puts into the trigonometric terms ([`NoiseCorrection`]), with `σ` given or
 //!   estimated from the record ([`estimate_noise_sigma`]).
 //!
+//! The whole recipe of one equation (assemble, select terms, solve, measure the fit, bootstrap)
+//! is [`identifier`]'s: a [`ModelSpec`] checked on the record's clock into an [`Identifier`]; a
+//! system of several coordinates runs one per equation on the same segments.
+//!
 //! # Example
 //!
 //! A linear oscillator `x'' + 0.1 x' + 2 x = cos t` has the exactly periodic solution
@@ -109,6 +113,7 @@ mod bootstrap;
 mod differences;
 mod error;
 mod fit;
+pub mod identifier;
 mod lstsq;
 mod method;
 mod noise;
@@ -137,6 +142,9 @@ pub use bootstrap::{
 pub use differences::FiniteDifferences;
 pub use error::{AssemblyError, BootstrapError, LstsqError, SelectError, SolveError};
 pub use fit::FitModel;
+pub use identifier::{
+    Identification, Identifier, IdentifyStep, Method, ModelSpec, TermSelection, UnknownMethod,
+};
 pub use lstsq::{LstsqFit, LstsqSolver, QrSolver, RankTolerance, SvdSolver};
 pub use method::{Assembly, HarmonicBalance};
 pub use noise::{NOISE_BAND_START, NOISE_ESTIMATE_MIN_LEN, correct_noise, estimate_noise_sigma};

@@ -3228,10 +3228,19 @@ fn a_systems_bad_inputs_are_one_line_errors() {
         let err = String::from_utf8_lossy(&out.stderr);
         // The record's own notes (spikes found, kept) may come before; the error is one line.
         let errors: Vec<&str> = err.lines().filter(|l| l.starts_with("error")).collect();
-        assert!(!out.status.success() && !err.contains("panicked"), "{args:?}: {err}");
+        assert!(
+            !out.status.success() && !err.contains("panicked"),
+            "{args:?}: {err}"
+        );
         assert_eq!(errors.len(), 1, "{args:?}: one error line expected: {err}");
-        assert!(errors[0].contains(mentions), "{args:?}: '{mentions}' not in: {err}");
-        assert!(err.trim_end().ends_with(errors[0]), "{args:?}: the error is not the last line: {err}");
+        assert!(
+            errors[0].contains(mentions),
+            "{args:?}: '{mentions}' not in: {err}"
+        );
+        assert!(
+            err.trim_end().ends_with(errors[0]),
+            "{args:?}: the error is not the last line: {err}"
+        );
         assert!(out.stdout.is_empty(), "{args:?} printed a result");
     }
 }

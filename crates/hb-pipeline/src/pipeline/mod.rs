@@ -67,12 +67,15 @@
 mod drift;
 mod error;
 mod prediction;
-mod setup;
 
 pub use drift::{DriftFit, GOLDEN_STEPS, PieceDrift, SCAN_POINTS, fit_drift};
 pub use error::PipelineError;
+/// The per-equation identifier, [`hb_solve::identifier`]'s, by the names this module has always
+/// given it (`Setup` is [`hb_solve::Identifier`]).
+pub use hb_solve::identifier::{
+    Identification, Identifier as Setup, IdentifyStep, Method, ModelSpec, TermSelection, UnknownMethod,
+};
 pub use prediction::PredictionOptions;
-pub use setup::{Identification, IdentifyStep, Method, ModelSpec, Setup, TermSelection, UnknownMethod};
 
 use std::ops::Range;
 

@@ -1,19 +1,20 @@
-//! One identification: a method, a basis and the settings of the fit, checked against the record's
-//! clock, and the model it gives.
+//! One equation's identification, the recipe every front end runs: a method, a basis and the
+//! settings of the fit ([`ModelSpec`]), checked against the record's clock into an
+//! [`Identifier`], which assembles the segments, selects terms, solves, measures the fit and
+//! bootstraps ([`Identifier::identify`]), giving an [`Identification`]. A system of several
+//! coordinates runs one identifier per equation on the same segments.
 
 use std::fmt;
 
-use circle_signal::{SampleClock, Segment};
-use hb_basis::BasisKind;
-use hb_model::{Forcing, Harmonics, IdentifiedModel, ModelForm, TermList};
-use hb_solve::{
+use crate::{
     Assembly, Bootstrap, BootstrapParams, EXPLAINED_WARNING_ORBITS, EXPLAINED_WARNING_WINDOWS, FitModel,
     FitQuality, HELD_OUT_FOLDS, HarmonicBalance, IdentifyParams, LinearSystem, LstsqSolver, NoiseCorrection,
     QrSolver, SelectParams, Selection, Signals, SolveError, WeakForm, bootstrap_or_reason, build_system,
     fit_quality, select_terms,
 };
-
-use super::PipelineError;
+use circle_signal::{SampleClock, Segment};
+use hb_basis::BasisKind;
+use hb_model::{Forcing, Harmonics, IdentifiedModel, ModelForm, TermList};
 
 /// Identification method: where the segments come from and how they become equations.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -68,9 +69,9 @@ impl fmt::Display for Method {
     }
 }
 
-/// One step of an identification, reported as it starts (see [`Setup::identify_with_progress`]).
+/// One step of an identification, reported as it starts (see [`Identifier::identify_with_progress`]).
+/// Exhaustive: a front end maps every step to its own display, and a new step must reach them.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[non_exhaustive]
 pub enum IdentifyStep {
     /// Assembling the stacked system of every segment (noise correction included).
     Assemble,
@@ -95,7 +96,7 @@ impl IdentifyStep {
     }
 }
 
-/// What to identify: a method and a basis, and the settings of the fit. It becomes a [`Setup`]
+/// What to identify: a method and a basis, and the settings of the fit. It becomes an [`Identifier`]
 /// against the record's clock ([`ModelSpec::setup`]), where the combination is checked.
 ///
 /// Defaults: the paper's form ([`ModelForm::parametric`]: damping, autonomous and parametric
@@ -139,7 +140,7 @@ impl ModelSpec {
     }
 
     /// Harmonics per segment instead of the method's default (checked: `M >= 1`, or a cap `>= 1`).
-    pub fn with_harmonics(mut self, harmonics: Harmonics) -> Result<Self, PipelineError> {
+    pub fn with_harmonics(mut self, harmonics: Harmonics) -> Result<Self, SolveError> {
         self.harmonics = Some(harmonics.validate()?);
         Ok(self)
     }
@@ -170,7 +171,7 @@ impl ModelSpec {
     }
 
     /// Model selection: the form's terms are a library of candidates, the terms the data
-    /// support are chosen by [`hb_solve::select_terms`] with `params`, and only those are fitted
+    /// support are chosen by [`crate::select_terms`] with `params`, and only those are fitted
     /// ([`Identification::selection`] says which and why). The library is the form's terms on the
     /// basis ([`ModelForm::term_list`]): a list of terms, or the default form's own.
     pub fn with_selection(mut self, params: SelectParams) -> Self {
@@ -185,7 +186,7 @@ impl ModelSpec {
 
     /// The setup on the record's `clock`: the identification parameters are built and checked
     /// (with a selection, the library's terms too).
-    pub fn setup(self, clock: &SampleClock) -> Result<Setup, PipelineError> {
+    pub fn setup(self, clock: &SampleClock) -> Result<Identifier, SolveError> {
         let assembly = self.method.assembly(self.weak);
         let harmonics = self
             .harmonics
@@ -200,7 +201,7 @@ impl ModelSpec {
             .harmonics(harmonics)
             .noise_correction(self.noise)
             .build()?;
-        Ok(Setup {
+        Ok(Identifier {
             method: self.method,
             basis: self.basis,
             params,
@@ -214,7 +215,7 @@ impl ModelSpec {
 
 /// Everything but the data: basis, parameters, assembly and solver, checked before any work.
 #[derive(Debug)]
-pub struct Setup {
+pub struct Identifier {
     method: Method,
     basis: BasisKind,
     params: IdentifyParams,
@@ -232,7 +233,7 @@ pub struct TermSelection {
     pub library: TermList,
     /// The kept terms, in the library's order: the terms of the fitted model.
     pub kept: TermList,
-    /// What [`hb_solve::select_terms`] found: the kept terms (indices into `library`), the
+    /// What [`crate::select_terms`] found: the kept terms (indices into `library`), the
     /// dropped ones with their held-out scores, the elimination path, the folds and the
     /// allowance.
     pub outcome: Selection,
@@ -245,24 +246,24 @@ pub struct Identification {
     pub model: IdentifiedModel,
     /// The bootstrap intervals of its coefficients, when asked for and they can be had.
     pub intervals: Option<Bootstrap>,
-    /// Why there are no intervals when they were asked for ([`hb_solve::bootstrap_or_reason`]):
+    /// Why there are no intervals when they were asked for ([`crate::bootstrap_or_reason`]):
     /// the model and its standard errors are given all the same.
     pub no_intervals: Option<String>,
     /// How well it fits: the fraction of the balanced acceleration it explains, in sample and on
     /// held-out stretches of the record, and the residual by frequency
-    /// ([`hb_solve::fit_quality`], [`hb_solve::held_out`]).
+    /// ([`crate::fit_quality`], [`crate::held_out`]).
     pub quality: FitQuality,
     /// A warning that the model does not describe the record: it explains too little for its
     /// method, in sample or held out, or far less held out than in sample
-    /// ([`FitQuality::warning`], [`hb_solve::EXPLAINED_WARNING_WINDOWS`],
-    /// [`hb_solve::EXPLAINED_WARNING_ORBITS`]).
+    /// ([`FitQuality::warning`], [`crate::EXPLAINED_WARNING_WINDOWS`],
+    /// [`crate::EXPLAINED_WARNING_ORBITS`]).
     pub warning: Option<String>,
     /// With [`ModelSpec::with_selection`]: the library, and which of its terms were kept (the
     /// model, its intervals, quality and warning are those of the kept terms alone).
     pub selection: Option<TermSelection>,
 }
 
-impl Setup {
+impl Identifier {
     /// The method.
     pub fn method(&self) -> Method {
         self.method
@@ -305,7 +306,7 @@ impl Setup {
     }
 
     /// The unexplained fraction of the fit over `segments` of `signal` (no bootstrap), and
-    /// whether the model has a constant term `1`: what [`super::fit_drift`] minimises.
+    /// whether the model has a constant term `1`: what a drift's fit minimises (`hb_pipeline::pipeline::fit_drift`).
     pub fn unexplained<'a>(
         &self,
         signals: impl Into<Signals<'a>>,
@@ -328,7 +329,7 @@ impl Setup {
         )
     }
 
-    /// [`Setup::identify`], calling `progress` with each step as it starts.
+    /// [`Identifier::identify`], calling `progress` with each step as it starts.
     pub fn identify_with_progress<'a>(
         &self,
         signals: impl Into<Signals<'a>>,
