@@ -3,7 +3,7 @@
 //!
 //! # The objective
 //!
-//! For a candidate angular frequency `W` the weak form ([`crate::WeakForm`]) is assembled on plain
+//! For a candidate angular frequency `W` the weak form ([`hb_solve::WeakForm`]) is assembled on plain
 //! windows of the record, natively on its own sampling grid: a window is `L = round(k T_w / h)`
 //! samples plus the closing one (`T_w / h` is generally not whole), its test functions
 //! `w(τ) cos(jΩτ)`, `w(τ) sin(jΩτ)` use the window's own fundamental `Ω = 2π / (L h)` (they only

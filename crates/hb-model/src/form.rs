@@ -145,7 +145,7 @@ pub enum Forcing {
 /// [`ModelForm::from_terms`] gives the terms instead, in their order, any product of a drive
 /// factor, a function of `x` and a function of `x'` ([`TermList`]); a known forcing
 /// ([`ModelForm::with_forcing`]`(Forcing::Known { .. })`) may be added to a list, the other
-/// preset switches may not (checked when the form is used: [`IdentifyParamsBuilder::build`],
+/// preset switches may not (checked when the form is used: `hb_solve::IdentifyParamsBuilder::build`,
 /// [`crate::IdentifiedModel::new`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(try_from = "ModelFormRaw", into = "ModelFormRaw")]
@@ -407,7 +407,7 @@ impl ModelForm {
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
     ///
-    /// Errors: those of [`columns`], and [`ModelError::Term(TermError::InvalidForm)`] for the linear stiffness
+    /// Errors: those of [`columns`], and `ModelError::Term(TermError::InvalidForm)` for the linear stiffness
     /// `k*x` of a preset, which has no name of its own in a list.
     pub fn term_list<B: Basis + ?Sized>(&self, basis: &B) -> Result<TermList, ModelError> {
         if let Some(list) = &self.terms {
@@ -609,7 +609,7 @@ fn preset_columns(functions: usize, form: &ModelForm) -> Vec<Term> {
 /// (the paper's order n, p, q); then `cos(kt)`, `sin(kt)` (identified forcing) and `k*x` (linear
 /// stiffness). With `H = 1` (the default) this is the paper's layout.
 ///
-/// Errors: those of [`TermList::resolve`], and [`ModelError::Term(TermError::TermNotAllowed)`] for `k*x` on the
+/// Errors: those of [`TermList::resolve`], and `ModelError::Term(TermError::TermNotAllowed)` for `k*x` on the
 /// circle.
 pub fn columns<B: Basis + ?Sized>(basis: &B, form: &ModelForm) -> Result<Vec<Term>, TermError> {
     check_form(basis.domain(), form)?;

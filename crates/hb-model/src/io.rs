@@ -171,7 +171,7 @@ impl<B: Basis + Clone + Serialize> IdentifiedModel<B> {
     /// Pretty JSON: `{"format": "hbid-model", "version": 4, "basis": .., "form": ..,
     /// "forcing_frequency": .., "coefficients": {"x'": {"value": .., "std_error": ..}, ..}, "fit": ..}`.
     ///
-    /// A model on [`BasisKind`] records which basis it uses (`{"hat": {"nodes": 8}}`), so any
+    /// A model on [`BasisKind`](hb_basis::BasisKind) records which basis it uses (`{"hat": {"nodes": 8}}`), so any
     /// program can load it; a model on a concrete basis type records only its size and must be
     /// loaded as the same type.
     pub fn to_json(&self) -> Result<String, ModelError> {

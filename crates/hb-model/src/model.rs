@@ -66,7 +66,7 @@ pub struct FitSummary {
 /// the column it came from ([`ModelForm::drive_column`]) but not its samples: to simulate it, give
 /// it the recorded drive with [`with_measured_drive`](Self::with_measured_drive), which it
 /// interpolates over the recorded span. Without it, or outside that span, its acceleration is
-/// NaN (an integrator stops there with a non-finite state); [`needs_measured_drive`]
+/// NaN (an integrator stops there with a non-finite state); [`needs_measured_drive`](Self::needs_measured_drive)
 /// (Self::needs_measured_drive) tells before any simulation.
 #[derive(Debug, Clone, PartialEq)]
 pub struct IdentifiedModel<B = BasisKind> {

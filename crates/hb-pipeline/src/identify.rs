@@ -233,7 +233,7 @@ pub struct IdentifyOptions {
     /// The smallest held-out unexplained fraction a term must remove to be kept, in `[0, 1)`.
     pub select_tolerance: f64,
     /// Refine the coefficients by the free run's error on the record after the fit
-    /// ([`crate::refine`]): the model then follows the record as `compare` scores it.
+    /// ([`refine`](fn@crate::refine)): the model then follows the record as `compare` scores it.
     pub refine: bool,
     /// Samples at the start of each piece that set the free run's state in the refinement and
     /// are not scored (default as `compare`'s: one drive period, at most a tenth of the longest

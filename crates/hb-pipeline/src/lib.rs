@@ -8,7 +8,7 @@
 //! JSON object of its keyword arguments ([`options::from_object`]: unknown names refused, a bad
 //! value named); its grammars (`harmonic:1`, `auto:5..7`, term lists) are the types' own.
 //!
-//! The runs ([`identify`], [`embed`], [`upos`], [`simulate()`]) take a [`Source`] (a file,
+//! The runs ([`identify()`], [`embed()`], [`upos`], [`simulate()`]) take a [`Source`] (a file,
 //! arrays, or a record on its grid), make it ready the one way ([`load`]: read, grid, wrap,
 //! spikes, integrate, drive, resample) and return reports whose serialisation is the JSON of the
 //! command line's `--json` ([`IdentifyReport`], [`EmbedReport`], [`UposReport`], [`Truth`]).

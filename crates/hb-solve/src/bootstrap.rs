@@ -267,7 +267,7 @@ pub const NORMAL_EQUATIONS_CONDITION: f64 = 1e5;
 ///
 /// Resamples run in parallel; resample `r` draws from the ChaCha8 stream `r` of `seed`, so results
 /// do not depend on the number of threads. Resamples that do not determine every unknown are left
-/// out; more than a tenth of them is an error ([`SolveError::Bootstrap(BootstrapError::BootstrapFailed)`]).
+/// out; more than a tenth of them is an error (`SolveError::Bootstrap(BootstrapError::BootstrapFailed)`).
 ///
 /// Memory: `(n − ℓ + 1) · u (u + 3) / 2` numbers for `u` unknowns (the run sums), or the reduced
 /// factors, `n (u + 1)²` numbers, for ill-conditioned systems.

@@ -294,8 +294,8 @@ impl Identifier {
     /// asked (then only the kept columns are solved), solves, and bootstraps.
     ///
     /// Errors: the assembly's, the solver's and the bootstrap's; with a selection also
-    /// [`SolveError::Lstsq(LstsqError::TooFewOrbits)`] for fewer than two segments and
-    /// [`SolveError::Select(SelectError::SelectionUndetermined)`] when a fold held out leaves the library
+    /// `SolveError::Lstsq(LstsqError::TooFewOrbits)` for fewer than two segments and
+    /// `SolveError::Select(SelectError::SelectionUndetermined)` when a fold held out leaves the library
     /// undetermined.
     pub fn identify<'a>(
         &self,

@@ -6,13 +6,13 @@
 //! c_r x' + k x + Σ_i q_i φ_i(x) + Σ_i [n_i cos(W t) + p_i sin(W t)] φ_i(x) + F_c cos(W t) + F_s sin(W t) = −x''
 //! ```
 //!
-//! with a basis `{φ_i}` from `hb-basis` and the terms chosen by a [`ModelForm`] (`k x` and the
+//! with a basis `{φ_i}` from `hb-basis` and the terms chosen by a [`ModelForm`](hb_model::ModelForm) (`k x` and the
 //! external forcing `F` are optional; the parametric terms and the forcing may have the drive's
 //! harmonics `2..H` too). More generally the model is `x'' + Σ_i c_i g_i = 0` with any terms
 //! `g_i`, each the product of a drive factor (`1`, `cos(kt)`, `sin(kt)`), a function of `x` (`1`
 //! or a basis function) and a function of `x'` (`1`, `x'`, `sign(x')`, `x'*|x'|`, `x'^3`), listed
-//! by a [`TermList`] (parsed from text such as `x', sign(x'), {1,cos(t),sin(t)}*{cos(x),sin(x)}`)
-//! and given by [`ModelForm::from_terms`]. Over a period-`k` orbit segment of `L = kP` samples, every
+//! by a [`TermList`](hb_model::TermList) (parsed from text such as `x', sign(x'), {1,cos(t),sin(t)}*{cos(x),sin(x)}`)
+//! and given by [`ModelForm::from_terms`](hb_model::ModelForm::from_terms). Over a period-`k` orbit segment of `L = kP` samples, every
 //! signal is expanded in a Fourier series of the orbit's fundamental `Ω = W / k` (eqs. 7-14); for an
 //! angle on the circle the segment is first unwrapped and split into a constant rotation `w_ck t`
 //! and an oscillation `x_var` (section 2, Figure 1), so `x' = w_ck + Σ ...` (eq. 10) and
@@ -22,12 +22,12 @@
 //! ([`LstsqSolver`]), never through the normal equations.
 //!
 //! Time is the data's own: `P` samples per forcing period `T`, `h = T / P`, `W = 2π / T`, and the
-//! forcing terms use the absolute time `t_n = t_0 + n h` of each sample ([`SampleClock`]); with the
+//! forcing terms use the absolute time `t_n = t_0 + n h` of each sample ([`SampleClock`](circle_signal::SampleClock)); with the
 //! paper's non-dimensional time (`T = 2π`) the rows are exactly those of the method notes.
 //!
 //! The result is an [`IdentifiedModel`]: coefficients with standard errors (`s² (AᵀA)⁻¹` from the
 //! factorisation), the condition number and residual of the fit, simulation through
-//! [`pendulum_sim::SecondOrderSystem`], and JSON or compact binary save/load.
+//! `pendulum_sim::SecondOrderSystem`, and JSON or compact binary save/load.
 //!
 //! Beyond the paper:
 //!
@@ -35,7 +35,7 @@
 //!   by test functions `w(τ) cos(jΩτ)`, `w(τ) sin(jΩτ)` with a window `w = sin^p(π τ / T_s)` that
 //!   vanishes with its first derivative at both ends of a segment, and integrated by parts, so no
 //!   derivative of the data is taken and no segment needs to be periodic: plain windows of the
-//!   record ([`upo_search::Windows`]) replace the orbits, and the equations come out in the same
+//!   record (`upo_search::Windows`) replace the orbits, and the equations come out in the same
 //!   [`LinearSystem`];
 //! - confidence intervals for every coefficient by a seeded moving-block bootstrap over segments
 //!   ([`bootstrap`]), for either method;
@@ -184,7 +184,7 @@ pub fn build_system<'a, B: Basis, A: Assembly + ?Sized>(
 /// correction applied: [`build_system`] with [`HarmonicBalance`], for any basis.
 ///
 /// Segments must satisfy the [`Segment`] invariant for the clock's `P`; each gives `2 M_k + 1`
-/// equations (see [`Harmonics`]). On the circle each segment is unwrapped with its closing
+/// equations (see [`Harmonics`](hb_model::Harmonics)). On the circle each segment is unwrapped with its closing
 /// sample and split into rotation and oscillation ([`circle_signal::RotationSplit`]); on the line
 /// it is used as it is. Segments are processed in parallel; FFT plans and buffers are reused.
 pub fn assemble<'a, B: Basis + ?Sized>(
@@ -222,8 +222,8 @@ pub fn assemble_weak<'a, B: Basis + ?Sized>(
 /// Identifies a model on `basis` from `segments` of `signals` by `method` ([`HarmonicBalance`],
 /// [`WeakForm`] or [`FiniteDifferences`]): [`build_system`], then least squares by `solver`.
 ///
-/// Errors: [`SolveError::Lstsq(LstsqError::TooFewOrbits)`] when the segments give no more equations than unknowns,
-/// [`SolveError::Lstsq(LstsqError::RankDeficient)`] when they do not determine every unknown, and typed errors for
+/// Errors: `SolveError::Lstsq(LstsqError::TooFewOrbits)` when the segments give no more equations than unknowns,
+/// `SolveError::Lstsq(LstsqError::RankDeficient)` when they do not determine every unknown, and typed errors for
 /// bad segments and non-finite samples.
 pub fn identify<'a, B: Basis, A: Assembly + ?Sized, S: LstsqSolver + ?Sized>(
     basis: B,

@@ -21,7 +21,7 @@ use hb_model::{Harmonics, ModelForm};
 /// ([`LinearSystem`]): the paper's harmonic-balance rows ([`HarmonicBalance`]), the weak form
 /// ([`WeakForm`]), or pointwise finite differences ([`crate::FiniteDifferences`], the classic peer).
 ///
-/// Every method produces the same column layout (the [`crate::columns`] of the params' form), so
+/// Every method produces the same column layout (the [`columns`](hb_model::columns) of the params' form), so
 /// that solvers, models and the bootstrap serve them all; a front end chooses a method in one
 /// place (`Box<dyn Assembly>`) and calls [`crate::identify`].
 pub trait Assembly: fmt::Debug + Send + Sync {

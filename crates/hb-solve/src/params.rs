@@ -24,7 +24,7 @@ const VELOCITY_CAP: f64 = 16.0;
 ///
 /// It applies to bases on the circle whose functions are single harmonics (the harmonic basis);
 /// with another basis, or on the line, identification fails with
-/// [`SolveError::Assembly(AssemblyError::NoiseCorrectionUnavailable)`] rather than correct wrongly.
+/// `SolveError::Assembly(AssemblyError::NoiseCorrectionUnavailable)` rather than correct wrongly.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case", try_from = "NoiseCorrectionRaw")]
 #[non_exhaustive]

@@ -24,7 +24,7 @@ use hb_model::{Forcing, Harmonics};
 /// On a segment of `k` forcing periods (`L = k P` samples and the closing one, duration
 /// `T_s = k T`, local time `τ = t − t_start`), the equation
 /// `x'' + c_r x' + Σ_i λ_i g_i(x, t) = 0` (the `g_i` being `φ_i(x)`, `φ_i(x) cos(W t)`,
-/// `φ_i(x) sin(W t)`, and `cos(W t)`, `sin(W t)`, `x` when the [`crate::ModelForm`] has them) is
+/// `φ_i(x) sin(W t)`, and `cos(W t)`, `sin(W t)`, `x` when the [`ModelForm`](hb_model::ModelForm) has them) is
 /// multiplied by test functions `ψ` that vanish with their first derivative at both ends, and
 /// every derivative is moved onto `ψ` by parts:
 ///
@@ -37,12 +37,12 @@ use hb_model::{Forcing, Harmonics};
 /// equation), so a segment gives `2M + 1` rows in the same layout as [`crate::assemble`]. `M` comes
 /// from the params' [`Harmonics`] (see [`WeakForm::DEFAULT_HARMONICS`]). On the circle `x` is the
 /// unwrapped angle of the window; no derivative of the data is taken and the window need not be
-/// periodic, so plain windows ([`upo_search::Windows`]) serve as well as orbits. Integrals are
+/// periodic, so plain windows (`upo_search::Windows`) serve as well as orbits. Integrals are
 /// taken by the trapezoid rule on the samples; since `w` vanishes at the ends with its first
 /// `p − 1` derivatives, the rule converges fast: its error falls as `h^(2⌊p/2⌋)` (the
 /// Euler–Maclaurin terms of `ψ'' x` start there), so even orders are the economical ones.
 ///
-/// Any other term of a [`crate::ModelForm`] (a product `D(t) f(x) v(x')`, see [`crate::Term`]):
+/// Any other term of a [`ModelForm`](hb_model::ModelForm) (a product `D(t) f(x) v(x')`, see [`Term`](hb_model::Term)):
 ///
 /// - linear in `x'` with a drive factor of the drive's phase (or none), `D(t) f(x) x'` is the
 ///   time derivative of `D(t) F(x)` less `D'(t) F(x)`, with `F` an antiderivative of `f`
@@ -54,7 +54,7 @@ use hb_model::{Forcing, Harmonics};
 ///   velocity harmonics), `sign(x')` averaged over each sample's cell so that its jumps fall where
 ///   the interpolated velocity crosses zero (`docs/identification.md` measures what this costs);
 /// - otherwise `∫ ψ g` of its samples, the drive factor at the samples' absolute time, or for
-///   the measured drive `p` its sample ([`crate::IdentifyParams::measured_drive`]) at each of the
+///   the measured drive `p` its sample (`IdentifyParams::measured_drive`) at each of the
 ///   window's samples: `∫ ψ p f(x)` by the same trapezoid rule as every other sampled term, so
 ///   that a drive of any waveform (harmonics, noise, no period at all) enters the rows as it was
 ///   measured.
@@ -324,7 +324,7 @@ impl pulp::WithSimd for WindowRows<'_> {
 /// serve both.
 ///
 /// Segments must satisfy the [`Segment`] invariant for the clock's `P` (including the closing
-/// sample, the window's last point) but need not be periodic: [`upo_search::Windows`] gives plain
+/// sample, the window's last point) but need not be periodic: `upo_search::Windows` gives plain
 /// windows. `M` per segment is `params.harmonics().count(k, L)`. Segments are processed in
 /// parallel; the test functions are tabulated once per segment length.
 pub(crate) fn weak_rows<B: Basis + ?Sized>(

@@ -7,7 +7,7 @@
 //! samples as a path or NumPy arrays (borrowed when contiguous `float64`), releases the
 //! interpreter while Rust works, and returns plain Python values (the report's JSON text, arrays,
 //! `bytes` for a model), which the pure-Python package `hbid` wraps in documented, picklable
-//! classes. Errors become the exceptions of `hbid.errors` by their kind ([`errors::Kind`]), the
+//! classes. Errors become the exceptions of `hbid.errors` by their kind (`errors::Kind`), the
 //! options named as Python arguments.
 //!
 //! # Example (Python)

@@ -71,7 +71,10 @@ fn invalid(name: &'static str, value: f64, why: &'static str) -> SimError {
 }
 
 /// Integrates `system` from `state = (x, x')` at `t_first` and samples it at
-/// `t_first + n · dt`, `n = 0..count` (see the [module documentation](self)).
+/// `t_first + n · dt`, `n = 0..count`. Systems that switch at `x' = 0` stick and slip as in every
+/// other simulation of this crate; where the integration cannot go on (the solution blows up, the
+/// drive was not measured there, the step budget runs out) the run stops, says why
+/// ([`FreeRun::stopped`]) and its later samples are NaN: a diverging model is a result.
 ///
 /// Errors: [`SimError::InvalidParameter`] for a non-finite `t_first` or state, or a step `dt`
 /// that is not positive and finite. Everything that goes wrong during the integration is

@@ -26,7 +26,8 @@ use crate::error::SimError;
 use crate::system::Branch;
 
 /// Velocity-dependent losses `μ sign(x') + d x'|x'| + c₃ x'^3` on the left-hand side of an
-/// equation (see the [module documentation](self)).
+/// equation: dry (Coulomb) friction `μ`, quadratic drag `d` and cubic damping `c₃`, all
+/// non-negative; `sign(0) = 0`, so at rest the friction holds the body up to `μ`.
 ///
 /// Built from [`Losses::none`] by the validating setters; deserialising validates as they do.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
@@ -260,8 +261,9 @@ impl DriveHarmonic {
     }
 }
 
-/// The harmonics `k = 2..=16` of a drive, each at most once (see the
-/// [module documentation](self)). A fixed-size table, so that the systems stay `Copy`.
+/// The harmonics `k = 2..=16` of a drive, each at most once, with an amplitude ratio `ρ_k` to
+/// the fundamental and a phase `φ_k` (the pendulum's base acceleration `sin(t)` becomes
+/// `sin(t) + Σ ρ_k sin(k t + φ_k)`). A fixed-size table, so that the systems stay `Copy`.
 ///
 /// Deserialised from the list of its harmonics, validated as [`DriveHarmonics::new`] does.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
