@@ -243,7 +243,10 @@ impl MeasuredDrive {
         }
         let t = t.clamp(first, end);
         // The interval [stamps[i], stamps[i+1]] that holds t.
-        let i = stamps.partition_point(|&s| s <= t).saturating_sub(1).min(last - 1);
+        let i = stamps
+            .partition_point(|&s| s <= t)
+            .saturating_sub(1)
+            .min(last - 1);
         let h = stamps[i + 1] - stamps[i];
         let s = (t - stamps[i]) / h;
         if s == 0.0 {
