@@ -441,7 +441,7 @@ pub struct GridData {
     /// The record's first rows, left out of the grid because a logger stamped them before it
     /// settled to its rate ([`Unsettled`]), kept aside at their own stamps (none when the record
     /// has no such rows, or they cannot be run through: see [`LeadIn`]).
-    pub lead_in: Option<LeadIn>,
+    pub lead_in: Option<Box<LeadIn>>,
 }
 
 /// The rows a logger stamped before it settled to its rate ([`Unsettled`] at the record's
@@ -629,7 +629,7 @@ pub fn condition(
                 .chain(&lead.velocities)
                 .all(|v| v.iter().all(|a| a.is_finite()));
             let increasing = lead.t.windows(2).all(|w| w[1] > w[0]) && lead.t.last().is_some_and(|&l| l < t0);
-            (finite && increasing && !lead.t.is_empty()).then_some(lead)
+            (finite && increasing && !lead.t.is_empty()).then(|| Box::new(lead))
         });
     // One grid for every piece, NaN in the gaps.
     let mut x: Vec<f64> = Vec::new();
