@@ -175,6 +175,7 @@ def compare(
     x0: Union[float, Sequence[float], None] = None,
     v0: Union[float, Sequence[float], None] = None,
     rtol: float = 1e-10,
+    skip_unsettled: bool = False,
 ) -> Comparison:
     """Runs a saved model freely under a record's measured input and scores it against the
     record's measured output, as ``hbid compare`` does.
@@ -208,13 +209,18 @@ def compare(
         signal: ``"circle"`` or ``"line"`` (default: the model's).
         measured: ``"displacement"``, ``"velocity"`` or ``"acceleration"`` (integrated).
         range: the samples compared: ``"A..B"`` (``"A.."`` to the end), ``(A, B)``, or a list
-            of them, each scored on its own (default: the whole record).
+            of them, each scored on its own (default: the whole record). A file's first rows
+            that its logger stamped before it settled to its rate are run through at their own
+            stamps and counted as its first samples (a note says so), so that the samples are the
+            file's rows for a record without gaps.
         init: samples that set the initial state of each piece (default: one period of the
             model's drive, at most a tenth of the range, at least 8).
         x0: the initial position instead of fitting it (with ``v0``): one per coordinate of a
             system.
         v0: the initial velocity, in the record's time unit (with ``x0``).
         rtol: the integrator's relative tolerance.
+        skip_unsettled: leave out those unsettled first rows, as ``identify`` does, and start
+            at the first row on the record's grid (the ranges then count from there).
 
     Returns:
         A :class:`Comparison`.
@@ -241,6 +247,7 @@ def compare(
         x0=numbers(x0, "x0"),
         v0=numbers(v0, "v0"),
         rtol=rtol,
+        skip_unsettled=bool(skip_unsettled),
     )
     samples = source(_in_order(x, saved), t, drive, options, COMPARE_DEFAULTS)
     if saved.is_system:

@@ -23,6 +23,10 @@ use crate::error::ModelError;
 /// outside the recorded span and next to a gap, so that a model never runs on a drive that was
 /// not measured.
 ///
+/// A drive may also be sampled at uneven time stamps ([`MeasuredDrive::at_stamps`]: a logger's
+/// first rows, stamped before it settled to its rate): the spline is then the interpolating
+/// cubic spline on those knots, not-a-knot at its ends, as on the grid.
+///
 /// The samples are shared, not copied, when the drive is cloned (a record holds millions), and
 /// are data, not settings: nothing saves them with a model or a request.
 ///
@@ -42,11 +46,14 @@ use crate::error::ModelError;
 #[derive(Clone, PartialEq)]
 pub struct MeasuredDrive {
     samples: Arc<[f64]>,
-    /// The spline's second derivatives at the samples (times step², NaN where a sample is not
-    /// finite), made once from the samples.
+    /// The spline's second derivatives at the samples (times step² on a grid, as they are at
+    /// uneven stamps; NaN where a sample is not finite), made once from the samples.
     curvatures: Arc<[f64]>,
     start_time: f64,
     step: f64,
+    /// The samples' time stamps, when they are not on a grid (increasing, the first at
+    /// `start_time`).
+    stamps: Option<Arc<[f64]>>,
 }
 
 impl MeasuredDrive {
@@ -77,6 +84,60 @@ impl MeasuredDrive {
             curvatures,
             start_time,
             step,
+            stamps: None,
+        })
+    }
+
+    /// The drive's `samples` at the time stamps `stamps` (one each, at least 2, finite and
+    /// increasing), which need not be evenly spaced: the interpolating cubic spline on those
+    /// knots (not-a-knot ends; NaN next to a sample that is not finite). [`step`](Self::step)
+    /// is then the mean step.
+    ///
+    /// ```
+    /// use hb_model::MeasuredDrive;
+    ///
+    /// // A cubic at uneven stamps is the spline itself.
+    /// let f = |t: f64| 1.0 - 2.0 * t + 0.5 * t * t * t;
+    /// let t = [0.0, 0.35, 0.7, 0.9, 1.1, 1.3, 1.5];
+    /// let drive = MeasuredDrive::at_stamps(t.map(f).to_vec(), &t)?;
+    /// assert!((drive.at(0.2) - f(0.2)).abs() < 1e-12 && (drive.at(1.4) - f(1.4)).abs() < 1e-12);
+    /// assert!(drive.at(1.6).is_nan());
+    /// # Ok::<(), hb_model::ModelError>(())
+    /// ```
+    pub fn at_stamps(samples: impl Into<Arc<[f64]>>, stamps: &[f64]) -> Result<Self, ModelError> {
+        let samples = samples.into();
+        if samples.len() < 2 {
+            return Err(ModelError::DriveTooShort { len: samples.len() });
+        }
+        if stamps.len() != samples.len() {
+            return Err(ModelError::InvalidParameter {
+                name: "measured drive's time stamps",
+                value: stamps.len() as f64,
+                why: "must be one per sample",
+            });
+        }
+        if let Some(&bad) = stamps.iter().find(|t| !t.is_finite()) {
+            return Err(ModelError::InvalidParameter {
+                name: "measured drive's time stamp",
+                value: bad,
+                why: "must be finite",
+            });
+        }
+        if let Some(w) = stamps.windows(2).find(|w| w[1] <= w[0]) {
+            return Err(ModelError::InvalidParameter {
+                name: "measured drive's time stamp",
+                value: w[1],
+                why: "must come after the one before it",
+            });
+        }
+        let n = stamps.len();
+        let curvatures = uneven_curvatures(&samples, stamps).into();
+        Ok(Self {
+            samples,
+            curvatures,
+            start_time: stamps[0],
+            step: (stamps[n - 1] - stamps[0]) / (n - 1) as f64,
+            stamps: Some(stamps.into()),
         })
     }
 
@@ -100,14 +161,22 @@ impl MeasuredDrive {
         self.start_time
     }
 
-    /// The sampling step.
+    /// The sampling step (at uneven stamps, the mean step).
     pub fn step(&self) -> f64 {
         self.step
     }
 
+    /// The samples' time stamps, when they are not on a grid ([`MeasuredDrive::at_stamps`]).
+    pub fn stamps(&self) -> Option<&[f64]> {
+        self.stamps.as_deref()
+    }
+
     /// The time of the last sample.
     pub fn end_time(&self) -> f64 {
-        self.start_time + (self.samples.len() - 1) as f64 * self.step
+        match &self.stamps {
+            Some(t) => t[t.len() - 1],
+            None => self.start_time + (self.samples.len() - 1) as f64 * self.step,
+        }
     }
 
     /// The same samples from another grid's origin (a record's grid after resampling keeps its
@@ -120,8 +189,13 @@ impl MeasuredDrive {
                 why: "must be finite",
             });
         }
+        let stamps = self
+            .stamps
+            .as_ref()
+            .map(|t| t.iter().map(|s| s - self.start_time + start_time).collect());
         Ok(Self {
             start_time,
+            stamps,
             ..self.clone()
         })
     }
@@ -129,6 +203,9 @@ impl MeasuredDrive {
     /// The drive at time `t`: the spline through the samples, NaN outside the recorded span and
     /// where a sample it needs is not finite.
     pub fn at(&self, t: f64) -> f64 {
+        if let Some(stamps) = &self.stamps {
+            return self.at_stamped(stamps, t);
+        }
         let p = &self.samples[..];
         let last = p.len() - 1;
         let u = (t - self.start_time) / self.step;
@@ -150,6 +227,108 @@ impl MeasuredDrive {
         // Between the samples: the line through them plus the curvatures' cubic corrections
         // (NaN where either sample, hence its curvature, is not finite).
         r * p[i] + s * p[i + 1] - s * r / 6.0 * ((1.0 + r) * m[i] + (1.0 + s) * m[i + 1])
+    }
+}
+
+impl MeasuredDrive {
+    /// [`MeasuredDrive::at`] of a drive at uneven `stamps`.
+    fn at_stamped(&self, stamps: &[f64], t: f64) -> f64 {
+        let p = &self.samples[..];
+        let last = p.len() - 1;
+        let (first, end) = (stamps[0], stamps[last]);
+        // As on a grid: a rounding of the times past an end is the end.
+        let slack = 8.0 * f64::EPSILON * (t.abs() + first.abs() + end.abs());
+        if !(t >= first - slack && t <= end + slack) {
+            return f64::NAN;
+        }
+        let t = t.clamp(first, end);
+        // The interval [stamps[i], stamps[i+1]] that holds t.
+        let i = stamps
+            .partition_point(|&s| s <= t)
+            .saturating_sub(1)
+            .min(last - 1);
+        let h = stamps[i + 1] - stamps[i];
+        let s = (t - stamps[i]) / h;
+        if s == 0.0 {
+            return if p[i].is_finite() { p[i] } else { f64::NAN };
+        }
+        let r = 1.0 - s;
+        let m = &self.curvatures[..];
+        r * p[i] + s * p[i + 1] - s * r * h * h / 6.0 * ((1.0 + r) * m[i] + (1.0 + s) * m[i + 1])
+    }
+}
+
+/// The second derivatives of the interpolating cubic spline on the knots `t` of each run of
+/// finite samples, not-a-knot at the run's ends (a parabola through 3 samples, a line through
+/// 2); NaN at the non-finite samples.
+fn uneven_curvatures(p: &[f64], t: &[f64]) -> Vec<f64> {
+    let mut m = vec![f64::NAN; p.len()];
+    let mut start = 0;
+    while start < p.len() {
+        if !p[start].is_finite() {
+            start += 1;
+            continue;
+        }
+        let end = p[start..]
+            .iter()
+            .position(|v| !v.is_finite())
+            .map_or(p.len(), |k| start + k);
+        uneven_run_curvatures(&p[start..end], &t[start..end], &mut m[start..end]);
+        start = end;
+    }
+    m
+}
+
+/// [`uneven_curvatures`] of one run of finite samples, into `m`.
+fn uneven_run_curvatures(p: &[f64], t: &[f64], m: &mut [f64]) {
+    let n = p.len();
+    let h = |i: usize| t[i + 1] - t[i];
+    let slope = |i: usize| (p[i + 1] - p[i]) / h(i);
+    match n {
+        0 => {}
+        1 | 2 => m.fill(0.0),
+        3 => m.fill(2.0 * (slope(1) - slope(0)) / (t[2] - t[0])),
+        _ => {
+            // Inside: h[i-1] m[i-1] + 2 (h[i-1] + h[i]) m[i] + h[i] m[i+1] = 6 (slope[i] -
+            // slope[i-1]); not-a-knot (the third derivative continuous at knots 1 and n-2):
+            // m0 = ((h0 + h1) m1 - h0 m2) / h1 and its mirror at the end, eliminated into the
+            // first and last rows. Thomas algorithm; row j is for the unknown m[j+1].
+            let k = n - 2;
+            let mut lower = vec![0.0; k];
+            let mut diag = vec![0.0; k];
+            let mut upper = vec![0.0; k];
+            let mut d = vec![0.0; k];
+            for j in 0..k {
+                let i = j + 1;
+                let (a, b) = (h(i - 1), h(i));
+                lower[j] = a;
+                diag[j] = 2.0 * (a + b);
+                upper[j] = b;
+                d[j] = 6.0 * (slope(i) - slope(i - 1));
+            }
+            let (h0, h1) = (h(0), h(1));
+            diag[0] += h0 * (h0 + h1) / h1;
+            upper[0] -= h0 * h0 / h1;
+            lower[0] = 0.0;
+            let (hb, ha) = (h(n - 2), h(n - 3));
+            diag[k - 1] += hb * (hb + ha) / ha;
+            lower[k - 1] -= hb * hb / ha;
+            upper[k - 1] = 0.0;
+            let mut c = vec![0.0; k];
+            let mut x = vec![0.0; k];
+            for j in 0..k {
+                let (c_prev, x_prev) = if j > 0 { (c[j - 1], x[j - 1]) } else { (0.0, 0.0) };
+                let denom = diag[j] - lower[j] * c_prev;
+                c[j] = upper[j] / denom;
+                x[j] = (d[j] - lower[j] * x_prev) / denom;
+            }
+            for j in (0..k - 1).rev() {
+                x[j] -= c[j] * x[j + 1];
+            }
+            m[1..n - 1].copy_from_slice(&x);
+            m[0] = ((h0 + h1) * m[1] - h0 * m[2]) / h1;
+            m[n - 1] = ((hb + ha) * m[n - 2] - hb * m[n - 3]) / ha;
+        }
     }
 }
 
@@ -217,6 +396,7 @@ impl fmt::Debug for MeasuredDrive {
             .field("len", &self.samples.len())
             .field("start_time", &self.start_time)
             .field("step", &self.step)
+            .field("stamped", &self.stamps.is_some())
             .finish()
     }
 }

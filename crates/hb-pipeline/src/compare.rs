@@ -12,6 +12,15 @@
 //! interpolation would put a kink at every sample); a model with a periodic drive runs on the
 //! record's clock, so the drive's phase is the one it was identified with.
 //!
+//! A record whose first rows a logger stamped before it settled to its rate (steps of 1.5 or 2
+//! of its later ones: the identification leaves them out, see [`hb_record::prepare::LeadIn`]) is
+//! compared from its first row all the same: the free run covers the record as given. Those rows
+//! are run through at their own stamps (a free run needs no even grid; the measured drives are
+//! then the spline on those stamps, [`MeasuredDrive::at_stamps`]), the rest on the grid, and the
+//! ranges count them as the record's first rows, so that the samples are the file's rows for a
+//! record without gaps; a notice says so ([`Notice::UnevenStart`]). `skip_unsettled` leaves them
+//! out, as an identification does, the ranges then counting the grid's samples.
+//!
 //! Each range is run piece by piece (a gap has no measured drive to run on, so the model starts
 //! again after it): on each piece the initial state is the one whose free run best matches its
 //! first `init` samples ([`fit_initial_state`]), or the state given for the first piece; the
@@ -26,17 +35,19 @@ use std::str::FromStr;
 use circle_signal::{Domain, Measured, wrap};
 use hb_model::{IdentifiedModel, IdentifiedSystem, MeasuredDrive};
 use hb_record::prepare::GridData;
-use pendulum_sim::multi::{self, MultiState};
+use pendulum_sim::multi::{self, MultiState, OneCoordinate};
 use pendulum_sim::{Tolerances, fit_initial_state, free_run};
 use serde::{Deserialize, Serialize};
 
 use crate::error::RunError;
-use crate::observe::{Observer, Stage};
+use crate::observe::{Notice, Observer, Stage};
 use crate::options::{OptionError, from_object, optional_text, text};
 use crate::record::{ColumnList, RecordOptions, Source, condition_source};
 
-/// A range of samples of the record's grid, `A..B` (0-based, `B` excluded), or `A..` to the
-/// record's end. For a record without gaps the grid's samples are the file's rows.
+/// A range of samples of the record, `A..B` (0-based, `B` excluded), or `A..` to the record's
+/// end: the grid's samples, after the rows a logger stamped before it settled, when the record
+/// has them (see the [module documentation](self)). For a record without gaps the samples are
+/// the file's rows.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct SampleRange {
     /// The first sample.
@@ -215,6 +226,11 @@ pub struct CompareOptions {
     pub v0: Option<Values>,
     /// Relative tolerance of the integrator (the absolute one is rtol/10).
     pub rtol: f64,
+    /// Leave out the record's first rows that a logger stamped before it settled to its rate,
+    /// as an identification does: the ranges then count the samples of the grid from its first
+    /// (by default the comparison covers the record from its first row; see the [module
+    /// documentation](self)).
+    pub skip_unsettled: bool,
 }
 
 impl Default for CompareOptions {
@@ -235,6 +251,7 @@ impl Default for CompareOptions {
             x0: None,
             v0: None,
             rtol: CompareRequest::DEFAULT_RTOL,
+            skip_unsettled: false,
         }
     }
 }
@@ -377,6 +394,119 @@ pub struct RangeScore {
     pub stopped: Option<String>,
 }
 
+/// The times of a compared record's samples: the grid's `t0 + n · dt`, after the rows a logger
+/// stamped before it settled, at their own stamps, when they are compared.
+#[derive(Debug, Clone, PartialEq)]
+struct Clock {
+    /// The stamps of the rows before the grid (empty when there are none).
+    lead: Vec<f64>,
+    t0: f64,
+    dt: f64,
+}
+
+impl Clock {
+    /// The time of sample `i`.
+    fn time(&self, i: usize) -> f64 {
+        match self.lead.get(i) {
+            Some(&t) => t,
+            None => self.t0 + (i - self.lead.len()) as f64 * self.dt,
+        }
+    }
+
+    /// The times of the samples `range`.
+    fn times(&self, range: std::ops::Range<usize>) -> Vec<f64> {
+        range.map(|i| self.time(i)).collect()
+    }
+
+    /// Whether sample `start` is before the grid (its run is not on an even grid).
+    fn uneven(&self, start: usize) -> bool {
+        start < self.lead.len()
+    }
+}
+
+/// The record of `source` as compared: conditioned ([`condition_source`]), and, unless
+/// `skip_unsettled`, with the rows a logger stamped before it settled ahead of its grid, their
+/// note (that they are left out) replaced by [`Notice::UnevenStart`].
+fn compared_record(
+    source: Source<'_>,
+    record: &RecordOptions,
+    skip_unsettled: bool,
+    observer: &mut dyn Observer,
+) -> Result<(GridData, Clock), RunError> {
+    /// Passes everything on but the note of a left-out start, which it keeps.
+    struct Relay<'o> {
+        inner: &'o mut dyn Observer,
+        held: Option<Notice>,
+    }
+    impl Observer for Relay<'_> {
+        fn stage(&mut self, stage: Stage) {
+            self.inner.stage(stage);
+        }
+        fn progress(&mut self, done: usize, total: usize) {
+            self.inner.progress(done, total);
+        }
+        fn notice(&mut self, notice: &Notice) {
+            match notice {
+                Notice::Record(hb_record::prepare::Note::Unsettled(run))
+                    if run.end == hb_record::input::RecordEnd::Start && self.held.is_none() =>
+                {
+                    self.held = Some(notice.clone());
+                }
+                _ => self.inner.notice(notice),
+            }
+        }
+    }
+    let mut relay = Relay {
+        inner: observer,
+        held: None,
+    };
+    let mut grid = condition_source(source, record, &mut relay)?;
+    let Relay {
+        inner: observer,
+        held,
+    } = relay;
+    let lead = grid.lead_in.take().filter(|_| !skip_unsettled);
+    let Some(lead) = lead else {
+        if let Some(held) = held {
+            observer.notice(&held);
+        }
+        let clock = Clock {
+            lead: Vec::new(),
+            t0: grid.t0,
+            dt: grid.dt,
+        };
+        return Ok((grid, clock));
+    };
+    observer.notice(&Notice::UnevenStart(lead.run.clone()));
+    let k = lead.len();
+    let ahead = |first: &[f64], rest: &mut Vec<f64>| {
+        let mut all = Vec::with_capacity(first.len() + rest.len());
+        all.extend_from_slice(first);
+        all.append(rest);
+        *rest = all;
+    };
+    ahead(&lead.x, &mut grid.x);
+    for (c, first) in grid.others.iter_mut().zip(&lead.others) {
+        ahead(first, &mut c.x);
+    }
+    for (d, first) in grid.drives.iter_mut().zip(&lead.drives) {
+        ahead(first, d);
+    }
+    for (v, first) in grid.velocities.iter_mut().zip(&lead.velocities) {
+        ahead(first, v);
+    }
+    // The grid's first piece starts at its sample 0: the rows before it join it.
+    for (i, piece) in grid.pieces.iter_mut().enumerate() {
+        *piece = if i == 0 { 0 } else { piece.start + k }..piece.end + k;
+    }
+    let clock = Clock {
+        lead: lead.t,
+        t0: grid.t0,
+        dt: grid.dt,
+    };
+    Ok((grid, clock))
+}
+
 /// One piece of a range as run: the measured and simulated output at each of its samples.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RunPiece {
@@ -400,8 +530,12 @@ pub struct RunPiece {
 pub struct CompareReport {
     /// The record's samples that hold data.
     pub samples: usize,
-    /// The sampling step.
+    /// The sampling step (of the grid).
     pub step: f64,
+    /// The record's first rows, stamped before its logger settled to its rate, that the free run
+    /// passes at their own stamps: the first samples of the ranges (0 when there are none, or
+    /// with `skip_unsettled`).
+    pub unsettled_rows: usize,
     /// Circle or line.
     #[serde(serialize_with = "text::serialize")]
     pub signal: Domain,
@@ -467,7 +601,7 @@ fn compare_one(
     }
     // A drive given as an array is Python's `drive=`, even when its name comes with it.
     let named = !matches!(source, Source::Arrays { .. });
-    let grid = condition_source(source, &o.record_options(domain), observer)?;
+    let (grid, clock) = compared_record(source, &o.record_options(domain), o.skip_unsettled, observer)?;
     let measured_drive = check_drive(model, &grid, named)?;
     observer.stage(Stage::Simulate);
     let len = grid.x.len();
@@ -491,7 +625,7 @@ fn compare_one(
                 default_init(period, range.len())
             }
         });
-        let (score, pieces) = run_range(model, &grid, range.clone(), init, request)?;
+        let (score, pieces) = run_range(model, &grid, &clock, range.clone(), init, request)?;
         if score.scored == 0 && score.stopped.is_none() {
             return Err(OptionError::value(
                 "init",
@@ -512,6 +646,7 @@ fn compare_one(
     Ok(CompareReport {
         samples: grid.pieces.iter().map(|p| p.len()).sum(),
         step: grid.dt,
+        unsettled_rows: clock.lead.len(),
         signal: domain,
         measured_drive,
         coordinates: Vec::new(),
@@ -628,7 +763,7 @@ fn compare_system(
         drive_period: None,
         drive_frequency: None,
     };
-    let grid = condition_source(source, &record, observer)?;
+    let (grid, clock) = compared_record(source, &record, o.skip_unsettled, observer)?;
     observer.stage(Stage::Simulate);
     let len = grid.x.len();
     let ranges: Vec<std::ops::Range<usize>> = if o.range.is_empty() {
@@ -670,12 +805,16 @@ fn compare_system(
                 skipped += 1;
                 continue;
             }
-            let times: Vec<f64> = (start..end).map(|i| grid.t0 + i as f64 * grid.dt).collect();
+            let times = clock.times(start..end);
+            let uneven = clock.uneven(start);
             let driven = match drives_needed {
                 true => system.clone().with_measured_drives(
                     grid.drives
                         .iter()
-                        .map(|p| MeasuredDrive::new(p[start..end].to_vec(), times[0], grid.dt))
+                        .map(|p| match uneven {
+                            true => MeasuredDrive::at_stamps(p[start..end].to_vec(), &times),
+                            false => MeasuredDrive::new(p[start..end].to_vec(), times[0], grid.dt),
+                        })
                         .collect::<Result<Vec<_>, _>>()?,
                 )?,
                 false => system.clone(),
@@ -764,6 +903,7 @@ fn compare_system(
     Ok(CompareReport {
         samples: grid.pieces.iter().map(|p| p.len()).sum(),
         step: grid.dt,
+        unsettled_rows: clock.lead.len(),
         signal: domains[0],
         measured_drive: drives_needed,
         coordinates: names.coordinates().to_vec(),
@@ -830,6 +970,23 @@ pub(crate) fn driven_on(
     }
 }
 
+/// `model` driven by the record's drive over the samples `[start, start + times.len())`, at the
+/// uneven `times` of a logger's first rows: [`driven_on`] off the grid.
+fn driven_at(
+    model: &IdentifiedModel,
+    grid: &GridData,
+    start: usize,
+    times: &[f64],
+) -> Result<IdentifiedModel, RunError> {
+    match grid.drives.first() {
+        Some(p) if model.form().has_measured_drive() => {
+            let signal = MeasuredDrive::at_stamps(p[start..start + times.len()].to_vec(), times)?;
+            Ok(model.clone().with_measured_drive(signal)?)
+        }
+        _ => Ok(model.clone()),
+    }
+}
+
 /// The difference of a simulated and a measured output, as the domain measures it.
 pub(crate) fn difference(domain: Domain, simulated: f64, measured: f64) -> f64 {
     match domain {
@@ -842,6 +999,7 @@ pub(crate) fn difference(domain: Domain, simulated: f64, measured: f64) -> f64 {
 fn run_range(
     model: &IdentifiedModel,
     grid: &GridData,
+    clock: &Clock,
     range: std::ops::Range<usize>,
     init: usize,
     request: &CompareRequest,
@@ -871,18 +1029,45 @@ fn run_range(
             continue;
         }
         let y = &grid.x[start..end];
-        let t0 = grid.t0 + start as f64 * grid.dt;
-        let model = &driven_on(model, grid, start, end)?;
+        let t0 = clock.time(start);
+        let times = clock.times(start..end);
+        let uneven = clock.uneven(start);
+        let model = &match uneven {
+            true => driven_at(model, grid, start, &times)?,
+            false => driven_on(model, grid, start, end)?,
+        };
+        // Off the grid, the run of one coordinate is that of the system of one coordinate,
+        // sampled at the stamps.
+        let one = OneCoordinate(model);
         let state = match given {
             Some(state) => Ok((state, 0.0)),
             None if measured_state => Ok(([y[0], grid.velocities[0][start]], 0.0)),
+            None if uneven => {
+                multi::fit_initial_state(&one, &[&y[..init]], &[domain], &times[..init], request.tolerances)
+                    .map(|fit| ([fit.state.q()[0], fit.state.v()[0]], fit.rms))
+            }
             None => fit_initial_state(model, &y[..init], t0, grid.dt, domain, request.tolerances)
                 .map(|fit| (fit.state, fit.rms)),
         };
         let run = match state {
             Ok((state, fit_rms)) => {
                 states.push([state[0], state[1], fit_rms]);
-                free_run(model, t0, grid.dt, y.len(), state, request.tolerances)?
+                if uneven {
+                    let run = multi::free_run(
+                        &one,
+                        &times,
+                        &MultiState::new(&[state[0]], &[state[1]])?,
+                        request.tolerances,
+                    )?;
+                    let (mut q, mut v) = (run.q, run.v);
+                    pendulum_sim::FreeRun {
+                        x: q.swap_remove(0),
+                        v: v.swap_remove(0),
+                        stopped: run.stopped,
+                    }
+                } else {
+                    free_run(model, t0, grid.dt, y.len(), state, request.tolerances)?
+                }
             }
             // No state from which the model runs through the first samples: the piece has no run.
             Err(why) => pendulum_sim::FreeRun {
@@ -905,7 +1090,7 @@ fn run_range(
         }
         pieces.push(RunPiece {
             start,
-            t: (start..end).map(|n| grid.t0 + n as f64 * grid.dt).collect(),
+            t: times,
             measured: y.to_vec(),
             x,
             v: run.v,

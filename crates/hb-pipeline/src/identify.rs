@@ -1202,6 +1202,7 @@ pub fn identify_data(
             drives: data.drives.clone(),
             velocities: Vec::new(),
             notes: Vec::new(),
+            lead_in: None,
         };
         let model = &identification.model;
         let longest = data.pieces.iter().map(|p| p.len()).max().unwrap_or(0);

@@ -108,6 +108,9 @@ pub enum Notice {
     NoIntervals(String),
     /// The fit's warning (too little explained, or not a description of the record).
     Warning(String),
+    /// A comparison runs through the record's first rows, which a logger stamped before it
+    /// settled to its rate, at their own stamps (an identification leaves them out).
+    UnevenStart(hb_record::input::Unsettled),
 }
 
 impl Notice {
@@ -188,9 +191,33 @@ impl fmt::Display for Notice {
                 )
             }
             Notice::NoIntervals(why) => write!(f, "no bootstrap intervals: {why}"),
+            Notice::UnevenStart(run) => write!(
+                f,
+                "the first {} rows ({} to {}, t = {} to {}) are {:.2} to {:.2} steps of {} apart, stamped before the \
+                 logger settled to its rate: the free run starts at the first row and passes them at their own \
+                 stamps (the measured drives interpolated over them), the rows after them on the grid; the ranges \
+                 count them as the record's first rows («skip_unsettled» leaves them out, as an identification does)",
+                run.samples.len(),
+                run.first,
+                run.last,
+                run.from,
+                run.to,
+                run.shortest / run.step,
+                run.longest / run.step,
+                significant(run.step, 6)
+            ),
             Notice::Warning(w) => f.write_str(w),
         }
     }
+}
+
+/// `v` to `digits` significant digits, in the shortest text that reads back as that.
+fn significant(v: f64, digits: i32) -> f64 {
+    if v == 0.0 || !v.is_finite() {
+        return v;
+    }
+    let scale = 10f64.powi(digits - 1 - v.abs().log10().floor() as i32);
+    (v * scale).round() / scale
 }
 
 /// Hears of a run as it goes. Every method has an empty default: implement what you show.

@@ -286,3 +286,179 @@ fn a_missing_coordinate_names_the_option_that_chooses_it() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The time stamps of a logger that takes its first steps at 3.0 to 3.5 ms before it settles to
+/// 2 ms (as the DFKI double pendulum's): `len` rows, the first 5 of them unsettled.
+fn unsettled_stamps(len: usize) -> Vec<f64> {
+    let mut t = vec![0.0, 0.0035, 0.0068, 0.0099, 0.0129];
+    let settled = 0.0159;
+    t.extend((0..len - t.len()).map(|i| settled + 0.002 * i as f64));
+    t
+}
+
+/// A torque-driven double pendulum in relative angles (q2 of link 2 against link 1), the shape
+/// of the DFKI rig's model: its equations read the torques tau1, tau2.
+fn torque_pendulum() -> IdentifiedSystem {
+    use hb_basis::{Domain, Harmonic};
+    use hb_model::{Names, TermList};
+    let names = Names::new(["q1", "q2"], ["tau1", "tau2"]).unwrap();
+    let basis = BasisKind::from(Harmonic::new(1).unwrap());
+    let equation = |own: usize, terms: &str, values: &[f64]| {
+        let list = TermList::parse_in(terms, &names, own).unwrap();
+        IdentifiedModel::new(basis, ModelForm::from_terms(list), 1.0, values).unwrap()
+    };
+    IdentifiedSystem::new(
+        names.clone(),
+        vec![Domain::Circle; 2],
+        vec![
+            equation(
+                0,
+                "q2''*cos(q2), sin(q1), sin(q1+q2), q1', tau1",
+                &[0.3, 20.0, 6.0, 0.2, -8.0],
+            ),
+            equation(1, "q1''*cos(q2), sin(q1+q2), q2', tau2", &[0.9, 40.0, 0.1, -30.0]),
+        ],
+    )
+    .unwrap()
+}
+
+/// The torques of the record: smooth, so that a spline through their samples is them.
+fn torques(t: f64) -> [f64; 2] {
+    [0.4 * (10.0 * t).sin(), -0.3 * (5.0 * t).cos()]
+}
+
+/// A drive sampled every 0.1 ms over `[0, end]`: its spline is the function to 1e-12.
+fn fine(f: impl Fn(f64) -> f64, end: f64) -> hb_model::MeasuredDrive {
+    let n = (end / 1e-4).ceil() as usize + 2;
+    hb_model::MeasuredDrive::new((0..n).map(|i| f(i as f64 * 1e-4)).collect::<Vec<_>>(), 0.0, 1e-4).unwrap()
+}
+
+/// A record whose first rows a logger stamped 3.0 to 3.5 ms apart before it settled to 2 ms is
+/// compared from its first row, as the protocol of such a record runs it: the true system,
+/// started from row 0's measured state, follows its own record at every row, the unsettled ones
+/// at their own stamps, and the ranges count those rows as the record's first. With
+/// `skip_unsettled` the comparison starts at the first row on the grid instead, as before.
+#[test]
+fn a_record_with_an_unsettled_start_is_compared_from_its_first_row() {
+    use hb_pipeline::{Notice, Notices};
+    use pendulum_sim::multi::{self, MultiState};
+    let system = torque_pendulum();
+    let t = unsettled_stamps(2000);
+    let end = t[t.len() - 1];
+    let driven = system
+        .clone()
+        .with_measured_drives(vec![fine(|s| torques(s)[0], end), fine(|s| torques(s)[1], end)])
+        .unwrap();
+    let (x0, v0) = ([0.1, -0.2], [0.0, 0.5]);
+    let tolerances = pendulum_sim::Tolerances::new(1e-12, 1e-13).unwrap();
+    let run = multi::free_run(&driven, &t, &MultiState::new(&x0, &v0).unwrap(), tolerances).unwrap();
+    assert!(run.stopped.is_none());
+    // It moves: half a radian of swing, so that a row placed a step off would show.
+    let swing = run.q[1].iter().fold(0.0f64, |m, q| m.max(q.abs()));
+    assert!(swing > 0.3, "{swing}");
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("unsettled.csv");
+    let mut text = "time,pos1,pos2,vel1,vel2,tau1,tau2\n".to_owned();
+    for (i, &s) in t.iter().enumerate() {
+        let [u1, u2] = torques(s);
+        text.push_str(&format!(
+            "{s},{},{},{},{},{u1},{u2}\n",
+            run.q[0][i], run.q[1][i], run.v[0][i], run.v[1][i]
+        ));
+    }
+    std::fs::write(&path, text).unwrap();
+
+    let compared = |skip_unsettled: bool| {
+        let request = CompareRequest::new(CompareOptions {
+            time_col: Some("time".into()),
+            coords: Some("q1=pos1,q2=pos2".parse().unwrap()),
+            drive_col: Some("tau1=tau1,tau2=tau2".parse().unwrap()),
+            velocity_col: Some("vel1,vel2".parse().unwrap()),
+            range: vec!["0..".parse().unwrap(), "0..500".parse().unwrap()],
+            skip_unsettled,
+            ..CompareOptions::default()
+        })
+        .unwrap();
+        let mut notices = Notices::default();
+        let report = compare(&system, Source::Path(&path), &request, &mut notices).unwrap();
+        (report, notices.0)
+    };
+
+    let (report, notices) = compared(false);
+    assert_eq!(report.unsettled_rows, 5);
+    assert_eq!(report.samples, 2000);
+    let uneven: Vec<_> = notices
+        .iter()
+        .filter_map(|n| match n {
+            Notice::UnevenStart(run) => Some(run.samples.clone()),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(uneven.len(), 1, "{notices:?}");
+    assert_eq!(uneven[0], 0..5, "{notices:?}");
+    assert_eq!(report.ranges.len(), 4);
+    for (i, r) in report.ranges.iter().enumerate() {
+        let end = if i < 2 { 2000 } else { 500 };
+        assert_eq!((r.range, r.init, r.scored), ([0, end], 0, end), "{r:?}");
+        assert!(r.rmse.unwrap() < 1e-6, "{r:?}");
+        assert!(r.max_error.unwrap() < 1e-5, "{r:?}");
+    }
+    // From row 0's measured state, at the rows' own stamps.
+    let first = &report.runs[0][0];
+    assert_eq!(first.start, 0);
+    assert_eq!(&first.t[..6], &t[..6]);
+    assert!((first.t[1999] - t[1999]).abs() < 1e-9);
+    assert_eq!(report.ranges[0].initial_states, [[x0[0], v0[0], 0.0]]);
+    assert_eq!(report.ranges[1].initial_states, [[x0[1], v0[1], 0.0]]);
+
+    // Left out: the grid's first sample is row 5, the ranges count from there.
+    let (skipped, notices) = compared(true);
+    assert_eq!((skipped.unsettled_rows, skipped.samples), (0, 1995));
+    assert!(!notices.iter().any(|n| matches!(n, Notice::UnevenStart(_))));
+    assert_eq!(skipped.ranges[0].range, [0, 1995]);
+    assert!((skipped.runs[0][0].t[0] - t[5]).abs() < 1e-9);
+    assert_eq!(skipped.ranges[0].initial_states[0][0], run.q[0][5]);
+    assert!(skipped.ranges[0].rmse.unwrap() < 1e-6);
+}
+
+/// A model of one coordinate on such a record, its state fitted to the first samples (no
+/// velocities: samples given as arrays with their stamps): the fit and the run go through the
+/// unsettled rows at their stamps, and the true model is its own record's.
+#[test]
+fn one_coordinate_is_fitted_and_run_through_an_unsettled_start() {
+    use pendulum_sim::multi::{self, MultiState, OneCoordinate};
+    let basis = BasisKind::from(Polynomial::new(3).unwrap());
+    let form = ModelForm::from_terms("x', x, x^3, p".parse().unwrap());
+    let model = IdentifiedModel::new(basis, form, 1.0, &[0.2, 30.0, 5.0, -40.0]).unwrap();
+    let t = unsettled_stamps(3000);
+    let end = t[t.len() - 1];
+    let p = |s: f64| (7.0 * s).sin() + 0.3 * (13.0 * s).cos();
+    let driven = model.clone().with_measured_drive(fine(p, end)).unwrap();
+    let tolerances = pendulum_sim::Tolerances::new(1e-12, 1e-13).unwrap();
+    let state = MultiState::new(&[0.05], &[-0.4]).unwrap();
+    let run = multi::free_run(&OneCoordinate(&driven), &t, &state, tolerances).unwrap();
+    assert!(run.stopped.is_none());
+    let drive: Vec<f64> = t.iter().map(|&s| p(s)).collect();
+    let request = CompareRequest::new(CompareOptions {
+        init: Some(40),
+        drive_col: Some("p".parse().unwrap()),
+        ..CompareOptions::default()
+    })
+    .unwrap();
+    let source = Source::Arrays {
+        coords: vec![&run.q[0]],
+        t: Some(&t),
+        drives: vec![&drive],
+    };
+    let report = compare(&IdentifiedSystem::one(model), source, &request, &mut ()).unwrap();
+    assert_eq!(report.unsettled_rows, 5);
+    let r = &report.ranges[0];
+    assert_eq!((r.range, r.init, r.scored), ([0, 3000], 40, 2960), "{r:?}");
+    let [x, v, rms] = r.initial_states[0];
+    assert!(
+        (x - 0.05).abs() < 1e-7 && (v + 0.4).abs() < 1e-5 && rms < 1e-8,
+        "{x} {v} {rms}"
+    );
+    assert!(r.rmse.unwrap() < 1e-6, "{r:?}");
+    assert_eq!(&report.runs[0][0].t[..6], &t[..6]);
+}

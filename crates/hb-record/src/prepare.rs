@@ -34,8 +34,8 @@ use std::fmt;
 use std::ops::Range;
 
 use crate::input::{
-    AngleRange, GridOptions, GridRecord, GridReport, InputError, Record as InputRecord, TimeRepair,
-    Unsettled, angle_range,
+    AngleRange, GridOptions, GridRecord, GridReport, InputError, Record as InputRecord, RecordEnd,
+    TimeRepair, UNSETTLED_MAX, Unsettled, angle_range,
 };
 use circle_signal::{
     CircleError, Domain, Measured, SampleClock, Spike, SpikeParams, find_and_repair_spikes, find_spikes,
@@ -359,6 +359,44 @@ pub struct GridData {
     pub velocities: Vec<Vec<f64>>,
     /// What was done to the record or found in it, in order.
     pub notes: Vec<Note>,
+    /// The record's first rows, left out of the grid because a logger stamped them before it
+    /// settled to its rate ([`Unsettled`]), kept aside at their own stamps (none when the record
+    /// has no such rows, or they cannot be run through: see [`LeadIn`]).
+    pub lead_in: Option<Box<LeadIn>>,
+}
+
+/// The rows a logger stamped before it settled to its rate ([`Unsettled`] at the record's
+/// start): not on the grid, so left out of every analysis on it, but kept with their own time
+/// stamps for what needs no grid, such as a free run compared with the record from its first
+/// row. Every series holds one value per row; the angles are wrapped as the grid's are. Kept
+/// only when every value is finite, the stamps increase, and the last comes before the grid's
+/// first sample; not for a velocity or acceleration record (integrated on the grid alone).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LeadIn {
+    /// What was left out, as the note says it.
+    pub run: Unsettled,
+    /// The rows' time stamps, as read.
+    pub t: Vec<f64>,
+    /// The first coordinate.
+    pub x: Vec<f64>,
+    /// The further coordinates, in order.
+    pub others: Vec<Vec<f64>>,
+    /// The measured drives, in the order read.
+    pub drives: Vec<Vec<f64>>,
+    /// The coordinates' measured velocities, when read.
+    pub velocities: Vec<Vec<f64>>,
+}
+
+impl LeadIn {
+    /// The number of rows.
+    pub fn len(&self) -> usize {
+        self.t.len()
+    }
+
+    /// Never true: a logger's unsettled run holds at least two rows.
+    pub fn is_empty(&self) -> bool {
+        self.t.is_empty()
+    }
 }
 
 /// A record ready for analysis.
@@ -443,6 +481,9 @@ pub fn condition(
         kept.push(n);
     };
     let mut record = record;
+    // A logger's unsettled start is at most UNSETTLED_MAX rows: their values, kept aside.
+    let head = |v: &[f64]| v[..v.len().min(UNSETTLED_MAX)].to_vec();
+    let (head_t, head_x) = (head(&record.t), head(&record.theta));
     let drives_read = std::mem::take(&mut record.drives);
     let velocities_read = std::mem::take(&mut record.velocities);
     let others_read = std::mem::take(&mut record.others);
@@ -468,6 +509,49 @@ pub fn condition(
         note(Note::TimeRepaired(*r));
     }
     let (t0, dt, read_kept) = (grid.t0, grid.dt, grid.kept());
+    let lead_in = grid
+        .unsettled
+        .iter()
+        .find(|run| run.end == RecordEnd::Start)
+        .filter(|_| options.measured == Measured::Displacement)
+        .and_then(|run| {
+            let rows = run.samples.clone();
+            let domains = options.domains();
+            let angles = |v: &[f64], domain: Domain| -> Vec<f64> {
+                v.iter()
+                    .map(|&a| match domain {
+                        Domain::Circle if !(-PI..PI).contains(&a) => circle_signal::wrap(a),
+                        _ => a,
+                    })
+                    .collect()
+            };
+            let lead = LeadIn {
+                run: run.clone(),
+                t: head_t.get(rows.clone())?.to_vec(),
+                x: angles(head_x.get(rows.clone())?, domains[0]),
+                others: others_read
+                    .iter()
+                    .zip(&domains[1..])
+                    .map(|(v, &d)| Some(angles(v.get(rows.clone())?, d)))
+                    .collect::<Option<_>>()?,
+                drives: drives_read
+                    .iter()
+                    .map(|v| v.get(rows.clone()).map(<[f64]>::to_vec))
+                    .collect::<Option<_>>()?,
+                velocities: velocities_read
+                    .iter()
+                    .map(|v| v.get(rows.clone()).map(<[f64]>::to_vec))
+                    .collect::<Option<_>>()?,
+            };
+            let finite = std::iter::once(&lead.t)
+                .chain(std::iter::once(&lead.x))
+                .chain(&lead.others)
+                .chain(&lead.drives)
+                .chain(&lead.velocities)
+                .all(|v| v.iter().all(|a| a.is_finite()));
+            let increasing = lead.t.windows(2).all(|w| w[1] > w[0]) && lead.t.last().is_some_and(|&l| l < t0);
+            (finite && increasing && !lead.t.is_empty()).then(|| Box::new(lead))
+        });
     // One grid for every piece, NaN in the gaps.
     let mut x: Vec<f64> = Vec::new();
     let mut pieces = Vec::with_capacity(grid.pieces.len());
@@ -565,6 +649,7 @@ pub fn condition(
         drives,
         velocities,
         notes: kept,
+        lead_in,
     })
 }
 

@@ -148,6 +148,7 @@ impl<'a> Samples<'a> {
                     drives: self.drives.iter().map(|d| d.to_vec()).collect(),
                     velocities: self.velocities.iter().map(|v| v.to_vec()).collect(),
                     notes: Vec::new(),
+                    lead_in: None,
                 }))
             }
         }

@@ -60,8 +60,9 @@ pub struct CompareArgs {
     /// to the displacement, as for `hbid identify`).
     #[arg(long, default_value_t = Measured::Displacement, value_parser = choice::<Measured>(&["displacement", "velocity", "acceleration"]))]
     pub measured: Measured,
-    /// Samples compared, A..B (0-based, B excluded) or A.. to the end, of the record's grid (its
-    /// rows for a record without gaps); repeatable, each range scored on its own [default: the
+    /// Samples compared, A..B (0-based, B excluded) or A.. to the end: the record's rows for a
+    /// record without gaps, its first rows included when a logger stamped them before it settled
+    /// to its rate (see --skip-unsettled); repeatable, each range scored on its own [default: the
     /// whole record].
     #[arg(long, value_name = "A..B")]
     pub range: Vec<SampleRange>,
@@ -80,6 +81,12 @@ pub struct CompareArgs {
     /// Relative tolerance of the integrator (the absolute one is rtol/10).
     #[arg(long, default_value_t = CompareRequest::DEFAULT_RTOL, allow_hyphen_values = true)]
     pub rtol: f64,
+    /// Leave out the record's first rows when a logger stamped them before it settled to its
+    /// rate (steps of 1.5 to 2 of the later ones), as `identify` does, and start at the first row
+    /// on the grid; the ranges then count from there. By default the free run starts at the
+    /// record's first row and passes those rows at their own stamps (a note says so).
+    #[arg(long)]
+    pub skip_unsettled: bool,
     /// Print the scores as JSON.
     #[arg(long)]
     pub json: bool,
@@ -107,6 +114,7 @@ impl CompareArgs {
             x0: self.x0.clone(),
             v0: self.v0.clone(),
             rtol: self.rtol,
+            skip_unsettled: self.skip_unsettled,
         }
     }
 }
@@ -147,8 +155,12 @@ pub fn table(report: &CompareReport) -> String {
     } else {
         "on its own drive, on the record's clock"
     };
+    let uneven = match report.unsettled_rows {
+        0 => String::new(),
+        n => format!(" (the first {n} at their own stamps)"),
+    };
     let mut out = format!(
-        "free run of the model {drive}, {} samples, step {}; errors in {unit}\n\n",
+        "free run of the model {drive}, {} samples{uneven}, step {}; errors in {unit}\n\n",
         report.samples, report.step
     );
     let w = report

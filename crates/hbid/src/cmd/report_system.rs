@@ -232,6 +232,8 @@ fn measure(
         no_repair: input.no_repair,
         velocity_col: input.velocity_col.clone(),
         measured: input.measured,
+        // On the record's grid, as the report draws it beside the models' runs.
+        skip_unsettled: true,
         ..CompareOptions::default()
     })?;
     let compare = hb_pipeline::compare(system, Source::Grid(grid.clone()), &request, observer)

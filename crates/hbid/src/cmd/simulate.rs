@@ -273,7 +273,8 @@ pub struct SimulateArgs {
     /// model's own drive on the record's clock; writes t,x,v at every sample of the record, piece
     /// by piece between gaps, each piece from the state whose free run best matches its first
     /// --init samples (or from --x0, --v0 with --init 0); pieces no longer than --init are not run.
-    /// Takes no option of a built-in system.
+    /// A record's first rows stamped before its logger settled to its rate are run at their own
+    /// stamps, as `hbid compare` runs them. Takes no option of a built-in system.
     #[arg(long, value_name = "MODEL", requires = "input", help_heading = MODEL)]
     model: Option<PathBuf>,
     /// The record whose input drives --model (text or .npy, read as by `hbid identify`).
