@@ -1,21 +1,25 @@
-//! The read stage of `hbid identify` (what `--timings` calls `read`) on 10^6 samples of the paper's
-//! pendulum as `hbid simulate --samples 1000000` writes them, `.npy` and CSV: the file read, its
-//! time stamps fitted to a grid, the angle wrapped and searched for spikes, the drive's period
-//! given (`hb_pipeline::load` with the command's defaults). The records are simulated and written
-//! once, outside the timed closures; `RAYON_NUM_THREADS=1` for one thread.
+//! The read stage of `hbid identify` (what `--timings` calls `read`) on 10^6 samples, `.npy` and
+//! CSV: the file read, its time stamps fitted to a grid, the angles wrapped and searched for
+//! spikes, the drive's period given (`hb_pipeline::load` with the command's defaults). Records:
+//! the paper's pendulum as `hbid simulate --samples 1000000` writes it (25 samples per period),
+//! the same at 64 per period (`--samples-per-period 64`), and the whirling double pendulum
+//! (`--system double-pendulum`, two coordinates read with `--time-col 1 --coords
+//! theta1=2,theta2=3`). The records are simulated and written once, outside the timed closures;
+//! `RAYON_NUM_THREADS=1` for one thread (the two coordinates are conditioned in parallel).
 use std::path::Path;
 use std::time::Duration;
 
 use criterion::{Criterion, criterion_group, criterion_main};
+use hb_pipeline::simulate::SystemKind;
 use hb_pipeline::{RecordOptions, Rig, SimulateOptions, Source, load, simulate};
 
-/// The paper's pendulum, `samples` samples, written to `path` as `hbid simulate` writes it.
-fn write_record(samples: usize, path: &Path) {
+/// `samples` samples of `options`' system, written to `path` as `hbid simulate` writes them.
+fn write_record(options: SimulateOptions, samples: usize, path: &Path) {
     let rig = Rig::new(SimulateOptions {
         samples: Some(samples),
-        ..SimulateOptions::default()
+        ..options
     })
-    .expect("the paper's settings");
+    .expect("valid settings");
     simulate(&rig, &mut ())
         .expect("simulation")
         .write(path)
@@ -24,15 +28,42 @@ fn write_record(samples: usize, path: &Path) {
 
 fn bench_read(c: &mut Criterion) {
     let dir = tempfile::tempdir().expect("temporary folder");
-    let options = RecordOptions::default();
-    let drive = options.drive(false);
     let mut group = c.benchmark_group("read");
     group.sample_size(10).measurement_time(Duration::from_secs(10));
-    for ext in ["npy", "csv"] {
-        let path = dir.path().join(format!("pendulum_1e6.{ext}"));
-        write_record(1_000_000, &path);
-        group.bench_function(format!("{ext}_1e6"), |b| {
-            b.iter(|| load(Source::Path(&path), &options, drive, &mut ()).expect("read"))
+    let one = RecordOptions::default();
+    let two = RecordOptions {
+        time_col: Some("1".to_owned()),
+        coords: Some("theta1=2,theta2=3".parse().expect("columns")),
+        ..RecordOptions::default()
+    };
+    let records = [
+        ("npy_1e6", "npy", SimulateOptions::default(), &one),
+        ("csv_1e6", "csv", SimulateOptions::default(), &one),
+        (
+            "npy_1e6_64_per_period",
+            "npy",
+            SimulateOptions {
+                samples_per_period: Some(64),
+                ..SimulateOptions::default()
+            },
+            &one,
+        ),
+        (
+            "npy_1e6_double_pendulum",
+            "npy",
+            SimulateOptions {
+                system: SystemKind::DoublePendulum,
+                ..SimulateOptions::default()
+            },
+            &two,
+        ),
+    ];
+    for (name, ext, simulation, options) in records {
+        let path = dir.path().join(format!("{name}.{ext}"));
+        write_record(simulation, 1_000_000, &path);
+        let drive = options.drive(false);
+        group.bench_function(name, |b| {
+            b.iter(|| load(Source::Path(&path), options, drive, &mut ()).expect("read"))
         });
     }
     group.finish();

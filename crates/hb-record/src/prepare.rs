@@ -42,6 +42,8 @@ use circle_signal::{
     resample_pieces,
 };
 
+use rayon::prelude::*;
+
 /// Where the windows' unit, a drive period, comes from.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum PeriodSource {
@@ -590,51 +592,26 @@ pub fn condition(
             missing,
         });
     }
-    let channels =
-        std::iter::once((&mut x, options.signal)).chain(others.iter_mut().map(|c| (&mut c.x, c.domain)));
+    // Each coordinate on its own, in parallel (a double pendulum's two angles take the same
+    // time); what each found is told in the coordinates' order, as if one after the other.
+    let channels: Vec<(&mut Vec<f64>, Domain)> = std::iter::once((&mut x, options.signal))
+        .chain(others.iter_mut().map(|c| (&mut c.x, c.domain)))
+        .collect();
+    let conditioned: Vec<Conditioned> = channels
+        .into_par_iter()
+        .enumerate()
+        .map(|(coordinate, (x, domain))| condition_channel(x, domain, coordinate, &pieces, dt, options))
+        .collect();
     let mut wrapped = false;
-    for (coordinate, (x, domain)) in channels.enumerate() {
-        if domain == Domain::Circle {
-            let present: Vec<f64> = pieces.iter().flat_map(|r| x[r.clone()].iter().copied()).collect();
-            if present.iter().any(|v| !(-PI..PI).contains(v)) {
-                if angle_range(&present) == AngleRange::Unwrapped && !wrapped {
-                    note(Note::Wrapped);
-                    wrapped = true;
-                }
-                for r in &pieces {
-                    for v in &mut x[r.clone()] {
-                        *v = circle_signal::wrap(*v);
-                    }
-                }
-            }
+    for channel in conditioned {
+        if channel.unwrapped && !wrapped {
+            note(Note::Wrapped);
+            wrapped = true;
         }
-        let mut channel_options = options.clone();
-        channel_options.signal = domain;
-        for spikes in spikes(x, &pieces, &channel_options)? {
-            note(match spikes {
-                Note::Spikes {
-                    found,
-                    repaired,
-                    domain,
-                    policy,
-                    ..
-                } => Note::Spikes {
-                    coordinate,
-                    found,
-                    repaired,
-                    domain,
-                    policy,
-                },
-                other => other,
-            });
+        for spikes in channel.notes {
+            note(spikes);
         }
-        if options.measured != Measured::Displacement {
-            if domain == Domain::Circle {
-                return Err(PrepareError::MeasuredOnCircle(options.measured));
-            }
-            *x = circle_signal::displacement(x, dt, options.measured, &pieces)
-                .map_err(PrepareError::Integrate)?;
-        }
+        channel.result?;
     }
     if options.measured != Measured::Displacement {
         note(Note::Integrated(options.measured));
@@ -651,6 +628,83 @@ pub fn condition(
         notes: kept,
         lead_in,
     })
+}
+
+/// What [`condition`] did to one coordinate: whether it was read as an unwrapped angle, the
+/// notes of its spikes, and how it ended.
+struct Conditioned {
+    unwrapped: bool,
+    notes: Vec<Note>,
+    result: Result<(), PrepareError>,
+}
+
+/// One coordinate of [`condition`]: wrapped on the circle, its spikes found (and replaced as
+/// the options say), integrated when it is a velocity or acceleration.
+fn condition_channel(
+    x: &mut Vec<f64>,
+    domain: Domain,
+    coordinate: usize,
+    pieces: &[Range<usize>],
+    dt: f64,
+    options: &PrepareOptions,
+) -> Conditioned {
+    let mut unwrapped = false;
+    if domain == Domain::Circle {
+        let present = || pieces.iter().flat_map(|r| x[r.clone()].iter().copied());
+        if present().any(|v| !(-PI..PI).contains(&v)) {
+            unwrapped = angle_range(&present().collect::<Vec<f64>>()) == AngleRange::Unwrapped;
+            for r in pieces {
+                for v in &mut x[r.clone()] {
+                    *v = circle_signal::wrap(*v);
+                }
+            }
+        }
+    }
+    let mut channel_options = options.clone();
+    channel_options.signal = domain;
+    let found = match spikes(x, pieces, &channel_options) {
+        Ok(found) => found,
+        Err(e) => {
+            return Conditioned {
+                unwrapped,
+                notes: Vec::new(),
+                result: Err(e),
+            };
+        }
+    };
+    let notes = found
+        .into_iter()
+        .map(|spikes| match spikes {
+            Note::Spikes {
+                found,
+                repaired,
+                domain,
+                policy,
+                ..
+            } => Note::Spikes {
+                coordinate,
+                found,
+                repaired,
+                domain,
+                policy,
+            },
+            other => other,
+        })
+        .collect();
+    let result = if options.measured == Measured::Displacement {
+        Ok(())
+    } else if domain == Domain::Circle {
+        Err(PrepareError::MeasuredOnCircle(options.measured))
+    } else {
+        circle_signal::displacement(x, dt, options.measured, pieces)
+            .map(|integrated| *x = integrated)
+            .map_err(PrepareError::Integrate)
+    };
+    Conditioned {
+        unwrapped,
+        notes,
+        result,
+    }
 }
 
 /// What to do with the spikes (or outliers) a record is found to have.
@@ -779,7 +833,12 @@ fn spikes(
         SpikePolicy::RepairFew => {
             // Only the spikes a lone sample would decide by (a jump the unwrapping or the fit
             // takes for motion), and only when they are few.
-            let decisive = SpikePolicy::decisive(x, pieces, options.signal);
+            // (Nothing to split when nothing was found: the percentile of every step is spared.)
+            let decisive = if found.is_empty() {
+                0.0
+            } else {
+                SpikePolicy::decisive(x, pieces, options.signal)
+            };
             let (mut replaced, mut kept): (Vec<Spike>, Vec<Spike>) =
                 found.into_iter().partition(|s| s.size.abs() >= decisive);
             if !SpikePolicy::few(replaced.len(), searched) {

@@ -16,6 +16,7 @@ use crate::signals::Signals;
 use crate::system::{Block, LinearSystem};
 use crate::system::{Layout, RowJob, layout, split_rows};
 use crate::velocity::{Series, VelocityTrend, cell_sign, velocity_into};
+use hb_model::terms::Combination;
 use hb_model::{Column, DriveFactor, Factor, MAX_COORDINATES, PositionFactor, Term, VelocityFactor};
 use hb_model::{Forcing, Harmonics};
 
@@ -231,6 +232,8 @@ struct Workspace {
     /// (unwrapped on the circle), and its velocity.
     other_x: Vec<Vec<f64>>,
     other_v: Vec<Vec<f64>>,
+    /// `(sin, cos)` of each combination of [`Shared::trig`] at one sample.
+    trig: Vec<(f64, f64)>,
     planner: FourierPlanner,
 }
 
@@ -367,6 +370,7 @@ pub(crate) fn weak_rows<B: Basis + ?Sized>(
         dphi: vec![0.0; names.len()],
         other_x: Vec::new(),
         other_v: Vec::new(),
+        trig: Vec::new(),
         planner: FourierPlanner::new(),
     };
 
@@ -447,6 +451,7 @@ pub(crate) fn weak_rows<B: Basis + ?Sized>(
         drives: (0..signals.drives()).map(|d| signals.drive(d)).collect(),
         others,
         coupled,
+        trig: trig_arguments(columns),
     };
     let blocks: Vec<Block> = jobs
         .into_par_iter()
@@ -500,6 +505,10 @@ struct Shared<'a, B: ?Sized> {
     others: Vec<usize>,
     /// Whether a term reads another coordinate or an acceleration.
     coupled: bool,
+    /// The arguments of the terms' sines and cosines of positions, each once: a term and its
+    /// rate, and the terms of an equation, share them (`cos(theta1-theta2)` by parts needs its
+    /// sine too, and `sin(theta1-theta2)` is another term's).
+    trig: Vec<Combination>,
 }
 
 /// Fills one segment's rows; returns its block.
@@ -617,6 +626,11 @@ fn fill_block<B: Basis + ?Sized>(
                 q[c] = ws.other_x[k][n];
                 v[c] = ws.other_v[k][n];
             }
+            ws.trig.clear();
+            ws.trig.extend(sh.trig.iter().map(|combination| {
+                let a = combination.eval(&q);
+                (a.sin(), a.cos())
+            }));
         }
         for (col, &column) in sh.columns.iter().enumerate() {
             ws.g[col * samples + n] = match column {
@@ -645,8 +659,8 @@ fn fill_block<B: Basis + ?Sized>(
                             let (mut g, mut rate) = (f, df * v[own]);
                             for factor in term.coupling.factors() {
                                 if matches!(factor, Factor::Trig { .. } | Factor::Power { .. }) {
-                                    let value = factor.eval(&q, &v);
-                                    rate = rate * value + g * factor_rate(factor, &q, &v);
+                                    let value = factor_value(factor, &q, &v, &sh.trig, &ws.trig);
+                                    rate = rate * value + g * factor_rate(factor, &q, &v, &sh.trig, &ws.trig);
                                     g *= value;
                                 }
                             }
@@ -689,7 +703,7 @@ fn fill_block<B: Basis + ?Sized>(
                                             .expect("a coordinate the terms read");
                                         cell_sign(&ws.other_v[k], n, false)
                                     }
-                                    other => other.eval(&q, &v),
+                                    other => factor_value(&other, &q, &v, &sh.trig, &ws.trig),
                                 };
                             }
                             g
@@ -805,12 +819,20 @@ fn fill_block<B: Basis + ?Sized>(
 }
 
 /// The time derivative of a factor of the positions, `Σ_c ∂f/∂q_c q_c'`.
-fn factor_rate(factor: &Factor, q: &[f64], v: &[f64]) -> f64 {
+fn factor_rate(factor: &Factor, q: &[f64], v: &[f64], args: &[Combination], trig: &[(f64, f64)]) -> f64 {
     match *factor {
-        Factor::Trig { combination, .. } => combination
-            .terms()
-            .map(|(c, _)| factor.eval_dq(q, c) * v[c])
-            .sum(),
+        Factor::Trig { sine, combination } => {
+            let (sin, cos) = trig[trig_index(args, combination)];
+            // `Factor::eval_dq` of each coordinate, from the sine and cosine held.
+            combination
+                .terms()
+                .map(|(c, a)| {
+                    let a = f64::from(a);
+                    let dq = if sine { a * cos } else { -a * sin };
+                    dq * v[c]
+                })
+                .sum()
+        }
         Factor::Power { coordinate, .. } => {
             let c = usize::from(coordinate);
             factor.eval_dq(q, c) * v[c]
@@ -819,9 +841,112 @@ fn factor_rate(factor: &Factor, q: &[f64], v: &[f64]) -> f64 {
     }
 }
 
+/// [`Factor::eval`], a sine or cosine of positions read from those held for the sample (`trig`,
+/// one per argument of `args`): the same numbers, each computed once per sample.
+#[inline]
+fn factor_value(factor: &Factor, q: &[f64], v: &[f64], args: &[Combination], trig: &[(f64, f64)]) -> f64 {
+    match *factor {
+        Factor::Trig { sine, combination } => {
+            let (sin, cos) = trig[trig_index(args, combination)];
+            if sine { sin } else { cos }
+        }
+        _ => factor.eval(q, v),
+    }
+}
+
+/// Where `combination` is among the arguments held (it is: they are every term's).
+#[inline]
+fn trig_index(args: &[Combination], combination: Combination) -> usize {
+    args.iter()
+        .position(|&a| a == combination)
+        .expect("every argument of the terms is held")
+}
+
+/// The arguments of the sines and cosines of positions in the columns' terms, each once.
+fn trig_arguments(columns: &[Column]) -> Vec<Combination> {
+    let mut args: Vec<Combination> = columns
+        .iter()
+        .filter_map(|c| match c {
+            Column::Product(t) => Some(t.coupling.factors().filter_map(|f| match *f {
+                Factor::Trig { combination, .. } => Some(combination),
+                _ => None,
+            })),
+            _ => None,
+        })
+        .flatten()
+        .collect();
+    args.sort_unstable();
+    args.dedup();
+    args
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The sines and cosines held per sample give every factor and its rate to the bit, as
+    /// `Factor::eval` and `Factor::eval_dq` compute them afresh.
+    #[test]
+    fn held_trig_is_bit_identical() {
+        let combination = |a: &[i32]| Combination::new(a).expect("a combination");
+        let factors = [
+            Factor::Trig {
+                sine: false,
+                combination: combination(&[1, -1]),
+            },
+            Factor::Trig {
+                sine: true,
+                combination: combination(&[1, -1]),
+            },
+            Factor::Trig {
+                sine: true,
+                combination: combination(&[2, 1]),
+            },
+            Factor::Trig {
+                sine: false,
+                combination: combination(&[0, 3]),
+            },
+        ];
+        let args = {
+            let mut a: Vec<Combination> = factors
+                .iter()
+                .filter_map(|f| match *f {
+                    Factor::Trig { combination, .. } => Some(combination),
+                    _ => None,
+                })
+                .collect();
+            a.sort_unstable();
+            a.dedup();
+            a
+        };
+        let mut q = [0.0; MAX_COORDINATES];
+        let mut v = [0.0; MAX_COORDINATES];
+        for k in 0..2000 {
+            let k = k as f64;
+            (q[0], q[1]) = (
+                37.0 * (0.37 * k).sin() + 0.01 * k,
+                -12.0 * (0.11 * k).cos() - 0.3 * k,
+            );
+            (v[0], v[1]) = ((0.7 * k).cos() * 9.0, (1.3 * k).sin() * 4.0);
+            let trig: Vec<(f64, f64)> = args
+                .iter()
+                .map(|c| {
+                    let a = c.eval(&q);
+                    (a.sin(), a.cos())
+                })
+                .collect();
+            for f in &factors {
+                let held = factor_value(f, &q, &v, &args, &trig);
+                assert_eq!(held.to_bits(), f.eval(&q, &v).to_bits());
+                let Factor::Trig { combination, .. } = *f else {
+                    unreachable!()
+                };
+                let fresh: f64 = combination.terms().map(|(c, _)| f.eval_dq(&q, c) * v[c]).sum();
+                let rate = factor_rate(f, &q, &v, &args, &trig);
+                assert_eq!(rate.to_bits(), fresh.to_bits());
+            }
+        }
+    }
 
     #[test]
     fn window_order_is_validated() {

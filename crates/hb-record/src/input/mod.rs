@@ -582,7 +582,32 @@ fn printed_decimals(x: &[f64]) -> Option<u32> {
         let scale = 10f64.powi(k as i32);
         x.iter().all(|&v| {
             let scaled = v * scale;
-            (scaled - scaled.round()).abs() <= 1e-9 + 1e-12 * scaled.abs()
+            (scaled - round(scaled)).abs() <= 1e-9 + 1e-12 * scaled.abs()
         })
     })
+}
+
+/// `x.round()` (half away from zero, the sign of zero kept), bit for bit, without a call: the
+/// x86-64 baseline has no instruction for it, and the library's `round` took a tenth of the read
+/// stage, which rounds every time stamp to its grid index several times.
+#[inline]
+pub(crate) fn round(x: f64) -> f64 {
+    // Below 2^52 the integer part is exact as an integer, and the fraction as a difference;
+    // from 2^52 on every number is whole (and NaN or infinite ones are their own rounding).
+    if x.abs() < 4_503_599_627_370_496.0 {
+        let whole = x as i64 as f64;
+        let fraction = x - whole;
+        let r = if fraction >= 0.5 {
+            whole + 1.0
+        } else if fraction <= -0.5 {
+            whole - 1.0
+        } else {
+            whole
+        };
+        let r = r.copysign(x);
+        debug_assert_eq!(r.to_bits(), x.round().to_bits(), "round({x})");
+        r
+    } else {
+        x
+    }
 }

@@ -97,7 +97,7 @@
 //! per period of a harmonic, about 1.3 % of its amplitude.
 
 use super::error::Rounded;
-use super::{InputError, Location, Record, StampFault, median, printed_decimals};
+use super::{InputError, Location, Record, StampFault, median, printed_decimals, round};
 
 /// Largest distance of a time stamp from its level (the clock's local offset from the grid), in
 /// steps, for it to fit when the stamps do not jitter beyond their printing.
@@ -528,14 +528,12 @@ impl GridRecord {
         })
         .ok_or_else(|| unresolved(n, None))?;
         // Every stamp less than half a step from its grid time: the line among the levels.
+        // (Each refit's indices are found once, for both of its passes.)
+        let mut indices = Vec::new();
         for _ in 0..MAX_REFITS {
-            let next = least_squares(|f| {
-                for i in 0..n {
-                    let k = line.index(tau(i));
-                    if line.indexable(k, tau(i)) {
-                        f(k, tau(i));
-                    }
-                }
+            let next = least_squares_indexed(n, &tau, &mut indices, |i| {
+                let k = line.index(tau(i));
+                line.indexable(k, tau(i)).then_some(k)
             });
             match next {
                 Some(next) if next != line => line = next,
@@ -617,19 +615,16 @@ impl GridRecord {
                     || (tau(i) - line.at(k)).abs() <= GRID_TOLERANCE * line.b)
         };
         for _ in 0..MAX_REFITS {
-            let next = least_squares(|f| {
-                for i in 0..n {
-                    let k = line.index(tau(i));
-                    if fits(line, k, i) {
-                        f(k, tau(i));
-                    }
-                }
+            let next = least_squares_indexed(n, &tau, &mut indices, |i| {
+                let k = line.index(tau(i));
+                fits(line, k, i).then_some(k)
             });
             match next {
                 Some(next) if next != line && next.b.is_finite() && next.b > 0.0 => line = next,
                 _ => break,
             }
         }
+        drop(indices);
         // Grid times increase with the index: those of every stamp's index (and of the indices
         // next to them, where glitches are repaired) are finite when the extreme ones are.
         let (lowest, highest) = (0..n).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), i| {
@@ -930,7 +925,7 @@ struct Line {
 impl Line {
     /// The grid index nearest to `tau`.
     fn index(self, tau: f64) -> f64 {
-        ((tau - self.a) / self.b).round()
+        round((tau - self.a) / self.b)
     }
 
     /// Whether `tau` is less than half a step from the grid time of index `k` (never for an
@@ -1148,7 +1143,7 @@ fn link(t: &[f64], runs: &[(usize, usize)], dt: f64) -> Vec<f64> {
     let (mut lo, mut hi) = (longest, longest);
     while lo > 0 || hi + 1 < runs.len() {
         let line = moments.line().unwrap_or(Line { a: 0.0, b: dt });
-        let index = |i: usize| ((t[i] - origin - line.a) / line.b).round();
+        let index = |i: usize| round((t[i] - origin - line.a) / line.b);
         let left = (lo > 0).then(|| t[runs[lo].0] - t[runs[lo - 1].1]);
         let right = (hi + 1 < runs.len()).then(|| t[runs[hi + 1].0] - t[runs[hi].1]);
         let go_left = match (left, right) {
@@ -1238,6 +1233,28 @@ fn least_squares(visit: impl Fn(&mut dyn FnMut(f64, f64))) -> Option<Line> {
     })
 }
 
+/// [`least_squares`] through the points `(index(i), tau(i))` of the samples `i < n` that have an
+/// index, each index found once for both passes (kept in `indices`, NaN for none): the same
+/// sums in the same order, so the same line.
+fn least_squares_indexed(
+    n: usize,
+    tau: &impl Fn(usize) -> f64,
+    indices: &mut Vec<f64>,
+    index: impl Fn(usize) -> Option<f64>,
+) -> Option<Line> {
+    indices.clear();
+    indices.extend((0..n).map(|i| index(i).unwrap_or(f64::NAN)));
+    let indices = &*indices;
+    least_squares(|f| {
+        for (i, &k) in indices.iter().enumerate() {
+            // An index is a whole number (never NaN) where there is one.
+            if !k.is_nan() {
+                f(k, tau(i));
+            }
+        }
+    })
+}
+
 /// A compensated (Neumaier) sum: exact to a few roundings whatever the number of terms.
 #[derive(Debug, Default, Clone, Copy)]
 struct Sum {
@@ -1246,13 +1263,13 @@ struct Sum {
 }
 
 impl Sum {
+    #[inline]
     fn add(&mut self, x: f64) {
         let t = self.sum + x;
-        self.compensation += if self.sum.abs() >= x.abs() {
-            (self.sum - t) + x
-        } else {
-            (x - t) + self.sum
-        };
+        // Both corrections, then a choice: a select rather than a branch, which the mixed signs
+        // of the deviations make unpredictable.
+        let (big, small) = ((self.sum - t) + x, (x - t) + self.sum);
+        self.compensation += if self.sum.abs() >= x.abs() { big } else { small };
         self.sum = t;
     }
 
@@ -1261,6 +1278,9 @@ impl Sum {
     }
 }
 
+/// Stamps whose levels [`judge`] holds at once.
+const JUDGE_HELD: usize = 16;
+
 /// Judges every stamp by its grid index `locate(i)` and whether it fits (see the module docs);
 /// returns the samples whose stamps are glitches, in order.
 ///
@@ -1268,9 +1288,16 @@ impl Sum {
 /// has the same index level. A stamp is good when it fits, its index level is not below the last
 /// good stamp's, and, unless it is anchored, not above the next anchored stamp's either.
 fn judge(n: usize, locate: impl Fn(usize) -> (f64, bool)) -> Vec<usize> {
+    // The levels asked for lie within a sample of the current stamp and of the next anchored
+    // one: held in a few slots, each stamp is located about once instead of five times.
+    let held = std::cell::RefCell::new([(usize::MAX, (0.0, false)); JUDGE_HELD]);
     let level = |i: usize| {
-        let (k, fits) = locate(i);
-        (k - i as f64, fits)
+        let slot = &mut held.borrow_mut()[i % JUDGE_HELD];
+        if slot.0 != i {
+            let (k, fits) = locate(i);
+            *slot = (i, (k - i as f64, fits));
+        }
+        slot.1
     };
     let anchored = |i: usize| {
         let (g, fits) = level(i);
