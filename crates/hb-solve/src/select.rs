@@ -29,6 +29,7 @@
 //! of 40 terms costs ~40² tiny solves, negligible beside the assembly.
 
 use faer::Mat;
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{LstsqError, SelectError, SolveError};
@@ -264,28 +265,37 @@ impl FoldMoments {
         let mut order: Vec<usize> = (0..system.blocks().len()).collect();
         order.sort_by_key(|&i| system.blocks()[i].segment.start());
         let n = order.len();
-        let mut factors = Vec::with_capacity(folds);
-        let mut grams = Vec::with_capacity(folds);
-        for f in 0..folds {
+        // Each fold's factor and Gram matrix, the folds in parallel on the factorisations' own
+        // pool (faer's kernels slow the plain arithmetic of the thread they ran on; see
+        // `on_factor_pool`). Each fold's factor is sequential, so the results are those of one
+        // fold after another, to the bit.
+        let fold = |f: usize| {
             let members = &order[f * n / folds..(f + 1) * n / folds];
             let rows: usize = members.iter().map(|&i| system.blocks()[i].rows).sum();
             let mut m = Mat::<f64>::zeros(rows, cols + 1);
             let mut at = 0;
             for &i in members {
                 let block = &system.blocks()[i];
-                for r in 0..block.rows {
-                    for (c, norm) in norms.iter().enumerate() {
-                        m[(at, c)] = a[(block.first_row + r, c)] / norm;
-                    }
-                    m[(at, cols)] = b[block.first_row + r];
-                    at += 1;
+                let len = block.rows;
+                for (c, norm) in norms.iter().enumerate() {
+                    let src = a.col(c).subrows(block.first_row, len);
+                    m.col_mut(c)
+                        .subrows_mut(at, len)
+                        .iter_mut()
+                        .zip(src.iter())
+                        .for_each(|(d, s)| *d = s / norm);
                 }
+                m.col_mut(cols)
+                    .subrows_mut(at, len)
+                    .copy_from(b.subrows(block.first_row, len));
+                at += len;
             }
             let r = crate::lstsq::triangular_factor(m);
             let g = r.transpose() * &r;
-            factors.push(r);
-            grams.push(g);
-        }
+            (r, g)
+        };
+        let (factors, grams): (Vec<Mat<f64>>, Vec<Mat<f64>>) =
+            crate::lstsq::on_factor_pool(|| (0..folds).into_par_iter().map(fold).unzip());
         let mut total = Mat::<f64>::zeros(cols + 1, cols + 1);
         for g in &grams {
             total += g;
