@@ -967,21 +967,26 @@ impl IdentifyReport {
     /// The identified system, one equation per coordinate (a record of one coordinate is the
     /// system of its model).
     pub fn system(&self) -> Result<IdentifiedSystem, RunError> {
-        let models: Vec<IdentifiedModel> = self
-            .equations
-            .iter()
-            .map(|e| e.identification.model.clone())
-            .collect();
-        if models.len() == 1 {
-            return Ok(IdentifiedSystem::one(models.into_iter().next().expect("one")));
+        let system = system_of(&self.names, &self.equations)?;
+        if self.equations.len() == 1 {
+            return Ok(system);
         }
-        let domains = models.iter().map(IdentifiedModel::domain).collect();
-        let system = IdentifiedSystem::new(self.names.clone(), domains, models)?;
         Ok(match &self.columns {
             Some(columns) => system.with_columns(columns.clone())?,
             None => system,
         })
     }
+}
+
+/// The identified system of `equations` in `names`, one equation per coordinate (a record of one
+/// coordinate is the system of its model).
+fn system_of(names: &Names, equations: &[EquationReport]) -> Result<IdentifiedSystem, RunError> {
+    let models: Vec<IdentifiedModel> = equations.iter().map(|e| e.identification.model.clone()).collect();
+    if models.len() == 1 {
+        return Ok(IdentifiedSystem::one(models.into_iter().next().expect("one")));
+    }
+    let domains = models.iter().map(IdentifiedModel::domain).collect();
+    Ok(IdentifiedSystem::new(names.clone(), domains, models)?)
 }
 
 /// The most samples of a record at which [`check_mass_matrix`] solves the identified mass matrix
@@ -994,14 +999,11 @@ const MASS_CHECKS: usize = 20_000;
 /// the copy of another's, whose equations then explain each other's acceleration) are an error
 /// naming the terms and the columns, never a model whose every run stops.
 fn check_mass_matrix(
-    equations: &[EquationReport],
+    system: &IdentifiedSystem,
     request: &IdentifyRequest,
     data: &Data,
     coordinates: &[(&[f64], Domain)],
 ) -> Result<(), RunError> {
-    let models: Vec<IdentifiedModel> = equations.iter().map(|e| e.identification.model.clone()).collect();
-    let domains = models.iter().map(IdentifiedModel::domain).collect();
-    let system = IdentifiedSystem::new(request.names.clone(), domains, models)?;
     let n = coordinates.len();
     let samples: usize = data.pieces.iter().map(|p| p.len()).sum();
     let stride = samples.div_ceil(MASS_CHECKS).max(1);
@@ -1024,11 +1026,15 @@ fn check_mass_matrix(
                     format!(
                         "the identified mass matrix is singular at t = {t} ({}; smallest pivot {:.1e} of its largest \
                          entry): the acceleration terms leave the accelerations of {} undetermined on the record, and \
-                         every free run of the model would stop there; is one coordinate's column («coords») a copy \
-                         of another's?",
+                         every free run of the model would stop there{}",
                         state.join(", "),
                         singular.pivot,
-                        names.join(", ")
+                        names.join(", "),
+                        if n > 1 {
+                            "; is one coordinate's column («coords») a copy of another's?"
+                        } else {
+                            ""
+                        }
                     ),
                 )
                 .into());
@@ -1172,8 +1178,15 @@ pub fn identify_data(
             identification,
         });
     }
-    if n > 1 {
-        check_mass_matrix(&equations, request, data, &coordinates)?;
+    // A mass matrix other than the identity (an acceleration times a function of the state, in
+    // a system or in the one equation of a record) is solved on the record as a free run will.
+    if equations.iter().any(|e| e.identification.model.is_coupled()) {
+        check_mass_matrix(
+            &system_of(&request.names, &equations)?,
+            request,
+            data,
+            &coordinates,
+        )?;
     }
     if method == Method::Windowed && segments.len() < hb_solve::HELD_OUT_FOLDS {
         let unknowns = equations
