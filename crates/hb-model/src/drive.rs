@@ -263,20 +263,25 @@ impl MeasuredDrive {
 /// 2); NaN at the non-finite samples.
 fn uneven_curvatures(p: &[f64], t: &[f64]) -> Vec<f64> {
     let mut m = vec![f64::NAN; p.len()];
+    for run in finite_runs(p) {
+        uneven_run_curvatures(&p[run.clone()], &t[run.clone()], &mut m[run]);
+    }
+    m
+}
+
+/// The runs of consecutive finite samples of `p`, in order.
+fn finite_runs(p: &[f64]) -> impl Iterator<Item = std::ops::Range<usize>> + '_ {
     let mut start = 0;
-    while start < p.len() {
-        if !p[start].is_finite() {
-            start += 1;
-            continue;
-        }
+    std::iter::from_fn(move || {
+        start += p[start.min(p.len())..].iter().position(|v| v.is_finite())?;
         let end = p[start..]
             .iter()
             .position(|v| !v.is_finite())
             .map_or(p.len(), |k| start + k);
-        uneven_run_curvatures(&p[start..end], &t[start..end], &mut m[start..end]);
+        let run = start..end;
         start = end;
-    }
-    m
+        Some(run)
+    })
 }
 
 /// [`uneven_curvatures`] of one run of finite samples, into `m`.
@@ -337,18 +342,8 @@ fn uneven_run_curvatures(p: &[f64], t: &[f64], m: &mut [f64]) {
 /// through 2); NaN at the non-finite samples.
 fn curvatures(p: &[f64]) -> Vec<f64> {
     let mut m = vec![f64::NAN; p.len()];
-    let mut start = 0;
-    while start < p.len() {
-        if !p[start].is_finite() {
-            start += 1;
-            continue;
-        }
-        let end = p[start..]
-            .iter()
-            .position(|v| !v.is_finite())
-            .map_or(p.len(), |k| start + k);
-        run_curvatures(&p[start..end], &mut m[start..end]);
-        start = end;
+    for run in finite_runs(p) {
+        run_curvatures(&p[run.clone()], &mut m[run]);
     }
     m
 }
