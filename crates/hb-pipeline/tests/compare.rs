@@ -125,31 +125,37 @@ fn the_default_init_scales_with_the_drive_and_the_range() {
 /// nondimensional time): the system a Python user runs with `Model.simulate(t=..., x0=[..],
 /// v0=[..])`.
 fn double_pendulum() -> IdentifiedSystem {
-    use hb_basis::{Domain, Harmonic};
-    use hb_model::{Names, TermList};
-    let names = Names::new(["theta1", "theta2"], Vec::<String>::new()).unwrap();
-    let basis = BasisKind::from(Harmonic::new(1).unwrap());
-    let equation = |own: usize, terms: &str, values: &[f64]| {
-        let list = TermList::parse_in(terms, &names, own).unwrap();
-        IdentifiedModel::new(basis, ModelForm::from_terms(list), 1.0, values).unwrap()
-    };
-    IdentifiedSystem::new(
-        names.clone(),
-        vec![Domain::Circle; 2],
-        vec![
-            equation(
-                0,
+    circle_system(
+        (["theta1", "theta2"], &[]),
+        [
+            (
                 "theta2''*cos(theta1-theta2), sin(theta1-theta2)*theta2'^2, sin(theta1), sin(t)*cos(theta1), theta1'",
                 &[0.5, 0.5, 0.8, -0.6, 0.05],
             ),
-            equation(
-                1,
+            (
                 "theta1''*cos(theta1-theta2), sin(theta1-theta2)*theta1'^2, sin(theta2), sin(t)*cos(theta2), theta2'",
                 &[1.0, -1.0, 0.8, -0.6, 0.05],
             ),
         ],
     )
-    .unwrap()
+}
+
+/// A system of two angles named `names.0` with the drives `names.1`, each equation its terms
+/// (in the grammar) and their coefficients, on the basis `harmonic:1` and the drive `W = 1`.
+fn circle_system(names: ([&str; 2], &[&str]), equations: [(&str, &[f64]); 2]) -> IdentifiedSystem {
+    use hb_basis::{Domain, Harmonic};
+    use hb_model::{Names, TermList};
+    let names = Names::new(names.0, names.1.iter().copied()).unwrap();
+    let basis = BasisKind::from(Harmonic::new(1).unwrap());
+    let models = equations
+        .iter()
+        .enumerate()
+        .map(|(own, (terms, values))| {
+            let list = TermList::parse_in(terms, &names, own).unwrap();
+            IdentifiedModel::new(basis, ModelForm::from_terms(list), 1.0, values).unwrap()
+        })
+        .collect();
+    IdentifiedSystem::new(names.clone(), vec![Domain::Circle; 2], models).unwrap()
 }
 
 /// A system run over given times from a given state is the free run `compare` (and `hbid
@@ -299,27 +305,16 @@ fn unsettled_stamps(len: usize) -> Vec<f64> {
 /// A torque-driven double pendulum in relative angles (q2 of link 2 against link 1), the shape
 /// of the DFKI rig's model: its equations read the torques tau1, tau2.
 fn torque_pendulum() -> IdentifiedSystem {
-    use hb_basis::{Domain, Harmonic};
-    use hb_model::{Names, TermList};
-    let names = Names::new(["q1", "q2"], ["tau1", "tau2"]).unwrap();
-    let basis = BasisKind::from(Harmonic::new(1).unwrap());
-    let equation = |own: usize, terms: &str, values: &[f64]| {
-        let list = TermList::parse_in(terms, &names, own).unwrap();
-        IdentifiedModel::new(basis, ModelForm::from_terms(list), 1.0, values).unwrap()
-    };
-    IdentifiedSystem::new(
-        names.clone(),
-        vec![Domain::Circle; 2],
-        vec![
-            equation(
-                0,
+    circle_system(
+        (["q1", "q2"], &["tau1", "tau2"]),
+        [
+            (
                 "q2''*cos(q2), sin(q1), sin(q1+q2), q1', tau1",
                 &[0.3, 20.0, 6.0, 0.2, -8.0],
             ),
-            equation(1, "q1''*cos(q2), sin(q1+q2), q2', tau2", &[0.9, 40.0, 0.1, -30.0]),
+            ("q1''*cos(q2), sin(q1+q2), q2', tau2", &[0.9, 40.0, 0.1, -30.0]),
         ],
     )
-    .unwrap()
 }
 
 /// The torques of the record: smooth, so that a spline through their samples is them.
