@@ -916,25 +916,7 @@ impl<'a, G: Geometry> Search<'a, G> {
                 (params.threshold * MAD_TO_SD * s).max(floor)
             })
             .collect();
-        let mut search = Self {
-            x,
-            thresholds,
-            block,
-            k: params.threshold,
-            max_run: params.max_run,
-            flagged: vec![0; n.div_ceil(64)],
-            bounds: BTreeMap::new(),
-            spikes: Vec::new(),
-            stretch: Stretch::new(n, params.max_run),
-            ranked: [[None; MAX_RUN]; 2],
-            rejected: Vec::new(),
-            held: vec![(usize::MAX, Held::default()); HELD],
-            repaired: vec![(usize::MAX, [0.0; MAX_RUN + 4]); HELD * MAX_RUN],
-            terms: Vec::new(),
-            window: None,
-            shortcuts,
-            _geometry: std::marker::PhantomData,
-        };
+        let mut search = Self::new(x, thresholds, block, params.threshold, params.max_run, shortcuts);
         search.search();
         let mut spikes = search.spikes;
         spikes.sort_unstable_by_key(|s| s.index);
@@ -944,6 +926,38 @@ impl<'a, G: Geometry> Search<'a, G> {
             domain: G::DOMAIN,
             scale,
             floor,
+        }
+    }
+
+    /// A search of `x` against `thresholds` (one per sample), nothing found yet: `block` and `k`
+    /// of the local scales, runs of at most `max_run` samples.
+    fn new(
+        x: &'a mut [f64],
+        thresholds: Vec<f64>,
+        block: usize,
+        k: f64,
+        max_run: usize,
+        shortcuts: bool,
+    ) -> Self {
+        let n = x.len();
+        Self {
+            x,
+            thresholds,
+            block,
+            k,
+            max_run,
+            flagged: vec![0; n.div_ceil(64)],
+            bounds: BTreeMap::new(),
+            spikes: Vec::new(),
+            stretch: Stretch::new(n, max_run),
+            ranked: [[None; MAX_RUN]; 2],
+            rejected: Vec::new(),
+            held: vec![(usize::MAX, Held::default()); HELD],
+            repaired: vec![(usize::MAX, [0.0; MAX_RUN + 4]); HELD * MAX_RUN],
+            terms: Vec::new(),
+            window: None,
+            shortcuts,
+            _geometry: std::marker::PhantomData,
         }
     }
 
@@ -2258,25 +2272,14 @@ mod tests {
     /// A search of `x` with no threshold of its own (the local scales do not read it).
     fn bare_search<G: Geometry>(x: &mut [f64], max_run: usize) -> Search<'_, G> {
         let n = x.len();
-        Search {
+        Search::new(
             x,
-            thresholds: vec![f64::INFINITY; n],
-            block: 1,
-            k: SpikeParams::DEFAULT_THRESHOLD,
+            vec![f64::INFINITY; n],
+            1,
+            SpikeParams::DEFAULT_THRESHOLD,
             max_run,
-            flagged: vec![0; n.div_ceil(64)],
-            bounds: BTreeMap::new(),
-            spikes: Vec::new(),
-            stretch: Stretch::new(n, max_run),
-            ranked: [[None; MAX_RUN]; 2],
-            rejected: Vec::new(),
-            held: vec![(usize::MAX, Held::default()); HELD],
-            repaired: vec![(usize::MAX, [0.0; MAX_RUN + 4]); HELD * MAX_RUN],
-            terms: Vec::new(),
-            window: None,
-            shortcuts: true,
-            _geometry: std::marker::PhantomData,
-        }
+            true,
+        )
     }
 
     /// Checks the local thresholds of every position and a few widths against the reference, and
