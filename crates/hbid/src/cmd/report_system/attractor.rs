@@ -423,6 +423,43 @@ fn panels<'a>(
         .collect()
 }
 
+/// The label of a coordinate's axis: an angle is shown wrapped.
+fn axis_label(name: &str, domain: Domain) -> String {
+    match domain {
+        Domain::Circle => format!("{name} (wrapped)"),
+        Domain::Line => name.to_owned(),
+    }
+}
+
+/// The points of a section's panels: the record's section, then each model's, each state
+/// projected onto the panel's axes by `project`.
+fn section_points(
+    record: &[(f64, State)],
+    models: &[ModelAttractor],
+    project: impl Fn(&State) -> (f64, f64),
+) -> Vec<Vec<(f64, f64)>> {
+    std::iter::once(record.iter().map(|(_, s)| project(s)).collect())
+        .chain(
+            models
+                .iter()
+                .map(|m| m.section.iter().flatten().map(&project).collect()),
+        )
+        .collect()
+}
+
+/// Draws a row of panels into `file` under `out` and lists it in `figures` with `caption`.
+fn draw_row(
+    out: &Path,
+    figures: &mut Vec<(String, String)>,
+    file: String,
+    row: &[Figure<'_>],
+    caption: String,
+) -> anyhow::Result<()> {
+    save_row(row, &out.join(&file))?;
+    add_figure(figures, file, caption);
+    Ok(())
+}
+
 /// The range of an axis of `domain`: [−π, π] for an angle, the data's otherwise.
 fn range(domain: Domain) -> Option<(f64, f64)> {
     match domain {
@@ -579,99 +616,65 @@ pub(super) fn section(
         .chain(entries.iter().map(|e| e.name.as_str()))
         .collect();
     for (c, name) in names.iter().enumerate() {
-        let x_label = match domains[c] {
-            Domain::Circle => format!("{name} (wrapped)"),
-            Domain::Line => name.clone(),
-        };
+        let x_label = axis_label(name, domains[c]);
         let y_label = format!("{name}'");
         if let Ok(portrait) = &record.portrait {
             let titles: Vec<String> = who.iter().map(|w| format!("{name}: {w}")).collect();
             let points = std::iter::once(portrait[c].clone())
                 .chain(a.models.iter().map(|m| m.portrait[c].clone()))
                 .collect();
-            let file = format!("portrait_{name}.png");
-            save_row(
-                &panels(&titles, &x_label, &y_label, points, 1, range(domains[c]), None),
-                &out.join(&file),
-            )?;
-            add_figure(
-                figures,
-                file,
-                format!(
-                    "Phase portrait of {name}: the record (grey) beside {} on the same axes.",
-                    match &a.no_section {
-                        Some(_) if system.has_measured_drive() => "each model's free run over the record",
-                        _ => "each model's long run",
-                    }
-                ),
+            let caption = format!(
+                "Phase portrait of {name}: the record (grey) beside {} on the same axes.",
+                match &a.no_section {
+                    Some(_) if system.has_measured_drive() => "each model's free run over the record",
+                    _ => "each model's long run",
+                }
             );
+            let row = panels(&titles, &x_label, &y_label, points, 1, range(domains[c]), None);
+            draw_row(out, figures, format!("portrait_{name}.png"), &row, caption)?;
         }
         if let Some(points) = strobe {
             let titles: Vec<String> = who.iter().map(|w| format!("{name} at phase 0: {w}")).collect();
-            let project = |s: &State| (shown(s[c], domains[c]), s[n + c]);
-            let points = std::iter::once(points.iter().map(|(_, s)| project(s)).collect())
-                .chain(
-                    a.models
-                        .iter()
-                        .map(|m| m.section.iter().flatten().map(project).collect()),
-                )
-                .collect();
-            let file = format!("section_{name}.png");
-            save_row(
-                &panels(&titles, &x_label, &y_label, points, 2, range(domains[c]), None),
-                &out.join(&file),
-            )?;
-            add_figure(
-                figures,
-                file,
-                format!(
-                    "Poincaré section of {name} against its velocity, once per drive period at phase 0: the record \
-                     (grey) beside each model's long run."
-                ),
+            let points = section_points(points, &a.models, |s| (shown(s[c], domains[c]), s[n + c]));
+            let caption = format!(
+                "Poincaré section of {name} against its velocity, once per drive period at phase 0: the record \
+                 (grey) beside each model's long run."
             );
+            let row = panels(&titles, &x_label, &y_label, points, 2, range(domains[c]), None);
+            draw_row(out, figures, format!("section_{name}.png"), &row, caption)?;
         }
     }
     if let (Some(points), [first, second, ..]) = (strobe, names) {
-        let label = |c: usize, name: &str| match domains[c] {
-            Domain::Circle => format!("{name} (wrapped)"),
-            Domain::Line => name.to_owned(),
-        };
-        let (x_label, y_label) = (label(0, first), label(1, second));
+        let (x_label, y_label) = (axis_label(first, domains[0]), axis_label(second, domains[1]));
         let torus = domains[..2].iter().all(|&d| d == Domain::Circle);
         let titles: Vec<String> = who
             .iter()
             .map(|w| format!("{first}, {second} at phase 0: {w}"))
             .collect();
-        let project = |s: &State| (shown(s[0], domains[0]), shown(s[1], domains[1]));
-        let points = std::iter::once(points.iter().map(|(_, s)| project(s)).collect())
-            .chain(
-                a.models
-                    .iter()
-                    .map(|m| m.section.iter().flatten().map(project).collect()),
-            )
-            .collect();
-        let file = format!("section_{first}_{second}.png");
-        save_row(
-            &panels(
-                &titles,
-                &x_label,
-                &y_label,
-                points,
-                2,
-                range(domains[0]),
-                range(domains[1]),
-            ),
-            &out.join(&file),
-        )?;
-        add_figure(
-            figures,
-            file,
-            format!(
-                "Poincaré section in the {} of {first} and {second}, once per drive period at phase 0: the record \
-                 (grey) beside each model's long run.",
-                if torus { "angles' torus" } else { "plane" }
-            ),
+        let points = section_points(points, &a.models, |s| {
+            (shown(s[0], domains[0]), shown(s[1], domains[1]))
+        });
+        let caption = format!(
+            "Poincaré section in the {} of {first} and {second}, once per drive period at phase 0: the record \
+             (grey) beside each model's long run.",
+            if torus { "angles' torus" } else { "plane" }
         );
+        let row = panels(
+            &titles,
+            &x_label,
+            &y_label,
+            points,
+            2,
+            range(domains[0]),
+            range(domains[1]),
+        );
+        draw_row(
+            out,
+            figures,
+            format!("section_{first}_{second}.png"),
+            &row,
+            caption,
+        )?;
     }
     Ok(())
 }
