@@ -492,7 +492,11 @@ impl<'a> IntoIterator for &'a Spikes {
 /// at the threshold of 6 robust standard deviations leaves about a sixth), while the smooth
 /// motion's own residual, which in a noise-free record sampled finely can stand out of its scale
 /// in a burst of fast motion, is only moved to the neighbours by a repair (the sum grows): such a
-/// sample is not a spike, whatever its ratio to the scale.
+/// sample is not a spike, whatever its ratio to the scale. A peak that is rejected (its statistic
+/// below its threshold with the local scale taken around it, no candidate chosen, or a repair that
+/// does not clear) is passed: the sweep goes on from the sample after the peak, since the samples
+/// before it found it the largest of their reach and would find it again (a burst of fast motion
+/// exceeds at several consecutive samples, and each would weigh the same candidates).
 ///
 /// A repair moves sample `j` by minus the residual its clean value would have had, which is at
 /// most its threshold `g_j T_j`, and that enters sample `i`'s residual with the weight `c_ij` of
@@ -806,9 +810,6 @@ struct Search<'a, G> {
     /// its local scale and its largest levels, which the next window, mostly the same positions,
     /// is ranked from (none after a repair).
     ranked: [[Option<Ranked>; MAX_RUN]; 2],
-    /// The peaks (sample and width) whose outlier the sweep has rejected since the record last
-    /// changed: found again from a later sample, the same peak is rejected again.
-    rejected: Vec<(usize, usize)>,
     /// Per sample `i` (at `i % HELD`, with `i`): its residual in the record as it stands and
     /// its term of an energy (none after a repair). The choices of outliers read each residual
     /// around them many times, with a candidate's samples replaced and without.
@@ -822,7 +823,7 @@ struct Search<'a, G> {
     /// `Some`; none after a repair): every candidate of a choice is weighed over one window.
     terms: Vec<f64>,
     window: Option<(usize, usize)>,
-    /// Whether the search spares itself work by the rejected peaks, the held residuals and the
+    /// Whether the search spares itself work by the held residuals and the
     /// ranked windows (always but in the tests, which compare the outliers found without them).
     shortcuts: bool,
     _geometry: std::marker::PhantomData<G>,
@@ -951,7 +952,6 @@ impl<'a, G: Geometry> Search<'a, G> {
             spikes: Vec::new(),
             stretch: Stretch::new(n, max_run),
             ranked: [[None; MAX_RUN]; 2],
-            rejected: Vec::new(),
             held: vec![(usize::MAX, Held::default()); HELD],
             repaired: vec![(usize::MAX, [0.0; MAX_RUN + 4]); HELD * MAX_RUN],
             terms: Vec::new(),
@@ -1298,7 +1298,6 @@ impl<'a, G: Geometry> Search<'a, G> {
         self.x[i] = replacement;
         self.stretch.patch::<G>(self.x, i, i);
         self.flagged[i / 64] |= 1 << (i % 64);
-        self.rejected.clear();
         self.held.fill((usize::MAX, Held::default()));
         self.repaired.fill((usize::MAX, [0.0; MAX_RUN + 4]));
         self.window = None;
@@ -1590,20 +1589,12 @@ impl<'a, G: Geometry> Search<'a, G> {
         to
     }
 
-    /// Notes that the outlier of the peak at `c` with width `t` was rejected at sample `i`
-    /// (the peaks before `i` are left out: the sweep has passed them).
-    fn reject(&mut self, i: usize, c: usize, t: usize) {
-        self.rejected.retain(|&(j, _)| j >= i);
-        self.rejected.push((c, t));
-    }
-
     /// One sweep of samples `from .. to`.
     fn sweep(&mut self, from: usize, to: usize) {
         let n = self.x.len();
         // What the sweep asks of the stretch ends short of its window's reach past `to`.
         self.stretch
             .set_horizon(to + PEAK_SEARCH + 2 * LOCAL_HALF_WINDOW + 8 * MAX_RUN);
-        self.rejected.clear();
         let mut i = from;
         while i < to {
             i = self.next_exceeding(i, to);
@@ -1657,19 +1648,14 @@ impl<'a, G: Geometry> Search<'a, G> {
                 i += 1;
                 continue;
             }
-            // A peak rejected since the record last changed is rejected again: what follows
-            // depends on the peak and the record alone (a later sample finds the same peak
-            // while it is within reach, up to seven times).
-            if self.shortcuts && self.rejected.contains(&(c, t)) {
-                i += 1;
-                continue;
-            }
             // The thresholds there: the local ones from the residuals nearest to the peak's.
             let local = self.local_thresholds(c, t);
             let own = |s: &Self, j: usize, m: usize| s.block_threshold(j).max(local[m - 1]);
+            // A rejected peak (here, or without a choice, or by its repair below) is passed: the
+            // sweep goes on after it. The samples between `i` and the peak found it the largest
+            // of their reach, and would find it again.
             if self.statistics(c)[t - 1] <= own(self, c, t) {
-                self.reject(i, c, t);
-                i += 1;
+                i = c + 1;
                 continue;
             }
             // The outlier is chosen among the candidates around the peak, then again around
@@ -1689,8 +1675,7 @@ impl<'a, G: Geometry> Search<'a, G> {
                 (span, runs) = again;
             }
             let Some(chosen) = chosen else {
-                self.reject(i, c, t);
-                i += 1;
+                i = c + 1;
                 continue;
             };
             let window = footprint(n, (chosen.start.saturating_sub(2), (chosen.end() + 2).min(n - 1)));
@@ -1698,8 +1683,7 @@ impl<'a, G: Geometry> Search<'a, G> {
             // (a burst of fast motion in a noise-free record) only moves to the neighbours.
             let before = self.energy(window);
             if self.energy_after_repair(chosen, window) > CLEARED * before {
-                self.reject(i, c, t);
-                i += 1;
+                i = c + 1;
                 continue;
             }
             if chosen.len == 1 {
