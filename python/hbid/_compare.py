@@ -174,7 +174,7 @@ def compare(
     init: Optional[int] = None,
     x0: Union[float, Sequence[float], None] = None,
     v0: Union[float, Sequence[float], None] = None,
-    rtol: float = 1e-10,
+    rtol: float = _hbid.DEFAULT_RTOL,
     skip_unsettled: bool = False,
 ) -> Comparison:
     """Runs a saved model freely under a record's measured input and scores it against the

@@ -10,6 +10,7 @@ import numpy as np
 import numpy.typing as npt
 
 __version__: str
+DEFAULT_RTOL: float
 
 Array = npt.NDArray[np.float64]
 Grid = Tuple[float, float, List[Tuple[int, int]], str]
@@ -84,7 +85,7 @@ def model_run_on(
     x0: List[float],
     v0: List[float],
     drive: Optional[List[Array]] = None,
-    rtol: float = 1e-10,
+    rtol: Optional[float] = None,
 ) -> Dict[str, Any]: ...
 def model_info(model: bytes) -> Dict[str, Any]: ...
 def model_json(model: bytes) -> str: ...
@@ -99,7 +100,7 @@ def model_simulate(
     v0: float = 0.0,
     samples_per_period: Optional[int] = None,
     transient_periods: int = 0,
-    rtol: float = 1e-10,
+    rtol: Optional[float] = None,
     wrapped: bool = True,
 ) -> Tuple[Array, Array, Array]: ...
 def rayon_sweep(cases: List[Tuple[float, int]], *, samples: int, bootstrap: int, threads: int) -> List[str]: ...

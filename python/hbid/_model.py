@@ -230,7 +230,7 @@ class Model:
         v0: Union[float, Sequence[float], None] = None,
         samples_per_period: Optional[int] = None,
         transient_periods: int = 0,
-        rtol: float = 1e-10,
+        rtol: float = _hbid.DEFAULT_RTOL,
         wrapped: bool = True,
     ) -> Any:
         """Simulates the model from ``(x0, v0)`` in the record's time.

@@ -149,7 +149,7 @@ def simulate(
     dq0: Union[str, Sequence[float], None] = None,
     x0: float = 0.1,
     v0: float = 0.0,
-    rtol: float = 1e-10,
+    rtol: float = _hbid.DEFAULT_RTOL,
     drive_frequency: Optional[float] = None,
     sample_rate: Optional[float] = None,
     samples_per_period: Optional[int] = None,

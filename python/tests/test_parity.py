@@ -128,3 +128,11 @@ def test_docs_python_md_documents_every_keyword(command):
         if p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD) and name != "x" and f"`{name}`" not in docs
     ]
     assert not missing, f"docs/python.md does not document hbid.{command}'s {missing}"
+
+
+def test_the_model_methods_take_the_command_lines_tolerance():
+    """``Model.simulate`` has no command of its own: its ``rtol`` is ``hbid simulate``'s default,
+    which the extension publishes once (``DEFAULT_RTOL``) for every signature that has one."""
+    cli = CLI["simulate"]["rtol"]
+    assert _same_default(cli, _hbid.DEFAULT_RTOL)
+    assert inspect.signature(hbid.Model.simulate).parameters["rtol"].default == _hbid.DEFAULT_RTOL

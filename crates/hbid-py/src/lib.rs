@@ -45,6 +45,8 @@ fn slice<'a>(array: &'a PyReadonlyArray1<'_, f64>) -> PyResult<&'a [f64]> {
 #[pymodule]
 fn _hbid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    // The integrator's default relative tolerance, written once (the Python signatures read it).
+    m.add("DEFAULT_RTOL", pendulum_sim::Tolerances::DEFAULT_RTOL)?;
     m.add_function(wrap_pyfunction!(run::condition, m)?)?;
     m.add_function(wrap_pyfunction!(run::identify, m)?)?;
     m.add_function(wrap_pyfunction!(run::embed, m)?)?;

@@ -154,7 +154,7 @@ pub fn model_load<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, Py
 /// per forcing period (default: the record's, from the fit; required for a model without one),
 /// after `transient_periods`.
 #[pyfunction]
-#[pyo3(signature = (model, *, samples, x0=0.1, v0=0.0, samples_per_period=None, transient_periods=0, rtol=1e-10, wrapped=true))]
+#[pyo3(signature = (model, *, samples, x0=0.1, v0=0.0, samples_per_period=None, transient_periods=0, rtol=None, wrapped=true))]
 #[allow(clippy::too_many_arguments)]
 pub fn model_simulate<'py>(
     py: Python<'py>,
@@ -164,7 +164,7 @@ pub fn model_simulate<'py>(
     v0: f64,
     samples_per_period: Option<usize>,
     transient_periods: usize,
-    rtol: f64,
+    rtol: Option<f64>,
     wrapped: bool,
 ) -> PyResult<Arrays3<'py>> {
     let model = decode(model)?;
@@ -183,7 +183,7 @@ pub fn model_simulate<'py>(
         .and_then(|c| c.with_samples_per_period(p))
         .and_then(|c| c.with_samples(samples))
         .and_then(|c| c.with_initial(x0, v0))
-        .and_then(|c| Ok(c.with_tolerances(Tolerances::relative(rtol)?)))
+        .and_then(|c| Ok(c.with_tolerances(Tolerances::relative(rtol.unwrap_or(Tolerances::DEFAULT_RTOL))?)))
         .map(|c| c.with_transient_periods(transient_periods))
         .or_raise(Kind::Options)?;
     let trajectory = py

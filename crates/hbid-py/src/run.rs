@@ -498,7 +498,7 @@ fn run_columns<'py>(py: Python<'py>, run: &hb_pipeline::ModelRun, out: &Bound<'p
 /// the order of its names): the columns (`t`, the coordinates, their velocities) and why the
 /// run stopped, if it did.
 #[pyfunction]
-#[pyo3(signature = (model, t, *, x0, v0, drive=None, rtol=1e-10))]
+#[pyo3(signature = (model, t, *, x0, v0, drive=None, rtol=None))]
 pub fn model_run_on<'py>(
     py: Python<'py>,
     model: &[u8],
@@ -506,8 +506,9 @@ pub fn model_run_on<'py>(
     x0: Vec<f64>,
     v0: Vec<f64>,
     drive: Arrays<'py>,
-    rtol: f64,
+    rtol: Option<f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let rtol = rtol.unwrap_or(pendulum_sim::Tolerances::DEFAULT_RTOL);
     let system = hb_model::IdentifiedSystem::from_bytes(model).map_err(|e| raise(Kind::Model, e))?;
     let times = crate::slice(&t)?;
     let drives = slices(&drive)?;
