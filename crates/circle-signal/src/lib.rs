@@ -27,7 +27,9 @@
 //! - [`SampleClock`]: the forcing period, the sample step and the time of the first sample, made
 //!   once from the record;
 //! - [`Segment`] and [`OrbitSource`]: pieces of the record spanning whole forcing periods, and the
-//!   interface of whatever finds them (close returns, plain windows).
+//!   interface of whatever finds them (close returns, plain windows);
+//! - [`system`]: the state traits of a system, one coordinate ([`SecondOrderSystem`]) or several
+//!   ([`MultiSystem`]), that simulated systems and identified models both implement.
 //!
 //! # Example
 //!
@@ -58,6 +60,7 @@ mod oscillation;
 mod resample;
 mod segment;
 mod spikes;
+pub mod system;
 
 pub use clock::SampleClock;
 pub use domain::{Domain, UnknownDomain};
@@ -66,6 +69,7 @@ pub use oscillation::{NoOscillationReason, OscillationPeriod, oscillation_period
 pub use resample::{RESAMPLE_HALF_WIDTH, Resampled, ResampledPieces, resample_pieces, resample_to_whole};
 pub use segment::{OrbitSource, Segment};
 pub use spikes::{Spike, SpikeParams, Spikes, find_and_repair_spikes, find_spikes, repair_spikes};
+pub use system::{Branch, MultiSystem, SecondOrderSystem, SingularMass};
 
 use std::f64::consts::{PI, TAU};
 

@@ -10,7 +10,7 @@
 //!   terms, and [`columns`], the one layout of the unknowns every assembly fills and every reader
 //!   of a system assumes; [`Harmonics`], the band each segment was balanced over;
 //! - [`model`]: [`IdentifiedModel`], the coefficients with their standard errors, evaluated as a
-//!   [`pendulum_sim::SecondOrderSystem`] (so that it is simulated, sectioned and measured by the
+//!   [`circle_signal::system::SecondOrderSystem`] (so that `pendulum_sim` simulates, sections and measures it with the
 //!   code that made the data), saved and loaded by [`io`] (JSON and compact binary, format 4,
 //!   reading 2 and 3);
 //! - [`MeasuredDrive`]: the samples of a measured drive `p(t)` on a record's grid, what a term in
@@ -26,7 +26,7 @@
 //! ```
 //! use hb_basis::{BasisKind, Harmonic};
 //! use hb_model::{IdentifiedModel, ModelForm, TermList};
-//! use pendulum_sim::SecondOrderSystem;
+//! use circle_signal::system::SecondOrderSystem;
 //!
 //! // x'' + 0.03 x' + 1.44 sin(x) - 1.52 sin(t)*cos(x) = 0, as a list of terms.
 //! let form = ModelForm::from_terms(TermList::parse("x', sin(x), sin(t)*cos(x)")?);

@@ -1,9 +1,9 @@
 //! The identified equation of motion: coefficients, statistics, and its evaluation as a system
 //! that `pendulum_sim` simulates.
 
+use circle_signal::system::{Branch, SecondOrderSystem};
 use circle_signal::wrap;
 use hb_basis::{Basis, BasisKind, Domain};
-use pendulum_sim::{Branch, SecondOrderSystem};
 use serde::{Deserialize, Serialize};
 
 use circle_signal::SampleClock;

@@ -3,9 +3,9 @@
 //! accelerations through its mass matrix, and saved (format 5; a system of one coordinate is
 //! saved as the model it is, in format 4).
 
+use circle_signal::system::MultiSystem;
+pub use circle_signal::system::SingularMass;
 use hb_basis::{Basis, BasisKind, Domain};
-use pendulum_sim::MultiSystem;
-pub use pendulum_sim::SingularMass;
 use serde::{Deserialize, Serialize};
 
 use crate::drive::MeasuredDrive;

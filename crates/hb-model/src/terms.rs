@@ -215,7 +215,7 @@ impl VelocityFactor {
         }
     }
 
-    /// The factor on one side of `x' = 0` (`side` = 1 or −1, see `pendulum_sim::Branch`):
+    /// The factor on one side of `x' = 0` (`side` = 1 or −1, see `circle_signal::system::Branch`):
     /// `sign(x')` is `side` and `x'*|x'|` is `side · x'²`, smooth in `v` across 0; the others as
     /// [`eval`](Self::eval). `None`: [`eval`](Self::eval).
     #[inline]

@@ -17,7 +17,7 @@
 //!
 //! A coordinate `c` whose equation has terms in `sign(q_c')` or `|q_c'|` (dry friction, quadratic
 //! drag) says so ([`MultiSystem::switches_at_rest`]); the integration then generalises the
-//! one-coordinate rule of [`SecondOrderSystem::switches_at_rest`] (Filippov's convention), with
+//! one-coordinate rule of [`SecondOrderSystem::switches_at_rest`](crate::SecondOrderSystem::switches_at_rest) (Filippov's convention), with
 //! every coordinate in one of three modes:
 //!
 //! - on a branch `s_c = ±1`: `sign(q_c') = s_c` and `|q_c'| = s_c q_c'`
@@ -74,25 +74,10 @@ use crate::error::{SimError, invalid};
 use crate::free_run::{STEPS_BASE, STEPS_PER_SAMPLE};
 use crate::simulate::{SimulationConfig, Trajectory};
 use crate::switching::{Mode, SCAN_POINTS, STICK_SCANS_PER_STEP, first_event, ulp};
-use crate::system::{Branch, SecondOrderSystem};
+use crate::system::Branch;
 use circle_signal::Domain;
 
-/// The largest number of coordinates of a [`MultiSystem`] (its first-order state has twice as
-/// many components, each size compiled once).
-pub const MAX_COORDINATES: usize = 8;
-
-/// The mass matrix of a system cannot be solved at time `t`: it is singular, or not positive
-/// definite, at the state reached.
-#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
-#[error("the mass matrix is singular at t = {t} (relative pivot {pivot:e})")]
-pub struct SingularMass {
-    /// The time of the evaluation.
-    pub t: f64,
-    /// The pivot of the factorisation that failed, relative to the matrix's scale (for a 2×2
-    /// matrix its determinant over the product of its diagonal): zero or negative, or too small
-    /// to divide by.
-    pub pivot: f64,
-}
+pub use circle_signal::system::{MAX_COORDINATES, MultiSystem, OneCoordinate, SingularMass};
 
 impl From<SingularMass> for SimError {
     fn from(e: SingularMass) -> Self {
@@ -100,107 +85,6 @@ impl From<SingularMass> for SimError {
             t: e.t,
             pivot: e.pivot,
         }
-    }
-}
-
-/// A system of `n` second-order equations solved for the accelerations, `q'' = A(t, q, q')`
-/// (see the [module documentation](self)).
-///
-/// Object safe: the integrators take it as `&dyn MultiSystem`, so each size of state is compiled
-/// once whatever the system.
-pub trait MultiSystem {
-    /// The number of coordinates `n` (`1..=`[`MAX_COORDINATES`]).
-    fn coordinates(&self) -> usize;
-
-    /// The accelerations `q''` at `(t, q, q')` into `acc` (each slice of length `n`), with
-    /// `sign(0) = 0` for a dry-friction term. Errors where the mass matrix is singular there.
-    fn accelerations(&self, t: f64, q: &[f64], v: &[f64], acc: &mut [f64]) -> Result<(), SingularMass>;
-
-    /// Whether coordinate `c`'s equation has terms in `sign(q_c')` or `|q_c'|` (dry friction,
-    /// quadratic drag). Default: no.
-    fn switches_at_rest(&self, c: usize) -> bool {
-        let _ = c;
-        false
-    }
-
-    /// The accelerations with `sign(q_c')` taken as `signs[c]` and `|q_c'|` as `signs[c] · q_c'`
-    /// for every coordinate `c` that switches at rest (`signs[c]` is `±1` on a branch, or a held
-    /// value in `[−1, 1]` while the coordinate sticks); `signs[c]` is to be ignored for the other
-    /// coordinates. Smooth in `v` on each branch, and affine in the signs (each sign in terms of
-    /// its own, never a product of two). Default: [`accelerations`](Self::accelerations), for a
-    /// system with no such terms.
-    fn accelerations_with_signs(
-        &self,
-        t: f64,
-        q: &[f64],
-        v: &[f64],
-        signs: &[f64],
-        acc: &mut [f64],
-    ) -> Result<(), SingularMass> {
-        let _ = signs;
-        self.accelerations(t, q, v, acc)
-    }
-}
-
-impl<S: MultiSystem + ?Sized> MultiSystem for &S {
-    fn coordinates(&self) -> usize {
-        (**self).coordinates()
-    }
-    fn accelerations(&self, t: f64, q: &[f64], v: &[f64], acc: &mut [f64]) -> Result<(), SingularMass> {
-        (**self).accelerations(t, q, v, acc)
-    }
-    fn switches_at_rest(&self, c: usize) -> bool {
-        (**self).switches_at_rest(c)
-    }
-    fn accelerations_with_signs(
-        &self,
-        t: f64,
-        q: &[f64],
-        v: &[f64],
-        signs: &[f64],
-        acc: &mut [f64],
-    ) -> Result<(), SingularMass> {
-        (**self).accelerations_with_signs(t, q, v, signs, acc)
-    }
-}
-
-/// A one-coordinate [`SecondOrderSystem`] as a [`MultiSystem`] with `n = 1`: the acceleration
-/// `F(t, x, x')`, its branches `sign(x') = ±1` as [`SecondOrderSystem::acceleration_on`] gives
-/// them, and a held value `s` in between as `((1 + s) F_+ + (1 − s) F_−) / 2`, exact at rest for
-/// an `F` affine in `sign(x')` (where `|x'| = 0`).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct OneCoordinate<S>(pub S);
-
-impl<S: SecondOrderSystem> MultiSystem for OneCoordinate<S> {
-    fn coordinates(&self) -> usize {
-        1
-    }
-    fn accelerations(&self, t: f64, q: &[f64], v: &[f64], acc: &mut [f64]) -> Result<(), SingularMass> {
-        acc[0] = self.0.acceleration(t, q[0], v[0]);
-        Ok(())
-    }
-    fn switches_at_rest(&self, _c: usize) -> bool {
-        self.0.switches_at_rest()
-    }
-    fn accelerations_with_signs(
-        &self,
-        t: f64,
-        q: &[f64],
-        v: &[f64],
-        signs: &[f64],
-        acc: &mut [f64],
-    ) -> Result<(), SingularMass> {
-        let s = signs[0];
-        acc[0] = if s == 1.0 {
-            self.0.acceleration_on(Branch::Forward, t, q[0], v[0])
-        } else if s == -1.0 {
-            self.0.acceleration_on(Branch::Backward, t, q[0], v[0])
-        } else {
-            let forward = self.0.acceleration_on(Branch::Forward, t, q[0], v[0]);
-            let backward = self.0.acceleration_on(Branch::Backward, t, q[0], v[0]);
-            0.5 * ((1.0 + s) * forward + (1.0 - s) * backward)
-        };
-        Ok(())
     }
 }
 
