@@ -50,7 +50,7 @@ struct Truth {
 impl Truth {
     /// The true model of `pendulum`.
     fn of(pendulum: &Pendulum) -> anyhow::Result<Self> {
-        let model = hb_model::truth::pendulum_model::<Harmonic>(pendulum)?;
+        let model = pendulum_sim::truth::pendulum_model::<Harmonic>(pendulum)?;
         let column = |name: &str| {
             model
                 .coefficients()

@@ -14,7 +14,7 @@ use hb_plot::{BLUE, Figure, GREY, ORANGE, RED, Series, Style};
 /// The paper's pendulum as a model on the harmonic basis K = 1 (method notes section 1): the
 /// truth of Table I and of the hat curves.
 pub fn truth() -> anyhow::Result<IdentifiedModel<Harmonic>> {
-    Ok(hb_model::truth::pendulum_model(&Pendulum::paper())?)
+    Ok(pendulum_sim::truth::pendulum_model(&Pendulum::paper())?)
 }
 
 /// The paper's Table I (and c_r from section 4.2.1).

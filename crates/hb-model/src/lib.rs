@@ -14,9 +14,10 @@
 //!   code that made the data), saved and loaded by [`io`] (JSON and compact binary, format 4,
 //!   reading 2 and 3);
 //! - [`MeasuredDrive`]: the samples of a measured drive `p(t)` on a record's grid, what a term in
-//!   `p` is balanced from and what a model in `p` is simulated with;
-//! - [`truth`]: the equation of `pendulum_sim`'s pendulum and Duffing oscillator (their losses and
-//!   drive harmonics included) in these terms, in a record's frame.
+//!   `p` is balanced from and what a model in `p` is simulated with.
+//!
+//! The true equations of the simulated systems, in these terms and a record's frame, are the
+//! simulator's (`pendulum_sim::truth`): this crate never reaches the simulator.
 //!
 //! Errors: [`TermError`] for lists and forms, [`ModelIoError`] for saved models, folded into
 //! [`ModelError`].
@@ -47,7 +48,6 @@ pub mod io;
 pub mod model;
 pub mod system;
 pub mod terms;
-pub mod truth;
 
 pub use drive::MeasuredDrive;
 pub use error::{ModelError, ModelIoError, TermError};
@@ -59,4 +59,3 @@ pub use terms::{
     Combination, Coupling, DriveFactor, Factor, MAX_COORDINATES, MAX_COUPLING, MAX_DRIVE_HARMONIC,
     MAX_DRIVES, MAX_TERMS, Names, PositionFactor, Term, TermList, TermSpec, VelocityFactor, XFunction,
 };
-pub use truth::{Equation, TrueEquation, pendulum_model};

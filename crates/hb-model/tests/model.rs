@@ -5,9 +5,9 @@ use circle_signal::SampleClock;
 use hb_basis::{Basis, BasisKind, Harmonic, Hat, Polynomial};
 use hb_model::{
     FitSummary, Forcing, Harmonics, IdentifiedModel, MODEL_VERSION, ModelError, ModelForm, ModelIoError,
-    TermError, TrueEquation,
+    TermError,
 };
-use pendulum_sim::{Pendulum, RecordFrame, SecondOrderSystem};
+use pendulum_sim::{Pendulum, RecordFrame, SecondOrderSystem, TrueEquation};
 
 /// The true model of `p` on the harmonic basis of order 1 in the paper's layout.
 fn true_model<B: Basis + From<Harmonic>>(p: &Pendulum) -> Result<IdentifiedModel<B>, ModelError> {

@@ -12,7 +12,7 @@
 //! that are measured inputs; each angle has its own encoder of the same settings, drawing from its
 //! own stream of the seed, so that the coordinates' errors differ while a seed gives one record.
 //! Their true equations are the simulator's (`normalised_equations`), read into the record's names
-//! and frame by `hb_model::truth::system_equations`, never written here.
+//! and frame by `pendulum_sim::truth::system_equations`, never written here.
 
 use std::f64::consts::{FRAC_PI_2, TAU};
 use std::fmt;
@@ -22,8 +22,9 @@ use std::str::FromStr;
 
 use circle_signal::Domain;
 use hb_basis::{Harmonic, Polynomial};
-use hb_model::{Forcing, ModelForm, Names, TrueEquation};
+use hb_model::{Forcing, ModelForm, Names};
 use npyz::WriterBuilder;
+use pendulum_sim::TrueEquation;
 use pendulum_sim::observe::{AngleRange, Encoder, Gaps, Jitter};
 use pendulum_sim::{
     ArmParameters, BaseAcceleration, CoupledDuffing, DoublePendulum, DriveHarmonic, DriveHarmonics, Duffing,
@@ -1984,7 +1985,7 @@ fn system_truth(rig: &Rig, frame: &RecordFrame) -> Result<(Hint, Equations), Run
         System::CoupledDuffing(d) => d.normalised_equations(),
         _ => unreachable!("a system of several coordinates"),
     };
-    let equations = hb_model::truth::system_equations(&normalised, &names, frame)?;
+    let equations = pendulum_sim::truth::system_equations(&normalised, &names, frame)?;
     let free = o.drive == DriveKind::None;
     let mut lists = Vec::new();
     for (name, equation) in coordinates.iter().zip(&equations) {

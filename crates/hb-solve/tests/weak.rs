@@ -149,7 +149,7 @@ fn unforced_pendulum_on_the_circle() {
         &SvdSolver::default(),
     )
     .unwrap();
-    let want = hb_model::truth::pendulum_model::<Harmonic>(&pendulum).unwrap();
+    let want = pendulum_sim::truth::pendulum_model::<Harmonic>(&pendulum).unwrap();
     for (c, w) in m.coefficients().iter().zip(want.coefficients()) {
         assert_eq!(c.name, w.name);
         let w = w.value;

@@ -172,7 +172,7 @@ fn bad_options_fail_cleanly_without_output() {
 
 /// The true coefficients of the paper's pendulum with the harmonic basis K = 1, by term name.
 fn pendulum_truth() -> Vec<(String, f64)> {
-    hb_model::truth::pendulum_model::<hb_basis::Harmonic>(&pendulum_sim::Pendulum::paper())
+    pendulum_sim::truth::pendulum_model::<hb_basis::Harmonic>(&pendulum_sim::Pendulum::paper())
         .unwrap()
         .coefficients()
         .iter()

@@ -21,7 +21,7 @@
 //! system of several coordinates ([`MultiSystem`]) reads the same in every coordinate,
 //! `q̈ = rate² · A(rate · t + phase, q + offset, q̇ / rate)`, the offset added to each. The
 //! same equation in the identification's terms, `ẍ + Σ c_i g_i(t, x, ẋ) = 0`, is written once, in
-//! the model's crate (`hb_model::truth`), from these systems and frames.
+//! [`truth`](crate::truth), from these systems and frames.
 //!
 //! # Example
 //!

@@ -114,6 +114,7 @@ mod simulate;
 mod switching;
 mod system;
 mod tableau;
+pub mod truth;
 mod validate;
 
 pub use arm::{ArmParameters, Torque, TorqueDoublePendulum};
@@ -141,6 +142,7 @@ pub use simulate::{
     poincare_section, simulate, simulate_with_progress,
 };
 pub use system::{Branch, SecondOrderSystem};
+pub use truth::{Equation, TrueEquation, pendulum_model};
 pub use validate::{
     CheckConfig, ModelCheck, PeriodicOrbit, Seeds, ShootingConfig, Variational, check_model, energy_distance,
     flow_with_jacobian, periodic_orbits, section_energy_distance, whirling_fraction,

@@ -20,4 +20,5 @@ mod simulate;
 mod switching;
 mod system_prediction;
 mod tableau;
+mod truth;
 mod validate;

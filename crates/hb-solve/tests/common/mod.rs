@@ -8,7 +8,7 @@ use std::error::Error;
 /// The paper's pendulum, x'' + 0.03 x' + (1/0.8333²) sin x − 1.52 sin t cos x = 0, as a model on
 /// the harmonic basis K = 1 (method notes section 1): the truth identified models are compared with.
 pub fn truth() -> hb_model::IdentifiedModel<hb_basis::Harmonic> {
-    hb_model::truth::pendulum_model(&pendulum_sim::Pendulum::paper()).unwrap()
+    pendulum_sim::truth::pendulum_model(&pendulum_sim::Pendulum::paper()).unwrap()
 }
 
 /// The shared fixture `paper_dataset.csv`, beside the repository.

@@ -1,7 +1,8 @@
 //! The true equation of the simulated systems in the model's terms: in their own frame, in a
 //! record's frame, with a rig's losses and drive harmonics, and satisfied by records in seconds.
 
-use hb_model::{ModelError, TrueEquation};
+use hb_model::ModelError;
+use pendulum_sim::TrueEquation;
 use pendulum_sim::{
     DriveHarmonic, DriveHarmonics, Duffing, InFrame, Losses, Pendulum, RecordFrame, SecondOrderSystem,
     SimulationConfig, Tolerances, simulate,
@@ -353,8 +354,8 @@ fn a_rig_record_in_seconds_satisfies_its_true_equation() {
 
 mod systems {
     use hb_basis::{BasisKind, Domain, Harmonic, Polynomial};
-    use hb_model::truth::{Equation, system_equations};
     use hb_model::{IdentifiedModel, IdentifiedSystem, MeasuredDrive, ModelForm, Names};
+    use pendulum_sim::truth::{Equation, system_equations};
     use pendulum_sim::{
         ArmParameters, BaseAcceleration, CoupledDuffing, DoublePendulum, InFrame, MultiSystem, RecordFrame,
         Torque, TorqueDoublePendulum,

@@ -22,7 +22,7 @@
 //! # Example
 //!
 //! ```
-//! use hb_model::truth::TrueEquation;
+//! use pendulum_sim::truth::TrueEquation;
 //! use pendulum_sim::{Pendulum, RecordFrame};
 //!
 //! // The paper's pendulum on a rig driven at 1.02 Hz, time in seconds.
@@ -35,12 +35,10 @@
 //! ```
 
 use hb_basis::Basis;
-use pendulum_sim::{Duffing, Losses, NormalisedEquation, Pendulum, RecordFrame};
+use hb_model::terms::{Coupling, DriveFactor, Factor, Names, TermList, TermSpec, VelocityFactor, XFunction};
+use hb_model::{IdentifiedModel, ModelError, ModelForm, TermError, columns};
 
-use crate::error::{ModelError, TermError};
-use crate::form::{ModelForm, columns};
-use crate::model::IdentifiedModel;
-use crate::terms::{Coupling, DriveFactor, Factor, Names, TermList, TermSpec, VelocityFactor, XFunction};
+use crate::{Duffing, Losses, NormalisedEquation, Pendulum, RecordFrame};
 
 /// An equation `ẍ + Σ c_i g_i = 0`: its terms, in order, and their coefficients.
 #[derive(Debug, Clone, PartialEq)]
@@ -132,7 +130,7 @@ impl Equation {
 ///
 /// ```
 /// use hb_basis::Harmonic;
-/// use hb_model::truth::pendulum_model;
+/// use pendulum_sim::truth::pendulum_model;
 /// use pendulum_sim::Pendulum;
 ///
 /// let truth = pendulum_model::<Harmonic>(&Pendulum::paper())?;
@@ -323,7 +321,8 @@ impl TrueEquation for Duffing {
 /// line needs lower powers, which the equation has not).
 ///
 /// ```
-/// use hb_model::{Names, truth::system_equations};
+/// use hb_model::Names;
+/// use pendulum_sim::truth::system_equations;
 /// use pendulum_sim::{DoublePendulum, RecordFrame};
 ///
 /// let pendulum = DoublePendulum::whirling();
