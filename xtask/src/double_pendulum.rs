@@ -20,7 +20,7 @@ use pendulum_sim::prediction::{
 };
 use pendulum_sim::{DoublePendulum, PredictionConfig, SimulationConfig, Tolerances, energy_distance};
 
-use crate::reproduce::Timings;
+use crate::timings::Timings;
 
 /// Samples per drive period: no angle of the whirling pendulum moves more than 0.45 rad between
 /// two of them.

@@ -11,6 +11,7 @@ mod identification;
 mod real_records;
 mod reproduce;
 mod scale;
+mod timings;
 mod weak_sindy;
 
 use std::path::{Path, PathBuf};

@@ -2,7 +2,6 @@
 
 use std::fmt::Write as _;
 use std::path::Path;
-use std::time::{Duration, Instant};
 
 use anyhow::Context;
 use circle_signal::wrap;
@@ -11,7 +10,6 @@ use hb_pipeline::pipeline::{
     Embedded, InitialState, Method, ModelSpec, Pipeline, PipelineOptions, PredictionOptions, Record,
     RecordComparison, Stage, ValidationOptions,
 };
-use indicatif::{ProgressBar, ProgressStyle};
 use pendulum_sim::{
     Domain, Pendulum, PredictionConfig, PredictionRecord, PredictionTimes, SimulationConfig, Trajectory,
     predict_window, prediction_starts, simulate,
@@ -21,6 +19,7 @@ use circle_signal::{RotationSplit, SampleClock, unwrap};
 use upo_search::{Catalogue, Segment};
 
 use crate::identification::{Identified, Validation, hat_curves, table_one, validation_section};
+use crate::timings::Timings;
 use hb_plot::{BLUE, Figure, GREY, ORANGE, RED, Series, Style};
 
 /// Sizes of a run.
@@ -73,71 +72,6 @@ fn models() -> anyhow::Result<[(&'static str, &'static str, Method, BasisKind); 
             hat,
         ),
     ])
-}
-
-/// Wall time of each stage, for the report.
-#[derive(Default)]
-pub(crate) struct Timings {
-    done: Vec<(&'static str, Duration)>,
-    current: Option<(&'static str, Instant, ProgressBar)>,
-}
-
-impl Timings {
-    /// Ends the current stage, if any, and starts `name` with a spinner on stderr (nothing if
-    /// `name` is already running).
-    fn start(&mut self, name: &'static str) {
-        if self
-            .current
-            .as_ref()
-            .is_some_and(|(current, ..)| *current == name)
-        {
-            return;
-        }
-        self.end();
-        let bar = ProgressBar::new_spinner();
-        bar.set_style(ProgressStyle::with_template("{spinner} {msg} ({elapsed})").expect("valid template"));
-        bar.set_message(name);
-        bar.enable_steady_tick(Duration::from_millis(120));
-        self.current = Some((name, Instant::now(), bar));
-    }
-
-    /// Ends the current stage and records its wall time.
-    fn end(&mut self) {
-        if let Some((name, start, bar)) = self.current.take() {
-            let took = start.elapsed();
-            bar.finish_and_clear();
-            eprintln!("{name:<28} {:>8.3} s", took.as_secs_f64());
-            self.done.push((name, took));
-        }
-    }
-
-    /// Ends the current stage with the outcome of its work: an error names the stage.
-    fn finish<T, E>(&mut self, outcome: Result<T, E>) -> anyhow::Result<T>
-    where
-        anyhow::Error: From<E>,
-    {
-        match outcome {
-            Ok(value) => {
-                self.end();
-                Ok(value)
-            }
-            Err(e) => {
-                let name = self.current.take().map_or("", |(name, ..)| name);
-                Err(anyhow::Error::from(e).context(format!("stage '{name}'")))
-            }
-        }
-    }
-
-    /// Runs `work` as a stage and records its wall time.
-    pub(crate) fn stage<T>(
-        &mut self,
-        name: &'static str,
-        work: impl FnOnce() -> anyhow::Result<T>,
-    ) -> anyhow::Result<T> {
-        self.start(name);
-        let outcome = work();
-        self.finish(outcome)
-    }
 }
 
 pub fn run(out: &Path, quick: bool) -> anyhow::Result<()> {
@@ -392,10 +326,10 @@ pub fn run(out: &Path, quick: bool) -> anyhow::Result<()> {
     report.push_str(&double_pendulum);
     writeln!(report, "## Wall time of each stage\n")?;
     writeln!(report, "| stage | seconds |\n| --- | --- |")?;
-    for (name, took) in &times.done {
+    for (name, took) in times.done() {
         writeln!(report, "| {name} | {:.3} |", took.as_secs_f64())?;
     }
-    let total: f64 = times.done.iter().map(|(_, d)| d.as_secs_f64()).sum();
+    let total: f64 = times.done().iter().map(|(_, d)| d.as_secs_f64()).sum();
     writeln!(report, "| total | {total:.3} |")?;
     let path = out.join("README.md");
     std::fs::write(&path, report).with_context(|| format!("cannot write {}", path.display()))?;

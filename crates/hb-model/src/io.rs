@@ -22,6 +22,10 @@ pub const MODEL_FORMAT: &str = "hbid-model";
 pub const MODEL_VERSION: u32 = 4;
 /// The oldest saved-model format version this build reads.
 pub const MODEL_OLDEST_VERSION: u32 = 2;
+/// The saved-system format version: a list of equations in the names of its coordinates and
+/// drives (`crate::IdentifiedSystem`; every format version is written here, so that the
+/// readers of one model and of a system tell each other's files apart).
+pub const SYSTEM_VERSION: u32 = 5;
 /// First bytes of a binary model.
 pub const MODEL_MAGIC: [u8; 8] = *b"HBIDMODL";
 
@@ -142,7 +146,7 @@ impl<B> From<ModelRecordV2<B>> for ModelRecord<B> {
 
 /// Whether this build reads format `version` as one model.
 fn check_version(version: u32) -> Result<(), ModelError> {
-    if version == crate::system::SYSTEM_VERSION {
+    if version == SYSTEM_VERSION {
         return Err(ModelError::Io(ModelIoError::SavedSystem));
     }
     if (MODEL_OLDEST_VERSION..=MODEL_VERSION).contains(&version) {

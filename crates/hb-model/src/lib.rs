@@ -52,9 +52,9 @@ pub mod terms;
 pub use drive::MeasuredDrive;
 pub use error::{ModelError, ModelIoError, TermError};
 pub use form::{Column, Forcing, Harmonics, ModelForm, columns, term_names};
-pub use io::{MODEL_FORMAT, MODEL_MAGIC, MODEL_OLDEST_VERSION, MODEL_VERSION};
+pub use io::{MODEL_FORMAT, MODEL_MAGIC, MODEL_OLDEST_VERSION, MODEL_VERSION, SYSTEM_VERSION};
 pub use model::{Coefficient, FitSummary, IdentifiedModel};
-pub use system::{Columns, IdentifiedSystem, SINGULAR_PIVOT, SYSTEM_VERSION, SingularMass};
+pub use system::{Columns, IdentifiedSystem, SINGULAR_PIVOT, SingularMass};
 pub use terms::{
     Combination, Coupling, DriveFactor, Factor, MAX_COORDINATES, MAX_COUPLING, MAX_DRIVE_HARMONIC,
     MAX_DRIVES, MAX_TERMS, Names, PositionFactor, Term, TermList, TermSpec, VelocityFactor, XFunction,

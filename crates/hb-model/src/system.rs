@@ -11,13 +11,9 @@ use serde::{Deserialize, Serialize};
 use crate::drive::MeasuredDrive;
 use crate::error::{ModelError, ModelIoError, TermError};
 use crate::form::ModelForm;
-use crate::io::{CoefficientMap, MODEL_FORMAT, MODEL_MAGIC, MODEL_VERSION};
+use crate::io::{CoefficientMap, MODEL_FORMAT, MODEL_MAGIC, MODEL_VERSION, SYSTEM_VERSION};
 use crate::model::{FitSummary, IdentifiedModel};
 use crate::terms::{MAX_COORDINATES, Names, TermList};
-
-/// The saved-system format version: a list of equations in the names of its coordinates and
-/// drives.
-pub const SYSTEM_VERSION: u32 = 5;
 
 /// A system of `n` coordinates with one equation each, in the [`Names`] of its record: equation
 /// `i` is a model ([`IdentifiedModel`]) of the own coordinate `i`, its terms possibly reading the

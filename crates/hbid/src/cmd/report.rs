@@ -3,11 +3,10 @@
 //! their own report ([`super::report_system`]).
 
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use anyhow::Context;
 use circle_signal::Measured;
-use clap::Args;
 use embedding::EmbeddingError;
 use hb_pipeline::DriveSpec;
 use hb_pipeline::pipeline::{
@@ -20,30 +19,9 @@ use hb_plot::{BLUE, Figure, GREY, ORANGE, RED, Series, Style, add_figure};
 use hb_record::prepare::Data;
 use pendulum_sim::Domain;
 
-use super::identify::IdentifyArgs;
+use super::report_args::Kept;
+pub use super::report_args::ReportArgs;
 use crate::progress::{Console, Progress};
-
-/// Options of `hbid report`.
-#[derive(Debug, Args)]
-pub struct ReportArgs {
-    #[command(flatten)]
-    pub identify: IdentifyArgs,
-    /// Folder of the report (created if missing; README.md, figures and the models go there).
-    #[arg(long)]
-    pub out: PathBuf,
-    /// Drive periods simulated for each model's Poincaré section and Lyapunov exponent (a record
-    /// of one coordinate; the report of a system or a saved model runs each model 300 periods
-    /// after 100 of transient).
-    #[arg(long, default_value_t = 2000)]
-    pub validation_periods: usize,
-    /// A saved model or system (`hbid identify --save-model`, JSON or binary) to report against
-    /// the record instead of identifying one: its equations' coefficients and fit, its free run
-    /// against the record coordinate by coordinate (`hbid compare`'s), its phase portraits and
-    /// Poincaré sections beside the record's, and its valid prediction time. A system's columns
-    /// are its own names unless --coords names them.
-    #[arg(long, value_name = "PATH", conflicts_with_all = ["terms", "method", "basis", "select", "refine"])]
-    pub model: Option<PathBuf>,
-}
 
 /// The methods of the report, in its order.
 const METHODS: [Method; 2] = [Method::Upo, Method::Windowed];
@@ -106,27 +84,6 @@ fn naming_options(error: PipelineError) -> anyhow::Error {
             anyhow::Error::new(error).context("choose the delay with «delay=», or raise «max_lag=»")
         }
         error => error.into(),
-    }
-}
-
-/// The console, and the notices kept for the report's text.
-pub(super) struct Kept {
-    pub(super) console: Console,
-    pub(super) notices: Vec<Notice>,
-}
-
-impl Observer for Kept {
-    fn stage(&mut self, stage: hb_pipeline::Stage) {
-        self.console.stage(stage);
-    }
-
-    fn progress(&mut self, done: usize, total: usize) {
-        self.console.progress(done, total);
-    }
-
-    fn notice(&mut self, notice: &Notice) {
-        self.console.notice(notice);
-        self.notices.push(notice.clone());
     }
 }
 

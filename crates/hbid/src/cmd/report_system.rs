@@ -25,7 +25,7 @@ use pendulum_sim::prediction::{
     SystemPredictionRecord, SystemPredictionTimes, system_prediction_starts, system_valid_prediction_times,
 };
 
-use super::report::{Kept, ReportArgs};
+use super::report_args::{Kept, ReportArgs};
 use crate::progress::Console;
 
 mod attractor;
