@@ -13,6 +13,7 @@ use hb_model::{
     TermList,
 };
 use hb_record::prepare::{Data, DriveFound, GridData, WindowUnit};
+use hb_solve::identifier::Identifier;
 use hb_solve::{
     BootstrapParams, LstsqSolver, NoiseCorrection, QrSolver, SelectParams, Signals, SvdSolver, WeakForm,
 };
@@ -1138,21 +1139,38 @@ pub fn identify_data(
     let x = drifted.as_deref().unwrap_or(&data.x);
     let mut coordinates = data.coordinates();
     coordinates[0].0 = x;
+    let identify_error = |i: Option<usize>, source| RunError::Identify {
+        found: match i {
+            Some(i) if n > 1 => format!("{found}, the equation of {}", request.names.coordinates()[i]),
+            _ => found.clone(),
+        },
+        source,
+    };
+    let signals = (0..n)
+        .map(|i| {
+            Signals::system(coordinates.clone(), i)
+                .and_then(|s| s.with_drives(drives.clone()))
+                .map_err(|e| identify_error(Some(i), e))
+        })
+        .collect::<Result<Vec<_>, RunError>>()?;
+    // Every equation's rows at once, window by window: each coordinate's window and velocity
+    // are made once for all the equations that read them.
+    observer.stage(Stage::Assemble);
+    let systems = match Identifier::systems(&setups, &signals, &segments) {
+        Ok(systems) => systems,
+        // Which equation's rows failed: each assembled alone names it.
+        Err(e) => {
+            for i in 0..n {
+                Identifier::systems(&setups[i..=i], &signals[i..=i], &segments)
+                    .map_err(|e| identify_error(Some(i), e))?;
+            }
+            return Err(identify_error(None, e));
+        }
+    };
     let mut equations = Vec::with_capacity(n);
-    for (i, setup) in setups.iter().enumerate() {
-        let identify_error = |source| RunError::Identify {
-            found: if n > 1 {
-                format!("{found}, the equation of {}", request.names.coordinates()[i])
-            } else {
-                found.clone()
-            },
-            source,
-        };
-        let signals = Signals::system(coordinates.clone(), i)
-            .and_then(|s| s.with_drives(drives.clone()))
-            .map_err(identify_error)?;
+    for (i, (setup, system)) in setups.iter().zip(systems).enumerate() {
         let identification = setup
-            .identify_with_progress(signals, &segments, |step| {
+            .identify_system(system, |step| {
                 observer.stage(match step {
                     IdentifyStep::Assemble => Stage::Assemble,
                     IdentifyStep::Select => Stage::Select,
@@ -1160,7 +1178,7 @@ pub fn identify_data(
                     IdentifyStep::Bootstrap => Stage::Bootstrap,
                 })
             })
-            .map_err(identify_error)?;
+            .map_err(|e| identify_error(Some(i), e))?;
         let of = if n > 1 {
             format!("the equation of {}: ", request.names.coordinates()[i])
         } else {

@@ -77,6 +77,15 @@ pub enum AssemblyError {
         /// Its value.
         value: f64,
     },
+    /// A system's equations given with a different number of views of the record
+    /// (`Identifier::systems`).
+    #[error("{setups} equation setups but {signals} views of the record: one each")]
+    EquationCount {
+        /// The setups.
+        setups: usize,
+        /// The views of the record.
+        signals: usize,
+    },
     /// The measured drive and the record have different numbers of samples.
     #[error(
         "the measured drive has {drive} samples but the record {record}: they must be sampled together, sample for sample"

@@ -7,13 +7,13 @@
 use std::fmt;
 
 use crate::{
-    Assembly, Bootstrap, BootstrapParams, EXPLAINED_WARNING_ORBITS, EXPLAINED_WARNING_WINDOWS, FitModel,
-    FitQuality, HELD_OUT_FOLDS, HarmonicBalance, IdentifyParams, LinearSystem, LstsqSolver, NoiseCorrection,
-    QrSolver, SelectParams, Selection, Signals, SolveError, WeakForm, bootstrap_or_reason, build_system,
-    fit_quality, select_terms,
+    Assembly, AssemblyError, Bootstrap, BootstrapParams, EXPLAINED_WARNING_ORBITS, EXPLAINED_WARNING_WINDOWS,
+    FitModel, FitQuality, HELD_OUT_FOLDS, HarmonicBalance, IdentifyParams, LinearSystem, LstsqSolver,
+    NoiseCorrection, QrSolver, SelectParams, Selection, Signals, SolveError, WeakForm, bootstrap_or_reason,
+    build_system, fit_quality, select_terms,
 };
 use circle_signal::{SampleClock, Segment};
-use hb_basis::BasisKind;
+use hb_basis::{Basis, BasisKind};
 use hb_model::{Forcing, Harmonics, IdentifiedModel, ModelForm, TermList};
 
 /// Identification method: where the segments come from and how they become equations.
@@ -203,6 +203,7 @@ impl ModelSpec {
             .build()?;
         Ok(Identifier {
             method: self.method,
+            weak: self.weak,
             basis: self.basis,
             params,
             solver: self.solver,
@@ -217,6 +218,8 @@ impl ModelSpec {
 #[derive(Debug)]
 pub struct Identifier {
     method: Method,
+    /// The weak form's settings (of its assembly, when the method is the weak form's).
+    weak: WeakForm,
     basis: BasisKind,
     params: IdentifyParams,
     solver: Box<dyn LstsqSolver>,
@@ -338,6 +341,56 @@ impl Identifier {
     ) -> Result<Identification, SolveError> {
         progress(IdentifyStep::Assemble);
         let system = self.system(&signals.into(), segments)?;
+        self.identify_system(system, progress)
+    }
+
+    /// The stacked rows of each of a system's equations, `setups[i]` on `signals[i]`, over the
+    /// shared `segments` ([`build_system`] of each): assembled together when the setups share
+    /// their method and its settings ([`crate::build_systems`]: each coordinate's window made
+    /// once per segment for every equation), one after the other otherwise; the same systems
+    /// either way. What [`Identifier::identify_system`] takes.
+    ///
+    /// Errors: the assemblies'; [`SolveError::Assembly`] when `signals` and `setups` differ in
+    /// number.
+    pub fn systems(
+        setups: &[Identifier],
+        signals: &[Signals<'_>],
+        segments: &[Segment],
+    ) -> Result<Vec<LinearSystem>, SolveError> {
+        if setups.len() != signals.len() {
+            return Err(SolveError::Assembly(AssemblyError::EquationCount {
+                setups: setups.len(),
+                signals: signals.len(),
+            }));
+        }
+        let together = setups
+            .windows(2)
+            .all(|w| w[0].method == w[1].method && w[0].weak == w[1].weak);
+        match setups.first() {
+            Some(first) if together && setups.len() > 1 => {
+                let equations: Vec<crate::EquationInput<'_>> = setups
+                    .iter()
+                    .zip(signals)
+                    .map(|(s, signals)| (&s.basis as &dyn Basis, signals, &s.params))
+                    .collect();
+                crate::build_systems(&equations, segments, first.assembly.as_ref())
+            }
+            _ => setups
+                .iter()
+                .zip(signals)
+                .map(|(s, signals)| s.system(signals, segments))
+                .collect(),
+        }
+    }
+
+    /// [`Identifier::identify_with_progress`] from the assembled `system` of this setup
+    /// ([`Identifier::systems`]): selection, least squares, quality and bootstrap, calling
+    /// `progress` with each step as it starts.
+    pub fn identify_system(
+        &self,
+        system: LinearSystem,
+        mut progress: impl FnMut(IdentifyStep),
+    ) -> Result<Identification, SolveError> {
         let (system, params, selection) = match &self.selection {
             Some((library, select)) => {
                 progress(IdentifyStep::Select);

@@ -146,7 +146,7 @@ pub use identifier::{
     Identification, Identifier, IdentifyStep, Method, ModelSpec, TermSelection, UnknownMethod,
 };
 pub use lstsq::{LstsqFit, LstsqSolver, QrSolver, RankTolerance, SvdSolver};
-pub use method::{Assembly, HarmonicBalance};
+pub use method::{Assembly, EquationInput, HarmonicBalance};
 pub use noise::{NOISE_BAND_START, NOISE_ESTIMATE_MIN_LEN, correct_noise, estimate_noise_sigma};
 pub use params::{IdentifyParams, IdentifyParamsBuilder, NoiseCorrection};
 pub use quality::{
@@ -178,6 +178,21 @@ pub fn build_system<'a, B: Basis, A: Assembly + ?Sized>(
     let mut system = method.assemble(basis, &signals, segments, params)?;
     correct_noise(basis, signals.own(), params, &mut system)?;
     Ok(system)
+}
+
+/// [`build_system`] of each of a system's `equations` over the same `segments`
+/// ([`Assembly::assemble_many`]), each with its noise correction: the same systems as each
+/// equation's [`build_system`], to the bit.
+pub fn build_systems<A: Assembly + ?Sized>(
+    equations: &[EquationInput<'_>],
+    segments: &[Segment],
+    method: &A,
+) -> Result<Vec<LinearSystem>, SolveError> {
+    let mut systems = method.assemble_many(equations, segments)?;
+    for (system, &(basis, signals, params)) in systems.iter_mut().zip(equations) {
+        correct_noise(basis, signals.own(), params, system)?;
+    }
+    Ok(systems)
 }
 
 /// The paper's stacked system (eq. 16) of `segments` of `signals` for a model on `basis`, noise

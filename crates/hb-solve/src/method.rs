@@ -55,7 +55,26 @@ pub trait Assembly: fmt::Debug + Send + Sync {
         segments: &[Segment],
         params: &IdentifyParams,
     ) -> Result<LinearSystem, SolveError>;
+
+    /// [`Assembly::assemble`] of each of a system's equations, `(basis, signals, params)`, over
+    /// the same `segments`: the same systems, in order. By default each equation is assembled
+    /// alone; the weak form assembles them window by window together, each coordinate's window
+    /// and velocity made once for every equation that reads it, the rows the same to the bit.
+    fn assemble_many(
+        &self,
+        equations: &[EquationInput<'_>],
+        segments: &[Segment],
+    ) -> Result<Vec<LinearSystem>, SolveError> {
+        equations
+            .iter()
+            .map(|&(basis, signals, params)| self.assemble(basis, signals, segments, params))
+            .collect()
+    }
 }
+
+/// One equation of a system to assemble ([`Assembly::assemble_many`]): its basis, its view of the
+/// record (its own coordinate among the others) and its parameters.
+pub type EquationInput<'e> = (&'e dyn Basis, &'e Signals<'e>, &'e IdentifyParams);
 
 /// The paper's method: eq. 15 on every segment, which must be (nearly) periodic, stacked as
 /// eq. 16 (see [`LinearSystem`] for the rows).
@@ -105,5 +124,13 @@ impl Assembly for WeakForm {
         params: &IdentifyParams,
     ) -> Result<LinearSystem, SolveError> {
         crate::weak::weak_rows(basis, signals, segments, params, self)
+    }
+
+    fn assemble_many(
+        &self,
+        equations: &[EquationInput<'_>],
+        segments: &[Segment],
+    ) -> Result<Vec<LinearSystem>, SolveError> {
+        crate::weak::weak_rows_many(equations, segments, self)
     }
 }

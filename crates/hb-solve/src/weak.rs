@@ -206,11 +206,11 @@ impl Tables {
     }
 }
 
-/// Per-worker buffers.
+/// Per-worker buffers of one equation.
 #[derive(Debug, Clone)]
 struct Workspace {
-    x: Vec<f64>,
-    /// `x` less its mean: the data of the right-hand side and of the damping column.
+    /// The own coordinate's window less its mean: the data of the right-hand side and of the
+    /// damping column.
     xc: Vec<f64>,
     phi: Vec<f64>,
     /// Column-major: one column of `samples` values per unknown (`x` less its mean for the
@@ -220,21 +220,82 @@ struct Workspace {
     forcing: Vec<(f64, f64)>,
     /// The antiderivatives of the basis functions at one sample.
     anti: Vec<f64>,
-    /// The velocity at every sample, when a term is nonlinear in it.
-    xdot: Vec<f64>,
-    /// The window less its trend.
-    detrended: Vec<f64>,
     /// `(cos kW t_n, sin kW t_n)` of one sample for `k = 0..=` the highest drive harmonic.
     harmonics: Vec<(f64, f64)>,
     /// The basis functions' derivatives at one sample, when an acceleration multiplies one.
     dphi: Vec<f64>,
-    /// The other coordinates a term reads ([`Shared::others`]): the window of each, continuous
-    /// (unwrapped on the circle), and its velocity.
-    other_x: Vec<Vec<f64>>,
-    other_v: Vec<Vec<f64>>,
     /// `(sin, cos)` of each combination of [`Shared::trig`] at one sample.
     trig: Vec<(f64, f64)>,
+}
+
+/// The record's coordinates over one segment, each made continuous (unwrapped on the circle) and
+/// its velocity estimated at most once, whatever equations read them: a system's equations are
+/// assembled window by window together ([`weak_rows_many`]), and each reads its own coordinate
+/// and the others its terms name.
+#[derive(Debug, Clone, Default)]
+struct Windows {
+    /// The segment (start, samples) the entries are of.
+    at: Option<(usize, usize)>,
+    /// Per coordinate: whether its window is made, unwrapped or not, and the window.
+    x: Vec<(Option<bool>, Vec<f64>)>,
+    /// Per coordinate: the velocity harmonics its velocity was estimated with, and the velocity.
+    v: Vec<(Option<usize>, Vec<f64>)>,
+    /// The window less its trend (scratch of the velocity).
+    detrended: Vec<f64>,
     planner: FourierPlanner,
+}
+
+impl Windows {
+    /// Forgets the entries when `segment` is not the one they are of.
+    fn on(&mut self, segment: &Segment, coordinates: usize) {
+        let at = Some((segment.start(), segment.len() + 1));
+        if self.at != at {
+            self.at = at;
+            self.x
+                .resize_with(coordinates.max(self.x.len()), Default::default);
+            self.v
+                .resize_with(coordinates.max(self.v.len()), Default::default);
+            self.x.iter_mut().for_each(|e| e.0 = None);
+            self.v.iter_mut().for_each(|e| e.0 = None);
+        }
+    }
+
+    /// Makes coordinate `c`'s window of the segment, unwrapped when `circle`.
+    fn make_window(&mut self, raw: &[f64], c: usize, circle: bool) {
+        let (made, x) = &mut self.x[c];
+        if *made == Some(circle) {
+            return;
+        }
+        if circle {
+            unwrap_into(raw, x);
+        } else {
+            x.clear();
+            x.extend_from_slice(raw);
+        }
+        *made = Some(circle);
+        // A velocity estimated from the other treatment no longer holds.
+        self.v[c].0 = None;
+    }
+
+    /// Estimates coordinate `c`'s velocity over the segment (its window made), `series`'
+    /// harmonics kept.
+    fn make_velocity(&mut self, c: usize, len: usize, series: Series) -> Result<(), SolveError> {
+        if self.v[c].0 == Some(series.harmonics) {
+            return Ok(());
+        }
+        let plan = self.planner.plan(len)?;
+        velocity_into(plan, &self.x[c].1, series, &mut self.detrended, &mut self.v[c].1)?;
+        self.v[c].0 = Some(series.harmonics);
+        Ok(())
+    }
+
+    fn window(&self, c: usize) -> &[f64] {
+        &self.x[c].1
+    }
+
+    fn velocity(&self, c: usize) -> &[f64] {
+        &self.v[c].1
+    }
 }
 
 /// How a column's samples become its entries `A[r, c]`.
@@ -337,15 +398,142 @@ pub(crate) fn weak_rows<B: Basis + ?Sized>(
     params: &IdentifyParams,
     weak: &WeakForm,
 ) -> Result<LinearSystem, SolveError> {
-    let layout = layout(basis, signals, segments, params)?;
+    let mut systems = weak_rows_many(&[(basis, signals, params)], segments, weak)?;
+    Ok(systems.pop().expect("one system per equation"))
+}
+
+/// One equation of a system to assemble: its basis, its view of the record and its parameters.
+pub(crate) type Input<'e, B> = (&'e B, &'e Signals<'e>, &'e IdentifyParams);
+
+/// [`weak_rows`] of each of a system's `equations` over the same `segments`, window by window:
+/// each coordinate's window is unwrapped and its velocity estimated once per segment for every
+/// equation that reads it ([`Windows`]), and each equation's rows are those [`weak_rows`] gives it
+/// alone, to the bit. The equations read the same record (their [`Signals`] hold the same
+/// coordinates) on the same clock.
+pub(crate) fn weak_rows_many<B: Basis + ?Sized>(
+    equations: &[Input<'_, B>],
+    segments: &[Segment],
+    weak: &WeakForm,
+) -> Result<Vec<LinearSystem>, SolveError> {
+    if !same_record(equations) {
+        return equations
+            .iter()
+            .map(|&(basis, signals, params)| weak_rows(basis, signals, segments, params, weak))
+            .collect();
+    }
+    let layouts = equations
+        .iter()
+        .map(|&(basis, signals, params)| layout(basis, signals, segments, params))
+        .collect::<Result<Vec<Layout>, SolveError>>()?;
+    let mut prepared = Vec::with_capacity(equations.len());
+    for (&(basis, signals, params), layout) in equations.iter().zip(&layouts) {
+        prepared.push(prepare(basis, signals, params, layout, segments, weak));
+    }
+    let mut outputs: Vec<(Mat<f64>, Vec<f64>)> = layouts
+        .iter()
+        .map(|l| (Mat::<f64>::zeros(l.rows, l.columns.len()), vec![0.0; l.rows]))
+        .collect();
+    // Each segment's rows of every equation, filled together.
+    let mut jobs: Vec<Vec<RowJob<'_>>> = (0..segments.len())
+        .map(|_| Vec::with_capacity(equations.len()))
+        .collect();
+    for ((matrix, rhs), layout) in outputs.iter_mut().zip(&layouts) {
+        for (segment_jobs, job) in
+            jobs.iter_mut()
+                .zip(split_rows(matrix.as_mut(), rhs, segments, &layout.counts))
+        {
+            segment_jobs.push(job);
+        }
+    }
+    let coordinates = equations
+        .iter()
+        .map(|(_, signals, _)| signals.coordinates())
+        .max()
+        .unwrap_or(1);
+    let workspaces: Vec<Workspace> = prepared.iter().map(|p| p.workspace.clone()).collect();
+    let per_segment: Vec<Vec<Block>> = jobs
+        .into_par_iter()
+        .with_min_len(8)
+        .map_init(
+            || (workspaces.clone(), Windows::default()),
+            |(workspaces, windows), segment_jobs: Vec<RowJob<'_>>| {
+                segment_jobs
+                    .into_iter()
+                    .zip(workspaces.iter_mut())
+                    .zip(&prepared)
+                    .map(|((job, ws), p)| {
+                        windows.on(&job.segment, coordinates);
+                        let t = &p.tables[&(job.segment.len(), job.harmonics)];
+                        fill_block(ws, windows, &p.shared, t, job)
+                    })
+                    .collect::<Result<Vec<Block>, SolveError>>()
+            },
+        )
+        .collect::<Result<_, SolveError>>()?;
+
+    let mut blocks: Vec<Vec<Block>> = (0..equations.len())
+        .map(|_| Vec::with_capacity(segments.len()))
+        .collect();
+    for segment_blocks in per_segment {
+        for (equation_blocks, block) in blocks.iter_mut().zip(segment_blocks) {
+            equation_blocks.push(block);
+        }
+    }
+    Ok(outputs
+        .into_iter()
+        .zip(blocks)
+        .zip(&layouts)
+        .map(|(((matrix, rhs), blocks), layout)| {
+            let rhs = Col::from_fn(layout.rows, |i| rhs[i]);
+            LinearSystem::from_parts(matrix, rhs, layout.term_names(), blocks)
+        })
+        .collect())
+}
+
+/// Whether `equations` read the same record on the same clock: the same coordinates (the same
+/// samples, not equal ones) with the same domains, so that a coordinate's window and velocity
+/// serve each of them.
+fn same_record<B: ?Sized>(equations: &[Input<'_, B>]) -> bool {
+    let Some(&(_, first, params)) = equations.first() else {
+        return true;
+    };
+    equations.iter().all(|&(_, signals, p)| {
+        p.clock() == params.clock()
+            && signals.coordinates() == first.coordinates()
+            && (0..first.coordinates()).all(|c| {
+                signals.domain(c) == first.domain(c)
+                    && match (signals.coordinate(c), first.coordinate(c)) {
+                        (Some(a), Some(b)) => std::ptr::eq(a, b),
+                        _ => false,
+                    }
+            })
+    })
+}
+
+/// What one equation's segments share: its columns' modes and needs, its test functions'
+/// tables per segment shape, and a workspace to clone per worker.
+struct Prepared<'a, B: ?Sized> {
+    shared: Shared<'a, B>,
+    tables: HashMap<(usize, usize), Tables>,
+    workspace: Workspace,
+}
+
+/// [`Prepared`] of the equation of `basis`, `signals` and `params` laid out as `layout`.
+fn prepare<'a, B: Basis + ?Sized>(
+    basis: &'a B,
+    signals: &'a Signals<'a>,
+    params: &'a IdentifyParams,
+    layout: &'a Layout,
+    segments: &[Segment],
+    weak: &WeakForm,
+) -> Prepared<'a, B> {
     let Layout {
         domain,
         ref names,
         ref columns,
         ref counts,
-        rows,
         ..
-    } = layout;
+    } = *layout;
     let cols = columns.len();
 
     let h = params.clock().step();
@@ -357,26 +545,17 @@ pub(crate) fn weak_rows<B: Basis + ?Sized>(
             .or_insert_with(|| weak.tables(s.len(), m, h, params.clock().drive_angular_frequency()));
         max_samples = max_samples.max(s.len() + 1);
     }
-    let ws = Workspace {
-        x: Vec::with_capacity(max_samples),
+    let workspace = Workspace {
         xc: Vec::with_capacity(max_samples),
         phi: vec![0.0; names.len()],
         g: Vec::with_capacity(cols * max_samples),
         forcing: Vec::with_capacity(max_samples),
         anti: vec![0.0; names.len()],
-        xdot: Vec::new(),
-        detrended: Vec::new(),
         harmonics: Vec::new(),
         dphi: vec![0.0; names.len()],
-        other_x: Vec::new(),
-        other_v: Vec::new(),
         trig: Vec::new(),
-        planner: FourierPlanner::new(),
     };
 
-    let mut matrix = Mat::<f64>::zeros(rows, cols);
-    let mut rhs = vec![0.0; rows];
-    let jobs = split_rows(matrix.as_mut(), &mut rhs, segments, counts);
     let mut modes = Vec::with_capacity(cols);
     let mut second = 0;
     for column in columns {
@@ -453,20 +632,11 @@ pub(crate) fn weak_rows<B: Basis + ?Sized>(
         coupled,
         trig: trig_arguments(columns),
     };
-    let blocks: Vec<Block> = jobs
-        .into_par_iter()
-        .with_min_len(8)
-        .map_init(
-            || ws.clone(),
-            |ws, job: RowJob<'_>| {
-                let t = &tables[&(job.segment.len(), job.harmonics)];
-                fill_block(ws, &shared, t, job)
-            },
-        )
-        .collect::<Result<_, SolveError>>()?;
-
-    let rhs = Col::from_fn(rows, |i| rhs[i]);
-    Ok(LinearSystem::from_parts(matrix, rhs, layout.term_names(), blocks))
+    Prepared {
+        shared,
+        tables,
+        workspace,
+    }
 }
 
 /// Whether a term has a function of a position (its own, or another coordinate's).
@@ -514,6 +684,7 @@ struct Shared<'a, B: ?Sized> {
 /// Fills one segment's rows; returns its block.
 fn fill_block<B: Basis + ?Sized>(
     ws: &mut Workspace,
+    windows: &mut Windows,
     sh: &Shared<'_, B>,
     t: &Tables,
     job: RowJob<'_>,
@@ -538,49 +709,35 @@ fn fill_block<B: Basis + ?Sized>(
         trend: VelocityTrend::Quintic,
     };
 
-    // The continuous displacement of the window, less its mean (∫ψ' and ∫ψ'' of a constant
-    // vanish, so the mean only adds rounding).
-    let (winding, rate) = match sh.domain {
-        Domain::Circle => {
-            unwrap_into(raw, &mut ws.x);
-            RotationSplit::winding_and_rate(&ws.x, clock.step())?
-        }
-        Domain::Line => {
-            ws.x.clear();
-            ws.x.extend_from_slice(raw);
-            (0, 0.0)
-        }
-    };
-    let mean = ws.x.iter().sum::<f64>() / samples as f64;
-    ws.xc.clear();
-    ws.xc.extend(ws.x.iter().map(|v| v - mean));
+    // The continuous displacement of each coordinate's window and its velocity, made once per
+    // segment for every equation that reads the coordinate ([`Windows`]).
+    let own = sh.signals.own_index();
+    windows.make_window(raw, own, sh.domain == Domain::Circle);
     if sh.needs_velocity {
-        let plan = ws.planner.plan(seg.len())?;
-        velocity_into(plan, &ws.x, series, &mut ws.detrended, &mut ws.xdot)?;
+        windows.make_velocity(own, seg.len(), series)?;
     }
-    // The other coordinates' windows, continuous, and their velocities.
-    ws.other_x.resize_with(sh.others.len(), Vec::new);
-    ws.other_v.resize_with(sh.others.len(), Vec::new);
-    for (k, &c) in sh.others.iter().enumerate() {
+    for &c in &sh.others {
         let x = sh.signals.coordinate(c).expect("checked by the layout");
         let raw = &x[seg.start()..seg.start() + samples];
-        match sh.signals.domain(c) {
-            Some(Domain::Circle) => unwrap_into(raw, &mut ws.other_x[k]),
-            _ => {
-                ws.other_x[k].clear();
-                ws.other_x[k].extend_from_slice(raw);
-            }
-        }
-        let plan = ws.planner.plan(seg.len())?;
-        velocity_into(
-            plan,
-            &ws.other_x[k],
-            series,
-            &mut ws.detrended,
-            &mut ws.other_v[k],
-        )?;
+        windows.make_window(raw, c, sh.signals.domain(c) == Some(Domain::Circle));
+        windows.make_velocity(c, seg.len(), series)?;
     }
-    let own = sh.signals.own_index();
+    let windows = &*windows;
+    let x = windows.window(own);
+    let xdot: &[f64] = if sh.needs_velocity {
+        windows.velocity(own)
+    } else {
+        &[]
+    };
+    // The own window less its mean (∫ψ' and ∫ψ'' of a constant vanish, so the mean only adds
+    // rounding).
+    let (winding, rate) = match sh.domain {
+        Domain::Circle => RotationSplit::winding_and_rate(x, clock.step())?,
+        Domain::Line => (0, 0.0),
+    };
+    let mean = x.iter().sum::<f64>() / samples as f64;
+    ws.xc.clear();
+    ws.xc.extend(x.iter().map(|v| v - mean));
     let (mut q, mut v) = ([0.0; MAX_COORDINATES], [0.0; MAX_COORDINATES]);
 
     // g: one column of samples per unknown; the forcing at every sample.
@@ -614,17 +771,17 @@ fn fill_block<B: Basis + ?Sized>(
             }
         }
         if sh.needs_anti {
-            sh.basis.eval_antiderivative(ws.x[n], &mut ws.anti);
+            sh.basis.eval_antiderivative(x[n], &mut ws.anti);
         }
         if sh.needs_dphi {
             sh.basis.eval_deriv(xe, &mut ws.dphi);
         }
         if sh.coupled {
-            q[own] = ws.x[n];
-            v[own] = ws.xdot[n];
-            for (k, &c) in sh.others.iter().enumerate() {
-                q[c] = ws.other_x[k][n];
-                v[c] = ws.other_v[k][n];
+            q[own] = x[n];
+            v[own] = xdot[n];
+            for &c in &sh.others {
+                q[c] = windows.window(c)[n];
+                v[c] = windows.velocity(c)[n];
             }
             ws.trig.clear();
             ws.trig.extend(sh.trig.iter().map(|combination| {
@@ -687,8 +844,8 @@ fn fill_block<B: Basis + ?Sized>(
                             };
                             let own_v = match term.velocity {
                                 VelocityFactor::One => 1.0,
-                                VelocityFactor::Sign => cell_sign(&ws.xdot, n, false),
-                                velocity => velocity.eval(ws.xdot[n]),
+                                VelocityFactor::Sign => cell_sign(xdot, n, false),
+                                velocity => velocity.eval(xdot[n]),
                             };
                             let mut g = d * f * own_v;
                             for factor in term.coupling.factors() {
@@ -701,7 +858,7 @@ fn fill_block<B: Basis + ?Sized>(
                                             .others
                                             .binary_search(&usize::from(coordinate))
                                             .expect("a coordinate the terms read");
-                                        cell_sign(&ws.other_v[k], n, false)
+                                        cell_sign(windows.velocity(sh.others[k]), n, false)
                                     }
                                     other => factor_value(&other, &q, &v, &sh.trig, &ws.trig),
                                 };
@@ -754,8 +911,8 @@ fn fill_block<B: Basis + ?Sized>(
                             };
                             let v = match velocity {
                                 VelocityFactor::One => 1.0,
-                                VelocityFactor::Sign => cell_sign(&ws.xdot, n, false),
-                                _ => velocity.eval(ws.xdot[n]),
+                                VelocityFactor::Sign => cell_sign(xdot, n, false),
+                                _ => velocity.eval(xdot[n]),
                             };
                             d * f * v
                         }

@@ -2,9 +2,13 @@
 //! and wrapped as encoders give it: each equation's physical terms by the weak form, against the
 //! truth the simulator writes ([`DoublePendulum::normalised_equations`]).
 use circle_signal::{Domain, SampleClock, wrap};
+use hb_basis::Basis;
 use hb_basis::{BasisKind, Harmonic};
 use hb_model::{ModelForm, Names, TermList};
-use hb_solve::{IdentifyParams, QrSolver, Signals, WeakForm, identify};
+use hb_solve::{
+    EquationInput, IdentifyParams, LinearSystem, QrSolver, Signals, WeakForm, build_system, build_systems,
+    identify,
+};
 use pendulum_sim::multi::{self, MultiConfig, MultiState};
 use pendulum_sim::{DoublePendulum, SimulationConfig, Tolerances};
 use upo_search::{OrbitSource, Windows};
@@ -71,6 +75,85 @@ fn every_coefficient_of_the_whirling_double_pendulum_comes_back_by_the_weak_form
         }
     }
     assert!(worst < 1e-4, "largest error {worst:e}");
+}
+
+/// Both equations assembled window by window together (each angle unwrapped and its velocity
+/// estimated once per window for the two) give each equation's rows alone, to the bit; and where
+/// the equations read different records, each is assembled alone.
+#[test]
+fn a_systems_equations_assembled_together_are_each_assembled_alone() {
+    let (clock, q1, q2) = record(64, 40);
+    let names = Names::new(["q1", "q2"], Vec::<String>::new()).unwrap();
+    let segments = Windows::builder(&clock)
+        .domain(Domain::Circle)
+        .build()
+        .unwrap()
+        .segments(&q1)
+        .unwrap();
+    let basis = BasisKind::from(Harmonic::new(1).unwrap());
+    let truths = DoublePendulum::whirling().normalised_equations();
+    let params: Vec<IdentifyParams> = truths
+        .iter()
+        .enumerate()
+        .map(|(own, truth)| {
+            let spec: Vec<&str> = truth.terms.iter().map(|(name, _)| name.as_ref()).collect();
+            let list = TermList::parse_in(&spec.join(", "), &names, own).unwrap();
+            IdentifyParams::builder(clock)
+                .form(ModelForm::from_terms(list))
+                .harmonics(WeakForm::DEFAULT_HARMONICS)
+                .velocity_harmonics(IdentifyParams::SYSTEM_VELOCITY_HARMONICS)
+                .build()
+                .unwrap()
+        })
+        .collect();
+    let coordinates = vec![(&q1[..], Domain::Circle), (&q2[..], Domain::Circle)];
+    let signals: Vec<Signals<'_>> = (0..2)
+        .map(|own| Signals::system(coordinates.clone(), own).unwrap())
+        .collect();
+    let alone: Vec<LinearSystem> = (0..2)
+        .map(|i| {
+            build_system(
+                &basis,
+                signals[i].clone(),
+                &segments,
+                &params[i],
+                &WeakForm::default(),
+            )
+            .unwrap()
+        })
+        .collect();
+    let inputs: Vec<EquationInput<'_>> = (0..2)
+        .map(|i| (&basis as &dyn Basis, &signals[i], &params[i]))
+        .collect();
+    let together = build_systems(&inputs, &segments, &WeakForm::default()).unwrap();
+    let same = |a: &LinearSystem, b: &LinearSystem| {
+        a.names() == b.names()
+            && a.blocks() == b.blocks()
+            && a.rhs()
+                .iter()
+                .zip(b.rhs().iter())
+                .all(|(x, y)| x.to_bits() == y.to_bits())
+            && (0..a.matrix().ncols()).all(|c| {
+                (0..a.matrix().nrows()).all(|r| a.matrix()[(r, c)].to_bits() == b.matrix()[(r, c)].to_bits())
+            })
+    };
+    assert_eq!(together.len(), 2);
+    for (a, b) in together.iter().zip(&alone) {
+        assert!(
+            same(a, b),
+            "the rows assembled together differ from those assembled alone"
+        );
+    }
+    // A second equation on a copy of the record: not the same samples, so each alone (and the
+    // rows are again each one's).
+    let copy = q2.clone();
+    let other = Signals::system(vec![(&q1[..], Domain::Circle), (&copy[..], Domain::Circle)], 1).unwrap();
+    let inputs = [
+        (&basis as &dyn Basis, &signals[0], &params[0]),
+        (&basis as &dyn Basis, &other, &params[1]),
+    ];
+    let apart = build_systems(&inputs, &segments, &WeakForm::default()).unwrap();
+    assert!(same(&apart[0], &alone[0]) && same(&apart[1], &alone[1]));
 }
 
 /// The paper's method one link up: close returns of the whole state (both angles' delay vectors
