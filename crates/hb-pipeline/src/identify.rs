@@ -14,7 +14,8 @@ use hb_model::{
 };
 use hb_record::prepare::{Data, DriveFound, GridData, WindowUnit};
 use hb_solve::{
-    BootstrapParams, LstsqSolver, NoiseCorrection, QrSolver, SelectParams, Signals, SvdSolver, WeakForm,
+    BootstrapParams, LstsqSolver, NoiseCorrection, QrSolver, SelectParams, Signals, SvdSolver, Tie, TieSpec,
+    TiedParameter, WeakForm,
 };
 use serde::{Deserialize, Serialize, Serializer};
 use upo_search::Windows;
@@ -239,6 +240,10 @@ pub struct IdentifyOptions {
     /// are not scored (default as `compare`'s: one drive period, at most a tenth of the longest
     /// piece and at least 8).
     pub refine_init: Option<usize>,
+    /// Physical parameters shared by the equations (a tied fit, [`hb_solve::TieSpec`]): the path
+    /// of a JSON file of the spec, or the spec itself as a JSON object. Its keys are the
+    /// equations' terms, so it replaces `terms`.
+    pub tie: Option<serde_json::Value>,
 }
 
 impl Default for IdentifyOptions {
@@ -267,6 +272,7 @@ impl Default for IdentifyOptions {
             select_tolerance: SelectParams::DEFAULT_TOLERANCE,
             refine: false,
             refine_init: None,
+            tie: None,
         }
     }
 }
@@ -326,6 +332,29 @@ pub struct IdentifyRequest {
     search: SearchOptions,
     bootstrap: Option<BootstrapParams>,
     selection: Option<SelectParams>,
+    /// The tie spec read in the record's names.
+    tie: Option<Tie>,
+}
+
+/// The tie spec of `value` (a path to a JSON file, or the spec as an object), read in `names`.
+fn read_tie(value: &serde_json::Value, names: &Names) -> Result<Tie, OptionError> {
+    let bad = |why: String| OptionError::new("tie", why);
+    let spec: TieSpec = match value {
+        serde_json::Value::String(path) => {
+            let text =
+                std::fs::read_to_string(path).map_err(|e| bad(format!("cannot read '{path}': {e}")))?;
+            serde_json::from_str(&text).map_err(|e| bad(format!("{path}: {e}")))?
+        }
+        serde_json::Value::Object(_) => {
+            serde_json::from_value(value.clone()).map_err(|e| bad(e.to_string()))?
+        }
+        other => {
+            return Err(bad(format!(
+                "expected the path of a JSON file or the spec as an object, not {other}"
+            )));
+        }
+    };
+    spec.resolve(names).map_err(|e| bad(e.to_string()))
 }
 
 impl IdentifyRequest {
@@ -482,6 +511,40 @@ impl IdentifyRequest {
         }
         // The list of each equation, read in the record's names for it.
         let mut lists: Vec<Option<TermList>> = vec![None; n];
+        let tie = match &o.tie {
+            None => None,
+            Some(value) => {
+                if o.terms.is_some() {
+                    return Err(OptionError::new(
+                        "tie",
+                        "replaces «terms»: the spec's keys are the equations' terms (leave out «terms»)",
+                    ));
+                }
+                if o.select {
+                    return Err(OptionError::new(
+                        "tie",
+                        "is not supported with «select»: a tied fit's terms are the spec's",
+                    ));
+                }
+                if o.method == Method::Upo {
+                    return Err(OptionError::new(
+                        "tie",
+                        "is not supported with «method=upo»: a tied fit is made by the weak form («method=windowed»)",
+                    ));
+                }
+                if o.refine {
+                    return Err(OptionError::new(
+                        "tie",
+                        "is not supported with «refine»: the refinement moves each coefficient on its own",
+                    ));
+                }
+                let tie = read_tie(value, &names)?;
+                for (i, slot) in lists.iter_mut().enumerate() {
+                    *slot = Some(tie.terms(i).clone());
+                }
+                Some(tie)
+            }
+        };
         if let Some(terms) = &o.terms {
             if let Some(unknown) = terms.named().find(|name| names.coordinate(name).is_none()) {
                 return Err(OptionError::new(
@@ -612,6 +675,7 @@ impl IdentifyRequest {
             search,
             bootstrap,
             selection,
+            tie,
             options,
         })
     }
@@ -620,6 +684,11 @@ impl IdentifyRequest {
     /// refused.
     pub fn from_json(value: serde_json::Value) -> Result<Self, OptionError> {
         Self::new(from_object(value)?)
+    }
+
+    /// The tie spec read in the record's names, when the parameters are tied (`tie`).
+    pub fn tie(&self) -> Option<&Tie> {
+        self.tie.as_ref()
     }
 
     /// The options as given.
@@ -945,6 +1014,9 @@ pub struct IdentifyReport {
     /// What the output-error refinement did (`refine`); the model's coefficients are then the
     /// refined ones, and its fit measures, intervals and selection those of the weak form.
     pub refinement: Option<crate::refine::Refinement>,
+    /// A tied fit's parameters (`tie`), in the spec's order; the equations' coefficients are
+    /// made from them.
+    pub parameters: Option<Vec<TiedParameter>>,
 }
 
 /// The identification of one coordinate's equation.
@@ -1139,6 +1211,37 @@ pub fn identify_data(
     let mut coordinates = data.coordinates();
     coordinates[0].0 = x;
     let mut equations = Vec::with_capacity(n);
+    let mut parameters = None;
+    let tied = match request.tie() {
+        Some(tie) => {
+            let signals = (0..n)
+                .map(|i| Signals::system(coordinates.clone(), i).and_then(|s| s.with_drives(drives.clone())))
+                .collect::<Result<Vec<_>, _>>()
+                .map_err(|source| RunError::Identify {
+                    found: found.clone(),
+                    source,
+                })?;
+            let tied = hb_solve::identify_tied(tie, &setups, signals, &segments, |step| {
+                observer.stage(match step {
+                    IdentifyStep::Assemble => Stage::Assemble,
+                    IdentifyStep::Select => Stage::Select,
+                    IdentifyStep::Solve => Stage::Solve,
+                    IdentifyStep::Bootstrap => Stage::Bootstrap,
+                })
+            })
+            .map_err(|source| match source {
+                hb_solve::SolveError::Tie(e) => OptionError::new("tie", e.to_string()).into(),
+                source => RunError::Identify {
+                    found: found.clone(),
+                    source,
+                },
+            })?;
+            parameters = Some(tied.fit.parameters);
+            Some(tied.equations)
+        }
+        None => None,
+    };
+    let mut tied = tied.map(Vec::into_iter);
     for (i, setup) in setups.iter().enumerate() {
         let identify_error = |source| RunError::Identify {
             found: if n > 1 {
@@ -1148,19 +1251,24 @@ pub fn identify_data(
             },
             source,
         };
-        let signals = Signals::system(coordinates.clone(), i)
-            .and_then(|s| s.with_drives(drives.clone()))
-            .map_err(identify_error)?;
-        let identification = setup
-            .identify_with_progress(signals, &segments, |step| {
-                observer.stage(match step {
-                    IdentifyStep::Assemble => Stage::Assemble,
-                    IdentifyStep::Select => Stage::Select,
-                    IdentifyStep::Solve => Stage::Solve,
-                    IdentifyStep::Bootstrap => Stage::Bootstrap,
-                })
-            })
-            .map_err(identify_error)?;
+        let identification = match tied.as_mut().and_then(Iterator::next) {
+            Some(identification) => identification,
+            None => {
+                let signals = Signals::system(coordinates.clone(), i)
+                    .and_then(|s| s.with_drives(drives.clone()))
+                    .map_err(identify_error)?;
+                setup
+                    .identify_with_progress(signals, &segments, |step| {
+                        observer.stage(match step {
+                            IdentifyStep::Assemble => Stage::Assemble,
+                            IdentifyStep::Select => Stage::Select,
+                            IdentifyStep::Solve => Stage::Solve,
+                            IdentifyStep::Bootstrap => Stage::Bootstrap,
+                        })
+                    })
+                    .map_err(identify_error)?
+            }
+        };
         let of = if n > 1 {
             format!("the equation of {}: ", request.names.coordinates()[i])
         } else {
@@ -1263,6 +1371,7 @@ pub fn identify_data(
             drives: request.options.record.drive_cols().to_vec(),
         }),
         refinement,
+        parameters,
         record: RecordSummary::of(data),
         delay,
         segments: segments.len(),
@@ -1464,10 +1573,39 @@ struct SystemJson<'a> {
     coordinates: &'a [String],
     drives: &'a [String],
     equations: Ordered<'a, EquationJson<'a>>,
+    /// A tied fit's parameters.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    parameters: Option<Ordered<'a, ParameterJson>>,
     segments: usize,
     delay: Option<usize>,
     found: &'a str,
     record: &'a RecordSummary,
+}
+
+/// A tied fit's parameter in the JSON.
+#[derive(Serialize)]
+struct ParameterJson {
+    value: f64,
+    std_error: f64,
+}
+
+/// The parameters of a tied fit keyed by name, in the spec's order.
+fn parameters_json(parameters: &Option<Vec<TiedParameter>>) -> Option<Ordered<'_, ParameterJson>> {
+    parameters.as_ref().map(|ps| {
+        Ordered(
+            ps.iter()
+                .map(|p| {
+                    (
+                        p.name.as_str(),
+                        ParameterJson {
+                            value: p.value,
+                            std_error: p.std_error,
+                        },
+                    )
+                })
+                .collect(),
+        )
+    })
 }
 
 impl Serialize for IdentifyReport {
@@ -1483,6 +1621,7 @@ impl Serialize for IdentifyReport {
                         .map(|e| (e.coordinate.as_str(), EquationJson::of(e)))
                         .collect(),
                 ),
+                parameters: parameters_json(&self.parameters),
                 segments: self.segments,
                 delay: self.delay,
                 found: &self.found,
