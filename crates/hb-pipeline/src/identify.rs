@@ -336,6 +336,38 @@ pub struct IdentifyRequest {
     tie: Option<Tie>,
 }
 
+/// The options a tied fit (`tie`) does not go with, refused before any other check of them.
+fn check_tie_with(o: &IdentifyOptions) -> Result<(), OptionError> {
+    if o.tie.is_none() {
+        return Ok(());
+    }
+    if o.terms.is_some() {
+        return Err(OptionError::new(
+            "tie",
+            "replaces «terms»: the spec's keys are the equations' terms (leave out «terms»)",
+        ));
+    }
+    if o.select {
+        return Err(OptionError::new(
+            "tie",
+            "is not supported with «select»: a tied fit's terms are the spec's",
+        ));
+    }
+    if o.method == Method::Upo {
+        return Err(OptionError::new(
+            "tie",
+            "is not supported with «method=upo»: a tied fit is made by the weak form («method=windowed»)",
+        ));
+    }
+    if o.refine {
+        return Err(OptionError::new(
+            "tie",
+            "is not supported with «refine»: the refinement moves each coefficient on its own",
+        ));
+    }
+    Ok(())
+}
+
 /// The tie spec of `value` (a path to a JSON file, or the spec as an object), read in `names`.
 fn read_tie(value: &serde_json::Value, names: &Names) -> Result<Tie, OptionError> {
     let bad = |why: String| OptionError::new("tie", why);
@@ -362,6 +394,7 @@ impl IdentifyRequest {
     pub fn new(options: IdentifyOptions) -> Result<Self, OptionError> {
         let o = &options;
         o.record.check()?;
+        check_tie_with(o)?;
         let search = o.orbits.search()?;
         o.orbits.check_delay()?;
         let weak = WeakForm::new(o.window_order)
@@ -514,30 +547,6 @@ impl IdentifyRequest {
         let tie = match &o.tie {
             None => None,
             Some(value) => {
-                if o.terms.is_some() {
-                    return Err(OptionError::new(
-                        "tie",
-                        "replaces «terms»: the spec's keys are the equations' terms (leave out «terms»)",
-                    ));
-                }
-                if o.select {
-                    return Err(OptionError::new(
-                        "tie",
-                        "is not supported with «select»: a tied fit's terms are the spec's",
-                    ));
-                }
-                if o.method == Method::Upo {
-                    return Err(OptionError::new(
-                        "tie",
-                        "is not supported with «method=upo»: a tied fit is made by the weak form («method=windowed»)",
-                    ));
-                }
-                if o.refine {
-                    return Err(OptionError::new(
-                        "tie",
-                        "is not supported with «refine»: the refinement moves each coefficient on its own",
-                    ));
-                }
                 let tie = read_tie(value, &names)?;
                 for (i, slot) in lists.iter_mut().enumerate() {
                     *slot = Some(tie.terms(i).clone());
