@@ -1474,6 +1474,9 @@ impl<'a> SelectionJson<'a> {
 #[derive(Serialize)]
 struct ReportJson<'a> {
     method: &'static str,
+    /// A tied fit's parameters.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    parameters: Option<Ordered<'a, ParameterJson>>,
     basis: String,
     terms: Vec<&'a str>,
     drive_column: Option<&'a str>,
@@ -1644,6 +1647,7 @@ impl Serialize for IdentifyReport {
         let summary = model.summary();
         ReportJson {
             method: self.method.name(),
+            parameters: parameters_json(&self.parameters),
             basis: self.basis.spec(),
             terms: coefficients.iter().map(|c| c.name.as_str()).collect(),
             drive_column: model.form().drive_column(),
