@@ -130,6 +130,9 @@ type Compared = (Vec<[Option<f64>; 2]>, u64, Option<String>);
 /// the means over folds per joint.
 type Fold<'a> = (f64, Vec<(&'a str, [f64; 2])>, [f64; 2]);
 
+/// The `hbid identify` options of one fit at a window (s).
+type FitArgs<'a> = dyn Fn(f64) -> Vec<String> + Sync + 'a;
+
 /// A table's row: a label and, per record, horizon and joint, an RMSE.
 struct Row {
     label: String,
@@ -652,14 +655,18 @@ pub fn run(exe: &Path, shared: &Path, work: &Path, python: Option<&str>) -> anyh
     };
     // The two fits cross-validation chooses between: one coefficient per term (each equation on
     // its own), and the physical parameters tied across both equations.
-    let variants: [(&str, &(dyn Fn(f64) -> Vec<String> + Sync)); 2] = [("untied", &terms), ("tied", &tied_args)];
+    let variants: [(&str, &FitArgs<'_>); 2] = [("untied", &terms), ("tied", &tied_args)];
 
     // The fit and the window: leave one training record out, fit on the other four, score the
     // 1 s free run of the one left out; the mean over folds and joints.
     eprintln!("dfki: cross-validation of the fit (untied or tied) and the window");
     // Every (fit, window, fold) in parallel: each `hbid` is a process of one thread.
     let jobs: Vec<(usize, f64, usize)> = (0..variants.len())
-        .flat_map(|v| WINDOWS.iter().flat_map(move |&w| (0..TRAIN.len()).map(move |k| (v, w, k))))
+        .flat_map(|v| {
+            WINDOWS
+                .iter()
+                .flat_map(move |&w| (0..TRAIN.len()).map(move |k| (v, w, k)))
+        })
         .collect();
     let scored = jobs
         .par_iter()
@@ -721,7 +728,11 @@ pub fn run(exe: &Path, shared: &Path, work: &Path, python: Option<&str>) -> anyh
     let model = work.join("dfki.json");
     let chosen_model = if tied_chosen { &tied_model } else { &untied_model };
     std::fs::copy(chosen_model, &model).with_context(|| model.display().to_string())?;
-    let extra = if tied_chosen { tied_args(window) } else { terms(window) };
+    let extra = if tied_chosen {
+        tied_args(window)
+    } else {
+        terms(window)
+    };
     let (found, seconds) = if tied_chosen {
         (tied_found.clone(), tied_seconds)
     } else {
@@ -1019,6 +1030,19 @@ pub fn run(exe: &Path, shared: &Path, work: &Path, python: Option<&str>) -> anyh
         "```\nhbid {} --save-model dfki.json\nhbid {}\n```\n",
         shown_command(&identify_words),
         shown_command(&compare_words)
+    )?;
+    let spec = tie_spec(&p);
+    writeln!(
+        r,
+        "`dfki-tie.json`, the tied fit's spec, written from the published parameters' map to the coefficients \
+         (each equation before its division by A1 or A2; gr = {}, l1 = {} m, g = {} m/s² known):\n\n```json\n\
+         {{\"parameters\": {},\n \"equations\": {{\n  \"q1\": {},\n  \"q2\": {}}}}}\n```\n",
+        p.gr,
+        p.l1,
+        p.g,
+        serde_json::to_string(&spec["parameters"])?,
+        serde_json::to_string(&spec["equations"]["q1"])?,
+        serde_json::to_string(&spec["equations"]["q2"])?,
     )?;
     writeln!(
         r,

@@ -86,7 +86,8 @@ struct EquationSpec {
 /// let names = Names::new(["x1", "x2"], ["f"])?;
 /// let tie = spec.resolve(&names)?;
 /// assert_eq!(tie.parameters(), ["m", "c"]);
-/// assert_eq!(tie.terms(1).names(), ["x2'", "f"]);
+/// // A JSON object has no order: the terms come in the order of their names.
+/// assert_eq!(tie.terms(1).names(), ["f", "x2'"]);
 /// // A parameter that no coefficient uses is refused.
 /// let unused = r#"{"parameters": ["m", "k"], "equations": {"x1": {"x1''": {"m": 1}, "f": -1}}}"#;
 /// assert!(serde_json::from_str::<TieSpec>(unused).unwrap_err().to_string().contains("'k'"));
@@ -216,7 +217,7 @@ impl TieSpec {
                         why: "has no coefficient of its own acceleration",
                     });
                 }
-                Some(TieCoefficient::Fixed(v)) if v == 0.0 => {
+                Some(TieCoefficient::Fixed(0.0)) => {
                     return Err(TieError::OwnAcceleration {
                         coordinate,
                         why: "has its own acceleration fixed to 0",
@@ -313,7 +314,7 @@ impl TieSpec {
                         format!("names {} terms: a key is one term", one.len()),
                     ));
                 }
-                let term = one.terms()[0].clone();
+                let term = one.terms()[0];
                 if let Some(before) = terms.iter().position(|t| *t == term) {
                     return Err(term_error(
                         key,
@@ -435,7 +436,13 @@ impl Tie {
 
     /// Fits the parameters to the assembled `systems`, one per equation in the coordinates' order,
     /// each assembled with [`Tie::terms`] on the same windows (columns found by the terms'
-    /// names), by `solver`, weighted as the [module documentation](self) says.
+    /// names), by `solver`: the column of parameter `m` in the rows of equation `i` is
+    /// `Σ_k P_ikm S_i[:, k] − P_i,own,m β_i` (the own acceleration's column is `−β_i`,
+    /// `β_i = −∫ψ'' q_i`), the fixed terms go to the right-hand side, and the rows are weighted
+    /// first not at all (torque units), then each equation's by `1 / |A_i|` of that pass, so that
+    /// every residual is in the untied fit's acceleration units (`S_i c_i − β_i`). The parameters'
+    /// standard errors are the weighted regression's; the coefficients' come from the parameters'
+    /// covariance (first order, `s² (XᵀX)⁻¹` from the triangular factor, never from `XᵀX`).
     ///
     /// Errors: [`TieError::SystemMismatch`], [`TieError::NotIdentifiable`] (a rank-deficient
     /// stacked system, naming the parameter that weighs most in the weakest direction),

@@ -148,7 +148,8 @@ fn tied_fit_recovers_the_arms_physical_parameters() {
         worst = worst.max(rel);
         assert!(rel < 1e-3, "{name}: {got} against the truth {value} ({rel:.2e})");
     }
-    eprintln!("worst relative error of the tied parameters: {worst:.2e}");
+    // Measured: 5.5e-4 (b1); the bound above is a little more.
+    assert!(worst > 0.0, "an exact fit would hide a broken comparison");
     // The equations' normalised coefficients are the truth's.
     for q in ["q1", "q2"] {
         let coefficients = truth["equations"][q]["coefficients"].as_object().unwrap();
