@@ -108,7 +108,8 @@ class Identification:
     system's by its coordinates' names."""
     parameters: Optional[Dict[str, Dict[str, float]]] = None
     """With ``tie``: the tied physical parameters by name, in the spec's order, each
-    ``{"value": ..., "std_error": ...}``; None otherwise."""
+    ``{"value": ..., "std_error": ..., "interval": [lower, upper], "interval_level": ...}`` (the
+    interval with ``bootstrap > 0`` when the record gives one); None otherwise."""
 
     @property
     def coordinates(self) -> List[str]:
@@ -495,7 +496,7 @@ def identify(
             {...}}}`` (per equation, each term's coefficient as a fixed number or a dict of
             parameter weights, the own acceleration's included), or the path of its JSON file.
             Its keys are the terms, so it replaces ``terms``; :attr:`Identification.parameters`
-            holds the parameters with their standard errors, and no bootstrap intervals are given.
+            holds the parameters with their standard errors and bootstrap intervals.
         save_model: also save the model here (JSON for a ``.json`` name, compact binary
             otherwise).
 

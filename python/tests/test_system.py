@@ -343,6 +343,8 @@ def test_a_tied_fit_from_a_dict_is_the_command_lines(cli, tmp_path):
     assert result.parameters["mr2"]["value"] == pytest.approx(p["m2"] * p["r2"], rel=1e-3)
     assert result.parameters["Ir"]["value"] == pytest.approx(p["Ir"], rel=1e-3)
     assert all(e.intervals is None for e in result.equations.values())
+    lo, hi = result.parameters["mr2"]["interval"]
+    assert lo < result.parameters["mr2"]["value"] < hi and result.parameters["mr2"]["interval_level"] == 0.95
     path = tmp_path / "tie.json"
     path.write_text(json.dumps(spec))
     assert hbid.identify(csv, tie=path, **options).to_json() == result.to_json()

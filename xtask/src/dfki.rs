@@ -1052,8 +1052,8 @@ pub fn run(exe: &Path, shared: &Path, work: &Path, python: Option<&str>) -> anyh
     writeln!(
         r,
         "The tied fit's physical parameters (SI units: kg m², kg m, N m s/rad, N m), from the training records \
-         alone, beside the published ones; standard errors of the weighted stacked regression (no bootstrap for \
-         a tied fit):\n"
+         alone, beside the published ones; standard errors of the weighted stacked regression (this run asks for \
+         no bootstrap, as for every fit here):\n"
     )?;
     writeln!(
         r,

@@ -1026,6 +1026,8 @@ pub struct IdentifyReport {
     /// A tied fit's parameters (`tie`), in the spec's order; the equations' coefficients are
     /// made from them.
     pub parameters: Option<Vec<TiedParameter>>,
+    /// The bootstrap intervals of a tied fit's parameters, when asked for and they can be had.
+    pub parameter_intervals: Option<hb_solve::Bootstrap>,
 }
 
 /// The identification of one coordinate's equation.
@@ -1221,6 +1223,7 @@ pub fn identify_data(
     coordinates[0].0 = x;
     let mut equations = Vec::with_capacity(n);
     let mut parameters = None;
+    let mut parameter_intervals = None;
     let tied = match request.tie() {
         Some(tie) => {
             let signals = (0..n)
@@ -1245,7 +1248,11 @@ pub fn identify_data(
                     source,
                 },
             })?;
+            if let Some(why) = &tied.no_intervals {
+                observer.notice(&Notice::NoIntervals(format!("the tied parameters: {why}")));
+            }
             parameters = Some(tied.fit.parameters);
+            parameter_intervals = tied.intervals;
             Some(tied.equations)
         }
         None => None,
@@ -1381,6 +1388,7 @@ pub fn identify_data(
         }),
         refinement,
         parameters,
+        parameter_intervals,
         record: RecordSummary::of(data),
         delay,
         segments: segments.len(),
@@ -1599,10 +1607,18 @@ struct SystemJson<'a> {
 struct ParameterJson {
     value: f64,
     std_error: f64,
+    /// The bootstrap interval, at `interval_level`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    interval: Option<[f64; 2]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    interval_level: Option<f64>,
 }
 
 /// The parameters of a tied fit keyed by name, in the spec's order.
-fn parameters_json(parameters: &Option<Vec<TiedParameter>>) -> Option<Ordered<'_, ParameterJson>> {
+fn parameters_json<'a>(
+    parameters: &'a Option<Vec<TiedParameter>>,
+    intervals: &Option<hb_solve::Bootstrap>,
+) -> Option<Ordered<'a, ParameterJson>> {
     parameters.as_ref().map(|ps| {
         Ordered(
             ps.iter()
@@ -1612,6 +1628,11 @@ fn parameters_json(parameters: &Option<Vec<TiedParameter>>) -> Option<Ordered<'_
                         ParameterJson {
                             value: p.value,
                             std_error: p.std_error,
+                            interval: intervals
+                                .as_ref()
+                                .and_then(|b| b.interval(&p.name))
+                                .map(|i| [i.lower, i.upper]),
+                            interval_level: intervals.as_ref().map(|b| b.level),
                         },
                     )
                 })
@@ -1633,7 +1654,7 @@ impl Serialize for IdentifyReport {
                         .map(|e| (e.coordinate.as_str(), EquationJson::of(e)))
                         .collect(),
                 ),
-                parameters: parameters_json(&self.parameters),
+                parameters: parameters_json(&self.parameters, &self.parameter_intervals),
                 segments: self.segments,
                 delay: self.delay,
                 found: &self.found,
@@ -1647,7 +1668,7 @@ impl Serialize for IdentifyReport {
         let summary = model.summary();
         ReportJson {
             method: self.method.name(),
-            parameters: parameters_json(&self.parameters),
+            parameters: parameters_json(&self.parameters, &self.parameter_intervals),
             basis: self.basis.spec(),
             terms: coefficients.iter().map(|c| c.name.as_str()).collect(),
             drive_column: model.form().drive_column(),

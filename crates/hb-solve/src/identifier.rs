@@ -434,10 +434,15 @@ pub struct TiedIdentification {
     pub equations: Vec<Identification>,
     /// The parameters and the per-equation fits.
     pub fit: crate::TiedFit,
+    /// The bootstrap intervals of the parameters, when asked for and they can be had.
+    pub intervals: Option<Bootstrap>,
+    /// Why there are no intervals of the parameters when they were asked for.
+    pub no_intervals: Option<String>,
 }
 
-/// Why a tied fit has no bootstrap intervals.
-pub const TIED_NO_INTERVALS: &str = "bootstrap intervals are not given for a tied fit: the parameters' standard errors are the stacked regression's";
+/// Why the equations of a tied fit have no bootstrap intervals of their own.
+pub const TIED_NO_INTERVALS: &str =
+    "a tied fit's bootstrap intervals are its parameters' (the coefficients follow from them)";
 
 /// The tied fit of a system ([`crate::Tie`]): each equation assembled by its `setups[i]` (made
 /// with the form of [`crate::Tie::terms`]) on `signals[i]` over the shared `segments`, the
@@ -468,6 +473,16 @@ pub fn identify_tied(
         })?
         .solver();
     let fit = tie.fit(&systems, solver)?;
+    let (intervals, no_intervals) = match setups[0].bootstrap() {
+        Some(params) => {
+            progress(IdentifyStep::Bootstrap);
+            match tie.bootstrap(&systems, &fit, solver, params) {
+                Ok(b) => (Some(b), None),
+                Err(why) => (None, Some(why.reason)),
+            }
+        }
+        None => (None, None),
+    };
     let mut equations = Vec::with_capacity(systems.len());
     for (i, ((setup, system), eq)) in setups.iter().zip(&systems).zip(&fit.equations).enumerate() {
         let terms = tie.terms(i).names();
@@ -522,5 +537,10 @@ pub fn identify_tied(
             selection: None,
         });
     }
-    Ok(TiedIdentification { equations, fit })
+    Ok(TiedIdentification {
+        equations,
+        fit,
+        intervals,
+        no_intervals,
+    })
 }

@@ -31,9 +31,10 @@ use faer::{Col, Mat};
 use hb_model::{Names, TermList};
 use serde::{Deserialize, Serialize};
 
+use crate::bootstrap::{Bootstrap, BootstrapParams, NoIntervals, bootstrap_or_reason};
 use crate::error::{LstsqError, SolveError, TieError};
 use crate::lstsq::{LstsqSolver, on_factor_pool, triangular_factor};
-use crate::system::LinearSystem;
+use crate::system::{Block, LinearSystem};
 
 /// A coefficient of a tie spec: a fixed number, or a linear combination of parameters by name
 /// (`{"Ia": 1, "Ir": 37}`).
@@ -415,6 +416,8 @@ pub struct TiedFit {
     pub condition: f64,
     /// Rows of the stacked system.
     pub rows: usize,
+    /// The weight of each equation's rows in the final pass, `1 / |A_i|` of the first.
+    pub weights: Vec<f64>,
 }
 
 impl Tie {
@@ -452,28 +455,7 @@ impl Tie {
         systems: &[LinearSystem],
         solver: &S,
     ) -> Result<TiedFit, SolveError> {
-        let mismatch = |term: &str| TieError::SystemMismatch {
-            expected: self.equations.len(),
-            found: systems.len(),
-            term: term.to_owned(),
-        };
-        if systems.len() != self.equations.len() {
-            return Err(mismatch("").into());
-        }
-        // Each term's column in its equation's system.
-        let mut columns: Vec<Vec<usize>> = Vec::with_capacity(systems.len());
-        for (e, s) in self.equations.iter().zip(systems) {
-            let mut cols = Vec::with_capacity(e.terms.len());
-            for name in e.terms.names() {
-                let c = s
-                    .names()
-                    .iter()
-                    .position(|n| *n == name)
-                    .ok_or_else(|| mismatch(&name))?;
-                cols.push(c);
-            }
-            columns.push(cols);
-        }
+        let columns = self.columns(systems)?;
         let p = self.parameters.len();
         let rows: usize = systems.iter().map(LinearSystem::rows).sum();
         // Pass 1: torque units; pass 2: each equation's rows over its own acceleration's coefficient.
@@ -562,7 +544,94 @@ impl Tie {
             equations,
             condition: fit.condition,
             rows,
+            weights,
         })
+    }
+
+    /// Bootstrap intervals of the parameters of `fit` (made by [`Tie::fit`] from `systems`): the
+    /// crate's moving-block bootstrap ([`crate::bootstrap_fit`]) over the shared windows, each
+    /// window's rows of every equation drawn together, the weights of the fit held.
+    ///
+    /// Errors: why there are none ([`NoIntervals`]): the equations' windows differ, or the
+    /// bootstrap's own reasons.
+    pub fn bootstrap<S: LstsqSolver + ?Sized>(
+        &self,
+        systems: &[LinearSystem],
+        fit: &TiedFit,
+        solver: &S,
+        params: &BootstrapParams,
+    ) -> Result<Bootstrap, NoIntervals> {
+        let no = |reason: String| NoIntervals { reason };
+        let first = systems.first().ok_or_else(|| no("no equation".into()))?;
+        let windows = first.blocks();
+        let same = systems.iter().all(|s| {
+            s.blocks().len() == windows.len()
+                && s.blocks()
+                    .iter()
+                    .zip(windows)
+                    .all(|(a, b)| a.segment == b.segment)
+        });
+        if !same || fit.weights.len() != systems.len() {
+            return Err(no("the equations were not assembled on the same windows".into()));
+        }
+        let columns = self.columns(systems).map_err(|e| no(e.to_string()))?;
+        let (x, y) = self.stacked(systems, &columns, &fit.weights);
+        // Each equation's first row in the stacked system.
+        let starts: Vec<usize> = systems
+            .iter()
+            .scan(0, |at, s| {
+                let here = *at;
+                *at += s.rows();
+                Some(here)
+            })
+            .collect();
+        // The rows window by window: every equation's rows of a window in one block.
+        let mut order = Vec::with_capacity(x.nrows());
+        let mut blocks = Vec::with_capacity(windows.len());
+        for (w, window) in windows.iter().enumerate() {
+            let first_row = order.len();
+            for (s, &start) in systems.iter().zip(&starts) {
+                let b = &s.blocks()[w];
+                order.extend(start + b.first_row..start + b.first_row + b.rows);
+            }
+            blocks.push(Block {
+                first_row,
+                rows: order.len() - first_row,
+                harmonics: 0,
+                ..*window
+            });
+        }
+        let matrix = Mat::from_fn(order.len(), x.ncols(), |r, c| x[(order[r], c)]);
+        let rhs = Col::from_fn(order.len(), |r| y[order[r]]);
+        let system = LinearSystem::from_parts(matrix, rhs, self.parameters.clone(), blocks);
+        let lstsq = system.solve(solver).map_err(|e| no(e.to_string()))?;
+        bootstrap_or_reason(&system, &lstsq, solver, params)
+    }
+
+    /// Each term's column in its equation's system, found by the terms' names.
+    fn columns(&self, systems: &[LinearSystem]) -> Result<Vec<Vec<usize>>, TieError> {
+        let mismatch = |term: &str| TieError::SystemMismatch {
+            expected: self.equations.len(),
+            found: systems.len(),
+            term: term.to_owned(),
+        };
+        if systems.len() != self.equations.len() {
+            return Err(mismatch(""));
+        }
+        let mut columns = Vec::with_capacity(systems.len());
+        for (e, s) in self.equations.iter().zip(systems) {
+            let mut cols = Vec::with_capacity(e.terms.len());
+            for name in e.terms.names() {
+                let c = s
+                    .names()
+                    .iter()
+                    .position(|n| *n == name)
+                    .ok_or_else(|| mismatch(&name))?;
+                cols.push(c);
+            }
+            columns.push(cols);
+        }
+        Ok(columns)
     }
 
     /// The weighted stacked system: the column of each parameter and the right-hand side of the

@@ -144,6 +144,13 @@ fn tied_fit_recovers_the_arms_physical_parameters() {
         let got = v["parameters"][name]["value"].as_f64().unwrap();
         let se = v["parameters"][name]["std_error"].as_f64().unwrap();
         assert!(se.is_finite() && se > 0.0, "{name}: std error {se}");
+        // The bootstrap's interval of the parameter, every equation's rows of a window together.
+        let interval = &v["parameters"][name]["interval"];
+        let (lo, hi) = (interval[0].as_f64().unwrap(), interval[1].as_f64().unwrap());
+        assert!(
+            lo < got && got < hi,
+            "{name}: {got} outside its interval [{lo}, {hi}]"
+        );
         let rel = (got - value).abs() / value.abs();
         worst = worst.max(rel);
         assert!(rel < 1e-3, "{name}: {got} against the truth {value} ({rel:.2e})");

@@ -164,8 +164,9 @@ pub struct IdentifyArgs {
     /// (its scale); every parameter must be used. The keys are terms of the --terms grammar, so
     /// --tie replaces --terms (and is not supported with --select, --method upo or --refine).
     /// Rows are weighted by 1/A of each equation from an unweighted first pass (residuals in
-    /// acceleration units); the parameters' standard errors are the stacked regression's, and no
-    /// bootstrap intervals are given. The saved model holds each equation divided by its A.
+    /// acceleration units); the parameters' standard errors are the stacked regression's, and the
+    /// bootstrap (--bootstrap) gives intervals of the parameters, drawing every equation's rows of
+    /// a window together. The saved model holds each equation divided by its A.
     #[arg(long, value_name = "PATH", verbatim_doc_comment)]
     pub tie: Option<PathBuf>,
     /// Print JSON instead of a table.
@@ -252,9 +253,25 @@ pub fn print_report(report: &IdentifyReport) {
     if let Some(parameters) = &report.parameters {
         println!("tied parameters ({}):", parameters.len());
         let width = parameters.iter().map(|p| p.name.len()).max().unwrap_or(0).max(9);
-        println!("  {:<width$}  {:>14}  {:>12}", "parameter", "value", "std error");
+        let intervals = report.parameter_intervals.as_ref();
+        match intervals {
+            Some(b) => println!(
+                "  {:<width$}  {:>14}  {:>12}  {:>27}",
+                "parameter",
+                "value",
+                "std error",
+                format!("{:.0} % interval", 100.0 * b.level)
+            ),
+            None => println!("  {:<width$}  {:>14}  {:>12}", "parameter", "value", "std error"),
+        }
         for p in parameters {
-            println!("  {:<width$}  {:>14.6e}  {:>12.3e}", p.name, p.value, p.std_error);
+            match intervals.and_then(|b| b.interval(&p.name)) {
+                Some(i) => println!(
+                    "  {:<width$}  {:>14.6e}  {:>12.3e}  [{:>12.5e}, {:>12.5e}]",
+                    p.name, p.value, p.std_error, i.lower, i.upper
+                ),
+                None => println!("  {:<width$}  {:>14.6e}  {:>12.3e}", p.name, p.value, p.std_error),
+            }
         }
         println!();
     }
