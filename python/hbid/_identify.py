@@ -106,6 +106,10 @@ class Identification:
     equations: Dict[str, Equation] = field(default_factory=dict, repr=False)
     """Each coordinate's equation, in order: ``{"x": ...}`` for a record of one coordinate, a
     system's by its coordinates' names."""
+    parameters: Optional[Dict[str, Dict[str, float]]] = None
+    """With ``tie``: the tied physical parameters by name, in the spec's order, each
+    ``{"value": ..., "std_error": ..., "interval": [lower, upper], "interval_level": ...}`` (the
+    interval with ``bootstrap > 0`` when the record gives one); None otherwise."""
 
     @property
     def coordinates(self) -> List[str]:
@@ -272,6 +276,7 @@ class Identification:
                 report=report,
                 json_text=d["json"],
                 equations=equations,
+                parameters=report.get("parameters"),
             )
         intervals = report["intervals"]
         return cls(
@@ -300,6 +305,18 @@ class Identification:
 
 
 TermsLike = Union[str, Sequence[str], Mapping[str, Union[str, Sequence[str]]], None]
+
+
+def _tie(tie: Union[Mapping[str, Any], PathLike, None]) -> Union[Dict[str, Any], str, None]:
+    """``tie=`` as the option's JSON value: the spec as an object, or its file's path."""
+    if tie is None:
+        return None
+    if isinstance(tie, Mapping):
+        return dict(tie)
+    try:
+        return os.fspath(tie)
+    except TypeError:
+        raise OptionsError(f"tie={tie!r}: the spec as a dict, or the path of its JSON file") from None
 
 
 def _terms(terms: TermsLike) -> Optional[str]:
@@ -384,6 +401,7 @@ def identify(
     select_tolerance: float = 1e-6,
     refine: bool = False,
     refine_init: Optional[int] = None,
+    tie: Union[Mapping[str, Any], PathLike, None] = None,
     save_model: Optional[PathLike] = None,
     **old: Any,
 ) -> Identification:
@@ -472,6 +490,13 @@ def identify(
         refine_init: samples at the start of each piece that set the refinement's free-run
             state and are not scored (default: one drive period, at most a tenth of the longest
             piece, at least 8).
+        tie: physical parameters shared by a system's equations (a tied fit, ``hbid identify
+            --tie``): the spec as a dict, ``{"parameters": ["Ia", ...], "equations": {"q1":
+            {"q1''": {"Ia": 1, "I2": 1}, "q1''*cos(q2)": {"mr2": 0.6}, ..., "tau1": -1}, "q2":
+            {...}}}`` (per equation, each term's coefficient as a fixed number or a dict of
+            parameter weights, the own acceleration's included), or the path of its JSON file.
+            Its keys are the terms, so it replaces ``terms``; :attr:`Identification.parameters`
+            holds the parameters with their standard errors and bootstrap intervals.
         save_model: also save the model here (JSON for a ``.json`` name, compact binary
             otherwise).
 
@@ -521,6 +546,7 @@ def identify(
         select_tolerance=select_tolerance,
         refine=bool(refine),
         refine_init=refine_init,
+        tie=_tie(tie),
     )
     _select(select, options)
     if "parametric" in old:

@@ -312,3 +312,51 @@ def test_arrays_of_samples_by_coordinates_and_the_matrix_of_coefficients(double_
     assert one.coefficients == named.coefficients
     with pytest.raises(hbid.OptionsError, match=r"drive_col: 2 name\(s\) for an array of 1 columns"):
         hbid.identify(x, t=duffing.t, coords=["x1", "x2"], drive=drives, drive_col=["a", "b"], bootstrap=0, **hint)
+
+
+def _arm_tie(p):
+    """The tie spec of the simulated arm's equations from its truth's parameters (the DFKI
+    model's rigid-body parameters, g, l1 and the gear ratio known)."""
+    g, l1, gr = p["g"], p["l1"], p["gr"]
+    return {
+        "parameters": ["Ia", "I2", "Ir", "mr1", "mr2", "b1", "cf1", "b2", "cf2"],
+        "equations": {
+            "q1": {"q1''": {"Ia": 1, "I2": 1, "Ir": gr * gr + 1}, "q1''*cos(q2)": {"mr2": 2 * l1},
+                   "q2''": {"I2": 1, "Ir": -gr}, "q2''*cos(q2)": {"mr2": l1}, "sin(q2)*q1'*q2'": {"mr2": -2 * l1},
+                   "sin(q2)*q2'^2": {"mr2": -l1}, "sin(q1)": {"mr1": g}, "sin(q1+q2)": {"mr2": g},
+                   "q1'": {"b1": 1}, "sign(q1')": {"cf1": 1}, "tau1": -1},
+            "q2": {"q2''": {"I2": 1, "Ir": gr * gr}, "q1''": {"I2": 1, "Ir": -gr}, "q1''*cos(q2)": {"mr2": l1},
+                   "sin(q2)*q1'^2": {"mr2": l1}, "sin(q1+q2)": {"mr2": g}, "q2'": {"b2": 1},
+                   "sign(q2')": {"cf2": 1}, "tau2": -1},
+        },
+    }
+
+
+def test_a_tied_fit_from_a_dict_is_the_command_lines(cli, tmp_path):
+    csv, truth = tmp_path / "arm.csv", tmp_path / "arm.json"
+    sim = hbid.simulate(system="arm", out=csv, truth=truth)
+    p = json.loads(truth.read_text())["parameters"]
+    spec = _arm_tie(p)
+    options = {k: v for k, v in sim.identify_options.items() if k != "terms"}
+    result = hbid.identify(csv, tie=spec, **options)
+    assert list(result.parameters) == spec["parameters"]
+    assert result.parameters["mr2"]["value"] == pytest.approx(p["m2"] * p["r2"], rel=1e-3)
+    assert result.parameters["Ir"]["value"] == pytest.approx(p["Ir"], rel=1e-3)
+    assert all(e.intervals is None for e in result.equations.values())
+    lo, hi = result.parameters["mr2"]["interval"]
+    assert lo < result.parameters["mr2"]["value"] < hi and result.parameters["mr2"]["interval_level"] == 0.95
+    path = tmp_path / "tie.json"
+    path.write_text(json.dumps(spec))
+    assert hbid.identify(csv, tie=path, **options).to_json() == result.to_json()
+    out = subprocess.run(
+        [str(cli), "--quiet", "identify", str(csv), "--json", "--coords", options["coords"], "--signal",
+         options["signal"], "--drive-col", options["drive_col"], "--window", str(options["window"]), "--tie",
+         str(path)],
+        capture_output=True, text=True, check=True,
+    )
+    assert json.loads(out.stdout) == json.loads(result.to_json())
+    with pytest.raises(hbid.OptionsError, match="tie"):
+        hbid.identify(csv, tie=spec, terms=sim.identify_options["terms"], **options)
+    bad = dict(spec, parameters=spec["parameters"] + ["unused"])
+    with pytest.raises(hbid.OptionsError, match="'unused'"):
+        hbid.identify(csv, tie=bad, **options)

@@ -15,7 +15,8 @@ use hb_model::{
 use hb_record::prepare::{Data, DriveFound, GridData, WindowUnit};
 use hb_solve::identifier::Identifier;
 use hb_solve::{
-    BootstrapParams, LstsqSolver, NoiseCorrection, QrSolver, SelectParams, Signals, SvdSolver, WeakForm,
+    BootstrapParams, LstsqSolver, NoiseCorrection, QrSolver, SelectParams, Signals, SvdSolver, Tie, TieSpec,
+    TiedParameter, WeakForm,
 };
 use serde::{Deserialize, Serialize, Serializer};
 use upo_search::Windows;
@@ -240,6 +241,10 @@ pub struct IdentifyOptions {
     /// are not scored (default as `compare`'s: one drive period, at most a tenth of the longest
     /// piece and at least 8).
     pub refine_init: Option<usize>,
+    /// Physical parameters shared by the equations (a tied fit, [`hb_solve::TieSpec`]): the path
+    /// of a JSON file of the spec, or the spec itself as a JSON object. Its keys are the
+    /// equations' terms, so it replaces `terms`.
+    pub tie: Option<serde_json::Value>,
 }
 
 impl Default for IdentifyOptions {
@@ -268,6 +273,7 @@ impl Default for IdentifyOptions {
             select_tolerance: SelectParams::DEFAULT_TOLERANCE,
             refine: false,
             refine_init: None,
+            tie: None,
         }
     }
 }
@@ -327,6 +333,61 @@ pub struct IdentifyRequest {
     search: SearchOptions,
     bootstrap: Option<BootstrapParams>,
     selection: Option<SelectParams>,
+    /// The tie spec read in the record's names.
+    tie: Option<Tie>,
+}
+
+/// The options a tied fit (`tie`) does not go with, refused before any other check of them.
+fn check_tie_with(o: &IdentifyOptions) -> Result<(), OptionError> {
+    if o.tie.is_none() {
+        return Ok(());
+    }
+    if o.terms.is_some() {
+        return Err(OptionError::new(
+            "tie",
+            "replaces «terms»: the spec's keys are the equations' terms (leave out «terms»)",
+        ));
+    }
+    if o.select {
+        return Err(OptionError::new(
+            "tie",
+            "is not supported with «select»: a tied fit's terms are the spec's",
+        ));
+    }
+    if o.method == Method::Upo {
+        return Err(OptionError::new(
+            "tie",
+            "is not supported with «method=upo»: a tied fit is made by the weak form («method=windowed»)",
+        ));
+    }
+    if o.refine {
+        return Err(OptionError::new(
+            "tie",
+            "is not supported with «refine»: the refinement moves each coefficient on its own",
+        ));
+    }
+    Ok(())
+}
+
+/// The tie spec of `value` (a path to a JSON file, or the spec as an object), read in `names`.
+fn read_tie(value: &serde_json::Value, names: &Names) -> Result<Tie, OptionError> {
+    let bad = |why: String| OptionError::new("tie", why);
+    let spec: TieSpec = match value {
+        serde_json::Value::String(path) => {
+            let text =
+                std::fs::read_to_string(path).map_err(|e| bad(format!("cannot read '{path}': {e}")))?;
+            serde_json::from_str(&text).map_err(|e| bad(format!("{path}: {e}")))?
+        }
+        serde_json::Value::Object(_) => {
+            serde_json::from_value(value.clone()).map_err(|e| bad(e.to_string()))?
+        }
+        other => {
+            return Err(bad(format!(
+                "expected the path of a JSON file or the spec as an object, not {other}"
+            )));
+        }
+    };
+    spec.resolve(names).map_err(|e| bad(e.to_string()))
 }
 
 impl IdentifyRequest {
@@ -334,6 +395,7 @@ impl IdentifyRequest {
     pub fn new(options: IdentifyOptions) -> Result<Self, OptionError> {
         let o = &options;
         o.record.check()?;
+        check_tie_with(o)?;
         let search = o.orbits.search()?;
         o.orbits.check_delay()?;
         let weak = WeakForm::new(o.window_order)
@@ -483,6 +545,16 @@ impl IdentifyRequest {
         }
         // The list of each equation, read in the record's names for it.
         let mut lists: Vec<Option<TermList>> = vec![None; n];
+        let tie = match &o.tie {
+            None => None,
+            Some(value) => {
+                let tie = read_tie(value, &names)?;
+                for (i, slot) in lists.iter_mut().enumerate() {
+                    *slot = Some(tie.terms(i).clone());
+                }
+                Some(tie)
+            }
+        };
         if let Some(terms) = &o.terms {
             if let Some(unknown) = terms.named().find(|name| names.coordinate(name).is_none()) {
                 return Err(OptionError::new(
@@ -613,6 +685,7 @@ impl IdentifyRequest {
             search,
             bootstrap,
             selection,
+            tie,
             options,
         })
     }
@@ -621,6 +694,11 @@ impl IdentifyRequest {
     /// refused.
     pub fn from_json(value: serde_json::Value) -> Result<Self, OptionError> {
         Self::new(from_object(value)?)
+    }
+
+    /// The tie spec read in the record's names, when the parameters are tied (`tie`).
+    pub fn tie(&self) -> Option<&Tie> {
+        self.tie.as_ref()
     }
 
     /// The options as given.
@@ -946,6 +1024,11 @@ pub struct IdentifyReport {
     /// What the output-error refinement did (`refine`); the model's coefficients are then the
     /// refined ones, and its fit measures, intervals and selection those of the weak form.
     pub refinement: Option<crate::refine::Refinement>,
+    /// A tied fit's parameters (`tie`), in the spec's order; the equations' coefficients are
+    /// made from them.
+    pub parameters: Option<Vec<TiedParameter>>,
+    /// The bootstrap intervals of a tied fit's parameters, when asked for and they can be had.
+    pub parameter_intervals: Option<hb_solve::Bootstrap>,
 }
 
 /// The identification of one coordinate's equation.
@@ -1168,17 +1251,41 @@ pub fn identify_data(
         }
     };
     let mut equations = Vec::with_capacity(n);
-    for (i, (setup, system)) in setups.iter().zip(systems).enumerate() {
-        let identification = setup
-            .identify_system(system, |step| {
-                observer.stage(match step {
-                    IdentifyStep::Assemble => Stage::Assemble,
-                    IdentifyStep::Select => Stage::Select,
-                    IdentifyStep::Solve => Stage::Solve,
-                    IdentifyStep::Bootstrap => Stage::Bootstrap,
-                })
-            })
-            .map_err(|e| identify_error(Some(i), e))?;
+    let mut parameters = None;
+    let mut parameter_intervals = None;
+    let stage = |step| match step {
+        IdentifyStep::Assemble => Stage::Assemble,
+        IdentifyStep::Select => Stage::Select,
+        IdentifyStep::Solve => Stage::Solve,
+        IdentifyStep::Bootstrap => Stage::Bootstrap,
+    };
+    let identifications = match request.tie() {
+        Some(tie) => {
+            let tied = hb_solve::identify_tied(tie, &setups, systems, |step| observer.stage(stage(step)))
+                .map_err(|source| match source {
+                    hb_solve::SolveError::Tie(e) => OptionError::new("tie", e.to_string()).into(),
+                    source => identify_error(None, source),
+                })?;
+            if let Some(why) = &tied.no_intervals {
+                observer.notice(&Notice::NoIntervals(format!("the tied parameters: {why}")));
+            }
+            parameters = Some(tied.fit.parameters);
+            parameter_intervals = tied.intervals;
+            tied.equations
+        }
+        None => {
+            let mut identifications = Vec::with_capacity(n);
+            for (i, (setup, system)) in setups.iter().zip(systems).enumerate() {
+                identifications.push(
+                    setup
+                        .identify_system(system, |step| observer.stage(stage(step)))
+                        .map_err(|e| identify_error(Some(i), e))?,
+                );
+            }
+            identifications
+        }
+    };
+    for (i, identification) in identifications.into_iter().enumerate() {
         let of = if n > 1 {
             format!("the equation of {}: ", request.names.coordinates()[i])
         } else {
@@ -1281,6 +1388,8 @@ pub fn identify_data(
             drives: request.options.record.drive_cols().to_vec(),
         }),
         refinement,
+        parameters,
+        parameter_intervals,
         record: RecordSummary::of(data),
         delay,
         segments: segments.len(),
@@ -1374,6 +1483,9 @@ impl<'a> SelectionJson<'a> {
 #[derive(Serialize)]
 struct ReportJson<'a> {
     method: &'static str,
+    /// A tied fit's parameters.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    parameters: Option<Ordered<'a, ParameterJson>>,
     basis: String,
     terms: Vec<&'a str>,
     drive_column: Option<&'a str>,
@@ -1482,10 +1594,52 @@ struct SystemJson<'a> {
     coordinates: &'a [String],
     drives: &'a [String],
     equations: Ordered<'a, EquationJson<'a>>,
+    /// A tied fit's parameters.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    parameters: Option<Ordered<'a, ParameterJson>>,
     segments: usize,
     delay: Option<usize>,
     found: &'a str,
     record: &'a RecordSummary,
+}
+
+/// A tied fit's parameter in the JSON.
+#[derive(Serialize)]
+struct ParameterJson {
+    value: f64,
+    std_error: f64,
+    /// The bootstrap interval, at `interval_level`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    interval: Option<[f64; 2]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    interval_level: Option<f64>,
+}
+
+/// The parameters of a tied fit keyed by name, in the spec's order.
+fn parameters_json<'a>(
+    parameters: &'a Option<Vec<TiedParameter>>,
+    intervals: &Option<hb_solve::Bootstrap>,
+) -> Option<Ordered<'a, ParameterJson>> {
+    parameters.as_ref().map(|ps| {
+        Ordered(
+            ps.iter()
+                .map(|p| {
+                    (
+                        p.name.as_str(),
+                        ParameterJson {
+                            value: p.value,
+                            std_error: p.std_error,
+                            interval: intervals
+                                .as_ref()
+                                .and_then(|b| b.interval(&p.name))
+                                .map(|i| [i.lower, i.upper]),
+                            interval_level: intervals.as_ref().map(|b| b.level),
+                        },
+                    )
+                })
+                .collect(),
+        )
+    })
 }
 
 impl Serialize for IdentifyReport {
@@ -1501,6 +1655,7 @@ impl Serialize for IdentifyReport {
                         .map(|e| (e.coordinate.as_str(), EquationJson::of(e)))
                         .collect(),
                 ),
+                parameters: parameters_json(&self.parameters, &self.parameter_intervals),
                 segments: self.segments,
                 delay: self.delay,
                 found: &self.found,
@@ -1514,6 +1669,7 @@ impl Serialize for IdentifyReport {
         let summary = model.summary();
         ReportJson {
             method: self.method.name(),
+            parameters: parameters_json(&self.parameters, &self.parameter_intervals),
             basis: self.basis.spec(),
             terms: coefficients.iter().map(|c| c.name.as_str()).collect(),
             drive_column: model.form().drive_column(),

@@ -296,6 +296,118 @@ pub enum SelectError {
     },
 }
 
+/// A tie spec ([`crate::TieSpec`]) that does not make a tied fit, or a tied fit the record does not
+/// determine. Each message names the coordinate, term or parameter at fault.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum TieError {
+    /// No parameter, or one named twice or by an empty name.
+    #[error("{0}")]
+    Parameters(String),
+    /// A combination names a parameter that is not in the list of parameters.
+    #[error(
+        "the coefficient of `{term}` in the equation of {coordinate} names the parameter '{parameter}', which is not among the parameters ({known})"
+    )]
+    UnknownParameter {
+        /// The equation's coordinate.
+        coordinate: String,
+        /// The term.
+        term: String,
+        /// The name given.
+        parameter: String,
+        /// The parameters, joined.
+        known: String,
+    },
+    /// A parameter that no coefficient uses.
+    #[error("the parameter '{0}' is used by no coefficient: it cannot be identified (drop it, or use it)")]
+    UnusedParameter(String),
+    /// A number that is not finite, or a combination without a parameter.
+    #[error("the coefficient of `{term}` in the equation of {coordinate}: {why}")]
+    BadCoefficient {
+        /// The equation's coordinate.
+        coordinate: String,
+        /// The term.
+        term: String,
+        /// What is wrong.
+        why: &'static str,
+    },
+    /// An equation without its own acceleration, or with it fixed to 0.
+    #[error(
+        "the equation of {coordinate} {why}: give its own acceleration `{coordinate}''` a coefficient (its mass, a combination of parameters)"
+    )]
+    OwnAcceleration {
+        /// The equation's coordinate.
+        coordinate: String,
+        /// What is wrong: missing or zero.
+        why: &'static str,
+    },
+    /// An equation with no fixed coefficient: its scale is undetermined.
+    #[error(
+        "the equation of {0} has no fixed coefficient (a number, such as the measured torque's -1): its scale, and with it every parameter, is undetermined"
+    )]
+    NoFixedCoefficient(String),
+    /// No equation at all.
+    #[error("no equation: give one per coordinate under \"equations\"")]
+    NoEquations,
+    /// An equation of a coordinate the record does not have.
+    #[error("the equation of '{coordinate}' is not one of the record's coordinates ({known})")]
+    UnknownCoordinate {
+        /// The name given.
+        coordinate: String,
+        /// The coordinates, joined.
+        known: String,
+    },
+    /// A coordinate of the record without an equation in the spec.
+    #[error(
+        "the record's coordinate {0} has no equation in the spec: a tied fit gives every equation its terms"
+    )]
+    MissingEquation(String),
+    /// A key that is not one term of the grammar.
+    #[error("the equation of {coordinate}: `{term}`: {why}")]
+    Term {
+        /// The equation's coordinate.
+        coordinate: String,
+        /// The key as given.
+        term: String,
+        /// The parser's message.
+        why: String,
+    },
+    /// The stacked system does not determine the parameters.
+    #[error(
+        "the parameters are not identifiable from the record: the stacked system has rank {rank} for {unknowns} parameters, and '{parameter}' weighs most in the undetermined direction (a combination of parameters that no term separates)"
+    )]
+    NotIdentifiable {
+        /// The parameter that weighs most in the weakest direction.
+        parameter: String,
+        /// The numerical rank.
+        rank: usize,
+        /// The number of parameters.
+        unknowns: usize,
+    },
+    /// The identified own-acceleration coefficient of an equation is zero or not finite.
+    #[error(
+        "the identified coefficient of {coordinate}'' is {value}: the equation cannot be normalised by its own acceleration"
+    )]
+    ZeroMass {
+        /// The equation's coordinate.
+        coordinate: String,
+        /// The coefficient.
+        value: f64,
+    },
+    /// The assembled systems do not match the spec's equations.
+    #[error(
+        "the tied fit was given {found} assembled system(s) for {expected} equation(s), or a system without the column of `{term}`"
+    )]
+    SystemMismatch {
+        /// Equations of the spec.
+        expected: usize,
+        /// Systems given.
+        found: usize,
+        /// The first term not found, if any.
+        term: String,
+    },
+}
+
 /// Everything that can go wrong in an identification, by concern.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
@@ -315,6 +427,9 @@ pub enum SolveError {
     /// Model selection.
     #[error(transparent)]
     Select(#[from] SelectError),
+    /// The tied fit of physical parameters shared by several equations.
+    #[error(transparent)]
+    Tie(#[from] TieError),
     /// A setting given in text that does not read as one.
     #[error("{name} '{text}': expected {expected}")]
     InvalidText {

@@ -287,6 +287,11 @@ impl Identifier {
         self.bootstrap.as_ref()
     }
 
+    /// The least-squares solver.
+    pub(crate) fn solver(&self) -> &dyn LstsqSolver {
+        self.solver.as_ref()
+    }
+
     /// The library of candidate terms and the selection's parameters, when terms are selected.
     pub fn selection(&self) -> Option<(&TermList, &SelectParams)> {
         self.selection.as_ref().map(|(l, p)| (l, p))
@@ -322,7 +327,11 @@ impl Identifier {
     }
 
     /// The stacked rows of the method over `segments` of `signals` ([`build_system`]).
-    fn system(&self, signals: &Signals<'_>, segments: &[Segment]) -> Result<LinearSystem, SolveError> {
+    pub(crate) fn system(
+        &self,
+        signals: &Signals<'_>,
+        segments: &[Segment],
+    ) -> Result<LinearSystem, SolveError> {
         build_system(
             &self.basis,
             signals,
@@ -467,4 +476,118 @@ impl Identifier {
             .build()?;
         Ok((kept, params, selection))
     }
+}
+
+/// A tied identification ([`identify_tied`]): each equation's identification (its model in the
+/// ordinary form, normalised by its own acceleration) and the shared parameters.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TiedIdentification {
+    /// One per equation, in the coordinates' order. No bootstrap intervals: `no_intervals`
+    /// says so when they were asked for. The share explained is in sample only.
+    pub equations: Vec<Identification>,
+    /// The parameters and the per-equation fits.
+    pub fit: crate::TiedFit,
+    /// The bootstrap intervals of the parameters, when asked for and they can be had.
+    pub intervals: Option<Bootstrap>,
+    /// Why there are no intervals of the parameters when they were asked for.
+    pub no_intervals: Option<String>,
+}
+
+/// Why the equations of a tied fit have no bootstrap intervals of their own.
+pub const TIED_NO_INTERVALS: &str =
+    "a tied fit's bootstrap intervals are its parameters' (the coefficients follow from them)";
+
+/// The tied fit of a system ([`crate::Tie`]) from each equation's rows, `systems[i]` assembled by
+/// its `setups[i]` (made with the form of [`crate::Tie::terms`]) over the shared segments
+/// ([`Identifier::systems`]): the parameters fitted to the stacked rows by the first setup's
+/// solver ([`crate::Tie::fit`]), and each equation's model made from its normalised
+/// coefficients. `progress` hears each step.
+///
+/// Errors: [`crate::TieError`] and the solver's.
+pub fn identify_tied(
+    tie: &crate::Tie,
+    setups: &[Identifier],
+    systems: Vec<LinearSystem>,
+    mut progress: impl FnMut(IdentifyStep),
+) -> Result<TiedIdentification, SolveError> {
+    progress(IdentifyStep::Solve);
+    let solver = setups
+        .first()
+        .ok_or(crate::TieError::SystemMismatch {
+            expected: tie.equations(),
+            found: 0,
+            term: String::new(),
+        })?
+        .solver();
+    let fit = tie.fit(&systems, solver)?;
+    let (intervals, no_intervals) = match setups[0].bootstrap() {
+        Some(params) => {
+            progress(IdentifyStep::Bootstrap);
+            match tie.bootstrap(&systems, &fit, solver, params) {
+                Ok(b) => (Some(b), None),
+                Err(why) => (None, Some(why.reason)),
+            }
+        }
+        None => (None, None),
+    };
+    let mut equations = Vec::with_capacity(systems.len());
+    for (i, ((setup, system), eq)) in setups.iter().zip(&systems).zip(&fit.equations).enumerate() {
+        let terms = tie.terms(i).names();
+        let coefficients = system
+            .names()
+            .iter()
+            .map(|name| {
+                let k = terms.iter().position(|n| n == name);
+                let k = k.ok_or_else(|| crate::TieError::SystemMismatch {
+                    expected: tie.equations(),
+                    found: systems.len(),
+                    term: name.clone(),
+                })?;
+                Ok(hb_model::Coefficient {
+                    name: name.clone(),
+                    value: eq.coefficients[k],
+                    std_error: eq.std_errors[k],
+                })
+            })
+            .collect::<Result<Vec<_>, SolveError>>()?;
+        let summary = hb_model::FitSummary {
+            solver: solver.name().to_owned(),
+            harmonics: setup.params.harmonics(),
+            clock: *setup.params.clock(),
+            rows: eq.rows,
+            unknowns: tie.parameters().len(),
+            segments: system.blocks().len(),
+            whirling_segments: system.blocks().iter().filter(|b| b.winding != 0).count(),
+            condition: fit.condition,
+            residual_rms: eq.residual_rms,
+            residual_variance: eq.residual_variance,
+        };
+        let values: Vec<f64> = coefficients.iter().map(|c| c.value).collect();
+        let model = IdentifiedModel::from_coefficients(
+            setup.basis,
+            setup.params.form().clone(),
+            setup.params.clock().drive_angular_frequency(),
+            coefficients,
+            Some(summary),
+        )?;
+        let quality = fit_quality(system, &values)?;
+        let warning = quality.warning(match setup.method {
+            Method::Upo => EXPLAINED_WARNING_ORBITS,
+            Method::Windowed => EXPLAINED_WARNING_WINDOWS,
+        });
+        equations.push(Identification {
+            model,
+            intervals: None,
+            no_intervals: setup.bootstrap.is_some().then(|| TIED_NO_INTERVALS.to_owned()),
+            quality,
+            warning,
+            selection: None,
+        });
+    }
+    Ok(TiedIdentification {
+        equations,
+        fit,
+        intervals,
+        no_intervals,
+    })
 }

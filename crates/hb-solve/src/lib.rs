@@ -122,6 +122,7 @@ mod quality;
 mod select;
 mod signals;
 mod system;
+mod tie;
 mod velocity;
 mod weak;
 
@@ -140,10 +141,11 @@ pub use bootstrap::{
     ResampleBlock, bootstrap, bootstrap_fit, bootstrap_or_reason,
 };
 pub use differences::FiniteDifferences;
-pub use error::{AssemblyError, BootstrapError, LstsqError, SelectError, SolveError};
+pub use error::{AssemblyError, BootstrapError, LstsqError, SelectError, SolveError, TieError};
 pub use fit::FitModel;
 pub use identifier::{
-    Identification, Identifier, IdentifyStep, Method, ModelSpec, TermSelection, UnknownMethod,
+    Identification, Identifier, IdentifyStep, Method, ModelSpec, TIED_NO_INTERVALS, TermSelection,
+    TiedIdentification, UnknownMethod, identify_tied,
 };
 pub use lstsq::{LstsqFit, LstsqSolver, QrSolver, RankTolerance, SvdSolver};
 pub use method::{Assembly, EquationInput, HarmonicBalance};
@@ -156,6 +158,7 @@ pub use quality::{
 pub use select::{DroppedTerm, SelectParams, Selection, SelectionStep, select_terms};
 pub use signals::Signals;
 pub use system::{Block, LinearSystem};
+pub use tie::{Tie, TieCoefficient, TieSpec, TiedEquationFit, TiedFit, TiedParameter};
 pub use velocity::{VelocityTrend, velocity_series};
 pub use weak::WeakForm;
 

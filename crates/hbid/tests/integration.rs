@@ -8,3 +8,4 @@ mod compare;
 mod free_decay;
 mod logger_clock;
 mod report_system;
+mod tie;

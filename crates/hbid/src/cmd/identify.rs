@@ -151,6 +151,24 @@ pub struct IdentifyArgs {
     /// scored (default: one drive period, at most a tenth of the longest piece, at least 8).
     #[arg(long, value_name = "N")]
     pub refine_init: Option<usize>,
+    /// Tie physical parameters across the equations of a system (one least squares of both
+    /// equations' rows): a JSON file giving, per equation keyed by its coordinate, each term's
+    /// coefficient as a fixed number or a linear combination of named parameters, the equation's
+    /// own acceleration included, in the sign convention A q1'' + sum a_k g_k = 0 (a measured
+    /// torque tau1 on the right-hand side is the term "tau1": -1):
+    ///   {"parameters": ["Ia", "I2", "mr2", "b1", "b2"],
+    ///    "equations": {"q1": {"q1''": {"Ia": 1, "I2": 1}, "q1''*cos(q2)": {"mr2": 0.6},
+    ///                         "q1'": {"b1": 1}, "tau1": -1},
+    ///                  "q2": {"q2''": {"I2": 1}, "q2'": {"b2": 1}, "tau2": -1}}}
+    /// Each equation needs its own acceleration (not fixed to 0) and a fixed nonzero coefficient
+    /// (its scale); every parameter must be used. The keys are terms of the --terms grammar, so
+    /// --tie replaces --terms (and is not supported with --select, --method upo or --refine).
+    /// Rows are weighted by 1/A of each equation from an unweighted first pass (residuals in
+    /// acceleration units); the parameters' standard errors are the stacked regression's, and the
+    /// bootstrap (--bootstrap) gives intervals of the parameters, drawing every equation's rows of
+    /// a window together. The saved model holds each equation divided by its A.
+    #[arg(long, value_name = "PATH", verbatim_doc_comment)]
+    pub tie: Option<PathBuf>,
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -187,6 +205,10 @@ impl IdentifyArgs {
             select_tolerance: self.select_tolerance,
             refine: self.refine,
             refine_init: self.refine_init,
+            tie: self
+                .tie
+                .as_ref()
+                .map(|p| serde_json::Value::String(p.to_string_lossy().into_owned())),
         }
     }
 
@@ -227,6 +249,31 @@ pub fn print_report(report: &IdentifyReport) {
             report.names.coordinates().join(", "),
             report.found
         );
+    }
+    if let Some(parameters) = &report.parameters {
+        println!("tied parameters ({}):", parameters.len());
+        let width = parameters.iter().map(|p| p.name.len()).max().unwrap_or(0).max(9);
+        let intervals = report.parameter_intervals.as_ref();
+        match intervals {
+            Some(b) => println!(
+                "  {:<width$}  {:>14}  {:>12}  {:>27}",
+                "parameter",
+                "value",
+                "std error",
+                format!("{:.0} % interval", 100.0 * b.level)
+            ),
+            None => println!("  {:<width$}  {:>14}  {:>12}", "parameter", "value", "std error"),
+        }
+        for p in parameters {
+            match intervals.and_then(|b| b.interval(&p.name)) {
+                Some(i) => println!(
+                    "  {:<width$}  {:>14.6e}  {:>12.3e}  [{:>12.5e}, {:>12.5e}]",
+                    p.name, p.value, p.std_error, i.lower, i.upper
+                ),
+                None => println!("  {:<width$}  {:>14.6e}  {:>12.3e}", p.name, p.value, p.std_error),
+            }
+        }
+        println!();
     }
     for (i, e) in report.equations.iter().enumerate() {
         let id = &e.identification;

@@ -99,6 +99,14 @@ pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
         return super::report_system::run(args, quiet);
     }
     let request = args.identify.request()?;
+    if let Some(spec) = &args.identify.tie {
+        anyhow::bail!(
+            "«tie={}»: the report of one coordinate identifies by both methods and a tied fit is the weak \
+             form's alone; identify it with hbid identify --tie {}",
+            spec.display(),
+            spec.display()
+        );
+    }
     if let Some(col) = &args.identify.input.drive_col {
         anyhow::bail!(
             "«drive_col={col}»: hbid report simulates each model for --validation-periods periods from the record's \

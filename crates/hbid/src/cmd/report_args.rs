@@ -28,7 +28,7 @@ pub struct ReportArgs {
     /// against the record coordinate by coordinate (`hbid compare`'s), its phase portraits and
     /// Poincaré sections beside the record's, and its valid prediction time. A system's columns
     /// are its own names unless --coords names them.
-    #[arg(long, value_name = "PATH", conflicts_with_all = ["terms", "method", "basis", "select", "refine"])]
+    #[arg(long, value_name = "PATH", conflicts_with_all = ["terms", "method", "basis", "select", "refine", "tie"])]
     pub model: Option<PathBuf>,
 }
 
