@@ -14,11 +14,7 @@ use std::time::Instant;
 use anyhow::{Context, bail};
 use serde_json::{Value, json};
 
-/// Runs `hbid` with `args`: its stdout as JSON, failing with its stderr.
-pub(crate) fn hbid(exe: &Path, args: &[String]) -> anyhow::Result<Value> {
-    let (stdout, _) = crate::run_hbid(exe, args)?;
-    serde_json::from_str(&stdout).with_context(|| format!("hbid {}: its JSON", args.join(" ")))
-}
+use crate::{hbid, shown};
 
 /// The `hbid` of this xtask's own build (the test profile: `cargo xtask` shares the build of
 /// `cargo test --workspace`), brought up to date by `cargo test --workspace --no-run`: with the
@@ -113,10 +109,6 @@ fn scored(
         scores,
         seconds,
     })
-}
-
-pub(crate) fn shown(v: Option<f64>, decimals: usize) -> String {
-    v.map_or_else(|| "—".to_owned(), |v| format!("{v:.decimals$}"))
 }
 
 fn command(words: &[String], model: &str) -> String {

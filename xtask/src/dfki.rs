@@ -18,7 +18,7 @@ use hb_model::{Coefficient, IdentifiedModel, IdentifiedSystem};
 use rayon::prelude::*;
 use serde_json::{Map, Value, json};
 
-use crate::benchmarks::{hbid, shown};
+use crate::{hbid, shown};
 
 /// The protocol's training and test records.
 const TRAIN: [&str; 5] = ["00", "01", "02", "03", "12"];

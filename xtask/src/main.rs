@@ -115,8 +115,6 @@ enum Command {
     },
 }
 
-/// How this xtask was built, for the generated pages that report wall times: `cargo xtask` runs
-/// in the test profile so that it shares one build with `cargo test` (see README.md).
 /// Runs `hbid --quiet` with `args`: its stdout and stderr, failing with its stderr.
 pub(crate) fn run_hbid(exe: &Path, args: &[String]) -> anyhow::Result<(String, String)> {
     let out = std::process::Command::new(exe)
@@ -131,6 +129,19 @@ pub(crate) fn run_hbid(exe: &Path, args: &[String]) -> anyhow::Result<(String, S
     Ok((String::from_utf8_lossy(&out.stdout).into_owned(), stderr))
 }
 
+/// Runs `hbid` with `args`: its stdout as JSON, failing with its stderr.
+pub(crate) fn hbid(exe: &Path, args: &[String]) -> anyhow::Result<serde_json::Value> {
+    let (stdout, _) = run_hbid(exe, args)?;
+    serde_json::from_str(&stdout).with_context(|| format!("hbid {}: its JSON", args.join(" ")))
+}
+
+/// A figure of a table with `decimals` decimals, a dash where there is none.
+pub(crate) fn shown(v: Option<f64>, decimals: usize) -> String {
+    v.map_or_else(|| "—".to_owned(), |v| format!("{v:.decimals$}"))
+}
+
+/// How this xtask was built, for the generated pages that report wall times: `cargo xtask` runs
+/// in the test profile so that it shares one build with `cargo test` (see README.md).
 pub fn build_profile() -> &'static str {
     if cfg!(debug_assertions) {
         "test-profile build: opt-level 2, debug assertions on"
