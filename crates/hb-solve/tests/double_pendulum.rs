@@ -34,16 +34,21 @@ fn record(p: usize, periods: usize) -> (SampleClock, Vec<f64>, Vec<f64>) {
     (clock, wrapped(&run.q[0]), wrapped(&run.q[1]))
 }
 
+/// The weak form's plain windows of the record (default length) on the circle.
+fn windows(clock: &SampleClock, q1: &[f64]) -> Vec<circle_signal::Segment> {
+    Windows::builder(clock)
+        .domain(Domain::Circle)
+        .build()
+        .unwrap()
+        .segments(q1)
+        .unwrap()
+}
+
 #[test]
 fn every_coefficient_of_the_whirling_double_pendulum_comes_back_by_the_weak_form() {
     let (clock, q1, q2) = record(64, 400);
     let names = Names::new(["q1", "q2"], Vec::<String>::new()).unwrap();
-    let segments = Windows::builder(&clock)
-        .domain(Domain::Circle)
-        .build()
-        .unwrap()
-        .segments(&q1)
-        .unwrap();
+    let segments = windows(&clock, &q1);
     let mut worst: f64 = 0.0;
     for (own, truth) in DoublePendulum::whirling()
         .normalised_equations()
@@ -84,12 +89,7 @@ fn every_coefficient_of_the_whirling_double_pendulum_comes_back_by_the_weak_form
 fn a_systems_equations_assembled_together_are_each_assembled_alone() {
     let (clock, q1, q2) = record(64, 40);
     let names = Names::new(["q1", "q2"], Vec::<String>::new()).unwrap();
-    let segments = Windows::builder(&clock)
-        .domain(Domain::Circle)
-        .build()
-        .unwrap()
-        .segments(&q1)
-        .unwrap();
+    let segments = windows(&clock, &q1);
     let basis = BasisKind::from(Harmonic::new(1).unwrap());
     let truths = DoublePendulum::whirling().normalised_equations();
     let params: Vec<IdentifyParams> = truths
