@@ -1,18 +1,10 @@
 //! The `hbid` binary as a user runs it.
+use crate::support::hbid;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-fn hbid(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_hbid"))
-        .args(args)
-        .output()
-        .expect("hbid runs")
-}
-
 fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("hbid-cli-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    crate::support::scratch("cli", name)
 }
 
 fn read_rows(path: &Path) -> (String, Vec<Vec<f64>>) {

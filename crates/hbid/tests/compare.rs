@@ -1,15 +1,8 @@
 //! `hbid compare` and `hbid simulate --model --input`: a saved model run freely under a held-out
 //! record's measured input and scored against its measured output.
+use crate::support::hbid_quiet as hbid;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn hbid(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_hbid"))
-        .arg("--quiet")
-        .args(args)
-        .output()
-        .expect("hbid runs")
-}
+use std::process::Output;
 
 fn ok(args: &[&str]) -> Output {
     let out = hbid(args);
@@ -23,9 +16,7 @@ fn ok(args: &[&str]) -> Output {
 }
 
 fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("hbid-compare-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    crate::support::scratch("compare", name)
 }
 
 fn s(p: &Path) -> &str {

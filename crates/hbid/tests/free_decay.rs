@@ -3,23 +3,14 @@
 //! (viscous damping and a little dry friction), with bit errors, half-turn ones (2048 counts)
 //! among them. Near rest the counts toggle every few samples: the period of the oscillation must
 //! still be found, and the equation identified with windows of that period.
+use crate::support::hbid;
 use std::f64::consts::{PI, TAU};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 use circle_signal::{Domain, OscillationPeriod, wrap};
 
-fn hbid(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_hbid"))
-        .args(args)
-        .output()
-        .expect("hbid runs")
-}
-
 fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("hbid-free-decay-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    crate::support::scratch("free-decay", name)
 }
 
 /// The header and the rows of a CSV record (comment lines skipped).

@@ -2,20 +2,11 @@
 //! record printed to 1 ms whose clock slips by a millisecond for tens of thousands of samples at
 //! a time (single steps of 1 and 3 ms where it slips) with two stamps 7 ms early (a step of -5 ms,
 //! then one of +9 ms), and records whose stamps jitter.
+use crate::support::hbid;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn hbid(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_hbid"))
-        .args(args)
-        .output()
-        .expect("hbid runs")
-}
 
 fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("hbid-logger-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    crate::support::scratch("logger", name)
 }
 
 /// The drive of the simulated rig, in Hz.

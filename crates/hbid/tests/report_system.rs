@@ -4,16 +4,9 @@
 //! coordinate's free run against the record, the phase portraits and Poincaré sections of the
 //! record beside the models' and the valid prediction time; a system driven by a measured drive
 //! has no section and says so; bad input fails with one line and leaves no report.
+use crate::support::hbid_quiet as hbid;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn hbid(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_hbid"))
-        .arg("--quiet")
-        .args(args)
-        .output()
-        .expect("hbid runs")
-}
+use std::process::Output;
 
 fn ok(args: &[&str]) -> Output {
     let out = hbid(args);
@@ -26,8 +19,9 @@ fn ok(args: &[&str]) -> Output {
     out
 }
 
+/// A fresh scratch folder (emptied first) of this module.
 fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("hbid-report-system-{}-{name}", std::process::id()));
+    let dir = crate::support::scratch("report-system", name);
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     dir

@@ -1,21 +1,12 @@
 //! `hbid identify --tie`: physical parameters shared by a system's equations, on the simulated
 //! torque-driven double pendulum (the DFKI arm) whose truth `hbid simulate` writes.
+use crate::support::hbid;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 use serde_json::{Value, json};
 
-fn hbid(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_hbid"))
-        .args(args)
-        .output()
-        .expect("hbid runs")
-}
-
 fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("hbid-tie-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    crate::support::scratch("tie", name)
 }
 
 /// The simulated arm record and its truth.
