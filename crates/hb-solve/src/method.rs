@@ -72,9 +72,10 @@ pub trait Assembly: fmt::Debug + Send + Sync {
     }
 }
 
-/// One equation of a system to assemble ([`Assembly::assemble_many`]): its basis, its view of the
-/// record (its own coordinate among the others) and its parameters.
-pub type EquationInput<'e> = (&'e dyn Basis, &'e Signals<'e>, &'e IdentifyParams);
+/// One equation of a system to assemble ([`Assembly::assemble_many`]): its basis (any basis
+/// behind `dyn`, or one type `B` for the assemblies' generic code), its view of the record (its
+/// own coordinate among the others) and its parameters.
+pub type EquationInput<'e, B = dyn Basis> = (&'e B, &'e Signals<'e>, &'e IdentifyParams);
 
 /// The paper's method: eq. 15 on every segment, which must be (nearly) periodic, stacked as
 /// eq. 16 (see [`LinearSystem`] for the rows).

@@ -369,6 +369,22 @@ struct TiedEquation {
     coefficients: Vec<Affine>,
 }
 
+impl TiedEquation {
+    /// The coefficient of the equation's own acceleration at `theta`, by which its terms are
+    /// normalised: [`TieError::ZeroMass`] where it is zero or not finite.
+    fn own_mass(&self, theta: &[f64]) -> Result<f64, TieError> {
+        let a = self.own.eval(theta);
+        if a.is_finite() && a != 0.0 {
+            Ok(a)
+        } else {
+            Err(TieError::ZeroMass {
+                coordinate: self.coordinate.clone(),
+                value: a,
+            })
+        }
+    }
+}
+
 /// A [`TieSpec`] read in a record's names ([`TieSpec::resolve`]): one equation per coordinate, in
 /// the coordinates' order, each with its list of terms (the own acceleration not among them).
 #[derive(Debug, Clone, PartialEq)]
@@ -470,15 +486,7 @@ impl Tie {
             theta = fit.solution.clone();
             if pass == 0 {
                 for (w, e) in weights.iter_mut().zip(&self.equations) {
-                    let a = e.own.eval(&theta);
-                    if !(a.is_finite() && a != 0.0) {
-                        return Err(TieError::ZeroMass {
-                            coordinate: e.coordinate.clone(),
-                            value: a,
-                        }
-                        .into());
-                    }
-                    *w = 1.0 / a.abs();
+                    *w = 1.0 / e.own_mass(&theta)?.abs();
                 }
             }
             last = Some((x, fit));
@@ -498,14 +506,7 @@ impl Tie {
         let dof = rows as f64 / (rows as f64 - p as f64).max(1.0);
         let mut equations = Vec::with_capacity(systems.len());
         for ((e, s), cols) in self.equations.iter().zip(systems).zip(&columns) {
-            let a = e.own.eval(&theta);
-            if !(a.is_finite() && a != 0.0) {
-                return Err(TieError::ZeroMass {
-                    coordinate: e.coordinate.clone(),
-                    value: a,
-                }
-                .into());
-            }
+            let a = e.own_mass(&theta)?;
             let coefficients: Vec<f64> = e.coefficients.iter().map(|c| c.eval(&theta) / a).collect();
             let std_errors = e
                 .coefficients

@@ -11,6 +11,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{AssemblyError, SolveError};
+use crate::method::EquationInput;
 use crate::params::IdentifyParams;
 use crate::signals::Signals;
 use crate::system::{Block, LinearSystem};
@@ -402,16 +403,13 @@ pub(crate) fn weak_rows<B: Basis + ?Sized>(
     Ok(systems.pop().expect("one system per equation"))
 }
 
-/// One equation of a system to assemble: its basis, its view of the record and its parameters.
-pub(crate) type Input<'e, B> = (&'e B, &'e Signals<'e>, &'e IdentifyParams);
-
 /// [`weak_rows`] of each of a system's `equations` over the same `segments`, window by window:
 /// each coordinate's window is unwrapped and its velocity estimated once per segment for every
 /// equation that reads it ([`Windows`]), and each equation's rows are those [`weak_rows`] gives it
 /// alone, to the bit. The equations read the same record (their [`Signals`] hold the same
 /// coordinates) on the same clock.
 pub(crate) fn weak_rows_many<B: Basis + ?Sized>(
-    equations: &[Input<'_, B>],
+    equations: &[EquationInput<'_, B>],
     segments: &[Segment],
     weak: &WeakForm,
 ) -> Result<Vec<LinearSystem>, SolveError> {
@@ -493,7 +491,7 @@ pub(crate) fn weak_rows_many<B: Basis + ?Sized>(
 /// Whether `equations` read the same record on the same clock: the same coordinates (the same
 /// samples, not equal ones) with the same domains, so that a coordinate's window and velocity
 /// serve each of them.
-fn same_record<B: ?Sized>(equations: &[Input<'_, B>]) -> bool {
+fn same_record<B: ?Sized>(equations: &[EquationInput<'_, B>]) -> bool {
     let Some(&(_, first, params)) = equations.first() else {
         return true;
     };
