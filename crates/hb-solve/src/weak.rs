@@ -227,6 +227,8 @@ struct Workspace {
     dphi: Vec<f64>,
     /// `(sin, cos)` of each combination of [`Shared::trig`] at one sample.
     trig: Vec<(f64, f64)>,
+    /// Where each combination of [`Shared::trig`] is held in [`Windows`]' sines and cosines.
+    trig_slots: Vec<usize>,
 }
 
 /// The record's coordinates over one segment, each made continuous (unwrapped on the circle) and
@@ -241,6 +243,11 @@ struct Windows {
     x: Vec<(Option<bool>, Vec<f64>)>,
     /// Per coordinate: the velocity harmonics its velocity was estimated with, and the velocity.
     v: Vec<(Option<usize>, Vec<f64>)>,
+    /// The first `trig_made` entries: a combination of the coordinates and its `(sin, cos)` at
+    /// every sample of the segment, made from the windows (the equations of a double pendulum
+    /// both read `theta1 − theta2`).
+    trig: Vec<(Combination, Vec<(f64, f64)>)>,
+    trig_made: usize,
     /// The window less its trend (scratch of the velocity).
     detrended: Vec<f64>,
     planner: FourierPlanner,
@@ -258,6 +265,7 @@ impl Windows {
                 .resize_with(coordinates.max(self.v.len()), Default::default);
             self.x.iter_mut().for_each(|e| e.0 = None);
             self.v.iter_mut().for_each(|e| e.0 = None);
+            self.trig_made = 0;
         }
     }
 
@@ -274,8 +282,52 @@ impl Windows {
             x.extend_from_slice(raw);
         }
         *made = Some(circle);
-        // A velocity estimated from the other treatment no longer holds.
+        // A velocity estimated from the other treatment, or a combination of the other
+        // window, no longer holds.
         self.v[c].0 = None;
+        self.trig_made = 0;
+    }
+
+    /// Makes the sines and cosines of `combinations` over the segment (the windows of the
+    /// coordinates they read made), and writes where each is held into `slots`.
+    fn make_trig(&mut self, combinations: &[Combination], slots: &mut Vec<usize>) {
+        slots.clear();
+        for &combination in combinations {
+            if let Some(at) = self.trig[..self.trig_made]
+                .iter()
+                .position(|(c, _)| *c == combination)
+            {
+                slots.push(at);
+                continue;
+            }
+            if self.trig.len() == self.trig_made {
+                self.trig.push((combination, Vec::new()));
+            }
+            let samples = combination
+                .terms()
+                .map(|(c, _)| self.x[c].1.len())
+                .min()
+                .unwrap_or(0);
+            let (held, values) = &mut self.trig[self.trig_made];
+            *held = combination;
+            values.clear();
+            let mut q = [0.0; MAX_COORDINATES];
+            values.extend((0..samples).map(|n| {
+                for (c, _) in combination.terms() {
+                    q[c] = self.x[c].1[n];
+                }
+                let a = combination.eval(&q);
+                (a.sin(), a.cos())
+            }));
+            slots.push(self.trig_made);
+            self.trig_made += 1;
+        }
+    }
+
+    /// `(sin, cos)` of the combination held in `slot` at sample `n` of the segment.
+    #[inline]
+    fn trig(&self, slot: usize, n: usize) -> (f64, f64) {
+        self.trig[slot].1[n]
     }
 
     /// Estimates coordinate `c`'s velocity over the segment (its window made), `series`'
@@ -552,6 +604,7 @@ fn prepare<'a, B: Basis + ?Sized>(
         harmonics: Vec::new(),
         dphi: vec![0.0; names.len()],
         trig: Vec::new(),
+        trig_slots: Vec::new(),
     };
 
     let mut modes = Vec::with_capacity(cols);
@@ -720,6 +773,9 @@ fn fill_block<B: Basis + ?Sized>(
         windows.make_window(raw, c, sh.signals.domain(c) == Some(Domain::Circle));
         windows.make_velocity(c, seg.len(), series)?;
     }
+    if sh.coupled {
+        windows.make_trig(&sh.trig, &mut ws.trig_slots);
+    }
     let windows = &*windows;
     let x = windows.window(own);
     let xdot: &[f64] = if sh.needs_velocity {
@@ -782,10 +838,8 @@ fn fill_block<B: Basis + ?Sized>(
                 v[c] = windows.velocity(c)[n];
             }
             ws.trig.clear();
-            ws.trig.extend(sh.trig.iter().map(|combination| {
-                let a = combination.eval(&q);
-                (a.sin(), a.cos())
-            }));
+            ws.trig
+                .extend(ws.trig_slots.iter().map(|&slot| windows.trig(slot, n)));
         }
         for (col, &column) in sh.columns.iter().enumerate() {
             ws.g[col * samples + n] = match column {
