@@ -7,4 +7,5 @@
 mod drive;
 mod form;
 mod model;
+mod saved;
 mod terms;

@@ -314,7 +314,7 @@ fn the_drive_column_is_saved_and_format_3_models_still_load() {
     assert!(IdentifiedModel::<BasisKind>::from_json(&orphan).is_err());
     assert!(IdentifiedModel::<BasisKind>::from_json(&json.replace("\"base acc\"", "\"\"")).is_err());
 
-    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures");
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures");
     let json = std::fs::read_to_string(format!("{dir}/model_v3_rig_terms.json")).unwrap();
     assert!(json.contains("\"version\": 3"));
     let from_json = IdentifiedModel::<BasisKind>::from_json(&json).unwrap();

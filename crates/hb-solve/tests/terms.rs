@@ -480,7 +480,7 @@ fn a_general_model_is_saved_with_its_terms() {
 /// were: the same coefficients and the same equation.
 #[test]
 fn models_saved_before_general_terms_still_load() {
-    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures");
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures");
     for name in ["model_v2_hat8_upo", "model_v2_duffing_known_forcing"] {
         let json = std::fs::read_to_string(format!("{dir}/{name}.json")).unwrap();
         assert!(json.contains("\"version\": 2"));
