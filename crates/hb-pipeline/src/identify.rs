@@ -896,12 +896,27 @@ impl IdentifyRequest {
                 (segments, found)
             }
             Method::Windowed => {
+                let k = self.options.window_periods;
+                let unit = match data.drive {
+                    DriveFound::Free { .. } => "oscillation periods".to_owned(),
+                    DriveFound::Windows { samples } => format!("units of {samples} samples"),
+                    _ => "drive periods".to_owned(),
+                };
                 let segments = self
                     .windows
                     .windows(&record)?
                     .windows_pieces(&data.x, &data.pieces)
-                    .map_err(crate::pipeline::PipelineError::from)?;
-                let k = self.options.window_periods;
+                    .map_err(|e| match e {
+                        upo_search::UpoError::TooShort { len, needed, .. } => {
+                            crate::pipeline::PipelineError::NoWindow {
+                                window: format!("{k} {unit}"),
+                                needed,
+                                longest: len,
+                                pieces: data.pieces.len(),
+                            }
+                        }
+                        e => crate::pipeline::PipelineError::from(e),
+                    })?;
                 let found = match data.drive {
                     DriveFound::Free { .. } => {
                         format!("{} windows of {k} oscillation periods", segments.len())

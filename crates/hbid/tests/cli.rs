@@ -308,6 +308,55 @@ fn bad_files_name_the_problem() {
     assert_clean_failure(&hbid(&["upos", garbage.to_str().unwrap()]), "line");
 }
 
+/// A record where no window of the weak form fits says so in one line, naming the window and
+/// the longest stretch, and writes no model: one too short, and one whose logger dropped every
+/// seventh row (gaps a window never spans).
+#[test]
+fn a_record_no_window_fits_is_named_and_writes_nothing() {
+    let dir = scratch("nowindow");
+    let rows = paper_rows();
+    let write = |name: &str, keep: &dyn Fn(usize) -> bool| {
+        let mut text = String::from("t,theta\n");
+        for (i, (t, x)) in rows.iter().take(3000).enumerate() {
+            if keep(i) {
+                text.push_str(&format!("{t},{x}\n"));
+            }
+        }
+        let path = dir.join(name);
+        std::fs::write(&path, text).unwrap();
+        path
+    };
+    let model = dir.join("model.json");
+    for (path, mentions) in [
+        (
+            write("short.csv", &|i| i < 60),
+            "no window fits in the record: it has 60 samples, and a window of 3 drive periods holds 76",
+        ),
+        (
+            write("dropped.csv", &|i| i % 7 != 3),
+            "no window fits between the record's gaps: its longest stretch without one has 6 samples",
+        ),
+    ] {
+        let out = hbid(&[
+            "identify",
+            path.to_str().unwrap(),
+            "--quiet",
+            "--save-model",
+            model.to_str().unwrap(),
+        ]);
+        assert!(!out.status.success());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!err.contains("panicked"), "{err}");
+        let line = err
+            .lines()
+            .find(|l| l.starts_with("error:"))
+            .expect("an error line");
+        assert!(line.contains(mentions), "'{mentions}' not in: {line}");
+        assert!(line.contains("--window"), "{line}");
+        assert!(!model.exists(), "a model was written");
+    }
+}
+
 /// The paper's data set as `(t, theta)` rows.
 fn paper_rows() -> Vec<(String, String)> {
     std::fs::read_to_string(paper_dataset())

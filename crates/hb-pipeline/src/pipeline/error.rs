@@ -42,4 +42,34 @@ pub enum PipelineError {
     /// The record has no samples.
     #[error("the record has no samples")]
     EmptyRecord,
+    /// No window of the weak form fits in the record, or in any of its pieces between gaps.
+    #[error(
+        "no window fits {}, and a window of {window} holds {needed} samples{}",
+        if *.pieces > 1 {
+            format!(
+                "between the record's gaps: its longest stretch without one has {} samples \
+                 ({} pieces, {} gaps)",
+                .longest,
+                .pieces,
+                .pieces - 1
+            )
+        } else {
+            format!("in the record: it has {} samples", .longest)
+        },
+        if *.pieces > 1 {
+            " (a window never spans a gap); give a shorter «window», or fill the gaps"
+        } else {
+            "; give a shorter «window», or a longer record"
+        }
+    )]
+    NoWindow {
+        /// The window, in words (`3 drive periods`).
+        window: String,
+        /// The samples a window holds (its closing sample included).
+        needed: usize,
+        /// The samples of the longest piece.
+        longest: usize,
+        /// How many pieces the record is in.
+        pieces: usize,
+    },
 }
