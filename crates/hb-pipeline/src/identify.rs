@@ -906,16 +906,12 @@ impl IdentifyRequest {
                     .windows
                     .windows(&record)?
                     .windows_pieces(&data.x, &data.pieces)
-                    .map_err(|e| match e {
-                        upo_search::UpoError::TooShort { len, needed, .. } => {
-                            crate::pipeline::PipelineError::NoWindow {
-                                window: format!("{k} {unit}"),
-                                needed,
-                                longest: len,
-                                pieces: data.pieces.len(),
-                            }
-                        }
-                        e => crate::pipeline::PipelineError::from(e),
+                    .map_err(|e| {
+                        crate::pipeline::PipelineError::windows(
+                            e,
+                            || format!("{k} {unit}"),
+                            data.pieces.len(),
+                        )
                     })?;
                 let found = match data.drive {
                     DriveFound::Free { .. } => {

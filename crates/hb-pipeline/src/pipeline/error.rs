@@ -73,3 +73,19 @@ pub enum PipelineError {
         pieces: usize,
     },
 }
+
+impl PipelineError {
+    /// The windows' error `e`, made [`PipelineError::NoWindow`] when no window fits (a window of
+    /// `window`, in words, over a record in `pieces` pieces).
+    pub(crate) fn windows(e: upo_search::UpoError, window: impl FnOnce() -> String, pieces: usize) -> Self {
+        match e {
+            upo_search::UpoError::TooShort { len, needed, .. } => PipelineError::NoWindow {
+                window: window(),
+                needed,
+                longest: len,
+                pieces,
+            },
+            e => PipelineError::from(e),
+        }
+    }
+}

@@ -739,7 +739,13 @@ impl<'a> Pipeline<'a> {
             .close_returns(&self.record, embedded.delay)?
             .catalogue_pieces(x, pieces)?;
         let windows = if self.setups.iter().any(|s| s.method() == Method::Windowed) {
-            Some(self.windows.windows_pieces(x, pieces)?)
+            Some(self.windows.windows_pieces(x, pieces).map_err(|e| {
+                PipelineError::windows(
+                    e,
+                    || format!("{} drive periods", self.windows.periods()),
+                    pieces.len(),
+                )
+            })?)
         } else {
             None
         };
