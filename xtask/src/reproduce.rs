@@ -413,7 +413,7 @@ fn prediction_times(
         exact_truth: PredictionTimes {
             windows,
             tolerance: config.tolerance() * observed.spread(),
-            forcing_period: record.clock().drive_period(),
+            drive_period: record.clock().drive_period(),
             lyapunov: truth_lyapunov,
         },
         held_out_samples: plan.samples,

@@ -575,7 +575,8 @@ pub struct PredictionTimes {
     /// The tolerance `δ` in the record's unit.
     pub tolerance: f64,
     /// The record's drive period (or free oscillation's), the unit of [`in_periods`](Self::in_periods).
-    pub forcing_period: f64,
+    #[serde(alias = "forcing_period")]
+    pub drive_period: f64,
     /// The largest Lyapunov exponent per unit time, if given.
     pub lyapunov: Option<f64>,
 }
@@ -588,7 +589,7 @@ impl PredictionTimes {
 
     /// The summary in drive periods.
     pub fn in_periods(&self) -> Option<TimeSummary> {
-        let t = self.forcing_period;
+        let t = self.drive_period;
         TimeSummary::of(self.windows.iter().map(|w| (w.valid_time / t, w.censored)))
     }
 
@@ -629,7 +630,7 @@ pub fn valid_prediction_times<S: SecondOrderSystem + Sync>(
     Ok(PredictionTimes {
         windows,
         tolerance: config.tolerance * record.spread,
-        forcing_period: record.clock.drive_period(),
+        drive_period: record.clock.drive_period(),
         lyapunov,
     })
 }

@@ -57,7 +57,7 @@ fn one_coordinate_is_the_one_coordinate_test() {
     let b =
         system_valid_prediction_times(&OneCoordinate(Pendulum::paper()), &system, &starts, &config).unwrap();
     assert_eq!(b.tolerances, vec![a.tolerance]);
-    assert_eq!(b.forcing_period, a.forcing_period);
+    assert_eq!(b.drive_period, a.drive_period);
     for (wa, wb) in a.windows.iter().zip(&b.windows) {
         assert_eq!((wa.start, wa.censored), (wb.start, wb.censored));
         assert_eq!(wa.state, [wb.state.q()[0], wb.state.v()[0]]);
@@ -139,7 +139,7 @@ fn the_true_double_pendulum_outlasts_a_wrong_one() {
     let bad = system_valid_prediction_times(&wrong, &record, &starts, &config).unwrap();
     let (a, b) = (good.in_periods().unwrap(), bad.in_periods().unwrap());
     assert!(a.median > 2.0 * b.median, "true {a:?}, wrong {b:?}");
-    assert!((a.median * good.forcing_period - good.summary().unwrap().median).abs() < 1e-9);
+    assert!((a.median * good.drive_period - good.summary().unwrap().median).abs() < 1e-9);
     // Every window that ended by leaving names the coordinate that left.
     for times in [&good, &bad] {
         let left: usize = (0..2).map(|c| times.left_by(c)).sum();
@@ -153,7 +153,7 @@ fn the_true_double_pendulum_outlasts_a_wrong_one() {
     let n = starts[4];
     let exact = MultiState::new(&[run.q[0][n], run.q[1][n]], &[run.v[0][n], run.v[1][n]]).unwrap();
     let w = predict_system_window(&truth, &record, n, &exact, &config).unwrap();
-    assert!(w.valid_time > a.median * good.forcing_period, "{w:?}");
+    assert!(w.valid_time > a.median * good.drive_period, "{w:?}");
     // The windows serialise and come back (to the last digit JSON keeps).
     let json = serde_json::to_string(&good).unwrap();
     let back: SystemPredictionTimes = serde_json::from_str(&json).unwrap();

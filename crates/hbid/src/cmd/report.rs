@@ -549,7 +549,7 @@ fn prediction_section(
             "lyapunov_per_unit_time": times.lyapunov,
             "windows": times.windows,
         }));
-        let period = times.forcing_period;
+        let period = times.drive_period;
         series.push(Series {
             label: res.method.name(),
             points: times
@@ -564,7 +564,7 @@ fn prediction_section(
     writeln!(r)?;
     let text = serde_json::to_string_pretty(&serde_json::json!({
         "tolerance": first.tolerance,
-        "forcing_period": first.forcing_period,
+        "forcing_period": first.drive_period,
         "models": json,
     }))?;
     hb_pipeline::output::write_atomically(&out.join("prediction.json"), |w| writeln!(w, "{text}"))?;

@@ -701,7 +701,7 @@ fn prediction_section(
             "periods": periods,
             "windows": times.windows,
         }));
-        let period = times.forcing_period;
+        let period = times.drive_period;
         series.push(Series {
             label: &entry.name,
             points: times
@@ -717,7 +717,7 @@ fn prediction_section(
     let text = serde_json::to_string_pretty(&serde_json::json!({
         "coordinates": names,
         "tolerances": first.tolerances,
-        "forcing_period": first.forcing_period,
+        "forcing_period": first.drive_period,
         "models": json,
     }))?;
     hb_pipeline::output::write_atomically(&out.join("prediction.json"), |w| writeln!(w, "{text}"))?;

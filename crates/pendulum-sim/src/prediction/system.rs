@@ -278,7 +278,8 @@ pub struct SystemPredictionTimes {
     /// Each coordinate's tolerance in its record's unit.
     pub tolerances: Vec<f64>,
     /// The record's drive period, the unit of [`in_periods`](Self::in_periods).
-    pub forcing_period: f64,
+    #[serde(alias = "forcing_period")]
+    pub drive_period: f64,
 }
 
 impl SystemPredictionTimes {
@@ -289,7 +290,7 @@ impl SystemPredictionTimes {
 
     /// The summary in drive periods.
     pub fn in_periods(&self) -> Option<TimeSummary> {
-        let t = self.forcing_period;
+        let t = self.drive_period;
         TimeSummary::of(self.windows.iter().map(|w| (w.valid_time / t, w.censored)))
     }
 
@@ -339,6 +340,6 @@ pub fn system_valid_prediction_times<S: MultiSystem + Sync + ?Sized>(
             .iter()
             .map(|c| config.tolerance * c.spread)
             .collect(),
-        forcing_period: record.clock().drive_period(),
+        drive_period: record.clock().drive_period(),
     })
 }
