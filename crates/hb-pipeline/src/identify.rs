@@ -1099,44 +1099,58 @@ fn check_mass_matrix(
     data: &Data,
     coordinates: &[(&[f64], Domain)],
 ) -> Result<(), RunError> {
+    use rayon::prelude::*;
     let n = coordinates.len();
     let samples: usize = data.pieces.iter().map(|p| p.len()).sum();
     let stride = samples.div_ceil(MASS_CHECKS).max(1);
-    let (mut q, v, mut acc) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-    for piece in &data.pieces {
-        for k in piece.clone().step_by(stride) {
-            for (qi, (x, _)) in q.iter_mut().zip(coordinates) {
-                *qi = x[k];
+    let states: Vec<usize> = data
+        .pieces
+        .iter()
+        .flat_map(|piece| piece.clone().step_by(stride))
+        .collect();
+    // The states in parallel; the first singular one in the record's order is told.
+    let first_singular = states
+        .par_iter()
+        .map_init(
+            || (vec![0.0; n], vec![0.0; n], vec![0.0; n]),
+            |(q, v, acc), &k| {
+                for (qi, (x, _)) in q.iter_mut().zip(coordinates) {
+                    *qi = x[k];
+                }
+                let t = data.clock.time(k);
+                system
+                    .accelerations(t, q, v, None, acc)
+                    .err()
+                    .map(|singular| (t, q.clone(), singular))
+            },
+        )
+        .find_map_first(|found| found);
+    let Some((t, q, singular)) = first_singular else {
+        return Ok(());
+    };
+    let names = request.names.coordinates();
+    let state: Vec<String> = names
+        .iter()
+        .zip(&q)
+        .map(|(c, x)| format!("{c} = {x:.4}"))
+        .collect();
+    Err(OptionError::new(
+        "terms",
+        format!(
+            "the identified mass matrix is singular at t = {t} ({}; smallest pivot {:.1e} of its largest \
+             entry): the acceleration terms leave the accelerations of {} undetermined on the record, and \
+             every free run of the model would stop there{}",
+            state.join(", "),
+            singular.pivot,
+            names.join(", "),
+            if n > 1 {
+                "; is one coordinate's column («coords») a copy of another's?"
+            } else {
+                ""
             }
-            let t = data.clock.time(k);
-            if let Err(singular) = system.accelerations(t, &q, &v, None, &mut acc) {
-                let names = request.names.coordinates();
-                let state: Vec<String> = names
-                    .iter()
-                    .zip(&q)
-                    .map(|(c, x)| format!("{c} = {x:.4}"))
-                    .collect();
-                return Err(OptionError::new(
-                    "terms",
-                    format!(
-                        "the identified mass matrix is singular at t = {t} ({}; smallest pivot {:.1e} of its largest \
-                         entry): the acceleration terms leave the accelerations of {} undetermined on the record, and \
-                         every free run of the model would stop there{}",
-                        state.join(", "),
-                        singular.pivot,
-                        names.join(", "),
-                        if n > 1 {
-                            "; is one coordinate's column («coords») a copy of another's?"
-                        } else {
-                            ""
-                        }
-                    ),
-                )
-                .into());
-            }
-        }
-    }
-    Ok(())
+        ),
+    )
+    .into())
 }
 
 /// The integrator's relative tolerance in the refinement (as `compare`'s default: the
