@@ -899,7 +899,12 @@ impl IdentifyRequest {
                 let k = self.options.window_periods;
                 let unit = match data.drive {
                     DriveFound::Free { .. } => "oscillation periods".to_owned(),
-                    DriveFound::Windows { samples } => format!("units of {samples} samples"),
+                    DriveFound::Windows { samples } => {
+                        // The window in the record's time, to four significant digits.
+                        let span = k as f64 * samples as f64 * data.clock.step();
+                        let decimals = (3 - span.log10().floor() as i32).max(0) as usize;
+                        format!("units of {samples} samples ({span:.decimals$} in the record's time unit)")
+                    }
                     _ => "drive periods".to_owned(),
                 };
                 let segments = self
