@@ -167,14 +167,14 @@ fn stamps(path: &Path) -> anyhow::Result<Vec<f64>> {
 fn horizon_ranges(data: &Path, rec: &str, first: usize) -> anyhow::Result<Vec<String>> {
     let all = stamps(&path(data, rec))?;
     let t = all.get(first..).unwrap_or_default();
-    let t0 = *t
-        .first()
-        .with_context(|| format!("record {rec} has no row {first}"))?;
+    if t.is_empty() {
+        bail!("record {rec} has no row {first}");
+    }
     Ok(HORIZONS
         .iter()
         .map(|(_, _, h)| match h {
             // A stamp's rounding is not a row past the horizon.
-            Some(h) => format!("0..{}", t.iter().filter(|&&s| s - t0 <= h + 1e-9).count()),
+            Some(h) => format!("0..{}", rows_within(t, *h)),
             None => "0..".to_owned(),
         })
         .collect())
@@ -184,32 +184,55 @@ fn horizon_ranges(data: &Path, rec: &str, first: usize) -> anyhow::Result<Vec<St
 /// first second.
 const SPLIT: f64 = 0.4;
 
-/// The rows of record `rec` from row 0 with t − t0 ≤ `horizon` s.
-fn rows_within(data: &Path, rec: &str, horizon: f64) -> anyhow::Result<usize> {
-    let t = stamps(&path(data, rec))?;
-    let t0 = *t.first().with_context(|| format!("record {rec} has no rows"))?;
-    Ok(t.iter().filter(|&&s| s - t0 <= horizon + 1e-9).count())
+/// The stamps `t` (from the run's first row) with t − t0 ≤ `horizon` s: a stamp's rounding is
+/// not a row past the horizon.
+fn rows_within(t: &[f64], horizon: f64) -> usize {
+    t.first()
+        .map_or(0, |&t0| t.iter().filter(|&&s| s - t0 <= horizon + 1e-9).count())
 }
 
-/// The measured angles and velocities of record `rec`'s row 0 (`pos_meas1`, `pos_meas2`,
-/// `vel_meas1`, `vel_meas2`: its columns 2 to 5).
+/// Per test record, the rows from row 0 within SPLIT and within 1 s.
+fn split_rows(data: &Path) -> anyhow::Result<Vec<(usize, usize)>> {
+    TEST.iter()
+        .map(|rec| {
+            let t = stamps(&path(data, rec))?;
+            Ok((rows_within(&t, SPLIT), rows_within(&t, 1.0)))
+        })
+        .collect()
+}
+
+/// The measured angles and velocities of record `rec`'s row 0, found by their columns' names
+/// (`pos_meas1`, `pos_meas2`, `vel_meas1`, `vel_meas2`).
 fn first_state(data: &Path, rec: &str) -> anyhow::Result<[f64; 4]> {
     let p = path(data, rec);
     let text = std::fs::read_to_string(&p).with_context(|| p.display().to_string())?;
-    let row = text
-        .lines()
-        .nth(1)
-        .with_context(|| format!("record {rec} has no rows"))?;
-    let cells: Vec<f64> = row
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines
+        .next()
+        .unwrap_or_default()
         .split(',')
-        .skip(1)
-        .take(4)
-        .map(|c| c.trim().parse::<f64>())
-        .collect::<Result<_, _>>()
-        .with_context(|| format!("{}: row 0", p.display()))?;
-    cells
-        .try_into()
-        .map_err(|_| anyhow::anyhow!("{}: row 0 has fewer than 5 cells", p.display()))
+        .map(str::trim)
+        .collect();
+    let row: Vec<&str> = lines
+        .next()
+        .with_context(|| format!("record {rec} has no rows"))?
+        .split(',')
+        .collect();
+    let cell = |name: &str| -> anyhow::Result<f64> {
+        let at = header
+            .iter()
+            .position(|h| *h == name)
+            .with_context(|| format!("{}: no column {name}", p.display()))?;
+        let text = row.get(at).map_or("", |c| c.trim());
+        text.parse()
+            .with_context(|| format!("{}: row 0's {name} '{text}'", p.display()))
+    };
+    Ok([
+        cell("pos_meas1")?,
+        cell("pos_meas2")?,
+        cell("vel_meas1")?,
+        cell("vel_meas2")?,
+    ])
 }
 
 /// The 1 s free run of `model` from row 0 (by the protocol, or with `extra` options) on each
@@ -220,12 +243,14 @@ fn split_errors(
     exe: &Path,
     data: &Path,
     model: &Path,
-    extra: &(dyn Fn(&str) -> anyhow::Result<Vec<String>> + Sync),
+    rows: &[(usize, usize)],
+    extra: &(dyn Fn(usize) -> Vec<String> + Sync),
 ) -> anyhow::Result<Vec<[[Option<f64>; 2]; 3]>> {
     TEST.par_iter()
-        .map(|rec| {
-            let (a, b) = (rows_within(data, rec, SPLIT)?, rows_within(data, rec, 1.0)?);
-            let extra = extra(rec)?;
+        .zip(rows)
+        .enumerate()
+        .map(|(i, (rec, &(a, b)))| {
+            let extra = extra(i);
             let extra: Vec<&str> = extra.iter().map(String::as_str).collect();
             let (r, _, _) = compare_with(
                 exe,
@@ -434,8 +459,15 @@ impl Physical {
     }
 }
 
-/// The tied fit's parameters, in the order of [`tie_spec`], with their published values.
-const TIED: [&str; 9] = ["Ia", "I2", "Ir", "mr1", "mr2", "b1", "cf1", "b2", "cf2"];
+/// The number of terms of each equation of an `hbid identify --json` result: `10 + 7`.
+fn term_counts(found: &Value) -> String {
+    let count = |q: &str| found["equations"][q]["terms"].as_array().map_or(0, Vec::len);
+    format!("{} + {}", count("q1"), count("q2"))
+}
+
+/// The tied fit's parameters, in the order of [`tie_spec`] (the arm's, as the simulator writes
+/// its equations).
+const TIED: [&str; 9] = pendulum_sim::ARM_PARAMETERS;
 
 impl Physical {
     /// The published values of [`TIED`]'s parameters.
@@ -446,41 +478,13 @@ impl Physical {
     }
 }
 
-/// The tie spec of TERMS' equations (`hbid identify --tie`): the map of
-/// [`Physical::coefficients`] before the division by A1 and A2, in the torque form
-/// `A_i q_i'' + Σ a g − τ_i = 0`, with l1, g and gr known (from the published set: the link's
+/// The tie spec of TERMS' equations (`hbid identify --tie`): the arm's (`pendulum_sim::ArmTie`,
+/// the map of [`Physical::coefficients`] before the division by A1 and A2, in the torque form
+/// `A_i q_i'' + Σ a g − τ_i = 0`), with l1, g and gr known (from the published set: the link's
 /// length, gravity, the gear ratio 6) and the Coulomb term as cf·π/2·sign(q').
-fn tie_spec(p: &Physical) -> Value {
-    let (l1, g, gr) = (p.l1, p.g, p.gr);
-    let coulomb = std::f64::consts::FRAC_PI_2;
-    json!({
-        "parameters": TIED,
-        "equations": {
-            "q1": {
-                "q1''": {"Ia": 1.0, "I2": 1.0, "Ir": gr * gr + 1.0},
-                "q1''*cos(q2)": {"mr2": 2.0 * l1},
-                "q2''": {"I2": 1.0, "Ir": -gr},
-                "q2''*cos(q2)": {"mr2": l1},
-                "sin(q2)*q1'*q2'": {"mr2": -2.0 * l1},
-                "sin(q2)*q2'^2": {"mr2": -l1},
-                "sin(q1)": {"mr1": g},
-                "sin(q1+q2)": {"mr2": g},
-                "q1'": {"b1": 1.0},
-                "sign(q1')": {"cf1": coulomb},
-                "tau1": -1.0
-            },
-            "q2": {
-                "q2''": {"I2": 1.0, "Ir": gr * gr},
-                "q1''": {"I2": 1.0, "Ir": -gr},
-                "q1''*cos(q2)": {"mr2": l1},
-                "sin(q2)*q1'^2": {"mr2": l1},
-                "sin(q1+q2)": {"mr2": g},
-                "q2'": {"b2": 1.0},
-                "sign(q2')": {"cf2": coulomb},
-                "tau2": -1.0
-            }
-        }
-    })
+fn tie_spec(p: &Physical) -> anyhow::Result<Value> {
+    let tie = pendulum_sim::ArmTie::new(p.l1, p.g, p.gr, std::f64::consts::FRAC_PI_2);
+    Ok(serde_json::to_value(tie)?)
 }
 
 /// The physical combinations that identified coefficients give, beside the published ones: the
@@ -715,7 +719,8 @@ pub fn run(exe: &Path, shared: &Path, work: &Path, python: Option<&str>) -> anyh
     let p = Physical::published(&parameters(&data.join("model_2.0_parameters.yml"))?)?;
     let terms = |window: f64| strings(&["--window", &window.to_string(), "--terms", TERMS]);
     let tie_path = work.join("dfki-tie.json");
-    std::fs::write(&tie_path, serde_json::to_string_pretty(&tie_spec(&p))? + "\n")
+    let spec = tie_spec(&p)?;
+    std::fs::write(&tie_path, serde_json::to_string_pretty(&spec)? + "\n")
         .with_context(|| tie_path.display().to_string())?;
     let tied_args = |window: f64| {
         vec![
@@ -817,18 +822,19 @@ pub fn run(exe: &Path, shared: &Path, work: &Path, python: Option<&str>) -> anyh
     let (published_rerun, _) = score(exe, &data, &published_path)?;
     // Where the 1 s error lies: the chosen and the published model by the protocol, and the
     // chosen one from rest (row 0's angles, no velocity), a diagnosis outside the protocol.
-    let by_protocol = |_: &str| -> anyhow::Result<Vec<String>> { Ok(Vec::new()) };
-    let split_ours = split_errors(exe, &data, &model, &by_protocol)?;
-    let split_published = split_errors(exe, &data, &published_path, &by_protocol)?;
-    let from_rest = |rec: &str| -> anyhow::Result<Vec<String>> {
-        let s = first_state(&data, rec)?;
-        Ok(strings(&["--x0", &format!("{},{}", s[0], s[1]), "--v0", "0,0"]))
-    };
-    let split_rest = split_errors(exe, &data, &model, &from_rest)?;
+    let rows = split_rows(&data)?;
     let first_states = TEST
         .iter()
         .map(|rec| first_state(&data, rec))
         .collect::<anyhow::Result<Vec<_>>>()?;
+    let by_protocol = |_: usize| Vec::new();
+    let split_ours = split_errors(exe, &data, &model, &rows, &by_protocol)?;
+    let split_published = split_errors(exe, &data, &published_path, &rows, &by_protocol)?;
+    let from_rest = |i: usize| {
+        let s = first_states[i];
+        strings(&["--x0", &format!("{},{}", s[0], s[1]), "--v0", "0,0"])
+    };
+    let split_rest = split_errors(exe, &data, &model, &rows, &from_rest)?;
     let select_path = work.join("dfki-selected.json");
     let select_extra = strings(&["--window", &window.to_string(), "--select"]);
     let (selected, select_seconds) = identify(exe, &data, &TRAIN, &select_extra, &select_path)?;
@@ -944,13 +950,8 @@ pub fn run(exe: &Path, shared: &Path, work: &Path, python: Option<&str>) -> anyh
         },
         Row {
             label: format!(
-                "physical, untied: one coefficient per term ({} + {} terms, {untied_window} s windows{})",
-                untied_found["equations"]["q1"]["terms"]
-                    .as_array()
-                    .map_or(0, Vec::len),
-                untied_found["equations"]["q2"]["terms"]
-                    .as_array()
-                    .map_or(0, Vec::len),
+                "physical, untied: one coefficient per term ({} terms, {untied_window} s windows{})",
+                term_counts(&untied_found),
                 chosen(false)
             ),
             rmse: untied_scores.rmse.clone(),
@@ -965,13 +966,8 @@ pub fn run(exe: &Path, shared: &Path, work: &Path, python: Option<&str>) -> anyh
         },
         Row {
             label: format!(
-                "selected from the default library of systems ({} + {} terms)",
-                selected["equations"]["q1"]["terms"]
-                    .as_array()
-                    .map_or(0, Vec::len),
-                selected["equations"]["q2"]["terms"]
-                    .as_array()
-                    .map_or(0, Vec::len)
+                "selected from the default library of systems ({} terms)",
+                term_counts(&selected)
             ),
             rmse: select_scores.rmse.clone(),
         },
@@ -1104,8 +1100,7 @@ pub fn run(exe: &Path, shared: &Path, work: &Path, python: Option<&str>) -> anyh
         "| record | joint | chosen, ≤ {SPLIT} s | chosen, {SPLIT}–1 s | share of the 1 s squared error before {SPLIT} s | \
          published run here, ≤ {SPLIT} s | published, {SPLIT}–1 s |\n| --- | --- | ---: | ---: | ---: | ---: | ---: |"
     )?;
-    for (i, rec) in TEST.iter().enumerate() {
-        let (a, b) = (rows_within(&data, rec, SPLIT)?, rows_within(&data, rec, 1.0)?);
+    for (i, (rec, &(a, b))) in TEST.iter().zip(&rows).enumerate() {
         for (j, joint) in JOINTS.iter().enumerate() {
             let share = match (split_ours[i][0][j], split_ours[i][2][j]) {
                 (Some(early), Some(all)) if all > 0.0 => {
@@ -1171,7 +1166,6 @@ pub fn run(exe: &Path, shared: &Path, work: &Path, python: Option<&str>) -> anyh
         shown_command(&identify_words),
         shown_command(&compare_words)
     )?;
-    let spec = tie_spec(&p);
     writeln!(
         r,
         "`dfki-tie.json`, the tied fit's spec, written from the published parameters' map to the coefficients \
@@ -1442,7 +1436,7 @@ pub fn run(exe: &Path, shared: &Path, work: &Path, python: Option<&str>) -> anyh
         },
         "tied": {
             "window_s": tied_window,
-            "spec": tie_spec(&p),
+            "spec": spec,
             "equations": equations(&tied_found),
             "rmse_rad": tied_scores.json(),
             "seconds": tied_seconds,

@@ -44,38 +44,11 @@ fn physical(truth: &Value) -> Vec<(&'static str, f64)> {
     ]
 }
 
-/// The tie spec of the arm's equations, with the known `g`, `l1` and gear ratio of the truth.
+/// The tie spec of the arm's equations (`pendulum_sim::ArmTie`), with the known `g`, `l1` and
+/// gear ratio of the truth, and its Coulomb friction `cf · sign(q')`.
 fn arm_spec(truth: &Value) -> Value {
     let p = |k: &str| truth["parameters"][k].as_f64().unwrap();
-    let (g, l1, gr) = (p("g"), p("l1"), p("gr"));
-    json!({
-        "parameters": ["Ia", "I2", "Ir", "mr1", "mr2", "b1", "cf1", "b2", "cf2"],
-        "equations": {
-            "q1": {
-                "q1''": {"Ia": 1.0, "I2": 1.0, "Ir": gr * gr + 1.0},
-                "q1''*cos(q2)": {"mr2": 2.0 * l1},
-                "q2''": {"I2": 1.0, "Ir": -gr},
-                "q2''*cos(q2)": {"mr2": l1},
-                "sin(q2)*q1'*q2'": {"mr2": -2.0 * l1},
-                "sin(q2)*q2'^2": {"mr2": -l1},
-                "sin(q1)": {"mr1": g},
-                "sin(q1+q2)": {"mr2": g},
-                "q1'": {"b1": 1.0},
-                "sign(q1')": {"cf1": 1.0},
-                "tau1": -1.0
-            },
-            "q2": {
-                "q2''": {"I2": 1.0, "Ir": gr * gr},
-                "q1''": {"I2": 1.0, "Ir": -gr},
-                "q1''*cos(q2)": {"mr2": l1},
-                "sin(q2)*q1'^2": {"mr2": l1},
-                "sin(q1+q2)": {"mr2": g},
-                "q2'": {"b2": 1.0},
-                "sign(q2')": {"cf2": 1.0},
-                "tau2": -1.0
-            }
-        }
-    })
+    serde_json::to_value(pendulum_sim::ArmTie::new(p("l1"), p("g"), p("gr"), 1.0)).unwrap()
 }
 
 /// The truth's `identify` options less `--terms` (the record's coordinates, drives, window).

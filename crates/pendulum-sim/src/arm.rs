@@ -1,6 +1,8 @@
 //! A double pendulum driven by joint torques like a robot arm, with known truth:
 //! [`TorqueDoublePendulum`] (the DFKI acrobot/pendubot), its [`ArmParameters`] and [`Torque`]s.
 
+use std::collections::BTreeMap;
+
 use serde::{Deserialize, Serialize};
 
 use crate::equations::{
@@ -139,6 +141,74 @@ impl ArmParameters {
         cf1: 0.093,
         cf2: 0.078,
     };
+}
+
+/// The physical parameters the arm's equations are linear in, in the published file's names:
+/// `Ia = I1 + m2 l1²`, `I2`, `Ir`, `mr1 = m1 r1 + m2 l1`, `mr2 = m2 r2`, `b1`, `cf1`, `b2`, `cf2`
+/// (`l1`, `g` and the gear ratio known).
+pub const ARM_PARAMETERS: [&str; 9] = ["Ia", "I2", "Ir", "mr1", "mr2", "b1", "cf1", "b2", "cf2"];
+
+/// A term's coefficient in the arm's torque form `A_i q_i'' + Σ a_k g_k − τ_i = 0`: a known
+/// number, or a linear combination of [`ARM_PARAMETERS`] (serialised as a number or as an object
+/// of a parameter's name to its factor, the form `hbid identify --tie` reads).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(untagged)]
+pub enum ArmCoefficient {
+    /// A known coefficient (a torque's −1).
+    Fixed(f64),
+    /// `Σ factor · parameter`.
+    Linear(BTreeMap<&'static str, f64>),
+}
+
+/// The arm's equations with every coefficient written in [`ARM_PARAMETERS`]: the spec of a tied
+/// fit (`hbid identify --tie`), written once here beside the equations it ties
+/// ([`TorqueDoublePendulum::normalised_equations`] divides each equation by its own
+/// acceleration's constant part, `A1 = Ia + I2 + (gr² + 1) Ir`, `A2 = I2 + gr² Ir`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ArmTie {
+    /// [`ARM_PARAMETERS`].
+    pub parameters: [&'static str; 9],
+    /// Per coordinate (`q1`, `q2`), each term's coefficient, the own acceleration's among them.
+    pub equations: BTreeMap<&'static str, BTreeMap<&'static str, ArmCoefficient>>,
+}
+
+impl ArmTie {
+    /// The tie of an arm with link length `l1`, gravity `g` and gear ratio `gr` known, its dry
+    /// friction `cf · coulomb · sign(q')` (`coulomb` is 1 for this simulator's `cf · sign(q')`,
+    /// π/2 for the published model's `cf · atan(100 q')` beyond a slow speed).
+    pub fn new(l1: f64, g: f64, gr: f64, coulomb: f64) -> Self {
+        use ArmCoefficient::{Fixed, Linear};
+        let lin = |parts: &[(&'static str, f64)]| Linear(parts.iter().copied().collect());
+        let q1 = [
+            (Q1_DD, lin(&[("Ia", 1.0), ("I2", 1.0), ("Ir", gr * gr + 1.0)])),
+            (Q1_DD_COS_Q2, lin(&[("mr2", 2.0 * l1)])),
+            (Q2_DD, lin(&[("I2", 1.0), ("Ir", -gr)])),
+            (Q2_DD_COS_Q2, lin(&[("mr2", l1)])),
+            (SIN_Q2_Q1_D_Q2_D, lin(&[("mr2", -2.0 * l1)])),
+            (SIN_Q2_Q2_D_SQ, lin(&[("mr2", -l1)])),
+            (SIN_Q1, lin(&[("mr1", g)])),
+            (SIN_Q1_PLUS_Q2, lin(&[("mr2", g)])),
+            (Q1_D, lin(&[("b1", 1.0)])),
+            (SIGN_Q1_D, lin(&[("cf1", coulomb)])),
+            (TAU1, Fixed(-1.0)),
+        ];
+        let q2 = [
+            (Q2_DD, lin(&[("I2", 1.0), ("Ir", gr * gr)])),
+            (Q1_DD, lin(&[("I2", 1.0), ("Ir", -gr)])),
+            (Q1_DD_COS_Q2, lin(&[("mr2", l1)])),
+            (SIN_Q2_Q1_D_SQ, lin(&[("mr2", l1)])),
+            (SIN_Q1_PLUS_Q2, lin(&[("mr2", g)])),
+            (Q2_D, lin(&[("b2", 1.0)])),
+            (SIGN_Q2_D, lin(&[("cf2", coulomb)])),
+            (TAU2, Fixed(-1.0)),
+        ];
+        Self {
+            parameters: ARM_PARAMETERS,
+            equations: [("q1", q1.into_iter().collect()), ("q2", q2.into_iter().collect())]
+                .into_iter()
+                .collect(),
+        }
+    }
 }
 
 /// A double pendulum driven by joint torques like a robot arm: the DFKI acrobot/pendubot

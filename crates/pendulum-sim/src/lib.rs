@@ -117,7 +117,7 @@ mod tableau;
 pub mod truth;
 mod validate;
 
-pub use arm::{ArmParameters, Torque, TorqueDoublePendulum};
+pub use arm::{ARM_PARAMETERS, ArmCoefficient, ArmParameters, ArmTie, Torque, TorqueDoublePendulum};
 pub use circle_signal::Domain;
 pub use coupled_duffing::{BaseAcceleration, CoupledDuffing};
 pub use dop853::{Dop853, OdeSystem, Stats, Tolerances};

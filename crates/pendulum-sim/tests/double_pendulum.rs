@@ -257,6 +257,47 @@ fn the_arm_is_the_published_model_with_the_published_parameters() {
     }
 }
 
+/// The arm's tie (`ArmTie`), evaluated at the arm's parameters, is its normalised equations times
+/// each equation's own-acceleration coefficient: the same terms, the same numbers to rounding.
+#[test]
+fn the_arms_tie_is_its_equations_in_the_physical_parameters() {
+    use pendulum_sim::{ARM_PARAMETERS, ArmCoefficient, ArmTie};
+    let p = ArmParameters::DFKI_A0;
+    let values = [
+        p.i1 + p.m2 * p.l1 * p.l1,
+        p.i2,
+        p.ir,
+        p.m1 * p.r1 + p.m2 * p.l1,
+        p.m2 * p.r2,
+        p.b1,
+        p.cf1,
+        p.b2,
+        p.cf2,
+    ];
+    let tie = ArmTie::new(p.l1, p.g, p.gr, 1.0);
+    assert_eq!(tie.parameters, ARM_PARAMETERS);
+    let value = |c: &ArmCoefficient| match c {
+        ArmCoefficient::Fixed(v) => *v,
+        ArmCoefficient::Linear(parts) => parts
+            .iter()
+            .map(|(name, factor)| factor * values[ARM_PARAMETERS.iter().position(|n| n == name).unwrap()])
+            .sum(),
+    };
+    let equations = TorqueDoublePendulum::new(p).unwrap().normalised_equations();
+    for (equation, q) in equations.iter().zip(["q1", "q2"]) {
+        let tied = &tie.equations[q];
+        let own = value(&tied[equation.acceleration]);
+        assert_eq!(tied.len(), equation.terms.len() + 1, "{q}");
+        for (name, coefficient) in &equation.terms {
+            let got = value(&tied[name.as_ref()]) / own;
+            assert!(
+                (got - coefficient).abs() <= 1e-12 * coefficient.abs().max(1.0),
+                "{q}: {name}: {got} against {coefficient}"
+            );
+        }
+    }
+}
+
 /// The relative drift of the energy along a run: `max |E − E0| / E0`.
 fn energy_drift(energy: impl Fn(&[f64], &[f64]) -> f64, run: &pendulum_sim::MultiTrajectory) -> f64 {
     let at = |i: usize| energy(&[run.q[0][i], run.q[1][i]], &[run.v[0][i], run.v[1][i]]);
