@@ -310,7 +310,7 @@ fn bad_files_name_the_problem() {
 
 /// A record where no window of the weak form fits says so in one line, naming the window and
 /// the longest stretch, and writes no model: one too short, and one whose logger dropped every
-/// seventh row (gaps a window never spans).
+/// seventh row (gaps a window never spans), of one coordinate and of two.
 #[test]
 fn a_record_no_window_fits_is_named_and_writes_nothing() {
     let dir = scratch("nowindow");
@@ -355,6 +355,52 @@ fn a_record_no_window_fits_is_named_and_writes_nothing() {
         assert!(line.contains("--window"), "{line}");
         assert!(!model.exists(), "a model was written");
     }
+    // A system: the double pendulum's two angles, the same rows dropped from both.
+    let dp = dir.join("dp.csv");
+    let out = hbid(&[
+        "simulate",
+        "--system",
+        "double-pendulum",
+        "--samples",
+        "3000",
+        "--out",
+        dp.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = std::fs::read_to_string(&dp).unwrap();
+    let mut lines = text.lines();
+    let mut kept = format!("{}\n", lines.next().unwrap());
+    for (i, line) in lines.enumerate() {
+        if i % 7 != 3 {
+            kept.push_str(line);
+            kept.push('\n');
+        }
+    }
+    std::fs::write(&dp, kept).unwrap();
+    let out = hbid(&[
+        "identify",
+        dp.to_str().unwrap(),
+        "--quiet",
+        "--coords",
+        "theta1,theta2",
+        "--save-model",
+        model.to_str().unwrap(),
+    ]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!err.contains("panicked"), "{err}");
+    let line = err
+        .lines()
+        .find(|l| l.starts_with("error:"))
+        .expect("an error line");
+    assert!(
+        line.contains(
+            "no window fits between the record's gaps: its longest stretch without one has 6 samples"
+        ),
+        "{line}"
+    );
+    assert!(line.contains("--window"), "{line}");
+    assert!(!model.exists(), "a model was written");
 }
 
 /// The paper's data set as `(t, theta)` rows.
