@@ -67,6 +67,10 @@ enum Command {
         /// Runs per size and method (the median is reported).
         #[arg(long, default_value_t = 3)]
         repeats: usize,
+        /// Further lengths that are only simulated (`hbid simulate` writes its record as it
+        /// integrates: its memory does not grow with the record); each file is removed after.
+        #[arg(long, value_delimiter = ',', default_value = "100000000")]
+        simulate_sizes: Vec<usize>,
     },
     /// Records shaped like real rigs' (`hbid simulate`), each identified by one `hbid identify`
     /// command with the truth beside the result; writes a Markdown report.
@@ -160,7 +164,8 @@ fn main() -> std::process::ExitCode {
             data,
             sizes,
             repeats,
-        } => scale::run(&out, &data, &sizes, repeats),
+            simulate_sizes,
+        } => scale::run(&out, &data, &sizes, repeats, &simulate_sizes),
         Command::RealRecords { out, data } => real_records::run(&out, &data),
         Command::Benchmarks { doc, out, work, peer } => {
             benchmarks::run(&doc, out.as_deref(), &work, peer.as_deref())

@@ -17,8 +17,24 @@ struct Run {
     error: f64,
 }
 
-/// Runs the study and writes the report to `out`.
-pub fn run(out: &Path, data: &Path, sizes: &[usize], repeats: usize) -> anyhow::Result<()> {
+/// One timed run of `hbid simulate`.
+#[derive(Debug, Clone, Copy)]
+struct Made {
+    samples: usize,
+    wall: f64,
+    peak_mib: f64,
+    bytes: u64,
+}
+
+/// Runs the study and writes the report to `out`: `hbid identify` on records of `sizes` samples,
+/// and `hbid simulate` making those and records of `simulate_sizes` samples.
+pub fn run(
+    out: &Path,
+    data: &Path,
+    sizes: &[usize],
+    repeats: usize,
+    simulate_sizes: &[usize],
+) -> anyhow::Result<()> {
     if sizes.is_empty() || repeats == 0 {
         bail!("give at least one size and one repeat");
     }
@@ -30,19 +46,10 @@ pub fn run(out: &Path, data: &Path, sizes: &[usize], repeats: usize) -> anyhow::
     std::fs::create_dir_all(data).with_context(|| format!("{}", data.display()))?;
     let methods = ["windowed", "upo"];
     let mut rows: Vec<(usize, &str, Run)> = Vec::new();
+    let mut made = Vec::new();
     for &n in sizes {
         let record = data.join(format!("pendulum_{n}.npy"));
-        if !record.exists() {
-            eprintln!("simulating {n} samples -> {}", record.display());
-            let status = Command::new(&hbid)
-                .args(["simulate", "--quiet", "--samples", &n.to_string(), "--out"])
-                .arg(&record)
-                .status()
-                .context("hbid simulate")?;
-            if !status.success() {
-                bail!("hbid simulate failed for {n} samples");
-            }
-        }
+        made.push(simulate(time, &hbid, n, &record)?);
         for method in methods {
             let mut runs: Vec<Run> = (0..repeats)
                 .map(|_| identify(time, &hbid, &record, method))
@@ -56,7 +63,14 @@ pub fn run(out: &Path, data: &Path, sizes: &[usize], repeats: usize) -> anyhow::
             rows.push((n, method, median));
         }
     }
-    let report = render(&rows, sizes, repeats)?;
+    for &n in simulate_sizes {
+        let record = data.join(format!("pendulum_{n}_simulated.npy"));
+        let result = simulate(time, &hbid, n, &record);
+        std::fs::remove_file(&record).ok();
+        made.push(result?);
+    }
+    let mut report = render(&rows, sizes, repeats)?;
+    render_simulate(&mut report, &made)?;
     if let Some(parent) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
         std::fs::create_dir_all(parent)?;
     }
@@ -89,6 +103,71 @@ pub(crate) fn build_hbid() -> anyhow::Result<PathBuf> {
     Ok(hbid)
 }
 
+/// `hbid simulate` of `n` samples of the paper's pendulum into `record`, under GNU time.
+fn simulate(time: &Path, hbid: &Path, n: usize, record: &Path) -> anyhow::Result<Made> {
+    eprintln!("simulating {n} samples -> {}", record.display());
+    let out = Command::new(time)
+        .arg("-v")
+        .arg(hbid)
+        .args(["simulate", "--quiet", "--samples", &n.to_string(), "--out"])
+        .arg(record)
+        .output()
+        .context("running hbid simulate")?;
+    let err = String::from_utf8_lossy(&out.stderr);
+    if !out.status.success() {
+        bail!("hbid simulate of {n} samples failed:\n{err}");
+    }
+    let (wall, peak_mib) = wall_and_peak(&err)?;
+    let bytes = std::fs::metadata(record)
+        .with_context(|| format!("{}", record.display()))?
+        .len();
+    Ok(Made {
+        samples: n,
+        wall,
+        peak_mib,
+        bytes,
+    })
+}
+
+/// The wall time (s) and the peak resident memory (MiB) in what `time -v` printed.
+fn wall_and_peak(err: &str) -> anyhow::Result<(f64, f64)> {
+    let field = |name: &str| -> anyhow::Result<String> {
+        err.lines()
+            .find_map(|l| l.trim().strip_prefix(name).map(|v| v.trim().to_owned()))
+            .with_context(|| format!("no '{name}' in the output of time -v"))
+    };
+    let wall = parse_clock(&field("Elapsed (wall clock) time (h:mm:ss or m:ss):")?)?;
+    let peak_kib: f64 = field("Maximum resident set size (kbytes):")?.parse()?;
+    Ok((wall, peak_kib / 1024.0))
+}
+
+/// The section on `hbid simulate`.
+fn render_simulate(s: &mut String, made: &[Made]) -> anyhow::Result<()> {
+    writeln!(s, "\n## `hbid simulate`\n")?;
+    writeln!(
+        s,
+        "The records above, and longer ones only simulated (removed after), each one run of \
+         `hbid simulate --samples N --out FILE.npy` under `/usr/bin/time -v`. The record is \
+         written as it is integrated, so the memory does not grow with it.\n"
+    )?;
+    writeln!(
+        s,
+        "| samples | wall time | per 10^6 samples | peak memory | file |\n| ---: | ---: | ---: | ---: | ---: |"
+    )?;
+    for m in made {
+        writeln!(
+            s,
+            "| {} | {:.2} s | {:.3} s | {:.0} MiB | {:.0} MiB |",
+            m.samples,
+            m.wall,
+            m.wall / (m.samples as f64 / 1e6),
+            m.peak_mib,
+            m.bytes as f64 / (1024.0 * 1024.0)
+        )?;
+    }
+    Ok(())
+}
+
 /// `hbid identify` with its defaults (1000 bootstrap resamples included) under GNU time.
 fn identify(time: &Path, hbid: &Path, record: &Path, method: &str) -> anyhow::Result<Run> {
     let out = Command::new(time)
@@ -105,13 +184,7 @@ fn identify(time: &Path, hbid: &Path, record: &Path, method: &str) -> anyhow::Re
             record.display()
         );
     }
-    let field = |name: &str| -> anyhow::Result<String> {
-        err.lines()
-            .find_map(|l| l.trim().strip_prefix(name).map(|v| v.trim().to_owned()))
-            .with_context(|| format!("no '{name}' in the output of time -v"))
-    };
-    let wall = parse_clock(&field("Elapsed (wall clock) time (h:mm:ss or m:ss):")?)?;
-    let peak_kib: f64 = field("Maximum resident set size (kbytes):")?.parse()?;
+    let (wall, peak_mib) = wall_and_peak(&err)?;
     let json: serde_json::Value = serde_json::from_slice(&out.stdout).context("hbid identify --json")?;
     let error = crate::identification::truth()?
         .coefficients()
@@ -135,7 +208,7 @@ fn identify(time: &Path, hbid: &Path, record: &Path, method: &str) -> anyhow::Re
         .collect();
     Ok(Run {
         wall,
-        peak_mib: peak_kib / 1024.0,
+        peak_mib,
         stages,
         error,
     })

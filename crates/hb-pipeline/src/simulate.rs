@@ -25,12 +25,11 @@ use hb_basis::{Harmonic, Polynomial};
 use hb_model::{Forcing, ModelForm, Names};
 use npyz::WriterBuilder;
 use pendulum_sim::TrueEquation;
-use pendulum_sim::observe::{AngleRange, Encoder, Gaps, Jitter};
+use pendulum_sim::observe::{AngleRange, Encoder, EncoderReader, Gaps, Jitter};
 use pendulum_sim::{
     ArmParameters, BaseAcceleration, CoupledDuffing, DoublePendulum, DriveHarmonic, DriveHarmonics, Duffing,
-    InFrame, Losses, MultiConfig, MultiState, MultiSystem, Pendulum, RecordFrame, SecondOrderSystem,
-    SimError, SimulationConfig, Sinusoid, SyntheticDrive, Tolerances, Torque, TorqueDoublePendulum,
-    Trajectory, simulate_with_progress,
+    InFrame, Losses, MultiConfig, MultiState, MultiSystem, Pendulum, RecordFrame, SimError, SimulationConfig,
+    Sinusoid, SyntheticDrive, Tolerances, Torque, TorqueDoublePendulum, simulate_each,
 };
 use serde::{Deserialize, Serialize};
 
@@ -701,24 +700,19 @@ impl System {
     }
 
     /// The drives as they enter the equations, in the record's frame `frame` (the system's time
-    /// `frame.system_time(t)`), at the times `t`: a drive that is an acceleration (a base's, or
+    /// `frame.system_time(t)`), at the time `t`, into `out`: a drive that is an acceleration (a base's, or
     /// the forcing of the Duffing oscillator) is `rate²` times the system's, the arm's torques
     /// are in N m at seconds already.
-    fn drives(&self, frame: &RecordFrame, t: &[f64]) -> Vec<Vec<f64>> {
+    fn drives_at(&self, frame: &RecordFrame, t: f64, out: &mut Vec<f64>) {
+        out.clear();
         let rate2 = frame.rate() * frame.rate();
-        let scaled = |drive: &dyn Fn(f64) -> f64| -> Vec<f64> {
-            t.iter().map(|&t| rate2 * drive(frame.system_time(t))).collect()
-        };
+        let tau = frame.system_time(t);
         match self {
-            Self::Pendulum(p) => vec![scaled(&|tau| p.drive(tau))],
-            Self::Duffing(d) => vec![scaled(&|tau| d.drive(tau))],
-            Self::DoublePendulum(p) => vec![scaled(&|tau| p.drive(tau))],
-            Self::Arm(a) => a
-                .torques()
-                .iter()
-                .map(|torque| t.iter().map(|&t| torque.at(t)).collect())
-                .collect(),
-            Self::CoupledDuffing(d) => vec![scaled(&|tau| d.drive().at(tau))],
+            Self::Pendulum(p) => out.push(rate2 * p.drive(tau)),
+            Self::Duffing(d) => out.push(rate2 * d.drive(tau)),
+            Self::DoublePendulum(p) => out.push(rate2 * p.drive(tau)),
+            Self::Arm(a) => out.extend(a.torques().iter().map(|torque| torque.at(t))),
+            Self::CoupledDuffing(d) => out.push(rate2 * d.drive().at(tau)),
         }
     }
 
@@ -1517,100 +1511,298 @@ pub struct Simulation {
     pub kept: Vec<bool>,
 }
 
-/// Simulates `rig`; `observer` hears the progress in samples.
-pub fn simulate(rig: &Rig, observer: &mut dyn Observer) -> Result<Simulation, RunError> {
+/// One cell of a coordinate's column as recorded: a number (radians or the displacement), or an
+/// encoder's count.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Cell {
+    Value(f64),
+    Count(u32),
+}
+
+impl Cell {
+    /// The number a reader of the printed cell gets.
+    fn number(self, decimals: Option<usize>) -> f64 {
+        match self {
+            Self::Value(v) => printed(v, decimals),
+            Self::Count(k) => f64::from(k),
+        }
+    }
+
+    /// The cell as printed.
+    fn text(self, decimals: Option<usize>) -> String {
+        match self {
+            Self::Value(v) => printed_text(v, decimals),
+            Self::Count(k) => k.to_string(),
+        }
+    }
+}
+
+/// How a coordinate's simulated value becomes its column: as it is, wrapped, or through its
+/// encoder (wrapped into its range, every turn kept, or the count).
+enum Report {
+    AsIs,
+    Wrapped,
+    Encoded(EncoderReader),
+    Continuous(EncoderReader),
+    Counts(EncoderReader),
+}
+
+impl Report {
+    /// Coordinate `c`'s report of the rig's record.
+    fn new(rig: &Rig, c: usize) -> Self {
+        let o = &rig.options;
+        match (&rig.system, rig.encoder) {
+            (System::Pendulum(_), None) if o.unwrapped => Self::AsIs,
+            (System::Pendulum(_), None) => Self::Wrapped,
+            (System::Pendulum(_), Some(e)) if o.raw_counts => Self::Counts(e.reader()),
+            (System::Pendulum(_), Some(e)) if o.unwrapped => Self::Continuous(e.reader()),
+            (System::Pendulum(_), Some(e)) => Self::Encoded(e.reader()),
+            (System::Duffing(_), None) => Self::AsIs,
+            (System::Duffing(_), Some(e)) => Self::Continuous(e.reader()),
+            (_, encoder) => {
+                let wrapped = o.system.domain() == Domain::Circle && !o.unwrapped;
+                // Each coordinate's encoder draws from its own stream of the seed.
+                match (encoder.map(|e| e.with_stream(c as u64)), wrapped) {
+                    (None, true) => Self::Wrapped,
+                    (None, false) => Self::AsIs,
+                    (Some(e), true) => Self::Encoded(e.reader()),
+                    (Some(e), false) => Self::Continuous(e.reader()),
+                }
+            }
+        }
+    }
+
+    /// The column's cell of the next sample, whose simulated value is `x`.
+    fn cell(&mut self, x: f64) -> Cell {
+        match self {
+            Self::AsIs => Cell::Value(x),
+            Self::Wrapped => Cell::Value(circle_signal::wrap(x)),
+            Self::Encoded(r) => Cell::Value(r.observe(x)),
+            Self::Continuous(r) => Cell::Value(r.observe_continuous(x)),
+            Self::Counts(r) => Cell::Count(r.observe_count(x).expect("checked: «raw_counts» needs «counts»")),
+        }
+    }
+}
+
+/// One sample of a simulated record, as [`each_sample`] gives it.
+struct Sample<'a> {
+    /// Whether the record keeps it (`false` inside a gap).
+    kept: bool,
+    /// The time stamp as written (jittered; before printing).
+    stamp: f64,
+    /// Each coordinate's cell.
+    coordinates: &'a [Cell],
+    /// Each coordinate's clean velocity.
+    velocities: &'a [f64],
+    /// Each drive as it enters the equations.
+    drives: &'a [f64],
+}
+
+/// Simulates `rig` and gives each sample to `sample` in order, holding none: the one way a
+/// simulated record is made, whether it is kept ([`simulate`]) or written as it comes
+/// ([`simulate_to`]). `observer` hears the progress in samples.
+fn each_sample(
+    rig: &Rig,
+    observer: &mut dyn Observer,
+    mut sample: impl FnMut(&Sample<'_>),
+) -> Result<(), RunError> {
     observer.stage(Stage::Simulate);
     let config = &rig.config;
     let samples = config.samples();
     let o = &rig.options;
+    let starts = match &rig.gaps {
+        Some(g) => g.starts(samples).map_err(on("gaps"))?,
+        None => Vec::new(),
+    };
+    let gap = rig.gaps.map_or(0, |g| g.length());
+    let mut next_gap = starts.iter().copied().peekable();
+    let mut jitter = rig.jitter.map(|j| j.stamps());
+    let step = config.sample_step();
+    let coordinates = rig.coordinates();
+    let mut reports: Vec<Report> = (0..coordinates).map(|c| Report::new(rig, c)).collect();
+    let (mut cells, mut drives) = (Vec::with_capacity(coordinates), Vec::new());
+    let mut one = |n: usize, t: f64, q: &[f64], v: &[f64]| {
+        let stamp = match o.time_origin {
+            TimeOrigin::Drive => t,
+            TimeOrigin::FirstSample => n as f64 * step,
+        };
+        let stamp = jitter.as_mut().map_or(stamp, |j| j.stamp(stamp));
+        cells.clear();
+        cells.extend(reports.iter_mut().zip(q).map(|(r, &x)| r.cell(x)));
+        // The drives at the instants the samples were taken, in the simulation's frame.
+        rig.system.drives_at(&rig.frame, t, &mut drives);
+        while next_gap.next_if(|&start| start + gap <= n).is_some() {}
+        let kept = next_gap.peek().is_none_or(|&start| n < start);
+        sample(&Sample {
+            kept,
+            stamp,
+            coordinates: &cells,
+            velocities: v,
+            drives: &drives,
+        });
+    };
     let mut progress = |done: usize, total: usize| observer.progress(done, total);
-    let (times, coordinates, velocities) = match (&rig.system, &rig.initial) {
+    match (&rig.system, &rig.initial) {
         (System::Pendulum(_) | System::Duffing(_), _) => {
-            let traj = match (&rig.system, o.drive_frequency) {
-                (System::Pendulum(p), None) => run(p, config, &mut progress)?,
-                (System::Pendulum(p), Some(_)) => run(&InFrame::new(*p, rig.frame), config, &mut progress)?,
-                (System::Duffing(d), None) => run(d, config, &mut progress)?,
-                (System::Duffing(d), Some(_)) => run(&InFrame::new(*d, rig.frame), config, &mut progress)?,
+            let mut each = |n: usize, t: f64, x: f64, v: f64| one(n, t, &[x], &[v]);
+            match (&rig.system, o.drive_frequency) {
+                (System::Pendulum(p), None) => simulate_each(p, config, &mut progress, &mut each)?,
+                (System::Pendulum(p), Some(_)) => {
+                    simulate_each(&InFrame::new(*p, rig.frame), config, &mut progress, &mut each)?;
+                }
+                (System::Duffing(d), None) => simulate_each(d, config, &mut progress, &mut each)?,
+                (System::Duffing(d), Some(_)) => {
+                    simulate_each(&InFrame::new(*d, rig.frame), config, &mut progress, &mut each)?;
+                }
                 _ => unreachable!("a system of one coordinate"),
-            };
-            let x = match (&rig.system, rig.encoder) {
-                (System::Pendulum(_), None) if o.unwrapped => Reported::Values(traj.theta.clone()),
-                (System::Pendulum(_), None) => {
-                    Reported::Values(traj.theta.iter().map(|&x| circle_signal::wrap(x)).collect())
-                }
-                (System::Pendulum(_), Some(e)) if o.raw_counts => Reported::Counts(
-                    e.observe_counts(&traj.theta)
-                        .ok_or_else(|| OptionError::sentence("raw_counts", "needs «counts»"))?,
-                ),
-                (System::Pendulum(_), Some(e)) if o.unwrapped => {
-                    Reported::Values(e.observe_continuous(&traj.theta))
-                }
-                (System::Pendulum(_), Some(e)) => Reported::Values(e.observe(&traj.theta)),
-                (_, None) => Reported::Values(traj.theta.clone()),
-                (_, Some(e)) => Reported::Values(e.observe_continuous(&traj.theta)),
-            };
-            (traj.t, vec![x], vec![traj.omega])
+            }
         }
         (system, Some(initial)) => {
             let system = system.multi().expect("a system of several coordinates");
             let multi = MultiConfig::from_sampling(config.clone(), initial.clone());
-            let traj = pendulum_sim::multi::simulate_with_progress(
-                &InFrame::new(system, rig.frame),
-                &multi,
-                &mut progress,
-            )?;
-            let circle = o.system.domain() == Domain::Circle;
-            let coordinates = traj
-                .q
-                .iter()
-                .enumerate()
-                .map(|(c, q)| {
-                    // Each coordinate's encoder draws from its own stream of the seed.
-                    let encoder = rig.encoder.map(|e| e.with_stream(c as u64));
-                    Reported::Values(match encoder {
-                        None if circle && !o.unwrapped => q.iter().map(|&x| circle_signal::wrap(x)).collect(),
-                        None => q.clone(),
-                        Some(e) if circle && !o.unwrapped => e.observe(q),
-                        Some(e) => e.observe_continuous(q),
-                    })
-                })
-                .collect();
-            (traj.t, coordinates, traj.v)
+            pendulum_sim::multi::simulate_each(&InFrame::new(system, rig.frame), &multi, &mut progress, one)?;
         }
         (_, None) => unreachable!("a system of several coordinates has its initial state"),
-    };
-    let mut t = match o.time_origin {
-        TimeOrigin::Drive => times.clone(),
-        TimeOrigin::FirstSample => {
-            let h = config.sample_step();
-            (0..times.len()).map(|n| n as f64 * h).collect()
-        }
-    };
-    if let Some(jitter) = &rig.jitter {
-        t = jitter.apply(&t);
     }
-    // The drives at the instants the samples were taken, in the simulation's frame.
-    let drives = rig.system.drives(&rig.frame, &times);
-    let kept = match &rig.gaps {
-        Some(g) => g.kept(samples).map_err(on("gaps"))?,
-        None => vec![true; samples],
-    };
+    Ok(())
+}
+
+/// Simulates `rig`; `observer` hears the progress in samples. The whole record is kept (see
+/// [`simulate_to`] for a record written as it is made, of any length).
+pub fn simulate(rig: &Rig, observer: &mut dyn Observer) -> Result<Simulation, RunError> {
+    let samples = rig.config.samples();
+    let coordinates = rig.coordinates();
+    let counts = rig.writes_counts();
+    let mut t = Vec::with_capacity(samples);
+    let mut reported: Vec<Reported> = (0..coordinates)
+        .map(|_| {
+            if counts {
+                Reported::Counts(Vec::with_capacity(samples))
+            } else {
+                Reported::Values(Vec::with_capacity(samples))
+            }
+        })
+        .collect();
+    let mut velocities = vec![Vec::with_capacity(samples); coordinates];
+    let mut drives: Vec<Vec<f64>> = Vec::new();
+    let mut kept = Vec::with_capacity(samples);
+    each_sample(rig, observer, |s| {
+        t.push(s.stamp);
+        for (column, &cell) in reported.iter_mut().zip(s.coordinates) {
+            match (column, cell) {
+                (Reported::Values(x), Cell::Value(v)) => x.push(v),
+                (Reported::Counts(x), Cell::Count(k)) => x.push(k),
+                _ => unreachable!("a column is counts or values throughout"),
+            }
+        }
+        for (column, &v) in velocities.iter_mut().zip(s.velocities) {
+            column.push(v);
+        }
+        drives.resize_with(s.drives.len(), || Vec::with_capacity(samples));
+        for (column, &p) in drives.iter_mut().zip(s.drives) {
+            column.push(p);
+        }
+        kept.push(s.kept);
+    })?;
     Ok(Simulation {
         rig: rig.clone(),
         t,
-        coordinates,
+        coordinates: reported,
         velocities,
         drives,
         kept,
     })
 }
 
-fn run<S: SecondOrderSystem>(
-    system: &S,
-    config: &SimulationConfig,
-    progress: &mut dyn FnMut(usize, usize),
-) -> Result<Trajectory, RunError> {
-    Ok(simulate_with_progress(system, config, progress)?)
+/// Simulates `rig` and writes its record to `path` as it is made, in memory that does not grow
+/// with the record: the file [`Simulation::write`] writes of [`simulate`]'s record, byte for byte,
+/// written atomically (nothing at `path` unless the whole record is). Returns the rows written.
+/// `observer` hears the progress in samples.
+///
+/// Errors: the simulation's (the file is not written) and the file's. A failure to write is
+/// reported once the simulation has run to its end.
+pub fn simulate_to(rig: &Rig, path: &Path, observer: &mut dyn Observer) -> Result<usize, RunError> {
+    let rows = rig.rows()?;
+    let columns = rig.columns();
+    let (time_decimals, decimals) = (rig.options.time_decimals, rig.options.decimals);
+    let drives = rig.writes_drives();
+    let npy = is_npy(path);
+    let mut failed: Option<RunError> = None;
+    let written = write_atomically(path, |w: &mut dyn Write| {
+        let mut out = if npy {
+            Out::Npy(
+                npyz::WriteOptions::<f64>::new()
+                    .default_dtype()
+                    .shape(&[rows as u64, columns.len() as u64])
+                    .writer(w)
+                    .begin_nd()?,
+            )
+        } else {
+            writeln!(w, "{}", columns.join(","))?;
+            Out::Csv(w)
+        };
+        let mut error: Option<std::io::Error> = None;
+        let mut line = String::new();
+        let result = each_sample(rig, observer, |s| {
+            if !s.kept || error.is_some() {
+                return;
+            }
+            let drives: &[f64] = if drives { s.drives } else { &[] };
+            let outcome = match &mut out {
+                Out::Npy(writer) => {
+                    let cells = std::iter::once(printed(s.stamp, time_decimals))
+                        .chain(s.coordinates.iter().map(|c| c.number(decimals)))
+                        .chain(s.velocities.iter().chain(drives).map(|&v| printed(v, decimals)));
+                    writer.extend(cells)
+                }
+                Out::Csv(w) => {
+                    line.clear();
+                    line.push_str(&printed_text(s.stamp, time_decimals));
+                    for cell in s.coordinates.iter().map(|c| c.text(decimals)).chain(
+                        s.velocities
+                            .iter()
+                            .chain(drives)
+                            .map(|&v| printed_text(v, decimals)),
+                    ) {
+                        line.push(',');
+                        line.push_str(&cell);
+                    }
+                    line.push('\n');
+                    w.write_all(line.as_bytes())
+                }
+            };
+            if let Err(e) = outcome {
+                error = Some(e);
+            }
+        });
+        if let Err(e) = result {
+            failed = Some(e);
+            return Err(std::io::Error::other("the simulation failed"));
+        }
+        if let Some(e) = error {
+            return Err(e);
+        }
+        match out {
+            Out::Npy(writer) => writer.finish(),
+            Out::Csv(_) => Ok(()),
+        }
+    });
+    match (failed, written) {
+        (Some(e), _) => Err(e),
+        (None, Err(e)) => Err(e.into()),
+        (None, Ok(())) => Ok(rows),
+    }
+}
+
+/// A record's file being written.
+enum Out<'w> {
+    Npy(npyz::NpyWriter<f64, &'w mut dyn Write>),
+    Csv(&'w mut dyn Write),
+}
+
+/// Whether `path` names a `.npy` file (CSV otherwise).
+fn is_npy(path: &Path) -> bool {
+    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("npy"))
 }
 
 /// `v` printed with `decimals`, or in the shortest form that reads back as `v`.
@@ -1635,27 +1827,12 @@ impl Simulation {
         &self.rig
     }
 
-    /// Whether the drives are written: always for a measured input, with `write_drive` otherwise.
-    fn writes_drives(&self) -> bool {
-        self.rig.options.write_drive || self.rig.options.system.measured_input()
-    }
-
     /// The columns written: time, the coordinates, their velocities, and the drives that are
     /// written (`t,theta,omega` and `p` with `write_drive` for the pendulum, `count` for `theta`
     /// with `raw_counts`; `t,x,v[,p]`; `t,theta1,theta2,omega1,omega2[,p]`;
     /// `t,q1,q2,v1,v2,tau1,tau2`; `t,x1,x2,v1,v2,a`).
     pub fn columns(&self) -> Vec<&'static str> {
-        let (coordinates, velocities, drives) = self.rig.options.system.column_names();
-        let mut columns = vec!["t"];
-        match self.coordinates.first() {
-            Some(Reported::Counts(_)) => columns.push("count"),
-            _ => columns.extend(coordinates),
-        }
-        columns.extend(velocities);
-        if self.writes_drives() {
-            columns.extend(drives);
-        }
-        columns
+        self.rig.columns()
     }
 
     /// Rows of the record (samples kept).
@@ -1663,20 +1840,26 @@ impl Simulation {
         self.kept.iter().filter(|&&k| k).count()
     }
 
-    /// The cells of sample `n` as `cell` prints each: the time stamp, each coordinate (a count as
-    /// it is), each velocity and each drive written.
-    fn cells<T>(&self, n: usize, cell: impl Fn(f64, Option<usize>) -> T, count: impl Fn(u32) -> T) -> Vec<T> {
+    /// The cells of sample `n`: the time stamp, each coordinate, each velocity and each drive
+    /// written.
+    fn cells(&self, n: usize) -> impl Iterator<Item = (Cell, Option<usize>)> + '_ {
         let (td, vd) = (self.rig.options.time_decimals, self.rig.options.decimals);
-        let mut row = vec![cell(self.t[n], td)];
-        row.extend(self.coordinates.iter().map(|x| match x {
-            Reported::Values(x) => cell(x[n], vd),
-            Reported::Counts(k) => count(k[n]),
-        }));
-        row.extend(self.velocities.iter().map(|v| cell(v[n], vd)));
-        if self.writes_drives() {
-            row.extend(self.drives.iter().map(|p| cell(p[n], vd)));
-        }
-        row
+        let drives: &[Vec<f64>] = if self.rig.writes_drives() {
+            &self.drives
+        } else {
+            &[]
+        };
+        std::iter::once((Cell::Value(self.t[n]), td))
+            .chain(self.coordinates.iter().map(move |x| match x {
+                Reported::Values(x) => (Cell::Value(x[n]), vd),
+                Reported::Counts(k) => (Cell::Count(k[n]), vd),
+            }))
+            .chain(
+                self.velocities
+                    .iter()
+                    .chain(drives)
+                    .map(move |v| (Cell::Value(v[n]), vd)),
+            )
     }
 
     /// The record's rows as they are written, each `[t, x, v]` (and `p`; a system's coordinates,
@@ -1685,32 +1868,32 @@ impl Simulation {
     pub fn table(&self) -> Vec<Vec<f64>> {
         (0..self.t.len())
             .filter(|&n| self.kept[n])
-            .map(|n| self.cells(n, printed, f64::from))
+            .map(|n| self.cells(n).map(|(c, d)| c.number(d)).collect())
             .collect()
     }
 
     /// Writes the record atomically: `.npy` (rows × columns, `f8`) or CSV (anything else).
     pub fn write(&self, path: &Path) -> Result<(), OutputError> {
-        let npy = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("npy"));
         let columns = self.columns();
-        if npy {
-            let table = self.table();
+        let rows = (0..self.t.len()).filter(|&n| self.kept[n]);
+        if is_npy(path) {
             return write_atomically(path, |w: &mut dyn Write| {
                 let mut writer = npyz::WriteOptions::<f64>::new()
                     .default_dtype()
-                    .shape(&[table.len() as u64, columns.len() as u64])
+                    .shape(&[self.rows() as u64, columns.len() as u64])
                     .writer(w)
                     .begin_nd()?;
-                for row in &table {
-                    writer.extend(row.iter().copied())?;
+                for n in rows {
+                    writer.extend(self.cells(n).map(|(c, d)| c.number(d)))?;
                 }
                 writer.finish()
             });
         }
         write_atomically(path, |w: &mut dyn Write| {
             writeln!(w, "{}", columns.join(","))?;
-            for n in (0..self.t.len()).filter(|&n| self.kept[n]) {
-                writeln!(w, "{}", self.cells(n, printed_text, |k| k.to_string()).join(","))?;
+            for n in rows {
+                let cells: Vec<String> = self.cells(n).map(|(c, d)| c.text(d)).collect();
+                writeln!(w, "{}", cells.join(","))?;
             }
             Ok(())
         })
@@ -1721,6 +1904,56 @@ impl Simulation {
     /// one equation per coordinate.
     pub fn truth(&self) -> Result<Truth, RunError> {
         truth(&self.rig, self.rows(), self.columns())
+    }
+}
+
+impl Rig {
+    /// The coordinates simulated.
+    fn coordinates(&self) -> usize {
+        self.initial.as_ref().map_or(1, MultiState::coordinates)
+    }
+
+    /// Whether the coordinate's column holds the encoder's counts.
+    fn writes_counts(&self) -> bool {
+        matches!(self.system, System::Pendulum(_)) && self.encoder.is_some() && self.options.raw_counts
+    }
+
+    /// Whether the drives are written: always for a measured input, with `write_drive` otherwise.
+    fn writes_drives(&self) -> bool {
+        self.options.write_drive || self.options.system.measured_input()
+    }
+
+    /// The columns of the record (see [`Simulation::columns`]).
+    pub fn columns(&self) -> Vec<&'static str> {
+        let (coordinates, velocities, drives) = self.options.system.column_names();
+        let mut columns = vec!["t"];
+        if self.writes_counts() {
+            columns.push("count");
+        } else {
+            columns.extend(coordinates);
+        }
+        columns.extend(velocities);
+        if self.writes_drives() {
+            columns.extend(drives);
+        }
+        columns
+    }
+
+    /// The rows of the record: the samples less those in gaps.
+    pub fn rows(&self) -> Result<usize, RunError> {
+        let samples = self.config.samples();
+        Ok(match &self.gaps {
+            Some(g) => {
+                g.starts(samples).map_err(on("gaps"))?;
+                samples - g.count() * g.length()
+            }
+            None => samples,
+        })
+    }
+
+    /// The true equations of the record (see [`Simulation::truth`]).
+    pub fn truth(&self) -> Result<Truth, RunError> {
+        truth(self, self.rows()?, self.columns())
     }
 }
 

@@ -373,3 +373,44 @@ fn the_truths_hint_identifies_the_double_pendulum() {
     // the cap at the Nyquist frequency, 31, the worst is 8e-6); the tolerance is ten times that.
     assert!(worst < 5e-3, "worst relative error {worst:e}");
 }
+
+#[test]
+fn a_record_written_as_it_is_simulated_is_the_kept_records_file() {
+    let dir = tempfile::tempdir().unwrap();
+    for options in [
+        json!({"samples": 400}),
+        json!({"samples": 400, "counts": 4096, "raw_counts": true, "bit_errors": 0.02, "seed": 5, "gaps": "3:20"}),
+        json!({"samples": 400, "counts": 4096, "unwrapped": true, "noise": 0.02, "seed": 9, "jitter": 0.001,
+               "time_decimals": 4, "decimals": 5}),
+        json!({"samples": 400, "drive_frequency": 1.3, "sample_rate": 500, "counts": 4096, "angle_range": "positive",
+               "time_origin": "first-sample", "write_drive": true}),
+        json!({"system": "duffing", "samples": 400, "noise": 0.01, "seed": 2, "write_drive": true, "gaps": "2:10"}),
+        json!({"system": "double-pendulum", "samples": 400, "counts": 4096, "noise": 0.01, "seed": 4, "gaps": "2:30",
+               "jitter": 0.0001}),
+        json!({"system": "arm", "samples": 400, "counts": 4096, "seed": 1}),
+        json!({"system": "coupled-duffing", "samples": 400, "noise": 0.001, "seed": 8, "gaps": "1:5"}),
+    ] {
+        let rig =
+            Rig::from_json(options.clone()).unwrap_or_else(|e| panic!("{}", e.spelled(Spelling::Python)));
+        let kept = hb_pipeline::simulate(&rig, &mut ()).unwrap();
+        for ext in ["csv", "npy"] {
+            let (whole, streamed) = (
+                dir.path().join(format!("whole.{ext}")),
+                dir.path().join(format!("streamed.{ext}")),
+            );
+            kept.write(&whole).unwrap();
+            let rows = hb_pipeline::simulate::simulate_to(&rig, &streamed, &mut ()).unwrap();
+            assert_eq!(rows, kept.rows(), "{options}");
+            assert_eq!(
+                std::fs::read(&whole).unwrap(),
+                std::fs::read(&streamed).unwrap(),
+                "{options} {ext}"
+            );
+        }
+        assert_eq!(
+            serde_json::to_value(rig.truth().unwrap()).unwrap(),
+            truth_json(&kept),
+            "{options}"
+        );
+    }
+}

@@ -400,13 +400,38 @@ pub fn simulate<S: MultiSystem + ?Sized>(
 pub fn simulate_with_progress<S: MultiSystem + ?Sized>(
     system: &S,
     config: &MultiConfig,
-    mut progress: impl FnMut(usize, usize),
+    progress: impl FnMut(usize, usize),
 ) -> Result<MultiTrajectory, SimError> {
+    let n = {
+        let system: &dyn MultiSystem = &system;
+        matching_coordinates(system, &config.initial)?
+    };
+    let mut traj = MultiTrajectory::with_capacity(n, config.sampling.samples());
+    simulate_each(system, config, progress, |_, t, q, v| {
+        traj.t.push(t);
+        for c in 0..n {
+            traj.q[c].push(q[c]);
+            traj.v[c].push(v[c]);
+        }
+    })?;
+    Ok(traj)
+}
+
+/// [`simulate_with_progress`] without the trajectory: `sample(i, t_i, q, q')` is called for each
+/// sample in order with the coordinates and their velocities, the same numbers [`simulate`] keeps,
+/// so a record of any length is made in constant memory.
+///
+/// Errors: as [`simulate`].
+pub fn simulate_each<S: MultiSystem + ?Sized>(
+    system: &S,
+    config: &MultiConfig,
+    mut progress: impl FnMut(usize, usize),
+    mut sample: impl FnMut(usize, f64, &[f64], &[f64]),
+) -> Result<(), SimError> {
     let system: &dyn MultiSystem = &system;
     let n = matching_coordinates(system, &config.initial)?;
     let sampling = &config.sampling;
     let samples = sampling.samples();
-    let mut traj = MultiTrajectory::with_capacity(n, samples);
     let report_every = (samples / 100).max(1);
     progress(0, samples);
     let times = Times::Grid {
@@ -424,18 +449,14 @@ pub fn simulate_with_progress<S: MultiSystem + ?Sized>(
         usize::MAX,
         &times,
         &mut |i, y| {
-            traj.t.push(sampling.sample_time(i));
-            for c in 0..n {
-                traj.q[c].push(y[c]);
-                traj.v[c].push(y[n + c]);
-            }
+            sample(i, sampling.sample_time(i), &y[..n], &y[n..2 * n]);
             if (i + 1) % report_every == 0 {
                 progress(i + 1, samples);
             }
         },
     )?;
     progress(samples, samples);
-    Ok(traj)
+    Ok(())
 }
 
 /// The stroboscopic (Poincaré) section: the state once per forcing period at the phase of

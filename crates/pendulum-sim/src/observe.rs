@@ -294,28 +294,8 @@ impl Encoder {
     /// What the encoder reports of the angle `theta`: the count's angle `k · 2π / N` (with
     /// counts) or the angle itself, wrapped into the encoder's range (`[−π, π)` by default).
     pub fn observe(&self, theta: &[f64]) -> Vec<f64> {
-        match self.counts {
-            None => self
-                .readings(theta)
-                .into_iter()
-                .map(|v| self.range.wrap(v))
-                .collect(),
-            Some(n) => {
-                let n = i64::from(n);
-                self.turn_counts(theta)
-                    .into_iter()
-                    .map(|k| {
-                        let k = k.rem_euclid(n);
-                        let k = match self.range {
-                            AngleRange::Positive => k,
-                            AngleRange::Signed if 2 * k >= n => k - n,
-                            AngleRange::Signed => k,
-                        };
-                        TAU * k as f64 / n as f64
-                    })
-                    .collect()
-            }
-        }
+        let mut reader = self.reader();
+        theta.iter().map(|&v| reader.observe(v)).collect()
     }
 
     /// The angle as the encoder sees it, not wrapped: `θ_n − o + ε_n`, or with counts the whole
@@ -323,72 +303,128 @@ impl Encoder {
     /// angle (or, without counts and offset, of a displacement on the line with noise). Its wrap
     /// into the range is [`Encoder::observe`].
     pub fn observe_continuous(&self, theta: &[f64]) -> Vec<f64> {
-        match self.counts {
-            None => self.readings(theta),
-            Some(n) => self
-                .turn_counts(theta)
-                .into_iter()
-                .map(|k| TAU * k as f64 / f64::from(n))
-                .collect(),
-        }
+        let mut reader = self.reader();
+        theta.iter().map(|&v| reader.observe_continuous(v)).collect()
     }
 
     /// The counts the encoder reports, in `[0, N)`; `None` when the encoder has no counts per
     /// turn.
     pub fn observe_counts(&self, theta: &[f64]) -> Option<Vec<u32>> {
-        let n = i64::from(self.counts?);
-        Some(
-            self.turn_counts(theta)
-                .into_iter()
-                .map(|k| u32::try_from(k.rem_euclid(n)).expect("a count modulo a u32 fits a u32"))
-                .collect(),
-        )
+        self.counts?;
+        let mut reader = self.reader();
+        theta.iter().map(|&v| reader.observe_count(v)).collect()
     }
 
-    /// The whole counts over every turn, bit errors included. Needs counts.
-    fn turn_counts(&self, theta: &[f64]) -> Vec<i64> {
-        let n = self.counts.expect("called with counts only");
-        let per_radian = f64::from(n) / TAU;
-        let mut k: Vec<i64> = self
-            .readings(theta)
-            .into_iter()
-            .map(|v| (v * per_radian).round() as i64)
-            .collect();
-        if self.bit_error_rate > 0.0 {
-            let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
-            rng.set_stream(self.stream);
-            rng.set_word_pos(BIT_ERROR_WORD);
-            for count in &mut k {
-                if rng.random::<f64>() < self.bit_error_rate {
-                    let bit = Self::BIT_ERROR_BITS[rng.random_range(0..Self::BIT_ERROR_BITS.len())];
-                    let spike = 1i64 << bit;
-                    *count += if rng.random::<bool>() { spike } else { -spike };
-                }
+    /// The encoder's reports one sample at a time, in sample order: the numbers
+    /// [`observe`](Self::observe), [`observe_continuous`](Self::observe_continuous) and
+    /// [`observe_counts`](Self::observe_counts) give for a whole record, without holding it (a
+    /// record written as it is simulated). One reader serves one record: its noise and bit errors
+    /// go on from sample to sample.
+    ///
+    /// ```
+    /// use pendulum_sim::observe::Encoder;
+    ///
+    /// let encoder = Encoder::seeded(7).with_noise(0.01)?.with_counts(4096)?.with_bit_errors(0.1)?;
+    /// let theta: Vec<f64> = (0..100).map(|n| 0.1 * n as f64).collect();
+    /// let mut reader = encoder.reader();
+    /// let one_by_one: Vec<f64> = theta.iter().map(|&v| reader.observe(v)).collect();
+    /// assert_eq!(one_by_one, encoder.observe(&theta));
+    /// # Ok::<(), pendulum_sim::SimError>(())
+    /// ```
+    pub fn reader(&self) -> EncoderReader {
+        let mut noise = ChaCha8Rng::seed_from_u64(self.seed);
+        noise.set_stream(self.stream);
+        let mut errors = ChaCha8Rng::seed_from_u64(self.seed);
+        errors.set_stream(self.stream);
+        errors.set_word_pos(BIT_ERROR_WORD);
+        EncoderReader {
+            encoder: *self,
+            normal: Normal::new(0.0, self.sigma).expect("sigma checked finite and >= 0"),
+            noise,
+            errors,
+        }
+    }
+}
+
+/// An [`Encoder`]'s reports of a record one sample at a time ([`Encoder::reader`]).
+#[derive(Debug, Clone)]
+pub struct EncoderReader {
+    encoder: Encoder,
+    normal: Normal<f64>,
+    /// The noise's draws, one normal number per sample.
+    noise: ChaCha8Rng,
+    /// The bit errors' draws, from word `2^66` of the same seed and stream.
+    errors: ChaCha8Rng,
+}
+
+impl EncoderReader {
+    /// What the encoder reports of the next sample's angle `theta` ([`Encoder::observe`]).
+    pub fn observe(&mut self, theta: f64) -> f64 {
+        let e = self.encoder;
+        match e.counts {
+            None => {
+                let v = self.reading(theta);
+                e.range.wrap(v)
             }
+            Some(n) => {
+                let k = self.turn_count(theta, n);
+                let n = i64::from(n);
+                let k = k.rem_euclid(n);
+                let k = match e.range {
+                    AngleRange::Positive => k,
+                    AngleRange::Signed if 2 * k >= n => k - n,
+                    AngleRange::Signed => k,
+                };
+                TAU * k as f64 / n as f64
+            }
+        }
+    }
+
+    /// The next sample's angle as the encoder sees it, not wrapped
+    /// ([`Encoder::observe_continuous`]).
+    pub fn observe_continuous(&mut self, theta: f64) -> f64 {
+        match self.encoder.counts {
+            None => self.reading(theta),
+            Some(n) => TAU * self.turn_count(theta, n) as f64 / f64::from(n),
+        }
+    }
+
+    /// The count the encoder reports of the next sample, in `[0, N)`; `None` when the encoder has
+    /// no counts per turn (and then no sample is read).
+    pub fn observe_count(&mut self, theta: f64) -> Option<u32> {
+        let n = self.encoder.counts?;
+        let k = self.turn_count(theta, n);
+        Some(u32::try_from(k.rem_euclid(i64::from(n))).expect("a count modulo a u32 fits a u32"))
+    }
+
+    /// The whole count over every turn of `counts` per turn, its bit error included.
+    fn turn_count(&mut self, theta: f64, counts: u32) -> i64 {
+        let per_radian = f64::from(counts) / TAU;
+        let mut k = (self.reading(theta) * per_radian).round() as i64;
+        let rate = self.encoder.bit_error_rate;
+        if rate > 0.0 && self.errors.random::<f64>() < rate {
+            let bits = Encoder::BIT_ERROR_BITS;
+            let bit = bits[self.errors.random_range(0..bits.len())];
+            let spike = 1i64 << bit;
+            k += if self.errors.random::<bool>() {
+                spike
+            } else {
+                -spike
+            };
         }
         k
     }
 
     /// `θ_n − o + ε_n`: the offset, then the noise.
-    fn readings(&self, theta: &[f64]) -> Vec<f64> {
-        let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
-        rng.set_stream(self.stream);
-        let offset = self.offset;
-        match self.draw {
-            NormalDraw::Ziggurat => {
-                let normal = Normal::new(0.0, self.sigma).expect("sigma checked finite and >= 0");
-                theta
-                    .iter()
-                    .map(|&v| (v - offset) + normal.sample(&mut rng))
-                    .collect()
+    fn reading(&mut self, theta: f64) -> f64 {
+        let e = self.encoder;
+        match e.draw {
+            NormalDraw::Ziggurat => (theta - e.offset) + self.normal.sample(&mut self.noise),
+            NormalDraw::BoxMuller => {
+                let rng = &mut self.noise;
+                let (u1, u2): (f64, f64) = (rng.random_range(f64::EPSILON..1.0), rng.random());
+                (theta - e.offset) + e.sigma * (-2.0 * u1.ln()).sqrt() * (TAU * u2).cos()
             }
-            NormalDraw::BoxMuller => theta
-                .iter()
-                .map(|&v| {
-                    let (u1, u2): (f64, f64) = (rng.random_range(f64::EPSILON..1.0), rng.random());
-                    (v - offset) + self.sigma * (-2.0 * u1.ln()).sqrt() * (TAU * u2).cos()
-                })
-                .collect(),
         }
     }
 }
@@ -571,9 +607,32 @@ impl Jitter {
 
     /// The stamps written for samples taken at `t`.
     pub fn apply(&self, t: &[f64]) -> Vec<f64> {
+        let mut stamps = self.stamps();
+        t.iter().map(|&t| stamps.stamp(t)).collect()
+    }
+
+    /// The stamps one sample at a time, in sample order: the numbers [`apply`](Self::apply) gives
+    /// for a whole record, without holding it.
+    pub fn stamps(&self) -> JitterStamps {
         let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
         rng.set_word_pos(JITTER_WORD);
-        let normal = Normal::new(0.0, self.sigma).expect("sigma checked finite and >= 0");
-        t.iter().map(|&t| t + normal.sample(&mut rng)).collect()
+        JitterStamps {
+            normal: Normal::new(0.0, self.sigma).expect("sigma checked finite and >= 0"),
+            rng,
+        }
+    }
+}
+
+/// A [`Jitter`]'s stamps of a record one sample at a time ([`Jitter::stamps`]).
+#[derive(Debug, Clone)]
+pub struct JitterStamps {
+    normal: Normal<f64>,
+    rng: ChaCha8Rng,
+}
+
+impl JitterStamps {
+    /// The stamp written for the next sample, taken at `t`.
+    pub fn stamp(&mut self, t: f64) -> f64 {
+        t + self.normal.sample(&mut self.rng)
     }
 }

@@ -354,13 +354,39 @@ pub fn simulate<S: SecondOrderSystem>(system: &S, config: &SimulationConfig) -> 
 pub fn simulate_with_progress<S: SecondOrderSystem>(
     system: &S,
     config: &SimulationConfig,
-    mut progress: impl FnMut(usize, usize),
+    progress: impl FnMut(usize, usize),
 ) -> Result<Trajectory, SimError> {
     let mut traj = Trajectory {
         t: Vec::with_capacity(config.samples),
         theta: Vec::with_capacity(config.samples),
         omega: Vec::with_capacity(config.samples),
     };
+    simulate_each(system, config, progress, |_, t, theta, omega| {
+        traj.t.push(t);
+        traj.theta.push(theta);
+        traj.omega.push(omega);
+    })?;
+    Ok(traj)
+}
+
+/// [`simulate_with_progress`] without the trajectory: `sample(n, t_n, x_n, x'_n)` is called for
+/// each sample in order, the same numbers [`simulate`] keeps, so a record of any length is made in
+/// constant memory (written as it comes, say).
+///
+/// ```
+/// use pendulum_sim::{simulate, simulate_each, Pendulum, SimulationConfig};
+/// let cfg = SimulationConfig::paper().with_samples(50)?;
+/// let mut last = (0, 0.0);
+/// simulate_each(&Pendulum::paper(), &cfg, |_, _| {}, |n, _, x, _| last = (n, x))?;
+/// assert_eq!(last, (49, simulate(&Pendulum::paper(), &cfg)?.theta[49]));
+/// # Ok::<(), pendulum_sim::SimError>(())
+/// ```
+pub fn simulate_each<S: SecondOrderSystem>(
+    system: &S,
+    config: &SimulationConfig,
+    mut progress: impl FnMut(usize, usize),
+    mut sample: impl FnMut(usize, f64, f64, f64),
+) -> Result<(), SimError> {
     let mut ode = Flow::new(
         FirstOrder(OnMode::new(system)),
         0.0,
@@ -374,15 +400,13 @@ pub fn simulate_with_progress<S: SecondOrderSystem>(
     // so runs that differ only in their output grid follow the same numerical trajectory.
     ode.sample_grid(t_first, config.sample_step(), config.samples, |n, _, y| {
         // Absolute grid time computed from the absolute index: no drift over long records.
-        traj.t.push(config.sample_time(n));
-        traj.theta.push(y[0]);
-        traj.omega.push(y[1]);
+        sample(n, config.sample_time(n), y[0], y[1]);
         if (n + 1) % report_every == 0 {
             progress(n + 1, config.samples);
         }
     })?;
     progress(config.samples, config.samples);
-    Ok(traj)
+    Ok(())
 }
 
 /// The stroboscopic (Poincaré) section: the state once per forcing period, at the phase of

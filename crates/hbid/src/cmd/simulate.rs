@@ -460,11 +460,11 @@ pub fn run(args: &SimulateArgs, quiet: bool) -> anyhow::Result<()> {
     let rig = Rig::new(args.options())?;
     check_outputs(Some(&args.out), args.truth.as_deref())?;
     let mut console = Console::new("simulate", quiet, false);
-    let simulation = hb_pipeline::simulate(&rig, &mut console)?;
+    // Written as it is simulated: a record of any length in memory that does not grow with it.
+    hb_pipeline::simulate::simulate_to(&rig, &args.out, &mut console)?;
     console.finish();
-    simulation.write(&args.out)?;
     if let Some(path) = &args.truth {
-        write_truth(&simulation.truth()?, path)?;
+        write_truth(&rig.truth()?, path)?;
     }
     Ok(())
 }
