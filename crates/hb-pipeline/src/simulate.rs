@@ -1872,6 +1872,20 @@ impl Simulation {
             .collect()
     }
 
+    /// The record's columns as they are written (in the order of [`Simulation::columns`]), each
+    /// the numbers a reader of the printed text gets: [`table`](Self::table) by column, without a
+    /// vector per row.
+    pub fn table_columns(&self) -> Vec<Vec<f64>> {
+        let rows = self.rows();
+        let mut columns = vec![Vec::with_capacity(rows); self.columns().len()];
+        for n in (0..self.t.len()).filter(|&n| self.kept[n]) {
+            for (column, (c, d)) in columns.iter_mut().zip(self.cells(n)) {
+                column.push(c.number(d));
+            }
+        }
+        columns
+    }
+
     /// Writes the record atomically: `.npy` (rows × columns, `f8`) or CSV (anything else).
     pub fn write(&self, path: &Path) -> Result<(), OutputError> {
         let columns = self.columns();

@@ -393,6 +393,9 @@ fn a_record_written_as_it_is_simulated_is_the_kept_records_file() {
         let rig =
             Rig::from_json(options.clone()).unwrap_or_else(|e| panic!("{}", e.spelled(Spelling::Python)));
         let kept = hb_pipeline::simulate(&rig, &mut ()).unwrap();
+        let table = kept.table();
+        let by_column: Vec<Vec<f64>> = (0..kept.columns().len()).map(|c| column(&table, c)).collect();
+        assert_eq!(kept.table_columns(), by_column, "{options}");
         for ext in ["csv", "npy"] {
             let (whole, streamed) = (
                 dir.path().join(format!("whole.{ext}")),

@@ -17,9 +17,8 @@ fn case(samples: usize, bootstrap: usize, noise: f64, seed: u64) -> Result<Strin
         ..SimulateOptions::default()
     })?;
     let simulation = hb_pipeline::simulate(&rig, &mut ())?;
-    let table = simulation.table();
-    let t: Vec<f64> = table.iter().map(|r| r[0]).collect();
-    let x: Vec<f64> = table.iter().map(|r| r[1]).collect();
+    let mut columns = simulation.table_columns().into_iter();
+    let (t, x) = (columns.next().unwrap_or_default(), columns.next().unwrap_or_default());
     let request = IdentifyRequest::new(IdentifyOptions {
         bootstrap,
         seed,

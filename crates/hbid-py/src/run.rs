@@ -410,10 +410,10 @@ pub fn simulate<'py>(
             }
             let json = serde_json::to_string(&record_truth)
                 .map_err(|e| hb_pipeline::OptionError::new("truth", e))?;
-            Ok::<_, hb_pipeline::RunError>((simulation.table(), simulation.columns(), json))
+            Ok::<_, hb_pipeline::RunError>((simulation.table_columns(), simulation.columns(), json))
         })
         .map_err(run_error)?;
-    let column = |i: usize| PyArray1::from_vec(py, table.iter().map(|row| row[i]).collect());
+    let column = |i: usize| PyArray1::from_slice(py, &table[i]);
     // A record is `t`, its coordinates, their velocities, then its drives: `x` and `v` are the
     // first coordinate and its velocity, `drive` the first drive written; `named` has every
     // column by its name (a system's `theta2`, `tau2`, ...).
