@@ -18,7 +18,10 @@ fn case(samples: usize, bootstrap: usize, noise: f64, seed: u64) -> Result<Strin
     })?;
     let simulation = hb_pipeline::simulate(&rig, &mut ())?;
     let mut columns = simulation.table_columns().into_iter();
-    let (t, x) = (columns.next().unwrap_or_default(), columns.next().unwrap_or_default());
+    let (t, x) = (
+        columns.next().unwrap_or_default(),
+        columns.next().unwrap_or_default(),
+    );
     let request = IdentifyRequest::new(IdentifyOptions {
         bootstrap,
         seed,

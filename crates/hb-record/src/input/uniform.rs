@@ -519,6 +519,11 @@ impl GridRecord {
         let origin = t[start];
         let tau = |i: usize| t[i] - origin;
         let starts = link(&t, &runs, dt);
+        // Whether `line` is the least-squares line through `(i, τ_i)` of every sample, in order
+        // (the record one run of single steps, its first sample at index 0). A refit whose
+        // indices are `0, 1, …, n − 1` again makes the same sums in the same order, so gives
+        // `line` back: it is not made.
+        let mut through_all = runs == [(0, n - 1)] && starts == [0.0];
         let mut line = least_squares(|f| {
             for (&(s, e), &k) in runs.iter().zip(&starts) {
                 for i in s..=e {
@@ -531,12 +536,15 @@ impl GridRecord {
         // (Each refit's indices are found once, for both of its passes.)
         let mut indices = Vec::new();
         for _ in 0..MAX_REFITS {
-            let next = least_squares_indexed(n, &tau, &mut indices, |i| {
+            let next = least_squares_indexed(n, &tau, &mut indices, &mut through_all, |i| {
                 let k = line.index(tau(i));
                 line.indexable(k, tau(i)).then_some(k)
             });
+            let Some(next) = next else {
+                break;
+            };
             match next {
-                Some(next) if next != line => line = next,
+                Refit::Line(next) if next != line => line = next,
                 _ => break,
             }
         }
@@ -614,23 +622,34 @@ impl GridRecord {
                 && (off_level(line, k, i).abs() <= tolerance
                     || (tau(i) - line.at(k)).abs() <= GRID_TOLERANCE * line.b)
         };
+        // Whether every stamp fits `line` at index i (found by the last refit, which then gave
+        // `line` back).
+        let mut on_grid = false;
         for _ in 0..MAX_REFITS {
-            let next = least_squares_indexed(n, &tau, &mut indices, |i| {
+            let next = least_squares_indexed(n, &tau, &mut indices, &mut through_all, |i| {
                 let k = line.index(tau(i));
                 fits(line, k, i).then_some(k)
             });
             match next {
-                Some(next) if next != line && next.b.is_finite() && next.b > 0.0 => line = next,
+                Some(Refit::Same) => {
+                    on_grid = true;
+                    break;
+                }
+                Some(Refit::Line(next)) if next != line && next.b.is_finite() && next.b > 0.0 => line = next,
                 _ => break,
             }
         }
         drop(indices);
         // Grid times increase with the index: those of every stamp's index (and of the indices
         // next to them, where glitches are repaired) are finite when the extreme ones are.
-        let (lowest, highest) = (0..n).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), i| {
-            let k = line.index(tau(i));
-            (lo.min(k), hi.max(k))
-        });
+        let (lowest, highest) = if on_grid {
+            (0.0, (n - 1) as f64)
+        } else {
+            (0..n).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), i| {
+                let k = line.index(tau(i));
+                (lo.min(k), hi.max(k))
+            })
+        };
         if !(origin + line.at(lowest - 1.0)).is_finite() || !(origin + line.at(highest + 1.0)).is_finite() {
             return Err(InputError::TimeOverflow {
                 at: at(n - 1),
@@ -639,10 +658,15 @@ impl GridRecord {
         }
 
         let index = |i: usize| line.index(tau(i));
-        let bad = judge(n, |i| {
-            let k = index(i);
-            (k, fits(line, k, i))
-        });
+        // Every stamp fitting at its own index is good (every level 0, every stamp anchored).
+        let bad = if on_grid {
+            Vec::new()
+        } else {
+            judge(n, |i| {
+                let k = index(i);
+                (k, fits(line, k, i))
+            })
+        };
         // Stamps off their level by more than a quarter step (those within a jitter's tolerance
         // beyond it included), and repeated ones.
         let near = |i: usize| {
@@ -1128,6 +1152,10 @@ fn refine_step(t: &[f64], mut dt: f64) -> f64 {
 /// that of the line fitted to the runs linked so far, so that each gap is measured against the
 /// longest baseline there is.
 fn link(t: &[f64], runs: &[(usize, usize)], dt: f64) -> Vec<f64> {
+    if runs.len() <= 1 {
+        // Nothing to link: the one run starts at index 0.
+        return vec![0.0; runs.len()];
+    }
     let longest = (0..runs.len())
         .max_by_key(|&r| (runs[r].1 - runs[r].0, std::cmp::Reverse(r)))
         .unwrap_or(0);
@@ -1233,17 +1261,37 @@ fn least_squares(visit: impl Fn(&mut dyn FnMut(f64, f64))) -> Option<Line> {
     })
 }
 
+/// A refit of a line.
+enum Refit {
+    /// The line through the points.
+    Line(Line),
+    /// The points are those the line was fitted to: it is the same line.
+    Same,
+}
+
 /// [`least_squares`] through the points `(index(i), tau(i))` of the samples `i < n` that have an
 /// index, each index found once for both passes (kept in `indices`, NaN for none): the same
-/// sums in the same order, so the same line.
+/// sums in the same order, so the same line. `through_all` says whether the line refitted was
+/// fitted to `(i, tau(i))` of every sample `i < n` in order; when the indices are `0, 1, …,
+/// n − 1` again, [`Refit::Same`] is returned without the sums. It is set for the line returned.
 fn least_squares_indexed(
     n: usize,
     tau: &impl Fn(usize) -> f64,
     indices: &mut Vec<f64>,
+    through_all: &mut bool,
     index: impl Fn(usize) -> Option<f64>,
-) -> Option<Line> {
+) -> Option<Refit> {
     indices.clear();
-    indices.extend((0..n).map(|i| index(i).unwrap_or(f64::NAN)));
+    let mut consecutive = true;
+    indices.extend((0..n).map(|i| {
+        let k = index(i).unwrap_or(f64::NAN);
+        consecutive &= k == i as f64;
+        k
+    }));
+    if consecutive && *through_all {
+        return Some(Refit::Same);
+    }
+    *through_all = consecutive;
     let indices = &*indices;
     least_squares(|f| {
         for (i, &k) in indices.iter().enumerate() {
@@ -1253,6 +1301,7 @@ fn least_squares_indexed(
             }
         }
     })
+    .map(Refit::Line)
 }
 
 /// A compensated (Neumaier) sum: exact to a few roundings whatever the number of terms.
@@ -1347,4 +1396,52 @@ fn expected_index(bad: &[usize], p: usize, n: usize, index: impl Fn(usize) -> f6
     }
     let j = (bad[last] + 1).min(n - 1);
     index(j) - (j as f64 - i as f64)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The refit spared when the indices are `0, 1, …, n − 1` again would have given the line
+    /// back to the bit; any other indices are fitted.
+    #[test]
+    fn a_refit_on_the_same_points_is_the_same_line() {
+        let n = 1000;
+        let t: Vec<f64> = (0..n)
+            .map(|i| 3.0 + i as f64 * 0.002 + 1e-5 * ((i * 7919 % 13) as f64 - 6.0))
+            .collect();
+        let tau = |i: usize| t[i] - t[0];
+        // As the fit over the one run makes it.
+        let line = least_squares(|f| {
+            for i in 0..n {
+                f(0.0 + i as f64, tau(i));
+            }
+        })
+        .unwrap();
+        let own = |i: usize| {
+            let k = line.index(tau(i));
+            line.indexable(k, tau(i)).then_some(k)
+        };
+        let (mut indices, mut through_all) = (Vec::new(), false);
+        let Some(Refit::Line(again)) = least_squares_indexed(n, &tau, &mut indices, &mut through_all, own)
+        else {
+            panic!("a line through the points");
+        };
+        assert_eq!(
+            (again.a.to_bits(), again.b.to_bits()),
+            (line.a.to_bits(), line.b.to_bits())
+        );
+        assert!(through_all);
+        assert!(matches!(
+            least_squares_indexed(n, &tau, &mut indices, &mut through_all, own),
+            Some(Refit::Same)
+        ));
+        // One stamp left out: fitted, and no longer through every sample.
+        let without = |i: usize| if i == 500 { None } else { own(i) };
+        assert!(matches!(
+            least_squares_indexed(n, &tau, &mut indices, &mut through_all, without),
+            Some(Refit::Line(_))
+        ));
+        assert!(!through_all);
+    }
 }
