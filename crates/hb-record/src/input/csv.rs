@@ -6,7 +6,15 @@ use super::{Column, Columns, InputError, Location, ReadOptions, Record, Role, Se
 /// Reads text; the options are assumed valid.
 pub(super) fn read<'a>(bytes: &'a [u8], options: &ReadOptions) -> Result<Record, InputError> {
     let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
-    let mut lines = Lines { bytes, line: 0 };
+    // A text that is UTF-8 throughout has every line so (no byte of a longer character is a
+    // line end), checked once; otherwise line by line, so that the first bad row is named.
+    let mut lines = Lines {
+        rest: match std::str::from_utf8(bytes) {
+            Ok(text) => Rest::Text(text),
+            Err(_) => Rest::Bytes(bytes),
+        },
+        line: 0,
+    };
     let Some((first_line, first)) = lines.next_row()? else {
         return Err(InputError::Empty);
     };
@@ -107,26 +115,55 @@ pub(super) fn read<'a>(bytes: &'a [u8], options: &ReadOptions) -> Result<Record,
 /// The rows of a text: lines that are neither blank nor comments, with their line numbers.
 struct Lines<'a> {
     /// What is left to read.
-    bytes: &'a [u8],
+    rest: Rest<'a>,
     /// The number of the last line read, counted from 1.
     line: u64,
+}
+
+/// What is left of a text to read: checked to be UTF-8 throughout, or bytes to check line by
+/// line.
+enum Rest<'a> {
+    Text(&'a str),
+    Bytes(&'a [u8]),
+}
+
+impl Rest<'_> {
+    fn is_empty(&self) -> bool {
+        match self {
+            Rest::Text(t) => t.is_empty(),
+            Rest::Bytes(b) => b.is_empty(),
+        }
+    }
 }
 
 impl<'a> Lines<'a> {
     /// The next row, trimmed, with its line number; `None` at the end.
     fn next_row(&mut self) -> Result<Option<(u64, &'a str)>, InputError> {
-        while !self.bytes.is_empty() {
-            let end = self.bytes.iter().position(|&b| b == b'\n');
-            let (raw, rest) = match end {
-                Some(e) => (&self.bytes[..e], &self.bytes[e + 1..]),
-                None => (self.bytes, &self.bytes[self.bytes.len()..]),
-            };
-            self.bytes = rest;
+        while !self.rest.is_empty() {
             self.line += 1;
-            let text = std::str::from_utf8(raw).map_err(|source| InputError::Malformed {
-                line: self.line,
-                source,
-            })?;
+            let text = match &mut self.rest {
+                // No byte of a longer character is a line end: a text that is UTF-8 throughout
+                // splits into lines that are.
+                Rest::Text(text) => {
+                    let (line, rest) = match memchr::memchr(b'\n', text.as_bytes()) {
+                        Some(e) => (&text[..e], &text[e + 1..]),
+                        None => (*text, ""),
+                    };
+                    *text = rest;
+                    line
+                }
+                Rest::Bytes(bytes) => {
+                    let (raw, rest) = match memchr::memchr(b'\n', bytes) {
+                        Some(e) => (&bytes[..e], &bytes[e + 1..]),
+                        None => (*bytes, &bytes[bytes.len()..]),
+                    };
+                    *bytes = rest;
+                    std::str::from_utf8(raw).map_err(|source| InputError::Malformed {
+                        line: self.line,
+                        source,
+                    })?
+                }
+            };
             let text = text.trim();
             if !(text.is_empty() || text.starts_with('#')) {
                 return Ok(Some((self.line, text)));
@@ -141,11 +178,12 @@ impl Separator {
     /// commas), else commas when it holds one, else white space when it holds any; `None` for a
     /// single cell.
     fn of(text: &str) -> Option<Self> {
-        if text.contains(';') {
+        let bytes = text.as_bytes();
+        if memchr::memchr(b';', bytes).is_some() {
             Some(Separator::Semicolon)
-        } else if text.contains(',') {
+        } else if memchr::memchr(b',', bytes).is_some() {
             Some(Separator::Comma)
-        } else if text.contains([' ', '\t']) {
+        } else if memchr::memchr2(b' ', b'\t', bytes).is_some() {
             Some(Separator::Whitespace)
         } else {
             None
@@ -155,15 +193,33 @@ impl Separator {
     /// The cells of a trimmed row into `cells`, each trimmed and without enclosing double quotes.
     fn split<'a>(self, text: &'a str, cells: &mut Vec<&'a str>) {
         fn clean(c: &str) -> &str {
+            // Most cells begin and end with a visible ASCII character other than a quote:
+            // nothing to take off (the bytes of a longer character are not ASCII).
+            let plain = |b: u8| b.is_ascii_graphic() && b != b'"';
+            if let (Some(&first), Some(&last)) = (c.as_bytes().first(), c.as_bytes().last())
+                && plain(first)
+                && plain(last)
+            {
+                return c;
+            }
             let c = c.trim();
             c.strip_prefix('"')
                 .and_then(|c| c.strip_suffix('"'))
                 .map_or(c, str::trim)
         }
+        // The cells between the separator's bytes (ASCII, so every piece is whole characters).
+        fn split_at<'a>(text: &'a str, separator: u8, cells: &mut Vec<&'a str>) {
+            let mut start = 0;
+            for end in memchr::memchr_iter(separator, text.as_bytes()) {
+                cells.push(clean(&text[start..end]));
+                start = end + 1;
+            }
+            cells.push(clean(&text[start..]));
+        }
         cells.clear();
         match self {
-            Separator::Comma => cells.extend(text.split(',').map(clean)),
-            Separator::Semicolon => cells.extend(text.split(';').map(clean)),
+            Separator::Comma => split_at(text, b',', cells),
+            Separator::Semicolon => split_at(text, b';', cells),
             Separator::Whitespace => {
                 cells.extend(text.split([' ', '\t']).filter(|c| !c.is_empty()).map(clean))
             }

