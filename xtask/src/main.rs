@@ -69,7 +69,8 @@ enum Command {
         repeats: usize,
         /// Further lengths that are only simulated (`hbid simulate` writes its record as it
         /// integrates: its memory does not grow with the record); each file is removed after.
-        #[arg(long, value_delimiter = ',', default_value = "100000000")]
+        /// The flag alone gives none.
+        #[arg(long, value_delimiter = ',', num_args = 0.., default_value = "100000000")]
         simulate_sizes: Vec<usize>,
     },
     /// Records shaped like real rigs' (`hbid simulate`), each identified by one `hbid identify`
