@@ -1726,52 +1726,24 @@ pub fn simulate_to(rig: &Rig, path: &Path, observer: &mut dyn Observer) -> Resul
     let columns = rig.columns();
     let (time_decimals, decimals) = (rig.options.time_decimals, rig.options.decimals);
     let drives = rig.writes_drives();
-    let npy = is_npy(path);
     let mut failed: Option<RunError> = None;
     let written = write_atomically(path, |w: &mut dyn Write| {
-        let mut out = if npy {
-            Out::Npy(
-                npyz::WriteOptions::<f64>::new()
-                    .default_dtype()
-                    .shape(&[rows as u64, columns.len() as u64])
-                    .writer(w)
-                    .begin_nd()?,
-            )
-        } else {
-            writeln!(w, "{}", columns.join(","))?;
-            Out::Csv(w)
-        };
+        let mut out = Out::begin(w, path, rows, &columns)?;
         let mut error: Option<std::io::Error> = None;
-        let mut line = String::new();
         let result = each_sample(rig, observer, |s| {
             if !s.kept || error.is_some() {
                 return;
             }
             let drives: &[f64] = if drives { s.drives } else { &[] };
-            let outcome = match &mut out {
-                Out::Npy(writer) => {
-                    let cells = std::iter::once(printed(s.stamp, time_decimals))
-                        .chain(s.coordinates.iter().map(|c| c.number(decimals)))
-                        .chain(s.velocities.iter().chain(drives).map(|&v| printed(v, decimals)));
-                    writer.extend(cells)
-                }
-                Out::Csv(w) => {
-                    line.clear();
-                    line.push_str(&printed_text(s.stamp, time_decimals));
-                    for cell in s.coordinates.iter().map(|c| c.text(decimals)).chain(
-                        s.velocities
-                            .iter()
-                            .chain(drives)
-                            .map(|&v| printed_text(v, decimals)),
-                    ) {
-                        line.push(',');
-                        line.push_str(&cell);
-                    }
-                    line.push('\n');
-                    w.write_all(line.as_bytes())
-                }
-            };
-            if let Err(e) = outcome {
+            let cells = std::iter::once((Cell::Value(s.stamp), time_decimals))
+                .chain(s.coordinates.iter().map(|&c| (c, decimals)))
+                .chain(
+                    s.velocities
+                        .iter()
+                        .chain(drives)
+                        .map(|&v| (Cell::Value(v), decimals)),
+                );
+            if let Err(e) = out.row(cells) {
                 error = Some(e);
             }
         });
@@ -1782,10 +1754,7 @@ pub fn simulate_to(rig: &Rig, path: &Path, observer: &mut dyn Observer) -> Resul
         if let Some(e) = error {
             return Err(e);
         }
-        match out {
-            Out::Npy(writer) => writer.finish(),
-            Out::Csv(_) => Ok(()),
-        }
+        out.finish()
     });
     match (failed, written) {
         (Some(e), _) => Err(e),
@@ -1794,10 +1763,57 @@ pub fn simulate_to(rig: &Rig, path: &Path, observer: &mut dyn Observer) -> Resul
     }
 }
 
-/// A record's file being written.
+/// A record's file being written: `.npy` (rows × columns, `f8`) or CSV (anything else).
 enum Out<'w> {
     Npy(npyz::NpyWriter<f64, &'w mut dyn Write>),
-    Csv(&'w mut dyn Write),
+    Csv { w: &'w mut dyn Write, line: String },
+}
+
+impl<'w> Out<'w> {
+    /// Begins the file of `rows` rows of `columns` at `path` (its header) on `w`.
+    fn begin(w: &'w mut dyn Write, path: &Path, rows: usize, columns: &[&str]) -> std::io::Result<Self> {
+        if is_npy(path) {
+            return Ok(Self::Npy(
+                npyz::WriteOptions::<f64>::new()
+                    .default_dtype()
+                    .shape(&[rows as u64, columns.len() as u64])
+                    .writer(w)
+                    .begin_nd()?,
+            ));
+        }
+        writeln!(w, "{}", columns.join(","))?;
+        Ok(Self::Csv {
+            w,
+            line: String::new(),
+        })
+    }
+
+    /// Writes a row of cells, each with its decimals: the number a reader of the printed cell
+    /// gets (`.npy`), or the printed cell (CSV).
+    fn row(&mut self, cells: impl Iterator<Item = (Cell, Option<usize>)>) -> std::io::Result<()> {
+        match self {
+            Self::Npy(writer) => writer.extend(cells.map(|(c, d)| c.number(d))),
+            Self::Csv { w, line } => {
+                line.clear();
+                for (i, (c, d)) in cells.enumerate() {
+                    if i > 0 {
+                        line.push(',');
+                    }
+                    line.push_str(&c.text(d));
+                }
+                line.push('\n');
+                w.write_all(line.as_bytes())
+            }
+        }
+    }
+
+    /// Ends the file.
+    fn finish(self) -> std::io::Result<()> {
+        match self {
+            Self::Npy(writer) => writer.finish(),
+            Self::Csv { .. } => Ok(()),
+        }
+    }
 }
 
 /// Whether `path` names a `.npy` file (CSV otherwise).
@@ -1889,27 +1905,12 @@ impl Simulation {
     /// Writes the record atomically: `.npy` (rows × columns, `f8`) or CSV (anything else).
     pub fn write(&self, path: &Path) -> Result<(), OutputError> {
         let columns = self.columns();
-        let rows = (0..self.t.len()).filter(|&n| self.kept[n]);
-        if is_npy(path) {
-            return write_atomically(path, |w: &mut dyn Write| {
-                let mut writer = npyz::WriteOptions::<f64>::new()
-                    .default_dtype()
-                    .shape(&[self.rows() as u64, columns.len() as u64])
-                    .writer(w)
-                    .begin_nd()?;
-                for n in rows {
-                    writer.extend(self.cells(n).map(|(c, d)| c.number(d)))?;
-                }
-                writer.finish()
-            });
-        }
         write_atomically(path, |w: &mut dyn Write| {
-            writeln!(w, "{}", columns.join(","))?;
-            for n in rows {
-                let cells: Vec<String> = self.cells(n).map(|(c, d)| c.text(d)).collect();
-                writeln!(w, "{}", cells.join(","))?;
+            let mut out = Out::begin(w, path, self.rows(), &columns)?;
+            for n in (0..self.t.len()).filter(|&n| self.kept[n]) {
+                out.row(self.cells(n))?;
             }
-            Ok(())
+            out.finish()
         })
     }
 
