@@ -119,7 +119,9 @@ impl RunError {
             RunError::Drive(_) => ErrorKind::Identification,
             // Options are checked before the run: what fails in it is the record's.
             RunError::Pipeline(PipelineError::Solve(_)) => ErrorKind::Options,
-            RunError::Pipeline(PipelineError::Simulation(_)) => ErrorKind::Simulation,
+            RunError::Pipeline(PipelineError::Simulation(_) | PipelineError::Validation { .. }) => {
+                ErrorKind::Simulation
+            }
             RunError::Pipeline(_) => ErrorKind::Identification,
             RunError::Identify { .. } | RunError::NoDelay(_) => ErrorKind::Identification,
             RunError::Simulation(_) | RunError::Refine(_) => ErrorKind::Simulation,

@@ -194,3 +194,68 @@ fn an_identification_that_fails_names_its_method_and_segments() {
     assert!(error.to_string().ends_with("segments (upo)"), "{error}");
     assert!(segments.of(Method::Windowed).is_empty());
 }
+
+#[test]
+fn a_model_whose_free_run_cannot_go_on_is_named_by_its_validation() {
+    let config = SimulationConfig::paper().with_samples(4_000).unwrap();
+    let trajectory = simulate(&pendulum_sim::Pendulum::paper(), &config).unwrap();
+    let clock = clock().with_start_time(trajectory.t[0]).unwrap();
+    let x = trajectory.wrapped();
+    let record = Record::new(&x, clock, Domain::Circle).unwrap();
+    let basis = BasisKind::from(Harmonic::new(1).unwrap());
+    let options = PipelineOptions {
+        models: vec![ModelSpec::new(Method::Windowed, basis)],
+        validation: ValidationOptions::default()
+            .with_section_points(20)
+            .unwrap()
+            .with_lyapunov_periods(20)
+            .unwrap()
+            .with_record_comparison(RecordComparison::DelaySection { periods: 40 })
+            .unwrap(),
+        ..PipelineOptions::default()
+    };
+    let pipeline = Pipeline::new(record, options).unwrap();
+    let embedded = pipeline.embed().unwrap();
+    let segments = pipeline.segments(&embedded).unwrap();
+    let mut models = pipeline.identify(&segments, |_| {}).unwrap();
+    assert!(pipeline.validate(&embedded, &models, |_| {}).is_ok());
+    // x'' − 50 x' + ... = 0: the velocity grows as e^(50 t) until no step can follow it.
+    let model = &models[0].model;
+    let coefficients = model
+        .coefficients()
+        .iter()
+        .map(|c| hb_model::Coefficient {
+            value: if c.name == "x'" { -50.0 } else { c.value },
+            ..c.clone()
+        })
+        .collect();
+    models[0].model = hb_model::IdentifiedModel::from_coefficients(
+        *model.basis(),
+        model.form().clone(),
+        model.drive_angular_frequency(),
+        coefficients,
+        None,
+    )
+    .unwrap();
+    models[0].warning = Some("the library does not describe the record".into());
+    let error = pipeline.validate(&embedded, &models, |_| {}).unwrap_err();
+    let PipelineError::Validation { method, warning, .. } = &error else {
+        panic!("{error}");
+    };
+    assert_eq!(*method, Method::Windowed);
+    assert_eq!(
+        warning.as_deref(),
+        Some("the library does not describe the record")
+    );
+    assert_eq!(
+        error.to_string(),
+        "the model of the windowed method cannot be run freely, as its validation does (its identification \
+         warned: the library does not describe the record)"
+    );
+    // The run's own error is its source, not repeated in the message.
+    let source = std::error::Error::source(&error).expect("the run's error");
+    assert!(
+        source.downcast_ref::<pendulum_sim::SimError>().is_some(),
+        "{source}"
+    );
+}

@@ -39,6 +39,24 @@ pub enum PipelineError {
         #[source]
         source: hb_solve::SolveError,
     },
+    /// A model's free run could not go on in its validation (it blows up, leaves the
+    /// floating-point range or its mass matrix turns singular): the model, not the options.
+    #[error(
+        "the model of the {method} method cannot be run freely, as its validation does{}",
+        match .warning {
+            Some(w) => format!(" (its identification warned: {w})"),
+            None => String::new(),
+        }
+    )]
+    Validation {
+        /// The method.
+        method: Method,
+        /// The identification's warning, if it gave one.
+        warning: Option<String>,
+        /// Why the run stopped.
+        #[source]
+        source: pendulum_sim::SimError,
+    },
     /// The record has no samples.
     #[error("the record has no samples")]
     EmptyRecord,

@@ -86,7 +86,7 @@ use embedding::{
     AmiCurve, AmiParams, FnnParams, FnnResult, average_mutual_information, false_nearest_neighbours,
 };
 use pendulum_sim::{
-    CheckConfig, LyapunovConfig, ModelCheck, PredictionTimes, SecondOrderSystem, SimulationConfig,
+    CheckConfig, LyapunovConfig, ModelCheck, PredictionTimes, SecondOrderSystem, SimError, SimulationConfig,
     check_model, energy_distance, simulate,
 };
 use upo_search::{Catalogue, CloseReturns, Windows};
@@ -850,8 +850,22 @@ impl<'a> Pipeline<'a> {
                     .par_iter()
                     .enumerate()
                     .for_each_with(send, |send, (model, ident)| {
+                        let result = one(ident).map_err(|e| match e {
+                            // A free run that cannot go on is the model's, whatever the stage.
+                            PipelineError::Simulation(
+                                source @ (SimError::StepSizeTooSmall { .. }
+                                | SimError::TooManySteps { .. }
+                                | SimError::NonFinite { .. }
+                                | SimError::SingularMass { .. }),
+                            ) => PipelineError::Validation {
+                                method: self.setups[model].method(),
+                                warning: ident.warning.clone(),
+                                source,
+                            },
+                            other => other,
+                        });
                         // The receiver lives until every model is in: a send cannot fail.
-                        let _ = send.send((model, one(ident)));
+                        let _ = send.send((model, result));
                     });
             });
             let mut finished = vec![false; count];
