@@ -291,7 +291,7 @@ pub fn upos(
     let catalogue = search
         .close_returns(&record, delay)?
         .catalogue_pieces(&data.x, &data.pieces)
-        .map_err(crate::pipeline::PipelineError::from)?;
+        .map_err(|e| crate::pipeline::PipelineError::orbits(e, data.p, data.pieces.len()))?;
     Ok(UposReport {
         delay,
         catalogue,

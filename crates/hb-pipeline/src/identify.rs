@@ -887,7 +887,7 @@ impl IdentifyRequest {
                     .search
                     .close_returns(&record, delay)?
                     .search_system_pieces(&coordinates, &data.pieces)
-                    .map_err(crate::pipeline::PipelineError::from)?;
+                    .map_err(|e| crate::pipeline::PipelineError::orbits(e, data.p, data.pieces.len()))?;
                 let found = format!(
                     "{} orbit segments found at tolerance {}",
                     segments.len(),

@@ -386,6 +386,64 @@ fn a_record_no_window_fits_is_named_and_writes_nothing() {
     refused(&dp, &["--coords", "theta1,theta2"], gaps);
 }
 
+/// A rig's record too short for the close-return search's longest period (here because its
+/// drive, 1.3 Hz at 500 Hz, is not given: one drive period of 2π s is 3142 samples) is told in
+/// one line that names the samples needed and the options that change them, and nothing is
+/// written.
+#[test]
+fn a_record_too_short_for_the_orbit_search_is_named_and_writes_nothing() {
+    let dir = scratch("noorbit");
+    let record = simulated(
+        &dir,
+        "rig.csv",
+        &[
+            "--drive-frequency",
+            "1.3",
+            "--sample-rate",
+            "500",
+            "--samples",
+            "20000",
+        ],
+    );
+    let model = dir.join("model.json");
+    let report = dir.join("rep");
+    for args in [
+        vec![
+            "identify",
+            record.to_str().unwrap(),
+            "--method",
+            "upo",
+            "--save-model",
+            model.to_str().unwrap(),
+        ],
+        vec!["upos", record.to_str().unwrap()],
+        vec![
+            "report",
+            record.to_str().unwrap(),
+            "--out",
+            report.to_str().unwrap(),
+        ],
+    ] {
+        let out = hbid(&args);
+        assert!(!out.status.success(), "{args:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!err.contains("panicked"), "{err}");
+        let line = err
+            .lines()
+            .find(|l| l.starts_with("error:"))
+            .expect("an error line");
+        for mentions in [
+            "too short for the close-return search: orbits of up to 16 drive periods need 50359 samples",
+            "one drive period is 3142 samples",
+            "--max-period",
+            "--drive-frequency",
+        ] {
+            assert!(line.contains(mentions), "{args:?}: '{mentions}' not in: {line}");
+        }
+        assert!(!model.exists() && !report.exists(), "{args:?} wrote a file");
+    }
+}
+
 /// The paper's data set as `(t, theta)` rows.
 fn paper_rows() -> Vec<(String, String)> {
     std::fs::read_to_string(paper_dataset())

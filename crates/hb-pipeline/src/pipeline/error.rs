@@ -39,6 +39,36 @@ pub enum PipelineError {
         #[source]
         source: hb_solve::SolveError,
     },
+    /// The close-return search cannot search its longest period in the record, or in any of its
+    /// pieces between gaps.
+    #[error(
+        "the record is too short for the close-return search: orbits of up to {period} drive periods need \
+         {needed} samples in one stretch ({period} periods of {samples_per_period} samples, and the embedding's span), and {}; give \
+         a smaller «max_period», a longer record, or check the drive: at the record's rate one drive period \
+         is {samples_per_period} samples («drive_frequency», «drive_period»)",
+        if *.pieces > 1 {
+            format!(
+                "the longest stretch between the record's gaps has {} ({} pieces, {} gaps)",
+                .longest,
+                .pieces,
+                .pieces - 1
+            )
+        } else {
+            format!("the record has {}", .longest)
+        }
+    )]
+    NoOrbitFits {
+        /// The longest period searched, in drive periods.
+        period: usize,
+        /// The samples of a drive period.
+        samples_per_period: usize,
+        /// The samples the search needs in one piece.
+        needed: usize,
+        /// The samples of the longest piece.
+        longest: usize,
+        /// The record's pieces.
+        pieces: usize,
+    },
     /// A model's free run could not go on in its validation (it blows up, leaves the
     /// floating-point range or its mass matrix turns singular): the model, not the options.
     #[error(
@@ -99,6 +129,22 @@ impl PipelineError {
         match e {
             upo_search::UpoError::TooShort { len, needed, .. } => PipelineError::NoWindow {
                 window: window(),
+                needed,
+                longest: len,
+                pieces,
+            },
+            e => PipelineError::from(e),
+        }
+    }
+
+    /// The close-return search's error `e`, made [`PipelineError::NoOrbitFits`] when its longest
+    /// period does not fit (in a record of `samples_per_period` samples per drive period, in
+    /// `pieces` pieces).
+    pub(crate) fn orbits(e: upo_search::UpoError, samples_per_period: usize, pieces: usize) -> Self {
+        match e {
+            upo_search::UpoError::TooShort { len, needed, period } => PipelineError::NoOrbitFits {
+                period,
+                samples_per_period,
                 needed,
                 longest: len,
                 pieces,

@@ -737,7 +737,8 @@ impl<'a> Pipeline<'a> {
         let catalogue = self
             .search
             .close_returns(&self.record, embedded.delay)?
-            .catalogue_pieces(x, pieces)?;
+            .catalogue_pieces(x, pieces)
+            .map_err(|e| PipelineError::orbits(e, self.record.samples_per_period, pieces.len()))?;
         let windows = if self.setups.iter().any(|s| s.method() == Method::Windowed) {
             Some(self.windows.windows_pieces(x, pieces).map_err(|e| {
                 PipelineError::windows(

@@ -120,6 +120,11 @@ pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
              hbid identify --method windowed (--drive-period none, --window)"
         );
     }
+    // Made before the work, so that a folder that cannot be made is told first; removed again
+    // (when this made it and it is still empty) if the report is not written.
+    let mut made = MadeFolder {
+        path: (!args.out.exists()).then(|| args.out.clone()),
+    };
     std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
 
     let mut kept = Kept {
@@ -167,7 +172,25 @@ pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
         .filter(|n| !matches!(n, Notice::Resampled { .. } | Notice::Record(_)))
         .map(|n| Spelling::CommandLine.render(&n.to_string()))
         .collect();
-    write_report(args, &request, &data, &notes, &outcome.map_err(naming_options)?)
+    write_report(args, &request, &data, &notes, &outcome.map_err(naming_options)?)?;
+    // Written: kept.
+    made.path = None;
+    Ok(())
+}
+
+/// The folder a report made, if it made one: removed when dropped if it is still empty (the
+/// report was not written).
+struct MadeFolder {
+    path: Option<std::path::PathBuf>,
+}
+
+impl Drop for MadeFolder {
+    fn drop(&mut self) {
+        if let Some(path) = &self.path {
+            // Fails, leaving it, when anything is in it.
+            let _ = std::fs::remove_dir(path);
+        }
+    }
 }
 
 fn write_report(
