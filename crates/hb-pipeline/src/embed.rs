@@ -26,13 +26,18 @@ fn max_lag(data: &Data, given: Option<usize>) -> usize {
     given.unwrap_or_else(|| Lags::default().max_lag(data.p))
 }
 
+/// What a user of the orbit search gives where the record is too short for the delay's search.
+pub(crate) const DELAY_REMEDY: Option<&str> = Some("the delay itself («delay»)");
+
 /// The mutual-information curve of the longest piece of `data` in `metric` and its first
-/// minimum.
+/// minimum; `remedy` is the option the caller's user can give where the record is too short for
+/// the largest lag (`a smaller «max_lag»`, `the delay itself («delay»)`), if any.
 pub(crate) fn first_minimum(
     data: &Data,
     metric: Domain,
     given_max_lag: Option<usize>,
     bins: Option<usize>,
+    remedy: Option<&'static str>,
 ) -> Result<(AmiCurve, usize), RunError> {
     let lag = max_lag(data, given_max_lag);
     let params = AmiParams::new(metric)
@@ -44,8 +49,8 @@ pub(crate) fn first_minimum(
             .map_err(|e| OptionError::checked("bins", b, &e))?,
         None => params,
     };
-    let curve =
-        average_mutual_information(data.longest(), &params).map_err(crate::pipeline::PipelineError::from)?;
+    let curve = average_mutual_information(data.longest(), &params)
+        .map_err(|e| crate::pipeline::PipelineError::delay_search(e, data.p, data.pieces.len(), remedy))?;
     let delay = curve.delay().map_err(RunError::NoDelay)?;
     Ok((curve, delay))
 }
@@ -187,7 +192,13 @@ pub fn embed(
     let data = load(source, &request.record, request.record.drive(false), observer)?;
     let metric = request.metric.unwrap_or(data.domain);
     observer.stage(Stage::Delay);
-    let (ami, delay) = first_minimum(&data, metric, request.max_lag, Some(request.bins))?;
+    let (ami, delay) = first_minimum(
+        &data,
+        metric,
+        request.max_lag,
+        Some(request.bins),
+        Some("a smaller «max_lag»"),
+    )?;
     observer.stage(Stage::Embed);
     let params = FnnParams::new(metric, delay)
         .and_then(|p| p.with_max_dim(request.max_dim))
@@ -284,7 +295,7 @@ pub fn upos(
         Some(d) => d,
         None => {
             observer.stage(Stage::Delay);
-            first_minimum(&data, data.domain, None, None)?.1
+            first_minimum(&data, data.domain, None, None, DELAY_REMEDY)?.1
         }
     };
     observer.stage(Stage::Segments);

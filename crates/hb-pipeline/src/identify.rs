@@ -857,7 +857,7 @@ impl IdentifyRequest {
             Some(d) => Ok(d),
             None => {
                 observer.stage(Stage::Delay);
-                first_minimum(data, data.domain, None, None).map(|(_, d)| d)
+                first_minimum(data, data.domain, None, None, crate::embed::DELAY_REMEDY).map(|(_, d)| d)
             }
         }
     }

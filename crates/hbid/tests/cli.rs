@@ -391,7 +391,7 @@ fn a_record_no_window_fits_is_named_and_writes_nothing() {
 /// one line that names the samples needed and the options that change them, and nothing is
 /// written.
 #[test]
-fn a_record_too_short_for_the_orbit_search_is_named_and_writes_nothing() {
+fn a_record_too_short_for_the_orbit_or_delay_search_is_named_and_writes_nothing() {
     let dir = scratch("noorbit");
     let record = simulated(
         &dir,
@@ -441,6 +441,61 @@ fn a_record_too_short_for_the_orbit_search_is_named_and_writes_nothing() {
             assert!(line.contains(mentions), "{args:?}: '{mentions}' not in: {line}");
         }
         assert!(!model.exists() && !report.exists(), "{args:?} wrote a file");
+    }
+    // Shorter still, the delay's search (two drive periods of lags) is what does not fit: each
+    // command names what its user can give.
+    let short = simulated(
+        &dir,
+        "short.csv",
+        &[
+            "--drive-frequency",
+            "1.3",
+            "--sample-rate",
+            "500",
+            "--samples",
+            "3000",
+        ],
+    );
+    for (args, remedy) in [
+        (
+            vec!["identify", short.to_str().unwrap(), "--method", "upo"],
+            "give the delay itself (--delay)",
+        ),
+        (
+            vec!["upos", short.to_str().unwrap()],
+            "give the delay itself (--delay)",
+        ),
+        (vec!["embed", short.to_str().unwrap()], "give a smaller --max-lag"),
+        // The report draws the curve whatever the delay.
+        (
+            vec![
+                "report",
+                short.to_str().unwrap(),
+                "--out",
+                report.to_str().unwrap(),
+            ],
+            "give a longer record",
+        ),
+    ] {
+        let out = hbid(&args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success() && !err.contains("panicked"),
+            "{args:?}: {err}"
+        );
+        let line = err
+            .lines()
+            .find(|l| l.starts_with("error:"))
+            .expect("an error line");
+        for mentions in [
+            "too short for the delay's search: the mutual information is taken to a lag of 6284 samples",
+            "the record has 2872",
+            remedy,
+            "one drive period is 3142 samples",
+        ] {
+            assert!(line.contains(mentions), "{args:?}: '{mentions}' not in: {line}");
+        }
+        assert!(!report.exists(), "{args:?} wrote a file");
     }
 }
 

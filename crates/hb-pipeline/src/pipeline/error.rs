@@ -69,6 +69,37 @@ pub enum PipelineError {
         /// The record's pieces.
         pieces: usize,
     },
+    /// The delay's search (the average mutual information) reaches beyond the record, or beyond
+    /// its longest piece between gaps.
+    #[error(
+        "the record is too short for the delay's search: the mutual information is taken to a lag of \
+         {max_lag} samples, and {}; give {}a longer record, or check the drive: at the record's rate one \
+         drive period is {samples_per_period} samples («drive_frequency», «drive_period»)",
+        if *.pieces > 1 {
+            format!(
+                "the longest stretch between the record's gaps has {} ({} pieces, {} gaps)",
+                .longest,
+                .pieces,
+                .pieces - 1
+            )
+        } else {
+            format!("the record has {}", .longest)
+        },
+        .remedy.map(|r| format!("{r}, ")).unwrap_or_default()
+    )]
+    NoDelayFits {
+        /// The largest lag, in samples.
+        max_lag: usize,
+        /// The samples of a drive period.
+        samples_per_period: usize,
+        /// The samples of the longest piece.
+        longest: usize,
+        /// The record's pieces.
+        pieces: usize,
+        /// What the caller's user can give instead, marked as an option (`a smaller «max_lag»`),
+        /// if anything.
+        remedy: Option<&'static str>,
+    },
     /// A model's free run could not go on in its validation (it blows up, leaves the
     /// floating-point range or its mass matrix turns singular): the model, not the options.
     #[error(
@@ -132,6 +163,27 @@ impl PipelineError {
                 needed,
                 longest: len,
                 pieces,
+            },
+            e => PipelineError::from(e),
+        }
+    }
+
+    /// The mutual information's error `e`, made [`PipelineError::NoDelayFits`] when its largest
+    /// lag does not fit (in a record of `samples_per_period` samples per drive period, in `pieces`
+    /// pieces; `remedy`, an option to give instead, if any).
+    pub(crate) fn delay_search(
+        e: embedding::EmbeddingError,
+        samples_per_period: usize,
+        pieces: usize,
+        remedy: Option<&'static str>,
+    ) -> Self {
+        match e {
+            embedding::EmbeddingError::LagTooLarge { max_lag, len } => PipelineError::NoDelayFits {
+                max_lag,
+                samples_per_period,
+                longest: len,
+                pieces,
+                remedy,
             },
             e => PipelineError::from(e),
         }

@@ -710,7 +710,15 @@ impl<'a> Pipeline<'a> {
     pub fn embed(&self) -> Result<Embedded, PipelineError> {
         let (x, metric) = (self.record.longest_piece(), self.record.domain);
         let params = self.embed.ami_params(metric, self.record.samples_per_period)?;
-        let ami = average_mutual_information(x, &params)?;
+        let ami = average_mutual_information(x, &params).map_err(|e| {
+            PipelineError::delay_search(
+                e,
+                self.record.samples_per_period,
+                self.record.pieces().len(),
+                // The curve is drawn whether or not the delay is given.
+                None,
+            )
+        })?;
         let delay = match self.embed.delay {
             Some(delay) => delay,
             None => ami.delay()?,
