@@ -46,16 +46,7 @@ pub enum PipelineError {
          {needed} samples in one stretch ({period} periods of {samples_per_period} samples, and the embedding's span), and {}; give \
          a smaller «max_period», a longer record, or check the drive: at the record's rate one drive period \
          is {samples_per_period} samples («drive_frequency», «drive_period»)",
-        if *.pieces > 1 {
-            format!(
-                "the longest stretch between the record's gaps has {} ({} pieces, {} gaps)",
-                .longest,
-                .pieces,
-                .pieces - 1
-            )
-        } else {
-            format!("the record has {}", .longest)
-        }
+        longest_stretch(*.longest, *.pieces)
     )]
     NoOrbitFits {
         /// The longest period searched, in drive periods.
@@ -75,16 +66,7 @@ pub enum PipelineError {
         "the record is too short for the delay's search: the mutual information is taken to a lag of \
          {max_lag} samples, and {}; give {}a longer record, or check the drive: at the record's rate one \
          drive period is {samples_per_period} samples («drive_frequency», «drive_period»)",
-        if *.pieces > 1 {
-            format!(
-                "the longest stretch between the record's gaps has {} ({} pieces, {} gaps)",
-                .longest,
-                .pieces,
-                .pieces - 1
-            )
-        } else {
-            format!("the record has {}", .longest)
-        },
+        longest_stretch(*.longest, *.pieces),
         .remedy.map(|r| format!("{r}, ")).unwrap_or_default()
     )]
     NoDelayFits {
@@ -151,6 +133,19 @@ pub enum PipelineError {
         /// How many pieces the record is in.
         pieces: usize,
     },
+}
+
+/// What a record has in one stretch: `the record has N`, or of a record in pieces `the longest
+/// stretch between the record's gaps has N (P pieces, G gaps)`.
+fn longest_stretch(longest: usize, pieces: usize) -> String {
+    if pieces > 1 {
+        format!(
+            "the longest stretch between the record's gaps has {longest} ({pieces} pieces, {} gaps)",
+            pieces - 1
+        )
+    } else {
+        format!("the record has {longest}")
+    }
 }
 
 impl PipelineError {
