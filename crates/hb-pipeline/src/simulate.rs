@@ -1528,12 +1528,15 @@ impl Cell {
         }
     }
 
-    /// The cell as printed.
-    fn text(self, decimals: Option<usize>) -> String {
-        match self {
-            Self::Value(v) => printed_text(v, decimals),
-            Self::Count(k) => k.to_string(),
-        }
+    /// The cell as printed, onto `out`.
+    fn print(self, decimals: Option<usize>, out: &mut String) {
+        use std::fmt::Write as _;
+        // Writing to a String cannot fail.
+        let _ = match (self, decimals) {
+            (Self::Value(v), Some(d)) => write!(out, "{v:.d$}"),
+            (Self::Value(v), None) => write!(out, "{v}"),
+            (Self::Count(k), _) => write!(out, "{k}"),
+        };
     }
 }
 
@@ -1799,7 +1802,7 @@ impl<'w> Out<'w> {
                     if i > 0 {
                         line.push(',');
                     }
-                    line.push_str(&c.text(d));
+                    c.print(d, line);
                 }
                 line.push('\n');
                 w.write_all(line.as_bytes())
@@ -1821,15 +1824,8 @@ fn is_npy(path: &Path) -> bool {
     path.extension().is_some_and(|e| e.eq_ignore_ascii_case("npy"))
 }
 
-/// `v` printed with `decimals`, or in the shortest form that reads back as `v`.
-fn printed_text(v: f64, decimals: Option<usize>) -> String {
-    match decimals {
-        Some(d) => format!("{v:.d$}"),
-        None => v.to_string(),
-    }
-}
-
-/// `v` as a reader of its printed form gets it.
+/// `v` as a reader of its printed form (with `decimals`, or the shortest that reads back as `v`)
+/// gets it.
 fn printed(v: f64, decimals: Option<usize>) -> f64 {
     match decimals {
         Some(d) => format!("{v:.d$}").parse().unwrap_or(v),
