@@ -511,8 +511,7 @@ impl GridRecord {
                 previous: t[i - 1],
             });
         }
-        let dt = refine_step(&t, dt0);
-        let runs = single_runs(&t, dt);
+        let (dt, runs) = refine_step(&t, dt0);
         let Some(&(start, _)) = runs.first() else {
             return Err(unresolved(n, None));
         };
@@ -1125,24 +1124,24 @@ fn single_runs(t: &[f64], dt: f64) -> Vec<(usize, usize)> {
     runs
 }
 
-/// The mean single step (runs telescoped), from `dt` until it settles.
-fn refine_step(t: &[f64], mut dt: f64) -> f64 {
+/// The mean single step (runs telescoped), from `dt` until it settles, and the
+/// [`single_runs`] of that step.
+fn refine_step(t: &[f64], mut dt: f64) -> (f64, Vec<(usize, usize)>) {
     for _ in 0..8 {
-        let (span, steps) = single_runs(t, dt)
-            .iter()
-            .fold((0.0, 0usize), |(span, steps), &(s, e)| {
-                (span + (t[e] - t[s]), steps + (e - s))
-            });
+        let runs = single_runs(t, dt);
+        let (span, steps) = runs.iter().fold((0.0, 0usize), |(span, steps), &(s, e)| {
+            (span + (t[e] - t[s]), steps + (e - s))
+        });
         if steps == 0 {
-            break;
+            return (dt, runs);
         }
         let next = span / steps as f64;
         if next == dt {
-            break;
+            return (dt, runs);
         }
         dt = next;
     }
-    dt
+    (dt, single_runs(t, dt))
 }
 
 /// The grid index of the first sample of each run, consistent across the runs (any one may be
