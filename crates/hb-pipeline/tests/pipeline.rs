@@ -14,6 +14,18 @@ fn clock() -> SampleClock {
     SampleClock::nondimensional(25).unwrap()
 }
 
+/// A validation short enough for a test: 20 section points and Lyapunov periods, the record's
+/// section over 40 periods.
+fn short_validation() -> ValidationOptions {
+    ValidationOptions::default()
+        .with_section_points(20)
+        .unwrap()
+        .with_lyapunov_periods(20)
+        .unwrap()
+        .with_record_comparison(RecordComparison::DelaySection { periods: 40 })
+        .unwrap()
+}
+
 #[test]
 fn a_record_needs_samples_and_whole_periods() {
     assert!(matches!(
@@ -61,13 +73,7 @@ fn a_record_with_gaps_is_identified_from_its_pieces() {
             ModelSpec::new(Method::Windowed, basis),
             ModelSpec::new(Method::Upo, basis),
         ],
-        validation: ValidationOptions::default()
-            .with_section_points(20)
-            .unwrap()
-            .with_lyapunov_periods(20)
-            .unwrap()
-            .with_record_comparison(RecordComparison::DelaySection { periods: 40 })
-            .unwrap(),
+        validation: short_validation(),
         ..PipelineOptions::default()
     };
     let outcome = Pipeline::new(record, options).unwrap().run(|_| {}).unwrap();
@@ -205,13 +211,7 @@ fn a_model_whose_free_run_cannot_go_on_is_named_by_its_validation() {
     let basis = BasisKind::from(Harmonic::new(1).unwrap());
     let options = PipelineOptions {
         models: vec![ModelSpec::new(Method::Windowed, basis)],
-        validation: ValidationOptions::default()
-            .with_section_points(20)
-            .unwrap()
-            .with_lyapunov_periods(20)
-            .unwrap()
-            .with_record_comparison(RecordComparison::DelaySection { periods: 40 })
-            .unwrap(),
+        validation: short_validation(),
         ..PipelineOptions::default()
     };
     let pipeline = Pipeline::new(record, options).unwrap();

@@ -28,6 +28,19 @@ fn assert_clean_failure(out: &Output, mentions: &str) {
     );
 }
 
+/// The error line of a command that failed (without a panic); its other lines are notes.
+fn error_line(out: &Output, args: &[&str]) -> String {
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && !err.contains("panicked"),
+        "{args:?}: {err}"
+    );
+    err.lines()
+        .find(|l| l.starts_with("error:"))
+        .expect("an error line")
+        .to_owned()
+}
+
 #[test]
 fn simulate_matches_reference_fixture() {
     let dir = scratch("ref");
@@ -326,14 +339,7 @@ fn a_record_no_window_fits_is_named_and_writes_nothing() {
             model.to_str().unwrap(),
         ];
         args.extend_from_slice(options);
-        let out = hbid(&args);
-        assert!(!out.status.success());
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert!(!err.contains("panicked"), "{err}");
-        let line = err
-            .lines()
-            .find(|l| l.starts_with("error:"))
-            .expect("an error line");
+        let line = error_line(&hbid(&args), &args);
         assert!(line.contains(mentions), "'{mentions}' not in: {line}");
         assert!(line.contains("--window"), "{line}");
         assert!(!model.exists(), "a model was written");
@@ -393,18 +399,22 @@ fn a_record_no_window_fits_is_named_and_writes_nothing() {
 #[test]
 fn a_record_too_short_for_the_orbit_or_delay_search_is_named_and_writes_nothing() {
     let dir = scratch("noorbit");
-    let record = simulated(
-        &dir,
-        "rig.csv",
-        &[
-            "--drive-frequency",
-            "1.3",
-            "--sample-rate",
-            "500",
-            "--samples",
-            "20000",
-        ],
-    );
+    // A rig's record of `samples` at 500 Hz under a 1.3 Hz drive.
+    let rig = |name: &str, samples: &str| {
+        simulated(
+            &dir,
+            name,
+            &[
+                "--drive-frequency",
+                "1.3",
+                "--sample-rate",
+                "500",
+                "--samples",
+                samples,
+            ],
+        )
+    };
+    let record = rig("rig.csv", "20000");
     let model = dir.join("model.json");
     let report = dir.join("rep");
     for args in [
@@ -424,14 +434,7 @@ fn a_record_too_short_for_the_orbit_or_delay_search_is_named_and_writes_nothing(
             report.to_str().unwrap(),
         ],
     ] {
-        let out = hbid(&args);
-        assert!(!out.status.success(), "{args:?}");
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert!(!err.contains("panicked"), "{err}");
-        let line = err
-            .lines()
-            .find(|l| l.starts_with("error:"))
-            .expect("an error line");
+        let line = error_line(&hbid(&args), &args);
         for mentions in [
             "too short for the close-return search: orbits of up to 16 drive periods need 50359 samples",
             "one drive period is 3142 samples",
@@ -444,18 +447,7 @@ fn a_record_too_short_for_the_orbit_or_delay_search_is_named_and_writes_nothing(
     }
     // Shorter still, the delay's search (two drive periods of lags) is what does not fit: each
     // command names what its user can give.
-    let short = simulated(
-        &dir,
-        "short.csv",
-        &[
-            "--drive-frequency",
-            "1.3",
-            "--sample-rate",
-            "500",
-            "--samples",
-            "3000",
-        ],
-    );
+    let short = rig("short.csv", "3000");
     for (args, remedy) in [
         (
             vec!["identify", short.to_str().unwrap(), "--method", "upo"],
@@ -477,16 +469,7 @@ fn a_record_too_short_for_the_orbit_or_delay_search_is_named_and_writes_nothing(
             "give a longer record",
         ),
     ] {
-        let out = hbid(&args);
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert!(
-            !out.status.success() && !err.contains("panicked"),
-            "{args:?}: {err}"
-        );
-        let line = err
-            .lines()
-            .find(|l| l.starts_with("error:"))
-            .expect("an error line");
+        let line = error_line(&hbid(&args), &args);
         for mentions in [
             "too short for the delay's search: the mutual information is taken to a lag of 6284 samples",
             "the record has 2872",
