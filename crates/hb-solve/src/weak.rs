@@ -841,8 +841,10 @@ fn fill_block<B: Basis + ?Sized>(
             ws.trig
                 .extend(ws.trig_slots.iter().map(|&slot| windows.trig(slot, n)));
         }
-        for (col, &column) in sh.columns.iter().enumerate() {
-            ws.g[col * samples + n] = match column {
+        // Each column by reference: a `Term` copied per sample and column costs more than the
+        // column's arithmetic (its bytes are stored and read back through the stack).
+        for (col, column) in sh.columns.iter().enumerate() {
+            ws.g[col * samples + n] = match *column {
                 Column::Damping => ws.xc[n],
                 Column::Auto(i) => ws.phi[i],
                 Column::CosT(i) => ws.phi[i] * c,
@@ -850,7 +852,7 @@ fn fill_block<B: Basis + ?Sized>(
                 Column::ForcingCos => c,
                 Column::ForcingSin => s,
                 Column::Stiffness => xr,
-                Column::Product(term) if !term.coupling.is_empty() => {
+                Column::Product(ref term) if !term.coupling.is_empty() => {
                     let f = match term.position {
                         PositionFactor::One => 1.0,
                         PositionFactor::Basis(i) => ws.phi[i],
@@ -919,7 +921,7 @@ fn fill_block<B: Basis + ?Sized>(
                         }
                     }
                 }
-                Column::Product(term) => {
+                Column::Product(ref term) => {
                     // The drive factor and its time derivative.
                     let (d, dd) = match term.drive {
                         DriveFactor::One => (1.0, 0.0),
