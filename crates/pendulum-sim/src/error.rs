@@ -21,8 +21,10 @@ pub enum SimError {
         /// The step that was too small.
         h: f64,
     },
-    /// The step budget ran out.
-    #[error("more than {steps} steps before t = {t}")]
+    /// The step budget ran out: the steps shrank as the solution grew (or turned stiff).
+    #[error(
+        "more than {steps} steps before t = {t}: the solution blows up or is too stiff for the tolerances"
+    )]
     TooManySteps {
         /// Time reached.
         t: f64,

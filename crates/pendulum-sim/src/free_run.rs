@@ -66,6 +66,21 @@ impl FreeRun {
 pub(crate) const STEPS_PER_SAMPLE: usize = 1_000;
 pub(crate) const STEPS_BASE: usize = 100_000;
 
+/// The step budget of an integration from `t = 0` to the last of `samples` samples `step` apart
+/// whose first is at `first` (a simulation with its transient): [`STEPS_PER_SAMPLE`] for each
+/// sample step of the whole span, plus [`STEPS_BASE`]. A runaway system (negative damping against a
+/// hardening spring, whose steps shrink as it grows) then stops with
+/// [`SimError::TooManySteps`](crate::SimError::TooManySteps) instead of grinding on.
+pub(crate) fn simulation_budget(first: f64, step: f64, samples: usize) -> usize {
+    let transient = if step > 0.0 && first > 0.0 {
+        // Saturates for an absurd ratio (`as` clamps to `usize::MAX`).
+        (first / step).ceil() as usize
+    } else {
+        0
+    };
+    STEPS_BASE.saturating_add(STEPS_PER_SAMPLE.saturating_mul(samples.saturating_add(transient)))
+}
+
 fn invalid(name: &'static str, value: f64, why: &'static str) -> SimError {
     SimError::InvalidParameter { name, value, why }
 }

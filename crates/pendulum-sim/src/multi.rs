@@ -71,7 +71,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::dop853::{Dop853, OdeSystem, Stepper, Tolerances, sample_at_times, sample_on_grid};
 use crate::error::{SimError, invalid};
-use crate::free_run::{STEPS_BASE, STEPS_PER_SAMPLE};
+use crate::free_run::{STEPS_BASE, STEPS_PER_SAMPLE, simulation_budget};
 use crate::simulate::{SimulationConfig, Trajectory};
 use crate::switching::{Mode, SCAN_POINTS, STICK_SCANS_PER_STEP, first_event, ulp};
 use crate::system::Branch;
@@ -446,7 +446,7 @@ pub fn simulate_each<S: MultiSystem + ?Sized>(
         0.0,
         &config.initial.first_order(),
         sampling.tolerances(),
-        usize::MAX,
+        simulation_budget(sampling.first_sample_time(), sampling.sample_step(), samples),
         &times,
         &mut |i, y| {
             sample(i, sampling.sample_time(i), &y[..n], &y[n..2 * n]);

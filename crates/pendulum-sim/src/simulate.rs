@@ -4,6 +4,7 @@ use std::f64::consts::TAU;
 
 use crate::dop853::{OdeSystem, Tolerances};
 use crate::error::SimError;
+use crate::free_run::simulation_budget;
 use crate::switching::{Flow, OnMode, Switched};
 use crate::system::SecondOrderSystem;
 
@@ -387,13 +388,15 @@ pub fn simulate_each<S: SecondOrderSystem>(
     mut progress: impl FnMut(usize, usize),
     mut sample: impl FnMut(usize, f64, f64, f64),
 ) -> Result<(), SimError> {
+    let t_first = config.first_sample_time();
+    let budget = simulation_budget(t_first, config.sample_step(), config.samples);
     let mut ode = Flow::new(
         FirstOrder(OnMode::new(system)),
         0.0,
         config.initial,
         config.tolerances,
-    )?;
-    let t_first = config.first_sample_time();
+    )?
+    .with_max_steps(budget);
     let report_every = (config.samples / 100).max(1);
     progress(0, config.samples);
     // No stop at the end of the transient: the step sequence then depends only on the end time,

@@ -206,3 +206,50 @@ fn two_well_duffing_is_chaotic_and_crosses_wells() {
         .count();
     assert!(switches > 100, "{switches} well changes in 1000 periods");
 }
+
+/// A runaway oscillator (negative damping against a hardening spring: its amplitude, and with it
+/// its frequency, grows without end, so the steps shrink) stops on its step budget, of one
+/// coordinate and of several, instead of grinding on; the same budget leaves a long ordinary
+/// simulation alone.
+#[test]
+fn a_runaway_simulation_stops_on_its_step_budget() {
+    use pendulum_sim::multi::{self, MultiConfig, MultiState};
+    use pendulum_sim::{BaseAcceleration, CoupledDuffing, SimError};
+    let config = SimulationConfig::paper()
+        .with_samples(100)
+        .unwrap()
+        .with_transient_periods(0);
+    let runaway = Duffing::new(-5.0, -1.0, 1.0, 0.3).unwrap();
+    match simulate(&runaway, &config) {
+        Err(SimError::TooManySteps { t, steps }) => {
+            assert_eq!(steps, 100_000 + 1_000 * 100);
+            assert!(t > 0.0 && t < config.sample_time(99), "stopped at t = {t}");
+        }
+        other => panic!("expected the step budget to run out, got {other:?}"),
+    }
+    let pair = CoupledDuffing::new(
+        [-5.0, -5.0],
+        [-1.0, -1.0],
+        [1.0, 1.0],
+        0.3,
+        0.0,
+        BaseAcceleration::measured(|t: f64| 0.3 * t.cos()),
+    )
+    .unwrap();
+    let state = MultiState::new(&[0.1, 0.0], &[0.0, 0.0]).unwrap();
+    let config = MultiConfig::new(state)
+        .with_samples(100)
+        .unwrap()
+        .with_transient_periods(0);
+    assert!(
+        matches!(
+            multi::simulate(&pair, &config),
+            Err(SimError::TooManySteps { .. })
+        ),
+        "the coupled runaway pair runs out of steps"
+    );
+    // The paper's chaotic pendulum, 200 transient periods and 2000 samples at 25 per period: far
+    // inside the budget.
+    let long = SimulationConfig::paper().with_samples(2_000).unwrap();
+    assert_eq!(simulate(&Pendulum::paper(), &long).unwrap().len(), 2_000);
+}
