@@ -213,7 +213,6 @@ struct Workspace {
     /// The own coordinate's window less its mean: the data of the right-hand side and of the
     /// damping column.
     xc: Vec<f64>,
-    phi: Vec<f64>,
     /// Column-major: one column of `samples` values per unknown (`x` less its mean for the
     /// damping), then the second factor of each column integrated by parts.
     g: Vec<f64>,
@@ -223,12 +222,95 @@ struct Workspace {
     anti: Vec<f64>,
     /// `(cos kW t_n, sin kW t_n)` of one sample for `k = 0..=` the highest drive harmonic.
     harmonics: Vec<(f64, f64)>,
-    /// The basis functions' derivatives at one sample, when an acceleration multiplies one.
-    dphi: Vec<f64>,
     /// `(sin, cos)` of each combination of [`Shared::trig`] at one sample.
     trig: Vec<(f64, f64)>,
     /// Where each combination of [`Shared::trig`] is held in [`Windows`]' sines and cosines.
     trig_slots: Vec<usize>,
+    /// The basis functions (and their derivatives) at the samples of the segment, kept for the
+    /// next one.
+    table: BasisTable,
+}
+
+/// The basis functions at every sample of a segment, and their derivatives after them when an
+/// acceleration multiplies one, by the sample's place in the record; the last segment's are kept,
+/// so that a sample it shares with the next (the windows overlap: with the default hop of one
+/// drive period, a sample lies in three) is evaluated once. The functions of a sample depend on
+/// that sample alone, so the values are the same numbers either way.
+#[derive(Debug, Clone, Default)]
+struct BasisTable {
+    /// The record the values are of (its first sample's address), and the first sample and the
+    /// count of `values`' samples.
+    at: (usize, usize, usize),
+    values: Vec<f64>,
+    /// The same of the segment before.
+    previous_at: (usize, usize, usize),
+    previous: Vec<f64>,
+}
+
+impl BasisTable {
+    /// The values at the samples `raw` of `signal` (its samples from `start` on), `stride` per
+    /// sample: the `basis.len()` functions, then their derivatives when `deriv`. A function that is
+    /// not finite is an error naming it (`index` the segment's index).
+    #[allow(clippy::too_many_arguments)]
+    fn make<B: Basis + ?Sized>(
+        &mut self,
+        basis: &B,
+        signal: &[f64],
+        start: usize,
+        samples: usize,
+        circle: bool,
+        deriv: bool,
+        index: usize,
+    ) -> Result<(), SolveError> {
+        let len = basis.len();
+        let stride = if deriv { 2 * len } else { len };
+        let source = signal.as_ptr() as usize;
+        std::mem::swap(&mut self.values, &mut self.previous);
+        self.previous_at = self.at;
+        self.at = (source, start, samples);
+        self.values.clear();
+        self.values.resize(stride * samples, 0.0);
+        // The samples the segment before holds, copied at once.
+        let (lo, hi) = if self.previous_at.0 == source {
+            let (from, count) = (self.previous_at.1, self.previous_at.2);
+            let (lo, hi) = (start.max(from), (start + samples).min(from + count));
+            if lo < hi {
+                self.values[(lo - start) * stride..(hi - start) * stride]
+                    .copy_from_slice(&self.previous[(lo - from) * stride..(hi - from) * stride]);
+            }
+            (lo, hi)
+        } else {
+            (0, 0)
+        };
+        for (n, row) in self.values.chunks_exact_mut(stride).enumerate() {
+            let at = start + n;
+            if at >= lo && at < hi {
+                continue;
+            }
+            let xr = signal[at];
+            let xe = if circle { wrap(xr) } else { xr };
+            let (phi, dphi) = row.split_at_mut(len);
+            basis.eval(xe, phi);
+            if let Some(i) = phi.iter().position(|v| !v.is_finite()) {
+                return Err(SolveError::Assembly(AssemblyError::NonFiniteTerm {
+                    segment: index,
+                    start,
+                    term: basis.name(i).unwrap_or_default(),
+                }));
+            }
+            if deriv {
+                basis.eval_deriv(xe, dphi);
+            }
+        }
+        Ok(())
+    }
+
+    /// The functions at sample `n` of the segment, and their derivatives (empty without them).
+    #[inline]
+    fn at(&self, n: usize, len: usize) -> (&[f64], &[f64]) {
+        let stride = self.values.len() / self.at.2.max(1);
+        self.values[n * stride..(n + 1) * stride].split_at(len)
+    }
 }
 
 /// The record's coordinates over one segment, each made continuous (unwrapped on the circle) and
@@ -597,14 +679,13 @@ fn prepare<'a, B: Basis + ?Sized>(
     }
     let workspace = Workspace {
         xc: Vec::with_capacity(max_samples),
-        phi: vec![0.0; names.len()],
         g: Vec::with_capacity(cols * max_samples),
         forcing: Vec::with_capacity(max_samples),
         anti: vec![0.0; names.len()],
         harmonics: Vec::new(),
-        dphi: vec![0.0; names.len()],
         trig: Vec::new(),
         trig_slots: Vec::new(),
+        table: BasisTable::default(),
     };
 
     let mut modes = Vec::with_capacity(cols);
@@ -801,16 +882,18 @@ fn fill_block<B: Basis + ?Sized>(
     ws.forcing.clear();
     let big_w = clock.drive_angular_frequency();
     let (s0, c0) = (big_w * clock.time(seg.start())).sin_cos();
+    let len = sh.basis.len();
+    ws.table.make(
+        sh.basis,
+        sh.signals.own(),
+        seg.start(),
+        samples,
+        sh.domain == Domain::Circle,
+        sh.needs_dphi,
+        index,
+    )?;
     for (n, &xr) in raw.iter().enumerate() {
-        let xe = if sh.domain == Domain::Circle { wrap(xr) } else { xr };
-        sh.basis.eval(xe, &mut ws.phi);
-        if let Some(i) = ws.phi.iter().position(|v| !v.is_finite()) {
-            return Err(SolveError::Assembly(AssemblyError::NonFiniteTerm {
-                segment: index,
-                start: seg.start(),
-                term: sh.basis.name(i).unwrap_or_default(),
-            }));
-        }
+        let (phi, dphi) = ws.table.at(n, len);
         // cos, sin of W t_n = W t_start + W n h by the angle-addition formulas.
         let (cr, sr) = t.turn[n];
         let (c, s) = (c0 * cr - s0 * sr, s0 * cr + c0 * sr);
@@ -826,9 +909,6 @@ fn fill_block<B: Basis + ?Sized>(
         }
         if sh.needs_anti {
             sh.basis.eval_antiderivative(x[n], &mut ws.anti);
-        }
-        if sh.needs_dphi {
-            sh.basis.eval_deriv(xe, &mut ws.dphi);
         }
         if sh.coupled {
             q[own] = x[n];
@@ -846,16 +926,16 @@ fn fill_block<B: Basis + ?Sized>(
         for (col, column) in sh.columns.iter().enumerate() {
             ws.g[col * samples + n] = match *column {
                 Column::Damping => ws.xc[n],
-                Column::Auto(i) => ws.phi[i],
-                Column::CosT(i) => ws.phi[i] * c,
-                Column::SinT(i) => ws.phi[i] * s,
+                Column::Auto(i) => phi[i],
+                Column::CosT(i) => phi[i] * c,
+                Column::SinT(i) => phi[i] * s,
                 Column::ForcingCos => c,
                 Column::ForcingSin => s,
                 Column::Stiffness => xr,
                 Column::Product(ref term) if !term.coupling.is_empty() => {
                     let f = match term.position {
                         PositionFactor::One => 1.0,
-                        PositionFactor::Basis(i) => ws.phi[i],
+                        PositionFactor::Basis(i) => phi[i],
                         PositionFactor::Linear => xr,
                     };
                     match (term.coupling.acceleration(), sh.modes[col]) {
@@ -864,7 +944,7 @@ fn fill_block<B: Basis + ?Sized>(
                             // ∫ψ f q_j'' = −∫ψ' f q_j' − ∫ψ (df/dt) q_j'.
                             let df = match term.position {
                                 PositionFactor::One => 0.0,
-                                PositionFactor::Basis(i) => ws.dphi[i],
+                                PositionFactor::Basis(i) => dphi[i],
                                 PositionFactor::Linear => 1.0,
                             };
                             let (mut g, mut rate) = (f, df * v[own]);
@@ -960,7 +1040,7 @@ fn fill_block<B: Basis + ?Sized>(
                         velocity => {
                             let f = match term.position {
                                 PositionFactor::One => 1.0,
-                                PositionFactor::Basis(i) => ws.phi[i],
+                                PositionFactor::Basis(i) => phi[i],
                                 PositionFactor::Linear => xr,
                             };
                             let v = match velocity {

@@ -464,6 +464,18 @@ fn bad_input_never_reaches_the_solver() {
         identify(Polynomial::new(3).unwrap(), &huge, &segs, &params, &hb_solve::HarmonicBalance, &QrSolver::default()),
         Err(SolveError::Assembly(AssemblyError::NonFiniteTerm { segment: 0, ref term, .. })) if term == "x^3"
     ));
+    // So it is by the weak form, whose basis values at a sample serve every window holding it:
+    // overlapping windows, the overflow in the samples the second shares with the first only.
+    let mut late = vec![0.0; 200];
+    late[60] = 1e120;
+    let segs = [
+        crate::common::segment(40, 1, 25, 0.0),
+        crate::common::segment(50, 1, 25, 0.0),
+    ];
+    assert!(matches!(
+        identify(Polynomial::new(3).unwrap(), &late, &segs, &params, &hb_solve::WeakForm::default(), &QrSolver::default()),
+        Err(SolveError::Assembly(AssemblyError::NonFiniteTerm { ref term, start: 40 | 50, .. })) if term == "x^3"
+    ));
 }
 
 // ---------------------------------------------------------------------------------------------
