@@ -248,20 +248,18 @@ struct BasisTable {
 }
 
 impl BasisTable {
-    /// The values at the samples `raw` of `signal` (its samples from `start` on), `stride` per
-    /// sample: the `basis.len()` functions, then their derivatives when `deriv`. A function that is
-    /// not finite is an error naming it (`index` the segment's index).
-    #[allow(clippy::too_many_arguments)]
+    /// The values at the samples of `segment` (the `index`-th) of the equation's own coordinate,
+    /// per sample the basis functions, then their derivatives when an acceleration multiplies
+    /// one. A function that is not finite is an error naming it.
     fn make<B: Basis + ?Sized>(
         &mut self,
-        basis: &B,
-        signal: &[f64],
-        start: usize,
-        samples: usize,
-        circle: bool,
-        deriv: bool,
+        sh: &Shared<'_, B>,
+        segment: &Segment,
         index: usize,
     ) -> Result<(), SolveError> {
+        let (basis, signal, deriv) = (sh.basis, sh.signals.own(), sh.needs_dphi);
+        let circle = sh.domain == Domain::Circle;
+        let (start, samples) = (segment.start(), segment.len() + 1);
         let len = basis.len();
         let stride = if deriv { 2 * len } else { len };
         let source = signal.as_ptr() as usize;
@@ -883,15 +881,7 @@ fn fill_block<B: Basis + ?Sized>(
     let big_w = clock.drive_angular_frequency();
     let (s0, c0) = (big_w * clock.time(seg.start())).sin_cos();
     let len = sh.basis.len();
-    ws.table.make(
-        sh.basis,
-        sh.signals.own(),
-        seg.start(),
-        samples,
-        sh.domain == Domain::Circle,
-        sh.needs_dphi,
-        index,
-    )?;
+    ws.table.make(sh, seg, index)?;
     for (n, &xr) in raw.iter().enumerate() {
         let (phi, dphi) = ws.table.at(n, len);
         // cos, sin of W t_n = W t_start + W n h by the angle-addition formulas.
