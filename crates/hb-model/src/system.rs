@@ -261,6 +261,54 @@ impl<B: Basis> IdentifiedSystem<B> {
     }
 }
 
+impl<B: Basis + Sync> IdentifiedSystem<B> {
+    /// The first of `samples` (indices into `coordinates`, one record per coordinate; tried in
+    /// parallel, the first in their order told) at which the mass matrix cannot be solved, as
+    /// [`accelerations`](Self::accelerations) solves it at every step of a free run, with the
+    /// velocities taken as zero (a mass matrix is a function of the positions); `time(k)` is the
+    /// time of sample `k`. `None` where it is solved at every one: terms that leave the
+    /// accelerations undetermined on a record (a coordinate's column the copy of another's,
+    /// whose equations then explain each other's acceleration) are found before any run stops.
+    pub fn first_singular(
+        &self,
+        coordinates: &[&[f64]],
+        samples: &[usize],
+        time: impl Fn(usize) -> f64 + Sync,
+    ) -> Option<SingularState> {
+        use rayon::prelude::*;
+        let n = coordinates.len();
+        samples
+            .par_iter()
+            .map_init(
+                || (vec![0.0; n], vec![0.0; n], vec![0.0; n]),
+                |(q, v, acc), &k| {
+                    for (qi, x) in q.iter_mut().zip(coordinates) {
+                        *qi = x[k];
+                    }
+                    self.accelerations(time(k), q, v, None, acc)
+                        .err()
+                        .map(|mass| SingularState {
+                            sample: k,
+                            q: q.clone(),
+                            mass,
+                        })
+                },
+            )
+            .find_map_first(|found| found)
+    }
+}
+
+/// Where [`IdentifiedSystem::first_singular`] found the mass matrix singular.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SingularState {
+    /// The sample.
+    pub sample: usize,
+    /// The positions there, one per coordinate.
+    pub q: Vec<f64>,
+    /// The time and the smallest pivot.
+    pub mass: SingularMass,
+}
+
 /// The smallest pivot of a mass matrix's factorisation, relative to its largest entry, that
 /// [`IdentifiedSystem::accelerations`] divides by.
 pub const SINGULAR_PIVOT: f64 = 1e-12;

@@ -241,3 +241,45 @@ fn construction_checks() {
     assert!((m.acceleration(0.3, 0.5, 0.2) - (-(0.02 + 1.0 - 0.3f64.cos()))).abs() < 1e-14);
     assert!(IdentifiedModel::new(line, form, 0.0, &[0.1, 2.0]).is_err());
 }
+
+/// A system's mass matrix, `[[1, cos(θ1−θ2)], [cos(θ1−θ2), 1]]`, is singular where the angles
+/// are equal: found at the first such sample of those asked, in their order, whatever the
+/// parallel order of the search; none among samples where it is not.
+#[test]
+fn the_first_state_where_the_mass_matrix_is_singular_is_found() {
+    use hb_basis::Domain;
+    use hb_model::{IdentifiedSystem, Names, TermList};
+    let names = Names::new(["theta1", "theta2"], Vec::<String>::new()).unwrap();
+    let basis = BasisKind::from(Harmonic::new(1).unwrap());
+    let equation = |own: usize, terms: &str| {
+        let list = TermList::parse_in(terms, &names, own).unwrap();
+        IdentifiedModel::new(basis, ModelForm::from_terms(list), 1.0, &[1.0, 2.0]).unwrap()
+    };
+    let system = IdentifiedSystem::new(
+        names.clone(),
+        vec![Domain::Circle; 2],
+        vec![
+            equation(0, "theta2''*cos(theta1-theta2), sin(theta1)"),
+            equation(1, "theta1''*cos(theta1-theta2), sin(theta2)"),
+        ],
+    )
+    .unwrap();
+    let theta1: Vec<f64> = (0..400).map(|k| 0.01 * k as f64).collect();
+    let mut theta2: Vec<f64> = theta1.iter().map(|x| x + 0.5).collect();
+    for k in [250, 251, 390] {
+        theta2[k] = theta1[k];
+    }
+    let all: Vec<usize> = (0..400).collect();
+    let found = system
+        .first_singular(&[&theta1, &theta2], &all, |k| 10.0 + 0.5 * k as f64)
+        .expect("singular where the angles are equal");
+    assert_eq!(found.sample, 250);
+    assert_eq!(found.q, vec![2.5, 2.5]);
+    assert_eq!(found.mass.t, 135.0);
+    assert!(found.mass.pivot < 1e-12, "pivot {}", found.mass.pivot);
+    let apart: Vec<usize> = (0..250).collect();
+    assert_eq!(
+        system.first_singular(&[&theta1, &theta2], &apart, |k| k as f64),
+        None
+    );
+}

@@ -1104,7 +1104,6 @@ fn check_mass_matrix(
     data: &Data,
     coordinates: &[(&[f64], Domain)],
 ) -> Result<(), RunError> {
-    use rayon::prelude::*;
     let n = coordinates.len();
     let samples: usize = data.pieces.iter().map(|p| p.len()).sum();
     let stride = samples.div_ceil(MASS_CHECKS).max(1);
@@ -1113,26 +1112,11 @@ fn check_mass_matrix(
         .iter()
         .flat_map(|piece| piece.clone().step_by(stride))
         .collect();
-    // The states in parallel; the first singular one in the record's order is told.
-    let first_singular = states
-        .par_iter()
-        .map_init(
-            || (vec![0.0; n], vec![0.0; n], vec![0.0; n]),
-            |(q, v, acc), &k| {
-                for (qi, (x, _)) in q.iter_mut().zip(coordinates) {
-                    *qi = x[k];
-                }
-                let t = data.clock.time(k);
-                system
-                    .accelerations(t, q, v, None, acc)
-                    .err()
-                    .map(|singular| (t, q.clone(), singular))
-            },
-        )
-        .find_map_first(|found| found);
-    let Some((t, q, singular)) = first_singular else {
+    let records: Vec<&[f64]> = coordinates.iter().map(|&(x, _)| x).collect();
+    let Some(found) = system.first_singular(&records, &states, |k| data.clock.time(k)) else {
         return Ok(());
     };
+    let (t, q, singular) = (found.mass.t, found.q, found.mass);
     let names = request.names.coordinates();
     let state: Vec<String> = names
         .iter()

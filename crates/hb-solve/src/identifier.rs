@@ -314,7 +314,7 @@ impl Identifier {
     }
 
     /// The unexplained fraction of the fit over `segments` of `signal` (no bootstrap), and
-    /// whether the model has a constant term `1`: what a drift's fit minimises (`hb_pipeline::pipeline::fit_drift`).
+    /// whether the model has a constant term `1`: what a drift's fit minimises ([`fit_drift`](crate::drift::fit_drift)).
     pub fn unexplained<'a>(
         &self,
         signals: impl Into<Signals<'a>>,

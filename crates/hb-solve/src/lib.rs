@@ -111,6 +111,7 @@
 mod assemble;
 mod bootstrap;
 mod differences;
+pub mod drift;
 mod error;
 mod fit;
 pub mod identifier;

@@ -64,12 +64,11 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-mod drift;
 mod error;
 mod prediction;
 
-pub use drift::{DriftFit, GOLDEN_STEPS, PieceDrift, SCAN_POINTS, fit_drift};
 pub use error::PipelineError;
+pub use hb_solve::drift::{DriftFit, GOLDEN_STEPS, PieceDrift, SCAN_POINTS, fit_drift};
 /// The per-equation identifier, [`hb_solve::identifier`]'s, by the names this module has always
 /// given it (`Setup` is [`hb_solve::Identifier`]).
 pub use hb_solve::identifier::{

@@ -20,9 +20,8 @@
 use std::ops::Range;
 
 use circle_signal::{Measured, Segment};
-use hb_solve::{Signals, SolveError};
 
-use super::Setup;
+use crate::{Identifier, Signals, SolveError};
 
 /// Values of each unknown scanned before the golden-section search.
 pub const SCAN_POINTS: usize = 24;
@@ -57,7 +56,7 @@ pub struct DriftFit {
 /// velocity. The setup's bootstrap is not run. `progress(done, total)` is called after each
 /// identification. `drives` are the record's measured drives, which the model's terms may read.
 pub fn fit_drift(
-    setup: &Setup,
+    setup: &Identifier,
     x: &[f64],
     drives: &[&[f64]],
     pieces: &[Range<usize>],
