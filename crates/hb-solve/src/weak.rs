@@ -736,6 +736,13 @@ fn prepare<'a, B: Basis + ?Sized>(
         domain,
         arch: pulp::Arch::new(),
         modes,
+        accelerations: columns
+            .iter()
+            .map(|c| match c {
+                Column::Product(t) => t.coupling.acceleration(),
+                _ => None,
+            })
+            .collect(),
         second,
         drive_harmonics: columns
             .iter()
@@ -788,6 +795,9 @@ struct Shared<'a, B: ?Sized> {
     arch: pulp::Arch,
     /// How each column is integrated.
     modes: Vec<Mode>,
+    /// The coordinate whose acceleration each column's term holds, if it holds one (found once,
+    /// not at every sample).
+    accelerations: Vec<Option<usize>>,
     /// Columns of the second block (terms integrated by parts with a drive factor).
     second: usize,
     /// The highest drive harmonic of a column.
@@ -928,7 +938,7 @@ fn fill_block<B: Basis + ?Sized>(
                         PositionFactor::Basis(i) => phi[i],
                         PositionFactor::Linear => xr,
                     };
-                    match (term.coupling.acceleration(), sh.modes[col]) {
+                    match (sh.accelerations[col], sh.modes[col]) {
                         (Some(j), Mode::DdPsi) => q[j],
                         (Some(j), Mode::ByParts(second)) => {
                             // ∫ψ f q_j'' = −∫ψ' f q_j' − ∫ψ (df/dt) q_j'.
@@ -1100,6 +1110,7 @@ fn fill_block<B: Basis + ?Sized>(
 }
 
 /// The time derivative of a factor of the positions, `Σ_c ∂f/∂q_c q_c'`.
+#[inline]
 fn factor_rate(factor: &Factor, q: &[f64], v: &[f64], args: &[Combination], trig: &[(f64, f64)]) -> f64 {
     match *factor {
         Factor::Trig { sine, combination } => {
