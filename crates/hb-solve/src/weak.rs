@@ -885,8 +885,13 @@ fn fill_block<B: Basis + ?Sized>(
 
     // g: one column of samples per unknown; the forcing at every sample.
     let width = cols + sh.second;
-    ws.g.clear();
+    // Every entry is written below (each column at every sample, each second part with its
+    // column), so the last window's values are not cleared first; a debug build fills them with
+    // NaN, which an entry left unwritten would carry into every test's coefficients.
     ws.g.resize(width * samples, 0.0);
+    if cfg!(debug_assertions) {
+        ws.g.fill(f64::NAN);
+    }
     ws.forcing.clear();
     let big_w = clock.drive_angular_frequency();
     let (s0, c0) = (big_w * clock.time(seg.start())).sin_cos();
