@@ -71,7 +71,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::dop853::{Dop853, OdeSystem, Stepper, Tolerances, sample_at_times, sample_on_grid};
 use crate::error::{SimError, invalid};
-use crate::free_run::{STEPS_BASE, STEPS_PER_SAMPLE, simulation_budget};
+use crate::free_run::{STEPS_BASE, STEPS_PER_SAMPLE};
 use crate::simulate::{SimulationConfig, Trajectory};
 use crate::switching::{Mode, SCAN_POINTS, STICK_SCANS_PER_STEP, first_event, ulp};
 use crate::system::Branch;
@@ -201,6 +201,8 @@ struct MultiConfigRaw {
     forcing_period: f64,
     phase: f64,
     tolerances: Tolerances,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    max_steps: Option<usize>,
 }
 
 impl TryFrom<MultiConfigRaw> for MultiConfig {
@@ -213,6 +215,10 @@ impl TryFrom<MultiConfigRaw> for MultiConfig {
             .with_drive_period(raw.forcing_period)?
             .with_phase(raw.phase)?
             .with_tolerances(raw.tolerances);
+        let config = match raw.max_steps {
+            Some(steps) => config.with_max_steps(steps),
+            None => config,
+        };
         match raw.sample_step {
             Some(h) => config.with_sample_step(h),
             None => Ok(config),
@@ -232,6 +238,7 @@ impl From<MultiConfig> for MultiConfigRaw {
             forcing_period: s.drive_period(),
             phase: s.phase(),
             tolerances: s.tolerances(),
+            max_steps: s.max_steps,
         }
     }
 }
@@ -285,6 +292,11 @@ impl MultiConfig {
     /// Integration tolerances.
     pub fn with_tolerances(mut self, tolerances: Tolerances) -> Self {
         self.sampling = self.sampling.with_tolerances(tolerances);
+        self
+    }
+    /// The most steps of the integration ([`SimulationConfig::with_max_steps`]).
+    pub fn with_max_steps(mut self, steps: usize) -> Self {
+        self.sampling = self.sampling.with_max_steps(steps);
         self
     }
     /// The initial state at `t = 0`.
@@ -446,7 +458,7 @@ pub fn simulate_each<S: MultiSystem + ?Sized>(
         0.0,
         &config.initial.first_order(),
         sampling.tolerances(),
-        simulation_budget(sampling.first_sample_time(), sampling.sample_step(), samples),
+        sampling.step_budget(),
         &times,
         &mut |i, y| {
             sample(i, sampling.sample_time(i), &y[..n], &y[n..2 * n]);

@@ -80,9 +80,12 @@ pub struct SimulationConfig {
     forcing_period: f64,
     phase: f64,
     tolerances: Tolerances,
+    /// The most steps of the integration, when not [`SimulationConfig::step_budget`]'s default.
+    pub(crate) max_steps: Option<usize>,
 }
 
-/// The serialised form of [`SimulationConfig`] (`sample_step` absent or `null` for the whole grid).
+/// The serialised form of [`SimulationConfig`] (`sample_step` absent or `null` for the whole grid;
+/// `max_steps` absent or `null` for the default budget).
 #[derive(serde::Serialize, serde::Deserialize)]
 struct SimulationConfigRaw {
     samples: usize,
@@ -94,6 +97,8 @@ struct SimulationConfigRaw {
     forcing_period: f64,
     phase: f64,
     tolerances: Tolerances,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    max_steps: Option<usize>,
 }
 
 impl TryFrom<SimulationConfigRaw> for SimulationConfig {
@@ -107,6 +112,10 @@ impl TryFrom<SimulationConfigRaw> for SimulationConfig {
             .with_drive_period(raw.forcing_period)?
             .with_phase(raw.phase)?
             .with_tolerances(raw.tolerances);
+        let config = match raw.max_steps {
+            Some(steps) => config.with_max_steps(steps),
+            None => config,
+        };
         match raw.sample_step {
             Some(h) => config.with_sample_step(h),
             None => Ok(config),
@@ -125,6 +134,7 @@ impl From<SimulationConfig> for SimulationConfigRaw {
             forcing_period: c.forcing_period,
             phase: c.phase,
             tolerances: c.tolerances,
+            max_steps: c.max_steps,
         }
     }
 }
@@ -161,7 +171,26 @@ impl SimulationConfig {
             forcing_period: TAU,
             phase: 0.0,
             tolerances: Tolerances::default(),
+            max_steps: None,
         }
+    }
+
+    /// The most steps (accepted and rejected) the integration may take, its transient included,
+    /// instead of the default [`step_budget`](Self::step_budget); past it the simulation stops
+    /// with [`SimError::TooManySteps`]. Raise it for a stiff system (`usize::MAX`: no limit).
+    pub fn with_max_steps(mut self, steps: usize) -> Self {
+        self.max_steps = Some(steps);
+        self
+    }
+
+    /// The most steps the integration may take: the one given
+    /// ([`with_max_steps`](Self::with_max_steps)), or by default 1000 for each sample step of
+    /// the whole span (the transient included) plus 100000, far more than a smooth solution
+    /// takes at any sampling rate, so that a runaway system (negative damping against a
+    /// hardening spring, whose steps shrink as it grows) stops in seconds instead of grinding on.
+    pub fn step_budget(&self) -> usize {
+        self.max_steps
+            .unwrap_or_else(|| simulation_budget(self.first_sample_time(), self.sample_step(), self.samples))
     }
 
     /// Number of samples kept (`>= 1`).
@@ -389,7 +418,7 @@ pub fn simulate_each<S: SecondOrderSystem>(
     mut sample: impl FnMut(usize, f64, f64, f64),
 ) -> Result<(), SimError> {
     let t_first = config.first_sample_time();
-    let budget = simulation_budget(t_first, config.sample_step(), config.samples);
+    let budget = config.step_budget();
     let mut ode = Flow::new(
         FirstOrder(OnMode::new(system)),
         0.0,

@@ -249,7 +249,17 @@ fn a_runaway_simulation_stops_on_its_step_budget() {
         "the coupled runaway pair runs out of steps"
     );
     // The paper's chaotic pendulum, 200 transient periods and 2000 samples at 25 per period: far
-    // inside the budget.
+    // inside the default budget, and stopped by a budget set below what it takes.
     let long = SimulationConfig::paper().with_samples(2_000).unwrap();
+    assert_eq!(long.step_budget(), 100_000 + 1_000 * (200 * 25 + 2_000));
     assert_eq!(simulate(&Pendulum::paper(), &long).unwrap().len(), 2_000);
+    assert!(matches!(
+        simulate(&Pendulum::paper(), &long.clone().with_max_steps(1_000)),
+        Err(SimError::TooManySteps { steps: 1_000, .. })
+    ));
+    // The budget given is kept by the serialised form; the default is not written.
+    let json = serde_json::to_string(&long.clone().with_max_steps(5_000)).unwrap();
+    let back: SimulationConfig = serde_json::from_str(&json).unwrap();
+    assert_eq!(back.step_budget(), 5_000);
+    assert!(!serde_json::to_string(&long).unwrap().contains("max_steps"));
 }

@@ -149,7 +149,8 @@ fn stick_slip_matches_a_regularised_friction() {
                 mu,
                 eps,
             },
-            &config,
+            // Stiff: explicit steps like 1/ε, past the default budget.
+            &config.clone().with_max_steps(usize::MAX),
         )
         .unwrap();
         traj.theta
