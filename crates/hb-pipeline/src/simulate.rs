@@ -17,6 +17,7 @@
 use std::f64::consts::{FRAC_PI_2, TAU};
 use std::fmt;
 use std::io::Write;
+use std::ops::ControlFlow;
 use std::path::Path;
 use std::str::FromStr;
 
@@ -29,7 +30,7 @@ use pendulum_sim::observe::{AngleRange, Encoder, EncoderReader, Gaps, Jitter};
 use pendulum_sim::{
     ArmParameters, BaseAcceleration, CoupledDuffing, DoublePendulum, DriveHarmonic, DriveHarmonics, Duffing,
     InFrame, Losses, MultiConfig, MultiState, MultiSystem, Pendulum, RecordFrame, SimError, SimulationConfig,
-    Sinusoid, SyntheticDrive, Tolerances, Torque, TorqueDoublePendulum, simulate_each,
+    Sinusoid, SyntheticDrive, Tolerances, Torque, TorqueDoublePendulum, simulate_while,
 };
 use serde::{Deserialize, Serialize};
 
@@ -1603,11 +1604,12 @@ struct Sample<'a> {
 
 /// Simulates `rig` and gives each sample to `sample` in order, holding none: the one way a
 /// simulated record is made, whether it is kept ([`simulate`]) or written as it comes
-/// ([`simulate_to`]). `observer` hears the progress in samples.
+/// ([`simulate_to`]). A sample that breaks ends the simulation there (a writer that failed).
+/// `observer` hears the progress in samples.
 fn each_sample(
     rig: &Rig,
     observer: &mut dyn Observer,
-    mut sample: impl FnMut(&Sample<'_>),
+    mut sample: impl FnMut(&Sample<'_>) -> ControlFlow<()>,
 ) -> Result<(), RunError> {
     observer.stage(Stage::Simulate);
     let config = &rig.config;
@@ -1642,20 +1644,20 @@ fn each_sample(
             coordinates: &cells,
             velocities: v,
             drives: &drives,
-        });
+        })
     };
     let mut progress = |done: usize, total: usize| observer.progress(done, total);
     match (&rig.system, &rig.initial) {
         (System::Pendulum(_) | System::Duffing(_), _) => {
             let mut each = |n: usize, t: f64, x: f64, v: f64| one(n, t, &[x], &[v]);
             match (&rig.system, o.drive_frequency) {
-                (System::Pendulum(p), None) => simulate_each(p, config, &mut progress, &mut each)?,
+                (System::Pendulum(p), None) => simulate_while(p, config, &mut progress, &mut each)?,
                 (System::Pendulum(p), Some(_)) => {
-                    simulate_each(&InFrame::new(*p, rig.frame), config, &mut progress, &mut each)?;
+                    simulate_while(&InFrame::new(*p, rig.frame), config, &mut progress, &mut each)?;
                 }
-                (System::Duffing(d), None) => simulate_each(d, config, &mut progress, &mut each)?,
+                (System::Duffing(d), None) => simulate_while(d, config, &mut progress, &mut each)?,
                 (System::Duffing(d), Some(_)) => {
-                    simulate_each(&InFrame::new(*d, rig.frame), config, &mut progress, &mut each)?;
+                    simulate_while(&InFrame::new(*d, rig.frame), config, &mut progress, &mut each)?;
                 }
                 _ => unreachable!("a system of one coordinate"),
             }
@@ -1663,7 +1665,12 @@ fn each_sample(
         (system, Some(initial)) => {
             let system = system.multi().expect("a system of several coordinates");
             let multi = MultiConfig::from_sampling(config.clone(), initial.clone());
-            pendulum_sim::multi::simulate_each(&InFrame::new(system, rig.frame), &multi, &mut progress, one)?;
+            pendulum_sim::multi::simulate_while(
+                &InFrame::new(system, rig.frame),
+                &multi,
+                &mut progress,
+                one,
+            )?;
         }
         (_, None) => unreachable!("a system of several coordinates has its initial state"),
     }
@@ -1706,6 +1713,7 @@ pub fn simulate(rig: &Rig, observer: &mut dyn Observer) -> Result<Simulation, Ru
             column.push(p);
         }
         kept.push(s.kept);
+        ControlFlow::Continue(())
     })?;
     Ok(Simulation {
         rig: rig.clone(),
@@ -1722,8 +1730,9 @@ pub fn simulate(rig: &Rig, observer: &mut dyn Observer) -> Result<Simulation, Ru
 /// written atomically (nothing at `path` unless the whole record is). Returns the rows written.
 /// `observer` hears the progress in samples.
 ///
-/// Errors: the simulation's (the file is not written) and the file's. A failure to write is
-/// reported once the simulation has run to its end.
+/// Errors: the simulation's (the file is not written) and the file's. A failure to write (a
+/// full disk) stops the simulation at that row: a record of 10^8 samples is not integrated to
+/// its end first.
 pub fn simulate_to(rig: &Rig, path: &Path, observer: &mut dyn Observer) -> Result<usize, RunError> {
     let rows = rig.rows()?;
     let columns = rig.columns();
@@ -1733,9 +1742,10 @@ pub fn simulate_to(rig: &Rig, path: &Path, observer: &mut dyn Observer) -> Resul
     let written = write_atomically(path, |w: &mut dyn Write| {
         let mut out = Out::begin(w, path, rows, &columns)?;
         let mut error: Option<std::io::Error> = None;
+        // A row that cannot be written (a full disk) ends the simulation there, not at its end.
         let result = each_sample(rig, observer, |s| {
-            if !s.kept || error.is_some() {
-                return;
+            if !s.kept {
+                return ControlFlow::Continue(());
             }
             let drives: &[f64] = if drives { s.drives } else { &[] };
             let cells = std::iter::once((Cell::Value(s.stamp), time_decimals))
@@ -1746,8 +1756,12 @@ pub fn simulate_to(rig: &Rig, path: &Path, observer: &mut dyn Observer) -> Resul
                         .chain(drives)
                         .map(|&v| (Cell::Value(v), decimals)),
                 );
-            if let Err(e) = out.row(cells) {
-                error = Some(e);
+            match out.row(cells) {
+                Ok(()) => ControlFlow::Continue(()),
+                Err(e) => {
+                    error = Some(e);
+                    ControlFlow::Break(())
+                }
             }
         });
         if let Err(e) = result {

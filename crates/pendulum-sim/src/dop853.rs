@@ -3,6 +3,8 @@
 // Stage and component loops index several arrays in step; iterators would hide the formulas.
 #![allow(clippy::needless_range_loop)]
 
+use std::ops::ControlFlow;
+
 use crate::error::SimError;
 use crate::tableau::{A, B, BHH, C, D, E5, STAGES, STAGES_EXT};
 
@@ -447,7 +449,11 @@ impl<S: OdeSystem<N>, const N: usize> Dop853<S, N> {
         count: usize,
         sink: impl FnMut(usize, f64, &[f64; N]),
     ) -> Result<(), SimError> {
-        sample_on_grid(self, t_first, dt, count, sink)
+        let mut sink = sink;
+        sample_on_grid(self, t_first, dt, count, |n, t, y| {
+            sink(n, t, y);
+            ControlFlow::Continue(())
+        })
     }
 }
 
@@ -487,7 +493,7 @@ pub(crate) fn sample_on_grid<St: Stepper<N> + ?Sized, const N: usize>(
     t_first: f64,
     dt: f64,
     count: usize,
-    sink: impl FnMut(usize, f64, &[f64; N]),
+    sink: impl FnMut(usize, f64, &[f64; N]) -> ControlFlow<()>,
 ) -> Result<(), SimError> {
     if count == 0 {
         return Ok(());
@@ -511,12 +517,13 @@ pub(crate) fn sample_on_grid<St: Stepper<N> + ?Sized, const N: usize>(
 
 /// Integrates up to the last of the times `time(n)`, `n = 0..count` (non-decreasing, the first
 /// not before the current time), calling `sink(n, t_n, y(t_n))` for each in order, from dense
-/// output (or exactly at a step's end). The step sequence depends only on the last time.
+/// output (or exactly at a step's end). The step sequence depends only on the last time. A sink
+/// that breaks ends the integration there (the caller knows why; `Ok` is returned).
 pub(crate) fn sample_at_times<St: Stepper<N> + ?Sized, const N: usize>(
     stepper: &mut St,
     count: usize,
     time: impl Fn(usize) -> f64,
-    mut sink: impl FnMut(usize, f64, &[f64; N]),
+    mut sink: impl FnMut(usize, f64, &[f64; N]) -> ControlFlow<()>,
 ) -> Result<(), SimError> {
     if count == 0 {
         return Ok(());
@@ -526,7 +533,9 @@ pub(crate) fn sample_at_times<St: Stepper<N> + ?Sized, const N: usize>(
     // A sample exactly at the current time needs no step.
     while n < count && time(n) == stepper.now() {
         let y = stepper.state();
-        sink(n, stepper.now(), &y);
+        if sink(n, stepper.now(), &y).is_break() {
+            return Ok(());
+        }
         n += 1;
     }
     while n < count {
@@ -540,7 +549,9 @@ pub(crate) fn sample_at_times<St: Stepper<N> + ?Sized, const N: usize>(
             if y.iter().any(|v| !v.is_finite()) {
                 return Err(SimError::NonFinite { t: tn });
             }
-            sink(n, tn, &y);
+            if sink(n, tn, &y).is_break() {
+                return Ok(());
+            }
             n += 1;
         }
     }

@@ -124,6 +124,7 @@ pub fn free_run<S: SecondOrderSystem>(
             .sample_grid(t_first, dt, count, |n, _, y| {
                 x[n] = y[0];
                 v[n] = y[1];
+                std::ops::ControlFlow::Continue(())
             })
     });
     Ok(FreeRun {

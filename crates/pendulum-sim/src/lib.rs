@@ -139,7 +139,7 @@ pub use prediction::{
 pub use signal::{MeasuredSignal, Sinusoid, SyntheticDrive};
 pub use simulate::{
     FirstOrder, LyapunovConfig, LyapunovEstimate, SimulationConfig, Tangent, Trajectory, largest_lyapunov,
-    poincare_section, simulate, simulate_each, simulate_with_progress,
+    poincare_section, simulate, simulate_each, simulate_while, simulate_with_progress,
 };
 pub use system::{Branch, SecondOrderSystem};
 pub use truth::{Equation, TrueEquation, pendulum_model};

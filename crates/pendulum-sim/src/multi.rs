@@ -66,6 +66,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use std::cell::Cell;
+use std::ops::ControlFlow;
 
 use serde::{Deserialize, Serialize};
 
@@ -437,8 +438,22 @@ pub fn simulate_with_progress<S: MultiSystem + ?Sized>(
 pub fn simulate_each<S: MultiSystem + ?Sized>(
     system: &S,
     config: &MultiConfig,
-    mut progress: impl FnMut(usize, usize),
+    progress: impl FnMut(usize, usize),
     mut sample: impl FnMut(usize, f64, &[f64], &[f64]),
+) -> Result<(), SimError> {
+    simulate_while(system, config, progress, |n, t, q, v| {
+        sample(n, t, q, v);
+        ControlFlow::Continue(())
+    })
+}
+
+/// [`simulate_each`] until `sample` breaks: the integration ends at that sample (see
+/// [`crate::simulate_while`]). `Ok` either way.
+pub fn simulate_while<S: MultiSystem + ?Sized>(
+    system: &S,
+    config: &MultiConfig,
+    mut progress: impl FnMut(usize, usize),
+    mut sample: impl FnMut(usize, f64, &[f64], &[f64]) -> ControlFlow<()>,
 ) -> Result<(), SimError> {
     let system: &dyn MultiSystem = &system;
     let n = matching_coordinates(system, &config.initial)?;
@@ -453,6 +468,7 @@ pub fn simulate_each<S: MultiSystem + ?Sized>(
     };
     // As for one coordinate: no stop at the end of the transient, so the step sequence depends
     // only on the end time; the sample times are the config's, by multiplication.
+    let mut stopped = false;
     integrate(
         system,
         0.0,
@@ -461,13 +477,17 @@ pub fn simulate_each<S: MultiSystem + ?Sized>(
         sampling.step_budget(),
         &times,
         &mut |i, y| {
-            sample(i, sampling.sample_time(i), &y[..n], &y[n..2 * n]);
-            if (i + 1) % report_every == 0 {
+            let flow = sample(i, sampling.sample_time(i), &y[..n], &y[n..2 * n]);
+            stopped = flow.is_break();
+            if !stopped && (i + 1) % report_every == 0 {
                 progress(i + 1, samples);
             }
+            flow
         },
     )?;
-    progress(samples, samples);
+    if !stopped {
+        progress(samples, samples);
+    }
     Ok(())
 }
 
@@ -527,6 +547,7 @@ pub fn free_run<S: MultiSystem + ?Sized>(
                 q[c][i] = y[c];
                 v[c][i] = y[n + c];
             }
+            ControlFlow::Continue(())
         },
     );
     Ok(MultiFreeRun {
@@ -566,7 +587,7 @@ fn integrate(
     tolerances: Tolerances,
     max_steps: usize,
     times: &Times,
-    sink: &mut dyn FnMut(usize, &[f64]),
+    sink: &mut dyn FnMut(usize, &[f64]) -> ControlFlow<()>,
 ) -> Result<(), SimError> {
     let args = (system, t0, y0, tolerances, max_steps, times);
     match system.coordinates() {
@@ -594,7 +615,7 @@ type RunArgs<'a, 't> = (
 /// [`integrate`] at the const size `N = 2n`.
 fn run<const N: usize>(
     (system, t0, y0, tolerances, max_steps, times): RunArgs<'_, '_>,
-    sink: &mut dyn FnMut(usize, &[f64]),
+    sink: &mut dyn FnMut(usize, &[f64]) -> ControlFlow<()>,
 ) -> Result<(), SimError> {
     let y0: [f64; N] = std::array::from_fn(|i| y0[i]);
     let mut flow = MultiFlow::<N>::new(system, t0, y0, tolerances, max_steps)?;

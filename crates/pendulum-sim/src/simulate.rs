@@ -1,6 +1,7 @@
 //! Sampled trajectories, stroboscopic (Poincaré) sections and the largest Lyapunov exponent.
 
 use std::f64::consts::TAU;
+use std::ops::ControlFlow;
 
 use crate::dop853::{OdeSystem, Tolerances};
 use crate::error::SimError;
@@ -414,8 +415,36 @@ pub fn simulate_with_progress<S: SecondOrderSystem>(
 pub fn simulate_each<S: SecondOrderSystem>(
     system: &S,
     config: &SimulationConfig,
-    mut progress: impl FnMut(usize, usize),
+    progress: impl FnMut(usize, usize),
     mut sample: impl FnMut(usize, f64, f64, f64),
+) -> Result<(), SimError> {
+    simulate_while(system, config, progress, |n, t, x, v| {
+        sample(n, t, x, v);
+        ControlFlow::Continue(())
+    })
+}
+
+/// [`simulate_each`] until `sample` breaks: the integration ends at that sample (a record's
+/// writer whose disk is full stops the simulation there rather than at its end). `Ok` either
+/// way; the caller knows why it broke.
+///
+/// ```
+/// use std::ops::ControlFlow;
+/// use pendulum_sim::{simulate_while, Pendulum, SimulationConfig};
+/// let cfg = SimulationConfig::paper().with_samples(50)?;
+/// let mut seen = 0;
+/// simulate_while(&Pendulum::paper(), &cfg, |_, _| {}, |n, _, _, _| {
+///     seen = n + 1;
+///     if n == 9 { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
+/// })?;
+/// assert_eq!(seen, 10);
+/// # Ok::<(), pendulum_sim::SimError>(())
+/// ```
+pub fn simulate_while<S: SecondOrderSystem>(
+    system: &S,
+    config: &SimulationConfig,
+    mut progress: impl FnMut(usize, usize),
+    mut sample: impl FnMut(usize, f64, f64, f64) -> ControlFlow<()>,
 ) -> Result<(), SimError> {
     let t_first = config.first_sample_time();
     let budget = config.step_budget();
@@ -430,14 +459,19 @@ pub fn simulate_each<S: SecondOrderSystem>(
     progress(0, config.samples);
     // No stop at the end of the transient: the step sequence then depends only on the end time,
     // so runs that differ only in their output grid follow the same numerical trajectory.
+    let mut stopped = false;
     ode.sample_grid(t_first, config.sample_step(), config.samples, |n, _, y| {
         // Absolute grid time computed from the absolute index: no drift over long records.
-        sample(n, config.sample_time(n), y[0], y[1]);
-        if (n + 1) % report_every == 0 {
+        let flow = sample(n, config.sample_time(n), y[0], y[1]);
+        stopped = flow.is_break();
+        if !stopped && (n + 1) % report_every == 0 {
             progress(n + 1, config.samples);
         }
+        flow
     })?;
-    progress(config.samples, config.samples);
+    if !stopped {
+        progress(config.samples, config.samples);
+    }
     Ok(())
 }
 

@@ -281,13 +281,13 @@ impl<O: Switched<N>, const N: usize> Flow<O, N> {
     }
 
     /// Integrates over a grid `t_first + n · dt`, `n = 0..count`, calling `sink(n, t_n, y(t_n))`
-    /// for each point in order, as [`Dop853::sample_grid`] does.
+    /// for each point in order, as [`Dop853::sample_grid`] does; a sink that breaks ends it there.
     pub(crate) fn sample_grid(
         &mut self,
         t_first: f64,
         dt: f64,
         count: usize,
-        sink: impl FnMut(usize, f64, &[f64; N]),
+        sink: impl FnMut(usize, f64, &[f64; N]) -> std::ops::ControlFlow<()>,
     ) -> Result<(), SimError> {
         sample_on_grid(self, t_first, dt, count, sink)
     }

@@ -351,3 +351,52 @@ fn systems_are_send_and_sync() {
     shared::<pendulum_sim::CoupledDuffing>();
     shared::<pendulum_sim::MultiConfig>();
 }
+
+/// A sample that breaks ends the simulation there, of one coordinate and of several: the samples
+/// given until then are the whole simulation's, none comes after, and the progress never says
+/// the record is done (a writer whose disk filled up stops the integration at once).
+#[test]
+fn a_simulation_stops_at_the_sample_that_breaks() {
+    use std::ops::ControlFlow;
+    let stop_at = |n: usize| {
+        if n == 99 {
+            ControlFlow::Break(())
+        } else {
+            ControlFlow::Continue(())
+        }
+    };
+    let config = MultiConfig::new(MultiState::new(&[0.4, -0.2], &[0.0, 0.1]).unwrap())
+        .with_samples(1_000)
+        .unwrap()
+        .with_transient_periods(1);
+    let system = DoublePendulum::whirling();
+    let whole = multi::simulate(&system, &config).unwrap();
+    let (mut seen, mut done) = (Vec::new(), 0);
+    multi::simulate_while(
+        &system,
+        &config,
+        |d, _| done = d,
+        |n, _, q, _| {
+            seen.push((n, q[1]));
+            stop_at(n)
+        },
+    )
+    .unwrap();
+    assert_eq!(seen.len(), 100);
+    assert!(seen.iter().all(|&(n, q1)| q1 == whole.q[1][n]));
+    assert!(done < 1_000, "progress said {done} of 1000");
+    let one = one_coordinate_config(0.1, 0.0);
+    let whole = simulate(&Pendulum::paper(), &one).unwrap();
+    let mut last = None;
+    pendulum_sim::simulate_while(
+        &Pendulum::paper(),
+        &one,
+        |_, _| {},
+        |n, _, x, _| {
+            last = Some((n, x));
+            stop_at(n)
+        },
+    )
+    .unwrap();
+    assert_eq!(last, Some((99, whole.theta[99])));
+}
