@@ -241,6 +241,10 @@ struct BasisTable {
     /// The record the values are of (its first sample's address), and the first sample and the
     /// count of `values`' samples.
     at: (usize, usize, usize),
+    /// The basis functions per sample, and the values per sample (twice as many with the
+    /// derivatives).
+    len: usize,
+    stride: usize,
     values: Vec<f64>,
     /// The same of the segment before.
     previous_at: (usize, usize, usize),
@@ -266,6 +270,7 @@ impl BasisTable {
         std::mem::swap(&mut self.values, &mut self.previous);
         self.previous_at = self.at;
         self.at = (source, start, samples);
+        (self.len, self.stride) = (len, stride);
         self.values.clear();
         self.values.resize(stride * samples, 0.0);
         // The samples the segment before holds, copied at once.
@@ -305,9 +310,8 @@ impl BasisTable {
 
     /// The functions at sample `n` of the segment, and their derivatives (empty without them).
     #[inline]
-    fn at(&self, n: usize, len: usize) -> (&[f64], &[f64]) {
-        let stride = self.values.len() / self.at.2.max(1);
-        self.values[n * stride..(n + 1) * stride].split_at(len)
+    fn at(&self, n: usize) -> (&[f64], &[f64]) {
+        self.values[n * self.stride..(n + 1) * self.stride].split_at(self.len)
     }
 }
 
@@ -895,10 +899,9 @@ fn fill_block<B: Basis + ?Sized>(
     ws.forcing.clear();
     let big_w = clock.drive_angular_frequency();
     let (s0, c0) = (big_w * clock.time(seg.start())).sin_cos();
-    let len = sh.basis.len();
     ws.table.make(sh, seg, index)?;
     for (n, &xr) in raw.iter().enumerate() {
-        let (phi, dphi) = ws.table.at(n, len);
+        let (phi, dphi) = ws.table.at(n);
         // cos, sin of W t_n = W t_start + W n h by the angle-addition formulas.
         let (cr, sr) = t.turn[n];
         let (c, s) = (c0 * cr - s0 * sr, s0 * cr + c0 * sr);

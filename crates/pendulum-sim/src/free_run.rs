@@ -63,8 +63,8 @@ impl FreeRun {
 
 /// Steps allowed per sample of a free run (plus a fixed allowance): far more than a smooth
 /// solution takes at any sampling rate, few enough that a runaway model stops in seconds.
-pub(crate) const STEPS_PER_SAMPLE: usize = 1_000;
-pub(crate) const STEPS_BASE: usize = 100_000;
+const STEPS_PER_SAMPLE: usize = 1_000;
+const STEPS_BASE: usize = 100_000;
 
 /// The step budget of an integration from `t = 0` to the last of `samples` samples `step` apart
 /// whose first is at `first` (a simulation with its transient): [`STEPS_PER_SAMPLE`] for each
@@ -72,13 +72,22 @@ pub(crate) const STEPS_BASE: usize = 100_000;
 /// hardening spring, whose steps shrink as it grows) then stops with
 /// [`SimError::TooManySteps`](crate::SimError::TooManySteps) instead of grinding on.
 pub(crate) fn simulation_budget(first: f64, step: f64, samples: usize) -> usize {
-    let transient = if step > 0.0 && first > 0.0 {
+    steps_for(samples.saturating_add(transient_samples(first, step)))
+}
+
+/// [`STEPS_PER_SAMPLE`] for each of `samples`, plus [`STEPS_BASE`]: the budget of a free run.
+pub(crate) fn steps_for(samples: usize) -> usize {
+    STEPS_BASE.saturating_add(STEPS_PER_SAMPLE.saturating_mul(samples))
+}
+
+/// The sample steps from `t = 0` to `first`.
+fn transient_samples(first: f64, step: f64) -> usize {
+    if step > 0.0 && first > 0.0 {
         // Saturates for an absurd ratio (`as` clamps to `usize::MAX`).
         (first / step).ceil() as usize
     } else {
         0
-    };
-    STEPS_BASE.saturating_add(STEPS_PER_SAMPLE.saturating_mul(samples.saturating_add(transient)))
+    }
 }
 
 fn invalid(name: &'static str, value: f64, why: &'static str) -> SimError {
@@ -118,7 +127,7 @@ pub fn free_run<S: SecondOrderSystem>(
     if count == 0 {
         return Ok(FreeRun { x, v, stopped: None });
     }
-    let budget = STEPS_BASE.saturating_add(STEPS_PER_SAMPLE.saturating_mul(count));
+    let budget = steps_for(count);
     let outcome = Flow::new(FirstOrder(OnMode::new(system)), t_first, state, tolerances).and_then(|flow| {
         flow.with_max_steps(budget)
             .sample_grid(t_first, dt, count, |n, _, y| {

@@ -72,7 +72,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::dop853::{Dop853, OdeSystem, Stepper, Tolerances, sample_at_times, sample_on_grid};
 use crate::error::{SimError, invalid};
-use crate::free_run::{STEPS_BASE, STEPS_PER_SAMPLE};
+use crate::free_run::steps_for;
 use crate::simulate::{SimulationConfig, Trajectory};
 use crate::switching::{Mode, SCAN_POINTS, STICK_SCANS_PER_STEP, first_event, ulp};
 use crate::system::Branch;
@@ -534,7 +534,7 @@ pub fn free_run<S: MultiSystem + ?Sized>(
     if count == 0 {
         return Ok(MultiFreeRun { q, v, stopped: None });
     }
-    let budget = STEPS_BASE.saturating_add(STEPS_PER_SAMPLE.saturating_mul(count));
+    let budget = steps_for(count);
     let outcome = integrate(
         system,
         times[0],
