@@ -218,12 +218,11 @@ struct Workspace {
     g: Vec<f64>,
     /// `(cos W t_n, sin W t_n)` at every sample.
     forcing: Vec<(f64, f64)>,
-    /// The antiderivatives of the basis functions at one sample.
+    /// The antiderivatives of the basis functions at every sample, `anti_stride` per sample.
     anti: Vec<f64>,
-    /// `(cos kW t_n, sin kW t_n)` of one sample for `k = 0..=` the highest drive harmonic.
+    anti_stride: usize,
+    /// `(cos kW t_n, sin kW t_n)` for `k = 0..=` the highest drive harmonic, at every sample.
     harmonics: Vec<(f64, f64)>,
-    /// `(sin, cos)` of each combination of [`Shared::trig`] at one sample.
-    trig: Vec<(f64, f64)>,
     /// Where each combination of [`Shared::trig`] is held in [`Windows`]' sines and cosines.
     trig_slots: Vec<usize>,
     /// The basis functions (and their derivatives) at the samples of the segment, kept for the
@@ -683,9 +682,9 @@ fn prepare<'a, B: Basis + ?Sized>(
         xc: Vec::with_capacity(max_samples),
         g: Vec::with_capacity(cols * max_samples),
         forcing: Vec::with_capacity(max_samples),
-        anti: vec![0.0; names.len()],
+        anti: Vec::new(),
+        anti_stride: names.len(),
         harmonics: Vec::new(),
-        trig: Vec::new(),
         trig_slots: Vec::new(),
         table: BasisTable::default(),
     };
@@ -771,8 +770,21 @@ fn prepare<'a, B: Basis + ?Sized>(
         drives: (0..signals.drives()).map(|d| signals.drive(d)).collect(),
         others,
         coupled,
+        resolved: Vec::new(),
         trig: trig_arguments(columns),
     };
+    let resolved = columns
+        .iter()
+        .map(|c| match c {
+            Column::Product(t) => t
+                .coupling
+                .factors()
+                .map(|f| Resolved::new(f, &shared.trig, &shared.others))
+                .collect(),
+            _ => Vec::new(),
+        })
+        .collect();
+    let shared = Shared { resolved, ..shared };
     Prepared {
         shared,
         tables,
@@ -819,6 +831,8 @@ struct Shared<'a, B: ?Sized> {
     others: Vec<usize>,
     /// Whether a term reads another coordinate or an acceleration.
     coupled: bool,
+    /// The factors of each column's term in other coordinates, resolved once.
+    resolved: Vec<Vec<Resolved>>,
     /// The arguments of the terms' sines and cosines of positions, each once: a term and its
     /// rate, and the terms of an equation, share them (`cos(theta1-theta2)` by parts needs its
     /// sine too, and `sin(theta1-theta2)` is another term's).
@@ -896,59 +910,119 @@ fn fill_block<B: Basis + ?Sized>(
     if cfg!(debug_assertions) {
         ws.g.fill(f64::NAN);
     }
-    ws.forcing.clear();
     let big_w = clock.drive_angular_frequency();
     let (s0, c0) = (big_w * clock.time(seg.start())).sin_cos();
     ws.table.make(sh, seg, index)?;
-    for (n, &xr) in raw.iter().enumerate() {
-        let (phi, dphi) = ws.table.at(n);
-        // cos, sin of W t_n = W t_start + W n h by the angle-addition formulas.
-        let (cr, sr) = t.turn[n];
-        let (c, s) = (c0 * cr - s0 * sr, s0 * cr + c0 * sr);
-        ws.forcing.push((c, s));
-        if sh.drive_harmonics > 1 {
-            // cos, sin of k W t_n by the same formulas, k = 0..=H.
-            ws.harmonics.clear();
+    // What the columns read at every sample, made once: the drive's phase (cos, sin of
+    // W t_n = W t_start + W n h by the angle-addition formulas), its harmonics (cos, sin of k W t_n
+    // by the same formulas, k = 0..=H) and the basis' antiderivatives where a column reads them.
+    ws.forcing.clear();
+    ws.forcing.extend(
+        t.turn[..samples]
+            .iter()
+            .map(|&(cr, sr)| (c0 * cr - s0 * sr, s0 * cr + c0 * sr)),
+    );
+    let per_sample = sh.drive_harmonics + 1;
+    ws.harmonics.clear();
+    if sh.drive_harmonics > 1 {
+        for &(c, s) in &ws.forcing {
+            let base = ws.harmonics.len();
             ws.harmonics.push((1.0, 0.0));
             for q in 1..=sh.drive_harmonics {
-                let (cq, sq) = ws.harmonics[q - 1];
+                let (cq, sq) = ws.harmonics[base + q - 1];
                 ws.harmonics.push((cq * c - sq * s, sq * c + cq * s));
             }
         }
-        if sh.needs_anti {
-            sh.basis.eval_antiderivative(x[n], &mut ws.anti);
+    }
+    let anti_stride = ws.anti_stride;
+    if sh.needs_anti {
+        ws.anti.resize(anti_stride * samples, 0.0);
+        for (row, &xn) in ws.anti.chunks_exact_mut(anti_stride).zip(x) {
+            sh.basis.eval_antiderivative(xn, row);
         }
-        if sh.coupled {
-            q[own] = x[n];
-            v[own] = xdot[n];
-            for &c in &sh.others {
-                q[c] = windows.window(c)[n];
-                v[c] = windows.velocity(c)[n];
+    }
+
+    // Column by column, each term's structure read once per window rather than at every sample;
+    // every entry is the same arithmetic, in the same order, as a sample-by-sample fill.
+    let Workspace {
+        xc,
+        g,
+        forcing,
+        anti,
+        harmonics: drive_harmonics,
+        trig_slots,
+        table,
+        ..
+    } = ws;
+    let (xc, forcing, anti, drive_harmonics, table) = (&*xc, &*forcing, &*anti, &*drive_harmonics, &*table);
+    let (g, seconds) = g.split_at_mut(cols * samples);
+    let start = seg.start();
+    let held = |arg: usize, n: usize| windows.trig(trig_slots[arg], n);
+    // The drive factor of a term at sample `n`, and its time derivative (never needed for the
+    // measured drive: a term in it is never integrated by parts).
+    let drive = |term: &Term, n: usize| -> (f64, f64) {
+        match term.drive {
+            DriveFactor::One => (1.0, 0.0),
+            DriveFactor::Measured(i) => (
+                sh.drives
+                    .get(usize::from(i))
+                    .copied()
+                    .flatten()
+                    .map_or(f64::NAN, |p| p[start + n]),
+                0.0,
+            ),
+            DriveFactor::Cos(k) | DriveFactor::Sin(k) => {
+                let (ck, sk) = if k == 1 {
+                    forcing[n]
+                } else {
+                    drive_harmonics[n * per_sample + k as usize]
+                };
+                let kw = f64::from(k) * big_w;
+                match term.drive {
+                    DriveFactor::Cos(_) => (ck, -kw * sk),
+                    _ => (sk, kw * ck),
+                }
             }
-            ws.trig.clear();
-            ws.trig
-                .extend(ws.trig_slots.iter().map(|&slot| windows.trig(slot, n)));
         }
-        // Each column by reference: a `Term` copied per sample and column costs more than the
-        // column's arithmetic (its bytes are stored and read back through the stack).
-        for (col, column) in sh.columns.iter().enumerate() {
-            ws.g[col * samples + n] = match *column {
-                Column::Damping => ws.xc[n],
-                Column::Auto(i) => phi[i],
-                Column::CosT(i) => phi[i] * c,
-                Column::SinT(i) => phi[i] * s,
-                Column::ForcingCos => c,
-                Column::ForcingSin => s,
-                Column::Stiffness => xr,
-                Column::Product(ref term) if !term.coupling.is_empty() => {
+    };
+    for (col, column) in sh.columns.iter().enumerate() {
+        let out = &mut g[col * samples..(col + 1) * samples];
+        let mut second = match sh.modes[col] {
+            Mode::ByParts(s) => Some(&mut seconds[s * samples..(s + 1) * samples]),
+            _ => None,
+        };
+        let fill = |out: &mut [f64], f: &dyn Fn(usize) -> f64| {
+            for (n, o) in out.iter_mut().enumerate() {
+                *o = f(n);
+            }
+        };
+        match *column {
+            Column::Damping => out.copy_from_slice(xc),
+            Column::Auto(i) => fill(out, &|n| table.at(n).0[i]),
+            Column::CosT(i) => fill(out, &|n| table.at(n).0[i] * forcing[n].0),
+            Column::SinT(i) => fill(out, &|n| table.at(n).0[i] * forcing[n].1),
+            Column::ForcingCos => fill(out, &|n| forcing[n].0),
+            Column::ForcingSin => fill(out, &|n| forcing[n].1),
+            Column::Stiffness => out.copy_from_slice(raw),
+            Column::Product(ref term) if !term.coupling.is_empty() => {
+                let factors = &sh.resolved[col];
+                for n in 0..samples {
+                    q[own] = x[n];
+                    v[own] = xdot[n];
+                    for &c in &sh.others {
+                        q[c] = windows.window(c)[n];
+                        v[c] = windows.velocity(c)[n];
+                    }
+                    let (phi, dphi) = table.at(n);
+                    let xr = raw[n];
                     let f = match term.position {
                         PositionFactor::One => 1.0,
                         PositionFactor::Basis(i) => phi[i],
                         PositionFactor::Linear => xr,
                     };
-                    match (sh.accelerations[col], sh.modes[col]) {
-                        (Some(j), Mode::DdPsi) => q[j],
-                        (Some(j), Mode::ByParts(second)) => {
+                    out[n] = match (sh.accelerations[col], &mut second) {
+                        (Some(j), _) if sh.modes[col] == Mode::DdPsi => q[j],
+                        (Some(j), Some(second)) => {
                             // ∫ψ f q_j'' = −∫ψ' f q_j' − ∫ψ (df/dt) q_j'.
                             let df = match term.position {
                                 PositionFactor::One => 0.0,
@@ -956,99 +1030,55 @@ fn fill_block<B: Basis + ?Sized>(
                                 PositionFactor::Linear => 1.0,
                             };
                             let (mut g, mut rate) = (f, df * v[own]);
-                            for factor in term.coupling.factors() {
-                                if matches!(factor, Factor::Trig { .. } | Factor::Power { .. }) {
-                                    let value = factor_value(factor, &q, &v, &sh.trig, &ws.trig);
-                                    rate = rate * value + g * factor_rate(factor, &q, &v, &sh.trig, &ws.trig);
-                                    g *= value;
-                                }
+                            for factor in factors.iter().filter(|r| r.positional()) {
+                                let at = factor.held(&held, n);
+                                let value = factor.value(&q, &v, at);
+                                rate = rate * value + g * factor.rate(&q, &v, at);
+                                g *= value;
                             }
-                            ws.g[(cols + second) * samples + n] = rate * v[j];
+                            second[n] = rate * v[j];
                             g * v[j]
                         }
                         _ => {
-                            let d = match term.drive {
-                                DriveFactor::One => 1.0,
-                                DriveFactor::Measured(i) => sh
-                                    .drives
-                                    .get(usize::from(i))
-                                    .copied()
-                                    .flatten()
-                                    .map_or(f64::NAN, |p| p[seg.start() + n]),
-                                DriveFactor::Cos(k) | DriveFactor::Sin(k) => {
-                                    let (ck, sk) = if k == 1 { (c, s) } else { ws.harmonics[k as usize] };
-                                    if matches!(term.drive, DriveFactor::Cos(_)) {
-                                        ck
-                                    } else {
-                                        sk
-                                    }
-                                }
-                            };
+                            let (d, _) = drive(term, n);
                             let own_v = match term.velocity {
                                 VelocityFactor::One => 1.0,
                                 VelocityFactor::Sign => cell_sign(xdot, n, false),
                                 velocity => velocity.eval(xdot[n]),
                             };
                             let mut g = d * f * own_v;
-                            for factor in term.coupling.factors() {
+                            for factor in factors {
                                 g *= match *factor {
-                                    Factor::Velocity {
-                                        coordinate,
-                                        function: VelocityFactor::Sign,
-                                    } => {
-                                        let k = sh
-                                            .others
-                                            .binary_search(&usize::from(coordinate))
-                                            .expect("a coordinate the terms read");
-                                        cell_sign(windows.velocity(sh.others[k]), n, false)
-                                    }
-                                    other => factor_value(&other, &q, &v, &sh.trig, &ws.trig),
+                                    Resolved::Sign(c) => cell_sign(windows.velocity(c), n, false),
+                                    _ => factor.value(&q, &v, factor.held(&held, n)),
                                 };
                             }
                             g
                         }
-                    }
-                }
-                Column::Product(ref term) => {
-                    // The drive factor and its time derivative.
-                    let (d, dd) = match term.drive {
-                        DriveFactor::One => (1.0, 0.0),
-                        // Its derivative is never needed: a term in p is never integrated by
-                        // parts.
-                        DriveFactor::Measured(i) => (
-                            sh.drives
-                                .get(usize::from(i))
-                                .copied()
-                                .flatten()
-                                .map_or(f64::NAN, |p| p[seg.start() + n]),
-                            0.0,
-                        ),
-                        DriveFactor::Cos(q) | DriveFactor::Sin(q) => {
-                            let (cq, sq) = if q == 1 { (c, s) } else { ws.harmonics[q as usize] };
-                            let qw = f64::from(q) * big_w;
-                            match term.drive {
-                                DriveFactor::Cos(_) => (cq, -qw * sq),
-                                _ => (sq, qw * cq),
-                            }
-                        }
                     };
-                    match term.velocity {
+                }
+            }
+            Column::Product(ref term) => {
+                for n in 0..samples {
+                    let (d, dd) = drive(term, n);
+                    let xr = raw[n];
+                    out[n] = match term.velocity {
                         VelocityFactor::Linear if !term.drive.is_measured() => {
                             // By parts: an antiderivative F of the function of x along the window.
                             let f = match term.position {
-                                PositionFactor::One => ws.xc[n],
-                                PositionFactor::Basis(i) => ws.anti[i],
+                                PositionFactor::One => xc[n],
+                                PositionFactor::Basis(i) => anti[n * anti_stride + i],
                                 PositionFactor::Linear => 0.5 * xr * xr,
                             };
-                            if let Mode::ByParts(second) = sh.modes[col] {
-                                ws.g[(cols + second) * samples + n] = dd * f;
+                            if let Some(second) = &mut second {
+                                second[n] = dd * f;
                             }
                             d * f
                         }
                         velocity => {
                             let f = match term.position {
                                 PositionFactor::One => 1.0,
-                                PositionFactor::Basis(i) => phi[i],
+                                PositionFactor::Basis(i) => table.at(n).0[i],
                                 PositionFactor::Linear => xr,
                             };
                             let v = match velocity {
@@ -1058,9 +1088,9 @@ fn fill_block<B: Basis + ?Sized>(
                             };
                             d * f * v
                         }
-                    }
+                    };
                 }
-            };
+            }
         }
     }
 
@@ -1117,49 +1147,116 @@ fn fill_block<B: Basis + ?Sized>(
     })
 }
 
-/// The time derivative of a factor of the positions, `Σ_c ∂f/∂q_c q_c'`.
-#[inline]
-fn factor_rate(factor: &Factor, q: &[f64], v: &[f64], args: &[Combination], trig: &[(f64, f64)]) -> f64 {
-    match *factor {
-        Factor::Trig { sine, combination } => {
-            let (sin, cos) = trig[trig_index(args, combination)];
-            // `Factor::eval_dq` of each coordinate, from the sine and cosine held.
-            combination
-                .terms()
-                .map(|(c, a)| {
-                    let a = f64::from(a);
+/// A factor of a term in other coordinates (or in several), resolved once per assembly: what a
+/// sample's value and rate of it read, without looking the factor up at every sample.
+#[derive(Debug, Clone, Copy)]
+enum Resolved {
+    /// `sin` (`sine`) or `cos` of the argument `arg` of [`Shared::trig`], whose sine and cosine
+    /// are held per sample; the argument's first `count` coordinates and coefficients, in order
+    /// (its rate).
+    Trig {
+        arg: usize,
+        sine: bool,
+        terms: [(usize, f64); MAX_COORDINATES],
+        count: usize,
+    },
+    /// The sign of coordinate `c`'s velocity averaged over the sample's cell.
+    Sign(usize),
+    /// Any other factor, at the sample's positions and velocities.
+    Other(Factor),
+}
+
+impl Resolved {
+    /// `factor` of a term whose equation holds the sines and cosines of `args`, reading the
+    /// other coordinates `others`.
+    fn new(factor: &Factor, args: &[Combination], others: &[usize]) -> Self {
+        match *factor {
+            Factor::Trig { sine, combination } => {
+                let mut terms = [(0, 0.0); MAX_COORDINATES];
+                let mut count = 0;
+                for (c, a) in combination.terms() {
+                    terms[count] = (c, f64::from(a));
+                    count += 1;
+                }
+                Resolved::Trig {
+                    arg: args
+                        .iter()
+                        .position(|&a| a == combination)
+                        .expect("every argument of the terms is held"),
+                    sine,
+                    terms,
+                    count,
+                }
+            }
+            Factor::Velocity {
+                coordinate,
+                function: VelocityFactor::Sign,
+            } => {
+                let c = usize::from(coordinate);
+                debug_assert!(others.binary_search(&c).is_ok(), "a coordinate the terms read");
+                Resolved::Sign(c)
+            }
+            other => Resolved::Other(other),
+        }
+    }
+
+    /// Whether the factor is a function of positions (a sine or cosine, or a power).
+    #[inline]
+    fn positional(&self) -> bool {
+        matches!(
+            self,
+            Resolved::Trig { .. } | Resolved::Other(Factor::Power { .. })
+        )
+    }
+
+    /// The `(sin, cos)` held at sample `n` of a sine's or cosine's argument, by `held(arg, n)`
+    /// (unused otherwise).
+    #[inline]
+    fn held(&self, held: &impl Fn(usize, usize) -> (f64, f64), n: usize) -> (f64, f64) {
+        match *self {
+            Resolved::Trig { arg, .. } => held(arg, n),
+            _ => (0.0, 0.0),
+        }
+    }
+
+    /// [`Factor::eval`] at `(q, v)`, a sine or cosine from its argument's `(sin, cos)` held: the
+    /// same number, computed once per sample. (A sign is the caller's: it reads the cell.)
+    #[inline]
+    fn value(&self, q: &[f64], v: &[f64], (sin, cos): (f64, f64)) -> f64 {
+        match *self {
+            Resolved::Trig { sine, .. } => {
+                if sine {
+                    sin
+                } else {
+                    cos
+                }
+            }
+            Resolved::Sign(c) => VelocityFactor::Sign.eval(v[c]),
+            Resolved::Other(f) => f.eval(q, v),
+        }
+    }
+
+    /// The time derivative of a factor of the positions, `Σ_c ∂f/∂q_c q_c'`, a sine or cosine
+    /// from its argument's `(sin, cos)` held (0 for a factor of velocities or an acceleration).
+    #[inline]
+    fn rate(&self, q: &[f64], v: &[f64], (sin, cos): (f64, f64)) -> f64 {
+        match *self {
+            Resolved::Trig {
+                sine, terms, count, ..
+            } => terms[..count]
+                .iter()
+                .map(|&(c, a)| {
                     let dq = if sine { a * cos } else { -a * sin };
                     dq * v[c]
                 })
-                .sum()
+                .sum(),
+            Resolved::Other(factor @ Factor::Power { coordinate, .. }) => {
+                let c = usize::from(coordinate);
+                factor.eval_dq(q, c) * v[c]
+            }
+            _ => 0.0,
         }
-        Factor::Power { coordinate, .. } => {
-            let c = usize::from(coordinate);
-            factor.eval_dq(q, c) * v[c]
-        }
-        Factor::Velocity { .. } | Factor::Acceleration { .. } => 0.0,
     }
-}
-
-/// [`Factor::eval`], a sine or cosine of positions read from those held for the sample (`trig`,
-/// one per argument of `args`): the same numbers, each computed once per sample.
-#[inline]
-fn factor_value(factor: &Factor, q: &[f64], v: &[f64], args: &[Combination], trig: &[(f64, f64)]) -> f64 {
-    match *factor {
-        Factor::Trig { sine, combination } => {
-            let (sin, cos) = trig[trig_index(args, combination)];
-            if sine { sin } else { cos }
-        }
-        _ => factor.eval(q, v),
-    }
-}
-
-/// Where `combination` is among the arguments held (it is: they are every term's).
-#[inline]
-fn trig_index(args: &[Combination], combination: Combination) -> usize {
-    args.iter()
-        .position(|&a| a == combination)
-        .expect("every argument of the terms is held")
 }
 
 /// The arguments of the sines and cosines of positions in the columns' terms, each once.
@@ -1236,13 +1333,15 @@ mod tests {
                 })
                 .collect();
             for f in &factors {
-                let held = factor_value(f, &q, &v, &args, &trig);
+                let resolved = Resolved::new(f, &args, &[0, 1]);
+                let at = resolved.held(&|arg, _| trig[arg], 0);
+                let held = resolved.value(&q, &v, at);
                 assert_eq!(held.to_bits(), f.eval(&q, &v).to_bits());
                 let Factor::Trig { combination, .. } = *f else {
                     unreachable!()
                 };
                 let fresh: f64 = combination.terms().map(|(c, _)| f.eval_dq(&q, c) * v[c]).sum();
-                let rate = factor_rate(f, &q, &v, &args, &trig);
+                let rate = resolved.rate(&q, &v, at);
                 assert_eq!(rate.to_bits(), fresh.to_bits());
             }
         }
