@@ -12,7 +12,7 @@ use crate::params::IdentifyParams;
 use crate::signals::Signals;
 use crate::system::{Block, LinearSystem};
 use crate::system::{Layout, RowJob, layout, split_rows};
-use crate::velocity::{Series, VelocityTrend, acceleration_into, cell_sign, velocity_into};
+use crate::velocity::{Series, TrendTables, VelocityTrend, acceleration_into, cell_sign, velocity_into};
 use hb_model::Forcing;
 use hb_model::{Column, DriveFactor, Factor, MAX_COORDINATES, PositionFactor, Term, VelocityFactor};
 
@@ -543,7 +543,14 @@ fn general_columns<B: Basis + ?Sized>(
         trend: VelocityTrend::Line,
     };
     if coupled || sh.others.iter().any(|(_, t)| t.velocity != VelocityFactor::One) {
-        velocity_into(plan, seg.cont, series, &mut buf.detrended, &mut buf.xdot)?;
+        velocity_into(
+            plan,
+            &mut TrendTables::default(),
+            seg.cont,
+            series,
+            &mut buf.detrended,
+            &mut buf.xdot,
+        )?;
     }
     let own = sh.signals.own_index();
     if coupled {
@@ -565,6 +572,7 @@ fn general_columns<B: Basis + ?Sized>(
             }
             velocity_into(
                 plan,
+                &mut TrendTables::default(),
                 &buf.other_x[i],
                 series,
                 &mut buf.detrended,

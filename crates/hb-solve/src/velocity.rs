@@ -101,7 +101,14 @@ pub fn velocity_series(
         step,
         trend,
     };
-    velocity_into(&mut plan, x, series, &mut detrended, &mut out)?;
+    velocity_into(
+        &mut plan,
+        &mut TrendTables::default(),
+        x,
+        series,
+        &mut detrended,
+        &mut out,
+    )?;
     Ok(out)
 }
 
@@ -113,35 +120,25 @@ fn end_fit_len(l: usize, periods: usize) -> usize {
 }
 
 /// The slope (per sample) at `x[0]` of the least-squares cubic through `x[0..=m]` (a quadratic
-/// or a line when `m` is too small for a cubic).
-fn end_slope(x: &[f64], m: usize) -> (f64, f64) {
-    // Powers of s = n / m: the normal equations of Σ c_k s^k, k = 0..=degree.
-    let degree = m.min(3);
-    let mut gram = [[0.0; 4]; 4];
+/// or a line when `m` is too small for a cubic), by the normal equations `fit` of `m` holds.
+fn end_slope(x: &[f64], fit: &EndFit) -> (f64, f64) {
+    let EndFit {
+        m,
+        degree,
+        ref powers,
+        ref gram,
+        ref factors,
+    } = *fit;
     let mut rhs = [0.0; 4];
-    for (n, &v) in x[..=m].iter().enumerate() {
-        let s = n as f64 / m as f64;
-        let mut p = [1.0; 4];
-        for k in 1..=degree {
-            p[k] = p[k - 1] * s;
-        }
+    for (p, &v) in powers.iter().zip(&x[..=m]) {
         for r in 0..=degree {
             rhs[r] += p[r] * (v - x[0]);
-            for c in 0..=degree {
-                gram[r][c] += p[r] * p[c];
-            }
         }
     }
-    // Gaussian elimination (the Gram matrix of 1, s, s², s³ on m + 1 >= degree + 1 points is
-    // positive definite).
+    // The elimination of the normal equations, on the right-hand side.
     for c in 0..=degree {
         for r in c + 1..=degree {
-            let f = gram[r][c] / gram[c][c];
-            let pivot_row = gram[c];
-            for (g, p) in gram[r].iter_mut().zip(pivot_row).take(degree + 1).skip(c) {
-                *g -= f * p;
-            }
-            rhs[r] -= f * rhs[c];
+            rhs[r] -= factors[r][c] * rhs[c];
         }
     }
     let mut coef = [0.0; 4];
@@ -152,6 +149,107 @@ fn end_slope(x: &[f64], m: usize) -> (f64, f64) {
     // d/dn at s = 0 is c_1 / m, d²/dn² is 2 c_2 / m².
     let mf = m as f64;
     (coef[1] / mf, 2.0 * coef[2] / (mf * mf))
+}
+
+/// The least-squares fit of `Σ c_k s^k`, `k = 0..=degree`, `s = n / m`, to `m + 1` samples, as
+/// far as it depends on `m` alone: the powers of `s` at each sample, and the normal equations
+/// (the Gram matrix of 1, s, s², s³ on `m + 1 >= degree + 1` points, positive definite) after
+/// Gaussian elimination with the factors it took.
+#[derive(Debug, Clone, Default)]
+struct EndFit {
+    m: usize,
+    degree: usize,
+    powers: Vec<[f64; 4]>,
+    gram: [[f64; 4]; 4],
+    factors: [[f64; 4]; 4],
+}
+
+impl EndFit {
+    fn new(m: usize) -> Self {
+        let degree = m.min(3);
+        let mut gram = [[0.0; 4]; 4];
+        let powers: Vec<[f64; 4]> = (0..=m)
+            .map(|n| {
+                let s = n as f64 / m as f64;
+                let mut p = [1.0; 4];
+                for k in 1..=degree {
+                    p[k] = p[k - 1] * s;
+                }
+                for r in 0..=degree {
+                    for c in 0..=degree {
+                        gram[r][c] += p[r] * p[c];
+                    }
+                }
+                p
+            })
+            .collect();
+        let mut factors = [[0.0; 4]; 4];
+        for c in 0..=degree {
+            for r in c + 1..=degree {
+                let f = gram[r][c] / gram[c][c];
+                factors[r][c] = f;
+                let pivot_row = gram[c];
+                for (g, p) in gram[r].iter_mut().zip(pivot_row).take(degree + 1).skip(c) {
+                    *g -= f * p;
+                }
+            }
+        }
+        Self {
+            m,
+            degree,
+            powers,
+            gram,
+            factors,
+        }
+    }
+}
+
+/// What a velocity estimate with the quintic trend computes from a window's length alone, kept
+/// for the next window of that length (the weak form's windows mostly have one): the end fits,
+/// and the trend's six Hermite functions and their derivatives at every sample.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct TrendTables {
+    /// The window's samples less one and the end fit's length the tables are for.
+    at: Option<(usize, usize)>,
+    fit: EndFit,
+    /// `h0, h1, h2, k0, k1, k2` at `s = n / L`, `n = 0..=L`.
+    value: Vec<[f64; 6]>,
+    /// Their derivatives in `s`.
+    slope: Vec<[f64; 6]>,
+}
+
+impl TrendTables {
+    /// The tables of windows of `l + 1` samples whose ends are fitted over `m + 1`.
+    fn make(&mut self, l: usize, m: usize) {
+        if self.at == Some((l, m)) {
+            return;
+        }
+        let lf = l as f64;
+        self.fit = EndFit::new(m);
+        self.value.clear();
+        self.slope.clear();
+        for n in 0..=l {
+            let s = n as f64 / lf;
+            let (s2, s3, s4, s5) = (s * s, s * s * s, s.powi(4), s.powi(5));
+            self.value.push([
+                1.0 - 10.0 * s3 + 15.0 * s4 - 6.0 * s5,
+                s - 6.0 * s3 + 8.0 * s4 - 3.0 * s5,
+                0.5 * s2 - 1.5 * s3 + 1.5 * s4 - 0.5 * s5,
+                10.0 * s3 - 15.0 * s4 + 6.0 * s5,
+                -4.0 * s3 + 7.0 * s4 - 3.0 * s5,
+                0.5 * s3 - s4 + 0.5 * s5,
+            ]);
+            self.slope.push([
+                -30.0 * s2 + 60.0 * s3 - 30.0 * s4,
+                1.0 - 18.0 * s2 + 32.0 * s3 - 15.0 * s4,
+                s - 4.5 * s2 + 6.0 * s3 - 2.5 * s4,
+                30.0 * s2 - 60.0 * s3 + 30.0 * s4,
+                -12.0 * s2 + 28.0 * s3 - 15.0 * s4,
+                1.5 * s2 - 4.0 * s3 + 2.5 * s4,
+            ]);
+        }
+        self.at = Some((l, m));
+    }
 }
 
 /// What [`velocity_series`] is asked for, besides the samples.
@@ -169,6 +267,7 @@ pub(crate) struct Series {
 /// [`velocity_series`] with a plan of length `L` and the caller's buffers.
 pub(crate) fn velocity_into(
     plan: &mut FourierPlan,
+    tables: &mut TrendTables,
     x: &[f64],
     series: Series,
     detrended: &mut Vec<f64>,
@@ -189,8 +288,9 @@ pub(crate) fn velocity_into(
         VelocityTrend::Line => (((xl - x0) / lf, 0.0), ((xl - x0) / lf, 0.0)),
         VelocityTrend::Quintic => {
             let m = end_fit_len(l, periods);
+            tables.make(l, m);
             let reversed: Vec<f64> = x[l - m..].iter().rev().copied().collect();
-            let (a, b) = (end_slope(x, m), end_slope(&reversed, m));
+            let (a, b) = (end_slope(x, &tables.fit), end_slope(&reversed, &tables.fit));
             (a, (-b.0, b.1))
         }
     };
@@ -198,47 +298,36 @@ pub(crate) fn velocity_into(
     // and its derivative in n.
     let (v1, v2) = (lf * d0, lf * dl);
     let (a1, a2) = (lf * lf * c0, lf * lf * cl);
-    let value = |n: f64| {
-        let s = n / lf;
-        let (s2, s3, s4, s5) = (s * s, s * s * s, s.powi(4), s.powi(5));
-        let h0 = 1.0 - 10.0 * s3 + 15.0 * s4 - 6.0 * s5;
-        let h1 = s - 6.0 * s3 + 8.0 * s4 - 3.0 * s5;
-        let h2 = 0.5 * s2 - 1.5 * s3 + 1.5 * s4 - 0.5 * s5;
-        let k0 = 10.0 * s3 - 15.0 * s4 + 6.0 * s5;
-        let k1 = -4.0 * s3 + 7.0 * s4 - 3.0 * s5;
-        let k2 = 0.5 * s3 - s4 + 0.5 * s5;
-        x0 * h0 + v1 * h1 + a1 * h2 + xl * k0 + v2 * k1 + a2 * k2
+    let weights = [x0, v1, a1, xl, v2, a2];
+    let combine = |h: &[f64; 6]| {
+        weights[0] * h[0]
+            + weights[1] * h[1]
+            + weights[2] * h[2]
+            + weights[3] * h[3]
+            + weights[4] * h[4]
+            + weights[5] * h[5]
     };
-    let slope = |n: f64| {
-        let s = n / lf;
-        let (s2, s3, s4) = (s * s, s * s * s, s.powi(4));
-        let h0 = -30.0 * s2 + 60.0 * s3 - 30.0 * s4;
-        let h1 = 1.0 - 18.0 * s2 + 32.0 * s3 - 15.0 * s4;
-        let h2 = s - 4.5 * s2 + 6.0 * s3 - 2.5 * s4;
-        let k0 = 30.0 * s2 - 60.0 * s3 + 30.0 * s4;
-        let k1 = -12.0 * s2 + 28.0 * s3 - 15.0 * s4;
-        let k2 = 1.5 * s2 - 4.0 * s3 + 2.5 * s4;
-        (x0 * h0 + v1 * h1 + a1 * h2 + xl * k0 + v2 * k1 + a2 * k2) / lf
-    };
+    let value = |n: usize| combine(&tables.value[n]);
+    let slope = |n: usize| combine(&tables.slope[n]) / lf;
     detrended.clear();
     match trend {
         // The chord exactly, so that a periodic record's oscillation comes out to rounding.
         VelocityTrend::Line => detrended.extend((0..l).map(|n| x[n] - x0 - d0 * n as f64)),
-        VelocityTrend::Quintic => detrended.extend((0..l).map(|n| x[n] - value(n as f64))),
+        VelocityTrend::Quintic => detrended.extend((0..l).map(|n| x[n] - value(n))),
     }
     out.resize(l + 1, 0.0);
     plan.derivative(detrended, harmonics, &mut out[..l])?;
     for (n, v) in out[..l].iter_mut().enumerate() {
         let trend_slope = match trend {
             VelocityTrend::Line => d0,
-            VelocityTrend::Quintic => slope(n as f64),
+            VelocityTrend::Quintic => slope(n),
         };
         *v = (*v + trend_slope) / step;
     }
     // The rest's series is periodic: at the closing sample as at the first.
     out[l] = match trend {
         VelocityTrend::Line => out[0],
-        VelocityTrend::Quintic => out[0] + (slope(lf) - slope(0.0)) / step,
+        VelocityTrend::Quintic => out[0] + (slope(l) - slope(0)) / step,
     };
     Ok(())
 }

@@ -16,7 +16,7 @@ use crate::params::IdentifyParams;
 use crate::signals::Signals;
 use crate::system::{Block, LinearSystem};
 use crate::system::{Layout, RowJob, layout, split_rows};
-use crate::velocity::{Series, VelocityTrend, cell_sign, velocity_into};
+use crate::velocity::{Series, TrendTables, VelocityTrend, cell_sign, velocity_into};
 use hb_model::terms::Combination;
 use hb_model::{Column, DriveFactor, Factor, MAX_COORDINATES, PositionFactor, Term, VelocityFactor};
 use hb_model::{Forcing, Harmonics};
@@ -333,6 +333,8 @@ struct Windows {
     trig_made: usize,
     /// The window less its trend (scratch of the velocity).
     detrended: Vec<f64>,
+    /// The trend's functions of the last window length.
+    trend: TrendTables,
     planner: FourierPlanner,
 }
 
@@ -420,7 +422,14 @@ impl Windows {
             return Ok(());
         }
         let plan = self.planner.plan(len)?;
-        velocity_into(plan, &self.x[c].1, series, &mut self.detrended, &mut self.v[c].1)?;
+        velocity_into(
+            plan,
+            &mut self.trend,
+            &self.x[c].1,
+            series,
+            &mut self.detrended,
+            &mut self.v[c].1,
+        )?;
         self.v[c].0 = Some(series.harmonics);
         Ok(())
     }
