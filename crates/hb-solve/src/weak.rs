@@ -270,7 +270,8 @@ impl BasisTable {
         self.previous_at = self.at;
         self.at = (source, start, samples);
         (self.len, self.stride) = (len, stride);
-        self.values.clear();
+        // Every value is written below (copied from the segment before, or evaluated), so the
+        // buffer's old values are not cleared first.
         self.values.resize(stride * samples, 0.0);
         // The samples the segment before holds, copied at once.
         let (lo, hi) = if self.previous_at.0 == source {
@@ -436,6 +437,15 @@ impl Windows {
 
     fn window(&self, c: usize) -> &[f64] {
         &self.x[c].1
+    }
+
+    /// Every coordinate's window and velocity, by coordinate (those not made as they were left,
+    /// empty when never made).
+    fn all(&self) -> ([&[f64]; MAX_COORDINATES], [&[f64]; MAX_COORDINATES]) {
+        (
+            std::array::from_fn(|c| self.x.get(c).map_or(&[][..], |e| &e.1[..])),
+            std::array::from_fn(|c| self.v.get(c).map_or(&[][..], |e| &e.1[..])),
+        )
     }
 
     fn velocity(&self, c: usize) -> &[f64] {
@@ -908,7 +918,6 @@ fn fill_block<B: Basis + ?Sized>(
     let mean = x.iter().sum::<f64>() / samples as f64;
     ws.xc.clear();
     ws.xc.extend(x.iter().map(|v| v - mean));
-    let (mut q, mut v) = ([0.0; MAX_COORDINATES], [0.0; MAX_COORDINATES]);
 
     // g: one column of samples per unknown; the forcing at every sample.
     let width = cols + sh.second;
@@ -1015,13 +1024,8 @@ fn fill_block<B: Basis + ?Sized>(
             Column::Stiffness => out.copy_from_slice(raw),
             Column::Product(ref term) if !term.coupling.is_empty() => {
                 let factors = &sh.resolved[col];
+                let (q, v) = windows.all();
                 for n in 0..samples {
-                    q[own] = x[n];
-                    v[own] = xdot[n];
-                    for &c in &sh.others {
-                        q[c] = windows.window(c)[n];
-                        v[c] = windows.velocity(c)[n];
-                    }
                     let (phi, dphi) = table.at(n);
                     let xr = raw[n];
                     let f = match term.position {
@@ -1030,7 +1034,7 @@ fn fill_block<B: Basis + ?Sized>(
                         PositionFactor::Linear => xr,
                     };
                     out[n] = match (sh.accelerations[col], &mut second) {
-                        (Some(j), _) if sh.modes[col] == Mode::DdPsi => q[j],
+                        (Some(j), _) if sh.modes[col] == Mode::DdPsi => q[j][n],
                         (Some(j), Some(second)) => {
                             // ∫ψ f q_j'' = −∫ψ' f q_j' − ∫ψ (df/dt) q_j'.
                             let df = match term.position {
@@ -1038,15 +1042,15 @@ fn fill_block<B: Basis + ?Sized>(
                                 PositionFactor::Basis(i) => dphi[i],
                                 PositionFactor::Linear => 1.0,
                             };
-                            let (mut g, mut rate) = (f, df * v[own]);
+                            let (mut g, mut rate) = (f, df * xdot[n]);
                             for factor in factors.iter().filter(|r| r.positional()) {
                                 let at = factor.held(&held, n);
-                                let value = factor.value(&q, &v, at);
-                                rate = rate * value + g * factor.rate(&q, &v, at);
+                                let value = factor.value(&q, &v, n, at);
+                                rate = rate * value + g * factor.rate(&q, &v, n, at);
                                 g *= value;
                             }
-                            second[n] = rate * v[j];
-                            g * v[j]
+                            second[n] = rate * v[j][n];
+                            g * v[j][n]
                         }
                         _ => {
                             let (d, _) = drive(term, n);
@@ -1059,7 +1063,7 @@ fn fill_block<B: Basis + ?Sized>(
                             for factor in factors {
                                 g *= match *factor {
                                     Resolved::Sign(c) => cell_sign(windows.velocity(c), n, false),
-                                    _ => factor.value(&q, &v, factor.held(&held, n)),
+                                    _ => factor.value(&q, &v, n, factor.held(&held, n)),
                                 };
                             }
                             g
@@ -1156,6 +1160,9 @@ fn fill_block<B: Basis + ?Sized>(
     })
 }
 
+/// A window's samples of each coordinate (its positions, or its velocities), by coordinate.
+type Series8<'a> = [&'a [f64]; MAX_COORDINATES];
+
 /// A factor of a term in other coordinates (or in several), resolved once per assembly: what a
 /// sample's value and rate of it read, without looking the factor up at every sample.
 #[derive(Debug, Clone, Copy)]
@@ -1228,10 +1235,11 @@ impl Resolved {
         }
     }
 
-    /// [`Factor::eval`] at `(q, v)`, a sine or cosine from its argument's `(sin, cos)` held: the
-    /// same number, computed once per sample. (A sign is the caller's: it reads the cell.)
-    #[inline]
-    fn value(&self, q: &[f64], v: &[f64], (sin, cos): (f64, f64)) -> f64 {
+    /// [`Factor::eval`] at sample `n` of the positions `q` and velocities `v` (by coordinate), a
+    /// sine or cosine from its argument's `(sin, cos)` held: the same number, computed once per
+    /// sample. (A sign is the caller's: it reads the cell.)
+    #[inline(always)]
+    fn value(&self, q: &Series8, v: &Series8, n: usize, (sin, cos): (f64, f64)) -> f64 {
         match *self {
             Resolved::Trig { sine, .. } => {
                 if sine {
@@ -1240,15 +1248,25 @@ impl Resolved {
                     cos
                 }
             }
-            Resolved::Sign(c) => VelocityFactor::Sign.eval(v[c]),
-            Resolved::Other(f) => f.eval(q, v),
+            Resolved::Sign(c) => VelocityFactor::Sign.eval(v[c][n]),
+            Resolved::Other(Factor::Power { coordinate, power }) => {
+                q[usize::from(coordinate)][n].powi(i32::from(power))
+            }
+            Resolved::Other(Factor::Velocity { coordinate, function }) => {
+                function.eval(v[usize::from(coordinate)][n])
+            }
+            Resolved::Other(Factor::Trig { sine, combination }) => {
+                let a: f64 = combination.terms().map(|(c, a)| f64::from(a) * q[c][n]).sum();
+                if sine { a.sin() } else { a.cos() }
+            }
+            Resolved::Other(Factor::Acceleration { .. }) => 1.0,
         }
     }
 
     /// The time derivative of a factor of the positions, `Σ_c ∂f/∂q_c q_c'`, a sine or cosine
     /// from its argument's `(sin, cos)` held (0 for a factor of velocities or an acceleration).
-    #[inline]
-    fn rate(&self, q: &[f64], v: &[f64], (sin, cos): (f64, f64)) -> f64 {
+    #[inline(always)]
+    fn rate(&self, q: &Series8, v: &Series8, n: usize, (sin, cos): (f64, f64)) -> f64 {
         match *self {
             Resolved::Trig {
                 sine, terms, count, ..
@@ -1256,12 +1274,13 @@ impl Resolved {
                 .iter()
                 .map(|&(c, a)| {
                     let dq = if sine { a * cos } else { -a * sin };
-                    dq * v[c]
+                    dq * v[c][n]
                 })
                 .sum(),
-            Resolved::Other(factor @ Factor::Power { coordinate, .. }) => {
+            Resolved::Other(Factor::Power { coordinate, power }) => {
+                // `Factor::eval_dq` in its own coordinate.
                 let c = usize::from(coordinate);
-                factor.eval_dq(q, c) * v[c]
+                f64::from(power) * q[c][n].powi(i32::from(power) - 1) * v[c][n]
             }
             _ => 0.0,
         }
@@ -1290,8 +1309,8 @@ fn trig_arguments(columns: &[Column]) -> Vec<Combination> {
 mod tests {
     use super::*;
 
-    /// The sines and cosines held per sample give every factor and its rate to the bit, as
-    /// `Factor::eval` and `Factor::eval_dq` compute them afresh.
+    /// The sines and cosines held per sample, and the factors resolved once, give every factor
+    /// and its rate to the bit, as `Factor::eval` and `Factor::eval_dq` compute them afresh.
     #[test]
     fn held_trig_is_bit_identical() {
         let combination = |a: &[i32]| Combination::new(a).expect("a combination");
@@ -1311,6 +1330,18 @@ mod tests {
             Factor::Trig {
                 sine: false,
                 combination: combination(&[0, 3]),
+            },
+            Factor::Power {
+                coordinate: 1,
+                power: 3,
+            },
+            Factor::Power {
+                coordinate: 0,
+                power: 1,
+            },
+            Factor::Velocity {
+                coordinate: 1,
+                function: VelocityFactor::Square,
             },
         ];
         let args = {
@@ -1344,13 +1375,23 @@ mod tests {
             for f in &factors {
                 let resolved = Resolved::new(f, &args, &[0, 1]);
                 let at = resolved.held(&|arg, _| trig[arg], 0);
-                let held = resolved.value(&q, &v, at);
+                let (qs, vs): (Series8, Series8) = (
+                    std::array::from_fn(|c| &q[c..=c]),
+                    std::array::from_fn(|c| &v[c..=c]),
+                );
+                let held = resolved.value(&qs, &vs, 0, at);
                 assert_eq!(held.to_bits(), f.eval(&q, &v).to_bits());
-                let Factor::Trig { combination, .. } = *f else {
-                    unreachable!()
+                let fresh: f64 = match *f {
+                    Factor::Trig { combination, .. } => {
+                        combination.terms().map(|(c, _)| f.eval_dq(&q, c) * v[c]).sum()
+                    }
+                    Factor::Power { coordinate, .. } => {
+                        let c = usize::from(coordinate);
+                        [f.eval_dq(&q, c) * v[c]].into_iter().sum()
+                    }
+                    _ => 0.0,
                 };
-                let fresh: f64 = combination.terms().map(|(c, _)| f.eval_dq(&q, c) * v[c]).sum();
-                let rate = resolved.rate(&q, &v, at);
+                let rate = resolved.rate(&qs, &vs, 0, at);
                 assert_eq!(rate.to_bits(), fresh.to_bits());
             }
         }
