@@ -553,7 +553,7 @@ fn sweep(plan: &Plan, records: &[Record]) -> Vec<SweepLine> {
             "harmonics j/k ≤",
             format!("{cap}"),
             WeakSetup {
-                harmonics: Harmonics::ForcingCap(cap),
+                harmonics: Harmonics::DriveCap(cap),
                 ..d
             },
         ));

@@ -401,7 +401,7 @@ impl DriveSearchBuilder {
         self
     }
 
-    /// Harmonics per window ([`Harmonics::ForcingCap`] relative to the candidate's frequency).
+    /// Harmonics per window ([`Harmonics::DriveCap`] relative to the candidate's frequency).
     pub fn harmonics(mut self, harmonics: Harmonics) -> Self {
         self.params.harmonics = harmonics;
         self

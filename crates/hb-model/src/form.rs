@@ -23,16 +23,18 @@ const MAX_COLUMN_NAME: usize = 256;
 pub enum Harmonics {
     /// `j = 1..=M` for every orbit, whatever its period (the paper's fixed `M`).
     Fixed(usize),
-    /// Every `j` with `j / k <= cap`: the same band of frequencies, up to `cap` times the forcing
-    /// frequency, for every orbit (`M_k = floor(cap k)`).
-    ForcingCap(f64),
+    /// Every `j` with `j / k <= cap`: the same band of frequencies, up to `cap` times the drive
+    /// frequency, for every orbit (`M_k = floor(cap k)`). Saved as `forcing_cap`, the name files
+    /// have always had.
+    #[serde(rename = "forcing_cap")]
+    DriveCap(f64),
 }
 
 impl Harmonics {
-    /// The default, [`Harmonics::ForcingCap`]`(3.0)`: every orbit is balanced over the same band of
+    /// The default, [`Harmonics::DriveCap`]`(3.0)`: every orbit is balanced over the same band of
     /// frequencies, up to three times the forcing frequency. See `docs/identification.md` for the
     /// measurements behind the choice.
-    pub const DEFAULT: Self = Self::ForcingCap(3.0);
+    pub const DEFAULT: Self = Self::DriveCap(3.0);
 
     /// Checks the value: `M >= 1`, or a cap `>= 1` (so that a period-1 orbit has a harmonic).
     pub fn validate(self) -> Result<Self, ModelError> {
@@ -42,7 +44,7 @@ impl Harmonics {
                 value: 0.0,
                 why: "must be at least 1",
             }),
-            Self::ForcingCap(c) if !(c.is_finite() && c >= 1.0) => Err(ModelError::InvalidParameter {
+            Self::DriveCap(c) if !(c.is_finite() && c >= 1.0) => Err(ModelError::InvalidParameter {
                 name: "harmonic cap",
                 value: c,
                 why: "must be finite and at least 1 (times the forcing frequency)",
@@ -60,13 +62,13 @@ impl Harmonics {
     /// ```
     /// use hb_model::Harmonics;
     ///
-    /// assert_eq!(Harmonics::ForcingCap(2.0).reaching(3), Harmonics::ForcingCap(3.0));
-    /// assert_eq!(Harmonics::ForcingCap(3.0).reaching(2), Harmonics::ForcingCap(3.0));
+    /// assert_eq!(Harmonics::DriveCap(2.0).reaching(3), Harmonics::DriveCap(3.0));
+    /// assert_eq!(Harmonics::DriveCap(3.0).reaching(2), Harmonics::DriveCap(3.0));
     /// assert_eq!(Harmonics::Fixed(6).reaching(5), Harmonics::Fixed(6));
     /// ```
     pub fn reaching(self, highest: u32) -> Self {
         match self {
-            Self::ForcingCap(c) if c < f64::from(highest) => Self::ForcingCap(f64::from(highest)),
+            Self::DriveCap(c) if c < f64::from(highest) => Self::DriveCap(f64::from(highest)),
             other => other,
         }
     }
@@ -77,7 +79,7 @@ impl Harmonics {
         let m = match self {
             Self::Fixed(m) => m,
             // A small allowance so that e.g. cap 1.0 with k = 3 gives exactly 3.
-            Self::ForcingCap(c) => (c * period as f64 + 1e-9).floor() as usize,
+            Self::DriveCap(c) => (c * period as f64 + 1e-9).floor() as usize,
         };
         m.min(below_nyquist)
     }
@@ -88,7 +90,8 @@ impl Harmonics {
 #[serde(rename_all = "snake_case")]
 enum HarmonicsRaw {
     Fixed(usize),
-    ForcingCap(f64),
+    #[serde(rename = "forcing_cap")]
+    DriveCap(f64),
 }
 
 impl TryFrom<HarmonicsRaw> for Harmonics {
@@ -97,7 +100,7 @@ impl TryFrom<HarmonicsRaw> for Harmonics {
     fn try_from(raw: HarmonicsRaw) -> Result<Self, ModelError> {
         match raw {
             HarmonicsRaw::Fixed(m) => Self::Fixed(m),
-            HarmonicsRaw::ForcingCap(c) => Self::ForcingCap(c),
+            HarmonicsRaw::DriveCap(c) => Self::DriveCap(c),
         }
         .validate()
     }

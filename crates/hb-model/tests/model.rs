@@ -283,3 +283,18 @@ fn the_first_state_where_the_mass_matrix_is_singular_is_found() {
         None
     );
 }
+
+/// The cap of the harmonics in units of the drive frequency is saved under the name files have
+/// always had, and read back from it; a cap below 1 is refused on reading.
+#[test]
+fn a_harmonic_cap_keeps_its_saved_name() {
+    let json = serde_json::to_string(&Harmonics::DriveCap(2.5)).unwrap();
+    assert_eq!(json, r#"{"forcing_cap":2.5}"#);
+    let back: Harmonics = serde_json::from_str(&json).unwrap();
+    assert_eq!(back, Harmonics::DriveCap(2.5));
+    assert!(serde_json::from_str::<Harmonics>(r#"{"forcing_cap":0.5}"#).is_err());
+    assert_eq!(
+        serde_json::from_str::<Harmonics>(r#"{"fixed":4}"#).unwrap(),
+        Harmonics::Fixed(4)
+    );
+}

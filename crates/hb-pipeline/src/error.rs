@@ -149,7 +149,7 @@ fn input_fix(error: &InputError) -> &'static str {
         InputError::MissingColumn {
             role: Role::Drive, ..
         } => " («drive_col»)",
-        InputError::BadForcingPeriod { .. } => " («drive_period»)",
+        InputError::BadDrivePeriod { .. } => " («drive_period»)",
         InputError::TimeGlitch { isolated: true, .. } => "; run with «repair=True» to fix isolated glitches",
         InputError::TimeGlitch { isolated: false, .. } | InputError::TimeUnresolved { .. } => " with «dt=»",
         _ => "",

@@ -917,7 +917,7 @@ impl GridData {
             }
         };
         if !(period.is_finite() && period > 0.0) {
-            return Err(InputError::BadForcingPeriod { period }.into());
+            return Err(InputError::BadDrivePeriod { period }.into());
         }
         let clock = SampleClock::from_step(period, dt)
             .and_then(|c| c.with_start_time(t0))

@@ -36,7 +36,7 @@ fn texts_name_no_command_line_options() {
         InputError::NeedStep,
         InputError::TimeTwice,
         InputError::BadStep { dt: 0.0 },
-        InputError::BadForcingPeriod { period: -1.0 },
+        InputError::BadDrivePeriod { period: -1.0 },
         InputError::MissingColumn {
             role: Role::Angle,
             wanted: Column::Position(2),

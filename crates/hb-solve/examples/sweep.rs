@@ -73,7 +73,7 @@ fn worst(m: &IdentifiedModel<Harmonic>, truth: &IdentifiedModel<Harmonic>) -> (S
 fn label(h: Harmonics) -> String {
     match h {
         Harmonics::Fixed(m) => format!("M = {m}"),
-        Harmonics::ForcingCap(c) => format!("j/k <= {c}"),
+        Harmonics::DriveCap(c) => format!("j/k <= {c}"),
         _ => format!("{h:?}"),
     }
 }
@@ -95,7 +95,7 @@ fn main() -> Result<(), Box<dyn Error>> {
     let policies: Vec<Harmonics> = [1usize, 2, 3, 6, 12, 24]
         .iter()
         .map(|&m| Harmonics::Fixed(m))
-        .chain([1.0, 2.0, 3.0, 6.0].iter().map(|&c| Harmonics::ForcingCap(c)))
+        .chain([1.0, 2.0, 3.0, 6.0].iter().map(|&c| Harmonics::DriveCap(c)))
         .collect();
 
     let segs = segments(&x, 0.03)?;

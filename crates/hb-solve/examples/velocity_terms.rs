@@ -202,7 +202,7 @@ fn main() -> Result<(), Box<dyn Error>> {
                 ];
                 for (method, segments) in &methods {
                     for &cap in caps {
-                        let cap = Harmonics::ForcingCap(cap);
+                        let cap = Harmonics::DriveCap(cap);
                         let params = IdentifyParams::builder(clock)
                             .form(truth.model()?.form().clone())
                             .harmonics(method.default_harmonics())
@@ -223,7 +223,7 @@ fn main() -> Result<(), Box<dyn Error>> {
                         };
                         let verr = velocity_error(&continuous, v, segments, h, cap, trend);
                         let cap_name = match cap {
-                            Harmonics::ForcingCap(c) => format!("{c} W"),
+                            Harmonics::DriveCap(c) => format!("{c} W"),
                             other => format!("{other:?}"),
                         };
                         match result {

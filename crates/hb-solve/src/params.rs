@@ -176,20 +176,20 @@ pub struct IdentifyParamsBuilder {
 }
 
 impl IdentifyParams {
-    /// The default harmonics of the velocity series, [`Harmonics::ForcingCap`]`(VELOCITY_CAP)`:
+    /// The default harmonics of the velocity series, [`Harmonics::DriveCap`]`(VELOCITY_CAP)`:
     /// the velocity that the nonlinear functions of `x'` (`sign(x')`, `x'*|x'|`, `x'^3`) are
     /// evaluated at is the derivative of a segment's Fourier series up to this many times the
     /// forcing frequency (see `docs/identification.md` for the measurements behind the choice).
-    pub const DEFAULT_VELOCITY_HARMONICS: Harmonics = Harmonics::ForcingCap(VELOCITY_CAP);
+    pub const DEFAULT_VELOCITY_HARMONICS: Harmonics = Harmonics::DriveCap(VELOCITY_CAP);
 
     /// The default harmonics of the velocity series of an equation with terms in other
     /// coordinates or accelerations ([`hb_model::TermList::is_coupled`]),
-    /// [`Harmonics::ForcingCap`]`(32)`: their velocities multiply each other and the functions of
+    /// [`Harmonics::DriveCap`]`(32)`: their velocities multiply each other and the functions of
     /// the positions, and a double pendulum whirls with content well above 16 times the drive
     /// frequency. On the whirling double pendulum at 64 samples per period the largest
     /// coefficient error is 5.3e-4 at a cap of 16, 1.4e-4 at 20, 4e-5 at 24 and 9e-6 at 31 (its
     /// Nyquist frequency); see `docs/identification.md`.
-    pub const SYSTEM_VELOCITY_HARMONICS: Harmonics = Harmonics::ForcingCap(32.0);
+    pub const SYSTEM_VELOCITY_HARMONICS: Harmonics = Harmonics::DriveCap(32.0);
 
     /// The default velocity harmonics of an identification of `form`:
     /// [`SYSTEM_VELOCITY_HARMONICS`](Self::SYSTEM_VELOCITY_HARMONICS) for a form with terms in
@@ -313,12 +313,12 @@ mod tests {
         assert_eq!(Harmonics::Fixed(12).count(1, 25), 12);
         assert_eq!(Harmonics::Fixed(12).count(1, 24), 11);
         assert_eq!(Harmonics::Fixed(3).count(16, 400), 3);
-        assert_eq!(Harmonics::ForcingCap(1.0).count(3, 75), 3);
-        assert_eq!(Harmonics::ForcingCap(2.5).count(2, 50), 5);
-        assert_eq!(Harmonics::ForcingCap(20.0).count(1, 25), 12);
+        assert_eq!(Harmonics::DriveCap(1.0).count(3, 75), 3);
+        assert_eq!(Harmonics::DriveCap(2.5).count(2, 50), 5);
+        assert_eq!(Harmonics::DriveCap(20.0).count(1, 25), 12);
         assert!(Harmonics::Fixed(0).validate().is_err());
-        assert!(Harmonics::ForcingCap(0.5).validate().is_err());
-        assert!(Harmonics::ForcingCap(f64::NAN).validate().is_err());
+        assert!(Harmonics::DriveCap(0.5).validate().is_err());
+        assert!(Harmonics::DriveCap(f64::NAN).validate().is_err());
     }
 
     #[test]
@@ -356,7 +356,7 @@ mod tests {
     #[test]
     fn deserialising_validates() {
         let h: Harmonics = serde_json::from_str(r#"{"forcing_cap":2.0}"#).unwrap();
-        assert_eq!(h, Harmonics::ForcingCap(2.0));
+        assert_eq!(h, Harmonics::DriveCap(2.0));
         for bad in [r#"{"fixed":0}"#, r#"{"forcing_cap":0.5}"#] {
             assert!(serde_json::from_str::<Harmonics>(bad).is_err(), "{bad}");
         }

@@ -103,7 +103,7 @@ impl WeakForm {
     /// within 1e-6 of the truth from a cap of 1 up); with noise on the angle the right-hand side
     /// `−∫ψ'' x` amplifies it by `(jΩ)²`, and caps above 2 lose accuracy quickly. See
     /// `docs/identification.md` for the measurements behind the choice.
-    pub const DEFAULT_HARMONICS: Harmonics = Harmonics::ForcingCap(2.0);
+    pub const DEFAULT_HARMONICS: Harmonics = Harmonics::DriveCap(2.0);
 
     /// The weak form with window order `2 <= p <=` [`MAX_WINDOW_ORDER`](Self::MAX_WINDOW_ORDER).
     pub fn new(window_order: u32) -> Result<Self, SolveError> {
@@ -124,8 +124,9 @@ impl WeakForm {
 
     /// The test functions of a segment of `len` samples (and the closing one) with `harmonics`
     /// harmonics and sample step `h`: `2M + 1` rows of `len + 1` values of `ψ`, `ψ'` and `ψ''`,
-    /// each multiplied by its trapezoid weight.
-    pub fn tables(&self, len: usize, harmonics: usize, h: f64, forcing_frequency: f64) -> Tables {
+    /// each multiplied by its trapezoid weight, and the drive's phase advance from the first
+    /// sample at `drive_angular_frequency` (`W`, radians per unit time).
+    pub fn tables(&self, len: usize, harmonics: usize, h: f64, drive_angular_frequency: f64) -> Tables {
         let p = self.window_order as i32;
         let pf = f64::from(self.window_order);
         let samples = len + 1;
@@ -140,7 +141,7 @@ impl WeakForm {
             ddpsi: vec![0.0; rows * samples],
             turn: (0..samples)
                 .map(|n| {
-                    let (s, c) = (forcing_frequency * n as f64 * h).sin_cos();
+                    let (s, c) = (drive_angular_frequency * n as f64 * h).sin_cos();
                     (c, s)
                 })
                 .collect(),

@@ -298,7 +298,7 @@ fn whirling_pendulum_orbits_identify_the_pendulum_exactly() {
             .with_start_time(t0)
             .unwrap();
         let params = IdentifyParams::builder(clock)
-            .harmonics(Harmonics::ForcingCap(8.0))
+            .harmonics(Harmonics::DriveCap(8.0))
             .build()
             .unwrap();
         for solver in [&QrSolver::default() as &dyn LstsqSolver, &SvdSolver::default()] {

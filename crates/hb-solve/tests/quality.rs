@@ -92,7 +92,7 @@ fn the_default_band_reaches_the_librarys_highest_drive_harmonic() {
     );
     let weak = WeakForm::default();
     assert_eq!(library.highest_drive_harmonic(), 3);
-    assert_eq!(weak.default_harmonics_for(&library), Harmonics::ForcingCap(3.0));
+    assert_eq!(weak.default_harmonics_for(&library), Harmonics::DriveCap(3.0));
     assert_eq!(
         HarmonicBalance.default_harmonics_for(&library),
         HarmonicBalance::DEFAULT_HARMONICS

@@ -401,7 +401,7 @@ fn forms_check_their_terms() {
     // The velocity harmonics are validated like the others.
     assert!(
         IdentifyParams::builder(clock)
-            .velocity_harmonics(hb_model::Harmonics::ForcingCap(0.5))
+            .velocity_harmonics(hb_model::Harmonics::DriveCap(0.5))
             .build()
             .is_err()
     );

@@ -257,9 +257,9 @@ pub enum InputError {
         /// Its time stamp.
         t: f64,
     },
-    /// A forcing period that is not positive and finite.
-    #[error("the forcing period {period} must be positive and finite")]
-    BadForcingPeriod {
+    /// A drive period that is not positive and finite.
+    #[error("the drive period {period} must be positive and finite")]
+    BadDrivePeriod {
         /// The period given.
         period: f64,
     },
