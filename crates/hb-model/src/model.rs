@@ -132,6 +132,14 @@ impl GeneralEvaluation {
     }
 }
 
+/// What [`IdentifiedModel::general_sum`] does with the terms in an acceleration.
+enum Mass<'a> {
+    /// Adds each to its coordinate's entry of the mass row, besides the sum of the others.
+    With(&'a mut [f64]),
+    /// Adds each to the mass row, and evaluates no other term.
+    Only(&'a mut [f64]),
+}
+
 /// The most measured drives read at one instant without an allocation.
 const DRIVES: usize = crate::terms::MAX_DRIVES;
 
@@ -508,7 +516,7 @@ impl<B: Basis> IdentifiedModel<B> {
                 // One coordinate with its own acceleration times a function of x: the mass
                 // `1 + Σ c f(x)` divides the rest.
                 let mut mass = [1.0];
-                let rest = self.general_sum(e, &|_| side, t, &[x], &[v], Some(&mut mass));
+                let rest = self.general_sum(e, &|_| side, t, &[x], &[v], Mass::With(&mut mass));
                 -rest / mass[0]
             }
             Evaluation::General(e) => {
@@ -533,8 +541,9 @@ impl<B: Basis> IdentifiedModel<B> {
     /// `Σ c D(t) F(x_own) V(v_own) C(q, v)` over the terms without an acceleration factor, at the
     /// state `(q, v)` of the whole system (positions as measured, not wrapped), with the known
     /// forcing; the terms with the acceleration of coordinate `j` add their `c D F V C` to
-    /// `mass[j]` when given. `side(c)` is the branch of coordinate `c`'s velocity (its sign's
-    /// value) for the factors that switch at rest, `None` for their plain value.
+    /// `mass[j]`. `side(c)` is the branch of coordinate `c`'s velocity (its sign's
+    /// value) for the factors that switch at rest, `None` for their plain value. With
+    /// [`Mass::Only`] only the terms with an acceleration are evaluated (0 is returned).
     fn general_sum(
         &self,
         e: &GeneralEvaluation,
@@ -542,16 +551,37 @@ impl<B: Basis> IdentifiedModel<B> {
         t: f64,
         q: &[f64],
         v: &[f64],
-        mut mass: Option<&mut [f64]>,
+        mass: Mass<'_>,
     ) -> f64 {
+        let (mass, rest) = match mass {
+            Mass::With(m) => (m, true),
+            Mass::Only(m) => (m, false),
+        };
         let own = self.own();
         let xe = self.point(q[own]);
-        let (dc, ds) = e.drive_table(self.forcing_frequency * t);
-        let p = self.measured(e, t);
+        // What the terms evaluated read: the mass row alone often reads no drive and no
+        // function of the own angle (a factor of 1 is 1 whatever the tables); the whole
+        // equation reads everything (the known forcing too).
+        let evaluated = |term: &Term| rest || term.coupling.acceleration().is_some();
+        let reads =
+            |f: &dyn Fn(&Term) -> bool| rest || e.terms.iter().any(|(_, term)| evaluated(term) && f(term));
+        let (dc, ds) = if reads(&|term| matches!(term.drive, DriveFactor::Cos(_) | DriveFactor::Sin(_))) {
+            e.drive_table(self.forcing_frequency * t)
+        } else {
+            ([0.0; DRIVE_TABLE], [0.0; DRIVE_TABLE])
+        };
+        let p = if reads(&|term| term.drive.is_measured()) {
+            self.measured(e, t)
+        } else {
+            [0.0; DRIVES]
+        };
         let own_side = side(own);
-        let sum = self.with_basis(xe, false, |phi| {
+        let mut body = |phi: &[f64]| {
             let mut sum = 0.0;
             for &(coefficient, term) in &e.terms {
+                if !evaluated(&term) {
+                    continue;
+                }
                 let mut value = coefficient
                     * drive_value(term.drive, &dc, &ds, &p)
                     * position_value(term.position, phi, xe, false)
@@ -565,14 +595,21 @@ impl<B: Basis> IdentifiedModel<B> {
                         other => other.eval(q, v),
                     };
                 }
-                match (term.coupling.acceleration(), mass.as_deref_mut()) {
-                    (Some(j), Some(m)) => m[j] += value,
-                    (Some(_), None) => {}
-                    (None, _) => sum += value,
+                match term.coupling.acceleration() {
+                    Some(j) => mass[j] += value,
+                    None => sum += value,
                 }
             }
             sum
-        });
+        };
+        let sum = if reads(&|term| matches!(term.position, PositionFactor::Basis(_))) {
+            self.with_basis(xe, false, body)
+        } else {
+            body(&[])
+        };
+        if !rest {
+            return 0.0;
+        }
         sum + e.forcing.0 * dc[1] + e.forcing.1 * ds[1]
     }
 
@@ -612,7 +649,19 @@ impl<B: Basis> IdentifiedModel<B> {
                 };
                 -a
             }
-            Evaluation::General(e) => self.general_sum(e, &side, t, q, v, Some(mass)),
+            Evaluation::General(e) => self.general_sum(e, &side, t, q, v, Mass::With(mass)),
+        }
+    }
+
+    /// The row of the mass matrix [`equation_at`](Self::equation_at) writes into `mass`, the
+    /// same numbers, without the rest of the equation (the terms without an acceleration are not
+    /// evaluated).
+    pub fn mass_row_at(&self, t: f64, q: &[f64], v: &[f64], sides: Option<&[f64]>, mass: &mut [f64]) {
+        mass.fill(0.0);
+        mass[self.own()] = 1.0;
+        let side = |c: usize| sides.and_then(|s| s.get(c).copied());
+        if let Evaluation::General(e) = &self.eval {
+            self.general_sum(e, &side, t, q, v, Mass::Only(mass));
         }
     }
 

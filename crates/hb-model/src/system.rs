@@ -6,6 +6,7 @@
 use circle_signal::system::MultiSystem;
 pub use circle_signal::system::SingularMass;
 use hb_basis::{Basis, BasisKind, Domain};
+use nalgebra::Const;
 use serde::{Deserialize, Serialize};
 
 use crate::drive::MeasuredDrive;
@@ -234,12 +235,30 @@ impl<B: Basis> IdentifiedSystem<B> {
         acc: &mut [f64],
     ) -> Result<(), SingularMass> {
         let n = self.equations.len();
-        let mut m = nalgebra::SMatrix::<f64, MAX_COORDINATES, MAX_COORDINATES>::identity();
         let mut r = nalgebra::SVector::<f64, MAX_COORDINATES>::zeros();
-        let mut row = [0.0; MAX_COORDINATES];
+        let (lu, pivot) = self.factor_mass(t, |i, model, row| {
+            r[i] = -model.equation_at(t, q, v, sides, row);
+        })?;
+        let x = lu.solve(&r).ok_or(SingularMass { t, pivot })?;
+        acc[..n].copy_from_slice(&x.as_slice()[..n]);
+        Ok(())
+    }
+
+    /// The mass matrix at time `t` (each equation's row written by `row(i, equation, row)`, the
+    /// unused rows the identity's) factorised by nalgebra's LU with partial pivoting, and its
+    /// smallest pivot relative to its largest entry; [`SingularMass`] where that pivot is below
+    /// [`SINGULAR_PIVOT`] or not finite.
+    fn factor_mass(
+        &self,
+        t: f64,
+        mut row: impl FnMut(usize, &IdentifiedModel<B>, &mut [f64]),
+    ) -> Result<(MassLu, f64), SingularMass> {
+        let n = self.equations.len();
+        let mut m = nalgebra::SMatrix::<f64, MAX_COORDINATES, MAX_COORDINATES>::identity();
+        let mut values = [0.0; MAX_COORDINATES];
         for (i, model) in self.equations.iter().enumerate() {
-            r[i] = -model.equation_at(t, q, v, sides, &mut row[..n]);
-            for (j, &value) in row[..n].iter().enumerate() {
+            row(i, model, &mut values[..n]);
+            for (j, &value) in values[..n].iter().enumerate() {
                 m[(i, j)] = value;
             }
         }
@@ -252,12 +271,11 @@ impl<B: Basis> IdentifiedSystem<B> {
             .map(|d| d.abs())
             .fold(f64::INFINITY, f64::min)
             / scale;
-        if !(pivot.is_finite() && pivot > SINGULAR_PIVOT) {
+        // Every pivot then non-zero: the factorisation solves.
+        if !(pivot.is_finite() && pivot > SINGULAR_PIVOT && lu.is_invertible()) {
             return Err(SingularMass { t, pivot });
         }
-        let x = lu.solve(&r).ok_or(SingularMass { t, pivot })?;
-        acc[..n].copy_from_slice(&x.as_slice()[..n]);
-        Ok(())
+        Ok((lu, pivot))
     }
 }
 
@@ -280,12 +298,15 @@ impl<B: Basis + Sync> IdentifiedSystem<B> {
         samples
             .par_iter()
             .map_init(
-                || (vec![0.0; n], vec![0.0; n], vec![0.0; n]),
-                |(q, v, acc), &k| {
+                || (vec![0.0; n], vec![0.0; n]),
+                |(q, v), &k| {
                     for (qi, x) in q.iter_mut().zip(coordinates) {
                         *qi = x[k];
                     }
-                    self.accelerations(time(k), q, v, None, acc)
+                    // The mass rows alone, as `accelerations` factorises them (the rest of each
+                    // equation does not decide whether it can solve).
+                    let t = time(k);
+                    self.factor_mass(t, |_, model, row| model.mass_row_at(t, q, v, None, row))
                         .err()
                         .map(|mass| SingularState {
                             sample: k,
@@ -297,6 +318,9 @@ impl<B: Basis + Sync> IdentifiedSystem<B> {
             .find_map_first(|found| found)
     }
 }
+
+/// A mass matrix factorised ([`IdentifiedSystem::accelerations`]).
+type MassLu = nalgebra::LU<f64, Const<MAX_COORDINATES>, Const<MAX_COORDINATES>>;
 
 /// Where [`IdentifiedSystem::first_singular`] found the mass matrix singular.
 #[derive(Debug, Clone, PartialEq)]

@@ -298,3 +298,30 @@ fn a_harmonic_cap_keeps_its_saved_name() {
         Harmonics::Fixed(4)
     );
 }
+
+/// The mass row alone is the row the whole equation writes, bit for bit, whatever functions of
+/// the positions the accelerations carry (of the own angle, of both) and whatever the state.
+#[test]
+fn the_mass_row_alone_is_the_equations_row() {
+    use hb_model::{Names, TermList};
+    let names = Names::new(["theta1", "theta2"], Vec::<String>::new()).unwrap();
+    let basis = BasisKind::from(Harmonic::new(2).unwrap());
+    let terms = "theta2''*cos(theta1-theta2), theta2'', theta1''*sin(theta1), \
+                 theta2''*sin(theta1+theta2), sin(theta1), sin(theta1-theta2)*theta2'^2, theta1', sin(2t)";
+    let list = TermList::parse_in(terms, &names, 0).unwrap();
+    let values = [0.7, -0.2, 0.3, 0.05, 9.0, 0.4, 0.1, 1.5];
+    let model = IdentifiedModel::new(basis, ModelForm::from_terms(list), 1.3, &values).unwrap();
+    for k in 0..500 {
+        let k = k as f64;
+        let q = [3.0 * (0.37 * k).sin() + 0.2 * k, -2.0 * (0.11 * k).cos()];
+        let v = [(0.7 * k).cos() * 4.0, (1.3 * k).sin() * 3.0];
+        let sides = [1.0, -1.0];
+        for (v, sides) in [([0.0, 0.0], None), (v, None), (v, Some(&sides[..]))] {
+            let (mut whole, mut alone) = ([0.0; 2], [7.0; 2]);
+            model.equation_at(0.1 * k, &q, &v, sides, &mut whole);
+            model.mass_row_at(0.1 * k, &q, &v, sides, &mut alone);
+            assert_eq!(whole.map(f64::to_bits), alone.map(f64::to_bits), "state {k}");
+            assert_ne!(whole[1], 0.0);
+        }
+    }
+}
