@@ -119,9 +119,11 @@ fn end_fit_len(l: usize, periods: usize) -> usize {
     (l / (8 * periods.max(1))).clamp(4.min(quarter), quarter)
 }
 
-/// The slope (per sample) at `x[0]` of the least-squares cubic through `x[0..=m]` (a quadratic
-/// or a line when `m` is too small for a cubic), by the normal equations `fit` of `m` holds.
-fn end_slope(x: &[f64], fit: &EndFit) -> (f64, f64) {
+/// The slope and curvature (per sample) at the first of `x`'s `m + 1` samples of the
+/// least-squares cubic through them (a quadratic or a line when `m` is too small for a cubic),
+/// by the normal equations `fit` of `m` holds; `x` runs from that end inwards (reversed at the
+/// window's last sample).
+fn end_slope<'a>(x: impl Iterator<Item = &'a f64> + Clone, fit: &EndFit) -> (f64, f64) {
     let EndFit {
         m,
         degree,
@@ -130,9 +132,10 @@ fn end_slope(x: &[f64], fit: &EndFit) -> (f64, f64) {
         ref factors,
     } = *fit;
     let mut rhs = [0.0; 4];
-    for (p, &v) in powers.iter().zip(&x[..=m]) {
+    let first = x.clone().next().copied().unwrap_or(f64::NAN);
+    for (p, &v) in powers.iter().zip(x.take(m + 1)) {
         for r in 0..=degree {
-            rhs[r] += p[r] * (v - x[0]);
+            rhs[r] += p[r] * (v - first);
         }
     }
     // The elimination of the normal equations, on the right-hand side.
@@ -289,8 +292,10 @@ pub(crate) fn velocity_into(
         VelocityTrend::Quintic => {
             let m = end_fit_len(l, periods);
             tables.make(l, m);
-            let reversed: Vec<f64> = x[l - m..].iter().rev().copied().collect();
-            let (a, b) = (end_slope(x, &tables.fit), end_slope(&reversed, &tables.fit));
+            let (a, b) = (
+                end_slope(x.iter(), &tables.fit),
+                end_slope(x[l - m..].iter().rev(), &tables.fit),
+            );
             (a, (-b.0, b.1))
         }
     };

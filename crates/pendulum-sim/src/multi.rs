@@ -217,7 +217,7 @@ impl TryFrom<MultiConfigRaw> for MultiConfig {
             .with_phase(raw.phase)?
             .with_tolerances(raw.tolerances);
         let config = match raw.max_steps {
-            Some(steps) => config.with_max_steps(steps),
+            Some(steps) => config.with_max_steps(steps)?,
             None => config,
         };
         match raw.sample_step {
@@ -295,10 +295,10 @@ impl MultiConfig {
         self.sampling = self.sampling.with_tolerances(tolerances);
         self
     }
-    /// The most steps of the integration ([`SimulationConfig::with_max_steps`]).
-    pub fn with_max_steps(mut self, steps: usize) -> Self {
-        self.sampling = self.sampling.with_max_steps(steps);
-        self
+    /// The most steps of the integration ([`SimulationConfig::with_max_steps`]; at least 1).
+    pub fn with_max_steps(mut self, steps: usize) -> Result<Self, SimError> {
+        self.sampling = self.sampling.with_max_steps(steps)?;
+        Ok(self)
     }
     /// The initial state at `t = 0`.
     pub fn with_initial(mut self, initial: MultiState) -> Self {

@@ -114,7 +114,7 @@ impl TryFrom<SimulationConfigRaw> for SimulationConfig {
             .with_phase(raw.phase)?
             .with_tolerances(raw.tolerances);
         let config = match raw.max_steps {
-            Some(steps) => config.with_max_steps(steps),
+            Some(steps) => config.with_max_steps(steps)?,
             None => config,
         };
         match raw.sample_step {
@@ -179,9 +179,13 @@ impl SimulationConfig {
     /// The most steps (accepted and rejected) the integration may take, its transient included,
     /// instead of the default [`step_budget`](Self::step_budget); past it the simulation stops
     /// with [`SimError::TooManySteps`]. Raise it for a stiff system (`usize::MAX`: no limit).
-    pub fn with_max_steps(mut self, steps: usize) -> Self {
+    /// At least 1.
+    pub fn with_max_steps(mut self, steps: usize) -> Result<Self, SimError> {
+        if steps == 0 {
+            return Err(invalid("max_steps", 0.0, "must be at least 1"));
+        }
         self.max_steps = Some(steps);
-        self
+        Ok(self)
     }
 
     /// The most steps the integration may take: the one given

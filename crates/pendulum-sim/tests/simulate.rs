@@ -254,12 +254,28 @@ fn a_runaway_simulation_stops_on_its_step_budget() {
     assert_eq!(long.step_budget(), 100_000 + 1_000 * (200 * 25 + 2_000));
     assert_eq!(simulate(&Pendulum::paper(), &long).unwrap().len(), 2_000);
     assert!(matches!(
-        simulate(&Pendulum::paper(), &long.clone().with_max_steps(1_000)),
+        simulate(&Pendulum::paper(), &long.clone().with_max_steps(1_000).unwrap()),
         Err(SimError::TooManySteps { steps: 1_000, .. })
     ));
     // The budget given is kept by the serialised form; the default is not written.
-    let json = serde_json::to_string(&long.clone().with_max_steps(5_000)).unwrap();
+    let json = serde_json::to_string(&long.clone().with_max_steps(5_000).unwrap()).unwrap();
     let back: SimulationConfig = serde_json::from_str(&json).unwrap();
     assert_eq!(back.step_budget(), 5_000);
     assert!(!serde_json::to_string(&long).unwrap().contains("max_steps"));
+    // No step at all is refused, when made and when read.
+    assert!(matches!(
+        long.clone().with_max_steps(0),
+        Err(SimError::InvalidParameter {
+            name: "max_steps",
+            ..
+        })
+    ));
+    assert!(serde_json::from_str::<SimulationConfig>(&json.replace("5000", "0")).is_err());
+    assert!(matches!(
+        config.clone().with_max_steps(0),
+        Err(SimError::InvalidParameter {
+            name: "max_steps",
+            ..
+        })
+    ));
 }

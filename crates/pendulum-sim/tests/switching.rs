@@ -150,7 +150,7 @@ fn stick_slip_matches_a_regularised_friction() {
                 eps,
             },
             // Stiff: explicit steps like 1/ε, past the default budget.
-            &config.clone().with_max_steps(usize::MAX),
+            &config.clone().with_max_steps(usize::MAX).unwrap(),
         )
         .unwrap();
         traj.theta
