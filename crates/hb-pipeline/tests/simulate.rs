@@ -374,6 +374,39 @@ fn the_truths_hint_identifies_the_double_pendulum() {
     assert!(worst < 5e-3, "worst relative error {worst:e}");
 }
 
+/// A whirling double pendulum, noise-free at 64 samples per drive period, turns sharply within
+/// two or three samples at times. Searched for runs of up to three samples (the line's default,
+/// a vibrometer's dropouts) such a turn is a run a few hundredths of a radian off the cubic
+/// through its neighbours; an angle is searched for isolated spikes only (an encoder's bit
+/// errors), and the record path finds none.
+#[test]
+fn the_sharp_turns_of_a_whirling_double_pendulum_are_not_spikes() {
+    use circle_signal::{Domain, SpikeParams, find_spikes};
+    let sim = simulated(json!({"system": "double-pendulum", "samples": 20000}));
+    let table = sim.table();
+    let (t, q1, q2) = (column(&table, 0), column(&table, 1), column(&table, 2));
+    let count =
+        |params: &SpikeParams| [&q1, &q2].map(|q| find_spikes(q, Domain::Circle, params).unwrap().len());
+    let runs = count(&SpikeParams::new().with_max_run(3).unwrap());
+    assert!(
+        runs.iter().all(|&n| n > 0),
+        "runs of three flag the sharp turns: {runs:?}"
+    );
+    assert_eq!(count(&SpikeParams::new()), [0, 0]);
+    let options = hb_pipeline::RecordOptions {
+        coords: Some("q1,q2".parse().unwrap()),
+        ..Default::default()
+    };
+    let source = Source::Arrays {
+        coords: vec![&q1, &q2],
+        t: Some(&t),
+        drives: Vec::new(),
+    };
+    let mut notices = hb_pipeline::Notices::default();
+    hb_pipeline::condition_source(source, &options, &mut notices).unwrap();
+    assert!(notices.0.is_empty(), "{:?}", notices.0);
+}
+
 #[test]
 fn a_record_written_as_it_is_simulated_is_the_kept_records_file() {
     let dir = tempfile::tempdir().unwrap();
