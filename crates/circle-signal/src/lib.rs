@@ -268,7 +268,14 @@ pub fn unwrap_into(x: &[f64], out: &mut Vec<f64>) {
     };
     out.push(prev);
     for &xn in &x[1..] {
-        turns -= ((xn - prev) / TAU).round();
+        // Within half a turn the step rounds to ±0, which leaves `turns` as it is (never −0):
+        // the same numbers without a call of `round` (the x86-64 baseline has no instruction for
+        // it) at nearly every sample. (A NaN step is rounded, and makes every later sample NaN,
+        // as always.)
+        let step = (xn - prev) / TAU;
+        if step.abs() >= 0.5 || step.is_nan() {
+            turns -= step.round();
+        }
         out.push(xn + TAU * turns);
         prev = xn;
     }

@@ -38,7 +38,50 @@ fn wrap_skips_the_remainder_without_changing_a_bit() {
     }
 }
 
+/// `unwrap` as its documentation defines it: every step's turns rounded.
+fn unwrap_by_rounding(x: &[f64]) -> Vec<f64> {
+    let mut turns = 0.0_f64;
+    let mut out = Vec::with_capacity(x.len());
+    for (i, &xn) in x.iter().enumerate() {
+        if i > 0 {
+            turns -= ((xn - x[i - 1]) / TAU).round();
+        }
+        out.push(xn + TAU * turns);
+    }
+    out
+}
+
+#[test]
+fn unwrap_skips_the_rounding_without_changing_a_bit() {
+    // Steps at half a turn and next to it, of many turns, and values that are no numbers.
+    let mut x = vec![
+        0.0,
+        PI,
+        0.0,
+        -PI,
+        0.0,
+        PI.next_up(),
+        0.0,
+        PI.next_down(),
+        0.0,
+        40.0,
+        -40.0,
+        1e300,
+    ];
+    x.extend([0.5, f64::NAN, 0.5, 1.0, f64::INFINITY, 2.0]);
+    let got: Vec<u64> = unwrap(&x).iter().map(|v| v.to_bits()).collect();
+    let want: Vec<u64> = unwrap_by_rounding(&x).iter().map(|v| v.to_bits()).collect();
+    assert_eq!(got, want);
+}
+
 proptest! {
+    #[test]
+    fn unwrap_is_the_rounding_to_the_bit(x in prop::collection::vec(-20.0..20.0f64, 1..300)) {
+        let got: Vec<u64> = unwrap(&x).iter().map(|v| v.to_bits()).collect();
+        let want: Vec<u64> = unwrap_by_rounding(&x).iter().map(|v| v.to_bits()).collect();
+        prop_assert_eq!(got, want);
+    }
+
     #[test]
     fn wrap_is_the_remainder_to_the_bit(x in -1e3..1e3f64, wrapped in -PI..PI) {
         prop_assert_eq!(wrap(x).to_bits(), wrap_by_remainder(x).to_bits());

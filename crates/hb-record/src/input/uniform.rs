@@ -470,17 +470,30 @@ impl GridRecord {
     /// ([`InputError::TimeUnsettled`]); a glitch not repaired ([`InputError::TimeGlitch`]), the
     /// first in the record, naming the others.
     pub fn fit(record: Record, options: &GridOptions) -> Result<Self, InputError> {
-        Self::fit_from(record, options, 0, true)
+        // Every debug build (the tests' too) checks that the pass over a record on its own
+        // indices gives what the general passes give, bit for bit.
+        #[cfg(debug_assertions)]
+        let general = Self::fit_from(record.clone(), options, 0, true, false);
+        let fitted = Self::fit_from(record, options, 0, true, true);
+        #[cfg(debug_assertions)]
+        assert_eq!(
+            format!("{fitted:?}"),
+            format!("{general:?}"),
+            "the grid fit of a record on its own indices"
+        );
+        fitted
     }
 
     /// [`GridRecord::fit`] of the samples of a record as read from its sample `before` on (for
     /// the samples without a line, named by their place in the record as read), leaving out
-    /// unsettled runs at the ends when `settle`.
+    /// unsettled runs at the ends when `settle`; `quick` lets a record whose stamps all lie on
+    /// their own indices take one pass instead of several ([`OwnIndices`], the same result).
     fn fit_from(
         record: Record,
         options: &GridOptions,
         before: usize,
         settle: bool,
+        quick: bool,
     ) -> Result<Self, InputError> {
         let Record { t, theta, lines, .. } = record;
         let n = t.len();
@@ -531,10 +544,20 @@ impl GridRecord {
             }
         })
         .ok_or_else(|| unresolved(n, None))?;
+        // A record whose every stamp lies less than half a step from the grid time of its own
+        // index (the common case): the refits give the line back, and what the passes below
+        // measure of each stamp is its deviation from that line, found here in one pass.
+        let own = (quick && through_all)
+            .then(|| OwnIndices::of(n, &tau, line))
+            .flatten();
         // Every stamp less than half a step from its grid time: the line among the levels.
         // (Each refit's indices are found once, for both of its passes.)
         let mut indices = Vec::new();
         for _ in 0..MAX_REFITS {
+            if own.is_some() {
+                // The refit's indices are `0, 1, …, n − 1`, as the line's: the same line.
+                break;
+            }
             let next = least_squares_indexed(n, &tau, &mut indices, line, &mut through_all, |i| {
                 let k = line.index(tau(i));
                 line.indexable(k, tau(i)).then_some(k)
@@ -588,11 +611,15 @@ impl GridRecord {
         // window of stamps whose median is half a slip off it.
         let flat_scatter = scatter_about(&|_| 0.0);
         let plain = resolution.map_or(NO_LEVELS_UNROUNDED * base.b, |u| NO_LEVELS_UNITS * u);
-        let levels = ((0..n).any(|i| {
-            let d = deviation(i).abs();
-            d.is_nan() || d > plain
-        }) && windows_depart(n, &deviation, 0.5 * slip_threshold(flat_scatter)))
-        .then(|| levels(n, &deviation));
+        let beyond_plain = match &own {
+            Some(own) => own.largest.abs() > plain,
+            None => (0..n).any(|i| {
+                let d = deviation(i).abs();
+                d.is_nan() || d > plain
+            }),
+        };
+        let levels = (beyond_plain && windows_depart(n, &deviation, 0.5 * slip_threshold(flat_scatter)))
+            .then(|| levels(n, &deviation));
         let level = |i: usize| levels.as_ref().map_or(0.0, |l| l.own[i]);
         // A stamp's deviation from its level, indexed `k` on `line`: against the line the levels
         // were found on, where there are levels; against `line` itself, where they are all 0.
@@ -622,9 +649,15 @@ impl GridRecord {
                     || (tau(i) - line.at(k)).abs() <= GRID_TOLERANCE * line.b)
         };
         // Whether every stamp fits `line` at index i (found by the last refit, which then gave
-        // `line` back).
-        let mut on_grid = false;
+        // `line` back). On its own indices without levels a stamp fits when its deviation from
+        // the line does: so all of them, when the largest does.
+        let own =
+            own.filter(|own| levels.is_none() && own.largest.abs() <= tolerance.max(GRID_TOLERANCE * line.b));
+        let mut on_grid = own.is_some();
         for _ in 0..MAX_REFITS {
+            if on_grid {
+                break;
+            }
             let next = least_squares_indexed(n, &tau, &mut indices, line, &mut through_all, |i| {
                 let k = line.index(tau(i));
                 fits(line, k, i).then_some(k)
@@ -674,11 +707,13 @@ impl GridRecord {
                 && (off_level(line, k, i).abs() <= near_level
                     || (tau(i) - line.at(k)).abs() <= GRID_TOLERANCE * line.b)
         };
-        let off = (0..n).filter(|&i| !near(i)).count()
-            + bad
-                .iter()
-                .filter(|&&i| near(i) && i > 0 && t[i] == t[i - 1])
-                .count();
+        let off = match &own {
+            Some(own) if own.largest.abs() <= near_level.max(GRID_TOLERANCE * line.b) => 0,
+            _ => (0..n).filter(|&i| !near(i)).count(),
+        } + bad
+            .iter()
+            .filter(|&&i| near(i) && i > 0 && t[i] == t[i - 1])
+            .count();
         let scatter_of_step = Some(scatter / base.b).filter(|s| s.is_finite());
         if bad.len() == n || (off >= UNRESOLVED_MIN && off as f64 > UNRESOLVED_FRACTION * n as f64) {
             return Err(unresolved(off, scatter_of_step));
@@ -728,7 +763,7 @@ impl GridRecord {
                         .map(<[u64]>::to_vec),
                     ..Record::default()
                 };
-                let mut grid = Self::fit_from(rest, options, before + start, false)?;
+                let mut grid = Self::fit_from(rest, options, before + start, false, quick)?;
                 grid.unsettled = runs
                     .into_iter()
                     .map(|r| Unsettled {
@@ -802,7 +837,16 @@ impl GridRecord {
         };
         let (mut squares, mut jitter_squares, mut kept) = (Sum::default(), Sum::default(), 0usize);
         let mut next_bad = bad.iter().peekable();
-        for i in 0..n {
+        // On its own indices every stamp is kept and its deviation from its level is its
+        // deviation from the line: measured already.
+        let unmeasured = if let Some(own) = &own {
+            (squares, jitter_squares, kept) = (own.squares, own.squares, n);
+            (report.max_deviation, report.max_at, report.max_jitter) = (own.largest, at(own.at), own.largest);
+            0
+        } else {
+            n
+        };
+        for i in 0..unmeasured {
             if next_bad.next_if_eq(&&i).is_some() {
                 continue;
             }
@@ -835,7 +879,8 @@ impl GridRecord {
         // Pieces, split from the end so that each sample moves once.
         let mut starts = vec![(0, 0)];
         let mut previous = k0;
-        for i in 1..n {
+        // On the grid every stamp is at its own index: one piece.
+        for i in 1..if on_grid { 1 } else { n } {
             let k = final_index(i);
             if k - previous >= 2.0 {
                 starts.push((i, (k - k0) as usize));
@@ -1311,6 +1356,44 @@ fn least_squares_indexed(
         }
     })
     .map(Refit::Line)
+}
+
+/// What the passes of [`GridRecord::fit`] measure of a record whose every stamp `i` is less than
+/// half a step from the grid time of index `i` on the line through all of them (and whose
+/// refits therefore give that line back): each stamp's deviation from the line, found in one
+/// pass. The deviation of stamp `i` is `τ_i − line.at(i)`, the same arithmetic as the passes'.
+struct OwnIndices {
+    /// The largest deviation (signed; the first of equal sizes).
+    largest: f64,
+    /// Where it is.
+    at: usize,
+    /// The squares of the deviations in steps, summed in order.
+    squares: Sum,
+}
+
+impl OwnIndices {
+    /// The deviations of the `n` stamps `tau` from `line`, or `None` when some stamp is not at
+    /// its own index (or not less than half a step from it).
+    fn of(n: usize, tau: &impl Fn(usize) -> f64, line: Line) -> Option<Self> {
+        let mut own = Self {
+            largest: 0.0,
+            at: 0,
+            squares: Sum::default(),
+        };
+        for i in 0..n {
+            let tau = tau(i);
+            let k = line.index(tau);
+            if k != i as f64 || !line.indexable(k, tau) {
+                return None;
+            }
+            let deviation = tau - line.at(k);
+            own.squares.add((deviation / line.b).powi(2));
+            if deviation.abs() > own.largest.abs() {
+                (own.largest, own.at) = (deviation, i);
+            }
+        }
+        Some(own)
+    }
 }
 
 /// A compensated (Neumaier) sum: exact to a few roundings whatever the number of terms.
