@@ -349,3 +349,97 @@ proptest::proptest! {
         proptest::prop_assert_eq!(r.theta, values);
     }
 }
+
+/// A cell's number is the one `str::parse` reads (the rows of numbers only are parsed as they
+/// are split), and a cell it does not read is an error naming its line, in rows of numbers only
+/// and beside quoted, spaced or decimal-comma cells alike.
+#[test]
+fn every_cell_reads_as_str_parse_reads_it() {
+    let cells = [
+        "1",
+        "-0",
+        "+1.5",
+        ".5",
+        "5.",
+        "1e5",
+        "1E-5",
+        "1.5e+3",
+        "-2.5e-310",
+        "1e308",
+        "1e309",
+        "4.9e-324",
+        "2.2250738585072011e-308",
+        "0.1000000000000000055511151231257827",
+        "123456789012345678901234567890",
+        "1e",
+        "e5",
+        ".",
+        "+",
+        "-",
+        "1.5e+",
+        "0x10",
+        "1_0",
+        "inf",
+        "-infinity",
+        "NaN",
+        "1.2.3",
+        "--1",
+        "1e5x",
+    ];
+    for cell in cells {
+        let text = format!("t,theta,omega\n0,{cell},2\n1,{cell},3\n");
+        let got = read(&text);
+        match cell.parse::<f64>() {
+            Ok(v) if v.is_finite() => {
+                let theta = got.unwrap_or_else(|e| panic!("{cell}: {e}")).theta;
+                assert_eq!(
+                    theta.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+                    [v.to_bits(); 2],
+                    "{cell}"
+                );
+            }
+            Ok(_) => assert!(
+                matches!(got, Err(InputError::NonFinite { .. })),
+                "{cell}: {got:?}"
+            ),
+            Err(_) => assert!(
+                matches!(got, Err(InputError::NotANumber { line: 2, .. })),
+                "{cell}: {got:?}"
+            ),
+        }
+    }
+    // A row of numbers only next to rows the general path reads: the same values.
+    let text = "t;theta\n0;1,25\n1;1.25\n2;\"1.25\"\n3; 1.25\n";
+    assert_eq!(read(text).unwrap().theta, [1.25; 4]);
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig {
+        cases: 256,
+        rng_seed: proptest::test_runner::RngSeed::Fixed(0x0c5f_0a57),
+        ..proptest::prelude::ProptestConfig::default()
+    })]
+
+    /// Any finite numbers, written as a logger writes them (shortest, fixed, scientific), are
+    /// read to the bit as `str::parse` reads their text.
+    #[test]
+    fn numbers_read_to_the_bit(
+        values in proptest::collection::vec(proptest::num::f64::NORMAL | proptest::num::f64::SUBNORMAL | proptest::num::f64::ZERO, 1..40),
+        style in 0usize..4,
+    ) {
+        let write = |v: f64| match style {
+            0 => format!("{v}"),
+            1 => format!("{v:e}"),
+            2 => format!("{v:.6}"),
+            _ => format!("{v:.17E}"),
+        };
+        let mut text = String::from("t,theta\n");
+        for (i, &v) in values.iter().enumerate() {
+            text.push_str(&format!("{i},{}\n", write(v)));
+        }
+        let theta = read(&text).unwrap().theta;
+        for (&got, &v) in theta.iter().zip(&values) {
+            proptest::prop_assert_eq!(got.to_bits(), write(v).parse::<f64>().unwrap().to_bits());
+        }
+    }
+}

@@ -61,7 +61,36 @@ pub(super) fn read<'a>(bytes: &'a [u8], options: &ReadOptions) -> Result<Record,
     };
     let mut numbers = Vec::new();
     let mut cells: Vec<&'a str> = Vec::with_capacity(width);
+    // A row of numbers only, each cell parsed as it is found: the common row, without splitting
+    // it first (see [`numbers_only`]); any other row takes the general path below.
+    let quick = match separator {
+        Separator::Comma => Some(b','),
+        Separator::Semicolon => Some(b';'),
+        Separator::Whitespace => None,
+    };
+    let mut values: Vec<f64> = Vec::with_capacity(width);
     let mut push = |line: u64, text: &'a str, cells: &mut Vec<&'a str>| -> Result<(), InputError> {
+        if let Some(separator) = quick
+            && numbers_only(text, separator, &mut values)
+            && values.len() == width
+        {
+            let cell = |field: &Field<'_>| values[field.index];
+            if let Some(time) = &time_field {
+                record.t.push(cell(time));
+            }
+            record.theta.push(cell(&angle_field));
+            for (field, column) in other_fields.iter().zip(&mut record.others) {
+                column.push(cell(field));
+            }
+            for (field, column) in drive_fields.iter().zip(&mut record.drives) {
+                column.push(cell(field));
+            }
+            for (field, column) in velocity_fields.iter().zip(&mut record.velocities) {
+                column.push(cell(field));
+            }
+            numbers.push(line);
+            return Ok(());
+        }
         if let Some(found) = Separator::of(text).filter(|&s| s != separator && width > 1) {
             return Err(InputError::MixedSeparators {
                 line,
@@ -223,6 +252,31 @@ impl Separator {
             Separator::Whitespace => {
                 cells.extend(text.split([' ', '\t']).filter(|c| !c.is_empty()).map(clean))
             }
+        }
+    }
+}
+
+/// Whether the row `text` holds finite numbers only, each followed by `separator` or the row's
+/// end, and if so its numbers in `values`: what the general path reads of such a row (its cells
+/// split at the separator are those numbers' texts, with nothing to trim or unquote, and a
+/// finite number's value is the one `str::parse` gives: both round the decimal correctly).
+/// `false` at anything else (a space, a quote, a decimal comma, a cell that is no number, or
+/// none, an infinity or NaN), which the general path then reads or names.
+fn numbers_only(text: &str, separator: u8, values: &mut Vec<f64>) -> bool {
+    values.clear();
+    let mut rest = text.as_bytes();
+    loop {
+        let Ok((value, used)) = fast_float2::parse_partial::<f64, _>(rest) else {
+            return false;
+        };
+        if !value.is_finite() {
+            return false;
+        }
+        values.push(value);
+        match rest.get(used) {
+            None => return true,
+            Some(&b) if b == separator => rest = &rest[used + 1..],
+            Some(_) => return false,
         }
     }
 }
