@@ -52,7 +52,7 @@ pub struct SpikeParams {
     threshold: f64,
     floor: Option<f64>,
     block: usize,
-    max_run: Option<usize>,
+    max_run: usize,
 }
 
 /// Longest run of samples that can be replaced together.
@@ -68,7 +68,7 @@ impl SpikeParams {
     /// false detections in 10⁵ clean samples with a threshold of 5 and none with 6, and the
     /// paper's chaotic record at 25 per period has residuals up to 5 times its robust scale. The
     /// price is the smallest spike found: one of 7 robust standard deviations (64 counts of 4096
-    /// at σ = 0.01 rad) is found 54 % of the time at 25 samples per period and 68–69 % at 100
+    /// at σ = 0.01 rad) is found 51 % of the time at 25 samples per period and 66–68 % at 100
     /// and 490 (69 % and 81–82 % with the block scale alone, before the local scale was added);
     /// 128 counts always (`cargo run --release -p circle-signal --example spike_rates`).
     pub const DEFAULT_THRESHOLD: f64 = 6.0;
@@ -78,19 +78,9 @@ impl SpikeParams {
     /// deviation of the sample median).
     pub const DEFAULT_BLOCK: usize = 64;
 
-    /// Default longest run of samples replaced together on the line: 3, a vibrometer's dropout
-    /// of up to 1.5 ms at 2048 Hz.
+    /// Default longest run of samples replaced together: 3, a vibrometer's dropout of up to
+    /// 1.5 ms at 2048 Hz.
     pub const DEFAULT_MAX_RUN: usize = 3;
-
-    /// Default longest run on the circle: 1, isolated spikes only. An angle comes from an
-    /// encoder, whose faults are bit errors of single samples; a dropout of a few samples is a
-    /// vibrometer's (the line's). Runs there would cost more than they find: a run of three
-    /// samples can take any sharp turn of the motion that spans three samples (a whirling
-    /// double pendulum at 64 samples per drive period, noise-free, had 131 and 193 samples of
-    /// its two angles in 2 · 10⁵ flagged as runs a few hundredths of a radian off the cubic
-    /// through their neighbours; isolated spikes only, one each), and weighing runs took 3 to 6
-    /// times as long there.
-    pub const DEFAULT_MAX_RUN_CIRCLE: usize = 1;
 
     /// Longest run of samples that can be replaced together.
     pub const MAX_RUN: usize = MAX_RUN;
@@ -109,24 +99,14 @@ impl SpikeParams {
 
     /// The defaults: threshold [`DEFAULT_THRESHOLD`](Self::DEFAULT_THRESHOLD), floor a
     /// [`DEFAULT_FLOOR_FRACTION`](Self::DEFAULT_FLOOR_FRACTION) of the span, block
-    /// [`DEFAULT_BLOCK`](Self::DEFAULT_BLOCK), runs up to the domain's default
-    /// ([`default_max_run`](Self::default_max_run)).
+    /// [`DEFAULT_BLOCK`](Self::DEFAULT_BLOCK), runs up to
+    /// [`DEFAULT_MAX_RUN`](Self::DEFAULT_MAX_RUN).
     pub fn new() -> Self {
         Self {
             threshold: Self::DEFAULT_THRESHOLD,
             floor: None,
             block: Self::DEFAULT_BLOCK,
-            max_run: None,
-        }
-    }
-
-    /// The longest run replaced together by default in `domain`:
-    /// [`DEFAULT_MAX_RUN_CIRCLE`](Self::DEFAULT_MAX_RUN_CIRCLE) on the circle,
-    /// [`DEFAULT_MAX_RUN`](Self::DEFAULT_MAX_RUN) on the line.
-    pub const fn default_max_run(domain: Domain) -> usize {
-        match domain {
-            Domain::Circle => Self::DEFAULT_MAX_RUN_CIRCLE,
-            Domain::Line => Self::DEFAULT_MAX_RUN,
+            max_run: Self::DEFAULT_MAX_RUN,
         }
     }
 
@@ -195,20 +175,13 @@ impl SpikeParams {
                 why: "must be 1 to 4 samples",
             });
         }
-        self.max_run = Some(max_run);
+        self.max_run = max_run;
         Ok(self)
     }
 
-    /// The longest run of samples replaced together, when given
-    /// ([`with_max_run`](Self::with_max_run)); `None` for the domain's default.
-    pub fn max_run(&self) -> Option<usize> {
+    /// The longest run of samples replaced together.
+    pub fn max_run(&self) -> usize {
         self.max_run
-    }
-
-    /// The longest run of samples replaced together in `domain`: the one given, else the
-    /// domain's default ([`default_max_run`](Self::default_max_run)).
-    pub fn max_run_in(&self, domain: Domain) -> usize {
-        self.max_run.unwrap_or(Self::default_max_run(domain))
     }
 
     /// The threshold in robust standard deviations.
@@ -242,8 +215,12 @@ struct SpikeParamsRaw {
     floor: Option<f64>,
     #[serde(default = "default_block")]
     block: usize,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    max_run: Option<usize>,
+    #[serde(default = "default_max_run")]
+    max_run: usize,
+}
+
+fn default_max_run() -> usize {
+    SpikeParams::DEFAULT_MAX_RUN
 }
 
 fn default_threshold() -> f64 {
@@ -269,10 +246,10 @@ impl TryFrom<SpikeParamsRaw> for SpikeParams {
     type Error = CircleError;
 
     fn try_from(raw: SpikeParamsRaw) -> Result<Self, CircleError> {
-        let mut p = Self::new().with_threshold(raw.threshold)?.with_block(raw.block)?;
-        if let Some(max_run) = raw.max_run {
-            p = p.with_max_run(max_run)?;
-        }
+        let p = Self::new()
+            .with_threshold(raw.threshold)?
+            .with_block(raw.block)?
+            .with_max_run(raw.max_run)?;
         match raw.floor {
             Some(f) => p.with_floor(f),
             None => Ok(p),
@@ -363,11 +340,9 @@ impl<'a> IntoIterator for &'a Spikes {
 }
 
 /// Finds the outliers of `x`: isolated spikes, samples that depart from the cubic through their
-/// neighbours, and runs of up to [`max_run_in`](SpikeParams::max_run_in) the domain consecutive
-/// samples that depart from the cubic through the two samples on each side of them (by default
-/// runs of up to three on the line, isolated spikes only on the circle), by more than the
-/// threshold times the larger of the block's and the local robust scale, and more than the
-/// floor.
+/// neighbours, and runs of up to [`max_run`](SpikeParams::max_run) consecutive samples that depart
+/// from the cubic through the two samples on each side of them, by more than the threshold times
+/// the larger of the block's and the local robust scale, and more than the floor.
 ///
 /// Errors: [`CircleError::NonFinite`] with the index of the first NaN or infinite sample,
 /// [`CircleError::TooShort`] below [`SpikeParams::MIN_SAMPLES`] samples. On the circle the samples
@@ -526,11 +501,8 @@ impl<'a> IntoIterator for &'a Spikes {
 /// from three samples after the choice, if that is later): their peaks weigh mostly the same
 /// candidates around the same burst and choose, as a rule, the same sample, whose repair, with the
 /// record unchanged, clears no better. On a whirling double pendulum sampled at 64 per drive
-/// period, noise-free, searched for runs of up to three samples, a rejected choice was weighed
-/// 2.2 times on average before, 1.1 times now, and every flag of the tables in `docs/spikes.md`
-/// is as it was. (On the circle the default is isolated spikes only, which takes none of that
-/// record's sharp turns for an outlier: see
-/// [`DEFAULT_MAX_RUN_CIRCLE`](SpikeParams::DEFAULT_MAX_RUN_CIRCLE).)
+/// period, noise-free, a rejected choice was weighed 2.2 times on average before, 1.1 times now,
+/// and every flag of the tables in `docs/spikes.md` is as it was.
 ///
 /// A repair moves sample `j` by minus the residual its clean value would have had, which is at
 /// most its threshold `g_j T_j`, and that enters sample `i`'s residual with the weight `c_ij` of
@@ -564,13 +536,10 @@ impl<'a> IntoIterator for &'a Spikes {
 /// one bit per sample for the flags and a map of the flagged samples' bounds, and a copy of the
 /// record here (none for [`find_and_repair_spikes`]). Computing the local scales afresh from the
 /// residuals at each such sample, as the search did before, took some ten thousand operations
-/// each: `3.2 · 10¹⁰` instructions per 10⁶ samples of that record, `7.8 · 10⁸` with runs of up
-/// to three samples; isolated spikes only, the circle's default, take 2.9 times fewer again
-/// (`1.76 → 0.61 · 10⁸` per `2 · 10⁵` samples of `hbid simulate`'s record of it). On the
-/// project's 2-core machine under load, per 10⁶ samples: 0.05–0.07 s for that record (3.2 s
-/// before the stretch), 0.05 s for a noisy vibrometer record or an encoder's, 0.08–0.11 s with
-/// a bit error per thousand samples and 0.08–0.09 s where the noise level changes within tens
-/// of samples (`docs/spikes.md`).
+/// each: `3.2 · 10¹⁰` instructions per 10⁶ samples of that record, `7.8 · 10⁸` now. On the
+/// project's 2-core machine under load, per 10⁶ samples: 0.11 s for that record (3.2 s before),
+/// 0.06 s for a noisy vibrometer record or an encoder's, 0.11 s with a bit error per thousand
+/// samples and 0.1 s where the noise level changes within tens of samples (`docs/spikes.md`).
 ///
 /// # Example
 ///
@@ -954,8 +923,7 @@ impl<'a, G: Geometry> Search<'a, G> {
                 (params.threshold * MAD_TO_SD * s).max(floor)
             })
             .collect();
-        let max_run = params.max_run_in(G::DOMAIN);
-        let mut search = Self::new(x, thresholds, block, params.threshold, max_run, shortcuts);
+        let mut search = Self::new(x, thresholds, block, params.threshold, params.max_run, shortcuts);
         search.search();
         let mut spikes = search.spikes;
         spikes.sort_unstable_by_key(|s| s.index);
@@ -2610,12 +2578,7 @@ mod tests {
         assert!(p.with_block(4).is_err());
         assert!(p.with_max_run(0).is_err());
         assert!(p.with_max_run(SpikeParams::MAX_RUN + 1).is_err());
-        assert_eq!(p.max_run(), None);
-        assert_eq!(p.max_run_in(Domain::Line), SpikeParams::DEFAULT_MAX_RUN);
-        assert_eq!(p.max_run_in(Domain::Circle), SpikeParams::DEFAULT_MAX_RUN_CIRCLE);
-        let given = p.with_max_run(3).unwrap();
-        assert_eq!(given.max_run_in(Domain::Circle), 3);
-        assert!(!serde_json::to_string(&p).unwrap().contains("max_run"));
+        assert_eq!(p.max_run(), SpikeParams::DEFAULT_MAX_RUN);
         assert_eq!(p.with_quantum(0.5).unwrap().floor(), Some(1.0));
         let q = p
             .with_threshold(4.5)

@@ -374,39 +374,6 @@ fn the_truths_hint_identifies_the_double_pendulum() {
     assert!(worst < 5e-3, "worst relative error {worst:e}");
 }
 
-/// A whirling double pendulum, noise-free at 64 samples per drive period, turns sharply within
-/// two or three samples at times. Searched for runs of up to three samples (the line's default,
-/// a vibrometer's dropouts) such a turn is a run a few hundredths of a radian off the cubic
-/// through its neighbours; an angle is searched for isolated spikes only (an encoder's bit
-/// errors), and the record path finds none.
-#[test]
-fn the_sharp_turns_of_a_whirling_double_pendulum_are_not_spikes() {
-    use circle_signal::{Domain, SpikeParams, find_spikes};
-    let sim = simulated(json!({"system": "double-pendulum", "samples": 20000}));
-    let table = sim.table();
-    let (t, q1, q2) = (column(&table, 0), column(&table, 1), column(&table, 2));
-    let count =
-        |params: &SpikeParams| [&q1, &q2].map(|q| find_spikes(q, Domain::Circle, params).unwrap().len());
-    let runs = count(&SpikeParams::new().with_max_run(3).unwrap());
-    assert!(
-        runs.iter().all(|&n| n > 0),
-        "runs of three flag the sharp turns: {runs:?}"
-    );
-    assert_eq!(count(&SpikeParams::new()), [0, 0]);
-    let options = hb_pipeline::RecordOptions {
-        coords: Some("q1,q2".parse().unwrap()),
-        ..Default::default()
-    };
-    let source = Source::Arrays {
-        coords: vec![&q1, &q2],
-        t: Some(&t),
-        drives: Vec::new(),
-    };
-    let mut notices = hb_pipeline::Notices::default();
-    hb_pipeline::condition_source(source, &options, &mut notices).unwrap();
-    assert!(notices.0.is_empty(), "{:?}", notices.0);
-}
-
 #[test]
 fn a_record_written_as_it_is_simulated_is_the_kept_records_file() {
     let dir = tempfile::tempdir().unwrap();
@@ -449,4 +416,70 @@ fn a_record_written_as_it_is_simulated_is_the_kept_records_file() {
             "{options}"
         );
     }
+}
+
+/// An encoder's glitch of one, two or three samples near half a turn, on the paper's chaotic
+/// pendulum (25 samples per period, wrapped): each is found whole and replaced by default, and
+/// the identified coefficients are those of the clean record. Angles are searched for runs of up
+/// to three samples, like displacements: searched for isolated spikes only, the test replaces the
+/// good samples beside a glitch of two or three instead, and the fit moves by 1e-3 with nothing
+/// said (`docs/spikes.md`, "What falls short").
+#[test]
+fn glitches_of_one_to_three_samples_near_half_a_turn_are_replaced() {
+    use std::f64::consts::PI;
+    let sim = simulated(json!({"samples": 40000}));
+    let table = sim.table();
+    let (t, clean) = (column(&table, 0), column(&table, 1));
+    let mut glitched = clean.clone();
+    let mut moved = Vec::new();
+    for (at, len) in [(5000, 1), (15000, 2), (25000, 3)] {
+        for i in at..at + len {
+            glitched[i] = circle_signal::wrap(glitched[i] + 0.98 * PI);
+            moved.push(i);
+        }
+    }
+    let options = hb_pipeline::RecordOptions::default();
+    let source = |x| Source::Arrays {
+        coords: vec![x],
+        t: Some(&t),
+        drives: Vec::new(),
+    };
+    let mut notices = hb_pipeline::Notices::default();
+    let grid = hb_pipeline::condition_source(source(&glitched), &options, &mut notices).unwrap();
+    let replaced: Vec<usize> = notices
+        .0
+        .iter()
+        .filter_map(|n| match n {
+            hb_pipeline::Notice::Record(hb_record::prepare::Note::Spikes {
+                found,
+                repaired: true,
+                ..
+            }) => Some(found.iter().map(|s| s.index)),
+            _ => None,
+        })
+        .flatten()
+        .collect();
+    assert_eq!(replaced, moved, "{:?}", notices.0);
+    for &i in &moved {
+        let off = circle_signal::circle_distance(grid.x[i], clean[i]);
+        assert!(off < 0.01, "sample {i} is {off} rad from the clean record");
+    }
+    let request = IdentifyRequest::from_json(json!({"bootstrap": 0})).unwrap();
+    let fit = |x| {
+        let report = hb_pipeline::identify(source(x), &request, &mut ()).unwrap();
+        report.equations[0]
+            .identification
+            .model
+            .coefficients()
+            .iter()
+            .map(|c| c.value)
+            .collect::<Vec<f64>>()
+    };
+    let (want, got) = (fit(&clean), fit(&glitched));
+    let worst = want
+        .iter()
+        .zip(&got)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    assert!(worst < 1e-5, "coefficients {worst:e} from the clean record's");
 }

@@ -748,12 +748,11 @@ impl SpikePolicy {
     /// sample decides by, larger than the record's own motion from one sample to the next (the
     /// 99th percentile of its steps, wrapped on the circle), and on the circle any of a quarter
     /// turn or more (a jump the unwrapping may take for a turn). A bit error of the count's upper
-    /// bits, a vibrometer's dropout, is far larger than the motion between two samples; where
-    /// the spike test flags a sample of a clean record of fast motion (a motion too sharp for its
-    /// sampling, whose turns the cubic through the neighbours misses: a whirling double pendulum
-    /// at 64 samples per period searched for runs of three samples had runs a few hundredths of a
-    /// radian off, well inside its steps of tenths of a radian), a repair would move a true
-    /// sample: those are kept and warned of.
+    /// bits, a vibrometer's dropout, is far larger than the motion between two samples; on a
+    /// clean record of fast motion (a whirling double pendulum at 64 samples per period) the
+    /// spike test flags runs of samples a few hundredths of a radian off the cubic where the
+    /// motion turns sharply, well inside its steps of tenths of a radian, and a repair there
+    /// would move true samples: those are kept and warned of.
     pub fn decisive(x: &[f64], pieces: &[Range<usize>], domain: Domain) -> f64 {
         let mut steps: Vec<f64> = pieces
             .iter()
