@@ -433,8 +433,8 @@ fn glitches_of_one_to_three_samples_near_half_a_turn_are_replaced() {
     let mut glitched = clean.clone();
     let mut moved = Vec::new();
     for (at, len) in [(5000, 1), (15000, 2), (25000, 3)] {
-        for i in at..at + len {
-            glitched[i] = circle_signal::wrap(glitched[i] + 0.98 * PI);
+        for (i, x) in glitched.iter_mut().enumerate().skip(at).take(len) {
+            *x = circle_signal::wrap(*x + 0.98 * PI);
             moved.push(i);
         }
     }
