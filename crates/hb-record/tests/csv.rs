@@ -420,6 +420,41 @@ proptest::proptest! {
         ..proptest::prelude::ProptestConfig::default()
     })]
 
+    /// Rows of any cells (numbers in several spellings, near-numbers, text, spaces, quotes,
+    /// decimal commas, empty cells) with commas or semicolons: every row read in one pass is
+    /// read the general way too in this (debug) build and must give the same numbers, and no
+    /// row panics.
+    #[test]
+    fn any_row_reads_as_the_general_path_reads_it(
+        rows in proptest::collection::vec(proptest::collection::vec(0usize..18, 2..4), 1..12),
+        numbers in proptest::collection::vec(-1e6..1e6f64, 40),
+        semicolons in proptest::bool::ANY,
+    ) {
+        let separator = if semicolons { ";" } else { "," };
+        let spell = |kind: usize, v: f64| match kind {
+            0..=5 => format!("{v}"),
+            6 => format!("{v:e}"),
+            7 => format!("{v:.3}"),
+            8 => "1e".to_owned(),
+            9 => "+.5".to_owned(),
+            10 => "0x1F".to_owned(),
+            11 => "inf".to_owned(),
+            12 => format!(" {v}"),
+            13 => format!("\"{v}\""),
+            14 => String::new(),
+            15 => "1,5".to_owned(),
+            16 => "abc".to_owned(),
+            _ => format!("{v}e-3"),
+        };
+        let mut text = String::from("t,theta\n").replace(',', separator);
+        for (r, row) in rows.iter().enumerate() {
+            let cells: Vec<String> = row.iter().enumerate().map(|(c, &k)| spell(k, numbers[(r * 3 + c) % 40])).collect();
+            text.push_str(&cells.join(separator));
+            text.push('\n');
+        }
+        let _ = read(&text);
+    }
+
     /// Any finite numbers, written as a logger writes them (shortest, fixed, scientific), are
     /// read to the bit as `str::parse` reads their text.
     #[test]

@@ -70,10 +70,27 @@ pub(super) fn read<'a>(bytes: &'a [u8], options: &ReadOptions) -> Result<Record,
     };
     let mut values: Vec<f64> = Vec::with_capacity(width);
     let mut push = |line: u64, text: &'a str, cells: &mut Vec<&'a str>| -> Result<(), InputError> {
-        if let Some(separator) = quick
-            && numbers_only(text, separator, &mut values)
+        if let Some(byte) = quick
+            && numbers_only(text, byte, &mut values)
             && values.len() == width
         {
+            // Every debug build (the tests' too) reads the row the general way as well: the same
+            // separator, the same cells, and each cell's number the same bits.
+            #[cfg(debug_assertions)]
+            {
+                assert_eq!(
+                    Separator::of(text).filter(|&s| s != separator && width > 1),
+                    None,
+                    "{text}"
+                );
+                separator.split(text, cells);
+                let general: Vec<u64> = cells
+                    .iter()
+                    .map(|c| number(c, separator).map_or(u64::MAX, f64::to_bits))
+                    .collect();
+                let quick: Vec<u64> = values.iter().map(|v| v.to_bits()).collect();
+                assert_eq!(quick, general, "the cells of {text:?}");
+            }
             let cell = |field: &Field<'_>| values[field.index];
             if let Some(time) = &time_field {
                 record.t.push(cell(time));
