@@ -66,7 +66,8 @@ pub(super) fn read<'a>(bytes: &'a [u8], options: &ReadOptions) -> Result<Record,
     let quick = match separator {
         Separator::Comma => Some(b','),
         Separator::Semicolon => Some(b';'),
-        Separator::Whitespace => None,
+        // Runs of spaces and tabs ([`numbers_only`] takes a space for either).
+        Separator::Whitespace => Some(b' '),
     };
     let mut values: Vec<f64> = Vec::with_capacity(width);
     let mut push = |line: u64, text: &'a str, cells: &mut Vec<&'a str>| -> Result<(), InputError> {
@@ -278,9 +279,11 @@ impl Separator {
 /// split at the separator are those numbers' texts, with nothing to trim or unquote, and a
 /// finite number's value is the one `str::parse` gives: both round the decimal correctly).
 /// `false` at anything else (a space, a quote, a decimal comma, a cell that is no number, or
-/// none, an infinity or NaN), which the general path then reads or names.
+/// none, an infinity or NaN), which the general path then reads or names. The separator `b' '`
+/// stands for white space: a run of spaces and tabs (the row is trimmed, so none at its ends).
 fn numbers_only(text: &str, separator: u8, values: &mut Vec<f64>) -> bool {
     values.clear();
+    let white = separator == b' ';
     let mut rest = text.as_bytes();
     loop {
         let Ok((value, used)) = fast_float2::parse_partial::<f64, _>(rest) else {
@@ -292,7 +295,14 @@ fn numbers_only(text: &str, separator: u8, values: &mut Vec<f64>) -> bool {
         values.push(value);
         match rest.get(used) {
             None => return true,
-            Some(&b) if b == separator => rest = &rest[used + 1..],
+            Some(&b) if b == separator && !white => rest = &rest[used + 1..],
+            Some(b' ' | b'\t') if white => {
+                let gap = rest[used..]
+                    .iter()
+                    .take_while(|&&b| b == b' ' || b == b'\t')
+                    .count();
+                rest = &rest[used + gap..];
+            }
             Some(_) => return false,
         }
     }
