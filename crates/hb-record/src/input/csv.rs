@@ -61,20 +61,11 @@ pub(super) fn read<'a>(bytes: &'a [u8], options: &ReadOptions) -> Result<Record,
     };
     let mut numbers = Vec::new();
     let mut cells: Vec<&'a str> = Vec::with_capacity(width);
-    // A row of numbers only, each cell parsed as it is found: the common row, without splitting
-    // it first (see [`numbers_only`]); any other row takes the general path below.
-    let quick = match separator {
-        Separator::Comma => Some(b','),
-        Separator::Semicolon => Some(b';'),
-        // Runs of spaces and tabs ([`numbers_only`] takes a space for either).
-        Separator::Whitespace => Some(b' '),
-    };
     let mut values: Vec<f64> = Vec::with_capacity(width);
     let mut push = |line: u64, text: &'a str, cells: &mut Vec<&'a str>| -> Result<(), InputError> {
-        if let Some(byte) = quick
-            && numbers_only(text, byte, &mut values)
-            && values.len() == width
-        {
+        // A row of numbers only, each cell parsed as it is found: the common row, without
+        // splitting it first; any other row takes the general path below.
+        if numbers_only(text, separator, &mut values) && values.len() == width {
             // Every debug build (the tests' too) reads the row the general way as well: the same
             // separator, the same cells, and each cell's number the same bits.
             #[cfg(debug_assertions)]
@@ -279,11 +270,17 @@ impl Separator {
 /// split at the separator are those numbers' texts, with nothing to trim or unquote, and a
 /// finite number's value is the one `str::parse` gives: both round the decimal correctly).
 /// `false` at anything else (a space, a quote, a decimal comma, a cell that is no number, or
-/// none, an infinity or NaN), which the general path then reads or names. The separator `b' '`
-/// stands for white space: a run of spaces and tabs (the row is trimmed, so none at its ends).
-fn numbers_only(text: &str, separator: u8, values: &mut Vec<f64>) -> bool {
+/// none, an infinity or NaN), which the general path then reads or names. White space separates
+/// by a run of spaces and tabs, as [`Separator::split`] does (the row is trimmed: none at its
+/// ends).
+fn numbers_only(text: &str, separator: Separator, values: &mut Vec<f64>) -> bool {
     values.clear();
-    let white = separator == b' ';
+    let byte = match separator {
+        Separator::Comma => b',',
+        Separator::Semicolon => b';',
+        Separator::Whitespace => b' ',
+    };
+    let white = separator == Separator::Whitespace;
     let mut rest = text.as_bytes();
     loop {
         let Ok((value, used)) = fast_float2::parse_partial::<f64, _>(rest) else {
@@ -295,7 +292,7 @@ fn numbers_only(text: &str, separator: u8, values: &mut Vec<f64>) -> bool {
         values.push(value);
         match rest.get(used) {
             None => return true,
-            Some(&b) if b == separator && !white => rest = &rest[used + 1..],
+            Some(&b) if b == byte && !white => rest = &rest[used + 1..],
             Some(b' ' | b'\t') if white => {
                 let gap = rest[used..]
                     .iter()

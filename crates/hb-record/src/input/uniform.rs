@@ -836,32 +836,30 @@ impl GridRecord {
             slips: Vec::new(),
         };
         let (mut squares, mut jitter_squares, mut kept) = (Sum::default(), Sum::default(), 0usize);
-        let mut next_bad = bad.iter().peekable();
-        // On its own indices every stamp is kept and its deviation from its level is its
-        // deviation from the line: measured already.
-        let unmeasured = if let Some(own) = &own {
+        if let Some(own) = &own {
+            // On its own indices every stamp is kept and its deviation from its level is its
+            // deviation from the line: measured already.
             (squares, jitter_squares, kept) = (own.squares, own.squares, n);
             (report.max_deviation, report.max_at, report.max_jitter) = (own.largest, at(own.at), own.largest);
-            0
         } else {
-            n
-        };
-        for i in 0..unmeasured {
-            if next_bad.next_if_eq(&&i).is_some() {
-                continue;
-            }
-            let k = index(i);
-            let deviation = tau(i) - line.at(k);
-            let jitter = off_level(line, k, i);
-            kept += 1;
-            // In steps, so that no square overflows.
-            squares.add((deviation / line.b).powi(2));
-            jitter_squares.add((jitter / line.b).powi(2));
-            if deviation.abs() > report.max_deviation.abs() {
-                (report.max_deviation, report.max_at) = (deviation, at(i));
-            }
-            if jitter.abs() > report.max_jitter.abs() {
-                report.max_jitter = jitter;
+            let mut next_bad = bad.iter().peekable();
+            for i in 0..n {
+                if next_bad.next_if_eq(&&i).is_some() {
+                    continue;
+                }
+                let k = index(i);
+                let deviation = tau(i) - line.at(k);
+                let jitter = off_level(line, k, i);
+                kept += 1;
+                // In steps, so that no square overflows.
+                squares.add((deviation / line.b).powi(2));
+                jitter_squares.add((jitter / line.b).powi(2));
+                if deviation.abs() > report.max_deviation.abs() {
+                    (report.max_deviation, report.max_at) = (deviation, at(i));
+                }
+                if jitter.abs() > report.max_jitter.abs() {
+                    report.max_jitter = jitter;
+                }
             }
         }
         if let Some(levels) = &levels {
@@ -880,12 +878,14 @@ impl GridRecord {
         let mut starts = vec![(0, 0)];
         let mut previous = k0;
         // On the grid every stamp is at its own index: one piece.
-        for i in 1..if on_grid { 1 } else { n } {
-            let k = final_index(i);
-            if k - previous >= 2.0 {
-                starts.push((i, (k - k0) as usize));
+        if !on_grid {
+            for i in 1..n {
+                let k = final_index(i);
+                if k - previous >= 2.0 {
+                    starts.push((i, (k - k0) as usize));
+                }
+                previous = k;
             }
-            previous = k;
         }
         let mut theta = theta;
         let mut pieces: Vec<Piece> = starts
