@@ -1299,6 +1299,18 @@ pub fn identify_data(
             identifications
         }
     };
+    // A model that does not describe a record whose drive was not given may have been fitted at
+    // the paper's period, 2π of the record's time unit, on a record in seconds: say so.
+    let drive_hint = if request.options.record.given_drive().is_none()
+        && request.options.record.drive_col.is_none()
+        && matches!(request.drive, DriveSpec::Period(_))
+    {
+        "; no drive was given, so its period is 2π in the record's time unit (the paper's \
+         non-dimensional time): for a record in seconds give «drive_frequency» in hertz, or \
+         «drive_frequency=auto» to estimate it"
+    } else {
+        ""
+    };
     for (i, identification) in identifications.into_iter().enumerate() {
         let of = if n > 1 {
             format!("the equation of {}: ", request.names.coordinates()[i])
@@ -1309,7 +1321,7 @@ pub fn identify_data(
             observer.notice(&Notice::NoIntervals(format!("{of}{why}")));
         }
         if let Some(w) = &identification.warning {
-            observer.notice(&Notice::Warning(format!("{of}{w}")));
+            observer.notice(&Notice::Warning(format!("{of}{w}{drive_hint}")));
         }
         equations.push(EquationReport {
             coordinate: request.names.coordinates()[i].clone(),

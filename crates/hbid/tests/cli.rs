@@ -744,6 +744,64 @@ fn report_writes_markdown_figures_and_model() {
     );
 }
 
+/// A record in seconds read without its drive: the paper's period of 2π seconds fits neither
+/// method's model, whose free runs blow up. The report is still written, with each model's
+/// coefficients and what stopped its validation, and says so on stderr; identify's warning says
+/// that no drive was given and how to give it.
+#[test]
+fn report_states_a_model_that_cannot_be_run_freely() {
+    let dir = scratch("report-unrunnable");
+    let record = simulated(
+        &dir,
+        "seconds.csv",
+        &["--drive-frequency", "1.3", "--sample-rate", "500", "--samples", "52000"],
+    );
+    let r = record.to_str().unwrap();
+    let out_dir = dir.join("rep");
+    let out = hbid(&[
+        "report",
+        r,
+        "--out",
+        out_dir.to_str().unwrap(),
+        "--validation-periods",
+        "50",
+        "--bootstrap",
+        "0",
+        "--quiet",
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("warning: the model of the windowed method cannot be run freely"),
+        "{stderr}"
+    );
+    let text = std::fs::read_to_string(out_dir.join("README.md")).unwrap();
+    assert!(text.contains("| windowed | cannot be run freely (below) |"), "{text}");
+    assert!(
+        text.contains("**Not validated:** the model of the windowed method cannot be run freely"),
+        "{text}"
+    );
+    // Why the run stopped, from the simulation's own error.
+    assert!(text.contains("steps before t ="), "{text}");
+    assert!(text.contains("`sin(t)*cos(x)`"), "{text}");
+    assert!(out_dir.join("model_windowed.json").exists());
+    assert!(!out_dir.join("section_model_windowed.png").exists());
+
+    let out = hbid(&["identify", r, "--bootstrap", "0", "--quiet"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains(
+            "no drive was given, so its period is 2π in the record's time unit (the paper's non-dimensional \
+             time): for a record in seconds give --drive-frequency in hertz, or --drive-frequency auto"
+        ),
+        "{stderr}"
+    );
+    // Given, the same record is described.
+    let out = hbid(&["identify", r, "--drive-frequency", "auto", "--bootstrap", "0", "--quiet"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success() && !stderr.contains("warning"), "{stderr}");
+}
+
 #[test]
 fn interrupt_leaves_no_file() {
     // A long simulation, interrupted while it runs: neither the output nor a temporary remains.

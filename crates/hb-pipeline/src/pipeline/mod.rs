@@ -618,16 +618,26 @@ pub struct Validation {
 }
 
 /// What the validation measured: the record's own section and each model.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug)]
 pub struct Validations {
     /// The record's section in delay coordinates and its floor, if a comparison was asked for.
     pub record: Option<DelaySection>,
-    /// Each model's validation, in the order of the models.
-    pub models: Vec<Validation>,
+    /// Each model's validation, in the order of the models: what it measured, or why the model
+    /// cannot be run freely ([`PipelineError::Validation`], the model's own failure: it blows up,
+    /// leaves the floating-point range or its mass matrix turns singular). One model's failure
+    /// leaves the others' validations standing.
+    pub models: Vec<Result<Validation, PipelineError>>,
+}
+
+impl Validations {
+    /// Every model's validation, or the first model's failure (in the models' order).
+    pub fn all(self) -> Result<Vec<Validation>, PipelineError> {
+        self.models.into_iter().collect()
+    }
 }
 
 /// Everything [`Pipeline::run`] found.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug)]
 pub struct Outcome {
     /// Delay and embedding dimension.
     pub embedded: Embedded,
@@ -787,7 +797,9 @@ impl<'a> Pipeline<'a> {
     /// Validates every model (`models` in the order of the setups, as [`Pipeline::identify`]
     /// returns them), the models side by side on rayon's threads. `progress` is called on this
     /// thread, in the setups' order: model `i`'s stage when every model before it is done (the
-    /// first at once). The first error in that order is returned, as a serial loop would.
+    /// first at once). A model whose free run cannot go on has its [`PipelineError::Validation`]
+    /// in its place of [`Validations::models`], beside the others' validations; any other error
+    /// (the first in the models' order, as a serial loop would meet it) is returned.
     pub fn validate(
         &self,
         embedded: &Embedded,
@@ -893,10 +905,13 @@ impl<'a> Pipeline<'a> {
             }
         });
         results.sort_by_key(|&(model, _)| model);
-        let validations = results
-            .into_iter()
-            .map(|(_, v)| v)
-            .collect::<Result<Vec<_>, _>>()?;
+        let mut validations = Vec::with_capacity(results.len());
+        for (_, result) in results {
+            match result {
+                Err(e) if !matches!(e, PipelineError::Validation { .. }) => return Err(e),
+                kept => validations.push(kept),
+            }
+        }
         Ok(Validations {
             record: record_section.map(|(section, _)| section),
             models: validations,

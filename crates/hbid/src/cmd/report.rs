@@ -30,7 +30,9 @@ const METHODS: [Method; 2] = [Method::Upo, Method::Windowed];
 struct MethodResult<'a> {
     method: Method,
     ident: &'a Identification,
-    validation: &'a Validation,
+    /// What the validation measured, or why the model cannot be run freely
+    /// ([`hb_pipeline::pipeline::PipelineError::Validation`]).
+    validation: Result<&'a Validation, &'a hb_pipeline::pipeline::PipelineError>,
 }
 
 /// The report's figures need a folder; checked before any work.
@@ -212,9 +214,16 @@ fn write_report(
         .map(|((&method, ident), validation)| MethodResult {
             method,
             ident,
-            validation,
+            validation: validation.as_ref(),
         })
         .collect();
+    // A model that cannot be run freely is reported as such, beside the others.
+    for res in &results {
+        if let Err(e) = res.validation {
+            let message = Spelling::CommandLine.render(&full_message(e));
+            eprintln!("warning: {message}; the report says so");
+        }
+    }
     let (section, floor) = outcome
         .validation
         .record
@@ -397,9 +406,22 @@ fn write_report(
         "| model | energy distance to the record | largest Lyapunov exponent (per unit time) | whirling fraction | \
          period-1 orbits at phase 0: x (winding) |\n| --- | --- | --- | --- | --- |"
     )?;
+    let mut failures = Vec::new();
     for res in &results {
-        let check = &res.validation.check;
-        let distance = res.validation.section.as_ref().and_then(|s| s.distance);
+        let validation = match res.validation {
+            Ok(v) => v,
+            Err(e) => {
+                writeln!(
+                    r,
+                    "| {} | cannot be run freely (below) | — | — | — |",
+                    res.method.name()
+                )?;
+                failures.push(Spelling::CommandLine.render(&full_message(e)));
+                continue;
+            }
+        };
+        let check = &validation.check;
+        let distance = validation.section.as_ref().and_then(|s| s.distance);
         let orbits: Vec<String> = check
             .orbits
             .iter()
@@ -421,6 +443,9 @@ fn write_report(
         )?;
     }
     writeln!(r)?;
+    for failure in &failures {
+        writeln!(r, "**Not validated:** {failure}.\n")?;
+    }
     prediction_section(&mut r, &mut figures, out, &results)?;
 
     let (range, label) = match data.domain {
@@ -435,10 +460,13 @@ fn write_report(
         GREY,
     )];
     for (res, color) in results.iter().zip([ORANGE, BLUE]) {
+        let Ok(validation) = res.validation else {
+            continue;
+        };
         panels.push((
             format!("section_model_{}.png", res.method.name()),
             format!("Model ({})", res.method.name()),
-            res.validation.section.as_ref().map_or(&[][..], |s| &s.points[..]),
+            validation.section.as_ref().map_or(&[][..], |s| &s.points[..]),
             color,
         ));
     }
@@ -520,7 +548,7 @@ fn prediction_section(
 ) -> anyhow::Result<()> {
     let measured: Vec<(&MethodResult<'_>, &pendulum_sim::PredictionTimes)> = results
         .iter()
-        .filter_map(|res| res.validation.prediction.as_ref().map(|p| (res, p)))
+        .filter_map(|res| res.validation.ok()?.prediction.as_ref().map(|p| (res, p)))
         .collect();
     let Some((_, first)) = measured.first() else {
         return Ok(());
@@ -607,4 +635,16 @@ fn prediction_section(
         "Valid prediction time against the window's start, each model started from the record's own state.",
     );
     Ok(())
+}
+
+/// An error with its chain of sources, `: `-joined (a model's failed free run says why it stopped).
+fn full_message(e: &dyn std::error::Error) -> String {
+    let mut text = e.to_string();
+    let mut source = e.source();
+    while let Some(s) = source {
+        text.push_str(": ");
+        text.push_str(&s.to_string());
+        source = s.source();
+    }
+    text
 }
