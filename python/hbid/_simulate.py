@@ -209,7 +209,7 @@ def simulate(
         drive: ``"drive"``, or ``"none"`` for a free decay (f = 0, no transient by default).
         c2: double pendulum and coupled oscillators: the damping of link 2 or oscillator 2
             (default 0.05, or 0.2).
-        mu: double pendulum: the mass ratio m2/(m1+m2), in [0, 1] (default 0.5).
+        mu: double pendulum: the mass ratio m2/(m1+m2), in [0, 1) (default 0.5).
         length_ratio: double pendulum: the length ratio l2/l1 (default 1).
         torque1: arm: the shoulder's torque, sinusoids ``"A:OMEGA[:PHASE]"`` (N m, rad/s, rad)
             or ``(A, OMEGA[, PHASE])``, a list for several (added), or ``"none"`` (default

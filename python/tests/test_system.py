@@ -191,7 +191,8 @@ def test_drives_by_name_from_arrays():
     drive by its name from a dict of arrays, in identify, compare and the system's run."""
     sim = hbid.simulate(system="coupled-duffing", samples=4000)
     hint = dict(sim.identify_options)
-    assert hint.pop("drive_col") == "a" and hint.pop("coords") == "x1,x2"
+    # Columns by name and position: a CSV's header or a .npy's columns alike.
+    assert hint.pop("drive_col") == "a=6" and hint.pop("coords") == "x1=2,x2=3"
     x = {q: sim.named[q] for q in ("x1", "x2")}
     drive = {"a": sim.named["a"]}
     result = hbid.identify(x, t=sim.t, drive=drive, bootstrap=0, **hint)

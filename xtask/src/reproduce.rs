@@ -158,8 +158,7 @@ pub fn run(out: &Path, quick: bool) -> anyhow::Result<()> {
             warning: id.warning,
         })
         .collect();
-    let in_sample: Vec<Option<PredictionTimes>> =
-        measured.iter().map(|v| v.prediction.clone()).collect();
+    let in_sample: Vec<Option<PredictionTimes>> = measured.iter().map(|v| v.prediction.clone()).collect();
     let checks: Vec<Validation> = models
         .iter()
         .zip(measured)

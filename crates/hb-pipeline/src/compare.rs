@@ -587,6 +587,19 @@ fn compare_one(
             OptionError::value("x0", x0, "the model has one coordinate: give one initial state").into(),
         );
     }
+    if let Some(coords) = &o.coords
+        && coords.len() != 1
+    {
+        return Err(OptionError::value(
+            "coords",
+            coords,
+            format!(
+                "the model has one coordinate, the record's {} are named: name its one column («angle_col»)",
+                coords.len()
+            ),
+        )
+        .into());
+    }
     let domain = o.signal.unwrap_or_else(|| model.domain());
     if domain != model.domain() {
         return Err(OptionError::value(

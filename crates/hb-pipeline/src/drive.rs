@@ -115,7 +115,12 @@ impl DriveSpec {
             Self::Free => (PeriodSource::Free, None),
             Self::Windows(unit) => (PeriodSource::Windows(unit), None),
             Self::Auto(range) => {
-                let estimate = estimate(grid, range, progress)?;
+                let estimate = estimate(grid, range, progress).map_err(|e| match e {
+                    DriveError::Estimate(source) if !grid.others.is_empty() => {
+                        DriveError::EstimateOfSystem(source)
+                    }
+                    other => other,
+                })?;
                 let source = PeriodSource::Estimated {
                     period: estimate.period,
                     uncertainty: estimate.period_uncertainty,
@@ -136,6 +141,13 @@ pub enum DriveError {
     /// The search ran and found no period.
     #[error("estimating the drive's period")]
     Estimate(#[source] DriveSearchError),
+    /// The search ran on a record of several coordinates and found no period.
+    #[error(
+        "estimating the drive's period (searched on the first coordinate alone, with the default model \
+         of one coordinate, which the coordinates of a coupled system need not follow: give the drive, \
+         «drive_frequency» or «drive_period», if the search cannot find it)"
+    )]
+    EstimateOfSystem(#[source] DriveSearchError),
 }
 
 /// The drive period of the record on `grid`, estimated on its longest piece within `range` (the

@@ -1300,10 +1300,13 @@ pub fn identify_data(
         }
     };
     // A model that does not describe a record whose drive was not given may have been fitted at
-    // the paper's period, 2π of the record's time unit, on a record in seconds: say so.
+    // the paper's period, 2π of the record's time unit, on a record in seconds: say so where 2π
+    // is no whole number of its steps (a record in the paper's time has a whole number of
+    // samples per period; one in seconds at a whole rate never has: 2π is irrational).
     let drive_hint = if request.options.record.given_drive().is_none()
         && request.options.record.drive_col.is_none()
         && matches!(request.drive, DriveSpec::Period(_))
+        && data.resampled_from.is_some()
     {
         "; no drive was given, so its period is 2π in the record's time unit (the paper's \
          non-dimensional time): for a record in seconds give «drive_frequency» in hertz, or \

@@ -72,6 +72,14 @@ impl Stage {
 pub enum Notice {
     /// A note of the record's preparation (grid, gaps, wrapping, spikes, integration).
     Record(Note),
+    /// A note of the preparation of one column of a record of several coordinates (its
+    /// spikes), named by the column's name.
+    Column {
+        /// The coordinate's name.
+        column: String,
+        /// The note.
+        note: Note,
+    },
     /// The drive's period estimated from the record.
     DriveEstimated(DriveEstimate),
     /// No drive: the windows are counted in periods of the free oscillation.
@@ -118,7 +126,7 @@ impl Notice {
     /// plain note.
     pub fn is_warning(&self) -> bool {
         match self {
-            Notice::Record(note) => note.is_warning(),
+            Notice::Record(note) | Notice::Column { note, .. } => note.is_warning(),
             Notice::Warning(_) => true,
             _ => false,
         }
@@ -130,6 +138,27 @@ impl Notice {
 impl fmt::Display for Notice {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
+            Notice::Column { column, note } => {
+                // The column's name in place of the note's own count of coordinates.
+                let note = match note {
+                    Note::Spikes {
+                        found,
+                        repaired,
+                        domain,
+                        policy,
+                        ..
+                    } => Note::Spikes {
+                        coordinate: 0,
+                        found: found.clone(),
+                        repaired: *repaired,
+                        domain: *domain,
+                        policy: *policy,
+                    },
+                    other => other.clone(),
+                };
+                write!(f, "{column}: ")?;
+                fmt::Display::fmt(&Notice::Record(note), f)
+            }
             Notice::Record(note) => {
                 write!(f, "{note}")?;
                 match note {

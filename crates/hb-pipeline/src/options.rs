@@ -24,8 +24,16 @@ pub enum Spelling {
 
 impl Spelling {
     /// The option `name` (`snake_case`) as this front end writes it: `--select-folds` or
-    /// `select_folds`.
+    /// `select_folds` (`file`, the records given, is `FILE` or `x`).
     pub fn name(self, name: &str) -> String {
+        // The records themselves: the command line's positional FILE arguments, Python's first
+        // argument `x`.
+        if name == "file" {
+            return match self {
+                Spelling::CommandLine => "FILE".to_owned(),
+                Spelling::Python => "x".to_owned(),
+            };
+        }
         match self {
             Spelling::CommandLine => format!("--{}", name.replace('_', "-")),
             Spelling::Python => name.to_owned(),

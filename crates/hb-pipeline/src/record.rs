@@ -8,7 +8,9 @@ use std::str::FromStr;
 
 use circle_signal::{Domain, Measured};
 use hb_record::input::{Column, InputError, ReadOptions, Record as InputRecord, Role, read_path};
-use hb_record::prepare::{Data, DriveFound, GridData, PrepareError, PrepareOptions, SpikePolicy, condition};
+use hb_record::prepare::{
+    Data, DriveFound, GridData, Note, PrepareError, PrepareOptions, SpikePolicy, condition,
+};
 use serde::{Deserialize, Serialize};
 
 use crate::drive::{BadDrive, DriveSpec, DriveUnit};
@@ -371,14 +373,32 @@ impl RecordOptions {
         } else {
             drives.to_vec()
         };
-        hb_model::Names::new(coordinates, drives.clone()).map_err(|e| {
-            let option = if single { "drive_col" } else { "coords" };
-            OptionError::new(
-                option,
-                format!(
-                    "{e}: the columns of a system are named in its terms (a file's header names such as theta1,                      tau1)"
+        hb_model::Names::new(coordinates.clone(), drives.clone()).map_err(|e| {
+            // The option whose list holds the name that cannot be used.
+            let bad = match &e {
+                hb_model::TermError::BadName { name, .. } => Some(name.as_str()),
+                _ => None,
+            };
+            let in_drives = bad.is_some_and(|b| drives.iter().any(|d| d == b));
+            let in_coordinates = bad.is_some_and(|b| coordinates.iter().any(|c| c == b));
+            let option = if single || (in_drives && !in_coordinates) {
+                "drive_col"
+            } else {
+                "coords"
+            };
+            let position = bad.filter(|b| !b.is_empty() && b.bytes().all(|c| c.is_ascii_digit()));
+            let example = if option == "drive_col" { "tau1" } else { "theta1" };
+            let hint = match position {
+                Some(p) => format!(
+                    "a column given by its position needs a name for the terms to call it by: NAME=COLUMN \
+                     ({example}={p})"
                 ),
-            )
+                None => format!(
+                    "the columns of a system are named in its terms (by the file's header names, or NAME=COLUMN: \
+                     {example}=2)"
+                ),
+            };
+            OptionError::new(option, format!("{e}: {hint}"))
         })
     }
 
@@ -621,8 +641,20 @@ pub fn condition_source(
             SpikePolicy::RepairFew
         })
         .with_measured(options.measured);
+    // A system's spikes are named by their column.
+    let columns: Vec<String> = match &options.coords {
+        Some(c) if c.len() > 1 => c.names().to_vec(),
+        _ => Vec::new(),
+    };
     condition(record, &prepare, &mut |note| {
-        observer.notice(&Notice::Record(note.clone()))
+        let notice = match note {
+            Note::Spikes { coordinate, .. } if *coordinate < columns.len() => Notice::Column {
+                column: columns[*coordinate].clone(),
+                note: note.clone(),
+            },
+            _ => Notice::Record(note.clone()),
+        };
+        observer.notice(&notice)
     })
     .map_err(|e| match e {
         PrepareError::Input(source) => RunError::Read {

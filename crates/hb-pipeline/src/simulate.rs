@@ -1181,6 +1181,15 @@ impl Rig {
                     ("c1", "c"),
                     ("c2", "c2"),
                 ];
+                // The model allows μ = 1 (a massless first link, its mass matrix singular with the
+                // links in line); a simulation would stop where they come in line.
+                if o.mu == Some(1.0) {
+                    return Err(OptionError::value(
+                        "mu",
+                        1.0,
+                        "must lie in [0, 1): at 1 the first link has no mass and the links in line cannot be moved",
+                    ));
+                }
                 System::DoublePendulum(
                     DoublePendulum::new(
                         o.mu.unwrap_or(mu),
@@ -2274,14 +2283,27 @@ fn system_truth(rig: &Rig, frame: &RecordFrame) -> Result<(Hint, Equations), Run
         System::CoupledDuffing(_) => Some(HINT_WINDOW_PERIODS * rig.frame.drive_period()),
         _ => None,
     };
+    // Columns as NAME=POSITION: the header's names on a CSV, the positions on a `.npy`.
+    let written = rig.columns();
+    let by_position = |names: &[&str]| {
+        names
+            .iter()
+            .map(|n| match written.iter().position(|c| c == n) {
+                Some(i) => format!("{n}={}", i + 1),
+                None => (*n).to_owned(),
+            })
+            .collect::<Vec<_>>()
+            .join(",")
+    };
     let hint = SystemHint {
-        coords: coordinates.join(","),
+        coords: by_position(coordinates),
         signal: match kind.domain() {
             Domain::Circle => "circle",
             Domain::Line => "line",
         },
-        drive_col: (!measured.is_empty()).then(|| measured.join(",")),
-        drive_frequency: if kind.measured_input() {
+        drive_col: (!measured.is_empty()).then(|| by_position(measured)),
+        // A free decay's time unit is its record's: no drive to give.
+        drive_frequency: if kind.measured_input() || free {
             None
         } else {
             o.drive_frequency

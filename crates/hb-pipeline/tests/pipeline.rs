@@ -218,7 +218,13 @@ fn a_model_whose_free_run_cannot_go_on_is_named_by_its_validation() {
     let embedded = pipeline.embed().unwrap();
     let segments = pipeline.segments(&embedded).unwrap();
     let mut models = pipeline.identify(&segments, |_| {}).unwrap();
-    assert!(pipeline.validate(&embedded, &models, |_| {}).unwrap().all().is_ok());
+    assert!(
+        pipeline
+            .validate(&embedded, &models, |_| {})
+            .unwrap()
+            .all()
+            .is_ok()
+    );
     // x'' − 50 x' + ... = 0: the velocity grows as e^(50 t) until no step can follow it.
     let model = &models[0].model;
     let coefficients = model

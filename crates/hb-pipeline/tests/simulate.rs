@@ -147,6 +147,7 @@ fn options_of_another_system_are_refused_in_one_line() {
             "number",
         ),
         (json!({"system": "double-pendulum", "mu": 2.0}), "mu", "[0, 1]"),
+        (json!({"system": "double-pendulum", "mu": 1.0}), "mu", "[0, 1)"),
         (
             json!({"system": "double-pendulum", "length_ratio": 0.0}),
             "length_ratio",
@@ -309,12 +310,13 @@ fn the_truth_is_in_the_records_names_unit_and_frame() {
     assert_eq!(truth["encoder"]["streams"], json!([0, 1]));
     assert_eq!(truth["initial"], json!({"q": [2.0, 0.0], "v": [0.0, 0.0]}));
     let hint = &truth["identify"];
-    assert_eq!(hint["coords"], "theta1,theta2");
+    // By name and position: the CSV's header or the `.npy`'s columns alike.
+    assert_eq!(hint["coords"], "theta1=2,theta2=3");
     assert_eq!(hint["signal"], "circle");
     assert_eq!(hint["drive_frequency"], json!(1.02));
     assert!(hint.get("drive_col").is_none());
     let args: Vec<String> = serde_json::from_value(hint["args"].clone()).unwrap();
-    assert_eq!(args[..4], ["--coords", "theta1,theta2", "--signal", "circle"]);
+    assert_eq!(args[..4], ["--coords", "theta1=2,theta2=3", "--signal", "circle"]);
     assert!(args.windows(2).any(|w| w == ["--drive-frequency", "1.02"]));
     // The arm: seconds natively, no periodic drive, its torques the measured drives and the
     // windows three periods of the slowest torque.
@@ -324,7 +326,7 @@ fn the_truth_is_in_the_records_names_unit_and_frame() {
     assert_eq!(truth["time_unit"], "s");
     assert_eq!(truth["forcing"], "measured");
     assert_eq!(truth["forcing_period"], Value::Null);
-    assert_eq!(truth["identify"]["drive_col"], "tau1,tau2");
+    assert_eq!(truth["identify"]["drive_col"], "tau1=6,tau2=7");
     let window = truth["identify"]["window"].as_f64().unwrap();
     assert!((window - 3.0 * std::f64::consts::TAU / 5.0).abs() < 1e-12);
     assert_eq!(

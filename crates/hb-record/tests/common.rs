@@ -25,6 +25,7 @@ pub fn is_about_the_content(e: &InputError) -> bool {
         InputError::Empty
         | InputError::NoData
         | InputError::MissingColumn { .. }
+        | InputError::AmbiguousColumn { .. }
         | InputError::NeedStep
         | InputError::NotANumber { .. }
         | InputError::NonFinite { .. }

@@ -73,6 +73,37 @@ fn reads_a_drive_column_beside_the_angle() {
     );
 }
 
+/// A column chosen by a name the header gives twice is refused, naming both positions; by its
+/// position, or when the name chosen is another, the record reads.
+#[test]
+fn a_name_the_header_gives_twice_is_ambiguous() {
+    let text = "t,theta,omega,theta\n0,0.1,0,5\n0.5,0.2,1,-6\n";
+    let e = read(text).unwrap_err();
+    assert!(
+        matches!(&e, InputError::AmbiguousColumn { role: Role::Angle, name, positions } if name == "theta" && positions == &[2, 4]),
+        "{e:?}"
+    );
+    assert_eq!(
+        e.to_string(),
+        "the angle column 'theta' is ambiguous: the header names columns 2 and 4 so (choose one by its position)"
+    );
+    let by_position = ReadOptions {
+        angle: Some("4".parse().unwrap()),
+        ..Default::default()
+    };
+    assert_eq!(with(text, by_position).unwrap().theta, vec![5.0, -6.0]);
+    let e = read("t,theta,t\n0,1,2\n1,2,3\n").unwrap_err();
+    assert!(
+        matches!(e, InputError::AmbiguousColumn { role: Role::Time, .. }),
+        "{e:?}"
+    );
+    // Names the reader does not look up may repeat.
+    assert_eq!(
+        read("t,theta,v,v\n0,1,2,3\n1,2,3,4\n").unwrap().theta,
+        vec![1.0, 2.0]
+    );
+}
+
 #[test]
 fn reads_with_comments_and_extra_columns() {
     let r = read("# a comment\nt,theta,omega\n0,0.1,0\n# mid\n0.5,-3.0,1e-3\n").unwrap();

@@ -169,6 +169,23 @@ pub enum AssemblyError {
         /// Why.
         why: &'static str,
     },
+    /// A drive harmonic the sampling cannot resolve: at or above half the samples per drive
+    /// period a sampled `cos(kt)`, `sin(kt)` is the alias of a lower harmonic (or zero), and its
+    /// coefficient would be taken from another term's or from nothing.
+    #[error(
+        "{what} has the drive's harmonic {harmonic}, which {samples_per_period} samples per drive period \
+         cannot resolve: a sampled harmonic is a lower one's alias from half the samples per period on \
+         (harmonics up to {} here)",
+        samples_per_period.saturating_sub(1) / 2
+    )]
+    DriveHarmonicAliased {
+        /// The term (`the term `sin(16t)*cos(x)``) or the default library.
+        what: String,
+        /// Its harmonic of the drive.
+        harmonic: u32,
+        /// Samples per drive period of the record.
+        samples_per_period: usize,
+    },
     /// A record too short for what was asked of it.
     #[error("{what} needs at least {needed} samples; the record has {len}")]
     RecordTooShort {

@@ -270,8 +270,28 @@ impl IdentifyParamsBuilder {
         self
     }
 
-    /// Validates and builds.
+    /// Validates and builds. A term with a drive harmonic `k` at or above half the clock's whole
+    /// samples per period `P` (`2k >= P`) is refused
+    /// ([`AssemblyError::DriveHarmonicAliased`](crate::error::AssemblyError::DriveHarmonicAliased)):
+    /// sampled, it is the alias of harmonic `P − k`.
     pub fn build(self) -> Result<IdentifyParams, SolveError> {
+        let highest = self.form.highest_drive_harmonic();
+        if let Some(p) = self.clock.whole_samples_per_period()
+            && 2 * highest as usize >= p
+        {
+            let what = match self.form.terms() {
+                Some(list) => (0..list.len())
+                    .find(|&i| list.terms()[i].drive.harmonic() == highest)
+                    .map_or_else(|| "a term".to_owned(), |i| format!("the term `{}`", list.name(i))),
+                None => format!("the default library (drive harmonics up to {highest})"),
+            };
+            return Err(crate::error::AssemblyError::DriveHarmonicAliased {
+                what,
+                harmonic: highest,
+                samples_per_period: p,
+            }
+            .into());
+        }
         Ok(IdentifyParams {
             clock: self.clock,
             harmonics: self.harmonics.validate()?,
@@ -286,6 +306,39 @@ impl IdentifyParamsBuilder {
 mod tests {
     use super::*;
     use std::f64::consts::TAU;
+
+    #[test]
+    fn a_drive_harmonic_the_sampling_cannot_resolve_is_refused() {
+        let names = hb_model::Names::new(["x"], Vec::<String>::new()).unwrap();
+        let form = |spec: &str| ModelForm::from_terms(hb_model::TermList::parse_in(spec, &names, 0).unwrap());
+        let clock = SampleClock::nondimensional(32).unwrap();
+        // 15 is the highest harmonic 32 samples resolve; 16 is sampled as cos(πn), sin(πn) = 0.
+        assert!(
+            IdentifyParams::builder(clock)
+                .form(form("sin(15t)*cos(x), sin(x)"))
+                .build()
+                .is_ok()
+        );
+        let e = IdentifyParams::builder(clock)
+            .form(form("sin(x), sin(16t)*cos(x), x'"))
+            .build()
+            .unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "the term `sin(16t)*cos(x)` has the drive's harmonic 16, which 32 samples per drive period cannot \
+             resolve: a sampled harmonic is a lower one's alias from half the samples per period on (harmonics up \
+             to 15 here)"
+        );
+        let e = IdentifyParams::builder(SampleClock::nondimensional(6).unwrap())
+            .form(ModelForm::parametric().with_drive_harmonics(3))
+            .build()
+            .unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with("the default library (drive harmonics up to 3) has"),
+            "{e}"
+        );
+    }
 
     #[test]
     fn clock() {

@@ -121,6 +121,18 @@ impl FitQuality {
     pub fn warning(&self, threshold: f64) -> Option<String> {
         let held = self.held_out;
         let low = self.explained < threshold || held.is_some_and(|h| h.explained < threshold);
+        if low && self.explained >= threshold {
+            // Described where fitted, not elsewhere: both shares, the in-sample one to the digit
+            // that shows it short of 100 %.
+            let h = held.expect("low only on held-out stretches");
+            return Some(format!(
+                "the model explains {} % of the acceleration it was fitted on but only {:.1} % of stretches of the \
+                 record it was not fitted on: the library does not describe the record (likely missing terms or a \
+                 wrong drive frequency)",
+                percent_short_of_all(self.explained),
+                100.0 * h.explained
+            ));
+        }
         if low {
             let beside = held.map_or(String::new(), |h| {
                 format!(
@@ -147,6 +159,15 @@ impl FitQuality {
             )
         })
     }
+}
+
+/// `100 · fraction` with as many decimals (2 to 6) as show it below 100 (`99.9993`).
+fn percent_short_of_all(fraction: f64) -> String {
+    let p = 100.0 * fraction;
+    (2..=6)
+        .map(|d| format!("{p:.d$}"))
+        .find(|text| !text.starts_with("100"))
+        .unwrap_or_else(|| format!("{p:.6}"))
 }
 
 /// How many times the in-sample unexplained fraction the held-out one may be before a model is
@@ -315,6 +336,30 @@ mod tests {
         );
         // One segment has no held-out share.
         assert!(held_out(&s.with_columns(&[0, 1]).unwrap(), 1).is_none());
+    }
+
+    /// Described where fitted, not on held-out stretches: the warning gives both shares, the
+    /// in-sample one to the digit that shows it short of 100 %.
+    #[test]
+    fn a_fit_described_only_in_sample_says_both_shares() {
+        let q = FitQuality {
+            explained: 0.99999993,
+            unexplained: 7e-8,
+            spectrum: Vec::new(),
+            held_out: Some(HeldOut {
+                explained: 0.778,
+                unexplained: 0.222,
+                folds: 10,
+            }),
+        };
+        assert_eq!(
+            q.warning(EXPLAINED_WARNING_WINDOWS).unwrap(),
+            "the model explains 99.99999 % of the acceleration it was fitted on but only 77.8 % of stretches of \
+             the record it was not fitted on: the library does not describe the record (likely missing terms or a \
+             wrong drive frequency)"
+        );
+        assert_eq!(percent_short_of_all(0.987654), "98.77");
+        assert_eq!(percent_short_of_all(1.0), "100.000000");
     }
 
     /// 200 columns of noise beside the true one, 520 rows in 40 segments: the fit soaks up a

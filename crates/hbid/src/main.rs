@@ -44,7 +44,7 @@ enum Command {
     /// base's acceleration). Each angle has its own encoder of the same settings, from its own
     /// stream of --seed; --gaps drops the same rows of every column; --truth writes each
     /// coordinate's equation under "equations" and the `hbid identify` options that identify them
-    /// under "identify".
+    /// under "identify" (columns as NAME=POSITION: they read the CSV and the .npy alike).
     ///
     /// Time: with --drive-frequency HZ the record is in seconds (the model's time is
     /// τ = 2π·f_drive·t, the drive has period 1/f_drive s, velocities are per second); the sample

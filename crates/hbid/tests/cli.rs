@@ -754,7 +754,14 @@ fn report_states_a_model_that_cannot_be_run_freely() {
     let record = simulated(
         &dir,
         "seconds.csv",
-        &["--drive-frequency", "1.3", "--sample-rate", "500", "--samples", "52000"],
+        &[
+            "--drive-frequency",
+            "1.3",
+            "--sample-rate",
+            "500",
+            "--samples",
+            "52000",
+        ],
     );
     let r = record.to_str().unwrap();
     let out_dir = dir.join("rep");
@@ -776,7 +783,10 @@ fn report_states_a_model_that_cannot_be_run_freely() {
         "{stderr}"
     );
     let text = std::fs::read_to_string(out_dir.join("README.md")).unwrap();
-    assert!(text.contains("| windowed | cannot be run freely (below) |"), "{text}");
+    assert!(
+        text.contains("| windowed | cannot be run freely (below) |"),
+        "{text}"
+    );
     assert!(
         text.contains("**Not validated:** the model of the windowed method cannot be run freely"),
         "{text}"
@@ -797,7 +807,15 @@ fn report_states_a_model_that_cannot_be_run_freely() {
         "{stderr}"
     );
     // Given, the same record is described.
-    let out = hbid(&["identify", r, "--drive-frequency", "auto", "--bootstrap", "0", "--quiet"]);
+    let out = hbid(&[
+        "identify",
+        r,
+        "--drive-frequency",
+        "auto",
+        "--bootstrap",
+        "0",
+        "--quiet",
+    ]);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success() && !stderr.contains("warning"), "{stderr}");
 }
@@ -3089,6 +3107,11 @@ fn simulate_system_options_fail_cleanly() {
         ),
         (vec!["--system", "arm", "--sample-rate", "0"], "--sample-rate 0"),
         (vec!["--jitter", "-0.1"], "--jitter"),
+        // A massless first link: the mass matrix is singular with the links in line.
+        (
+            vec!["--system", "double-pendulum", "--mu", "1"],
+            "must lie in [0, 1)",
+        ),
     ] {
         let mut all = vec!["simulate", "--samples", "500"];
         all.extend(args.iter().copied());
@@ -3101,6 +3124,169 @@ fn simulate_system_options_fail_cleanly() {
         assert_clean_failure(&hbid(&all), &mentions.to_lowercase());
         assert!(!target.exists() && !truth.exists(), "{args:?} left a file");
     }
+}
+
+/// Columns of a system given by their positions need names for the terms: the error names the
+/// option whose list holds the position and how to name it.
+#[test]
+fn system_columns_by_position_are_named_by_the_option_that_gives_them() {
+    let dir = scratch("systems-positions");
+    let arm = simulated(&dir, "arm.csv", &["--system", "arm", "--samples", "2000"]);
+    let r = arm.to_str().unwrap();
+    let out = hbid(&[
+        "identify",
+        r,
+        "--coords",
+        "q1,q2",
+        "--drive-col",
+        "6,7",
+        "--window",
+        "1.885",
+    ]);
+    assert_clean_failure(&out, "--drive-col: the name `6` cannot be used");
+    assert_clean_failure(
+        &out,
+        "needs a name for the terms to call it by: name=column (tau1=6)",
+    );
+    let out = hbid(&[
+        "identify",
+        r,
+        "--coords",
+        "q1,3",
+        "--drive-col",
+        "tau1,tau2",
+        "--window",
+        "1.885",
+    ]);
+    assert_clean_failure(&out, "--coords: the name `3` cannot be used");
+    let out = hbid(&[
+        "identify",
+        r,
+        "--coords",
+        "q1,q2",
+        "--drive-col",
+        "tau1=6,tau2=7",
+        "--window",
+        "1.885",
+        "--bootstrap",
+        "0",
+        "--quiet",
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+}
+
+/// A drive harmonic at or above half the samples per period is refused by name: sampled, it is
+/// a lower harmonic's alias and its coefficient would be anything.
+#[test]
+fn a_drive_harmonic_the_sampling_cannot_resolve_is_refused() {
+    let dir = scratch("aliased-harmonic");
+    let record = simulated(&dir, "p.csv", &["--samples", "3000"]);
+    let r = record.to_str().unwrap();
+    for method in ["windowed", "upo"] {
+        let out = hbid(&[
+            "identify",
+            r,
+            "--method",
+            method,
+            "--terms",
+            "sin(x), sin(13t)*cos(x), x'",
+        ]);
+        assert_clean_failure(
+            &out,
+            "the term `sin(13t)*cos(x)` has the drive's harmonic 13, which 25 samples per drive period cannot resolve",
+        );
+    }
+    let out = hbid(&[
+        "identify",
+        r,
+        "--terms",
+        "sin(x), sin(12t)*cos(x), x'",
+        "--bootstrap",
+        "0",
+        "--quiet",
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+}
+
+/// The spikes of a system's record are named by their column, every coordinate's alike.
+#[test]
+fn a_systems_spikes_are_named_by_their_column() {
+    let dir = scratch("system-spikes");
+    let record = simulated(
+        &dir,
+        "dp.csv",
+        &[
+            "--system",
+            "double-pendulum",
+            "--samples",
+            "6400",
+            "--counts",
+            "4096",
+            "--bit-errors",
+            "0.002",
+        ],
+    );
+    let out = hbid(&[
+        "identify",
+        record.to_str().unwrap(),
+        "--coords",
+        "theta1,theta2",
+        "--bootstrap",
+        "0",
+        "--quiet",
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    for column in ["theta1", "theta2"] {
+        assert!(
+            stderr
+                .lines()
+                .any(|l| l.starts_with(&format!("warning: {column}: ")) && l.contains("isolated spike(s)")),
+            "{stderr}"
+        );
+    }
+    assert!(!stderr.contains("coordinate 2"), "{stderr}");
+}
+
+/// A model of one coordinate compared with a record whose several coordinates are named is
+/// refused, not run against the first of them.
+#[test]
+fn compare_refuses_a_model_of_one_coordinate_on_several() {
+    let dir = scratch("compare-one-on-two");
+    let pendulum = simulated(&dir, "p.csv", &["--samples", "3000"]);
+    let double = simulated(
+        &dir,
+        "dp.csv",
+        &["--system", "double-pendulum", "--samples", "3000"],
+    );
+    let model = dir.join("p.json");
+    let out = hbid(&[
+        "identify",
+        pendulum.to_str().unwrap(),
+        "--bootstrap",
+        "0",
+        "--quiet",
+        "--save-model",
+        model.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = hbid(&[
+        "compare",
+        model.to_str().unwrap(),
+        double.to_str().unwrap(),
+        "--coords",
+        "theta1,theta2",
+    ]);
+    assert_clean_failure(&out, "--coords theta1,theta2: the model has one coordinate");
+    let out = hbid(&[
+        "compare",
+        model.to_str().unwrap(),
+        double.to_str().unwrap(),
+        "--angle-col",
+        "theta1",
+        "--quiet",
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
 }
 
 /// A seed gives one record, its encoders' errors, gaps and jitter included; gaps drop the same
@@ -3238,7 +3424,7 @@ fn coupled_duffing_truth_is_what_identify_recovers() {
         ],
     );
     let hint: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&truth).unwrap()).unwrap();
-    assert_eq!(hint["identify"]["drive_col"], "a");
+    assert_eq!(hint["identify"]["drive_col"], "a=6");
     // Measured: 1.7e-7; ten times that.
     let worst = system_round_trip(&record, &truth);
     assert!(worst < 2e-6, "worst relative error {worst:e}");

@@ -62,6 +62,17 @@ pub enum InputError {
         /// The number of columns.
         width: usize,
     },
+    /// A column chosen by a name that the header gives to several columns.
+    #[error("the {role} column '{name}' is ambiguous: the header names columns {} so (choose one by its position)",
+        positions.iter().map(|p| p.to_string()).collect::<Vec<_>>().join(" and "))]
+    AmbiguousColumn {
+        /// What the column would hold.
+        role: Role,
+        /// The name.
+        name: String,
+        /// The 1-based positions of the columns of that name.
+        positions: Vec<usize>,
+    },
     /// A column option that is neither a name nor a positive position.
     #[error("'{given}' is not a column: give a header name or a position counted from 1")]
     BadColumn {

@@ -245,6 +245,13 @@ impl ReadOptions {
                 width,
             )?,
             (None, Some(names)) => {
+                // The default name, if the header has it, is looked up as a chosen one is (a
+                // name given twice is ambiguous).
+                if let Some(name) = default_value(names, time.column()).map(|i| names[i])
+                    && VALUE_NAMES.contains(&name)
+                {
+                    find(Role::Angle, Column::Name(name.to_owned()), Some(names), width)?;
+                }
                 default_value(names, time.column()).ok_or_else(|| InputError::MissingColumn {
                     role: Role::Angle,
                     wanted: Column::Name(VALUE_NAMES[0].to_owned()),
@@ -408,7 +415,20 @@ impl Times {
 fn find(role: Role, wanted: Column, names: Option<&[&str]>, width: usize) -> Result<usize, InputError> {
     let index = match (&wanted, names) {
         (Column::Position(p), _) => (1..=width).contains(p).then(|| p - 1),
-        (Column::Name(n), Some(names)) => names.iter().position(|c| c == n),
+        (Column::Name(n), Some(names)) => {
+            let positions: Vec<usize> = (0..names.len())
+                .filter(|&i| names[i] == n)
+                .map(|i| i + 1)
+                .collect();
+            if positions.len() > 1 {
+                return Err(InputError::AmbiguousColumn {
+                    role,
+                    name: n.clone(),
+                    positions,
+                });
+            }
+            positions.first().map(|p| p - 1)
+        }
         (Column::Name(_), None) => None,
     };
     index.ok_or_else(|| InputError::MissingColumn {

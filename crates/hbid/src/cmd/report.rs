@@ -171,7 +171,12 @@ pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
     drop(bar);
     let notes: Vec<String> = notices
         .iter()
-        .filter(|n| !matches!(n, Notice::Resampled { .. } | Notice::Record(_)))
+        .filter(|n| {
+            !matches!(
+                n,
+                Notice::Resampled { .. } | Notice::Record(_) | Notice::Column { .. }
+            )
+        })
         .map(|n| Spelling::CommandLine.render(&n.to_string()))
         .collect();
     write_report(args, &request, &data, &notes, &outcome.map_err(naming_options)?)?;

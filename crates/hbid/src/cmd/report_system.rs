@@ -140,7 +140,12 @@ pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
         .chain(
             notices
                 .iter()
-                .filter(|n| !matches!(n, Notice::Resampled { .. } | Notice::Record(_)))
+                .filter(|n| {
+                    !matches!(
+                        n,
+                        Notice::Resampled { .. } | Notice::Record(_) | Notice::Column { .. }
+                    )
+                })
                 .map(|n| Spelling::CommandLine.render(&n.to_string())),
         )
         .collect();

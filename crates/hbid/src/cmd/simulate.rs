@@ -118,7 +118,7 @@ pub struct SimulateArgs {
     /// 0.05 for the double pendulum, 0.2 for the coupled oscillators].
     #[arg(long, allow_hyphen_values = true, help_heading = SYSTEMS)]
     c2: Option<f64>,
-    /// Double pendulum: the mass ratio μ = m2/(m1+m2), in [0, 1] [default: 0.5].
+    /// Double pendulum: the mass ratio μ = m2/(m1+m2), in [0, 1) [default: 0.5].
     #[arg(long, allow_hyphen_values = true, help_heading = SYSTEMS)]
     mu: Option<f64>,
     /// Double pendulum: the length ratio λ = l2/l1 [default: 1].
