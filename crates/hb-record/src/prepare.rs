@@ -249,7 +249,7 @@ impl fmt::Display for Note {
                 let list: Vec<String> = found
                     .iter()
                     .take(5)
-                    .map(|s| format!("sample {} ({:+.4})", s.index + 1, s.size))
+                    .map(|s| format!("sample {} ({})", s.index + 1, signed_size(s.size)))
                     .collect();
                 let more = if found.len() > 5 { ", ..." } else { "" };
                 let what = match domain {
@@ -970,5 +970,15 @@ impl GridData {
             drives,
             velocities,
         })
+    }
+}
+
+/// A spike's size with four decimals, or in scientific notation where those would show it as
+/// zero (`+0.0123`, `-3.2e-5`).
+fn signed_size(size: f64) -> String {
+    if size != 0.0 && size.abs() < 5e-5 {
+        format!("{size:+.1e}")
+    } else {
+        format!("{size:+.4}")
     }
 }

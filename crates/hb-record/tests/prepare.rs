@@ -240,6 +240,20 @@ fn the_spikes_note_says_when_they_were_replaced_by_default_and_when_they_were_to
          steps, or more than one in 1000 samples): sample 42 (-3.1408)"
     );
     assert!(note(false).is_warning());
+    // A size four decimals would print as zero is written so that it shows.
+    let tiny = Note::Spikes {
+        coordinate: 1,
+        found: vec![Spike {
+            index: 7,
+            size: 3.2e-5,
+            replacement: 0.1,
+        }],
+        repaired: false,
+        domain: Domain::Circle,
+        policy: SpikePolicy::RepairFew,
+    };
+    assert!(tiny.to_string().starts_with("coordinate 2: 1 isolated spike(s)"), "{tiny}");
+    assert!(tiny.to_string().ends_with("sample 8 (+3.2e-5)"), "{tiny}");
 }
 
 #[test]
