@@ -252,7 +252,10 @@ fn the_spikes_note_says_when_they_were_replaced_by_default_and_when_they_were_to
         domain: Domain::Circle,
         policy: SpikePolicy::RepairFew,
     };
-    assert!(tiny.to_string().starts_with("coordinate 2: 1 isolated spike(s)"), "{tiny}");
+    assert!(
+        tiny.to_string().starts_with("coordinate 2: 1 isolated spike(s)"),
+        "{tiny}"
+    );
     assert!(tiny.to_string().ends_with("sample 8 (+3.2e-5)"), "{tiny}");
 }
 

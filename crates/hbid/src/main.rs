@@ -10,7 +10,7 @@ use hb_pipeline::output;
 
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
 /// Identify the equation of motion of a forced, possibly whirling, oscillator from a record of
 /// its angle (or displacement), knowing only the forcing frequency.
@@ -66,7 +66,7 @@ enum Command {
     Upos(cmd::upos::UposArgs),
     /// Identify the equation of motion by harmonic balance.
     Identify(cmd::identify::IdentifyArgs),
-    /// Embed, find orbits, identify and validate, and write a Markdown report with figures.
+    /// Embed, find orbits, identify (by both methods, or the one --method gives) and validate, and write a Markdown report with figures.
     Report(cmd::report::ReportArgs),
     /// Run a saved model freely under a record's measured input and score it against the record's measured output.
     ///
@@ -80,7 +80,17 @@ enum Command {
 }
 
 fn main() -> ExitCode {
-    let cli = match Cli::try_parse() {
+    // Parsed from the matches, so that what the user gave (not a default) can be told.
+    let parsed = Cli::command().try_get_matches().and_then(|matches| {
+        let mut cli = Cli::from_arg_matches(&matches)?;
+        if let Command::Report(args) = &mut cli.command {
+            args.method_given = matches
+                .subcommand_matches("report")
+                .is_some_and(|m| m.value_source("method") == Some(clap::parser::ValueSource::CommandLine));
+        }
+        Ok(cli)
+    });
+    let cli = match parsed {
         Ok(cli) => cli,
         Err(e) => {
             use clap::error::ErrorKind;

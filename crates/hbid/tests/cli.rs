@@ -820,6 +820,32 @@ fn report_states_a_model_that_cannot_be_run_freely() {
     assert!(out.status.success() && !stderr.contains("warning"), "{stderr}");
 }
 
+/// `--method` given, the report identifies by that method alone (both otherwise).
+#[test]
+fn report_identifies_by_the_method_given() {
+    let dir = scratch("report-method");
+    let out_dir = dir.join("rep");
+    let out = hbid(&[
+        "report",
+        &paper_dataset(),
+        "--out",
+        out_dir.to_str().unwrap(),
+        "--method",
+        "windowed",
+        "--validation-periods",
+        "50",
+        "--bootstrap",
+        "0",
+        "--quiet",
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = std::fs::read_to_string(out_dir.join("README.md")).unwrap();
+    assert_eq!(text.matches("## Identified model: ").count(), 1, "{text}");
+    assert!(text.contains("## Identified model: windowed"), "{text}");
+    assert!(out_dir.join("model_windowed.json").exists());
+    assert!(!out_dir.join("model_upo.json").exists());
+}
+
 #[test]
 fn interrupt_leaves_no_file() {
     // A long simulation, interrupted while it runs: neither the output nor a temporary remains.

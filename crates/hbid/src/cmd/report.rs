@@ -23,9 +23,6 @@ use super::report_args::Kept;
 pub use super::report_args::ReportArgs;
 use crate::progress::{Console, Progress};
 
-/// The methods of the report, in its order.
-const METHODS: [Method; 2] = [Method::Upo, Method::Windowed];
-
 /// One method's identification and its checks.
 struct MethodResult<'a> {
     method: Method,
@@ -45,9 +42,10 @@ pub fn check_out(path: &Path) -> anyhow::Result<()> {
 
 /// The pipeline's options from the request (the models' first, as `hbid identify` checks them).
 fn options(args: &ReportArgs, request: &IdentifyRequest, data: &Data) -> anyhow::Result<PipelineOptions> {
-    let models = METHODS
-        .iter()
-        .map(|&method| request.model_spec(data, method))
+    let models = args
+        .methods()
+        .into_iter()
+        .map(|method| request.model_spec(data, method))
         .collect::<Result<_, _>>()?;
     let mut embed = EmbedOptions::default();
     if let Some(delay) = request.options().orbits.delay {
@@ -212,11 +210,12 @@ fn write_report(
     let (delay, fnn, ami) = (embedded.delay, &embedded.fnn, &embedded.ami.values);
     let catalogue = &outcome.segments.catalogue;
     let basis = request.basis().spec();
-    let results: Vec<MethodResult<'_>> = METHODS
-        .iter()
+    let results: Vec<MethodResult<'_>> = args
+        .methods()
+        .into_iter()
         .zip(&outcome.models)
         .zip(&outcome.validation.models)
-        .map(|((&method, ident), validation)| MethodResult {
+        .map(|((method, ident), validation)| MethodResult {
             method,
             ident,
             validation: validation.as_ref(),

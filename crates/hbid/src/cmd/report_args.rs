@@ -5,6 +5,7 @@
 use std::path::PathBuf;
 
 use clap::Args;
+use hb_pipeline::pipeline::Method;
 use hb_pipeline::{Notice, Observer};
 
 use super::identify::IdentifyArgs;
@@ -30,6 +31,21 @@ pub struct ReportArgs {
     /// are its own names unless --coords names them.
     #[arg(long, value_name = "PATH", conflicts_with_all = ["terms", "method", "basis", "select", "refine", "tie"])]
     pub model: Option<PathBuf>,
+    /// Whether --method was given: the report then identifies by that method alone (by both
+    /// otherwise).
+    #[arg(skip)]
+    pub method_given: bool,
+}
+
+impl ReportArgs {
+    /// The methods the report identifies by, in its order: the one given, or both.
+    pub fn methods(&self) -> Vec<Method> {
+        if self.method_given {
+            vec![self.identify.method]
+        } else {
+            vec![Method::Upo, Method::Windowed]
+        }
+    }
 }
 
 /// The console, and the notices kept for the report's text.

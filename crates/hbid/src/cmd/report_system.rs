@@ -93,7 +93,7 @@ pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
             let grid = hb_pipeline::condition_source(Source::Path(file), record, &mut kept)?;
             let data = hb_pipeline::load(Source::Grid(grid.clone()), record, request.drive(), &mut kept)?;
             let mut entries = Vec::new();
-            for method in [Method::Upo, Method::Windowed] {
+            for method in args.methods() {
                 let how = match method {
                     Method::Upo => {
                         "harmonic balance on vector orbits, the close returns of the whole state: the paper's method"
@@ -114,7 +114,8 @@ pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
                         identified: Some(report),
                     }),
                     // The weak form is the one that needs no orbit: its failure is the report's.
-                    Err(e) if method == Method::Windowed => return Err(e),
+                    // So is the failure of the one method asked for.
+                    Err(e) if method == Method::Windowed || args.method_given => return Err(e),
                     Err(e) => missing.push((method, how, e)),
                 }
             }
