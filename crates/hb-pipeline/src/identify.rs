@@ -579,6 +579,21 @@ impl IdentifyRequest {
                 }
             }
         }
+        // A system's measured drive that no equation's terms name is a mistake (a column in
+        // the wrong option, or a term left out), not a column to read for nothing.
+        if n > 1 && lists.iter().all(Option::is_some) {
+            let used: std::collections::BTreeSet<usize> =
+                lists.iter().flatten().flat_map(|l| l.measured_drives()).collect();
+            if let Some(unused) = (0..names.drives().len()).find(|d| !used.contains(d)) {
+                return Err(OptionError::new(
+                    "drive_col",
+                    format!(
+                        "the drive '{}' is in no equation's terms: name it in «terms», or leave it out",
+                        names.drives()[unused]
+                    ),
+                ));
+            }
+        }
         // A term that does not fit its coordinate's domain (`x^3` of an angle) is the list's
         // error, before the basis it would imply is found on the wrong domain.
         for list in lists.iter().flatten() {

@@ -3185,6 +3185,20 @@ fn system_columns_by_position_are_named_by_the_option_that_gives_them() {
         "1.885",
     ]);
     assert_clean_failure(&out, "--coords: the name `3` cannot be used");
+    // A drive no equation's terms name is a mistake, not a column read for nothing.
+    let out = hbid(&[
+        "identify",
+        r,
+        "--coords",
+        "q1,q2",
+        "--drive-col",
+        "tau1,tau2,v1",
+        "--window",
+        "1.885",
+        "--terms",
+        "q1: sin(q1), q1', tau1; q2: sin(q1+q2), q2', tau2",
+    ]);
+    assert_clean_failure(&out, "--drive-col: the drive 'v1' is in no equation's terms");
     let out = hbid(&[
         "identify",
         r,
