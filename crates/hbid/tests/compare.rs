@@ -563,3 +563,58 @@ fn windows_in_seconds_for_a_drive_without_a_period() {
     args.extend(["--window", "0.75", "--drive-frequency", "4"]);
     assert_clean_failure(&hbid(&args), "--window");
 }
+
+/// The width and height of a PNG, from its header.
+fn png_size(path: &Path) -> (u32, u32) {
+    let bytes = std::fs::read(path).unwrap();
+    assert_eq!(&bytes[1..4], b"PNG", "{}", path.display());
+    let word = |at: usize| u32::from_be_bytes(bytes[at..at + 4].try_into().unwrap());
+    (word(16), word(20))
+}
+
+/// A system's comparison is drawn one panel per coordinate, side by side, each named by it; on
+/// the circle every curve is wrapped as the measured angle is.
+#[test]
+fn a_systems_comparison_is_drawn_coordinate_by_coordinate() {
+    let dir = scratch("system-plot");
+    let record = dir.join("dp.csv");
+    let truth = dir.join("dp.json");
+    ok(&[
+        "simulate",
+        "--system",
+        "double-pendulum",
+        "--samples",
+        "3200",
+        "--truth",
+        s(&truth),
+        "--out",
+        s(&record),
+    ]);
+    let hint: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&truth).unwrap()).unwrap();
+    let terms = hint["identify"]["terms"].as_str().unwrap();
+    let model = dir.join("dp-model.json");
+    ok(&[
+        "identify",
+        s(&record),
+        "--coords",
+        "theta1,theta2",
+        "--terms",
+        terms,
+        "--bootstrap",
+        "0",
+        "--save-model",
+        s(&model),
+    ]);
+    let plot = dir.join("dp.png");
+    ok(&[
+        "compare",
+        s(&model),
+        s(&record),
+        "--range",
+        "0..500",
+        "--plot",
+        s(&plot),
+    ]);
+    // Two panels of 640 × 600 (one figure is 900 × 650).
+    assert_eq!(png_size(&plot), (1280, 600));
+}

@@ -209,52 +209,86 @@ pub fn table(report: &CompareReport) -> String {
     out
 }
 
-/// Draws the measured and simulated output and their difference into `path`, atomically.
+/// Draws the measured and simulated output and their difference into `path`, atomically: one
+/// panel, or for a system one panel per coordinate, side by side.
 fn plot(report: &CompareReport, path: &Path) -> anyhow::Result<()> {
     let break_above = match report.signal {
         Domain::Circle => std::f64::consts::PI,
         Domain::Line => f64::INFINITY,
     };
-    let mut series = Vec::new();
-    for (i, piece) in report.runs.iter().flatten().enumerate() {
-        let first = i == 0;
-        let points = |v: &dyn Fn(usize) -> f64| -> Vec<(f64, f64)> {
-            (0..piece.t.len())
-                .map(|k| (piece.t[k], v(k)))
-                .filter(|p| p.1.is_finite())
-                .collect()
-        };
-        series.push(Series {
-            label: if first { "measured" } else { "" },
-            points: points(&|k| piece.measured[k]),
-            style: Style::Line { break_above },
-            color: BLUE,
-        });
-        series.push(Series {
-            label: if first { "model, free run" } else { "" },
-            points: points(&|k| piece.x[k]),
-            style: Style::Line { break_above },
-            color: ORANGE,
-        });
-        let difference = |k: usize| match report.signal {
-            Domain::Circle => circle_signal::wrap(piece.x[k] - piece.measured[k]),
-            Domain::Line => piece.x[k] - piece.measured[k],
-        };
-        series.push(Series {
-            label: if first { "model − measured" } else { "" },
-            points: points(&difference),
-            style: Style::Line { break_above },
-            color: RED,
-        });
-    }
-    let figure = Figure {
-        title: "The model's free run against the record",
-        x_label: "t",
-        y_label: "output",
-        series,
-        x_range: None,
-        y_range: None,
+    // The entries of each coordinate (all of them for a record of one).
+    let panels: Vec<(Option<&str>, Vec<usize>)> = if report.coordinates.len() > 1 {
+        report
+            .coordinates
+            .iter()
+            .map(|q| {
+                let entries = (0..report.ranges.len())
+                    .filter(|&e| report.ranges[e].coordinate.as_deref() == Some(q.as_str()))
+                    .collect();
+                (Some(q.as_str()), entries)
+            })
+            .collect()
+    } else {
+        vec![(None, (0..report.runs.len()).collect())]
     };
+    let titles: Vec<String> = panels
+        .iter()
+        .map(|(q, _)| match q {
+            Some(q) => format!("{q}: the model's free run against the record"),
+            None => "The model's free run against the record".to_owned(),
+        })
+        .collect();
+    let figures: Vec<Figure<'_>> = panels
+        .iter()
+        .zip(&titles)
+        .map(|((q, entries), title)| {
+            let mut series = Vec::new();
+            let pieces = entries.iter().flat_map(|&e| &report.runs[e]);
+            for (i, piece) in pieces.enumerate() {
+                let first = i == 0;
+                // On the circle every curve is drawn wrapped, as the measured angle is.
+                let points = |v: &dyn Fn(usize) -> f64| -> Vec<(f64, f64)> {
+                    (0..piece.t.len())
+                        .map(|k| match report.signal {
+                            Domain::Circle => (piece.t[k], circle_signal::wrap(v(k))),
+                            Domain::Line => (piece.t[k], v(k)),
+                        })
+                        .filter(|p| p.1.is_finite())
+                        .collect()
+                };
+                series.push(Series {
+                    label: if first { "measured" } else { "" },
+                    points: points(&|k| piece.measured[k]),
+                    style: Style::Line { break_above },
+                    color: BLUE,
+                });
+                series.push(Series {
+                    label: if first { "model, free run" } else { "" },
+                    points: points(&|k| piece.x[k]),
+                    style: Style::Line { break_above },
+                    color: ORANGE,
+                });
+                let difference = |k: usize| match report.signal {
+                    Domain::Circle => circle_signal::wrap(piece.x[k] - piece.measured[k]),
+                    Domain::Line => piece.x[k] - piece.measured[k],
+                };
+                series.push(Series {
+                    label: if first { "model − measured" } else { "" },
+                    points: points(&difference),
+                    style: Style::Line { break_above },
+                    color: RED,
+                });
+            }
+            Figure {
+                title,
+                x_label: "t",
+                y_label: q.unwrap_or("output"),
+                series,
+                x_range: None,
+                y_range: None,
+            }
+        })
+        .collect();
     let parent = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
@@ -274,7 +308,10 @@ fn plot(report: &CompareReport, path: &Path) -> anyhow::Result<()> {
     let tmp = builder
         .tempfile_in(parent)
         .with_context(|| format!("cannot create a file in {}", parent.display()))?;
-    figure.save(tmp.path())?;
+    match figures.as_slice() {
+        [figure] => figure.save(tmp.path())?,
+        panels => hb_plot::save_row(panels, tmp.path())?,
+    }
     tmp.persist(path)
         .with_context(|| format!("cannot write {}", path.display()))?;
     Ok(())
