@@ -46,6 +46,7 @@ pub fn is_about_the_content(e: &InputError) -> bool {
         | InputError::TimeUnresolved { .. }
         | InputError::TimeUnsettled { .. }
         | InputError::TimeOverflow { .. }
+        | InputError::GapTooLong { .. }
         | InputError::BadDrivePeriod { .. } => false,
         // `InputError` is non-exhaustive: a variant added later is not about the content until
         // it is listed above (so that a test seeing it fails rather than passes by default).

@@ -286,6 +286,50 @@ fn stamps_whose_grid_overflows_are_refused() {
     assert!((u.dt / 1e305 - 1.0).abs() < 1e-12 && (u.t0 / 1e307 - 1.0).abs() < 1e-12);
 }
 
+/// A stamp far off the others (a logger's first stamp before its clock was set, an end glitched
+/// far away, a pause of a day) would make a grid of billions of samples: refused with its line,
+/// before any of it is held. A gap that leaves the grid within bounds is a gap.
+#[test]
+fn a_gap_that_would_make_the_grid_huge_is_refused() {
+    let clock: Vec<f64> = (0..2000).map(|i| 1.7e9 + f64::from(i) * 0.002).collect();
+    let mut t = vec![0.0];
+    t.extend(&clock[1..]);
+    for options in [GridOptions::default(), GridOptions { repair: true }] {
+        match GridRecord::fit(record(t.clone()), &options) {
+            Err(e @ InputError::GapTooLong { .. }) => {
+                let text = e.to_string();
+                assert!(
+                    text.starts_with("line 3: time 1700000000.002 follows 0 after a gap of"),
+                    "{text}"
+                );
+                assert!(
+                    text.contains("split the record there, or remove the stamp"),
+                    "{text}"
+                );
+            }
+            other => panic!("{options:?}: {other:?}"),
+        }
+    }
+    let mut t = clock.clone();
+    *t.last_mut().unwrap() = 1e10;
+    assert!(matches!(fit(t), Err(InputError::GapTooLong { .. })));
+    // A pause of a day in 4 s at 500 Hz: refused; of a minute: a gap.
+    for (pause, refused) in [(86_400.0, true), (60.0, false)] {
+        let t: Vec<f64> = (0..2000)
+            .map(|i| f64::from(i) * 0.002 + if i >= 1000 { pause } else { 0.0 })
+            .collect();
+        let fitted = fit(t);
+        assert_eq!(
+            matches!(fitted, Err(InputError::GapTooLong { .. })),
+            refused,
+            "{pause}: {fitted:?}"
+        );
+        if !refused {
+            assert_eq!(fitted.unwrap().pieces.len(), 2);
+        }
+    }
+}
+
 #[test]
 fn gaps_split_the_record() {
     // Samples 0..100, then 103..200, then 250..300, stamped at 0.001 s printed to 5 decimals.

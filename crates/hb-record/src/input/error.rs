@@ -268,6 +268,30 @@ pub enum InputError {
         /// Its time stamp.
         t: f64,
     },
+    /// A gap in the time stamps that would make the record's grid far longer than its samples
+    /// (a stamp far off the others: a logger's first stamp before its clock was set, a glitch
+    /// at an end, a pause of hours).
+    #[error(
+        "{at}: time {t} follows {previous} after a gap of {missing} steps of {dt}, and the grid of the \
+         record's {samples} samples would hold {grid} (a stamp far off the others? a logger's clock set \
+         or reset there, or a pause): split the record there, or remove the stamp"
+    )]
+    GapTooLong {
+        /// The first sample after the gap.
+        at: Location,
+        /// Its time stamp.
+        t: f64,
+        /// The stamp before the gap.
+        previous: f64,
+        /// Grid steps missing in the gap.
+        missing: usize,
+        /// The grid's step.
+        dt: f64,
+        /// Samples read.
+        samples: usize,
+        /// Grid points the record would span.
+        grid: usize,
+    },
     /// A drive period that is not positive and finite.
     #[error("the drive period {period} must be positive and finite")]
     BadDrivePeriod {

@@ -191,6 +191,14 @@ const MAD_TO_SIGMA: f64 = 1.482_602_218_505_602;
 /// The most other glitches an error names.
 const GLITCHES_NAMED: usize = 5;
 
+/// A record whose gaps make its grid more than this many times its samples, and more than
+/// [`GAP_MISSING_ALLOWED`] steps longer, is refused ([`InputError::GapTooLong`]): every stage
+/// holds the grid, NaN in the gaps, so a stamp far off the others would take all memory.
+pub const GAP_GRID_FACTOR: usize = 4;
+
+/// Grid steps a record's gaps may hold in all whatever its length (see [`GAP_GRID_FACTOR`]).
+pub const GAP_MISSING_ALLOWED: usize = 1 << 24;
+
 /// How to fit a record's time stamps to a grid.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct GridOptions {
@@ -886,6 +894,27 @@ impl GridRecord {
                 }
                 previous = k;
             }
+        }
+        // A grid far longer than the samples: refused before anything holds it.
+        let span = match starts.last() {
+            Some(&(i, first)) => first + (n - i),
+            None => n,
+        };
+        if span > GAP_GRID_FACTOR.saturating_mul(n) && span - n > GAP_MISSING_ALLOWED {
+            let (at_gap, missing) = starts
+                .windows(2)
+                .map(|w| (w[1].0, w[1].1 - w[0].1 - (w[1].0 - w[0].0)))
+                .max_by_key(|&(_, missing)| missing)
+                .unwrap_or((n - 1, span - n));
+            return Err(InputError::GapTooLong {
+                at: at(at_gap),
+                t: t[at_gap],
+                previous: t[at_gap.saturating_sub(1)],
+                missing,
+                dt: line.b,
+                samples: n,
+                grid: span,
+            });
         }
         let mut theta = theta;
         let mut pieces: Vec<Piece> = starts
