@@ -76,13 +76,56 @@ pub fn check_output_path(path: &Path) -> Result<(), OutputError> {
     Ok(())
 }
 
+/// Where a result named `path` is written, and how: the file a symbolic link names (followed
+/// through a chain of links; the links stay), and whether it is written in place (`true`: an
+/// existing file that is neither a regular file nor a folder, such as `/dev/null` or a named
+/// pipe, which a temporary file renamed over it would replace) rather than through a temporary
+/// file renamed into place.
+pub fn output_target(path: &Path) -> (PathBuf, bool) {
+    let mut target = path.to_owned();
+    // At most as many links as the system follows itself.
+    for _ in 0..40 {
+        match std::fs::symlink_metadata(&target) {
+            Ok(m) if m.file_type().is_symlink() => match std::fs::read_link(&target) {
+                Ok(link) if link.is_absolute() => target = link,
+                Ok(link) => {
+                    let folder = target.parent().map_or_else(PathBuf::new, Path::to_owned);
+                    target = folder.join(link);
+                }
+                Err(_) => break,
+            },
+            _ => break,
+        }
+    }
+    let in_place = std::fs::metadata(&target).is_ok_and(|m| !m.is_file() && !m.is_dir());
+    (target, in_place)
+}
+
 /// Writes a file through a temporary file in the same folder, renamed into place only when
-/// complete: a failure or an interruption leaves no partial file under `path`.
+/// complete: a failure or an interruption leaves no partial file under `path`. A symbolic link
+/// is written through (the file it names is replaced, the link kept), and a device or named
+/// pipe (`/dev/null`) is written in place ([`output_target`]).
 pub fn write_atomically(
     path: &Path,
     write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
 ) -> Result<(), OutputError> {
+    let (target, in_place) = output_target(path);
+    let path = target.as_path();
     check_output_path(path)?;
+    if in_place {
+        return std::fs::OpenOptions::new()
+            .write(true)
+            .open(path)
+            .and_then(|file| {
+                let mut buf = std::io::BufWriter::new(file);
+                write(&mut buf)?;
+                buf.flush()
+            })
+            .map_err(|source| OutputError::Write {
+                path: path.to_owned(),
+                source,
+            });
+    }
     let parent = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),

@@ -289,6 +289,19 @@ fn plot(report: &CompareReport, path: &Path) -> anyhow::Result<()> {
             }
         })
         .collect();
+    let draw = |to: &Path| -> anyhow::Result<()> {
+        match figures.as_slice() {
+            [figure] => figure.save(to)?,
+            panels => hb_plot::save_row(panels, to)?,
+        }
+        Ok(())
+    };
+    // Through a symbolic link to its file; a device or named pipe in place.
+    let (target, in_place) = hb_pipeline::output::output_target(path);
+    if in_place {
+        return draw(&target).with_context(|| format!("cannot write {}", target.display()));
+    }
+    let path = target.as_path();
     let parent = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
@@ -308,10 +321,7 @@ fn plot(report: &CompareReport, path: &Path) -> anyhow::Result<()> {
     let tmp = builder
         .tempfile_in(parent)
         .with_context(|| format!("cannot create a file in {}", parent.display()))?;
-    match figures.as_slice() {
-        [figure] => figure.save(tmp.path())?,
-        panels => hb_plot::save_row(panels, tmp.path())?,
-    }
+    draw(tmp.path())?;
     tmp.persist(path)
         .with_context(|| format!("cannot write {}", path.display()))?;
     Ok(())
