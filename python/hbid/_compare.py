@@ -249,6 +249,10 @@ def compare(
         rtol=rtol,
         skip_unsettled=bool(skip_unsettled),
     )
+    if isinstance(drive, Mapping):
+        # By the model's names, checked as Model.simulate checks them (a name the model does not
+        # have is not taken for another by its place).
+        drive = dict(zip(saved.drives, saved._drives(drive)))
     samples = source(_in_order(x, saved), t, drive, options, COMPARE_DEFAULTS)
     if saved.is_system:
         if isinstance(x, Record):

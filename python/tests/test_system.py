@@ -202,6 +202,9 @@ def test_drives_by_name_from_arrays():
     assert model.drives == ["a"] and model.signals == ["line", "line"] and model.signal == "line"
     c = hbid.compare(model, {"x2": x["x2"], "x1": x["x1"]}, t=sim.t, drive=drive, range=(0, 1000))
     assert c.measured_drive and [r.coordinate for r in c.ranges] == ["x1", "x2"]
+    # A drive by a name the model does not have is refused, not taken by its place.
+    with pytest.raises(hbid.OptionsError, match=r"drive: \['b'\] is not a drive of the model \(its drives: a\)"):
+        hbid.compare(model, x, t=sim.t, drive={"b": drive["a"]}, range=(0, 1000))
     x0 = [r.initial_states[0][0] for r in c.ranges]
     v0 = [r.initial_states[0][1] for r in c.ranges]
     # On the record's grid. The drive's spline takes its step from the times (the grid's step
