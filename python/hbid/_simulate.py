@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 from dataclasses import dataclass, field
 from typing import Any, Dict, Iterator, Optional, Sequence, Tuple, Union
 
@@ -64,11 +65,25 @@ class Simulation:
     @property
     def identify_options(self) -> Dict[str, Any]:
         """The keywords of :func:`identify` that identify the truth's equations from this record
-        (the truth file's hint: a system's ``coords``, ``signal``, ``terms`` and drives), if it
-        has them."""
+        (the truth file's hint: a system's ``coords``, ``signal``, ``terms`` and drives; for a
+        record of one coordinate its ``signal``, the truth's ``terms`` and, in seconds, its
+        ``drive_frequency``), if it has them."""
         hint = dict(self.truth_file.get("identify") or {})
         hint.pop("args", None)
-        return hint
+        if not hint or "equations" in self.truth_file:
+            return hint
+        # A record of one coordinate: the truth's terms, on its drive (the hint's other keys say
+        # how the CLI's defaults read the record's columns).
+        terms = list(self.truth_file["coefficients"])
+        options: Dict[str, Any] = {"signal": hint["signal"]}
+        if self.truth_file.get("forcing") == "none":
+            # A free oscillation: no drive's phase to balance (its drive terms are all 0).
+            terms = [t for t in terms if not re.search(r"\b(cos|sin)\(\d*t\)", t)]
+            options["forcing"] = "none"
+        elif self.truth_file.get("time_unit") == "s" and self.truth_file.get("drive_frequency"):
+            options["drive_frequency"] = self.truth_file["drive_frequency"]
+        options["terms"] = ", ".join(terms)
+        return options
 
     @property
     def drive_period(self) -> float:

@@ -42,6 +42,24 @@ def test_a_rig_in_seconds_with_an_encoder_and_gaps():
     assert raw.columns == ("t", "count", "omega") and raw.x.min() >= 0 and raw.x.max() < 1024
 
 
+@pytest.mark.parametrize(
+    "options",
+    [
+        dict(drive_frequency=1.02, sample_rate=500, samples=6000),
+        dict(system="duffing", samples=6000),
+        dict(drive="none", x0=1.0, samples=3000),
+    ],
+)
+def test_identify_options_of_one_coordinate_recover_the_truth(options):
+    """The truth's keywords for identify, from arrays: its terms on its drive, in seconds too."""
+    sim = hbid.simulate(**options)
+    result = hbid.identify(sim.x, t=sim.t, bootstrap=0, **sim.identify_options)
+    scale = max(abs(v) for v in sim.truth.values())
+    worst = max(abs(result.coefficients[k] - v) / scale for k, v in sim.truth.items() if k in result.coefficients)
+    assert set(result.coefficients) <= set(sim.truth)
+    assert worst < 1e-4, (worst, result.coefficients, sim.truth)
+
+
 def test_noise_is_seeded():
     a = hbid.simulate(samples=200, noise=0.01, seed=1).x
     b = hbid.simulate(samples=200, noise=0.01, seed=1).x
