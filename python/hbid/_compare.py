@@ -170,6 +170,7 @@ def compare(
     no_repair: bool = False,
     signal: Union[str, Sequence[str], None] = None,
     measured: str = "displacement",
+    angle_unit: str = "rad",
     range: Union[str, Tuple[int, Optional[int]], Sequence[Any], None] = None,
     init: Optional[int] = None,
     x0: Union[float, Sequence[float], None] = None,
@@ -208,6 +209,9 @@ def compare(
         no_repair: keep every spike instead of replacing the few large ones.
         signal: ``"circle"`` or ``"line"`` (default: the model's).
         measured: ``"displacement"``, ``"velocity"`` or ``"acceleration"`` (integrated).
+        angle_unit: the unit of the angles on the circle (and of their measured velocities):
+            ``"rad"``, ``"deg"`` or ``"counts:N"`` (an encoder's N counts per turn); converted
+            to radians as they are read.
         range: the samples compared: ``"A..B"`` (``"A.."`` to the end), ``(A, B)``, or a list
             of them, each scored on its own (default: the whole record). A file's first rows
             that its logger stamped before it settled to its rate are run through at their own
@@ -242,6 +246,7 @@ def compare(
         no_repair=bool(no_repair),
         signal=signals(signal),
         measured=measured,
+        angle_unit=angle_unit,
         range=_ranges(range),
         init=init,
         x0=numbers(x0, "x0"),

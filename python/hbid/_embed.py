@@ -69,6 +69,7 @@ def _record_options(
     no_repair: bool,
     signal: Union[str, Sequence[str]],
     measured: str,
+    angle_unit: str,
     drive_period: Any,
     drive_frequency: Any,
 ) -> Dict[str, Any]:
@@ -83,6 +84,7 @@ def _record_options(
         no_repair=bool(no_repair),
         signal=signals(signal),
         measured=measured,
+        angle_unit=angle_unit,
         drive_period=drive_value(drive_period, "drive_period"),
         drive_frequency=drive_value(drive_frequency, "drive_frequency"),
     )
@@ -103,6 +105,7 @@ def embed(
     no_repair: bool = False,
     signal: Union[str, Sequence[str]] = "circle",
     measured: str = "displacement",
+    angle_unit: str = "rad",
     drive_period: Union[float, str, None] = None,
     drive_frequency: Union[float, str, None] = None,
     max_lag: Optional[int] = None,
@@ -117,7 +120,7 @@ def embed(
 
     Args:
         x, t, dt, drive, time_col, angle_col, coords, drive_col, velocity_col, repair,
-            no_repair, signal, measured, drive_period, drive_frequency: the record, as for
+            no_repair, signal, measured, angle_unit, drive_period, drive_frequency: the record, as for
             :func:`identify` (one file, a Record or arrays).
         max_lag: largest lag of the mutual information (default: two drive periods, at least 40).
         bins: equal boxes of the mutual-information histogram.
@@ -139,6 +142,7 @@ def embed(
         no_repair,
         signal,
         measured,
+        angle_unit,
         drive_period,
         drive_frequency,
     )
@@ -228,6 +232,7 @@ def upos(
     no_repair: bool = False,
     signal: Union[str, Sequence[str]] = "circle",
     measured: str = "displacement",
+    angle_unit: str = "rad",
     drive_period: Union[float, str, None] = None,
     drive_frequency: Union[float, str, None] = None,
     tolerance: float = 0.03,
@@ -240,7 +245,7 @@ def upos(
 
     Args:
         x, t, dt, drive, time_col, angle_col, coords, drive_col, velocity_col, repair,
-            no_repair, signal, measured, drive_period, drive_frequency: the record, as for
+            no_repair, signal, measured, angle_unit, drive_period, drive_frequency: the record, as for
             :func:`identify` (one file, a Record or arrays).
         tolerance: close-return tolerance, a fraction of the data's span.
         max_period: longest orbit period searched, in drive periods.
@@ -261,6 +266,7 @@ def upos(
         no_repair,
         signal,
         measured,
+        angle_unit,
         drive_period,
         drive_frequency,
     )

@@ -43,6 +43,7 @@ RECORD_DEFAULTS: Dict[str, Any] = dict(
     no_repair=False,
     signal="circle",
     measured="displacement",
+    angle_unit="rad",
 )
 
 
@@ -374,6 +375,7 @@ def identify(
     no_repair: bool = False,
     signal: Union[str, Sequence[str]] = "circle",
     measured: str = "displacement",
+    angle_unit: str = "rad",
     drive_period: Union[float, str, None] = None,
     drive_frequency: Union[float, str, None] = None,
     method: str = "windowed",
@@ -444,6 +446,9 @@ def identify(
             one per coordinate (``["circle", "line"]``); a Record's own.
         measured: ``"displacement"``, or (on the line) ``"velocity"`` or ``"acceleration"``,
             integrated to the displacement (its drift fitted with the model); a Record's own.
+        angle_unit: the unit of the angles on the circle (and of their measured velocities):
+            ``"rad"``, ``"deg"`` or ``"counts:N"`` (an encoder's N counts per turn); converted
+            to radians as they are read.
         drive_period: the drive's period in the record's time unit (default 2 pi, the paper's
             time), ``"auto"`` or ``"auto:A..B"`` to estimate it, ``"none"`` for no drive (a free
             oscillation).
@@ -520,6 +525,7 @@ def identify(
         no_repair=bool(no_repair),
         signal=signals(signal),
         measured=measured,
+        angle_unit=angle_unit,
         drive_period=drive_value(drive_period, "drive_period"),
         drive_frequency=drive_value(drive_frequency, "drive_frequency"),
         method=method,

@@ -142,6 +142,7 @@ def read(
     no_repair: bool = False,
     signal: Union[str, Sequence[str]] = "circle",
     measured: str = "displacement",
+    angle_unit: str = "rad",
 ) -> Record:
     """Reads a record from a file (or takes it from arrays), as ``hbid`` reads one.
 
@@ -173,6 +174,9 @@ def read(
             displacement; for several coordinates one for all or a list, one per coordinate.
         measured: ``"displacement"``, or (on the line) ``"velocity"`` or ``"acceleration"``,
             integrated to the displacement.
+        angle_unit: the unit of the angles on the circle (and of their measured velocities):
+            ``"rad"``, ``"deg"`` or ``"counts:N"`` (an encoder's N counts per turn); converted
+            to radians as they are read.
 
     Returns:
         The :class:`Record` on its grid, with what was repaired.
@@ -192,6 +196,7 @@ def read(
         no_repair=bool(no_repair),
         signal=signals(signal),
         measured=measured,
+        angle_unit=angle_unit,
     )
     if isinstance(path, (str, os.PathLike)):
         if t is not None or drive is not None:
@@ -313,6 +318,9 @@ def source(
                     f"{name}={options[name]!r}: the record was read as {own!r}; read it again with {name}={options[name]!r}"
                 )
             options[name] = own
+        if options.get("angle_unit", "rad") != "rad":
+            raise OptionsError("angle_unit: the Record was read in radians already; read it again to change it")
+        options.pop("angle_unit", None)
         for name in RECORD_FIXED:
             if options.get(name) not in (None, False):
                 raise OptionsError(f"{name}: the Record was read with its own; read it again to change it")

@@ -82,6 +82,9 @@ class Simulation:
             options["forcing"] = "none"
         elif self.truth_file.get("time_unit") == "s" and self.truth_file.get("drive_frequency"):
             options["drive_frequency"] = self.truth_file["drive_frequency"]
+        encoder = self.truth_file.get("encoder") or {}
+        if encoder.get("raw_counts") and encoder.get("counts"):
+            options["angle_unit"] = f"counts:{encoder['counts']}"
         options["terms"] = ", ".join(terms)
         return options
 

@@ -83,6 +83,21 @@ def test_the_paper_data_set_in_a_few_lines(paper_csv):
     assert upo.coefficients["sin(t)*cos(x)"] == pytest.approx(-1.52, abs=0.05)
 
 
+def test_angles_in_degrees_are_read_in_degrees():
+    """An angle in degrees: read as radians it is warned of by its wrap; with angle_unit="deg"
+    it is the radians' record."""
+    sim = hbid.simulate(drive_frequency=1.02, sample_rate=500, samples=8000)
+    degrees = np.degrees(sim.x)
+    with pytest.warns(hbid.HbidWarning, match=r'angle_unit="deg"|angle_unit=deg'):
+        hbid.identify(degrees, t=sim.t, drive_frequency=1.02, bootstrap=0)
+    radians = hbid.identify(sim.x, t=sim.t, drive_frequency=1.02, bootstrap=0)
+    read = hbid.identify(degrees, t=sim.t, drive_frequency=1.02, bootstrap=0, angle_unit="deg")
+    for name, value in radians.coefficients.items():
+        assert read.coefficients[name] == pytest.approx(value, rel=1e-9, abs=1e-9), name
+    with pytest.raises(hbid.OptionsError, match="angle_unit"):
+        hbid.identify(degrees, t=sim.t, angle_unit="grad")
+
+
 def test_a_record_in_seconds_with_an_estimated_drive():
     sim = hbid.simulate(drive_frequency=1.02, sample_rate=50, duration=150, noise=0.001, seed=1)
     known = hbid.identify(sim.x, t=sim.t, forcing_frequency=1.02, bootstrap=0)

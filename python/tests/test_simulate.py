@@ -48,6 +48,7 @@ def test_a_rig_in_seconds_with_an_encoder_and_gaps():
         dict(drive_frequency=1.02, sample_rate=500, samples=6000),
         dict(system="duffing", samples=6000),
         dict(drive="none", x0=1.0, samples=3000),
+        dict(drive_frequency=1.02, sample_rate=500, samples=6000, counts=4096, raw_counts=True),
     ],
 )
 def test_identify_options_of_one_coordinate_recover_the_truth(options):

@@ -42,7 +42,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::RunError;
 use crate::observe::{Notice, Observer, Stage};
 use crate::options::{OptionError, from_object, optional_text, text};
-use crate::record::{ColumnList, RecordOptions, Source, condition_source};
+use crate::record::{AngleUnit, ColumnList, RecordOptions, Source, condition_source};
 
 /// A range of samples of the record, `A..B` (0-based, `B` excluded), or `A..` to the record's
 /// end: the grid's samples, after the rows a logger stamped before it settled, when the record
@@ -212,6 +212,10 @@ pub struct CompareOptions {
     /// What the sensor measured: the displacement, or its velocity or acceleration.
     #[serde(with = "text")]
     pub measured: Measured,
+    /// The unit of the angles on the circle (and of their measured velocities): `rad`, `deg` or
+    /// `counts:N`, converted to radians as they are read.
+    #[serde(with = "text")]
+    pub angle_unit: AngleUnit,
     /// The ranges of samples compared, each scored on its own (default: the whole record).
     pub range: Vec<SampleRange>,
     /// Samples at the start of each range (and after each gap) that set the initial state and
@@ -246,6 +250,7 @@ impl Default for CompareOptions {
             velocity_col: None,
             signal: None,
             measured: Measured::Displacement,
+            angle_unit: AngleUnit::Radians,
             range: Vec::new(),
             init: None,
             x0: None,
@@ -324,6 +329,8 @@ impl CompareRequest {
             } else {
                 None
             },
+            // Checked against the model's domains when the record is read.
+            angle_unit: AngleUnit::Radians,
             ..record
         }
         .check()?;
@@ -359,6 +366,7 @@ impl CompareOptions {
             measured: self.measured,
             drive_period: None,
             drive_frequency: None,
+            angle_unit: self.angle_unit,
         }
     }
 }
@@ -773,6 +781,7 @@ fn compare_system(
             .parse()
             .map_err(|e: String| OptionError::new("signal", e))?,
         measured: o.measured,
+        angle_unit: o.angle_unit,
         drive_period: None,
         drive_frequency: None,
     };

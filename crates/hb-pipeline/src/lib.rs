@@ -71,7 +71,7 @@ pub use identify::{
 pub use observe::{Notice, Notices, Observer, Stage};
 pub use options::{OptionError, Spelling};
 pub use record::{
-    ColumnList, DriveFrequency, DrivePeriod, RecordOptions, RecordSummary, SignalList, Source,
+    AngleUnit, ColumnList, DriveFrequency, DrivePeriod, RecordOptions, RecordSummary, SignalList, Source,
     condition_source, load,
 };
 pub use refine::{Refinement, refine};

@@ -199,6 +199,61 @@ impl fmt::Display for SignalList {
     }
 }
 
+/// The unit of a record's angles: radians (the default), degrees or an encoder's counts per
+/// turn. Angles on the circle, and their measured velocities, are converted to radians as they
+/// are read.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum AngleUnit {
+    /// Radians.
+    #[default]
+    Radians,
+    /// Degrees.
+    Degrees,
+    /// An encoder's counts, this many per turn.
+    Counts(u64),
+}
+
+impl AngleUnit {
+    /// Radians per unit.
+    pub fn radians(self) -> f64 {
+        match self {
+            AngleUnit::Radians => 1.0,
+            AngleUnit::Degrees => std::f64::consts::PI / 180.0,
+            AngleUnit::Counts(n) => std::f64::consts::TAU / n as f64,
+        }
+    }
+}
+
+/// `rad`, `deg`, `counts:N`.
+impl fmt::Display for AngleUnit {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            AngleUnit::Radians => f.write_str("rad"),
+            AngleUnit::Degrees => f.write_str("deg"),
+            AngleUnit::Counts(n) => write!(f, "counts:{n}"),
+        }
+    }
+}
+
+impl FromStr for AngleUnit {
+    type Err = String;
+
+    /// `rad`, `deg` or `counts:N` (N counts per turn, at least 2).
+    fn from_str(s: &str) -> Result<Self, String> {
+        let text = s.trim().to_ascii_lowercase();
+        match text.as_str() {
+            "rad" | "radians" => Ok(AngleUnit::Radians),
+            "deg" | "degrees" => Ok(AngleUnit::Degrees),
+            _ => match text.strip_prefix("counts:").map(|n| n.trim().parse::<u64>()) {
+                Some(Ok(n)) if n >= 2 => Ok(AngleUnit::Counts(n)),
+                _ => Err(format!(
+                    "'{s}' is not an angle unit: rad, deg or counts:N (an encoder's N counts per turn, N at least 2)"
+                )),
+            },
+        }
+    }
+}
+
 /// The options of a record, as `hbid identify`, `embed`, `upos` and `report` take them and the
 /// Python functions of the same names. Defaults: an angle on the circle, measured as the
 /// displacement itself, nothing repaired, the drive's period 2π (the paper's time) unless given.
@@ -248,6 +303,10 @@ pub struct RecordOptions {
     /// `none`.
     #[serde(with = "optional_text")]
     pub drive_frequency: Option<DriveFrequency>,
+    /// The unit of the angles on the circle (and of their measured velocities, per time unit):
+    /// `rad` (the default), `deg` or `counts:N`; converted to radians as they are read.
+    #[serde(with = "text")]
+    pub angle_unit: AngleUnit,
 }
 
 impl RecordOptions {
@@ -269,6 +328,13 @@ impl RecordOptions {
                 text.parse::<Column>()
                     .map_err(|e| OptionError::value(name, text, e))?;
             }
+        }
+        if self.angle_unit != AngleUnit::Radians && !self.domains().contains(&Domain::Circle) {
+            return Err(OptionError::value(
+                "angle_unit",
+                self.angle_unit,
+                "is the unit of angles on the circle, and every coordinate is on the line («signal»)",
+            ));
         }
         if self.repair && self.no_repair {
             return Err(OptionError::new(
@@ -609,6 +675,83 @@ fn arrays_record(
     })
 }
 
+/// The angles on the circle of `record` (and their measured velocities) in radians, read in
+/// `unit`. In radians, an angle that wraps by what a turn is in degrees or in an encoder's
+/// counts (its span, where it wraps, within 5 % of 360 or of a power of two) is warned of.
+fn in_radians(
+    mut record: InputRecord,
+    domains: &[Domain],
+    unit: AngleUnit,
+    observer: &mut dyn Observer,
+) -> InputRecord {
+    let on_circle = |i: usize| domains.get(i).or(domains.first()) == Some(&Domain::Circle);
+    let scale = unit.radians();
+    if unit != AngleUnit::Radians {
+        for (i, column) in std::iter::once(&mut record.theta)
+            .chain(record.others.iter_mut())
+            .enumerate()
+        {
+            if on_circle(i) {
+                column.iter_mut().for_each(|v| *v *= scale);
+            }
+        }
+        for (i, column) in record.velocities.iter_mut().enumerate() {
+            if on_circle(i) {
+                column.iter_mut().for_each(|v| *v *= scale);
+            }
+        }
+        return record;
+    }
+    for (i, column) in std::iter::once(&record.theta).chain(&record.others).enumerate() {
+        if !on_circle(i) {
+            continue;
+        }
+        if let Some(turn) = wrap_size(column) {
+            let unit = if (turn / 360.0 - 1.0).abs() < 0.05 {
+                Some("«angle_unit=deg» if they are degrees".to_owned())
+            } else {
+                let counts = turn.log2().round();
+                ((8.0..=32.0).contains(&counts) && (turn / counts.exp2() - 1.0).abs() < 0.05).then(|| {
+                    format!(
+                        "«angle_unit=counts:{}» if they are an encoder's counts",
+                        counts.exp2()
+                    )
+                })
+            };
+            if let Some(unit) = unit {
+                let which = if domains.len() > 1 {
+                    format!("coordinate {}", i + 1)
+                } else {
+                    "the angle".to_owned()
+                };
+                observer.notice(&Notice::Warning(format!(
+                    "{which} jumps by about {turn:.0} where it wraps, not 2π: read as radians; give {unit}"
+                )));
+            }
+        }
+    }
+    record
+}
+
+/// What a turn is in the unit of `x` when it wraps in another unit than radians: its span
+/// (largest less smallest value), when the span is beyond a turn and a half in radians and at
+/// least two steps jump by more than half of it (where it wraps).
+fn wrap_size(x: &[f64]) -> Option<f64> {
+    let (lo, hi) = x
+        .iter()
+        .filter(|v| v.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
+            (lo.min(v), hi.max(v))
+        });
+    let span = hi - lo;
+    // A NaN span (no finite value) is no span either.
+    if span.is_nan() || span <= 3.0 * std::f64::consts::PI {
+        return None;
+    }
+    let wraps = x.windows(2).filter(|w| (w[1] - w[0]).abs() > 0.5 * span).count();
+    (wraps >= 2).then_some(span)
+}
+
 /// Reads `source` (for a file) and conditions it: time stamps fitted to a grid, wrapped on the
 /// circle, spikes found and repaired on request, integrated when a velocity or acceleration was
 /// measured. Each note is told to `observer` as it is found.
@@ -632,6 +775,7 @@ pub fn condition_source(
         Source::Arrays { coords, t, drives } => arrays_record(&coords, t, &drives, options)?,
     };
     let domains = options.domains();
+    let record = in_radians(record, &domains, options.angle_unit, observer);
     let prepare = PrepareOptions::new(domains[0])
         .with_others(domains[1..].to_vec())
         .with_repair(options.repair)

@@ -3288,6 +3288,84 @@ fn a_systems_spikes_are_named_by_their_column() {
     assert!(!stderr.contains("coordinate 2"), "{stderr}");
 }
 
+/// Angles in an encoder's counts or in degrees: read as radians they are nonsense, and the
+/// wrap says what they are; with --angle-unit they are the radians' record to the printed digit.
+#[test]
+fn angles_in_counts_or_degrees_are_read_in_their_unit() {
+    let dir = scratch("angle-units");
+    let rig = [
+        "--drive-frequency",
+        "1.02",
+        "--sample-rate",
+        "500",
+        "--samples",
+        "20000",
+    ];
+    let radians = simulated(&dir, "rad.csv", &[&rig[..], &["--counts", "4096"]].concat());
+    let counts = simulated(
+        &dir,
+        "counts.csv",
+        &[&rig[..], &["--counts", "4096", "--raw-counts"]].concat(),
+    );
+    let (head, rows) = read_rows(&counts);
+    assert_eq!(head, "t,count,omega");
+    let degrees = dir.join("deg.csv");
+    let (_, rad_rows) = read_rows(&radians);
+    let text: String = rad_rows
+        .iter()
+        .map(|r| format!("{},{}\n", r[0], r[1].to_degrees()))
+        .collect();
+    std::fs::write(&degrees, format!("t,theta\n{text}")).unwrap();
+    assert!(
+        rows.iter()
+            .all(|r| (0.0..4096.0).contains(&r[1]) && r[1].fract() == 0.0)
+    );
+    let identify = |file: &Path, extra: &[&str]| {
+        let mut args = vec![
+            "identify",
+            file.to_str().unwrap(),
+            "--drive-frequency",
+            "1.02",
+            "--bootstrap",
+            "0",
+        ];
+        args.extend(extra);
+        hbid(&args)
+    };
+    let sin = |out: &Output| -> String {
+        String::from_utf8_lossy(&out.stdout)
+            .lines()
+            .find(|l| l.starts_with("sin(x) "))
+            .unwrap_or_default()
+            .to_owned()
+    };
+    let reference = identify(&radians, &[]);
+    assert!(reference.status.success());
+    for (file, extra, unit) in [
+        (&counts, &["--angle-col", "count"][..], "counts:4096"),
+        (&degrees, &[][..], "deg"),
+    ] {
+        let out = identify(file, extra);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            stderr.contains(&format!("read as radians; give --angle-unit {unit}")),
+            "{stderr}"
+        );
+        let out = identify(file, &[extra, &["--angle-unit", unit][..]].concat());
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        assert_eq!(sin(&out), sin(&reference), "{unit}");
+        assert!(!String::from_utf8_lossy(&out.stderr).contains("warning"));
+    }
+    assert_clean_failure(
+        &identify(&degrees, &["--angle-unit", "deg", "--signal", "line"]),
+        "--angle-unit deg: is the unit of angles on the circle",
+    );
+    assert_clean_failure(
+        &identify(&degrees, &["--angle-unit", "grad"]),
+        "rad, deg or counts:n",
+    );
+}
+
 /// A model of one coordinate compared with a record whose several coordinates are named is
 /// refused, not run against the first of them.
 #[test]

@@ -8,7 +8,9 @@ use anyhow::Context;
 use circle_signal::{Domain, Measured};
 use clap::Args;
 use hb_pipeline::compare::Values;
-use hb_pipeline::{ColumnList, CompareOptions, CompareReport, CompareRequest, SampleRange, Source};
+use hb_pipeline::{
+    AngleUnit, ColumnList, CompareOptions, CompareReport, CompareRequest, SampleRange, Source,
+};
 use hb_plot::{BLUE, Figure, ORANGE, RED, Series, Style};
 
 use super::data::choice;
@@ -60,6 +62,11 @@ pub struct CompareArgs {
     /// to the displacement, as for `hbid identify`).
     #[arg(long, default_value_t = Measured::Displacement, value_parser = choice::<Measured>(&["displacement", "velocity", "acceleration"]))]
     pub measured: Measured,
+    /// The unit of the angles on the circle, and of their measured velocities (per time unit):
+    /// rad, deg, or counts:N for an encoder's N counts per turn (4096 counts from 0 to 4095, say);
+    /// converted to radians as they are read.
+    #[arg(long, value_name = "rad|deg|counts:N", default_value_t = AngleUnit::Radians)]
+    pub angle_unit: AngleUnit,
     /// Samples compared, A..B (0-based, B excluded) or A.. to the end: the record's rows for a
     /// record without gaps, its first rows included when a logger stamped them before it settled
     /// to its rate (see --skip-unsettled); repeatable, each range scored on its own [default: the
@@ -109,6 +116,7 @@ impl CompareArgs {
             velocity_col: self.velocity_col.clone(),
             signal: self.signal,
             measured: self.measured,
+            angle_unit: self.angle_unit,
             range: self.range.clone(),
             init: self.init,
             x0: self.x0.clone(),

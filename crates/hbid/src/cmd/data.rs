@@ -5,7 +5,9 @@ use std::path::PathBuf;
 
 use circle_signal::Measured;
 use clap::Args;
-use hb_pipeline::{ColumnList, DriveFrequency, DrivePeriod, OrbitOptions, RecordOptions, SignalList, Source};
+use hb_pipeline::{
+    AngleUnit, ColumnList, DriveFrequency, DrivePeriod, OrbitOptions, RecordOptions, SignalList, Source,
+};
 use upo_search::CloseReturns;
 
 /// A value among `names`, read by its type's `FromStr`: the help lists the names, a bad one is
@@ -77,6 +79,11 @@ pub struct InputArgs {
     /// polynomial terms are then those of the displacement less its mean).
     #[arg(long, default_value_t = Measured::Displacement, value_parser = choice::<Measured>(&["displacement", "velocity", "acceleration"]))]
     pub measured: Measured,
+    /// The unit of the angles on the circle, and of their measured velocities (per time unit):
+    /// rad, deg, or counts:N for an encoder's N counts per turn (4096 counts from 0 to 4095, say);
+    /// converted to radians as they are read.
+    #[arg(long, value_name = "rad|deg|counts:N", default_value_t = AngleUnit::Radians)]
+    pub angle_unit: AngleUnit,
     /// Drive period in the time unit of the data, any number of sampling steps (default 2π, the
     /// paper's non-dimensional time); `auto` or `auto:A..B` estimates it from the record (within
     /// periods A to B); `none`: no drive, a free oscillation (windows in periods of the
@@ -117,6 +124,7 @@ impl InputArgs {
             measured: self.measured,
             drive_period: self.drive_period.clone(),
             drive_frequency: self.drive_frequency.clone(),
+            angle_unit: self.angle_unit,
         }
     }
 

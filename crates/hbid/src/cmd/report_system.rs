@@ -214,6 +214,7 @@ fn record_options(args: &ReportArgs, system: &IdentifiedSystem) -> anyhow::Resul
             .parse()
             .map_err(anyhow::Error::msg)?,
         measured: input.measured,
+        angle_unit: input.angle_unit,
         ..RecordOptions::default()
     })
 }
