@@ -136,6 +136,20 @@ fn whitespace_semicolons_and_tabs_separate_cells() {
         let r = read(text).unwrap_or_else(|e| panic!("{text:?}: {e}"));
         assert_eq!((r.t, r.theta), expected, "{text:?}");
     }
+    // A header whose names hold spaces between tabs (units): tabs alone separate, spaces and
+    // runs of tabs about a cell are not cells of their own.
+    let named = ReadOptions {
+        time: Some("time [s]".parse().unwrap()),
+        angle: Some("angle [rad]".parse().unwrap()),
+        ..Default::default()
+    };
+    for text in [
+        "time [s]\tangle [rad]\n0\t0.1\n0.5\t\t-0.2\n1 \t 0.3\n",
+        "\"time [s]\"\t\"angle [rad]\"\tstatus flag\n0\t0.1\tok\n0.5\t-0.2\tSYNC LOST\n1\t0.3\tok\n",
+    ] {
+        let r = with(text, named.clone()).unwrap_or_else(|e| panic!("{text:?}: {e}"));
+        assert_eq!((r.t, r.theta), expected, "{text:?}");
+    }
     // A single column with the step: white space around it is no separator.
     let step = ReadOptions {
         dt: Some(0.5),

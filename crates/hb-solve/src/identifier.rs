@@ -414,10 +414,12 @@ impl Identifier {
         let model = IdentifiedModel::from_fit(self.basis, &params, &system, &fit, solver.name())?;
         let folds = self.selection.as_ref().map_or(HELD_OUT_FOLDS, |(_, p)| p.folds());
         let quality = fit_quality(&system, &fit.solution)?.with_held_out(&system, folds);
-        let warning = quality.warning(match self.method {
-            Method::Upo => EXPLAINED_WARNING_ORBITS,
-            Method::Windowed => EXPLAINED_WARNING_WINDOWS,
-        });
+        let warning = quality
+            .warning(match self.method {
+                Method::Upo => EXPLAINED_WARNING_ORBITS,
+                Method::Windowed => EXPLAINED_WARNING_WINDOWS,
+            })
+            .or_else(|| undetermined_warning(&quality, &system, folds, fit.condition));
         let (intervals, no_intervals) = match &self.bootstrap {
             Some(b) => {
                 progress(IdentifyStep::Bootstrap);
@@ -589,5 +591,26 @@ pub fn identify_tied(
         fit,
         intervals,
         no_intervals,
+    })
+}
+
+/// The warning of a fit whose share on held-out stretches could not be had because the record
+/// less one of its folds does not determine the coefficients (its normal equations singular to
+/// working precision): the terms are nearly dependent on this record, and the coefficients,
+/// however well they fit it, are not those of its equation (a periodic response, on which a
+/// parametric library's terms are functions of one another, is the common case).
+fn undetermined_warning(
+    quality: &FitQuality,
+    system: &LinearSystem,
+    folds: usize,
+    condition: f64,
+) -> Option<String> {
+    (quality.held_out.is_none() && folds >= 2 && system.blocks().len() >= 2).then(|| {
+        format!(
+            "the record does not tell the terms apart: without one of {folds} folds of its stretches they are \
+             dependent to working precision (condition number {condition:.1e}), so the coefficients, however \
+             well they fit, are not determined (a periodic response excites too few states for a library this \
+             large: fewer terms, «select», or a record of richer motion)"
+        )
     })
 }

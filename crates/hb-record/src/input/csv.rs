@@ -19,6 +19,19 @@ pub(super) fn read<'a>(bytes: &'a [u8], options: &ReadOptions) -> Result<Record,
         return Err(InputError::Empty);
     };
     let separator = match Separator::of(first) {
+        // Tabs alone separate where the first row's cells hold spaces (a header's `time [s]`):
+        // there are fewer of them between tabs than between spaces and tabs.
+        Some(Separator::Tab) => {
+            let mut by_tabs = Vec::new();
+            let mut by_white = Vec::new();
+            Separator::Tab.split(first, &mut by_tabs);
+            Separator::Whitespace.split(first, &mut by_white);
+            if by_tabs.len() < by_white.len() {
+                Separator::Tab
+            } else {
+                Separator::Whitespace
+            }
+        }
         Some(s) => s,
         // A single cell: any separator splits it into itself.
         None => Separator::Whitespace,
@@ -71,7 +84,7 @@ pub(super) fn read<'a>(bytes: &'a [u8], options: &ReadOptions) -> Result<Record,
             #[cfg(debug_assertions)]
             {
                 assert_eq!(
-                    Separator::of(text).filter(|&s| s != separator && width > 1),
+                    separator.of_row(text).filter(|&s| s != separator && width > 1),
                     None,
                     "{text}"
                 );
@@ -100,7 +113,7 @@ pub(super) fn read<'a>(bytes: &'a [u8], options: &ReadOptions) -> Result<Record,
             numbers.push(line);
             return Ok(());
         }
-        if let Some(found) = Separator::of(text).filter(|&s| s != separator && width > 1) {
+        if let Some(found) = separator.of_row(text).filter(|&s| s != separator && width > 1) {
             return Err(InputError::MixedSeparators {
                 line,
                 expected: separator,
@@ -213,18 +226,32 @@ impl<'a> Lines<'a> {
 
 impl Separator {
     /// The separator of a trimmed row: semicolons when it holds one (commas are then decimal
-    /// commas), else commas when it holds one, else white space when it holds any; `None` for a
-    /// single cell.
+    /// commas), else commas when it holds one, else tabs when it holds one, else spaces when it
+    /// holds any; `None` for a single cell. (A first row of tabs is read as one of tabs alone
+    /// only where its cells hold spaces, see `read`.)
     fn of(text: &str) -> Option<Self> {
         let bytes = text.as_bytes();
         if memchr::memchr(b';', bytes).is_some() {
             Some(Separator::Semicolon)
         } else if memchr::memchr(b',', bytes).is_some() {
             Some(Separator::Comma)
-        } else if memchr::memchr2(b' ', b'\t', bytes).is_some() {
+        } else if memchr::memchr(b'\t', bytes).is_some() {
+            Some(Separator::Tab)
+        } else if memchr::memchr(b' ', bytes).is_some() {
             Some(Separator::Whitespace)
         } else {
             None
+        }
+    }
+
+    /// The separator a row after the first uses, in a record whose first row uses `self`: a
+    /// row of tabs and spaces (no comma or semicolon) is one of tabs in a record of tabs (its
+    /// spaces inside cells) and one of spaces in a record of spaces.
+    fn of_row(self, text: &str) -> Option<Self> {
+        match (self, Self::of(text)) {
+            (Separator::Whitespace, Some(Separator::Tab)) => Some(Separator::Whitespace),
+            (Separator::Tab, Some(Separator::Whitespace)) => Some(Separator::Tab),
+            (_, found) => found,
         }
     }
 
@@ -258,6 +285,7 @@ impl Separator {
         match self {
             Separator::Comma => split_at(text, b',', cells),
             Separator::Semicolon => split_at(text, b';', cells),
+            Separator::Tab => cells.extend(text.split('\t').map(clean).filter(|c| !c.is_empty())),
             Separator::Whitespace => {
                 cells.extend(text.split([' ', '\t']).filter(|c| !c.is_empty()).map(clean))
             }
@@ -278,9 +306,10 @@ fn numbers_only(text: &str, separator: Separator, values: &mut Vec<f64>) -> bool
     let byte = match separator {
         Separator::Comma => b',',
         Separator::Semicolon => b';',
+        Separator::Tab => b'\t',
         Separator::Whitespace => b' ',
     };
-    let white = separator == Separator::Whitespace;
+    let white = matches!(separator, Separator::Whitespace | Separator::Tab);
     let mut rest = text.as_bytes();
     loop {
         let Ok((value, used)) = fast_float2::parse_partial::<f64, _>(rest) else {
@@ -298,6 +327,10 @@ fn numbers_only(text: &str, separator: Separator, values: &mut Vec<f64>) -> bool
                     .iter()
                     .take_while(|&&b| b == b' ' || b == b'\t')
                     .count();
+                // Between tabs' cells a gap holds a tab (spaces alone are inside a cell).
+                if separator == Separator::Tab && memchr::memchr(b'\t', &rest[used..used + gap]).is_none() {
+                    return false;
+                }
                 rest = &rest[used + gap..];
             }
             Some(_) => return false,

@@ -336,6 +336,9 @@ pub enum Separator {
     Comma,
     /// Semicolons (commas inside cells are then decimal commas).
     Semicolon,
+    /// Tabs (runs of them), in a record whose first row has cells with spaces inside
+    /// (`time [s]`, `angle [rad]`): spaces are then part of a cell.
+    Tab,
     /// Runs of spaces and tabs.
     Whitespace,
 }
@@ -345,6 +348,7 @@ impl std::fmt::Display for Separator {
         f.write_str(match self {
             Separator::Comma => "commas",
             Separator::Semicolon => "semicolons",
+            Separator::Tab => "tabs",
             Separator::Whitespace => "spaces or tabs",
         })
     }
