@@ -132,6 +132,9 @@ fn whitespace_semicolons_and_tabs_separate_cells() {
         "t ; theta\n0; 0,1\n0,5 ;-0,2\n1;0.3\n",
         "0 0.1\n0.5 -0.2\n1 0.3\n",
         "0;0.1\n0.5;-0.2\n1;0.3\n",
+        // Line ends: CR LF, and CR alone.
+        "t,theta\r\n0,0.1\r\n0.5,-0.2\r\n1,0.3\r\n",
+        "t,theta\r0,0.1\r0.5,-0.2\r1,0.3\r",
     ] {
         let r = read(text).unwrap_or_else(|e| panic!("{text:?}: {e}"));
         assert_eq!((r.t, r.theta), expected, "{text:?}");

@@ -14,6 +14,13 @@ pub(super) fn read<'a>(bytes: &'a [u8], options: &ReadOptions) -> Result<Record,
             Err(_) => Rest::Bytes(bytes),
         },
         line: 0,
+        // Lines end in LF (CR LF included: the CR is trimmed), or in CR alone where no LF is
+        // (an old Mac's or some loggers' files).
+        end: if memchr::memchr(b'\n', bytes).is_none() && memchr::memchr(b'\r', bytes).is_some() {
+            b'\r'
+        } else {
+            b'\n'
+        },
     };
     let Some((first_line, first)) = lines.next_row()? else {
         return Err(InputError::Empty);
@@ -169,6 +176,8 @@ struct Lines<'a> {
     rest: Rest<'a>,
     /// The number of the last line read, counted from 1.
     line: u64,
+    /// The byte that ends a line.
+    end: u8,
 }
 
 /// What is left of a text to read: checked to be UTF-8 throughout, or bytes to check line by
@@ -196,7 +205,7 @@ impl<'a> Lines<'a> {
                 // No byte of a longer character is a line end: a text that is UTF-8 throughout
                 // splits into lines that are.
                 Rest::Text(text) => {
-                    let (line, rest) = match memchr::memchr(b'\n', text.as_bytes()) {
+                    let (line, rest) = match memchr::memchr(self.end, text.as_bytes()) {
                         Some(e) => (&text[..e], &text[e + 1..]),
                         None => (*text, ""),
                     };
@@ -204,7 +213,7 @@ impl<'a> Lines<'a> {
                     line
                 }
                 Rest::Bytes(bytes) => {
-                    let (raw, rest) = match memchr::memchr(b'\n', bytes) {
+                    let (raw, rest) = match memchr::memchr(self.end, bytes) {
                         Some(e) => (&bytes[..e], &bytes[e + 1..]),
                         None => (*bytes, &bytes[bytes.len()..]),
                     };
