@@ -112,7 +112,9 @@ impl RunError {
             RunError::Read { .. } => ErrorKind::Input,
             RunError::Prepare(PrepareError::MeasuredOnCircle(_)) => ErrorKind::Options,
             RunError::Prepare(_) => ErrorKind::Input,
-            RunError::Drive(PrepareError::Clock(_)) => ErrorKind::Options,
+            RunError::Drive(PrepareError::Clock(_) | PrepareError::WindowTooShort { .. }) => {
+                ErrorKind::Options
+            }
             RunError::DriveEstimate(crate::drive::DriveError::Search(_)) => ErrorKind::Options,
             RunError::DriveEstimate(_) => ErrorKind::Identification,
             RunError::Drive(PrepareError::Input(_)) => ErrorKind::Input,

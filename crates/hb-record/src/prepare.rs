@@ -321,6 +321,18 @@ pub enum PrepareError {
     /// The clock is not whole after resampling.
     #[error(transparent)]
     Whole(CircleError),
+    /// Windows given in the record's time whose unit is shorter than two samples.
+    #[error(
+        "the windows' unit of {length:.3e} in the record's time is {:.2} of its steps of {dt}: it needs at \
+         least 2 (a longer «window», or fewer «window_periods»)",
+        length / dt
+    )]
+    WindowTooShort {
+        /// The unit's length in the record's time (the window over its periods).
+        length: f64,
+        /// The record's step.
+        dt: f64,
+    },
     /// Further coordinates read and their domains do not match.
     #[error("{read} coordinate(s) were read but {domains} domain(s) given")]
     Coordinates {
@@ -910,7 +922,10 @@ impl GridData {
             }
             PeriodSource::Windows(unit) => {
                 let samples = match unit {
-                    WindowUnit::Time(length) => (length / dt).round().clamp(2.0, 1e12) as usize,
+                    WindowUnit::Time(length) if (length / dt).round() < 2.0 => {
+                        return Err(PrepareError::WindowTooShort { length, dt });
+                    }
+                    WindowUnit::Time(length) => (length / dt).round().min(1e12) as usize,
                     WindowUnit::Samples(n) => n.max(2),
                 };
                 (samples as f64 * dt, DriveFound::Windows { samples })

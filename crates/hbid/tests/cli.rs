@@ -3199,6 +3199,21 @@ fn system_columns_by_position_are_named_by_the_option_that_gives_them() {
         "q1: sin(q1), q1', tau1; q2: sin(q1+q2), q2', tau2",
     ]);
     assert_clean_failure(&out, "--drive-col: the drive 'v1' is in no equation's terms");
+    // Windows shorter than two samples per unit are refused, in time as in samples.
+    let out = hbid(&[
+        "identify",
+        r,
+        "--coords",
+        "q1,q2",
+        "--drive-col",
+        "tau1,tau2",
+        "--window",
+        "1e-9",
+    ]);
+    assert_clean_failure(
+        &out,
+        "it needs at least 2 (a longer --window, or fewer --window-periods)",
+    );
     let out = hbid(&[
         "identify",
         r,
