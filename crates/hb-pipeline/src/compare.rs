@@ -1329,6 +1329,7 @@ pub fn run_on_times(
                 )
                 .into());
             }
+            finite_drive(p, "p")?;
             model
                 .clone()
                 .with_measured_drive(MeasuredDrive::new(p.to_vec(), t[0], dt)?)?
@@ -1356,6 +1357,22 @@ pub fn run_on_times(
         rows,
         stopped: run.stopped.map(|why| format!("the model's run stopped: {why}")),
     })
+}
+
+/// A measured drive given for a run: every sample finite (a NaN would stop the run with a
+/// misleading reason, a step too small or a singular mass matrix, where it enters).
+fn finite_drive(p: &[f64], name: &str) -> Result<(), RunError> {
+    match p.iter().position(|v| !v.is_finite()) {
+        Some(i) => Err(OptionError::new(
+            "drive",
+            format!(
+                "sample {i} of the drive {name} is {}: every sample must be finite",
+                p[i]
+            ),
+        )
+        .into()),
+        None => Ok(()),
+    }
 }
 
 /// The step of the times `t`, an even grid (stamps within 10⁻⁶ of a step of `t[0] + n · dt`) of
@@ -1463,6 +1480,7 @@ pub fn run_system_on_times(
                     )
                     .into());
                 }
+                finite_drive(p, name)?;
                 splines.push(MeasuredDrive::new(p.to_vec(), t[0], dt)?);
             }
             system.clone().with_measured_drives(splines)?

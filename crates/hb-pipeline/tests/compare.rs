@@ -239,6 +239,25 @@ fn a_systems_run_refuses_a_state_or_drives_that_do_not_fit() {
         run_system_on_times(&system, &uneven, &[], &[0.1, 0.2], &[0.0, 0.0], 1e-10),
         "even grid",
     );
+    // A measured drive with a sample that is not a number: named, not run into a reason that
+    // misleads (a singular mass matrix, a step too small).
+    let driven = circle_system(
+        (["q1", "q2"], &["tau1", "tau2"]),
+        [
+            ("sin(q1), q1', tau1", &[9.0, 0.1, -1.0]),
+            ("sin(q2), q2', tau2", &[9.0, 0.1, -1.0]),
+        ],
+    );
+    let mut tau1 = vec![0.1; t.len()];
+    let tau2 = vec![0.0; t.len()];
+    assert!(run_system_on_times(&driven, &t, &[&tau1, &tau2], &[0.1, 0.2], &[0.0, 0.0], 1e-10).is_ok());
+    tau1[10] = f64::NAN;
+    let e = run_system_on_times(&driven, &t, &[&tau1, &tau2], &[0.1, 0.2], &[0.0, 0.0], 1e-10).unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::Options, "{e}");
+    assert!(
+        e.to_string().contains("sample 10 of the drive tau1 is NaN"),
+        "{e}"
+    );
 }
 
 /// Measured velocities are columns of a file: samples given as arrays with `velocity_col` are
