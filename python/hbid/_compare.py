@@ -334,8 +334,8 @@ def run_model(
     dt: Optional[float],
     drive_col: ColumnsLike,
     init: Optional[int],
-    x0: float,
-    v0: float,
+    x0: Union[float, Sequence[float]],
+    v0: Union[float, Sequence[float]],
     rtol: float,
     out: Optional[PathLike],
 ) -> ModelRun:
@@ -347,8 +347,8 @@ def run_model(
         dt=dt,
         drive_col=columns(drive_col, "drive_col"),
         init=None if given else init,
-        x0=x0 if given else None,
-        v0=v0 if given else None,
+        x0=numbers(x0, "x0") if given else None,
+        v0=numbers(v0, "v0") if given else None,
         rtol=rtol,
     )
     samples = source(input, None, None, options, COMPARE_DEFAULTS)

@@ -361,17 +361,29 @@ def simulate(
 
         if truth is not None:
             raise OptionsError("truth is the equation of a built-in system: a saved model= has none to write")
+        # A system's state: q0, dq0, or x0, v0 given one value per coordinate.
+        rig = dict(options)
+        state = {}
+        for one, several, default in (("x0", "q0", 0.1), ("v0", "dq0", 0.0)):
+            value = rig[one]
+            if rig.get(several) is not None:
+                state[one] = rig[several]
+            elif value is not None and not np.isscalar(value):
+                state[one] = value
+                rig[several], rig[one] = value, default
+            else:
+                state[one] = value
         return run_model(
             model,
             input,
-            rig=options_json(options),
+            rig=options_json(rig),
             time_col=time_col,
             angle_col=angle_col,
             dt=dt,
             drive_col=drive_col,
             init=init,
-            x0=options["x0"],
-            v0=options["v0"],
+            x0=state["x0"],
+            v0=state["v0"],
             rtol=options["rtol"],
             out=out,
         )

@@ -186,6 +186,25 @@ def test_measured_velocities_start_each_run(double_pendulum, cli):
     assert [r.rmse for r in given.ranges] == pytest.approx([r.rmse for r in c.ranges], rel=1e-6)
 
 
+def test_a_saved_system_runs_from_a_given_state(tmp_path):
+    """simulate(model=, input=, init=0) of a system from one value per coordinate, by x0 and
+    v0 or by q0 and dq0: the same run, from that state."""
+    sim = hbid.simulate(system="arm", samples=2000, out=tmp_path / "arm.csv")
+    n = sim.named
+    model = hbid.identify(str(tmp_path / "arm.csv"), bootstrap=0, **sim.identify_options).model
+    model.save(tmp_path / "arm-model.json")
+    run = lambda **state: hbid.simulate(
+        model=str(tmp_path / "arm-model.json"), input=str(tmp_path / "arm.csv"), drive_col=["tau1", "tau2"], init=0, **state
+    )
+    by_x = run(x0=[0.1, 0.0], v0=[0.0, 0.0])
+    by_q = run(q0=[0.1, 0.0], dq0=[0.0, 0.0])
+    np.testing.assert_array_equal(by_x.named["q1"], by_q.named["q1"])
+    assert by_x.named["q1"][0] == pytest.approx(0.1, abs=1e-12) and by_x.named["q2"][0] == pytest.approx(0.0, abs=1e-12)
+    with pytest.raises(hbid.OptionsError, match="init"):
+        hbid.simulate(model=str(tmp_path / "arm-model.json"), input=str(tmp_path / "arm.csv"), drive_col=["tau1", "tau2"], q0=[0.1, 0.0])
+    assert n["q1"].shape == by_x.named["q1"].shape
+
+
 def test_drives_by_name_from_arrays():
     """The coupled Duffing oscillators on a base shaken by a measured acceleration ``a``: the
     drive by its name from a dict of arrays, in identify, compare and the system's run."""

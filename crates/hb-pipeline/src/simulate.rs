@@ -570,15 +570,22 @@ impl Default for SimulateOptions {
 }
 
 /// Why an option of a built-in system is refused with a saved model, after the option's name.
-pub const MODEL_TAKES_NO_RIG: &str = "is an option of a built-in system: a saved model («model») takes only the input's options, «x0», «v0» and «rtol»";
+pub const MODEL_TAKES_NO_RIG: &str = "is an option of a built-in system: a saved model («model») takes only the input's options, «x0», «v0» (a system's «q0», «dq0») and «rtol»";
 
 /// With a saved model the initial state is fitted to the input's first samples unless `init` is 0
 /// (`state_given`): an `x0` or `v0` set away from its default without it would be ignored, and
 /// is refused instead.
 pub fn check_model_state(rig: &SimulateOptions, state_given: bool) -> Result<(), OptionError> {
     let d = SimulateOptions::default();
-    if !state_given && (rig.x0 != d.x0 || rig.v0 != d.v0) {
-        let name = if rig.x0 != d.x0 { "x0" } else { "v0" };
+    let set = [
+        ("x0", rig.x0 != d.x0),
+        ("v0", rig.v0 != d.v0),
+        ("q0", rig.q0.is_some()),
+        ("dq0", rig.dq0.is_some()),
+    ];
+    if let Some(&(name, _)) = set.iter().find(|(_, set)| *set)
+        && !state_given
+    {
         return Err(OptionError::sentence(
             name,
             "sets the state of a saved «model» with «init=0» only (otherwise the state is fitted to the input's \
@@ -590,7 +597,7 @@ pub fn check_model_state(rig: &SimulateOptions, state_given: bool) -> Result<(),
 
 impl SimulateOptions {
     /// The options of a built-in system set away from their defaults (every option but `x0`,
-    /// `v0` and `rtol`): what a saved model's run under a record's input (`hbid simulate --model`)
+    /// `v0`, `q0`, `dq0` and `rtol`): what a saved model's run under a record's input (`hbid simulate --model`)
     /// does not take.
     pub fn rig_settings(&self) -> Vec<String> {
         let (Ok(serde_json::Value::Object(now)), Ok(serde_json::Value::Object(default))) =
@@ -599,7 +606,9 @@ impl SimulateOptions {
             return Vec::new();
         };
         now.into_iter()
-            .filter(|(k, v)| !matches!(k.as_str(), "x0" | "v0" | "rtol") && default.get(k) != Some(v))
+            .filter(|(k, v)| {
+                !matches!(k.as_str(), "x0" | "v0" | "q0" | "dq0" | "rtol") && default.get(k) != Some(v)
+            })
             .map(|(k, _)| k)
             .collect()
     }

@@ -617,4 +617,45 @@ fn a_systems_comparison_is_drawn_coordinate_by_coordinate() {
     ]);
     // Two panels of 640 × 600 (one figure is 900 × 650).
     assert_eq!(png_size(&plot), (1280, 600));
+    // The saved system run from a given state: one value per coordinate by --q0, --dq0.
+    let run = dir.join("run.csv");
+    ok(&[
+        "simulate",
+        "--model",
+        s(&model),
+        "--input",
+        s(&record),
+        "--init",
+        "0",
+        "--q0",
+        "0.5,-0.25",
+        "--dq0",
+        "0,0",
+        "--out",
+        s(&run),
+    ]);
+    let text = std::fs::read_to_string(&run).unwrap();
+    let first: Vec<f64> = text
+        .lines()
+        .nth(1)
+        .unwrap()
+        .split(',')
+        .map(|c| c.parse().unwrap())
+        .collect();
+    assert!(
+        (first[1] - 0.5).abs() < 1e-12 && (first[2] + 0.25).abs() < 1e-12,
+        "{first:?}"
+    );
+    let out = hbid(&[
+        "simulate",
+        "--model",
+        s(&model),
+        "--input",
+        s(&record),
+        "--q0",
+        "0.5,0",
+        "--out",
+        s(&run),
+    ]);
+    assert_clean_failure(&out, "--q0 sets the state of a saved --model with --init 0 only");
 }

@@ -5,6 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use clap::{Args, ValueEnum};
+use hb_pipeline::compare::Values;
 use hb_pipeline::simulate::{
     DriveKind, GapsText, HarmonicText, Numbers, RangeKind, SystemKind, TimeOrigin, TorqueText, check_outputs,
     write_truth,
@@ -433,8 +434,9 @@ fn model_request(args: &SimulateArgs) -> anyhow::Result<CompareRequest> {
         dt: args.dt,
         drive_col: args.drive_col.clone(),
         init: args.init.filter(|&n| n > 0),
-        x0: given.then_some(args.x0.into()),
-        v0: given.then_some(args.v0.into()),
+        // A system's state by --q0, --dq0; one coordinate's by --x0, --v0.
+        x0: given.then(|| args.q0.clone().map_or(args.x0.into(), |q| Values(q.0))),
+        v0: given.then(|| args.dq0.clone().map_or(args.v0.into(), |v| Values(v.0))),
         rtol: args.rtol,
         ..CompareOptions::default()
     })?)
