@@ -34,7 +34,7 @@ use std::fmt;
 use std::ops::Range;
 
 use crate::input::{
-    AngleRange, GridOptions, GridRecord, GridReport, InputError, Record as InputRecord, RecordEnd,
+    AngleRange, GridOptions, GridRecord, GridReport, InputError, Location, Record as InputRecord, RecordEnd,
     TimeRepair, UNSETTLED_MAX, Unsettled, angle_range,
 };
 use circle_signal::{
@@ -177,6 +177,14 @@ pub enum Note {
         /// Samples missing in them.
         missing: usize,
     },
+    /// Rows written twice (a stamp and every value the same as the row before), the second of
+    /// each left out.
+    DuplicateRows {
+        /// Where the first repeated row is.
+        first: Location,
+        /// How many were left out.
+        count: usize,
+    },
     /// Values outside `[-π, π)` read as an unwrapped angle, and wrapped.
     Wrapped,
     /// A velocity or acceleration record integrated to the displacement.
@@ -225,6 +233,11 @@ impl fmt::Display for Note {
                 gaps + 1
             ),
             Note::Wrapped => f.write_str("values outside [-π, π): read as an unwrapped angle and wrapped"),
+            Note::DuplicateRows { first, count } => write!(
+                f,
+                "{count} row(s) written twice (the stamp and every value of the row before) left out, the \
+                 first at {first}"
+            ),
             Note::Integrated(measured) => {
                 let (what, removed) = match measured {
                     Measured::Acceleration => ("an acceleration", "least-squares linear trend"),
@@ -481,6 +494,55 @@ impl Data {
     }
 }
 
+/// Leaves out every row of `record` that repeats the row before it, its stamp and every value
+/// (a logger that wrote a row twice), and says so; `None` when there is none. A stamp repeated
+/// with other values is the grid fit's to judge (a glitch).
+fn drop_duplicate_rows(record: &mut InputRecord) -> Option<Note> {
+    let n = record.t.len();
+    let same = |v: &[f64], i: usize| v.get(i).map(|x| x.to_bits()) == v.get(i - 1).map(|x| x.to_bits());
+    let repeated = |r: &InputRecord, i: usize| {
+        r.t[i] == r.t[i - 1]
+            && std::iter::once(&r.theta)
+                .chain(&r.others)
+                .chain(&r.drives)
+                .chain(&r.velocities)
+                .all(|v| same(v, i))
+    };
+    let drop: Vec<usize> = (1..n).filter(|&i| repeated(record, i)).collect();
+    let &first = drop.first()?;
+    let first = match record.lines.as_ref().and_then(|l| l.get(first)) {
+        Some(&line) => Location::Line(line),
+        None => Location::Sample(first + 1),
+    };
+    let keep = |v: &mut Vec<f64>| {
+        let mut next = drop.iter().peekable();
+        let mut i = 0;
+        v.retain(|_| {
+            let gone = next.next_if_eq(&&i).is_some();
+            i += 1;
+            !gone
+        });
+    };
+    keep(&mut record.t);
+    keep(&mut record.theta);
+    record.others.iter_mut().for_each(keep);
+    record.drives.iter_mut().for_each(keep);
+    record.velocities.iter_mut().for_each(keep);
+    if let Some(lines) = &mut record.lines {
+        let mut next = drop.iter().peekable();
+        let mut i = 0;
+        lines.retain(|_| {
+            let gone = next.next_if_eq(&&i).is_some();
+            i += 1;
+            !gone
+        });
+    }
+    Some(Note::DuplicateRows {
+        first,
+        count: drop.len(),
+    })
+}
+
 /// Fits the record's time stamps to a grid (pieces on one grid, NaN in the gaps), wraps it (on the
 /// circle) and finds its spikes, repairing glitches and spikes when asked; `notes` hears of each
 /// thing done or found as it happens.
@@ -495,6 +557,9 @@ pub fn condition(
         kept.push(n);
     };
     let mut record = record;
+    if let Some(duplicates) = drop_duplicate_rows(&mut record) {
+        note(duplicates);
+    }
     // A logger's unsettled start is at most UNSETTLED_MAX rows: their values, kept aside.
     let head = |v: &[f64]| v[..v.len().min(UNSETTLED_MAX)].to_vec();
     let (head_t, head_x) = (head(&record.t), head(&record.theta));

@@ -45,6 +45,50 @@ fn the_spikes_note_speaks_of_bit_errors_on_the_circle_and_of_outliers_on_the_lin
     assert!(!note(Domain::Line, false).contains("bit error"));
 }
 
+/// A row written twice (its stamp and every value the row before's) is left out of every
+/// column, with a note naming its line; the record is then the one without it. A stamp repeated
+/// with other values is not a duplicate (the grid fit judges it).
+#[test]
+fn a_row_written_twice_is_left_out() {
+    let n = 400;
+    let t: Vec<f64> = (0..n).map(|i| 5.0 + i as f64 * 0.01).collect();
+    let x: Vec<f64> = (0..n).map(|i| (i as f64 * 0.05).sin()).collect();
+    let drive: Vec<f64> = (0..n).map(|i| (i as f64 * 0.03).cos()).collect();
+    let clean = Record {
+        t: t.clone(),
+        theta: x.clone(),
+        drives: vec![drive.clone()],
+        lines: Some((2..n as u64 + 2).collect()),
+        ..Record::default()
+    };
+    let twice = |v: &[f64]| -> Vec<f64> { v[..201].iter().chain(&v[200..]).copied().collect() };
+    let doubled = Record {
+        t: twice(&t),
+        theta: twice(&x),
+        drives: vec![twice(&drive)],
+        lines: Some((2..n as u64 + 3).collect()),
+        ..Record::default()
+    };
+    let options = PrepareOptions::new(Domain::Line);
+    let expected = condition(clean, &options, &mut |_| {}).unwrap();
+    let grid = condition(doubled, &options, &mut |_| {}).unwrap();
+    assert_eq!(grid.x, expected.x);
+    assert_eq!(grid.drives, expected.drives);
+    assert_eq!(
+        grid.notes[0].to_string(),
+        "1 row(s) written twice (the stamp and every value of the row before) left out, the first at line 203"
+    );
+    // The same stamp with another value: not a duplicate row.
+    let mut glitch = twice(&x);
+    glitch[201] += 0.5;
+    let record = Record {
+        t: twice(&t),
+        theta: glitch,
+        ..Record::default()
+    };
+    assert!(condition(record, &options, &mut |_| {}).is_err());
+}
+
 #[test]
 fn the_unsettled_note_says_what_was_left_out_and_why() {
     let run = Unsettled {
