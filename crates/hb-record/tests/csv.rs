@@ -153,6 +153,20 @@ fn whitespace_semicolons_and_tabs_separate_cells() {
         let r = with(text, named.clone()).unwrap_or_else(|e| panic!("{text:?}: {e}"));
         assert_eq!((r.t, r.theta), expected, "{text:?}");
     }
+    // Separators between double quotes are a cell's own (a header's units after a comma).
+    let quoted = ReadOptions {
+        time: Some("Time, s".parse().unwrap()),
+        angle: Some("Angle, rad".parse().unwrap()),
+        ..Default::default()
+    };
+    for text in [
+        "\"Time, s\",\"Angle, rad\"\n0,0.1\n0.5,-0.2\n1,0.3\n",
+        "\"Time, s\"\t\"Angle, rad\"\n0\t0.1\n0.5\t-0.2\n1\t0.3\n",
+        "\"Time, s\";\"Angle, rad\"\n0;0,1\n0,5;-0,2\n1;0,3\n",
+    ] {
+        let r = with(text, quoted.clone()).unwrap_or_else(|e| panic!("{text:?}: {e}"));
+        assert_eq!((r.t, r.theta), expected, "{text:?}");
+    }
     // A single column with the step: white space around it is no separator.
     let step = ReadOptions {
         dt: Some(0.5),

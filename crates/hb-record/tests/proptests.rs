@@ -14,8 +14,14 @@ use crate::common::npy_bytes;
 
 /// The lines of a text as the reader counts them.
 fn line_count(text: &[u8]) -> u64 {
-    let breaks = text.iter().filter(|&&b| b == b'\n').count() as u64;
-    breaks + u64::from(!text.ends_with(b"\n") && !text.is_empty())
+    // Lines end in LF, or in CR alone in a text without LF.
+    let end = if !text.contains(&b'\n') && text.contains(&b'\r') {
+        b'\r'
+    } else {
+        b'\n'
+    };
+    let breaks = text.iter().filter(|&&b| b == end).count() as u64;
+    breaks + u64::from(!text.ends_with(&[end]) && !text.is_empty())
 }
 
 /// The line an error names, if any.

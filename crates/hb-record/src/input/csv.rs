@@ -239,7 +239,21 @@ impl Separator {
     /// holds any; `None` for a single cell. (A first row of tabs is read as one of tabs alone
     /// only where its cells hold spaces, see `read`.)
     fn of(text: &str) -> Option<Self> {
-        let bytes = text.as_bytes();
+        // What is between double quotes is a cell's own.
+        let unquoted: Vec<u8>;
+        let bytes = if memchr::memchr(b'"', text.as_bytes()).is_some() {
+            let mut quoted = false;
+            unquoted = text
+                .bytes()
+                .filter(|&b| {
+                    quoted ^= b == b'"';
+                    !quoted && b != b'"'
+                })
+                .collect();
+            &unquoted[..]
+        } else {
+            text.as_bytes()
+        };
         if memchr::memchr(b';', bytes).is_some() {
             Some(Separator::Semicolon)
         } else if memchr::memchr(b',', bytes).is_some() {
@@ -281,12 +295,25 @@ impl Separator {
                 .and_then(|c| c.strip_suffix('"'))
                 .map_or(c, str::trim)
         }
-        // The cells between the separator's bytes (ASCII, so every piece is whole characters).
+        // The cells between the separator's bytes (ASCII, so every piece is whole characters);
+        // a separator between double quotes is the cell's own (`"Time, s"`).
         fn split_at<'a>(text: &'a str, separator: u8, cells: &mut Vec<&'a str>) {
             let mut start = 0;
-            for end in memchr::memchr_iter(separator, text.as_bytes()) {
-                cells.push(clean(&text[start..end]));
-                start = end + 1;
+            if memchr::memchr(b'"', text.as_bytes()).is_some() {
+                let mut quoted = false;
+                for (end, &b) in text.as_bytes().iter().enumerate() {
+                    if b == b'"' {
+                        quoted = !quoted;
+                    } else if b == separator && !quoted {
+                        cells.push(clean(&text[start..end]));
+                        start = end + 1;
+                    }
+                }
+            } else {
+                for end in memchr::memchr_iter(separator, text.as_bytes()) {
+                    cells.push(clean(&text[start..end]));
+                    start = end + 1;
+                }
             }
             cells.push(clean(&text[start..]));
         }
