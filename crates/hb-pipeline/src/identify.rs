@@ -1363,10 +1363,23 @@ pub fn identify_data(
             .map(|e| e.identification.model.coefficients().len())
             .max()
             .unwrap_or(0);
+        // Windows of the paper's drive period, 2π of the record's time unit, when no drive was
+        // given: in seconds, long ones.
+        let defaulted = request.options.record.given_drive().is_none()
+            && matches!(request.drive, DriveSpec::Period(_))
+            && request.options.window.is_none()
+            && request.options.window_samples.is_none();
+        let drive = if defaulted {
+            "; no drive was given, so the windows' unit is the paper's period of 2π in the record's time unit: \
+             give the drive («drive_frequency»), or for a record without a periodic drive «drive_period=none» \
+             or «window»"
+        } else {
+            ""
+        };
         observer.notice(&Notice::Warning(format!(
             "only {} window(s) ({found}) for {unknowns} unknowns: too few to check the fit on stretches it was \
              not fitted on, so its share explained says little; shorten the windows with «window», \
-             «window_samples» or «window_periods»",
+             «window_samples» or «window_periods»{drive}",
             segments.len()
         )));
     }

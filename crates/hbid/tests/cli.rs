@@ -806,6 +806,25 @@ fn report_states_a_model_that_cannot_be_run_freely() {
         ),
         "{stderr}"
     );
+    // Too short for windows of 2π seconds: the warning of too few windows says why.
+    let short = simulated(
+        &dir,
+        "short.csv",
+        &[
+            "--drive-frequency",
+            "1.3",
+            "--sample-rate",
+            "500",
+            "--samples",
+            "20000",
+        ],
+    );
+    let out = hbid(&["identify", short.to_str().unwrap(), "--bootstrap", "0", "--quiet"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("no drive was given, so the windows' unit is the paper's period of 2π"),
+        "{stderr}"
+    );
     // Given, the same record is described.
     let out = hbid(&[
         "identify",
