@@ -69,6 +69,21 @@ def _state(values: Any, name: str) -> List[float]:
     return out
 
 
+def _one_state(value: Any, default: float, name: str) -> List[float]:
+    """``x0=``, ``v0=`` of one coordinate: one number (or a list of one)."""
+    values = _state(default if value is None else value, name)
+    if len(values) != 1:
+        raise OptionsError(f"{name}={value!r}: the model has one coordinate: give one number")
+    return values
+
+
+def _count(value: Any, name: str, least: int) -> int:
+    """A whole number of at least ``least``, or an ``OptionsError`` naming ``name``."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or value < least:
+        raise OptionsError(f"{name}={value!r}: a whole number of at least {least}")
+    return int(value)
+
+
 class Model:
     """An identified equation of motion ``x'' + sum c_i g_i(t, x, x') = 0``, or a system of them,
     one per coordinate (``q_i'' + sum c_ik g_ik = 0``, its terms reading the other coordinates,
@@ -275,13 +290,15 @@ class Model:
                 raise OptionsError("drive: a measured drive is given at times: give t= with it")
             if samples is None:
                 raise OptionsError("give samples= (on the record's grid) or the times t=")
+            (start,) = _one_state(x0, 0.1, "x0")
+            (speed,) = _one_state(v0, 0.0, "v0")
             return _hbid.model_simulate(
                 self._bytes,
-                samples=samples,
-                x0=0.1 if x0 is None else float(x0),  # type: ignore[arg-type]
-                v0=0.0 if v0 is None else float(v0),  # type: ignore[arg-type]
-                samples_per_period=samples_per_period,
-                transient_periods=transient_periods,
+                samples=_count(samples, "samples", 1),
+                x0=start,
+                v0=speed,
+                samples_per_period=None if samples_per_period is None else _count(samples_per_period, "samples_per_period", 2),
+                transient_periods=_count(transient_periods, "transient_periods", 0),
                 rtol=rtol,
                 wrapped=wrapped,
             )

@@ -150,6 +150,17 @@ def test_the_model_saves_loads_and_simulates(tmp_path, pendulum):
     assert len(t) == len(x) == len(v) == 500
     assert t[1] - t[0] == pytest.approx(2 * np.pi / 25)
     assert x.min() >= -np.pi and x.max() < np.pi and np.isfinite(v).all()
+    # A list of one state is the one state; bad counts and states are options' errors by name.
+    assert np.array_equal(model.simulate(50, x0=[0.1])[1], model.simulate(50, x0=0.1)[1])
+    for kwargs, name in [
+        (dict(samples=-5), "samples"),
+        (dict(samples=2.5), "samples"),
+        (dict(samples=50, transient_periods=-1), "transient_periods"),
+        (dict(samples=50, x0=[0.1, 0.2]), "x0"),
+        (dict(samples=50, x0="a"), "x0"),
+    ]:
+        with pytest.raises(hbid.OptionsError, match=name):
+            model.simulate(**kwargs)
     (tmp_path / "junk.bin").write_bytes(b"HBIDMODL" + b"\x00" * 5)
     with pytest.raises(hbid.ModelError):
         hbid.Model.load(tmp_path / "junk.bin")
