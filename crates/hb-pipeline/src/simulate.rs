@@ -2140,6 +2140,9 @@ struct IdentifyHint {
     basis: &'static str,
     forcing: &'static str,
     angle_column: &'static str,
+    /// The angle's unit when it is not radians (an encoder's raw counts: `counts:N`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    angle_unit: Option<String>,
     /// Terms of the true equation beyond the layout of `basis` and `forcing` (a rig's losses and
     /// drive harmonics), listed after it in `coefficients`.
     extra_terms: Vec<String>,
@@ -2211,6 +2214,7 @@ fn one_truth(
                 basis: "harmonic:1",
                 forcing: "none",
                 angle_column: columns[1],
+                angle_unit: None,
                 extra_terms: Vec::new(),
             },
         ),
@@ -2225,6 +2229,7 @@ fn one_truth(
                 basis: "poly:3",
                 forcing: "identified",
                 angle_column: columns[1],
+                angle_unit: None,
                 extra_terms: Vec::new(),
             },
         ),
@@ -2360,7 +2365,10 @@ fn truth(rig: &Rig, rows: usize, columns: Vec<&'static str>) -> Result<Truth, Ru
     let frame = rig.frame.with_phase(at_zero)?.with_offset(offset)?;
     let (hint, coefficients, equations) = match &rig.system {
         System::Pendulum(_) | System::Duffing(_) => {
-            let (hint, coefficients) = one_truth(&rig.system, &frame, &columns)?;
+            let (mut hint, coefficients) = one_truth(&rig.system, &frame, &columns)?;
+            if let (Hint::One(h), true) = (&mut hint, rig.writes_counts()) {
+                h.angle_unit = encoder.and_then(|e| e.counts()).map(|n| format!("counts:{n}"));
+            }
             (hint, coefficients, None)
         }
         _ => {
