@@ -3336,11 +3336,24 @@ fn angles_in_counts_or_degrees_are_read_in_their_unit() {
         "20000",
     ];
     let radians = simulated(&dir, "rad.csv", &[&rig[..], &["--counts", "4096"]].concat());
+    let truth = dir.join("counts.json");
     let counts = simulated(
         &dir,
         "counts.csv",
-        &[&rig[..], &["--counts", "4096", "--raw-counts"]].concat(),
+        &[
+            &rig[..],
+            &[
+                "--counts",
+                "4096",
+                "--raw-counts",
+                "--truth",
+                truth.to_str().unwrap(),
+            ],
+        ]
+        .concat(),
     );
+    let hint: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&truth).unwrap()).unwrap();
+    assert_eq!(hint["identify"]["angle_unit"], "counts:4096");
     let (head, rows) = read_rows(&counts);
     assert_eq!(head, "t,count,omega");
     let degrees = dir.join("deg.csv");
