@@ -140,22 +140,7 @@ impl fmt::Display for Notice {
         match self {
             Notice::Column { column, note } => {
                 // The column's name in place of the note's own count of coordinates.
-                let note = match note {
-                    Note::Spikes {
-                        found,
-                        repaired,
-                        domain,
-                        policy,
-                        ..
-                    } => Note::Spikes {
-                        coordinate: 0,
-                        found: found.clone(),
-                        repaired: *repaired,
-                        domain: *domain,
-                        policy: *policy,
-                    },
-                    other => other.clone(),
-                };
+                let note = note.of_coordinate(0);
                 write!(f, "{column}: ")?;
                 fmt::Display::fmt(&Notice::Record(note), f)
             }

@@ -206,6 +206,27 @@ pub enum Note {
 }
 
 impl Note {
+    /// The note of coordinate `coordinate`: a spikes note's coordinate replaced, any other
+    /// note as it is.
+    pub fn of_coordinate(&self, coordinate: usize) -> Note {
+        match self {
+            Note::Spikes {
+                found,
+                repaired,
+                domain,
+                policy,
+                ..
+            } => Note::Spikes {
+                coordinate,
+                found: found.clone(),
+                repaired: *repaired,
+                domain: *domain,
+                policy: *policy,
+            },
+            other => other.clone(),
+        }
+    }
+
     /// Whether the note is a warning (spikes left in the record, or time stamps that jitter by
     /// more than [`crate::input::JITTER_WARNING`] of the step), not a plain note.
     pub fn is_warning(&self) -> bool {
@@ -514,7 +535,8 @@ fn drop_duplicate_rows(record: &mut InputRecord) -> Option<Note> {
         Some(&line) => Location::Line(line),
         None => Location::Sample(first + 1),
     };
-    let keep = |v: &mut Vec<f64>| {
+    /// `v` without the rows `drop` (increasing).
+    fn without<T>(v: &mut Vec<T>, drop: &[usize]) {
         let mut next = drop.iter().peekable();
         let mut i = 0;
         v.retain(|_| {
@@ -522,20 +544,19 @@ fn drop_duplicate_rows(record: &mut InputRecord) -> Option<Note> {
             i += 1;
             !gone
         });
-    };
-    keep(&mut record.t);
-    keep(&mut record.theta);
-    record.others.iter_mut().for_each(keep);
-    record.drives.iter_mut().for_each(keep);
-    record.velocities.iter_mut().for_each(keep);
+    }
+    without(&mut record.t, &drop);
+    without(&mut record.theta, &drop);
+    for column in record
+        .others
+        .iter_mut()
+        .chain(&mut record.drives)
+        .chain(&mut record.velocities)
+    {
+        without(column, &drop);
+    }
     if let Some(lines) = &mut record.lines {
-        let mut next = drop.iter().peekable();
-        let mut i = 0;
-        lines.retain(|_| {
-            let gone = next.next_if_eq(&&i).is_some();
-            i += 1;
-            !gone
-        });
+        without(lines, &drop);
     }
     Some(Note::DuplicateRows {
         first,
@@ -749,25 +770,7 @@ fn condition_channel(
             };
         }
     };
-    let notes = found
-        .into_iter()
-        .map(|spikes| match spikes {
-            Note::Spikes {
-                found,
-                repaired,
-                domain,
-                policy,
-                ..
-            } => Note::Spikes {
-                coordinate,
-                found,
-                repaired,
-                domain,
-                policy,
-            },
-            other => other,
-        })
-        .collect();
+    let notes = found.iter().map(|note| note.of_coordinate(coordinate)).collect();
     let result = if options.measured == Measured::Displacement {
         Ok(())
     } else if domain == Domain::Circle {
