@@ -90,6 +90,13 @@ fn spellings() {
     );
     let e = OptionError::sentence("bit_errors", "needs «counts»");
     assert_eq!(e.spelled(Spelling::CommandLine), "--bit-errors needs --counts");
+    // The records given are the command line's FILE arguments, Python's first argument x.
+    let e = OptionError::new("file", "record 2 has other columns");
+    assert_eq!(
+        e.spelled(Spelling::CommandLine),
+        "FILE: record 2 has other columns"
+    );
+    assert_eq!(e.spelled(Spelling::Python), "x: record 2 has other columns");
     // The edit distance of kitten and sitting is 3, of kitten and sittin 2.
     let e = from_object::<Near>(serde_json::json!({"kitten": 1})).unwrap_err();
     assert_eq!(e.reason(), "unknown option; did you mean sittin?");

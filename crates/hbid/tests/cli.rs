@@ -3413,6 +3413,45 @@ fn angles_in_counts_or_degrees_are_read_in_their_unit() {
     );
 }
 
+/// The drive's period estimated on a system searches its first coordinate alone: where that
+/// fails, the error says so and how to give the drive.
+#[test]
+fn a_systems_drive_search_says_what_it_searched() {
+    let dir = scratch("system-drive-auto");
+    let record = simulated(
+        &dir,
+        "dp.csv",
+        &[
+            "--system",
+            "double-pendulum",
+            "--drive-frequency",
+            "2",
+            "--sample-rate",
+            "200",
+            "--samples",
+            "8000",
+        ],
+    );
+    let out = hbid(&[
+        "identify",
+        record.to_str().unwrap(),
+        "--coords",
+        "theta1,theta2",
+        "--drive-frequency",
+        "auto:1..3",
+        "--bootstrap",
+        "0",
+        "--quiet",
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("searched on the first coordinate alone")
+            && stderr.contains("--drive-frequency or --drive-period"),
+        "{stderr}"
+    );
+}
+
 /// A model of one coordinate compared with a record whose several coordinates are named is
 /// refused, not run against the first of them.
 #[test]
