@@ -6,7 +6,6 @@
 use circle_signal::system::MultiSystem;
 pub use circle_signal::system::SingularMass;
 use hb_basis::{Basis, BasisKind, Domain};
-use nalgebra::Const;
 use serde::{Deserialize, Serialize};
 
 use crate::drive::MeasuredDrive;
@@ -220,7 +219,8 @@ impl<B: Basis> IdentifiedSystem<B> {
     }
 
     /// The accelerations at `(t, q, v)` into `acc`: `M q'' = −r` solved by nalgebra's LU with
-    /// partial pivoting (the unused rows of its fixed 8 × 8 matrix are the identity's).
+    /// partial pivoting, of the `n × n` mass matrix (the same arithmetic as on a fixed 8 × 8
+    /// matrix whose unused rows are the identity's, and the same decision of singularity).
     /// `sides[c]` is the value of `sign(q_c')` (a branch's ±1, a held value while `q_c` sticks;
     /// `None`: the sign of `v[c]`).
     ///
@@ -234,48 +234,83 @@ impl<B: Basis> IdentifiedSystem<B> {
         sides: Option<&[f64]>,
         acc: &mut [f64],
     ) -> Result<(), SingularMass> {
-        let n = self.equations.len();
-        let mut r = nalgebra::SVector::<f64, MAX_COORDINATES>::zeros();
-        let (lu, pivot) = self.factor_mass(t, |i, model, row| {
+        let mut r = [0.0; MAX_COORDINATES];
+        let mass = self.mass(|i, model, row| {
             r[i] = -model.equation_at(t, q, v, sides, row);
-        })?;
-        let x = lu.solve(&r).ok_or(SingularMass { t, pivot })?;
-        acc[..n].copy_from_slice(&x.as_slice()[..n]);
-        Ok(())
+        });
+        solve_mass(self.equations.len(), &mass, Some(&r), t, acc)
     }
 
-    /// The mass matrix at time `t` (each equation's row written by `row(i, equation, row)`, the
-    /// unused rows the identity's) factorised by nalgebra's LU with partial pivoting, and its
-    /// smallest pivot relative to its largest entry; [`SingularMass`] where that pivot is below
-    /// [`SINGULAR_PIVOT`] or not finite.
-    fn factor_mass(
-        &self,
-        t: f64,
-        mut row: impl FnMut(usize, &IdentifiedModel<B>, &mut [f64]),
-    ) -> Result<(MassLu, f64), SingularMass> {
+    /// The mass matrix's rows, each equation's written by `row(i, equation, row)`.
+    fn mass(&self, mut row: impl FnMut(usize, &IdentifiedModel<B>, &mut [f64])) -> MassRows {
         let n = self.equations.len();
-        let mut m = nalgebra::SMatrix::<f64, MAX_COORDINATES, MAX_COORDINATES>::identity();
-        let mut values = [0.0; MAX_COORDINATES];
+        let mut m = [[0.0; MAX_COORDINATES]; MAX_COORDINATES];
         for (i, model) in self.equations.iter().enumerate() {
-            row(i, model, &mut values[..n]);
-            for (j, &value) in values[..n].iter().enumerate() {
-                m[(i, j)] = value;
+            row(i, model, &mut m[i][..n]);
+        }
+        m
+    }
+}
+
+// `solve_mass` writes out the sizes 1 to 8.
+const _: () = assert!(MAX_COORDINATES == 8);
+
+/// The rows of a mass matrix of up to [`MAX_COORDINATES`] coordinates (the first `n` of each of
+/// the first `n` rows used).
+type MassRows = [[f64; MAX_COORDINATES]; MAX_COORDINATES];
+
+/// Factorises the `n × n` mass matrix `m` by nalgebra's LU with partial pivoting and, with a
+/// right-hand side `r`, solves it into `out`; [`SingularMass`] where the smallest pivot,
+/// relative to the largest entry, is below [`SINGULAR_PIVOT`] or not finite. Both measures
+/// count the unit pivots and entries of the identity that pads the matrix to 8 × 8 (the
+/// factorisation this replaces, whose arithmetic on the `n × n` block is this one's).
+fn solve_mass(
+    n: usize,
+    m: &MassRows,
+    r: Option<&[f64; MAX_COORDINATES]>,
+    t: f64,
+    out: &mut [f64],
+) -> Result<(), SingularMass> {
+    // One body per size (nalgebra's LU of a fixed size wants its size written out).
+    macro_rules! sized {
+        ($n:literal) => {{
+            let matrix = nalgebra::SMatrix::<f64, $n, $n>::from_fn(|i, j| m[i][j]);
+            let padded = $n < MAX_COORDINATES;
+            let scale = if padded {
+                matrix.amax().max(1.0)
+            } else {
+                matrix.amax()
+            };
+            let lu = matrix.lu();
+            let smallest = lu
+                .u()
+                .diagonal()
+                .iter()
+                .map(|d| d.abs())
+                .fold(f64::INFINITY, f64::min);
+            let pivot = if padded { smallest.min(1.0) } else { smallest } / scale;
+            // Every pivot then non-zero: the factorisation solves.
+            if !(pivot.is_finite() && pivot > SINGULAR_PIVOT && lu.is_invertible()) {
+                return Err(SingularMass { t, pivot });
             }
-        }
-        let scale = m.amax();
-        let lu = m.lu();
-        let pivot = lu
-            .u()
-            .diagonal()
-            .iter()
-            .map(|d| d.abs())
-            .fold(f64::INFINITY, f64::min)
-            / scale;
-        // Every pivot then non-zero: the factorisation solves.
-        if !(pivot.is_finite() && pivot > SINGULAR_PIVOT && lu.is_invertible()) {
-            return Err(SingularMass { t, pivot });
-        }
-        Ok((lu, pivot))
+            if let Some(r) = r {
+                let x = lu
+                    .solve(&nalgebra::SVector::<f64, $n>::from_fn(|i, _| r[i]))
+                    .ok_or(SingularMass { t, pivot })?;
+                out[..$n].copy_from_slice(x.as_slice());
+            }
+            Ok(())
+        }};
+    }
+    match n {
+        1 => sized!(1),
+        2 => sized!(2),
+        3 => sized!(3),
+        4 => sized!(4),
+        5 => sized!(5),
+        6 => sized!(6),
+        7 => sized!(7),
+        _ => sized!(8),
     }
 }
 
@@ -306,7 +341,8 @@ impl<B: Basis + Sync> IdentifiedSystem<B> {
                     // The mass rows alone, as `accelerations` factorises them (the rest of each
                     // equation does not decide whether it can solve).
                     let t = time(k);
-                    self.factor_mass(t, |_, model, row| model.mass_row_at(t, q, v, None, row))
+                    let mass = self.mass(|_, model, row| model.mass_row_at(t, q, v, None, row));
+                    solve_mass(n, &mass, None, t, &mut [])
                         .err()
                         .map(|mass| SingularState {
                             sample: k,
@@ -318,9 +354,6 @@ impl<B: Basis + Sync> IdentifiedSystem<B> {
             .find_map_first(|found| found)
     }
 }
-
-/// A mass matrix factorised ([`IdentifiedSystem::accelerations`]).
-type MassLu = nalgebra::LU<f64, Const<MAX_COORDINATES>, Const<MAX_COORDINATES>>;
 
 /// Where [`IdentifiedSystem::first_singular`] found the mass matrix singular.
 #[derive(Debug, Clone, PartialEq)]
