@@ -677,10 +677,12 @@ fn arrays_record(
 
 /// The angles on the circle of `record` (and their measured velocities) in radians, read in
 /// `unit`. In radians, an angle that wraps by what a turn is in degrees or in an encoder's
-/// counts (its span, where it wraps, within 5 % of 360 or of a power of two) is warned of.
+/// counts (its span, where it wraps, within 5 % of 360 or of a power of two) is warned of, a
+/// system's by its column's name (`columns`, empty for a record of one coordinate).
 fn in_radians(
     mut record: InputRecord,
     domains: &[Domain],
+    columns: &[String],
     unit: AngleUnit,
     observer: &mut dyn Observer,
 ) -> InputRecord {
@@ -719,10 +721,10 @@ fn in_radians(
                 })
             };
             if let Some(unit) = unit {
-                let which = if domains.len() > 1 {
-                    format!("coordinate {}", i + 1)
-                } else {
-                    "the angle".to_owned()
+                // A system's angle by its column's name, as its spikes are.
+                let which = match columns.get(i) {
+                    Some(name) if columns.len() > 1 => name.clone(),
+                    _ => "the angle".to_owned(),
                 };
                 observer.notice(&Notice::Warning(format!(
                     "{which} jumps by about {turn:.0} where it wraps, not 2π: read as radians; give {unit}"
@@ -775,7 +777,12 @@ pub fn condition_source(
         Source::Arrays { coords, t, drives } => arrays_record(&coords, t, &drives, options)?,
     };
     let domains = options.domains();
-    let record = in_radians(record, &domains, options.angle_unit, observer);
+    // A system's notes are named by their column.
+    let columns: Vec<String> = match &options.coords {
+        Some(c) if c.len() > 1 => c.names().to_vec(),
+        _ => Vec::new(),
+    };
+    let record = in_radians(record, &domains, &columns, options.angle_unit, observer);
     let prepare = PrepareOptions::new(domains[0])
         .with_others(domains[1..].to_vec())
         .with_repair(options.repair)
@@ -785,11 +792,6 @@ pub fn condition_source(
             SpikePolicy::RepairFew
         })
         .with_measured(options.measured);
-    // A system's spikes are named by their column.
-    let columns: Vec<String> = match &options.coords {
-        Some(c) if c.len() > 1 => c.names().to_vec(),
-        _ => Vec::new(),
-    };
     condition(record, &prepare, &mut |note| {
         let notice = match note {
             Note::Spikes { coordinate, .. } if *coordinate < columns.len() => Notice::Column {

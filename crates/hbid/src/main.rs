@@ -143,8 +143,13 @@ fn main() -> ExitCode {
 /// The error and every cause behind it, joined by `: `, each cause left out when the text before
 /// already holds it.
 fn message(error: &anyhow::Error) -> String {
+    message_of(error.as_ref())
+}
+
+/// [`message`] of any error: it and the chain of its sources.
+pub(crate) fn message_of(error: &(dyn std::error::Error + 'static)) -> String {
     let mut text = String::new();
-    for cause in error.chain() {
+    for cause in std::iter::successors(Some(error), |e| e.source()) {
         let part = cause.to_string();
         if text.contains(&part) {
             continue;

@@ -3413,6 +3413,66 @@ fn angles_in_counts_or_degrees_are_read_in_their_unit() {
     );
 }
 
+/// A system's angles in degrees: the wrap is warned of by each column's name, and read in
+/// degrees they give the radians' coefficients to the printed digit.
+#[test]
+fn a_systems_angles_in_degrees_are_named_and_read() {
+    let dir = scratch("system-degrees");
+    let truth = dir.join("dp.json");
+    let radians = simulated(
+        &dir,
+        "dp.csv",
+        &[
+            "--system",
+            "double-pendulum",
+            "--samples",
+            "6400",
+            "--truth",
+            truth.to_str().unwrap(),
+        ],
+    );
+    let hint: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&truth).unwrap()).unwrap();
+    let terms = hint["identify"]["terms"].as_str().unwrap().to_owned();
+    let (head, rows) = read_rows(&radians);
+    let text: String = rows
+        .iter()
+        .map(|r| {
+            let cells: Vec<String> = std::iter::once(r[0].to_string())
+                .chain(r[1..5].iter().map(|v| v.to_degrees().to_string()))
+                .collect();
+            cells.join(",") + "\n"
+        })
+        .collect();
+    let degrees = dir.join("deg.csv");
+    std::fs::write(&degrees, format!("{head}\n{text}")).unwrap();
+    let identify = |file: &Path, extra: &[&str]| {
+        let mut args = vec![
+            "identify",
+            file.to_str().unwrap(),
+            "--coords",
+            "theta1,theta2",
+            "--terms",
+            &terms,
+        ];
+        args.extend(["--bootstrap", "0"]);
+        args.extend(extra);
+        hbid(&args)
+    };
+    let read_as_radians = identify(&degrees, &[]);
+    let stderr = String::from_utf8_lossy(&read_as_radians.stderr);
+    for column in ["theta1", "theta2"] {
+        assert!(
+            stderr.contains(&format!("warning: {column} jumps by about"))
+                && stderr.contains("--angle-unit deg"),
+            "{stderr}"
+        );
+    }
+    let reference = identify(&radians, &["--quiet"]);
+    let read = identify(&degrees, &["--angle-unit", "deg", "--quiet"]);
+    assert!(read.status.success(), "{}", String::from_utf8_lossy(&read.stderr));
+    assert_eq!(read.stdout, reference.stdout);
+}
+
 /// The drive's period estimated on a system searches its first coordinate alone: where that
 /// fails, the error says so and how to give the drive.
 #[test]

@@ -239,28 +239,37 @@ impl Separator {
     /// holds any; `None` for a single cell. (A first row of tabs is read as one of tabs alone
     /// only where its cells hold spaces, see `read`.)
     fn of(text: &str) -> Option<Self> {
-        // What is between double quotes is a cell's own.
-        let unquoted: Vec<u8>;
-        let bytes = if memchr::memchr(b'"', text.as_bytes()).is_some() {
-            let mut quoted = false;
-            unquoted = text
-                .bytes()
-                .filter(|&b| {
-                    quoted ^= b == b'"';
-                    !quoted && b != b'"'
-                })
-                .collect();
-            &unquoted[..]
+        let bytes = text.as_bytes();
+        let (semicolon, comma, tab, space) = if memchr::memchr(b'"', bytes).is_some() {
+            // What is between double quotes is a cell's own: one pass, nothing copied.
+            let (mut quoted, mut found) = (false, [false; 4]);
+            for &b in bytes {
+                match b {
+                    b'"' => quoted = !quoted,
+                    _ if quoted => {}
+                    b';' => found[0] = true,
+                    b',' => found[1] = true,
+                    b'\t' => found[2] = true,
+                    b' ' => found[3] = true,
+                    _ => {}
+                }
+            }
+            (found[0], found[1], found[2], found[3])
         } else {
-            text.as_bytes()
+            (
+                memchr::memchr(b';', bytes).is_some(),
+                memchr::memchr(b',', bytes).is_some(),
+                memchr::memchr(b'\t', bytes).is_some(),
+                memchr::memchr(b' ', bytes).is_some(),
+            )
         };
-        if memchr::memchr(b';', bytes).is_some() {
+        if semicolon {
             Some(Separator::Semicolon)
-        } else if memchr::memchr(b',', bytes).is_some() {
+        } else if comma {
             Some(Separator::Comma)
-        } else if memchr::memchr(b'\t', bytes).is_some() {
+        } else if tab {
             Some(Separator::Tab)
-        } else if memchr::memchr(b' ', bytes).is_some() {
+        } else if space {
             Some(Separator::Whitespace)
         } else {
             None

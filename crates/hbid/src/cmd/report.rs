@@ -224,7 +224,7 @@ fn write_report(
     // A model that cannot be run freely is reported as such, beside the others.
     for res in &results {
         if let Err(e) = res.validation {
-            let message = Spelling::CommandLine.render(&full_message(e));
+            let message = Spelling::CommandLine.render(&crate::message_of(e));
             eprintln!("warning: {message}; the report says so");
         }
     }
@@ -420,7 +420,7 @@ fn write_report(
                     "| {} | cannot be run freely (below) | — | — | — |",
                     res.method.name()
                 )?;
-                failures.push(Spelling::CommandLine.render(&full_message(e)));
+                failures.push(Spelling::CommandLine.render(&crate::message_of(e)));
                 continue;
             }
         };
@@ -639,16 +639,4 @@ fn prediction_section(
         "Valid prediction time against the window's start, each model started from the record's own state.",
     );
     Ok(())
-}
-
-/// An error with its chain of sources, `: `-joined (a model's failed free run says why it stopped).
-fn full_message(e: &dyn std::error::Error) -> String {
-    let mut text = e.to_string();
-    let mut source = e.source();
-    while let Some(s) = source {
-        text.push_str(": ");
-        text.push_str(&s.to_string());
-        source = s.source();
-    }
-    text
 }
