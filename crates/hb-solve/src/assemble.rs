@@ -461,6 +461,7 @@ fn fill_block<B: Basis + ?Sized>(
         harmonics: m,
         winding,
         rotation_rate: rate,
+        group: None,
     })
 }
 

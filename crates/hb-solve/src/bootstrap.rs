@@ -10,7 +10,7 @@ use crate::error::{BootstrapError, LstsqError, SolveError};
 
 use crate::lstsq::{LstsqFit, LstsqSolver};
 
-use crate::system::LinearSystem;
+use crate::system::{Block, LinearSystem};
 
 /// How many consecutive segments are drawn together.
 ///
@@ -288,7 +288,7 @@ pub fn bootstrap_fit<S: LstsqSolver + ?Sized>(
     solver: &S,
     params: &BootstrapParams,
 ) -> Result<Bootstrap, SolveError> {
-    if fit.rows != system.rows() || fit.solution.len() != system.unknowns() {
+    if fit.rows != system.equations() || fit.solution.len() != system.unknowns() {
         return Err(SolveError::InvalidParameter {
             name: "fit rows",
             value: fit.rows as f64,
@@ -635,11 +635,7 @@ fn quantile(v: &[f64], q: f64) -> f64 {
 /// The mean number of segments that share a sample: the segments' total length over the length
 /// of their union (1 for none, or for segments that do not overlap).
 fn overlap_depth(system: &LinearSystem) -> f64 {
-    let mut spans: Vec<(usize, usize)> = system
-        .blocks()
-        .iter()
-        .map(|b| (b.segment.start(), b.segment.start() + b.segment.len()))
-        .collect();
+    let mut spans: Vec<(usize, usize)> = system.blocks().iter().map(Block::span).collect();
     spans.sort_unstable();
     let total: usize = spans.iter().map(|(a, b)| b - a).sum();
     let (mut union, mut open) = (0, None::<(usize, usize)>);
@@ -765,6 +761,7 @@ mod tests {
                     harmonics: 2,
                     winding: 0,
                     rotation_rate: 0.0,
+                    group: None,
                 }
             })
             .collect();
@@ -848,6 +845,7 @@ mod tests {
                 harmonics: 0,
                 winding: 0,
                 rotation_rate: 0.0,
+                group: None,
             })
             .collect();
         let matrix = Mat::from_fn(rows, 1, |i, _| 1.0 + i as f64);

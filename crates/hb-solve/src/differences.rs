@@ -144,6 +144,7 @@ impl Assembly for FiniteDifferences {
                 harmonics: 0,
                 winding: 0,
                 rotation_rate: 0.0,
+                group: None,
             });
         }
         Ok(LinearSystem::from_parts(matrix, rhs, layout.term_names(), blocks))

@@ -359,6 +359,12 @@ impl Identifier {
     /// once per segment for every equation), one after the other otherwise; the same systems
     /// either way. What [`Identifier::identify_system`] takes.
     ///
+    /// More segments than [`crate::MAX_BLOCKS`]: the segments are assembled in chunks of
+    /// [`crate::COMPRESS_CHUNK`] groups of `g = ⌈segments / MAX_BLOCKS⌉` consecutive segments, and each
+    /// chunk's systems [compressed](LinearSystem::compressed) by those groups before the next is
+    /// assembled, so that a long record's rows are never all held: the same least-squares
+    /// problems, at most `MAX_BLOCKS` blocks of `unknowns + 1` rows each.
+    ///
     /// Errors: the assemblies'; [`SolveError::Assembly`] when `signals` and `setups` differ in
     /// number.
     pub fn systems(
@@ -372,6 +378,50 @@ impl Identifier {
                 signals: signals.len(),
             }));
         }
+        Self::systems_within(
+            setups,
+            signals,
+            segments,
+            crate::MAX_BLOCKS,
+            crate::COMPRESS_CHUNK,
+        )
+    }
+
+    /// [`Identifier::systems`] in at most `max_blocks` blocks, assembled `chunk` groups at a
+    /// time.
+    fn systems_within(
+        setups: &[Identifier],
+        signals: &[Signals<'_>],
+        segments: &[Segment],
+        max_blocks: usize,
+        chunk: usize,
+    ) -> Result<Vec<LinearSystem>, SolveError> {
+        let group = segments.len().div_ceil(max_blocks.max(1));
+        if group <= 1 {
+            return Self::systems_at_once(setups, signals, segments);
+        }
+        // Chunks of about COMPRESS_CHUNK groups, as even as the segments allow (a short last
+        // chunk could hold fewer rows than unknowns).
+        let chunks = segments.len().div_ceil(group * chunk.max(1));
+        let mut parts: Vec<Vec<LinearSystem>> = (0..setups.len()).map(|_| Vec::new()).collect();
+        for c in 0..chunks {
+            let piece = &segments[c * segments.len() / chunks..(c + 1) * segments.len() / chunks];
+            for (part, system) in parts
+                .iter_mut()
+                .zip(Self::systems_at_once(setups, signals, piece)?)
+            {
+                part.push(system.compressed(group)?);
+            }
+        }
+        parts.into_iter().map(LinearSystem::joined).collect()
+    }
+
+    /// [`Identifier::systems`] with every segment's rows held.
+    fn systems_at_once(
+        setups: &[Identifier],
+        signals: &[Signals<'_>],
+        segments: &[Segment],
+    ) -> Result<Vec<LinearSystem>, SolveError> {
         let together = setups
             .windows(2)
             .all(|w| w[0].method == w[1].method && w[0].weak == w[1].weak);
@@ -558,8 +608,8 @@ pub fn identify_tied(
             clock: *setup.params.clock(),
             rows: eq.rows,
             unknowns: tie.parameters().len(),
-            segments: system.blocks().len(),
-            whirling_segments: system.blocks().iter().filter(|b| b.winding != 0).count(),
+            segments: system.segments(),
+            whirling_segments: system.whirling_segments(),
             condition: fit.condition,
             residual_rms: eq.residual_rms,
             residual_variance: eq.residual_variance,
@@ -613,4 +663,65 @@ fn undetermined_warning(
              large: fewer terms, «select», or a record of richer motion)"
         )
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{QrSolver, fit_quality};
+    use hb_basis::Harmonic;
+
+    /// A long record's systems, assembled in chunks and compressed by groups, give the
+    /// coefficients, standard errors and share explained of the systems held whole.
+    #[test]
+    fn systems_in_chunks_solve_as_the_whole() {
+        let p = 25;
+        let clock = SampleClock::nondimensional(p).unwrap();
+        let h = clock.step();
+        // A damped, driven oscillator's response with a little deterministic ripple.
+        let x: Vec<f64> = (0..30_000)
+            .map(|n| {
+                let t = n as f64 * h;
+                0.8 * (t + 0.3).sin() + 0.2 * (2.0 * t).cos() + 1e-3 * (0.37 * n as f64).sin()
+            })
+            .collect();
+        let segments = upo_search::Windows::new(&clock).unwrap().windows(&x).unwrap();
+        assert!(segments.len() > 1000);
+        let setup = ModelSpec::new(Method::Windowed, Harmonic::new(1).unwrap().into())
+            .setup(&clock)
+            .unwrap();
+        let signals = [Signals::from(&x[..])];
+        let whole = Identifier::systems(std::slice::from_ref(&setup), &signals, &segments).unwrap();
+        let max = 97;
+        // Chunks of 8 groups: several of them, joined.
+        let chunked =
+            Identifier::systems_within(std::slice::from_ref(&setup), &signals, &segments, max, 8).unwrap();
+        let (whole, chunked) = (&whole[0], &chunked[0]);
+        assert!(!whole.is_compressed() && chunked.is_compressed());
+        assert!(chunked.blocks().len() <= max, "{} blocks", chunked.blocks().len());
+        assert_eq!(chunked.segments(), segments.len());
+        assert_eq!(chunked.whirling_segments(), whole.whirling_segments());
+        assert_eq!(chunked.equations(), whole.rows());
+        assert!(chunked.rows() <= max * (whole.unknowns() + 1));
+        let solver = QrSolver::default();
+        let (a, b) = (whole.solve(&solver).unwrap(), chunked.solve(&solver).unwrap());
+        assert_eq!(a.rows, b.rows);
+        for (u, v) in a.solution.iter().zip(&b.solution) {
+            assert!((u - v).abs() <= 1e-10 * u.abs().max(1e-3), "{u} vs {v}");
+        }
+        for (u, v) in a.std_errors.iter().zip(&b.std_errors) {
+            assert!((u - v).abs() <= 1e-6 * u.abs(), "{u} vs {v}");
+        }
+        let (qa, qb) = (
+            fit_quality(whole, &a.solution).unwrap(),
+            fit_quality(chunked, &b.solution).unwrap(),
+        );
+        assert!((qa.unexplained - qb.unexplained).abs() <= 1e-6 * qa.unexplained.max(1e-12));
+        assert_eq!(qa.spectrum.len(), qb.spectrum.len());
+        for (la, lb) in qa.spectrum.iter().zip(&qb.spectrum) {
+            assert_eq!((la.harmonic, la.rows), (lb.harmonic, lb.rows));
+            assert!((la.rhs_rms - lb.rhs_rms).abs() <= 1e-9 * la.rhs_rms.max(1e-12));
+            assert!((la.residual_rms - lb.residual_rms).abs() <= 1e-5 * la.residual_rms.max(1e-9));
+        }
+    }
 }

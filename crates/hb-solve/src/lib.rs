@@ -158,7 +158,7 @@ pub use quality::{
 };
 pub use select::{DroppedTerm, SelectParams, Selection, SelectionStep, select_terms};
 pub use signals::Signals;
-pub use system::{Block, LinearSystem};
+pub use system::{Block, COMPRESS_CHUNK, Group, LinearSystem, MAX_BLOCKS};
 pub use tie::{Tie, TieCoefficient, TieSpec, TiedEquationFit, TiedFit, TiedParameter};
 pub use velocity::{VelocityTrend, velocity_series};
 pub use weak::WeakForm;

@@ -84,6 +84,46 @@ pub trait LstsqSolver: fmt::Debug + Send + Sync {
 
     /// Solves `min ||A x − b||`.
     fn solve(&self, a: MatRef<'_, f64>, b: ColRef<'_, f64>) -> Result<LstsqFit, SolveError>;
+
+    /// Solves `min ||A x − b||` for rows that stand for `rows` rows of a taller system: `[A | b]`
+    /// a triangular factor of that system's (an orthogonal transform of it, as
+    /// [`LinearSystem::compressed`](crate::LinearSystem::compressed) makes), so the minimiser and
+    /// the residual sum of squares are the taller system's. What counts rows is counted by `rows`:
+    /// the rank tolerance, the residual variance `RSS / (rows − cols)` and with it the standard
+    /// errors, the residual RMS and [`LstsqFit::rows`].
+    ///
+    /// The provided method solves and then rescales those statistics (its rank tolerance is the
+    /// factor's); the crate's solvers take `rows` into the rank tolerance as well.
+    fn solve_standing_for(
+        &self,
+        a: MatRef<'_, f64>,
+        b: ColRef<'_, f64>,
+        rows: usize,
+    ) -> Result<LstsqFit, SolveError> {
+        let fit = self.solve(a, b)?;
+        Ok(fit.standing_for(rows))
+    }
+}
+
+impl LstsqFit {
+    /// The fit's statistics counted by `rows` rows instead of its own (see
+    /// [`LstsqSolver::solve_standing_for`]).
+    fn standing_for(mut self, rows: usize) -> Self {
+        if rows == self.rows || rows <= self.cols {
+            return self;
+        }
+        let variance = self.rss / (rows - self.cols) as f64;
+        let ratio = if self.residual_variance > 0.0 {
+            (variance / self.residual_variance).sqrt()
+        } else {
+            0.0
+        };
+        self.std_errors.iter_mut().for_each(|e| *e *= ratio);
+        self.residual_variance = variance;
+        self.residual_rms = (self.rss / rows as f64).sqrt();
+        self.rows = rows;
+        self
+    }
 }
 
 impl<S: LstsqSolver + ?Sized> LstsqSolver for &S {
@@ -93,6 +133,14 @@ impl<S: LstsqSolver + ?Sized> LstsqSolver for &S {
     fn solve(&self, a: MatRef<'_, f64>, b: ColRef<'_, f64>) -> Result<LstsqFit, SolveError> {
         (**self).solve(a, b)
     }
+    fn solve_standing_for(
+        &self,
+        a: MatRef<'_, f64>,
+        b: ColRef<'_, f64>,
+        rows: usize,
+    ) -> Result<LstsqFit, SolveError> {
+        (**self).solve_standing_for(a, b, rows)
+    }
 }
 
 impl<S: LstsqSolver + ?Sized> LstsqSolver for Box<S> {
@@ -101,6 +149,14 @@ impl<S: LstsqSolver + ?Sized> LstsqSolver for Box<S> {
     }
     fn solve(&self, a: MatRef<'_, f64>, b: ColRef<'_, f64>) -> Result<LstsqFit, SolveError> {
         (**self).solve(a, b)
+    }
+    fn solve_standing_for(
+        &self,
+        a: MatRef<'_, f64>,
+        b: ColRef<'_, f64>,
+        rows: usize,
+    ) -> Result<LstsqFit, SolveError> {
+        (**self).solve_standing_for(a, b, rows)
     }
 }
 
@@ -408,8 +464,9 @@ fn finish(
     gram_inv_scaled: &[f64],
     norms: &[f64],
     condition: f64,
+    m: usize,
 ) -> LstsqFit {
-    let (m, n) = a.shape();
+    let n = a.ncols();
     let solution: Vec<f64> = x_scaled.iter().zip(norms).map(|(x, s)| x / s).collect();
     let mut r: Vec<f64> = b.iter().copied().collect();
     for (c, &x) in solution.iter().enumerate() {
@@ -443,14 +500,23 @@ impl LstsqSolver for QrSolver {
     }
 
     fn solve(&self, a: MatRef<'_, f64>, b: ColRef<'_, f64>) -> Result<LstsqFit, SolveError> {
-        on_factor_pool(|| self.solve_here(a, b))
+        on_factor_pool(|| self.solve_here(a, b, a.nrows()))
+    }
+
+    fn solve_standing_for(
+        &self,
+        a: MatRef<'_, f64>,
+        b: ColRef<'_, f64>,
+        rows: usize,
+    ) -> Result<LstsqFit, SolveError> {
+        on_factor_pool(|| self.solve_here(a, b, rows.max(a.nrows())))
     }
 }
 
 impl QrSolver {
-    fn solve_here(&self, a: MatRef<'_, f64>, b: ColRef<'_, f64>) -> Result<LstsqFit, SolveError> {
+    fn solve_here(&self, a: MatRef<'_, f64>, b: ColRef<'_, f64>, m: usize) -> Result<LstsqFit, SolveError> {
         let sc = prepare(a, b)?;
-        let (m, n) = a.shape();
+        let n = a.ncols();
         // The factorisation works on the (possibly reduced) scaled system of `ms` rows.
         let ms = sc.a.nrows();
         let par = Par::Seq;
@@ -516,7 +582,7 @@ impl QrSolver {
         for (j, &orig) in perm_fwd.iter().enumerate() {
             gram_inv[orig] = (0..n).map(|k| rinv[(j, k)] * rinv[(j, k)]).sum();
         }
-        Ok(finish(a, b, &x, &gram_inv, &sc.norms, condition))
+        Ok(finish(a, b, &x, &gram_inv, &sc.norms, condition, m))
     }
 }
 
@@ -526,14 +592,23 @@ impl LstsqSolver for SvdSolver {
     }
 
     fn solve(&self, a: MatRef<'_, f64>, b: ColRef<'_, f64>) -> Result<LstsqFit, SolveError> {
-        on_factor_pool(|| self.solve_here(a, b))
+        on_factor_pool(|| self.solve_here(a, b, a.nrows()))
+    }
+
+    fn solve_standing_for(
+        &self,
+        a: MatRef<'_, f64>,
+        b: ColRef<'_, f64>,
+        rows: usize,
+    ) -> Result<LstsqFit, SolveError> {
+        on_factor_pool(|| self.solve_here(a, b, rows.max(a.nrows())))
     }
 }
 
 impl SvdSolver {
-    fn solve_here(&self, a: MatRef<'_, f64>, b: ColRef<'_, f64>) -> Result<LstsqFit, SolveError> {
+    fn solve_here(&self, a: MatRef<'_, f64>, b: ColRef<'_, f64>, m: usize) -> Result<LstsqFit, SolveError> {
         let sc = prepare(a, b)?;
-        let (m, n) = a.shape();
+        let n = a.ncols();
         let SvdParts { s, u, v } = svd_seq(sc.a.as_ref())?;
         let (rank, condition, imin) = rank_of(&s, self.tol.value(m, n));
         if rank < n {
@@ -549,7 +624,7 @@ impl SvdSolver {
                 gram_inv[c] += vck * vck / (sk * sk);
             }
         }
-        Ok(finish(a, b, &x, &gram_inv, &sc.norms, condition))
+        Ok(finish(a, b, &x, &gram_inv, &sc.norms, condition, m))
     }
 }
 

@@ -200,17 +200,29 @@ pub fn fit_quality(system: &LinearSystem, solution: &[f64]) -> Result<FitQuality
     let unexplained = if power > 0.0 { rss / power } else { 0.0 };
     let explained = (1.0 - unexplained).clamp(0.0, 1.0);
 
-    // Rows grouped by the reduced fraction j / k.
+    // Rows grouped by the reduced fraction j / k: of a compressed system, from each line's
+    // factor `F` (`‖F [x; −1]‖²` its residual's sum of squares, `‖F_b‖²` its right-hand side's).
     let mut lines: Vec<((usize, usize), f64, f64, usize)> = Vec::new();
-    for block in system.blocks() {
+    if let Some(kept) = system.spectrum_lines() {
+        let cols = solution.len();
+        for l in kept {
+            let f = &l.factor;
+            let (mut res, mut rhs) = (0.0, 0.0);
+            for i in 0..f.nrows() {
+                let fitted: f64 = (0..cols).map(|j| f[(i, j)] * solution[j]).sum();
+                res += (fitted - f[(i, cols)]).powi(2);
+                rhs += f[(i, cols)].powi(2);
+            }
+            lines.push((l.key, res, rhs, l.rows));
+        }
+    }
+    for block in system.blocks().iter().filter(|_| !system.is_compressed()) {
         if block.harmonics == 0 || block.rows != 2 * block.harmonics + 1 {
             continue;
         }
         let k = block.segment.period();
         for r in 0..block.rows {
-            let j = r.div_ceil(2);
-            let g = gcd(j, k);
-            let key = if j == 0 { (0, 1) } else { (j / g, k / g) };
+            let key = crate::system::line_key(r, k);
             let row = block.first_row + r;
             let (res, rhs) = (residual[row], b[row]);
             match lines.iter_mut().find(|l| l.0 == key) {
@@ -239,10 +251,6 @@ pub fn fit_quality(system: &LinearSystem, solution: &[f64]) -> Result<FitQuality
         spectrum,
         held_out: None,
     })
-}
-
-fn gcd(a: usize, b: usize) -> usize {
-    if b == 0 { a.max(1) } else { gcd(b, a % b) }
 }
 
 #[cfg(test)]
@@ -278,6 +286,7 @@ mod tests {
                 harmonics: 6,
                 winding: 0,
                 rotation_rate: 0.0,
+                group: None,
             })
             .collect();
         LinearSystem::from_parts(a, b, vec!["p".into(), "q".into()], blocks)

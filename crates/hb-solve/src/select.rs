@@ -427,6 +427,7 @@ mod tests {
                 harmonics: 4,
                 winding: 0,
                 rotation_rate: 0.0,
+                group: None,
             })
             .collect();
         let names = ["a", "b", "small", "spurious", "near a"]

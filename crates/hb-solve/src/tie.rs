@@ -473,7 +473,8 @@ impl Tie {
     ) -> Result<TiedFit, SolveError> {
         let columns = self.columns(systems)?;
         let p = self.parameters.len();
-        let rows: usize = systems.iter().map(LinearSystem::rows).sum();
+        // The equations the systems stand for (a compressed system's rows are fewer).
+        let rows: usize = systems.iter().map(LinearSystem::equations).sum();
         // Pass 1: torque units; pass 2: each equation's rows over its own acceleration's coefficient.
         let mut weights = vec![1.0; systems.len()];
         let mut theta = Vec::new();
@@ -481,7 +482,7 @@ impl Tie {
         for pass in 0..2 {
             let (x, y) = self.stacked(systems, &columns, &weights);
             let fit = solver
-                .solve(x.as_ref(), y.as_ref())
+                .solve_standing_for(x.as_ref(), y.as_ref(), rows)
                 .map_err(|e| self.rank_error(e))?;
             theta = fit.solution.clone();
             if pass == 0 {
@@ -530,12 +531,12 @@ impl Tie {
                     (fitted - rhs[r]).powi(2)
                 })
                 .sum();
-            let n = s.rows().max(1) as f64;
+            let n = s.equations().max(1) as f64;
             equations.push(TiedEquationFit {
                 own: a,
                 coefficients,
                 std_errors,
-                rows: s.rows(),
+                rows: s.equations(),
                 residual_rms: (rss / n).sqrt(),
                 residual_variance: rss / n * dof,
             });

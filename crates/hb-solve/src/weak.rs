@@ -1149,6 +1149,7 @@ fn fill_block<B: Basis + ?Sized>(
         harmonics,
         winding,
         rotation_rate: rate,
+        group: None,
     })
 }
 

@@ -5,6 +5,7 @@
 //! they share (faer, proptest, serde) are compiled once, not once per file.
 mod common;
 
+mod compressed;
 mod coupled;
 mod double_pendulum;
 
