@@ -6,6 +6,7 @@
 //! they share (proptest) are compiled and linked once, not once per file.
 mod common;
 
+mod chunks;
 mod csv;
 mod error;
 mod input;

@@ -300,6 +300,117 @@ pub enum InputError {
     },
 }
 
+impl InputError {
+    /// The error with every place it names mapped by `at` (a chunk's places as the file's,
+    /// [`super::Chunk::relocate`]); a line number is mapped as a [`Location::Line`].
+    pub fn relocated(self, at: &dyn Fn(Location) -> Location) -> Self {
+        let line = |n: u64| match at(Location::Line(n)) {
+            Location::Line(m) => m,
+            Location::Sample(_) => n,
+        };
+        match self {
+            Self::NotANumber {
+                line: n,
+                column,
+                value,
+            } => Self::NotANumber {
+                line: line(n),
+                column,
+                value,
+            },
+            Self::NonFinite { at: a, role, value } => Self::NonFinite {
+                at: at(a),
+                role,
+                value,
+            },
+            Self::Ragged {
+                line: n,
+                expected,
+                found,
+            } => Self::Ragged {
+                line: line(n),
+                expected,
+                found,
+            },
+            Self::MixedSeparators {
+                line: n,
+                expected,
+                found,
+            } => Self::MixedSeparators {
+                line: line(n),
+                expected,
+                found,
+            },
+            Self::Malformed { line: n, source } => Self::Malformed {
+                line: line(n),
+                source,
+            },
+            Self::TimeNotIncreasing { at: a, t, previous } => Self::TimeNotIncreasing {
+                at: at(a),
+                t,
+                previous,
+            },
+            Self::TimeGlitch {
+                at: a,
+                t,
+                fault,
+                expected,
+                dt,
+                isolated,
+                others,
+                other_count,
+            } => Self::TimeGlitch {
+                at: at(a),
+                t,
+                fault,
+                expected,
+                dt,
+                isolated,
+                others: others.into_iter().map(at).collect(),
+                other_count,
+            },
+            Self::TimeUnsettled {
+                end,
+                first,
+                last,
+                count,
+                shortest,
+                longest,
+                dt,
+                bound,
+            } => Self::TimeUnsettled {
+                end,
+                first: at(first),
+                last: at(last),
+                count,
+                shortest,
+                longest,
+                dt,
+                bound,
+            },
+            Self::TimeOverflow { at: a, t } => Self::TimeOverflow { at: at(a), t },
+            Self::GapTooLong {
+                at: a,
+                t,
+                previous,
+                missing,
+                dt,
+                samples,
+                grid,
+            } => Self::GapTooLong {
+                at: at(a),
+                t,
+                previous,
+                missing,
+                dt,
+                samples,
+                grid,
+            },
+            other => other,
+        }
+    }
+}
+
 impl Role {
     /// The value in a column of this role, as the errors name it.
     fn value_noun(self) -> &'static str {

@@ -80,11 +80,13 @@
 //! This module holds the record, the options and the entry points; `csv` and `npy` are the two
 //! readers, `uniform` the grid fit and `error` what can go wrong ([`InputError`]).
 
+mod chunks;
 mod csv;
 mod error;
 mod npy;
 mod uniform;
 
+pub use chunks::{Chunk, Chunks, Opened};
 pub use error::{InputError, Location, StampFault};
 pub use uniform::{
     GRID_TOLERANCE, GridOptions, GridRecord, GridReport, JITTER_MIN_STAMPS, JITTER_SIGMAS, JITTER_WARNING,

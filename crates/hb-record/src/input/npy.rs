@@ -189,7 +189,7 @@ const MAX_HEADER_DEPTH: usize = 4;
 /// announce (a 16-bit length for format 1, 32-bit for formats 2 and 3; a reader allocates what it
 /// says), and brackets may not nest deeper than [`MAX_HEADER_DEPTH`] (the parser of the header's
 /// Python literal takes time exponential in the depth: 20 brackets take seconds).
-fn check_header(bytes: &[u8]) -> Result<(), InputError> {
+pub(super) fn check_header(bytes: &[u8]) -> Result<(), InputError> {
     // The magic (6 bytes) and the version (2) come first.
     let (size, length) = match bytes.get(6..8) {
         Some([1, 0]) => (
