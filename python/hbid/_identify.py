@@ -404,6 +404,8 @@ def identify(
     refine: bool = False,
     refine_init: Optional[int] = None,
     tie: Union[Mapping[str, Any], PathLike, None] = None,
+    stream: bool = False,
+    no_stream: bool = False,
     save_model: Optional[PathLike] = None,
     **old: Any,
 ) -> Identification:
@@ -502,6 +504,9 @@ def identify(
             parameter weights, the own acceleration's included), or the path of its JSON file.
             Its keys are the terms, so it replaces ``terms``; :attr:`Identification.parameters`
             holds the parameters with their standard errors and bootstrap intervals.
+        stream: read the record's file in chunks, so that memory does not grow with the record
+            (the weak form; the default for a file of 256 MiB or more).
+        no_stream: read the record's file whole, however large.
         save_model: also save the model here (JSON for a ``.json`` name, compact binary
             otherwise).
 
@@ -553,7 +558,10 @@ def identify(
         refine=bool(refine),
         refine_init=refine_init,
         tie=_tie(tie),
+        stream=True if stream else (False if no_stream else None),
     )
+    if stream and no_stream:
+        raise OptionsError("stream: give «stream» or «no_stream», not both")
     _select(select, options)
     if "parametric" in old:
         warnings.warn("identify(parametric=...) is now identify(no_parametric=...)", DeprecationWarning, stacklevel=2)

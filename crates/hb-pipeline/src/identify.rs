@@ -245,6 +245,10 @@ pub struct IdentifyOptions {
     /// of a JSON file of the spec, or the spec itself as a JSON object. Its keys are the
     /// equations' terms, so it replaces `terms`.
     pub tie: Option<serde_json::Value>,
+    /// Read the record's file in chunks ([`crate::stream`]): memory that does not grow with the
+    /// record. Default (`None`): for a file of at least [`crate::stream::STREAM_BYTES`] whose
+    /// identification can be streamed (the weak form, a displacement, no refinement).
+    pub stream: Option<bool>,
 }
 
 impl Default for IdentifyOptions {
@@ -274,6 +278,7 @@ impl Default for IdentifyOptions {
             refine: false,
             refine_init: None,
             tie: None,
+            stream: None,
         }
     }
 }
@@ -933,18 +938,19 @@ impl IdentifyRequest {
                             data.pieces.len(),
                         )
                     })?;
-                let found = match data.drive {
-                    DriveFound::Free { .. } => {
-                        format!("{} windows of {k} oscillation periods", segments.len())
-                    }
-                    DriveFound::Windows { samples } => {
-                        format!("{} windows of {} samples", segments.len(), k * samples)
-                    }
-                    _ => format!("{} windows of {k} drive periods", segments.len()),
-                };
+                let found = windows_found(data, k, segments.len());
                 (segments, found)
             }
         })
+    }
+}
+
+/// What `count` windows of `k` units of `data` are, in a line.
+pub(crate) fn windows_found(data: &Data, k: usize, count: usize) -> String {
+    match data.drive {
+        DriveFound::Free { .. } => format!("{count} windows of {k} oscillation periods"),
+        DriveFound::Windows { samples } => format!("{count} windows of {} samples", k * samples),
+        _ => format!("{count} windows of {k} drive periods"),
     }
 }
 
@@ -1172,6 +1178,19 @@ pub fn identify(
     request: &IdentifyRequest,
     observer: &mut dyn Observer,
 ) -> Result<IdentifyReport, RunError> {
+    match source {
+        Source::Path(path) if crate::stream::streams(path, request)? => {
+            return crate::stream::identify_streamed(path, request, observer);
+        }
+        _ if request.options.stream == Some(true) => {
+            return Err(OptionError::new(
+                "stream",
+                "reads a file in chunks: give the record as a file, one file",
+            )
+            .into());
+        }
+        _ => {}
+    }
     let data = load(source, &request.options.record, request.drive, observer)?;
     identify_data(&data, request, observer)
 }
@@ -1183,6 +1202,12 @@ pub fn identify_records(
     request: &IdentifyRequest,
     observer: &mut dyn Observer,
 ) -> Result<IdentifyReport, RunError> {
+    if sources.len() == 1 {
+        return identify(sources.into_iter().next().expect("one"), request, observer);
+    }
+    if request.options.stream == Some(true) {
+        return Err(OptionError::new("stream", "reads one file in chunks: give one record").into());
+    }
     let data = load_all(sources, &request.options.record, request.drive, observer)?;
     identify_data(&data, request, observer)
 }
@@ -1279,6 +1304,80 @@ pub fn identify_data(
             return Err(identify_error(None, e));
         }
     };
+    finish(
+        request,
+        Assembled {
+            setups,
+            systems,
+            found,
+            segments: segments.len(),
+            delay,
+            drift,
+            record: RecordSummary::of(data),
+            resampled: data.resampled_from.is_some(),
+            states: Some(States { data, coordinates, x }),
+        },
+        observer,
+    )
+}
+
+/// What the identification of a record assembled, for [`finish`].
+pub(crate) struct Assembled<'a> {
+    /// Each equation's setup.
+    pub(crate) setups: Vec<Identifier>,
+    /// Each equation's system.
+    pub(crate) systems: Vec<hb_solve::LinearSystem>,
+    /// What was found (windows, orbits), in a line.
+    pub(crate) found: String,
+    /// How many segments.
+    pub(crate) segments: usize,
+    /// The delay (`upo`).
+    pub(crate) delay: Option<usize>,
+    /// The drift of an integrated record.
+    pub(crate) drift: Option<DriftFit>,
+    /// The record's summary.
+    pub(crate) record: RecordSummary,
+    /// Whether the record was resampled.
+    pub(crate) resampled: bool,
+    /// The record's states, where it is held: for the mass matrix's check and the refinement.
+    pub(crate) states: Option<States<'a>>,
+}
+
+/// A record held in memory, and its coordinates (the first one as fitted: integrated records'
+/// drift removed).
+pub(crate) struct States<'a> {
+    pub(crate) data: &'a Data,
+    pub(crate) coordinates: Vec<(&'a [f64], Domain)>,
+    pub(crate) x: &'a [f64],
+}
+
+/// The identification from the assembled systems: selection, least squares, bootstrap,
+/// warnings, the mass matrix's check and the refinement, and the report.
+pub(crate) fn finish(
+    request: &IdentifyRequest,
+    assembled: Assembled<'_>,
+    observer: &mut dyn Observer,
+) -> Result<IdentifyReport, RunError> {
+    let Assembled {
+        setups,
+        systems,
+        found,
+        segments,
+        delay,
+        drift,
+        record,
+        resampled,
+        states,
+    } = assembled;
+    let method = request.options.method;
+    let n = request.equations();
+    let identify_error = |i: Option<usize>, source| RunError::Identify {
+        found: match i {
+            Some(i) if n > 1 => format!("{found}, the equation of {}", request.names.coordinates()[i]),
+            _ => found.clone(),
+        },
+        source,
+    };
     let mut equations = Vec::with_capacity(n);
     let mut parameters = None;
     let mut parameter_intervals = None;
@@ -1321,7 +1420,7 @@ pub fn identify_data(
     let drive_hint = if request.options.record.given_drive().is_none()
         && request.options.record.drive_col.is_none()
         && matches!(request.drive, DriveSpec::Period(_))
-        && data.resampled_from.is_some()
+        && resampled
     {
         "; no drive was given, so its period is 2π in the record's time unit (the paper's \
          non-dimensional time): for a record in seconds give «drive_frequency» in hertz, or \
@@ -1349,15 +1448,17 @@ pub fn identify_data(
     }
     // A mass matrix other than the identity (an acceleration times a function of the state, in
     // a system or in the one equation of a record) is solved on the record as a free run will.
-    if equations.iter().any(|e| e.identification.model.is_coupled()) {
+    if let Some(states) = &states
+        && equations.iter().any(|e| e.identification.model.is_coupled())
+    {
         check_mass_matrix(
             &system_of(&request.names, &equations)?,
             request,
-            data,
-            &coordinates,
+            states.data,
+            &states.coordinates,
         )?;
     }
-    if method == Method::Windowed && segments.len() < hb_solve::HELD_OUT_FOLDS {
+    if method == Method::Windowed && segments < hb_solve::HELD_OUT_FOLDS {
         let unknowns = equations
             .iter()
             .map(|e| e.identification.model.coefficients().len())
@@ -1380,11 +1481,18 @@ pub fn identify_data(
             "only {} window(s) ({found}) for {unknowns} unknowns: too few to check the fit on stretches it was \
              not fitted on, so its share explained says little; shorten the windows with «window», \
              «window_samples» or «window_periods»{drive}",
-            segments.len()
+            segments
         )));
     }
     let mut refinement = None;
     if request.options.refine {
+        let Some(States { data, x, .. }) = states else {
+            return Err(OptionError::sentence(
+                "refine",
+                "refines on the record in memory: a record read in chunks («stream») is not held",
+            )
+            .into());
+        };
         observer.stage(Stage::Refine);
         let identification = &mut equations[0].identification;
         let grid = GridData {
@@ -1447,9 +1555,9 @@ pub fn identify_data(
         refinement,
         parameters,
         parameter_intervals,
-        record: RecordSummary::of(data),
+        record,
         delay,
-        segments: segments.len(),
+        segments,
         found,
         drift,
     })

@@ -56,6 +56,7 @@ pub mod pipeline;
 pub mod record;
 pub mod refine;
 pub mod simulate;
+pub mod stream;
 
 pub use compare::{
     CompareOptions, CompareReport, CompareRequest, ModelRun, SampleRange, compare, model_run, read_model,

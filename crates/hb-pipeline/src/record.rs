@@ -9,7 +9,7 @@ use std::str::FromStr;
 use circle_signal::{Domain, Measured};
 use hb_record::input::{Column, InputError, ReadOptions, Record as InputRecord, Role, read_path};
 use hb_record::prepare::{
-    Data, DriveFound, GridData, Note, PrepareError, PrepareOptions, SpikePolicy, condition,
+    Data, DriveFound, GridData, Note, PeriodSource, PrepareError, PrepareOptions, SpikePolicy, condition,
 };
 use serde::{Deserialize, Serialize};
 
@@ -487,7 +487,7 @@ impl RecordOptions {
         }
     }
 
-    fn read_options(&self) -> Result<ReadOptions, OptionError> {
+    pub(crate) fn read_options(&self) -> Result<ReadOptions, OptionError> {
         let column = |name: &str, text: &Option<String>| {
             text.as_deref()
                 .map(|t| t.parse::<Column>().map_err(|e| OptionError::value(name, t, e)))
@@ -776,6 +776,18 @@ pub fn condition_source(
         }
         Source::Arrays { coords, t, drives } => arrays_record(&coords, t, &drives, options)?,
     };
+    condition_read(record, options, name, observer, &|at| at)
+}
+
+/// A read record conditioned as [`condition_source`] conditions it; the places its notes and
+/// errors name mapped by `relocate` (a chunk's as the file's).
+pub(crate) fn condition_read(
+    record: InputRecord,
+    options: &RecordOptions,
+    name: String,
+    observer: &mut dyn Observer,
+    relocate: &dyn Fn(hb_record::input::Location) -> hb_record::input::Location,
+) -> Result<GridData, RunError> {
     let domains = options.domains();
     // A system's notes are named by their column.
     let columns: Vec<String> = match &options.coords {
@@ -793,19 +805,20 @@ pub fn condition_source(
         })
         .with_measured(options.measured);
     condition(record, &prepare, &mut |note| {
+        let note = note.relocated(relocate);
         let notice = match note {
-            Note::Spikes { coordinate, .. } if *coordinate < columns.len() => Notice::Column {
-                column: columns[*coordinate].clone(),
-                note: note.clone(),
+            Note::Spikes { coordinate, .. } if coordinate < columns.len() => Notice::Column {
+                column: columns[coordinate].clone(),
+                note,
             },
-            _ => Notice::Record(note.clone()),
+            note => Notice::Record(note),
         };
         observer.notice(&notice)
     })
     .map_err(|e| match e {
         PrepareError::Input(source) => RunError::Read {
             name,
-            source: Box::new(source),
+            source: Box::new(source.relocated(relocate)),
             coords: options.coords.is_some(),
         },
         e => RunError::Prepare(e),
@@ -822,6 +835,16 @@ pub fn load(
     observer: &mut dyn Observer,
 ) -> Result<Data, RunError> {
     let grid = condition_source(source, options, observer)?;
+    Ok(on_clock(grid, drive, observer)?.0)
+}
+
+/// A conditioned record on its clock ([`load`]'s second half), and the period's source it was
+/// found by.
+pub(crate) fn on_clock(
+    grid: GridData,
+    drive: DriveSpec,
+    observer: &mut dyn Observer,
+) -> Result<(Data, PeriodSource), RunError> {
     if matches!(drive, DriveSpec::Auto(_)) {
         observer.stage(Stage::Drive);
     }
@@ -846,7 +869,7 @@ pub fn load(
     if let Some(from) = data.resampled_from {
         observer.notice(&Notice::Resampled { from, to: data.p });
     }
-    Ok(data)
+    Ok((data, period))
 }
 
 /// The records of `sources`, each read, conditioned and its clock found as [`load`] does, joined

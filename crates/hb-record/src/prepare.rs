@@ -227,6 +227,37 @@ impl Note {
         }
     }
 
+    /// The note with every place of the file it names mapped by `at` (a chunk's places as the
+    /// file's, [`crate::input::Chunk::relocate`]); a spike's index, a place in the grid, is not
+    /// one of them.
+    pub fn relocated(&self, at: &dyn Fn(Location) -> Location) -> Note {
+        match self {
+            Note::Grid(report) => Note::Grid(GridReport {
+                max_at: at(report.max_at),
+                slips: report
+                    .slips
+                    .iter()
+                    .map(|s| crate::input::Slip {
+                        at: at(s.at),
+                        by: s.by,
+                    })
+                    .collect(),
+                ..report.clone()
+            }),
+            Note::Unsettled(run) => Note::Unsettled(crate::input::Unsettled {
+                first: at(run.first),
+                last: at(run.last),
+                ..run.clone()
+            }),
+            Note::TimeRepaired(r) => Note::TimeRepaired(crate::input::TimeRepair { at: at(r.at), ..*r }),
+            Note::DuplicateRows { first, count } => Note::DuplicateRows {
+                first: at(*first),
+                count: *count,
+            },
+            other => other.clone(),
+        }
+    }
+
     /// Whether the note is a warning (spikes left in the record, or time stamps that jitter by
     /// more than [`crate::input::JITTER_WARNING`] of the step), not a plain note.
     pub fn is_warning(&self) -> bool {

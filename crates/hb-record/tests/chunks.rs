@@ -15,9 +15,9 @@ fn file(name: &str, bytes: &[u8]) -> PathBuf {
     path
 }
 
-fn chunks(path: &PathBuf, options: &ReadOptions) -> Chunks {
+fn chunks(path: &std::path::Path, options: &ReadOptions) -> Chunks {
     match Chunks::open(path, options).unwrap() {
-        Opened::Chunks(c) => c,
+        Opened::Chunks(c) => *c,
         Opened::Whole(why) => panic!("read whole: {why}"),
     }
 }

@@ -378,31 +378,45 @@ impl Identifier {
                 signals: signals.len(),
             }));
         }
-        Self::systems_within(
-            setups,
-            signals,
-            segments,
-            crate::MAX_BLOCKS,
-            crate::COMPRESS_CHUNK,
-        )
-    }
-
-    /// [`Identifier::systems`] in at most `max_blocks` blocks, assembled `chunk` groups at a
-    /// time.
-    fn systems_within(
-        setups: &[Identifier],
-        signals: &[Signals<'_>],
-        segments: &[Segment],
-        max_blocks: usize,
-        chunk: usize,
-    ) -> Result<Vec<LinearSystem>, SolveError> {
-        let group = segments.len().div_ceil(max_blocks.max(1));
+        let group = segments.len().div_ceil(crate::MAX_BLOCKS);
         if group <= 1 {
             return Self::systems_at_once(setups, signals, segments);
         }
-        // Chunks of about COMPRESS_CHUNK groups, as even as the segments allow (a short last
-        // chunk could hold fewer rows than unknowns).
-        let chunks = segments.len().div_ceil(group * chunk.max(1));
+        Self::systems_grouped(setups, signals, segments, group)
+    }
+
+    /// [`Identifier::systems`] compressed by groups of `group` consecutive segments (at least
+    /// 1; [`LinearSystem::compressed`]), assembled [`crate::COMPRESS_CHUNK`] groups at a time:
+    /// what a record read in chunks assembles each chunk's segments by, its group found from the
+    /// whole record's length.
+    ///
+    /// Errors: [`Identifier::systems`]'.
+    pub fn systems_grouped(
+        setups: &[Identifier],
+        signals: &[Signals<'_>],
+        segments: &[Segment],
+        group: usize,
+    ) -> Result<Vec<LinearSystem>, SolveError> {
+        if setups.len() != signals.len() {
+            return Err(SolveError::Assembly(AssemblyError::EquationCount {
+                setups: setups.len(),
+                signals: signals.len(),
+            }));
+        }
+        Self::grouped_in(setups, signals, segments, group.max(1), crate::COMPRESS_CHUNK)
+    }
+
+    /// [`Identifier::systems_grouped`] assembled `chunk` groups at a time.
+    fn grouped_in(
+        setups: &[Identifier],
+        signals: &[Signals<'_>],
+        segments: &[Segment],
+        group: usize,
+        chunk: usize,
+    ) -> Result<Vec<LinearSystem>, SolveError> {
+        // Chunks of about `chunk` groups, as even as the segments allow (a short last chunk
+        // could hold fewer rows than unknowns).
+        let chunks = segments.len().div_ceil(group * chunk.max(1)).max(1);
         let mut parts: Vec<Vec<LinearSystem>> = (0..setups.len()).map(|_| Vec::new()).collect();
         for c in 0..chunks {
             let piece = &segments[c * segments.len() / chunks..(c + 1) * segments.len() / chunks];
@@ -694,8 +708,14 @@ mod tests {
         let whole = Identifier::systems(std::slice::from_ref(&setup), &signals, &segments).unwrap();
         let max = 97;
         // Chunks of 8 groups: several of them, joined.
-        let chunked =
-            Identifier::systems_within(std::slice::from_ref(&setup), &signals, &segments, max, 8).unwrap();
+        let chunked = Identifier::grouped_in(
+            std::slice::from_ref(&setup),
+            &signals,
+            &segments,
+            segments.len().div_ceil(max),
+            8,
+        )
+        .unwrap();
         let (whole, chunked) = (&whole[0], &chunked[0]);
         assert!(!whole.is_compressed() && chunked.is_compressed());
         assert!(chunked.blocks().len() <= max, "{} blocks", chunked.blocks().len());

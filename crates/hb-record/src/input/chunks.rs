@@ -23,6 +23,8 @@ pub struct Chunks {
     source: Source,
     /// Rows delivered so far (the next chunk's new rows start here).
     rows: usize,
+    /// Bytes of the file read so far.
+    bytes: u64,
     /// The last rows delivered: an `.npy`'s are read again, a text's lines held.
     held: VecDeque<(u64, Vec<u8>)>,
     done: bool,
@@ -41,8 +43,6 @@ enum Source {
         row_bytes: usize,
         /// The element type as the header writes it (`'<f8'`).
         descr: String,
-        /// The rows held of the chunk before, to start the next one with.
-        tail: Vec<u8>,
     },
     Text {
         reader: BufReader<File>,
@@ -98,7 +98,7 @@ impl Chunk {
 #[derive(Debug)]
 pub enum Opened {
     /// In chunks.
-    Chunks(Chunks),
+    Chunks(Box<Chunks>),
     /// Whole only, and why (an `.npy` in Fortran order, standard input).
     Whole(&'static str),
 }
@@ -144,14 +144,21 @@ impl Chunks {
                 line: 0,
             }
         };
-        Ok(Opened::Chunks(Self {
+        Ok(Opened::Chunks(Box::new(Self {
             path: path.to_owned(),
             options: options.clone(),
             source,
             rows: 0,
+            bytes: 0,
             held: VecDeque::new(),
             done: false,
-        }))
+        })))
+    }
+
+    /// The bytes of the file read so far (with the rows delivered, an estimate of a text's
+    /// rows from its size).
+    pub fn bytes_read(&self) -> u64 {
+        self.bytes
     }
 
     /// The rows of the file, where its format says (an `.npy`'s header); `None` for text.
@@ -183,9 +190,9 @@ impl Chunks {
                 cols,
                 row_bytes,
                 descr,
-                tail,
             } => {
-                let repeated = (tail.len() / *row_bytes).min(keep);
+                // The rows repeated are read again.
+                let repeated = keep.min(self.rows);
                 let first_row = self.rows - repeated;
                 let new = rows.min(*total - self.rows);
                 if new == 0 && self.rows > 0 {
@@ -193,19 +200,15 @@ impl Chunks {
                     return Ok(None);
                 }
                 let count = repeated + new;
-                let mut body = Vec::with_capacity(count * *row_bytes);
-                body.extend_from_slice(&tail[tail.len() - repeated * *row_bytes..]);
-                file.seek(SeekFrom::Start(*offset + (self.rows * *row_bytes) as u64))
-                    .map_err(io)?;
-                let start = body.len();
-                body.resize(start + new * *row_bytes, 0);
-                file.read_exact(&mut body[start..]).map_err(io)?;
-                self.rows += new;
-                let last = self.rows == *total;
-                let held = keep.min(count);
-                *tail = body[(count - held) * *row_bytes..].to_vec();
                 let mut bytes = npy_header(descr, count, *cols);
-                bytes.extend_from_slice(&body);
+                let start = bytes.len();
+                bytes.resize(start + count * *row_bytes, 0);
+                file.seek(SeekFrom::Start(*offset + (first_row * *row_bytes) as u64))
+                    .map_err(io)?;
+                file.read_exact(&mut bytes[start..]).map_err(io)?;
+                self.rows += new;
+                self.bytes = *offset + (self.rows * *row_bytes) as u64;
+                let last = self.rows == *total;
                 (bytes, first_row, repeated, None, last)
             }
             Source::Text {
@@ -214,8 +217,18 @@ impl Chunks {
                 prefix_lines,
                 line,
             } => {
-                // The held lines of the chunk before (`keep` rows' worth: kept below), then lines
-                // up to `rows` more rows of data.
+                // The lines of the last `keep` rows of data held (and any comment among them),
+                // after the file's prefix; then lines up to `rows` more rows of data.
+                let mut counted = 0;
+                let mut from = self.held.len();
+                while from > 0 && counted < keep {
+                    from -= 1;
+                    if !is_blank_or_comment(&self.held[from].1) {
+                        counted += 1;
+                    }
+                }
+                self.held.drain(..from);
+                self.held.retain(|(n, _)| *n > *prefix_lines);
                 let mut new: Vec<(u64, Vec<u8>)> = Vec::new();
                 let mut data_rows = 0;
                 let mut buf = Vec::new();
@@ -226,6 +239,7 @@ impl Chunks {
                         break;
                     }
                     *line += 1;
+                    self.bytes += n as u64;
                     if !is_blank_or_comment(&buf) {
                         data_rows += 1;
                     }
@@ -296,10 +310,7 @@ impl Chunks {
             chunk.repeated = repeated;
             chunk.first_row = self.rows - repeated;
             self.rows += own.len() - repeated;
-            // The lines of the last `keep` rows, held for the next chunk.
-            let from = own.len().saturating_sub(keep);
-            let first_kept = own.get(from).copied().unwrap_or(u64::MAX);
-            self.held.retain(|(n, _)| *n >= first_kept);
+            // The chunk's lines are held until the next call says how many rows it repeats.
         }
         // Times of a record without a time column from the file's first row.
         if let Some(dt) = self.options.dt {
@@ -391,7 +402,6 @@ fn npy_source(mut file: File) -> Result<Option<Source>, Header> {
         cols,
         row_bytes,
         descr: dtype.descr(),
-        tail: Vec::new(),
     }))
 }
 

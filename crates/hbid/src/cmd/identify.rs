@@ -169,6 +169,13 @@ pub struct IdentifyArgs {
     /// a window together. The saved model holds each equation divided by its A.
     #[arg(long, value_name = "PATH", verbatim_doc_comment)]
     pub tie: Option<PathBuf>,
+    /// Read the record's file in chunks of 2^21 rows, so that memory does not grow with the
+    /// record (the weak form; default for files of 256 MiB or more: docs/scale.md).
+    #[arg(long, conflicts_with = "no_stream")]
+    pub stream: bool,
+    /// Read the record's file whole, however large.
+    #[arg(long)]
+    pub no_stream: bool,
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -209,6 +216,11 @@ impl IdentifyArgs {
                 .tie
                 .as_ref()
                 .map(|p| serde_json::Value::String(p.to_string_lossy().into_owned())),
+            stream: match (self.stream, self.no_stream) {
+                (true, _) => Some(true),
+                (_, true) => Some(false),
+                _ => None,
+            },
         }
     }
 

@@ -1,0 +1,741 @@
+//! Identification of a long record read in chunks: memory that does not grow with the record.
+//!
+//! The file is read [`CHUNK_ROWS`] rows at a time ([`hb_record::input::Chunks`]), each chunk
+//! beginning with the last rows of the one before. Each chunk is conditioned as a record of its
+//! own (time stamps fitted to its grid, spikes, resampling), on the clock the first chunk found
+//! (a given drive, or the first chunk's estimate of it, or its free period); its windows are
+//! those of the whole record's lattice (every window's step from the record's first sample) that
+//! start in the chunk's own stretch, between the middles of its overlaps with its neighbours, so
+//! each window is taken once, from the chunk that holds it with room on both sides. Each chunk's
+//! rows are assembled and compressed by groups of windows at once
+//! ([`Identifier::systems_grouped`]); the fit, its held-out share and the bootstrap work from
+//! those blocks. A record without gaps, spikes or resampling gives the windows and the rows of
+//! an identification in memory, so the same coefficients to rounding.
+
+use std::ops::Range;
+use std::path::Path;
+
+use circle_signal::Segment;
+use circle_signal::Spike;
+use hb_record::input::{Chunks, Location, Opened};
+use hb_record::prepare::{Data, Note, PeriodSource};
+use hb_solve::identifier::Identifier;
+use hb_solve::{LinearSystem, MAX_BLOCKS, Signals};
+
+use crate::drive::DriveSpec;
+use crate::error::RunError;
+use crate::identify::{Assembled, IdentifyReport, IdentifyRequest, States, finish, windows_found};
+use crate::observe::{Notice, Observer, Stage};
+use crate::options::OptionError;
+use crate::pipeline::{Method, Record};
+use crate::record::{RecordSummary, condition_read, on_clock};
+use circle_signal::Measured;
+
+/// New rows of a file per chunk: about 2 · 10^6 (tens of megabytes per column in memory).
+pub const CHUNK_ROWS: usize = 1 << 21;
+
+/// Files at least this large (256 MiB) are read in chunks by default.
+pub const STREAM_BYTES: u64 = 256 << 20;
+
+/// Samples of room a chunk keeps on each side of its windows for the conditioning of its
+/// samples to be the whole record's there (the spike search looks a few hundred samples about a
+/// sample; the grid fit's running medians less).
+pub const CONDITIONING_MARGIN: usize = 4096;
+
+/// Whether [`crate::identify`] reads `path` in chunks for `request`: as the option `stream`
+/// says, or (not given) for a file of at least [`STREAM_BYTES`] whose identification can be
+/// streamed. A stream asked for on a request that cannot be streamed is an error naming what
+/// stands in the way.
+pub(crate) fn streams(path: &Path, request: &IdentifyRequest) -> Result<bool, RunError> {
+    let asked = request.options().stream;
+    if asked == Some(false) {
+        return Ok(false);
+    }
+    let why_not = if request.options().method == Method::Upo {
+        Some("the paper's method («method=upo») searches the whole record for its orbits")
+    } else if request.options().record.measured != Measured::Displacement {
+        Some("an integrated record's drift is fitted over the whole record («measured»)")
+    } else if request.options().refine {
+        Some("the refinement («refine») runs the model over the whole record")
+    } else if path == Path::new("-") {
+        Some("standard input is read whole")
+    } else {
+        None
+    };
+    match (asked, why_not) {
+        (Some(true), Some(why)) => {
+            Err(OptionError::new("stream", format!("cannot read the record in chunks: {why}")).into())
+        }
+        (Some(true), None) => Ok(true),
+        (_, Some(_)) => Ok(false),
+        (_, None) => Ok(std::fs::metadata(path).is_ok_and(|m| m.is_file() && m.len() >= STREAM_BYTES)),
+    }
+}
+
+/// Identifies the record of the file `path` read in chunks, as `request` asks (see the module
+/// docs); `observer` hears the reading's progress (rows read of the file's, where its header
+/// says how many) and every notice, the chunks' merged.
+pub fn identify_streamed(
+    path: &Path,
+    request: &IdentifyRequest,
+    observer: &mut dyn Observer,
+) -> Result<IdentifyReport, RunError> {
+    streamed_in(path, request, observer, CHUNK_ROWS)
+}
+
+/// [`identify_streamed`] in chunks of `chunk_rows` new rows (at least four overlaps').
+fn streamed_in(
+    path: &Path,
+    request: &IdentifyRequest,
+    observer: &mut dyn Observer,
+    chunk_rows: usize,
+) -> Result<IdentifyReport, RunError> {
+    let options = &request.options().record;
+    options.check()?;
+    let name = path.display().to_string();
+    let read_error = |source| RunError::Read {
+        name: name.clone(),
+        source: Box::new(source),
+        coords: options.coords.is_some(),
+    };
+    let mut chunks = match Chunks::open(path, &options.read_options()?).map_err(read_error)? {
+        Opened::Chunks(c) => *c,
+        Opened::Whole(why) => {
+            return Err(
+                OptionError::new("stream", format!("cannot read the record in chunks: {why}")).into(),
+            );
+        }
+    };
+    observer.stage(Stage::Read);
+    let total_rows = chunks.total_rows();
+    let file_bytes = std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
+    let n = request.equations();
+    let mut merged = Merged::default();
+    let mut stream: Option<Stream> = None;
+    let mut parts: Vec<Vec<LinearSystem>> = (0..n).map(|_| Vec::new()).collect();
+    let mut first_data: Option<Data> = None;
+    let mut keep = 0;
+    while let Some(chunk) = chunks
+        .next_chunk(chunk_rows.max(4 * keep), keep)
+        .map_err(read_error)?
+    {
+        // The chunk's own stretch: from the middle of its overlap with the chunk before to the
+        // middle of the next one's with it, in the time of the raw stamps (the next overlap's
+        // length is known once the first chunk found the windows).
+        let t = chunk.record.t.clone();
+        let from = (chunk.repeated > 0).then(|| t[chunk.repeated - chunk.repeated / 2]);
+        let rows_done = chunk.first_row + t.len();
+        let (first_row, chunk_last) = (chunk.first_row, chunk.last);
+        let mut hears = Hears {
+            merged: &mut merged,
+            spikes: Vec::new(),
+        };
+        let grid = condition_read(chunk.record, options, name.clone(), &mut hears, &|at| {
+            relocate(first_row, at)
+        })?;
+        let raw = (grid.t0, grid.dt);
+        let spikes = std::mem::take(&mut hears.spikes);
+        let data = match &stream {
+            None => {
+                let (data, period) = on_clock(grid, request.drive(), &mut hears)?;
+                let rows = total_rows.unwrap_or_else(|| {
+                    // A text's rows, estimated from the bytes of the first chunk's.
+                    let read = chunks.bytes_read().max(1) as f64;
+                    (file_bytes as f64 / read * rows_done as f64).ceil() as usize
+                });
+                stream = Some(Stream::new(request, &data, period, raw, rows)?);
+                data
+            }
+            Some(s) => {
+                let (data, _) = on_clock(grid, s.later, &mut ())?;
+                s.check(&data)?;
+                data
+            }
+        };
+        let s = stream.as_mut().expect("set by the first chunk");
+        keep = s.keep;
+        // The next chunk repeats `r` rows, its stretch from its `r − r/2`-th: this one's
+        // `len − r/2`-th (none of it when that is before this chunk's first row).
+        let r = keep.min(rows_done);
+        let to = (!chunk_last).then(|| t[t.len().saturating_sub(r / 2).min(t.len() - 1)]);
+        drop(t);
+        merged.spikes(spikes, raw, s.raw, (from, to));
+        merged.pieces(&data, s, (from, to));
+        let segments = s.windows(request, &data, (from, to))?;
+        if !segments.is_empty() {
+            let coordinates = data.coordinates();
+            let drives: Vec<&[f64]> = data.drives.iter().map(Vec::as_slice).collect();
+            let setups = (0..n)
+                .map(|i| {
+                    request
+                        .equation_spec(&data, request.options().method, i)?
+                        .setup(&data.clock)
+                        .map_err(RunError::from)
+                })
+                .collect::<Result<Vec<_>, RunError>>()?;
+            let signals = (0..n)
+                .map(|i| {
+                    Signals::system(coordinates.clone(), i)
+                        .and_then(|sig| sig.with_drives(drives.clone()))
+                        .map_err(|e| s.identify_error(request, Some(i), e))
+                })
+                .collect::<Result<Vec<_>, RunError>>()?;
+            let systems = Identifier::systems_grouped(&setups, &signals, &segments, s.group)
+                .map_err(|e| s.identify_error(request, None, e))?;
+            for (part, system) in parts.iter_mut().zip(systems) {
+                part.push(system);
+            }
+            s.segments += segments.len();
+            if s.setups.is_none() {
+                s.setups = Some(setups);
+            }
+        }
+        observer.progress(rows_done, total_rows.unwrap_or(0).max(rows_done));
+        if first_data.is_none() {
+            first_data = Some(data);
+        }
+    }
+    let mut s = stream.ok_or_else(|| read_error(hb_record::input::InputError::Empty))?;
+    let first = first_data.expect("the first chunk's record");
+    merged.tell(observer, &s);
+    let Some(setups) = s.setups.take() else {
+        return Err(OptionError::new(
+            "window_periods",
+            format!(
+                "no window of {} samples fits the record's pieces: shorten the windows",
+                s.window_len + 1
+            ),
+        )
+        .into());
+    };
+    observer.stage(Stage::Assemble);
+    let mut systems = Vec::with_capacity(n);
+    for part in parts {
+        let mut system = LinearSystem::joined(part).map_err(|e| s.identify_error(request, None, e))?;
+        // More windows than the record's length promised (a text file's rows are estimated):
+        // compressed again, so the blocks stay within their bound.
+        let blocks = system.blocks().len();
+        if blocks > MAX_BLOCKS {
+            system = system
+                .compressed(blocks.div_ceil(MAX_BLOCKS))
+                .map_err(|e| s.identify_error(request, None, e))?;
+        }
+        systems.push(system);
+    }
+    let k = request.options().window_periods;
+    let found = windows_found(&first, k, s.segments);
+    let summary = RecordSummary::of(&Data {
+        clock: first.clock,
+        p: first.p,
+        x: Vec::new(),
+        pieces: merged.global_pieces.clone(),
+        domain: first.domain,
+        drive: first.drive.clone(),
+        resampled_from: first.resampled_from,
+        others: Vec::new(),
+        drives: Vec::new(),
+        velocities: Vec::new(),
+    });
+    let coordinates = first.coordinates();
+    finish(
+        request,
+        Assembled {
+            setups,
+            systems,
+            found,
+            segments: s.segments,
+            delay: None,
+            drift: None,
+            record: summary,
+            resampled: first.resampled_from.is_some(),
+            states: Some(States {
+                data: &first,
+                coordinates,
+                x: &first.x,
+            }),
+        },
+        observer,
+    )
+}
+
+/// A place a chunk's conditioning names, in the file: a sample by the file's row (a line of
+/// text is the file's already).
+fn relocate(first_row: usize, at: Location) -> Location {
+    match at {
+        Location::Sample(n) => Location::Sample(n + first_row),
+        line => line,
+    }
+}
+
+/// What the first chunk fixed for the rest.
+struct Stream {
+    /// The period's source for the later chunks: the first one's period as given.
+    later: DriveSpec,
+    /// The record's grid after resampling: the time of its sample 0 and its step.
+    t0: f64,
+    h: f64,
+    /// Samples per period.
+    p: usize,
+    /// The windows: length (samples, the closing one not counted), step, periods.
+    window_len: usize,
+    window_step: usize,
+    /// Rows each chunk repeats of the one before.
+    keep: usize,
+    /// Consecutive windows compressed together.
+    group: usize,
+    /// Windows taken so far.
+    segments: usize,
+    /// The first chunk's setups (their clock is the record's).
+    setups: Option<Vec<Identifier>>,
+    /// The raw grid's time of sample 0 and step (before resampling), for the spikes' indices.
+    raw: (f64, f64),
+}
+
+impl Stream {
+    fn new(
+        request: &IdentifyRequest,
+        data: &Data,
+        period: PeriodSource,
+        raw: (f64, f64),
+        rows: usize,
+    ) -> Result<Self, RunError> {
+        let windows = request.windows().windows(&Record::from_data(data)?)?;
+        let (h, p) = (data.clock.step(), data.p);
+        let later = match period {
+            PeriodSource::Windows(unit) => DriveSpec::Windows(unit),
+            _ => DriveSpec::Period(data.clock.drive_period()),
+        };
+        // A window and the conditioning's room on each side, in rows of the file.
+        let rows_per_sample = h / raw.1;
+        let window_rows = ((windows.len() + 1) as f64 * rows_per_sample).ceil() as usize;
+        let keep = 2 * (window_rows + 2 + CONDITIONING_MARGIN);
+        // The group from the windows the whole record holds (`rows`: an .npy's are in its
+        // header, a text's estimated from the first chunk's bytes per row).
+        let expected = (rows as f64 / rows_per_sample / windows.step() as f64).ceil() as usize;
+        Ok(Self {
+            later,
+            t0: data.clock.start_time(),
+            h,
+            p,
+            window_len: windows.len(),
+            window_step: windows.step(),
+            keep,
+            group: expected.div_ceil(MAX_BLOCKS).max(1),
+            segments: 0,
+            setups: None,
+            raw,
+        })
+    }
+
+    /// That a later chunk is on the first one's clock.
+    fn check(&self, data: &Data) -> Result<(), RunError> {
+        if data.p != self.p || ((data.clock.step() - self.h) / self.h).abs() > 1e-6 {
+            return Err(OptionError::new(
+                "stream",
+                format!(
+                    "the record's sampling changes from one chunk to another ({} samples per period in steps of {} \
+                     from t = {}, the first chunk's {} in steps of {}): read it whole («stream=false»)",
+                    data.p,
+                    data.clock.step(),
+                    data.clock.start_time(),
+                    self.p,
+                    self.h
+                ),
+            )
+            .into());
+        }
+        Ok(())
+    }
+
+    /// The windows of the record's lattice in `data` (a chunk's) that start in its stretch
+    /// `(from, to)` (raw stamps; `None`: the record's end).
+    fn windows(
+        &self,
+        request: &IdentifyRequest,
+        data: &Data,
+        (from, to): (Option<f64>, Option<f64>),
+    ) -> Result<Vec<Segment>, RunError> {
+        let base = ((data.clock.start_time() - self.t0) / self.h).round() as i64;
+        let step = self.window_step as i64;
+        let l = self.window_len;
+        let periods = request.options().window_periods;
+        let half = 0.5 * self.h;
+        let mut out = Vec::new();
+        for piece in &data.pieces {
+            // The first start on the lattice in the piece.
+            let offset = (base + piece.start as i64).rem_euclid(step);
+            let mut j = piece.start + if offset == 0 { 0 } else { (step - offset) as usize };
+            while j + l < piece.end {
+                let t = data.clock.time(j);
+                if from.is_none_or(|f| t >= f - half) && to.is_none_or(|e| t < e - half) {
+                    let error = data.domain.distance(data.x[j + l], data.x[j]);
+                    out.push(
+                        Segment::new(j, periods, &data.clock, error, data.x.len())
+                            .map_err(crate::pipeline::PipelineError::from)?,
+                    );
+                }
+                j += self.window_step;
+            }
+        }
+        Ok(out)
+    }
+
+    fn identify_error(
+        &self,
+        request: &IdentifyRequest,
+        i: Option<usize>,
+        source: hb_solve::SolveError,
+    ) -> RunError {
+        let found = format!("{} windows so far", self.segments);
+        RunError::Identify {
+            found: match i {
+                Some(i) if request.equations() > 1 => {
+                    format!("{found}, the equation of {}", request.names().coordinates()[i])
+                }
+                _ => found,
+            },
+            source,
+        }
+    }
+}
+
+/// The chunks' notices merged: each told once, the spikes and gaps of every chunk's own
+/// stretch gathered into one note each.
+#[derive(Default)]
+struct Merged {
+    /// Notices told, by their text.
+    told: Vec<String>,
+    /// Spikes per coordinate (the column's name for a system's), by the raw grid's index from
+    /// the record's first sample, and whether repaired.
+    spikes: Vec<(Option<String>, Note, Vec<Spike>)>,
+    /// Notices held back to be told after the reading (the first chunk's, in order).
+    later: Vec<Notice>,
+    /// The record's pieces, grid indices from its first sample.
+    global_pieces: Vec<Range<usize>>,
+    gaps: usize,
+    missing: usize,
+}
+
+impl Merged {
+    /// Adds the pieces of `data` (a chunk's) within its stretch to the record's.
+    fn pieces(&mut self, data: &Data, s: &Stream, (from, to): (Option<f64>, Option<f64>)) {
+        let base = ((data.clock.start_time() - s.t0) / s.h).round() as i64;
+        let half = 0.5 * s.h;
+        let inside = |j: usize| {
+            let t = data.clock.time(j);
+            from.is_none_or(|f| t >= f - half) && to.is_none_or(|e| t < e - half)
+        };
+        for piece in &data.pieces {
+            let (mut a, mut b) = (piece.start, piece.end);
+            while a < b && !inside(a) {
+                a += 1;
+            }
+            while b > a && !inside(b - 1) {
+                b -= 1;
+            }
+            if a == b {
+                continue;
+            }
+            let (ga, gb) = (
+                (base + a as i64).max(0) as usize,
+                (base + b as i64).max(0) as usize,
+            );
+            // A piece that goes on into the next chunk: its grid (resampled on its own) may be
+            // off this one's by a fraction of a step, so its first index by one.
+            match self.global_pieces.last_mut() {
+                Some(last) if last.end + 1 >= ga => last.end = last.end.max(gb),
+                Some(last) => {
+                    self.gaps += 1;
+                    self.missing += ga - last.end;
+                    self.global_pieces.push(ga..gb);
+                }
+                None => self.global_pieces.push(ga..gb),
+            }
+        }
+    }
+
+    /// A notice told once, by its text.
+    fn hold(&mut self, notice: &Notice) {
+        let text = format!("{notice:?}");
+        if !self.told.contains(&text) {
+            self.told.push(text);
+            self.later.push(notice.clone());
+        }
+    }
+
+    /// Adds a chunk's spikes notes: the spikes in its stretch (raw stamps), indexed in the raw
+    /// grid from the record's first sample (`raw`, the chunk's raw grid; `record`, the first
+    /// chunk's).
+    fn spikes(
+        &mut self,
+        notes: Vec<(Option<String>, Note)>,
+        raw: (f64, f64),
+        record: (f64, f64),
+        (from, to): (Option<f64>, Option<f64>),
+    ) {
+        let half = 0.5 * raw.1;
+        for (column, note) in notes {
+            let Note::Spikes {
+                coordinate,
+                found,
+                repaired,
+                ..
+            } = &note
+            else {
+                continue;
+            };
+            let mine: Vec<Spike> = found
+                .iter()
+                .filter_map(|s| {
+                    let t = raw.0 + s.index as f64 * raw.1;
+                    let inside = from.is_none_or(|f| t >= f - half) && to.is_none_or(|e| t < e - half);
+                    inside.then(|| Spike {
+                        index: ((t - record.0) / record.1).round().max(0.0) as usize,
+                        ..*s
+                    })
+                })
+                .collect();
+            if mine.is_empty() {
+                continue;
+            }
+            let slot = self.spikes.iter_mut().find(|(c, n, _)| {
+                *c == column
+                    && matches!(n, Note::Spikes { coordinate: k, repaired: r, .. } if k == coordinate && r == repaired)
+            });
+            match slot {
+                Some((_, _, all)) => all.extend(mine),
+                None => self.spikes.push((column, note.clone(), mine)),
+            }
+        }
+    }
+
+    /// Tells `observer` what was held back: the spikes of every chunk and the gaps.
+    fn tell(&mut self, observer: &mut dyn Observer, _s: &Stream) {
+        for (column, note, found) in std::mem::take(&mut self.spikes) {
+            let Note::Spikes {
+                coordinate,
+                repaired,
+                domain,
+                policy,
+                ..
+            } = note
+            else {
+                continue;
+            };
+            let note = Note::Spikes {
+                coordinate,
+                found,
+                repaired,
+                domain,
+                policy,
+            };
+            observer.notice(&match column {
+                Some(column) => Notice::Column { column, note },
+                None => Notice::Record(note),
+            });
+        }
+        if self.gaps > 0 {
+            observer.notice(&Notice::Record(Note::Gaps {
+                gaps: self.gaps,
+                missing: self.missing,
+            }));
+        }
+        for notice in std::mem::take(&mut self.later) {
+            observer.notice(&notice);
+        }
+    }
+}
+
+/// A chunk's observer: its notices merged into [`Merged`], its spikes held until its grid is
+/// known.
+struct Hears<'a> {
+    merged: &'a mut Merged,
+    /// The chunk's spikes notes, with the column's name for a system's.
+    spikes: Vec<(Option<String>, Note)>,
+}
+
+impl Observer for Hears<'_> {
+    fn notice(&mut self, notice: &Notice) {
+        let (column, note) = match notice {
+            Notice::Record(note) => (None, note),
+            Notice::Column { column, note } => (Some(column.clone()), note),
+            other => {
+                self.merged.hold(other);
+                return;
+            }
+        };
+        match note {
+            // Counted from the record's pieces after the reading.
+            Note::Gaps { .. } => {}
+            Note::Spikes { .. } => self.spikes.push((column, note.clone())),
+            _ => self.merged.hold(notice),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::identify::IdentifyOptions;
+    use crate::observe::Notices;
+    use crate::record::Source;
+    use crate::simulate::{Rig, simulate_to};
+    use std::path::PathBuf;
+
+    fn record(name: &str, rig: serde_json::Value) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("hb-pipeline-stream-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join(name);
+        simulate_to(&Rig::from_json(rig).unwrap(), &path, &mut ()).unwrap();
+        path
+    }
+
+    fn request(options: serde_json::Value) -> IdentifyRequest {
+        let mut o: IdentifyOptions = crate::options::from_object(options).unwrap();
+        o.bootstrap = 50;
+        IdentifyRequest::new(o).unwrap()
+    }
+
+    /// In memory, and in chunks of `rows`: the two reports and the streamed run's notices.
+    fn both(
+        path: &Path,
+        request: &IdentifyRequest,
+        rows: usize,
+    ) -> (IdentifyReport, IdentifyReport, Notices) {
+        let whole = crate::identify::identify(Source::Path(path), request, &mut ()).unwrap();
+        let mut notices = Notices::default();
+        let streamed = streamed_in(path, request, &mut notices, rows).unwrap();
+        (whole, streamed, notices)
+    }
+
+    fn values(r: &IdentifyReport) -> Vec<f64> {
+        r.equations[0]
+            .identification
+            .model
+            .coefficients()
+            .iter()
+            .map(|c| c.value)
+            .collect()
+    }
+
+    /// Coefficients equal to `rel` of the largest (a coefficient whose truth is 0 comes out at
+    /// rounding's size).
+    fn same(a: &IdentifyReport, b: &IdentifyReport, rel: f64) -> bool {
+        let (a, b) = (values(a), values(b));
+        let scale = a.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        a.iter().zip(&b).all(|(u, v)| (u - v).abs() <= rel * scale)
+    }
+
+    #[test]
+    fn a_record_in_chunks_is_the_record_in_memory() {
+        for name in ["paper.npy", "paper.csv"] {
+            // Chunks of at least four overlaps (8 348 rows): four of them.
+            let path = record(name, serde_json::json!({"samples": 120_000}));
+            let (whole, streamed, _) = both(&path, &request(serde_json::json!({})), 30_000);
+            assert_eq!(whole.segments, streamed.segments, "{name}");
+            // The first chunk's grid fitted to its own stamps: the record's origin to rounding.
+            let (a, b) = (&whole.record, &streamed.record);
+            assert!(
+                (a.start - b.start).abs() <= 1e-14 * a.start.abs(),
+                "{name}: {} vs {}",
+                a.start,
+                b.start
+            );
+            assert_eq!(
+                (a.samples, a.step, a.samples_per_period, &a.pieces),
+                (b.samples, b.step, b.samples_per_period, &b.pieces)
+            );
+            assert!(
+                same(&whole, &streamed, 1e-10),
+                "{name}: {:?} vs {:?}",
+                values(&whole),
+                values(&streamed)
+            );
+            let e = &streamed.equations[0].identification;
+            assert_eq!(e.model.summary().unwrap().segments, whole.segments);
+            assert!(e.intervals.is_some() && e.quality.held_out.is_some());
+        }
+    }
+
+    #[test]
+    fn a_rig_s_record_in_chunks_has_its_gaps_spikes_and_resampling() {
+        // Seconds, 500 Hz under a 1.3 Hz drive (resampled), a 4096-count encoder with bit
+        // errors, gaps: each chunk resampled on its own grid.
+        let path = record(
+            "rig.csv",
+            serde_json::json!({"samples": 120_000, "sample_rate": 500.0, "drive_frequency": 1.3,
+                "counts": 4096, "bit_errors": 2e-4, "gaps": "3:40", "seed": 3}),
+        );
+        let request = request(serde_json::json!({"drive_frequency": "1.3"}));
+        let (whole, streamed, notices) = both(&path, &request, 30_000);
+        assert_eq!(whole.record.pieces.len(), streamed.record.pieces.len());
+        // Each chunk resampled on its own grid: a sample more or less where two meet.
+        assert!(whole.record.samples.abs_diff(streamed.record.samples) <= 4);
+        assert!(whole.record.resampled_from.is_some());
+        let (a, b) = (
+            &whole.equations[0].identification.model,
+            &streamed.equations[0].identification.model,
+        );
+        for (x, y) in a.coefficients().iter().zip(b.coefficients()) {
+            assert!(
+                (x.value - y.value).abs() <= x.std_error.max(y.std_error),
+                "{}: {} ± {} vs {} ± {}",
+                x.name,
+                x.value,
+                x.std_error,
+                y.value,
+                y.std_error
+            );
+        }
+        // One note of the gaps and one of the spikes, their samples the file's.
+        let gaps: Vec<&Notice> = notices
+            .0
+            .iter()
+            .filter(|n| matches!(n, Notice::Record(Note::Gaps { .. })))
+            .collect();
+        assert_eq!(gaps.len(), 1);
+        assert!(
+            matches!(gaps[0], Notice::Record(Note::Gaps { gaps: 3, .. })),
+            "{gaps:?}"
+        );
+        let mut memory = Notices::default();
+        crate::identify::identify(Source::Path(&path), &request, &mut memory).unwrap();
+        let spikes = |n: &Notices| -> Vec<usize> {
+            n.0.iter()
+                .filter_map(|n| match n {
+                    Notice::Record(Note::Spikes { found, .. }) => Some(found.iter().map(|s| s.index)),
+                    _ => None,
+                })
+                .flatten()
+                .collect()
+        };
+        let (m, s) = (spikes(&memory), spikes(&notices));
+        assert!(!m.is_empty());
+        assert_eq!(m, s);
+    }
+
+    #[test]
+    fn what_cannot_be_streamed_is_named() {
+        let path = record("short.npy", serde_json::json!({"samples": 3_000}));
+        for (options, word) in [
+            (serde_json::json!({"stream": true, "method": "upo"}), "upo"),
+            (serde_json::json!({"stream": true, "refine": true}), "refine"),
+        ] {
+            let e = crate::identify::identify(Source::Path(&path), &request(options), &mut ()).unwrap_err();
+            assert!(
+                e.to_string().contains("stream") && e.to_string().contains(word),
+                "{e}"
+            );
+        }
+        // A bad cell in a later chunk: the file's line.
+        let text = std::fs::read_to_string(record("bad.csv", serde_json::json!({"samples": 3_000}))).unwrap();
+        let mut lines: Vec<String> = text.lines().map(str::to_owned).collect();
+        lines[2500] = lines[2500].replacen(',', ",x", 1);
+        let bad = std::env::temp_dir()
+            .join(format!("hb-pipeline-stream-{}", std::process::id()))
+            .join("bad2.csv");
+        std::fs::write(&bad, lines.join("\n")).unwrap();
+        let e = streamed_in(&bad, &request(serde_json::json!({})), &mut (), 1_000).unwrap_err();
+        assert!(e.to_string().contains("line 2501"), "{e}");
+    }
+}
