@@ -72,6 +72,10 @@ enum Command {
         /// The flag alone gives none.
         #[arg(long, value_delimiter = ',', num_args = 0.., default_value = "100000000")]
         simulate_sizes: Vec<usize>,
+        /// Lengths identified with the record read in chunks (`--stream`), the windowed method;
+        /// a length only simulated is made once for both. The flag alone gives none.
+        #[arg(long, value_delimiter = ',', num_args = 0.., default_value = "1000000,10000000,100000000")]
+        stream_sizes: Vec<usize>,
     },
     /// Records shaped like real rigs' (`hbid simulate`), each identified by one `hbid identify`
     /// command with the truth beside the result; writes a Markdown report.
@@ -166,7 +170,8 @@ fn main() -> std::process::ExitCode {
             sizes,
             repeats,
             simulate_sizes,
-        } => scale::run(&out, &data, &sizes, repeats, &simulate_sizes),
+            stream_sizes,
+        } => scale::run(&out, &data, &sizes, repeats, &simulate_sizes, &stream_sizes),
         Command::RealRecords { out, data } => real_records::run(&out, &data),
         Command::Benchmarks { doc, out, work, peer } => {
             benchmarks::run(&doc, out.as_deref(), &work, peer.as_deref())

@@ -15,6 +15,8 @@ struct Run {
     stages: Vec<(String, f64)>,
     /// Largest |identified − true| over the seven coefficients.
     error: f64,
+    /// The coefficients, in the truth's order.
+    coefficients: Vec<f64>,
 }
 
 /// One timed run of `hbid simulate`.
@@ -26,14 +28,17 @@ struct Made {
     bytes: u64,
 }
 
-/// Runs the study and writes the report to `out`: `hbid identify` on records of `sizes` samples,
-/// and `hbid simulate` making those and records of `simulate_sizes` samples.
+/// Runs the study and writes the report to `out`: `hbid identify` on records of `sizes` samples
+/// (both methods, the record read whole below 256 MiB), the windowed method on records of
+/// `stream_sizes` read in chunks (`--stream`), and `hbid simulate` making those and records of
+/// `simulate_sizes` samples.
 pub fn run(
     out: &Path,
     data: &Path,
     sizes: &[usize],
     repeats: usize,
     simulate_sizes: &[usize],
+    stream_sizes: &[usize],
 ) -> anyhow::Result<()> {
     if sizes.is_empty() || repeats == 0 {
         bail!("give at least one size and one repeat");
@@ -52,7 +57,7 @@ pub fn run(
         made.push(simulate(time, &hbid, n, &record)?);
         for method in methods {
             let mut runs: Vec<Run> = (0..repeats)
-                .map(|_| identify(time, &hbid, &record, method))
+                .map(|_| identify(time, &hbid, &record, method, &["--no-stream"]))
                 .collect::<anyhow::Result<_>>()?;
             runs.sort_by(|a, b| a.wall.total_cmp(&b.wall));
             let median = runs[runs.len() / 2].clone();
@@ -63,13 +68,44 @@ pub fn run(
             rows.push((n, method, median));
         }
     }
-    for &n in simulate_sizes {
+    let mut streamed: Vec<(usize, Run)> = Vec::new();
+    for &n in stream_sizes {
+        let kept = sizes.contains(&n);
+        let record = if kept {
+            data.join(format!("pendulum_{n}.npy"))
+        } else {
+            let record = data.join(format!("pendulum_{n}_simulated.npy"));
+            made.push(simulate(time, &hbid, n, &record)?);
+            record
+        };
+        let runs: anyhow::Result<Vec<Run>> = (0..repeats)
+            .map(|_| identify(time, &hbid, &record, "windowed", &["--stream"]))
+            .collect();
+        if !kept {
+            std::fs::remove_file(&record).ok();
+        }
+        let mut runs = runs?;
+        runs.sort_by(|a, b| a.wall.total_cmp(&b.wall));
+        let median = runs[runs.len() / 2].clone();
+        eprintln!(
+            "{n:>10} samples  streamed {:>7.3} s  {:>6.0} MiB",
+            median.wall, median.peak_mib
+        );
+        streamed.push((n, median));
+    }
+    for &n in simulate_sizes
+        .iter()
+        .filter(|n| !stream_sizes.contains(n) || sizes.contains(n))
+    {
         let record = data.join(format!("pendulum_{n}_simulated.npy"));
         let result = simulate(time, &hbid, n, &record);
         std::fs::remove_file(&record).ok();
         made.push(result?);
     }
+    made.sort_by_key(|m| m.samples);
+    made.dedup_by_key(|m| m.samples);
     let mut report = render(&rows, sizes, repeats)?;
+    render_streamed(&mut report, &rows, &streamed, repeats)?;
     render_simulate(&mut report, &made)?;
     if let Some(parent) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
         std::fs::create_dir_all(parent)?;
@@ -169,11 +205,12 @@ fn render_simulate(s: &mut String, made: &[Made]) -> anyhow::Result<()> {
 }
 
 /// `hbid identify` with its defaults (1000 bootstrap resamples included) under GNU time.
-fn identify(time: &Path, hbid: &Path, record: &Path, method: &str) -> anyhow::Result<Run> {
+fn identify(time: &Path, hbid: &Path, record: &Path, method: &str, extra: &[&str]) -> anyhow::Result<Run> {
     let out = Command::new(time)
         .arg("-v")
         .arg(hbid)
         .args(["identify", "--quiet", "--timings", "--json", "--method", method])
+        .args(extra)
         .arg(record)
         .output()
         .context("running hbid identify")?;
@@ -186,16 +223,21 @@ fn identify(time: &Path, hbid: &Path, record: &Path, method: &str) -> anyhow::Re
     }
     let (wall, peak_mib) = wall_and_peak(&err)?;
     let json: serde_json::Value = serde_json::from_slice(&out.stdout).context("hbid identify --json")?;
-    let error = crate::identification::truth()?
+    let truth = crate::identification::truth()?;
+    let coefficients = truth
         .coefficients()
         .iter()
         .map(|t| {
             json["coefficients"][&t.name]
                 .as_f64()
-                .map(|v| (v - t.value).abs())
                 .with_context(|| format!("no coefficient {}", t.name))
         })
-        .try_fold(0.0_f64, |m, e| e.map(|e| m.max(e)))?;
+        .collect::<anyhow::Result<Vec<f64>>>()?;
+    let error = truth
+        .coefficients()
+        .iter()
+        .zip(&coefficients)
+        .fold(0.0_f64, |m, (t, v)| m.max((v - t.value).abs()));
     let stages = err
         .lines()
         .filter_map(|l| {
@@ -211,7 +253,67 @@ fn identify(time: &Path, hbid: &Path, record: &Path, method: &str) -> anyhow::Re
         peak_mib,
         stages,
         error,
+        coefficients,
     })
+}
+
+/// The records read in chunks: time, memory, error, and against the same record read whole.
+fn render_streamed(
+    s: &mut String,
+    rows: &[(usize, &str, Run)],
+    streamed: &[(usize, Run)],
+    repeats: usize,
+) -> anyhow::Result<()> {
+    if streamed.is_empty() {
+        return Ok(());
+    }
+    writeln!(s, "\n## Read in chunks (`--stream`)\n")?;
+    writeln!(
+        s,
+        "The windowed method with the record's file read {} rows at a time (`hbid identify FILE \
+         --stream`, the default for files of 256 MiB or more: 10^7 samples of these records are 229 \
+         MiB), each chunk conditioned and its windows assembled and compressed before the next is \
+         read (`hb_pipeline::stream`); the median of {repeats} runs. The last column is the largest \
+         difference of a coefficient from the same record read whole (above), over the largest \
+         coefficient.\n",
+        hb_pipeline::stream::CHUNK_ROWS
+    )?;
+    writeln!(
+        s,
+        "| samples | wall time | per 10^6 samples | peak memory | largest coefficient error | against the record read whole |\n| ---: | ---: | ---: | ---: | ---: | ---: |"
+    )?;
+    for (n, run) in streamed {
+        let whole = rows.iter().find(|r| r.0 == *n && r.1 == "windowed").map(|r| &r.2);
+        let against = whole.map_or("—".to_owned(), |w| {
+            let scale = w.coefficients.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+            let d = w
+                .coefficients
+                .iter()
+                .zip(&run.coefficients)
+                .fold(0.0_f64, |m, (a, b)| m.max((a - b).abs()));
+            format!("{:.1e}", d / scale)
+        });
+        writeln!(
+            s,
+            "| {n} | {:.2} s | {:.3} s | {:.0} MiB | {:.1e} | {against} |",
+            run.wall,
+            run.wall / (*n as f64 / 1e6),
+            run.peak_mib,
+            run.error
+        )?;
+    }
+    if streamed.len() >= 2 {
+        let lx: Vec<f64> = streamed.iter().map(|(n, _)| (*n as f64).ln()).collect();
+        let ly: Vec<f64> = streamed.iter().map(|(_, r)| r.wall.ln()).collect();
+        let (_, slope) = line_fit(&lx, &ly);
+        writeln!(
+            s,
+            "\nThe slope of log(time) against log(samples) over these sizes: {slope:.3}. The peak memory is \
+             the chunks' (a few hundred MiB whatever the record's length: two chunks' columns, their \
+             windows' rows, and at most 65 536 compressed blocks of the regression)."
+        )?;
+    }
+    Ok(())
 }
 
 /// `m:ss.ss` or `h:mm:ss` as seconds.

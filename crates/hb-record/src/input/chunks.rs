@@ -8,7 +8,6 @@
 //! the one before. What a chunk's reading names by place is then placed in the file
 //! ([`Chunk::relocate`]): a line of text by the file's count, a sample of an array by its row.
 
-use std::collections::VecDeque;
 use std::fs::File;
 use std::io::{BufRead, BufReader, Read, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
@@ -25,8 +24,10 @@ pub struct Chunks {
     rows: usize,
     /// Bytes of the file read so far.
     bytes: u64,
-    /// The last rows delivered: an `.npy`'s are read again, a text's lines held.
-    held: VecDeque<(u64, Vec<u8>)>,
+    /// A text's lines of the chunk delivered last, in `held_text` (an `.npy`'s rows are read
+    /// again).
+    held: Vec<HeldLine>,
+    held_text: Vec<u8>,
     done: bool,
 }
 
@@ -150,7 +151,8 @@ impl Chunks {
             source,
             rows: 0,
             bytes: 0,
-            held: VecDeque::new(),
+            held: Vec::new(),
+            held_text: Vec::new(),
             done: false,
         })))
     }
@@ -218,49 +220,96 @@ impl Chunks {
                 line,
             } => {
                 // The lines of the last `keep` rows of data held (and any comment among them),
-                // after the file's prefix; then lines up to `rows` more rows of data.
+                // after the file's prefix; then lines up to `rows` more rows of data, read in
+                // blocks.
                 let mut counted = 0;
                 let mut from = self.held.len();
                 while from > 0 && counted < keep {
                     from -= 1;
-                    if !is_blank_or_comment(&self.held[from].1) {
+                    if self.held[from].data {
                         counted += 1;
                     }
                 }
-                self.held.drain(..from);
-                self.held.retain(|(n, _)| *n > *prefix_lines);
-                let mut new: Vec<(u64, Vec<u8>)> = Vec::new();
-                let mut data_rows = 0;
-                let mut buf = Vec::new();
+                while from < self.held.len() && self.held[from].line <= *prefix_lines {
+                    from += 1;
+                }
+                let held_until = self.held.last().map_or(0, |h| h.line);
+                let mut bytes = Vec::with_capacity(prefix.len() + 64 * (rows + keep));
+                bytes.extend_from_slice(prefix);
+                let mut lines: Vec<u64> = (1..=*prefix_lines).collect();
+                let mut held = Vec::with_capacity(rows + keep);
+                if let Some(first) = self.held.get(from) {
+                    let shift = bytes.len() as isize - first.start as isize;
+                    bytes.extend_from_slice(&self.held_text[first.start..]);
+                    for h in &self.held[from..] {
+                        lines.push(h.line);
+                        held.push(HeldLine {
+                            start: (h.start as isize + shift) as usize,
+                            ..*h
+                        });
+                    }
+                }
+                // The chunk before's text is not needed past its rows repeated.
+                self.held_text = Vec::new();
+                self.held = Vec::new();
+                let (mut data_rows, mut new_lines) = (0, 0);
                 while data_rows < rows {
-                    buf.clear();
-                    let n = reader.read_until(b'\n', &mut buf).map_err(io)?;
-                    if n == 0 {
+                    let block = reader.fill_buf().map_err(io)?;
+                    if block.is_empty() {
                         break;
                     }
-                    *line += 1;
-                    self.bytes += n as u64;
-                    if !is_blank_or_comment(&buf) {
-                        data_rows += 1;
+                    let mut used = 0;
+                    while data_rows < rows && used < block.len() {
+                        let rest = &block[used..];
+                        let Some(end) = memchr::memchr(b'\n', rest) else {
+                            // A line that goes on past the block: read on.
+                            break;
+                        };
+                        let text = &rest[..=end];
+                        *line += 1;
+                        let data = !is_blank_or_comment(text);
+                        data_rows += usize::from(data);
+                        new_lines += 1;
+                        held.push(HeldLine {
+                            line: *line,
+                            start: bytes.len(),
+                            data,
+                        });
+                        lines.push(*line);
+                        bytes.extend_from_slice(text);
+                        used += end + 1;
                     }
-                    new.push((*line, buf.clone()));
+                    if used == 0 {
+                        // No line end in the block: the line is longer than the buffer, or the
+                        // file's last line has none.
+                        let mut text = Vec::new();
+                        let n = reader.read_until(b'\n', &mut text).map_err(io)?;
+                        self.bytes += n as u64;
+                        *line += 1;
+                        let data = !is_blank_or_comment(&text);
+                        data_rows += usize::from(data);
+                        new_lines += 1;
+                        held.push(HeldLine {
+                            line: *line,
+                            start: bytes.len(),
+                            data,
+                        });
+                        lines.push(*line);
+                        bytes.extend_from_slice(&text);
+                        if !text.ends_with(b"\n") {
+                            bytes.push(b'\n');
+                        }
+                        continue;
+                    }
+                    self.bytes += used as u64;
+                    reader.consume(used);
                 }
                 let last = reader.fill_buf().map_err(io)?.is_empty();
-                if new.is_empty() && self.rows > 0 {
+                if new_lines == 0 && self.rows > 0 {
                     self.done = true;
                     return Ok(None);
                 }
-                let held_until = self.held.back().map_or(0, |(n, _)| *n);
-                let mut bytes = prefix.clone();
-                let mut lines: Vec<u64> = (1..=*prefix_lines).collect();
-                for (n, text) in self.held.iter().chain(new.iter()) {
-                    bytes.extend_from_slice(text);
-                    if !text.ends_with(b"\n") {
-                        bytes.push(b'\n');
-                    }
-                    lines.push(*n);
-                }
-                self.held.extend(new);
+                self.held = held;
                 (bytes, held_until as usize, 0, Some(lines), last)
             }
         };
@@ -312,6 +361,9 @@ impl Chunks {
             self.rows += own.len() - repeated;
             // The chunk's lines are held until the next call says how many rows it repeats.
         }
+        if matches!(self.source, Source::Text { .. }) {
+            self.held_text = bytes;
+        }
         // Times of a record without a time column from the file's first row.
         if let Some(dt) = self.options.dt {
             for (i, t) in chunk.record.t.iter_mut().enumerate() {
@@ -320,6 +372,15 @@ impl Chunks {
         }
         Ok(Some(chunk))
     }
+}
+
+/// A line of text held: its number in the file, where it starts in the text held, and whether it
+/// holds a row of data.
+#[derive(Debug, Clone, Copy)]
+struct HeldLine {
+    line: u64,
+    start: usize,
+    data: bool,
 }
 
 /// Whether a line holds no row of data for the reader: blank, or a comment (`#`).
