@@ -337,3 +337,21 @@ def test_bad_samples_raise_clear_errors(pendulum):
     # a strided view is accepted (copied once into a contiguous array)
     strided = hbid.identify(pendulum.x[::1], t=pendulum.t, bootstrap=0)
     assert strided.segments > 0
+
+
+def test_a_file_read_in_chunks_is_the_file_read_whole(tmp_path, pendulum):
+    """stream=True reads the file in chunks (the default for files of 256 MiB or more): the
+    same windows and coefficients as the file read whole; what cannot be streamed is named."""
+    path = tmp_path / "r.csv"
+    np.savetxt(path, np.c_[pendulum.t, pendulum.x], delimiter=",", header="t,theta", comments="", fmt="%.17g")
+    whole = hbid.identify(path, bootstrap=0)
+    chunked = hbid.identify(path, bootstrap=0, stream=True)
+    assert chunked.segments == whole.segments
+    scale = max(abs(v) for v in whole.coefficients.values())
+    for name, value in whole.coefficients.items():
+        assert abs(chunked.coefficients[name] - value) <= 1e-10 * scale, name
+    for bad in ({"method": "upo"}, {"refine": True}, {"no_stream": True}):
+        with pytest.raises(hbid.OptionsError, match="stream"):
+            hbid.identify(path, bootstrap=0, stream=True, **bad)
+    with pytest.raises(hbid.OptionsError, match="stream"):
+        hbid.identify(pendulum.x, t=pendulum.t, stream=True)

@@ -342,8 +342,8 @@ fn render(rows: &[(usize, &str, Run)], sizes: &[usize], repeats: usize) -> anyho
         s,
         "Written by `cargo xtask scale` (records: the paper's pendulum from `hbid simulate`, \
          25 samples per forcing period, saved as `.npy` f8 with columns t, theta, omega). Each \
-         run is `hbid identify FILE --method M` with its defaults, 1000 bootstrap resamples \
-         included, under `/usr/bin/time -v`; the median wall time of {repeats} runs and its peak \
+         run is `hbid identify FILE --method M --no-stream` (the record read whole) with its \
+         defaults, 1000 bootstrap resamples included, under `/usr/bin/time -v`; the median wall time of {repeats} runs and its peak \
          resident memory. {cores} cores; load average at the end: {}.\n",
         load.split_whitespace().take(3).collect::<Vec<_>>().join(" ")
     )?;

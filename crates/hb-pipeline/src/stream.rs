@@ -73,8 +73,8 @@ pub(crate) fn streams(path: &Path, request: &IdentifyRequest) -> Result<bool, Ru
 }
 
 /// Identifies the record of the file `path` read in chunks, as `request` asks (see the module
-/// docs); `observer` hears the reading's progress (rows read of the file's, where its header
-/// says how many) and every notice, the chunks' merged.
+/// docs); `observer` hears the reading's progress (bytes of the file read) and every notice, the
+/// chunks' merged.
 pub fn identify_streamed(
     path: &Path,
     request: &IdentifyRequest,
@@ -190,7 +190,11 @@ fn streamed_in(
                 s.setups = Some(setups);
             }
         }
-        observer.progress(rows_done, total_rows.unwrap_or(0).max(rows_done));
+        // Progress in bytes of the file: a text's rows are not known before it is read.
+        observer.progress(
+            chunks.bytes_read() as usize,
+            (file_bytes as usize).max(chunks.bytes_read() as usize),
+        );
         if first_data.is_none() {
             first_data = Some(data);
         }
