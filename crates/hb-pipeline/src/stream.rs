@@ -10,7 +10,16 @@
 //! rows are assembled and compressed by groups of windows at once
 //! ([`Identifier::systems_grouped`]); the fit, its held-out share and the bootstrap work from
 //! those blocks. A record without gaps, spikes or resampling gives the windows and the rows of
-//! an identification in memory, so the same coefficients to rounding.
+//! an identification in memory, so the same coefficients to rounding (each chunk's grid is
+//! fitted to its own stamps: 10^7 samples agree to 1e-10 of the largest coefficient,
+//! `docs/scale.md`). After a gap the windows start on the lattice, not at the piece's first
+//! sample; a resampled record's chunks are each resampled from their own first sample.
+//!
+//! What the whole record decides is decided by the first chunk: the drive's estimate
+//! (`drive_frequency=auto`) or the free period, and the check that a coupled model's mass matrix
+//! can be solved (at the first chunk's states). The chunks' notes are merged: the spikes and the
+//! rows written twice of each chunk's own stretch into one note each, the gaps counted from the
+//! record's pieces, the grid's note the worst chunk's, any other note told once.
 
 use std::ops::Range;
 use std::path::Path;
@@ -129,12 +138,14 @@ fn streamed_in(
         let mut hears = Hears {
             merged: &mut merged,
             spikes: Vec::new(),
+            duplicates: Vec::new(),
         };
         let grid = condition_read(chunk.record, options, name.clone(), &mut hears, &|at| {
             relocate(first_row, at)
         })?;
         let raw = (grid.t0, grid.dt);
         let spikes = std::mem::take(&mut hears.spikes);
+        let duplicates = std::mem::take(&mut hears.duplicates);
         let data = match &stream {
             None => {
                 let (data, period) = on_clock(grid, request.drive(), &mut hears)?;
@@ -160,6 +171,7 @@ fn streamed_in(
         let to = (!chunk_last).then(|| t[t.len().saturating_sub(r / 2).min(t.len() - 1)]);
         drop(t);
         merged.spikes(spikes, raw, s.raw, (from, to));
+        merged.duplicates(duplicates, (from, to));
         merged.pieces(&data, s, (from, to));
         let segments = s.windows(request, &data, (from, to))?;
         if !segments.is_empty() {
@@ -418,6 +430,8 @@ struct Merged {
     global_pieces: Vec<Range<usize>>,
     gaps: usize,
     missing: usize,
+    /// The rows written twice, merged.
+    duplicated: Option<Note>,
 }
 
 impl Merged {
@@ -458,12 +472,55 @@ impl Merged {
         }
     }
 
-    /// A notice told once, by its text.
+    /// A notice told once, by its text; of the chunks' grid notes, whose numbers differ from
+    /// chunk to chunk, one: the worst chunk's (the largest deviation from its grid).
     fn hold(&mut self, notice: &Notice) {
+        if let Notice::Record(Note::Grid(new)) = notice {
+            if let Some(Notice::Record(Note::Grid(old))) = self
+                .later
+                .iter_mut()
+                .find(|n| matches!(n, Notice::Record(Note::Grid(_))))
+            {
+                if new.max_fraction() > old.max_fraction() {
+                    *old = new.clone();
+                }
+                return;
+            }
+        }
         let text = format!("{notice:?}");
         if !self.told.contains(&text) {
             self.told.push(text);
             self.later.push(notice.clone());
+        }
+    }
+
+    /// Adds a chunk's rows written twice, those whose stamps are in its stretch (`from`, `to`):
+    /// each row counted once, from the first chunk's place of the first.
+    fn duplicates(&mut self, notes: Vec<Note>, (from, to): (Option<f64>, Option<f64>)) {
+        for note in notes {
+            let Note::DuplicateRows { first, times, .. } = note else {
+                continue;
+            };
+            let mine: Vec<f64> = times
+                .into_iter()
+                .filter(|&t| from.is_none_or(|f| t >= f) && to.is_none_or(|e| t < e))
+                .collect();
+            if mine.is_empty() {
+                continue;
+            }
+            match &mut self.duplicated {
+                Some(Note::DuplicateRows { count, times, .. }) => {
+                    *count += mine.len();
+                    times.extend(mine);
+                }
+                _ => {
+                    self.duplicated = Some(Note::DuplicateRows {
+                        first,
+                        count: mine.len(),
+                        times: mine,
+                    })
+                }
+            }
         }
     }
 
@@ -538,6 +595,9 @@ impl Merged {
                 None => Notice::Record(note),
             });
         }
+        if let Some(note) = self.duplicated.take() {
+            observer.notice(&Notice::Record(note));
+        }
         if self.gaps > 0 {
             observer.notice(&Notice::Record(Note::Gaps {
                 gaps: self.gaps,
@@ -556,6 +616,8 @@ struct Hears<'a> {
     merged: &'a mut Merged,
     /// The chunk's spikes notes, with the column's name for a system's.
     spikes: Vec<(Option<String>, Note)>,
+    /// Its notes of rows written twice.
+    duplicates: Vec<Note>,
 }
 
 impl Observer for Hears<'_> {
@@ -572,6 +634,7 @@ impl Observer for Hears<'_> {
             // Counted from the record's pieces after the reading.
             Note::Gaps { .. } => {}
             Note::Spikes { .. } => self.spikes.push((column, note.clone())),
+            Note::DuplicateRows { .. } => self.duplicates.push(note.clone()),
             _ => self.merged.hold(notice),
         }
     }
@@ -716,6 +779,40 @@ mod tests {
         let (m, s) = (spikes(&memory), spikes(&notices));
         assert!(!m.is_empty());
         assert_eq!(m, s);
+    }
+
+    #[test]
+    fn rows_written_twice_are_counted_once() {
+        // Rows written twice, some in the overlaps of chunks of 30 000 new rows (the first
+        // chunk's rows 0..30 000, the next ones repeating 8 348): one note, as read whole.
+        let text = std::fs::read_to_string(record("twice-src.csv", serde_json::json!({"samples": 120_000})))
+            .unwrap();
+        let mut lines: Vec<&str> = text.lines().collect();
+        for row in [29_000, 27_000, 12_000, 60_500, 90_000] {
+            let line = lines[row + 1];
+            lines.insert(row + 1, line);
+        }
+        let path = std::env::temp_dir()
+            .join(format!("hb-pipeline-stream-{}", std::process::id()))
+            .join("twice.csv");
+        std::fs::write(&path, lines.join("\n")).unwrap();
+        let request = request(serde_json::json!({}));
+        let (whole, streamed, notices) = both(&path, &request, 30_000);
+        let mut memory = Notices::default();
+        crate::identify::identify(Source::Path(&path), &request, &mut memory).unwrap();
+        let twice = |n: &Notices| -> Vec<(String, usize)> {
+            n.0.iter()
+                .filter_map(|n| match n {
+                    Notice::Record(Note::DuplicateRows { first, count, .. }) => {
+                        Some((first.to_string(), *count))
+                    }
+                    _ => None,
+                })
+                .collect()
+        };
+        assert_eq!(twice(&memory), vec![("line 12003".to_owned(), 5)]);
+        assert_eq!(twice(&notices), twice(&memory));
+        assert!(same(&whole, &streamed, 1e-10));
     }
 
     #[test]

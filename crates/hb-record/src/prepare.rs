@@ -184,6 +184,8 @@ pub enum Note {
         first: Location,
         /// How many were left out.
         count: usize,
+        /// Their time stamps (where a record read in chunks counts each once).
+        times: Vec<f64>,
     },
     /// Values outside `[-π, π)` read as an unwrapped angle, and wrapped.
     Wrapped,
@@ -250,9 +252,10 @@ impl Note {
                 ..run.clone()
             }),
             Note::TimeRepaired(r) => Note::TimeRepaired(crate::input::TimeRepair { at: at(r.at), ..*r }),
-            Note::DuplicateRows { first, count } => Note::DuplicateRows {
+            Note::DuplicateRows { first, count, times } => Note::DuplicateRows {
                 first: at(*first),
                 count: *count,
+                times: times.clone(),
             },
             other => other.clone(),
         }
@@ -285,7 +288,7 @@ impl fmt::Display for Note {
                 gaps + 1
             ),
             Note::Wrapped => f.write_str("values outside [-π, π): read as an unwrapped angle and wrapped"),
-            Note::DuplicateRows { first, count } => write!(
+            Note::DuplicateRows { first, count, .. } => write!(
                 f,
                 "{count} row(s) written twice (the stamp and every value of the row before) left out, the \
                  first at {first}"
@@ -566,6 +569,7 @@ fn drop_duplicate_rows(record: &mut InputRecord) -> Option<Note> {
         Some(&line) => Location::Line(line),
         None => Location::Sample(first + 1),
     };
+    let times: Vec<f64> = drop.iter().map(|&i| record.t[i]).collect();
     /// `v` without the rows `drop` (increasing).
     fn without<T>(v: &mut Vec<T>, drop: &[usize]) {
         let mut next = drop.iter().peekable();
@@ -592,6 +596,7 @@ fn drop_duplicate_rows(record: &mut InputRecord) -> Option<Note> {
     Some(Note::DuplicateRows {
         first,
         count: drop.len(),
+        times,
     })
 }
 
