@@ -782,6 +782,40 @@ mod tests {
     }
 
     #[test]
+    fn a_system_in_chunks_is_the_system_in_memory() {
+        // The whirling double pendulum, its physical library: both equations from chunks.
+        let rig = serde_json::json!({"system": "double-pendulum", "samples": 150_000});
+        let truth = crate::simulate::simulate(&Rig::from_json(rig.clone()).unwrap(), &mut ())
+            .unwrap()
+            .truth()
+            .unwrap();
+        let hint = serde_json::to_value(&truth).unwrap()["identify"].clone();
+        let path = record("dp.npy", rig);
+        let request = request(serde_json::json!({
+            "coords": hint["coords"], "signal": hint["signal"], "terms": hint["terms"]
+        }));
+        let (whole, streamed, _) = both(&path, &request, 40_000);
+        assert_eq!(whole.segments, streamed.segments);
+        assert_eq!(streamed.equations.len(), 2);
+        for (a, b) in whole.equations.iter().zip(&streamed.equations) {
+            let (a, b) = (
+                a.identification.model.coefficients(),
+                b.identification.model.coefficients(),
+            );
+            let scale = a.iter().fold(0.0_f64, |m, c| m.max(c.value.abs()));
+            for (x, y) in a.iter().zip(b) {
+                assert!(
+                    (x.value - y.value).abs() <= 1e-10 * scale,
+                    "{}: {} vs {}",
+                    x.name,
+                    x.value,
+                    y.value
+                );
+            }
+        }
+    }
+
+    #[test]
     fn rows_written_twice_are_counted_once() {
         // Rows written twice, some in the overlaps of chunks of 30 000 new rows (the first
         // chunk's rows 0..30 000, the next ones repeating 8 348): one note, as read whole.
