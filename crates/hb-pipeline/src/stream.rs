@@ -120,98 +120,57 @@ fn streamed_in(
     let file_bytes = std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
     let n = request.equations();
     let mut merged = Merged::default();
-    let mut stream: Option<Stream> = None;
     let mut parts: Vec<Vec<LinearSystem>> = (0..n).map(|_| Vec::new()).collect();
+    let read = Reading {
+        request,
+        name: &name,
+        read_error: &read_error,
+        chunk_rows,
+        file_bytes,
+        total_rows,
+    };
+    // The first chunk fixes the clock, the windows and the overlap; then each chunk's windows
+    // are assembled while the next one is read and conditioned.
+    let Some((first, mut stream)) = read.first(&mut chunks, &mut merged)? else {
+        return Err(read_error(hb_record::input::InputError::Empty));
+    };
+    observer.progress(
+        chunks.bytes_read() as usize,
+        (file_bytes as usize).max(chunks.bytes_read() as usize),
+    );
+    let mut current = first;
     let mut first_data: Option<Data> = None;
-    let mut keep = 0;
-    while let Some(chunk) = chunks
-        .next_chunk(chunk_rows.max(4 * keep), keep)
-        .map_err(read_error)?
-    {
-        // The chunk's own stretch: from the middle of its overlap with the chunk before to the
-        // middle of the next one's with it, in the time of the raw stamps (the next overlap's
-        // length is known once the first chunk found the windows).
-        let t = chunk.record.t.clone();
-        let from = (chunk.repeated > 0).then(|| t[chunk.repeated - chunk.repeated / 2]);
-        let rows_done = chunk.first_row + t.len();
-        let (first_row, chunk_last) = (chunk.first_row, chunk.last);
-        let mut hears = Hears {
-            merged: &mut merged,
-            spikes: Vec::new(),
-            duplicates: Vec::new(),
-        };
-        let grid = condition_read(chunk.record, options, name.clone(), &mut hears, &|at| {
-            relocate(first_row, at)
-        })?;
-        let raw = (grid.t0, grid.dt);
-        let spikes = std::mem::take(&mut hears.spikes);
-        let duplicates = std::mem::take(&mut hears.duplicates);
-        let data = match &stream {
-            None => {
-                let (data, period) = on_clock(grid, request.drive(), &mut hears)?;
-                let rows = total_rows.unwrap_or_else(|| {
-                    // A text's rows, estimated from the bytes of the first chunk's.
-                    let read = chunks.bytes_read().max(1) as f64;
-                    (file_bytes as f64 / read * rows_done as f64).ceil() as usize
-                });
-                stream = Some(Stream::new(request, &data, period, raw, rows)?);
-                data
-            }
-            Some(s) => {
-                let (data, _) = on_clock(grid, s.later, &mut ())?;
-                s.check(&data)?;
-                data
-            }
-        };
-        let s = stream.as_mut().expect("set by the first chunk");
-        keep = s.keep;
-        // The next chunk repeats `r` rows, its stretch from its `r − r/2`-th: this one's
-        // `len − r/2`-th (none of it when that is before this chunk's first row).
-        let r = keep.min(rows_done);
-        let to = (!chunk_last).then(|| t[t.len().saturating_sub(r / 2).min(t.len() - 1)]);
-        drop(t);
-        merged.spikes(spikes, raw, s.raw, (from, to));
-        merged.duplicates(duplicates, (from, to));
-        merged.pieces(&data, s, (from, to));
-        let segments = s.windows(request, &data, (from, to))?;
-        if !segments.is_empty() {
-            let coordinates = data.coordinates();
-            let drives: Vec<&[f64]> = data.drives.iter().map(Vec::as_slice).collect();
-            let setups = (0..n)
-                .map(|i| {
-                    request
-                        .equation_spec(&data, request.options().method, i)?
-                        .setup(&data.clock)
-                        .map_err(RunError::from)
-                })
-                .collect::<Result<Vec<_>, RunError>>()?;
-            let signals = (0..n)
-                .map(|i| {
-                    Signals::system(coordinates.clone(), i)
-                        .and_then(|sig| sig.with_drives(drives.clone()))
-                        .map_err(|e| s.identify_error(request, Some(i), e))
-                })
-                .collect::<Result<Vec<_>, RunError>>()?;
-            let systems = Identifier::systems_grouped(&setups, &signals, &segments, s.group)
-                .map_err(|e| s.identify_error(request, None, e))?;
-            for (part, system) in parts.iter_mut().zip(systems) {
-                part.push(system);
-            }
-            s.segments += segments.len();
-            if s.setups.is_none() {
-                s.setups = Some(setups);
-            }
+    loop {
+        let (assembled, next) = rayon::join(
+            || stream.assemble(request, &current),
+            || read.next(&mut chunks, &mut merged, &stream),
+        );
+        let (systems, count, setups) = assembled?;
+        for (part, system) in parts.iter_mut().zip(systems) {
+            part.push(system);
         }
-        // Progress in bytes of the file: a text's rows are not known before it is read.
+        stream.segments += count;
+        if stream.setups.is_none() {
+            stream.setups = setups;
+        }
         observer.progress(
             chunks.bytes_read() as usize,
             (file_bytes as usize).max(chunks.bytes_read() as usize),
         );
+        let Some(chunk) = next? else {
+            if first_data.is_none() {
+                first_data = Some(current.data);
+            }
+            break;
+        };
+        // The first chunk's record is kept: its clock, kind of drive and states are the
+        // record's (the others are let go as their windows are assembled).
+        let done = std::mem::replace(&mut current, chunk);
         if first_data.is_none() {
-            first_data = Some(data);
+            first_data = Some(done.data);
         }
     }
-    let mut s = stream.ok_or_else(|| read_error(hb_record::input::InputError::Empty))?;
+    let mut s = stream;
     let first = first_data.expect("the first chunk's record");
     merged.tell(observer, &s);
     let Some(setups) = s.setups.take() else {
@@ -272,6 +231,113 @@ fn streamed_in(
         },
         observer,
     )
+}
+
+/// A chunk read and conditioned, on the record's clock, with its stretch.
+struct Prepared {
+    data: Data,
+    /// Its stretch, in raw stamps (`None`: the record's end).
+    stretch: (Option<f64>, Option<f64>),
+}
+
+/// What reading a chunk needs of the run.
+struct Reading<'a> {
+    request: &'a IdentifyRequest,
+    name: &'a str,
+    read_error: &'a (dyn Fn(hb_record::input::InputError) -> RunError + Sync),
+    chunk_rows: usize,
+    file_bytes: u64,
+    total_rows: Option<usize>,
+}
+
+impl Reading<'_> {
+    /// Reads and conditions the first chunk, and finds the clock, the windows and the overlap
+    /// from it.
+    fn first(
+        &self,
+        chunks: &mut Chunks,
+        merged: &mut Merged,
+    ) -> Result<Option<(Prepared, Stream)>, RunError> {
+        let Some(chunk) = chunks.next_chunk(self.chunk_rows, 0).map_err(self.read_error)? else {
+            return Ok(None);
+        };
+        let options = &self.request.options().record;
+        let t = chunk.record.t.clone();
+        let rows_done = chunk.first_row + t.len();
+        let (first_row, last) = (chunk.first_row, chunk.last);
+        let mut hears = Hears {
+            merged,
+            spikes: Vec::new(),
+            duplicates: Vec::new(),
+        };
+        let grid = condition_read(chunk.record, options, self.name.to_owned(), &mut hears, &|at| {
+            relocate(first_row, at)
+        })?;
+        let raw = (grid.t0, grid.dt);
+        let (data, period) = on_clock(grid, self.request.drive(), &mut hears)?;
+        let (spikes, duplicates) = (
+            std::mem::take(&mut hears.spikes),
+            std::mem::take(&mut hears.duplicates),
+        );
+        let rows = self.total_rows.unwrap_or_else(|| {
+            // A text's rows, estimated from the bytes of the first chunk's.
+            let read = chunks.bytes_read().max(1) as f64;
+            (self.file_bytes as f64 / read * rows_done as f64).ceil() as usize
+        });
+        let stream = Stream::new(self.request, &data, period, raw, rows)?;
+        let stretch = (None, stream.stretch_end(&t, rows_done, last));
+        merged.spikes(spikes, raw, stream.raw, stretch);
+        merged.duplicates(duplicates, stretch);
+        merged.pieces(&data, &stream, stretch);
+        Ok(Some((Prepared { data, stretch }, stream)))
+    }
+
+    /// Reads and conditions the next chunk on the first one's clock; `None` after the last.
+    fn next(
+        &self,
+        chunks: &mut Chunks,
+        merged: &mut Merged,
+        stream: &Stream,
+    ) -> Result<Option<Prepared>, RunError> {
+        let keep = stream.keep;
+        let Some(chunk) = chunks
+            .next_chunk(self.chunk_rows.max(4 * keep), keep)
+            .map_err(self.read_error)?
+        else {
+            return Ok(None);
+        };
+        // The chunk's own stretch: from the middle of its overlap with the chunk before to the
+        // middle of the next one's with it, in the time of the raw stamps.
+        let t = chunk.record.t.clone();
+        let from = (chunk.repeated > 0).then(|| t[chunk.repeated - chunk.repeated / 2]);
+        let rows_done = chunk.first_row + t.len();
+        let (first_row, last) = (chunk.first_row, chunk.last);
+        let stretch = (from, stream.stretch_end(&t, rows_done, last));
+        drop(t);
+        let mut hears = Hears {
+            merged,
+            spikes: Vec::new(),
+            duplicates: Vec::new(),
+        };
+        let grid = condition_read(
+            chunk.record,
+            &self.request.options().record,
+            self.name.to_owned(),
+            &mut hears,
+            &|at| relocate(first_row, at),
+        )?;
+        let raw = (grid.t0, grid.dt);
+        let (spikes, duplicates) = (
+            std::mem::take(&mut hears.spikes),
+            std::mem::take(&mut hears.duplicates),
+        );
+        let (data, _) = on_clock(grid, stream.later, &mut ())?;
+        stream.check(&data)?;
+        merged.spikes(spikes, raw, stream.raw, stretch);
+        merged.duplicates(duplicates, stretch);
+        merged.pieces(&data, stream, stretch);
+        Ok(Some(Prepared { data, stretch }))
+    }
 }
 
 /// A place a chunk's conditioning names, in the file: a sample by the file's row (a line of
@@ -341,6 +407,50 @@ impl Stream {
             setups: None,
             raw,
         })
+    }
+
+    /// Where the stretch of a chunk whose raw stamps are `t` ends (`rows_done` rows of the file
+    /// read with it): the next chunk repeats `r` rows and its stretch starts at its
+    /// `r − r/2`-th, this one's `len − r/2`-th; `None` for the last chunk.
+    fn stretch_end(&self, t: &[f64], rows_done: usize, last: bool) -> Option<f64> {
+        let r = self.keep.min(rows_done);
+        (!last).then(|| t[t.len().saturating_sub(r / 2).min(t.len() - 1)])
+    }
+
+    /// A chunk's windows assembled and compressed: each equation's system, how many windows,
+    /// and the setups (none when no window starts in its stretch).
+    #[allow(clippy::type_complexity)]
+    fn assemble(
+        &self,
+        request: &IdentifyRequest,
+        chunk: &Prepared,
+    ) -> Result<(Vec<LinearSystem>, usize, Option<Vec<Identifier>>), RunError> {
+        let data = &chunk.data;
+        let segments = self.windows(request, data, chunk.stretch)?;
+        if segments.is_empty() {
+            return Ok((Vec::new(), 0, None));
+        }
+        let n = request.equations();
+        let coordinates = data.coordinates();
+        let drives: Vec<&[f64]> = data.drives.iter().map(Vec::as_slice).collect();
+        let setups = (0..n)
+            .map(|i| {
+                request
+                    .equation_spec(data, request.options().method, i)?
+                    .setup(&data.clock)
+                    .map_err(RunError::from)
+            })
+            .collect::<Result<Vec<_>, RunError>>()?;
+        let signals = (0..n)
+            .map(|i| {
+                Signals::system(coordinates.clone(), i)
+                    .and_then(|sig| sig.with_drives(drives.clone()))
+                    .map_err(|e| self.identify_error(request, Some(i), e))
+            })
+            .collect::<Result<Vec<_>, RunError>>()?;
+        let systems = Identifier::systems_grouped(&setups, &signals, &segments, self.group)
+            .map_err(|e| self.identify_error(request, None, e))?;
+        Ok((systems, segments.len(), Some(setups)))
     }
 
     /// That a later chunk is on the first one's clock.
@@ -475,17 +585,16 @@ impl Merged {
     /// A notice told once, by its text; of the chunks' grid notes, whose numbers differ from
     /// chunk to chunk, one: the worst chunk's (the largest deviation from its grid).
     fn hold(&mut self, notice: &Notice) {
-        if let Notice::Record(Note::Grid(new)) = notice {
-            if let Some(Notice::Record(Note::Grid(old))) = self
+        if let Notice::Record(Note::Grid(new)) = notice
+            && let Some(Notice::Record(Note::Grid(old))) = self
                 .later
                 .iter_mut()
                 .find(|n| matches!(n, Notice::Record(Note::Grid(_))))
-            {
-                if new.max_fraction() > old.max_fraction() {
-                    *old = new.clone();
-                }
-                return;
+        {
+            if new.max_fraction() > old.max_fraction() {
+                *old = new.clone();
             }
+            return;
         }
         let text = format!("{notice:?}");
         if !self.told.contains(&text) {
