@@ -272,8 +272,8 @@ fn render_streamed(
         s,
         "The windowed method with the record's file read {} rows at a time (`hbid identify FILE \
          --stream`, the default for files of 256 MiB or more: 10^7 samples of these records are 229 \
-         MiB), each chunk conditioned and its windows assembled and compressed before the next is \
-         read (`hb_pipeline::stream`); the median of {repeats} runs. The last column is the largest \
+         MiB), each chunk's windows assembled and compressed while the next chunk is read and \
+         conditioned (`hb_pipeline::stream`); the median of {repeats} runs. The last column is the largest \
          difference of a coefficient from the same record read whole (above), over the largest \
          coefficient.\n",
         hb_pipeline::stream::CHUNK_ROWS
@@ -309,8 +309,9 @@ fn render_streamed(
         writeln!(
             s,
             "\nThe slope of log(time) against log(samples) over these sizes: {slope:.3}. The peak memory is \
-             the chunks' (a few hundred MiB whatever the record's length: two chunks' columns, their \
-             windows' rows, and at most 65 536 compressed blocks of the regression)."
+             two chunks' columns and windows' rows, at most 65 536 compressed blocks of the \
+             regression, and what glibc's heap keeps of the chunks' freed buffers, which grows from \
+             10^7 to 10^8 samples (`docs/performance.md`; 10^9 was not run)."
         )?;
     }
     Ok(())

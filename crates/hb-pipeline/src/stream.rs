@@ -172,7 +172,7 @@ fn streamed_in(
     }
     let mut s = stream;
     let first = first_data.expect("the first chunk's record");
-    merged.tell(observer, &s);
+    merged.tell(observer);
     let Some(setups) = s.setups.take() else {
         return Err(OptionError::new(
             "window_periods",
@@ -232,6 +232,10 @@ fn streamed_in(
         observer,
     )
 }
+
+/// A chunk's rows: each equation's compressed system, how many windows, and the setups (none
+/// when no window starts in the chunk's stretch).
+type ChunkRows = (Vec<LinearSystem>, usize, Option<Vec<Identifier>>);
 
 /// A chunk read and conditioned, on the record's clock, with its stretch.
 struct Prepared {
@@ -419,12 +423,7 @@ impl Stream {
 
     /// A chunk's windows assembled and compressed: each equation's system, how many windows,
     /// and the setups (none when no window starts in its stretch).
-    #[allow(clippy::type_complexity)]
-    fn assemble(
-        &self,
-        request: &IdentifyRequest,
-        chunk: &Prepared,
-    ) -> Result<(Vec<LinearSystem>, usize, Option<Vec<Identifier>>), RunError> {
+    fn assemble(&self, request: &IdentifyRequest, chunk: &Prepared) -> Result<ChunkRows, RunError> {
         let data = &chunk.data;
         let segments = self.windows(request, data, chunk.stretch)?;
         if segments.is_empty() {
@@ -680,7 +679,7 @@ impl Merged {
     }
 
     /// Tells `observer` what was held back: the spikes of every chunk and the gaps.
-    fn tell(&mut self, observer: &mut dyn Observer, _s: &Stream) {
+    fn tell(&mut self, observer: &mut dyn Observer) {
         for (column, note, found) in std::mem::take(&mut self.spikes) {
             let Note::Spikes {
                 coordinate,

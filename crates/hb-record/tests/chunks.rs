@@ -177,7 +177,7 @@ fn text_chunks_are_the_file_and_name_its_lines() {
 }
 
 #[test]
-fn fortran_arrays_and_standard_input_are_read_whole() {
+fn fortran_arrays_standard_input_and_cr_alone_are_read_whole() {
     let path = file("f.npy", &npy_bytes("<f8", "(2, 2)", true, &[0u8; 32]));
     assert!(matches!(
         Chunks::open(&path, &ReadOptions::default()).unwrap(),
@@ -187,4 +187,15 @@ fn fortran_arrays_and_standard_input_are_read_whole() {
         Chunks::open(std::path::Path::new("-"), &ReadOptions::default()).unwrap(),
         Opened::Whole(_)
     ));
+    let cr = file("cr.csv", b"t,theta\r0,0.1\r0.1,0.2\r0.2,0.3\r");
+    assert!(matches!(
+        Chunks::open(&cr, &ReadOptions::default()).unwrap(),
+        Opened::Whole(_)
+    ));
+    // CR LF is read in chunks, as the whole file is.
+    let crlf: String = (0..40).map(|i| format!("{},{}\r\n", 0.1 * i as f64, i)).collect();
+    let path = file("crlf.csv", format!("t,theta\r\n{crlf}").as_bytes());
+    let whole = read_path(&path, &ReadOptions::default()).unwrap();
+    let (joined, _) = read_all(chunks(&path, &ReadOptions::default()), 15, 4);
+    assert_eq!((joined.t, joined.theta), (whole.t, whole.theta));
 }

@@ -138,6 +138,15 @@ impl Chunks {
                 None => return Ok(Opened::Whole("an .npy array in Fortran order is read whole")),
             }
         } else {
+            // A text whose lines end in CR alone (the reader's other line end) is one line to a
+            // reader of lines ending in LF: read whole.
+            let mut head = vec![0u8; 1 << 16];
+            let got = read_up_to(&mut file, &mut head).map_err(io)?;
+            file.seek(SeekFrom::Start(0)).map_err(io)?;
+            let head = &head[..got];
+            if memchr::memchr(b'\n', head).is_none() && memchr::memchr(b'\r', head).is_some() {
+                return Ok(Opened::Whole("a text whose lines end in CR alone is read whole"));
+            }
             Source::Text {
                 reader: BufReader::with_capacity(1 << 20, file),
                 prefix: Vec::new(),
