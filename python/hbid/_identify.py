@@ -504,8 +504,9 @@ def identify(
             parameter weights, the own acceleration's included), or the path of its JSON file.
             Its keys are the terms, so it replaces ``terms``; :attr:`Identification.parameters`
             holds the parameters with their standard errors and bootstrap intervals.
-        stream: read the record's file in chunks, so that memory does not grow with the record
-            (the weak form; the default for a file of 256 MiB or more).
+        stream: read the record's file in chunks, never holding the whole record (the weak form;
+            the default for a file of 256 MiB or more; ``drive_frequency="auto"`` is then
+            estimated on the first chunk).
         no_stream: read the record's file whole, however large.
         save_model: also save the model here (JSON for a ``.json`` name, compact binary
             otherwise).

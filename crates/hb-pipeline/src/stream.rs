@@ -278,6 +278,7 @@ impl Reading<'_> {
             relocate(first_row, at)
         })?;
         let raw = (grid.t0, grid.dt);
+        let raw_pieces = grid.pieces.clone();
         let (data, period) = on_clock(grid, self.request.drive(), &mut hears)?;
         let (spikes, duplicates) = (
             std::mem::take(&mut hears.spikes),
@@ -288,11 +289,20 @@ impl Reading<'_> {
             let read = chunks.bytes_read().max(1) as f64;
             (self.file_bytes as f64 / read * rows_done as f64).ceil() as usize
         });
+        if matches!(self.request.drive(), DriveSpec::Auto(_)) && !last {
+            hears.merged.hold(&Notice::Warning(format!(
+                "the drive's period was estimated on the first {rows_done} rows, the record being read in chunks \
+                 («stream»): its error grows into the drive's phase over the whole record and leaks into the \
+                 drive terms' coefficients; give «drive_frequency», or estimate it on the record read whole \
+                 («stream=false»)"
+            )));
+        }
         let stream = Stream::new(self.request, &data, period, raw, rows)?;
         let stretch = (None, stream.stretch_end(&t, rows_done, last));
         merged.spikes(spikes, raw, stream.raw, stretch);
         merged.duplicates(duplicates, stretch);
         merged.pieces(&data, &stream, stretch);
+        merged.raw_pieces(&raw_pieces, raw, &stream, stretch);
         Ok(Some((Prepared { data, stretch }, stream)))
     }
 
@@ -331,6 +341,7 @@ impl Reading<'_> {
             &|at| relocate(first_row, at),
         )?;
         let raw = (grid.t0, grid.dt);
+        let raw_pieces = grid.pieces.clone();
         let (spikes, duplicates) = (
             std::mem::take(&mut hears.spikes),
             std::mem::take(&mut hears.duplicates),
@@ -340,6 +351,7 @@ impl Reading<'_> {
         merged.spikes(spikes, raw, stream.raw, stretch);
         merged.duplicates(duplicates, stretch);
         merged.pieces(&data, stream, stretch);
+        merged.raw_pieces(&raw_pieces, raw, stream, stretch);
         Ok(Some(Prepared { data, stretch }))
     }
 }
@@ -537,52 +549,51 @@ struct Merged {
     later: Vec<Notice>,
     /// The record's pieces, grid indices from its first sample.
     global_pieces: Vec<Range<usize>>,
-    gaps: usize,
-    missing: usize,
+    /// The record's pieces on its grid as fitted (before any resampling), for its gaps.
+    record_pieces: Vec<Range<usize>>,
     /// The rows written twice, merged.
     duplicated: Option<Note>,
 }
 
 impl Merged {
     /// Adds the pieces of `data` (a chunk's) within its stretch to the record's.
-    fn pieces(&mut self, data: &Data, s: &Stream, (from, to): (Option<f64>, Option<f64>)) {
+    fn pieces(&mut self, data: &Data, s: &Stream, stretch: (Option<f64>, Option<f64>)) {
         let base = ((data.clock.start_time() - s.t0) / s.h).round() as i64;
-        let half = 0.5 * s.h;
-        let inside = |j: usize| {
-            let t = data.clock.time(j);
-            from.is_none_or(|f| t >= f - half) && to.is_none_or(|e| t < e - half)
-        };
-        for piece in &data.pieces {
-            let (mut a, mut b) = (piece.start, piece.end);
-            while a < b && !inside(a) {
-                a += 1;
-            }
-            while b > a && !inside(b - 1) {
-                b -= 1;
-            }
-            if a == b {
-                continue;
-            }
-            let (ga, gb) = (
-                (base + a as i64).max(0) as usize,
-                (base + b as i64).max(0) as usize,
-            );
-            // A piece that goes on into the next chunk: its grid (resampled on its own) may be
-            // off this one's by a fraction of a step, so its first index by one.
-            match self.global_pieces.last_mut() {
-                Some(last) if last.end + 1 >= ga => last.end = last.end.max(gb),
-                Some(last) => {
-                    self.gaps += 1;
-                    self.missing += ga - last.end;
-                    self.global_pieces.push(ga..gb);
-                }
-                None => self.global_pieces.push(ga..gb),
-            }
-        }
+        add_pieces(
+            &mut self.global_pieces,
+            &data.pieces,
+            |j| data.clock.time(j),
+            s.h,
+            base,
+            stretch,
+        );
+    }
+
+    /// Adds the pieces of a chunk's grid as fitted (`raw`: its time of sample 0 and step; before
+    /// any resampling) within its stretch to the record's, for its gaps: counted in the samples
+    /// of the record's grid, as a record read whole counts them.
+    fn raw_pieces(
+        &mut self,
+        pieces: &[Range<usize>],
+        raw: (f64, f64),
+        s: &Stream,
+        stretch: (Option<f64>, Option<f64>),
+    ) {
+        let base = ((raw.0 - s.raw.0) / s.raw.1).round() as i64;
+        add_pieces(
+            &mut self.record_pieces,
+            pieces,
+            |j| raw.0 + j as f64 * raw.1,
+            raw.1,
+            base,
+            stretch,
+        );
     }
 
     /// A notice told once, by its text; of the chunks' grid notes, whose numbers differ from
-    /// chunk to chunk, one: the worst chunk's (the largest deviation from its grid).
+    /// chunk to chunk, one: the first chunk's, or a later one's that is a warning where the first
+    /// is not (the first chunk decides what the record's stamps are printed with, as the whole
+    /// record does: a later chunk's larger stamps print with fewer decimals).
     fn hold(&mut self, notice: &Notice) {
         if let Notice::Record(Note::Grid(new)) = notice
             && let Some(Notice::Record(Note::Grid(old))) = self
@@ -590,7 +601,7 @@ impl Merged {
                 .iter_mut()
                 .find(|n| matches!(n, Notice::Record(Note::Grid(_))))
         {
-            if new.max_fraction() > old.max_fraction() {
+            if new.is_warning() && !old.is_warning() {
                 *old = new.clone();
             }
             return;
@@ -706,14 +717,53 @@ impl Merged {
         if let Some(note) = self.duplicated.take() {
             observer.notice(&Notice::Record(note));
         }
-        if self.gaps > 0 {
-            observer.notice(&Notice::Record(Note::Gaps {
-                gaps: self.gaps,
-                missing: self.missing,
-            }));
+        let gaps = self.record_pieces.len().saturating_sub(1);
+        if gaps > 0 {
+            let missing = self.record_pieces.windows(2).map(|w| w[1].start - w[0].end).sum();
+            observer.notice(&Notice::Record(Note::Gaps { gaps, missing }));
         }
         for notice in std::mem::take(&mut self.later) {
             observer.notice(&notice);
+        }
+    }
+}
+
+/// Appends `pieces` (a chunk's, on a grid of step `h` whose sample 0 is `base` steps after the
+/// record's, `time` of each sample) within `(from, to)` (raw stamps) to `into` (the record's,
+/// indices from its first sample), a piece that goes on from the chunk before joined to it (a
+/// grid resampled on its own may be off the chunk before's by a fraction of a step, so its
+/// first index by one).
+fn add_pieces(
+    into: &mut Vec<Range<usize>>,
+    pieces: &[Range<usize>],
+    time: impl Fn(usize) -> f64,
+    h: f64,
+    base: i64,
+    (from, to): (Option<f64>, Option<f64>),
+) {
+    let half = 0.5 * h;
+    let inside = |j: usize| {
+        let t = time(j);
+        from.is_none_or(|f| t >= f - half) && to.is_none_or(|e| t < e - half)
+    };
+    for piece in pieces {
+        let (mut a, mut b) = (piece.start, piece.end);
+        while a < b && !inside(a) {
+            a += 1;
+        }
+        while b > a && !inside(b - 1) {
+            b -= 1;
+        }
+        if a == b {
+            continue;
+        }
+        let (ga, gb) = (
+            (base + a as i64).max(0) as usize,
+            (base + b as i64).max(0) as usize,
+        );
+        match into.last_mut() {
+            Some(last) if last.end + 1 >= ga => last.end = last.end.max(gb),
+            _ => into.push(ga..gb),
         }
     }
 }
@@ -887,6 +937,16 @@ mod tests {
         let (m, s) = (spikes(&memory), spikes(&notices));
         assert!(!m.is_empty());
         assert_eq!(m, s);
+        // A drive estimated on the first chunk only is warned of.
+        let auto = super::tests::request(serde_json::json!({"drive_frequency": "auto"}));
+        let mut told = Notices::default();
+        streamed_in(&path, &auto, &mut told, 30_000).unwrap();
+        assert!(
+            told.0
+                .iter()
+                .any(|n| matches!(n, Notice::Warning(w) if w.contains("first") && w.contains("stream"))),
+            "{told:?}"
+        );
     }
 
     #[test]

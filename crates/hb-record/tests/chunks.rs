@@ -133,6 +133,23 @@ fn npy_chunks_name_the_file_s_rows_and_count_times_from_its_first() {
 }
 
 #[test]
+fn text_chunks_without_a_time_column_count_times_from_the_file_s_first_row() {
+    let mut text = String::from("# one column\ntheta\n");
+    for i in 0..70 {
+        text.push_str(&format!("{}\n", (0.3 * i as f64).sin()));
+    }
+    let path = file("step.txt", text.as_bytes());
+    let options = ReadOptions {
+        dt: Some(0.002),
+        ..ReadOptions::default()
+    };
+    let whole = read_path(&path, &options).unwrap();
+    let (joined, all) = read_all(chunks(&path, &options), 20, 6);
+    assert!(all.len() >= 3);
+    assert_eq!((joined.t, joined.theta), (whole.t, whole.theta));
+}
+
+#[test]
 fn text_chunks_are_the_file_and_name_its_lines() {
     let mut text = String::from("# logger 7\n# rate 100 Hz\ntime [s],angle [rad]\n");
     for i in 0..90 {

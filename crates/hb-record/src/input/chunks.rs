@@ -375,8 +375,10 @@ impl Chunks {
         }
         // Times of a record without a time column from the file's first row.
         if let Some(dt) = self.options.dt {
+            // The chunk's first row of data (a text's found above from its lines).
+            let first = chunk.first_row;
             for (i, t) in chunk.record.t.iter_mut().enumerate() {
-                *t = (first_row + i) as f64 * dt;
+                *t = (first + i) as f64 * dt;
             }
         }
         Ok(Some(chunk))

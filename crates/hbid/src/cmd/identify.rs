@@ -169,8 +169,9 @@ pub struct IdentifyArgs {
     /// a window together. The saved model holds each equation divided by its A.
     #[arg(long, value_name = "PATH", verbatim_doc_comment)]
     pub tie: Option<PathBuf>,
-    /// Read the record's file in chunks of 2^21 rows, so that memory does not grow with the
-    /// record (the weak form; default for files of 256 MiB or more: docs/scale.md).
+    /// Read the record's file in chunks of 2^21 rows, never holding the whole record (the weak
+    /// form; the default for files of 256 MiB or more; a drive estimated with
+    /// --drive-frequency auto is estimated on the first chunk: docs/scale.md).
     #[arg(long, conflicts_with = "no_stream")]
     pub stream: bool,
     /// Read the record's file whole, however large.
