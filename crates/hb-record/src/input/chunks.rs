@@ -274,18 +274,10 @@ impl Chunks {
                             // A line that goes on past the block: read on.
                             break;
                         };
-                        let text = &rest[..=end];
                         *line += 1;
-                        let data = !is_blank_or_comment(text);
-                        data_rows += usize::from(data);
+                        data_rows +=
+                            usize::from(push_line(&mut bytes, &mut held, &mut lines, *line, &rest[..=end]));
                         new_lines += 1;
-                        held.push(HeldLine {
-                            line: *line,
-                            start: bytes.len(),
-                            data,
-                        });
-                        lines.push(*line);
-                        bytes.extend_from_slice(text);
                         used += end + 1;
                     }
                     if used == 0 {
@@ -294,20 +286,12 @@ impl Chunks {
                         let mut text = Vec::new();
                         let n = reader.read_until(b'\n', &mut text).map_err(io)?;
                         self.bytes += n as u64;
-                        *line += 1;
-                        let data = !is_blank_or_comment(&text);
-                        data_rows += usize::from(data);
-                        new_lines += 1;
-                        held.push(HeldLine {
-                            line: *line,
-                            start: bytes.len(),
-                            data,
-                        });
-                        lines.push(*line);
-                        bytes.extend_from_slice(&text);
                         if !text.ends_with(b"\n") {
-                            bytes.push(b'\n');
+                            text.push(b'\n');
                         }
+                        *line += 1;
+                        data_rows += usize::from(push_line(&mut bytes, &mut held, &mut lines, *line, &text));
+                        new_lines += 1;
                         continue;
                     }
                     self.bytes += used as u64;
@@ -392,6 +376,26 @@ struct HeldLine {
     line: u64,
     start: usize,
     data: bool,
+}
+
+/// Appends line number `line` (its `text`, ending in LF) to a chunk's `bytes`, its index `held`
+/// and its `lines`; whether it holds a row of data.
+fn push_line(
+    bytes: &mut Vec<u8>,
+    held: &mut Vec<HeldLine>,
+    lines: &mut Vec<u64>,
+    line: u64,
+    text: &[u8],
+) -> bool {
+    let data = !is_blank_or_comment(text);
+    held.push(HeldLine {
+        line,
+        start: bytes.len(),
+        data,
+    });
+    lines.push(line);
+    bytes.extend_from_slice(text);
+    data
 }
 
 /// Whether a line holds no row of data for the reader: blank, or a comment (`#`).
