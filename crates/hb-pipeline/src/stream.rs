@@ -323,7 +323,9 @@ impl Reading<'_> {
         // The chunk's own stretch: from the middle of its overlap with the chunk before to the
         // middle of the next one's with it, in the time of the raw stamps.
         let t = chunk.record.t.clone();
-        let from = (chunk.repeated > 0).then(|| t[chunk.repeated - chunk.repeated / 2]);
+        let from = (chunk.repeated > 0)
+            .then(|| t.get(chunk.repeated - chunk.repeated / 2).copied())
+            .flatten();
         let rows_done = chunk.first_row + t.len();
         let (first_row, last) = (chunk.first_row, chunk.last);
         let stretch = (from, stream.stretch_end(&t, rows_done, last));
@@ -430,7 +432,12 @@ impl Stream {
     /// `r − r/2`-th, this one's `len − r/2`-th; `None` for the last chunk.
     fn stretch_end(&self, t: &[f64], rows_done: usize, last: bool) -> Option<f64> {
         let r = self.keep.min(rows_done);
-        (!last).then(|| t[t.len().saturating_sub(r / 2).min(t.len() - 1)])
+        (!last)
+            .then(|| {
+                t.get(t.len().saturating_sub(r / 2).min(t.len().saturating_sub(1)))
+                    .copied()
+            })
+            .flatten()
     }
 
     /// A chunk's windows assembled and compressed: each equation's system, how many windows,
