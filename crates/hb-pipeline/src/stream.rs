@@ -289,13 +289,26 @@ impl Reading<'_> {
             let read = chunks.bytes_read().max(1) as f64;
             (self.file_bytes as f64 / read * rows_done as f64).ceil() as usize
         });
-        if matches!(self.request.drive(), DriveSpec::Auto(_)) && !last {
-            hears.merged.hold(&Notice::Warning(format!(
-                "the drive's period was estimated on the first {rows_done} rows, the record being read in chunks \
+        let found_on_first = match self.request.drive() {
+            DriveSpec::Auto(_) => Some(
+                "the drive's period was estimated on the first {rows} rows, the record being read in chunks \
                  («stream»): its error grows into the drive's phase over the whole record and leaks into the \
                  drive terms' coefficients; give «drive_frequency», or estimate it on the record read whole \
-                 («stream=false»)"
-            )));
+                 («stream=false»)",
+            ),
+            DriveSpec::Free => Some(
+                "the free oscillation's period, the windows' unit, was found on the first {rows} rows, the record \
+                 being read in chunks («stream»): a decaying oscillation's period changes over the record; give \
+                 the windows' length («window»), or read the record whole («stream=false»)",
+            ),
+            _ => None,
+        };
+        if let Some(text) = found_on_first
+            && !last
+        {
+            hears
+                .merged
+                .hold(&Notice::Warning(text.replace("{rows}", &rows_done.to_string())));
         }
         let stream = Stream::new(self.request, &data, period, raw, rows)?;
         let stretch = (None, stream.stretch_end(&t, rows_done, last));
@@ -348,7 +361,10 @@ impl Reading<'_> {
             std::mem::take(&mut hears.spikes),
             std::mem::take(&mut hears.duplicates),
         );
-        let (data, _) = on_clock(grid, stream.later, &mut ())?;
+        let (mut data, _) = on_clock(grid, stream.later, &mut ())?;
+        // On the first chunk's period, the first chunk's kind of drive (a free oscillation's
+        // model has no drive terms, whatever period its windows are cut by).
+        data.drive = stream.drive.clone();
         stream.check(&data)?;
         merged.spikes(spikes, raw, stream.raw, stretch);
         merged.duplicates(duplicates, stretch);
@@ -371,6 +387,8 @@ fn relocate(first_row: usize, at: Location) -> Location {
 struct Stream {
     /// The period's source for the later chunks: the first one's period as given.
     later: DriveSpec,
+    /// What the first chunk found the period by (every chunk's record says it).
+    drive: hb_record::prepare::DriveFound,
     /// The record's grid after resampling: the time of its sample 0 and its step.
     t0: f64,
     h: f64,
@@ -414,6 +432,7 @@ impl Stream {
         let expected = (rows as f64 / rows_per_sample / windows.step() as f64).ceil() as usize;
         Ok(Self {
             later,
+            drive: data.drive.clone(),
             t0: data.clock.start_time(),
             h,
             p,
@@ -988,6 +1007,34 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn a_free_decay_in_chunks_is_the_free_decay_in_memory() {
+        // No drive: the windows' unit is the free oscillation's period, found on the first
+        // chunk (and warned of); every chunk's model is the free model's.
+        let path = record(
+            "free.npy",
+            serde_json::json!({"drive": "none", "x0": 2.5, "c": 2e-6, "drive_frequency": 2.0,
+                "sample_rate": 100.0, "samples": 120_000}),
+        );
+        let request = request(serde_json::json!({"forcing": "none"}));
+        let (whole, streamed, notices) = both(&path, &request, 30_000);
+        assert_eq!(values(&whole).len(), values(&streamed).len());
+        // The first chunk's period (the record read whole finds it on the longest piece).
+        assert!(
+            same(&whole, &streamed, 1e-3),
+            "{:?} vs {:?}",
+            values(&whole),
+            values(&streamed)
+        );
+        assert!(
+            notices
+                .0
+                .iter()
+                .any(|n| matches!(n, Notice::Warning(w) if w.contains("free oscillation"))),
+            "{notices:?}"
+        );
     }
 
     #[test]
