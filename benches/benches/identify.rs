@@ -1,5 +1,6 @@
 //! The whole `hbid identify` as a user runs it (process start, reading, delay, segments, assembly,
-//! least squares, 1000 bootstrap resamples): on the paper's data set and on 10^6 samples.
+//! least squares, 1000 bootstrap resamples): on the paper's data set and on 10^6 samples, read
+//! whole and in chunks (`--stream`).
 //!
 //! The release `hbid` is built first by the same `cargo` (`cargo build --release -p hbid`): it
 //! lives here and not in the `hbid` package so that `cargo test` builds no criterion.
@@ -72,6 +73,11 @@ fn bench(c: &mut Criterion) {
             b.iter(|| hbid(&["identify", "--quiet", "--method", method], &record))
         });
     }
+    // The same record read in chunks (one chunk of it: the reading, conditioning and compressed
+    // assembly of `hb_pipeline::stream` against the record read whole above).
+    group.bench_function("simulated_1e6_npy/windowed_stream", |b| {
+        b.iter(|| hbid(&["identify", "--quiet", "--stream"], &record))
+    });
     group.finish();
 }
 

@@ -485,8 +485,13 @@ impl Stream {
                     .map_err(|e| self.identify_error(request, Some(i), e))
             })
             .collect::<Result<Vec<_>, RunError>>()?;
-        let systems = Identifier::systems_grouped(&setups, &signals, &segments, self.group)
-            .map_err(|e| self.identify_error(request, None, e))?;
+        // A record of fewer windows than the regression's bound keeps its rows, as read whole.
+        let systems = if self.group == 1 {
+            Identifier::systems(&setups, &signals, &segments)
+        } else {
+            Identifier::systems_grouped(&setups, &signals, &segments, self.group)
+        }
+        .map_err(|e| self.identify_error(request, None, e))?;
         Ok((systems, segments.len(), Some(setups)))
     }
 
