@@ -237,6 +237,15 @@ fn streamed_in(
 /// when no window starts in the chunk's stretch).
 type ChunkRows = (Vec<LinearSystem>, usize, Option<Vec<Identifier>>);
 
+/// What a chunk's conditioning found that its stretch decides: its spikes and rows written
+/// twice, and its grid as fitted (time of sample 0, step, pieces) for its gaps.
+struct Held {
+    spikes: Vec<(Option<String>, Note)>,
+    duplicates: Vec<Note>,
+    raw: (f64, f64),
+    raw_pieces: Vec<Range<usize>>,
+}
+
 /// A chunk read and conditioned, on the record's clock, with its stretch.
 struct Prepared {
     data: Data,
@@ -265,25 +274,11 @@ impl Reading<'_> {
         let Some(chunk) = chunks.next_chunk(self.chunk_rows, 0).map_err(self.read_error)? else {
             return Ok(None);
         };
-        let options = &self.request.options().record;
         let t = chunk.record.t.clone();
         let rows_done = chunk.first_row + t.len();
-        let (first_row, last) = (chunk.first_row, chunk.last);
-        let mut hears = Hears {
-            merged,
-            spikes: Vec::new(),
-            duplicates: Vec::new(),
-        };
-        let grid = condition_read(chunk.record, options, self.name.to_owned(), &mut hears, &|at| {
-            relocate(first_row, at)
-        })?;
-        let raw = (grid.t0, grid.dt);
-        let raw_pieces = grid.pieces.clone();
-        let (data, period) = on_clock(grid, self.request.drive(), &mut hears)?;
-        let (spikes, duplicates) = (
-            std::mem::take(&mut hears.spikes),
-            std::mem::take(&mut hears.duplicates),
-        );
+        let last = chunk.last;
+        let (grid, held) = self.condition(chunk.record, chunk.first_row, merged)?;
+        let (data, period) = on_clock(grid, self.request.drive(), merged)?;
         let rows = self.total_rows.unwrap_or_else(|| {
             // A text's rows, estimated from the bytes of the first chunk's.
             let read = chunks.bytes_read().max(1) as f64;
@@ -306,16 +301,11 @@ impl Reading<'_> {
         if let Some(text) = found_on_first
             && !last
         {
-            hears
-                .merged
-                .hold(&Notice::Warning(text.replace("{rows}", &rows_done.to_string())));
+            merged.hold(&Notice::Warning(text.replace("{rows}", &rows_done.to_string())));
         }
-        let stream = Stream::new(self.request, &data, period, raw, rows)?;
+        let stream = Stream::new(self.request, &data, period, held.raw, rows)?;
         let stretch = (None, stream.stretch_end(&t, rows_done, last));
-        merged.spikes(spikes, raw, stream.raw, stretch);
-        merged.duplicates(duplicates, stretch);
-        merged.pieces(&data, &stream, stretch);
-        merged.raw_pieces(&raw_pieces, raw, &stream, stretch);
+        merged.add(held, &data, &stream, stretch);
         Ok(Some((Prepared { data, stretch }, stream)))
     }
 
@@ -335,42 +325,49 @@ impl Reading<'_> {
         };
         // The chunk's own stretch: from the middle of its overlap with the chunk before to the
         // middle of the next one's with it, in the time of the raw stamps.
-        let t = chunk.record.t.clone();
+        let t = &chunk.record.t;
         let from = (chunk.repeated > 0)
             .then(|| t.get(chunk.repeated - chunk.repeated / 2).copied())
             .flatten();
-        let rows_done = chunk.first_row + t.len();
-        let (first_row, last) = (chunk.first_row, chunk.last);
-        let stretch = (from, stream.stretch_end(&t, rows_done, last));
-        drop(t);
+        let stretch = (from, stream.stretch_end(t, chunk.first_row + t.len(), chunk.last));
+        let (grid, held) = self.condition(chunk.record, chunk.first_row, merged)?;
+        let (mut data, _) = on_clock(grid, stream.later, &mut ())?;
+        // On the first chunk's period, the first chunk's kind of drive (a free oscillation's
+        // model has no drive terms, whatever period its windows are cut by).
+        data.drive = stream.drive.clone();
+        stream.check(&data)?;
+        merged.add(held, &data, stream, stretch);
+        Ok(Some(Prepared { data, stretch }))
+    }
+
+    /// A chunk's `record` (its first row `first_row` of the file) conditioned; its notes of
+    /// spikes and of rows written twice held with its grid as fitted until its stretch is known,
+    /// its other notices merged.
+    fn condition(
+        &self,
+        record: hb_record::input::Record,
+        first_row: usize,
+        merged: &mut Merged,
+    ) -> Result<(hb_record::prepare::GridData, Held), RunError> {
         let mut hears = Hears {
             merged,
             spikes: Vec::new(),
             duplicates: Vec::new(),
         };
         let grid = condition_read(
-            chunk.record,
+            record,
             &self.request.options().record,
             self.name.to_owned(),
             &mut hears,
             &|at| relocate(first_row, at),
         )?;
-        let raw = (grid.t0, grid.dt);
-        let raw_pieces = grid.pieces.clone();
-        let (spikes, duplicates) = (
-            std::mem::take(&mut hears.spikes),
-            std::mem::take(&mut hears.duplicates),
-        );
-        let (mut data, _) = on_clock(grid, stream.later, &mut ())?;
-        // On the first chunk's period, the first chunk's kind of drive (a free oscillation's
-        // model has no drive terms, whatever period its windows are cut by).
-        data.drive = stream.drive.clone();
-        stream.check(&data)?;
-        merged.spikes(spikes, raw, stream.raw, stretch);
-        merged.duplicates(duplicates, stretch);
-        merged.pieces(&data, stream, stretch);
-        merged.raw_pieces(&raw_pieces, raw, stream, stretch);
-        Ok(Some(Prepared { data, stretch }))
+        let held = Held {
+            spikes: hears.spikes,
+            duplicates: hears.duplicates,
+            raw: (grid.t0, grid.dt),
+            raw_pieces: grid.pieces.clone(),
+        };
+        Ok((grid, held))
     }
 }
 
@@ -621,6 +618,14 @@ impl Merged {
         );
     }
 
+    /// Adds a chunk's `held` findings and the pieces of its `data` within its `stretch`.
+    fn add(&mut self, held: Held, data: &Data, s: &Stream, stretch: (Option<f64>, Option<f64>)) {
+        self.spikes(held.spikes, held.raw, s.raw, stretch);
+        self.duplicates(held.duplicates, stretch);
+        self.pieces(data, s, stretch);
+        self.raw_pieces(&held.raw_pieces, held.raw, s, stretch);
+    }
+
     /// A notice told once, by its text; of the chunks' grid notes, whose numbers differ from
     /// chunk to chunk, one: the first chunk's, or a later one's that is a warning where the first
     /// is not (the first chunk decides what the record's stamps are printed with, as the whole
@@ -796,6 +801,14 @@ fn add_pieces(
             Some(last) if last.end + 1 >= ga => last.end = last.end.max(gb),
             _ => into.push(ga..gb),
         }
+    }
+}
+
+/// The notices of the first chunk's clock (the drive estimated, the period found, the
+/// resampling), held as any other.
+impl Observer for Merged {
+    fn notice(&mut self, notice: &Notice) {
+        self.hold(notice);
     }
 }
 
