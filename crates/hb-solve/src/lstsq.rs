@@ -500,7 +500,7 @@ impl LstsqSolver for QrSolver {
     }
 
     fn solve(&self, a: MatRef<'_, f64>, b: ColRef<'_, f64>) -> Result<LstsqFit, SolveError> {
-        on_factor_pool(|| self.solve_here(a, b, a.nrows()))
+        self.solve_standing_for(a, b, a.nrows())
     }
 
     fn solve_standing_for(
@@ -592,7 +592,7 @@ impl LstsqSolver for SvdSolver {
     }
 
     fn solve(&self, a: MatRef<'_, f64>, b: ColRef<'_, f64>) -> Result<LstsqFit, SolveError> {
-        on_factor_pool(|| self.solve_here(a, b, a.nrows()))
+        self.solve_standing_for(a, b, a.nrows())
     }
 
     fn solve_standing_for(

@@ -1091,6 +1091,25 @@ fn simulated(dir: &Path, name: &str, args: &[&str]) -> PathBuf {
     path
 }
 
+/// A record of 6400 samples of `system` (`hbid simulate --system`) in `dir`, and its truth.
+fn simulated_system(dir: &Path, name: &str, system: &str) -> (PathBuf, serde_json::Value) {
+    let truth = dir.join(format!("{name}.truth.json"));
+    let record = simulated(
+        dir,
+        name,
+        &[
+            "--system",
+            system,
+            "--samples",
+            "6400",
+            "--truth",
+            truth.to_str().unwrap(),
+        ],
+    );
+    let hint = serde_json::from_str(&std::fs::read_to_string(&truth).unwrap()).unwrap();
+    (record, hint)
+}
+
 /// Without the rig options the record is what it always was: the same bytes as with every new
 /// option at its default, the header `t,theta,omega`, numbers printed in their shortest
 /// round-trip form, the first stamp after the transient, and equal seeds giving equal records.
@@ -3418,20 +3437,7 @@ fn angles_in_counts_or_degrees_are_read_in_their_unit() {
 #[test]
 fn a_systems_angles_in_degrees_are_named_and_read() {
     let dir = scratch("system-degrees");
-    let truth = dir.join("dp.json");
-    let radians = simulated(
-        &dir,
-        "dp.csv",
-        &[
-            "--system",
-            "double-pendulum",
-            "--samples",
-            "6400",
-            "--truth",
-            truth.to_str().unwrap(),
-        ],
-    );
-    let hint: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&truth).unwrap()).unwrap();
+    let (radians, hint) = simulated_system(&dir, "dp.csv", "double-pendulum");
     let terms = hint["identify"]["terms"].as_str().unwrap().to_owned();
     let (head, rows) = read_rows(&radians);
     let text: String = rows
@@ -3674,23 +3680,10 @@ fn double_pendulum_rigs_are_identified_within_a_percent() {
 #[test]
 fn coupled_duffing_truth_is_what_identify_recovers() {
     let dir = scratch("coupled-duffing-truth");
-    let truth = dir.join("truth.json");
-    let record = simulated(
-        &dir,
-        "cd.csv",
-        &[
-            "--system",
-            "coupled-duffing",
-            "--samples",
-            "6400",
-            "--truth",
-            truth.to_str().unwrap(),
-        ],
-    );
-    let hint: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&truth).unwrap()).unwrap();
+    let (record, hint) = simulated_system(&dir, "cd.csv", "coupled-duffing");
     assert_eq!(hint["identify"]["drive_col"], "a=6");
     // Measured: 1.7e-7; ten times that.
-    let worst = system_round_trip(&record, &truth);
+    let worst = system_round_trip(&record, &dir.join("cd.csv.truth.json"));
     assert!(worst < 2e-6, "worst relative error {worst:e}");
 }
 
