@@ -176,8 +176,22 @@ impl Stretch {
         // The residuals the statistics reach: up to MAX_RUN − 1 positions past the last.
         residuals::<G>(x, lo, (hi + MAX_RUN - 1).min(n), &mut self.residuals);
         self.stats.clear();
-        self.stats
-            .extend((lo..hi).map(|p| statistics(&self.residuals, lo, p, n, self.max_run)));
+        // Inside the record (`2 ≤ p`, `p + MAX_RUN + 2 ≤ n`) every sum is there: those positions
+        // in one loop over the residuals without a test per position (most of a stretch).
+        let inside = (lo.max(2), (n + 1).saturating_sub(MAX_RUN + 2).min(hi));
+        if inside.0 < inside.1 {
+            let (max_run, residuals) = (self.max_run, &self.residuals);
+            self.stats
+                .extend((lo..inside.0).map(|p| statistics(residuals, lo, p, n, max_run)));
+            let r = &residuals[inside.0 - lo..inside.1 - lo + MAX_RUN - 1];
+            self.stats
+                .extend(r.windows(MAX_RUN).map(|w| inside_sums(w, max_run)));
+            self.stats
+                .extend((inside.1..hi).map(|p| statistics(residuals, lo, p, n, max_run)));
+        } else {
+            self.stats
+                .extend((lo..hi).map(|p| statistics(&self.residuals, lo, p, n, self.max_run)));
+        }
         self.levels_ready = false;
     }
 
@@ -298,6 +312,21 @@ fn residuals<G: Geometry>(x: &[f64], from: usize, to: usize, out: &mut Vec<f64>)
     out.extend((inside_to.max(from)..to).map(|j| predict::<G>(x, j).0));
 }
 
+/// The statistics of a position inside the record (see [`statistics`]) from the `MAX_RUN`
+/// residuals from its own: every sum is there, the same sums without the tests, each width's
+/// division one lane of a vector's.
+#[inline(always)]
+fn inside_sums(r: &[f64], max_run: usize) -> [f64; MAX_RUN] {
+    let &[r0, r1, r2, r3] = r else {
+        unreachable!("MAX_RUN residuals");
+    };
+    let (s1, s2) = (r0, r0 + r1);
+    let s3 = s2 + r2;
+    let s4 = s3 + r3;
+    let sums = [s1.abs(), s2.abs(), s3.abs(), s4.abs()];
+    std::array::from_fn(|m| if m < max_run { sums[m] / SUM_GAINS[m] } else { 0.0 })
+}
+
 /// The statistics of sample `p` by width `m` (index `m − 1`) from the residuals of positions
 /// `first ..` of a record of `n` samples: its weighted residual (`m = 1`), and inside the record
 /// the sums of the centred residuals of `p ..= p + m − 1` over their noise gains for white noise
@@ -306,16 +335,7 @@ fn residuals<G: Geometry>(x: &[f64], from: usize, to: usize, out: &mut Vec<f64>)
 #[inline]
 fn statistics(residuals: &[f64], first: usize, p: usize, n: usize, max_run: usize) -> [f64; MAX_RUN] {
     if p >= 2 && p + MAX_RUN + 2 <= n {
-        // Inside the record every sum is there: the same sums, without the tests.
-        let r = &residuals[p - first..p - first + MAX_RUN];
-        let mut out = [0.0; MAX_RUN];
-        let mut sum = 0.0;
-        for m in 0..MAX_RUN {
-            sum += r[m];
-            out[m] = sum.abs() / SUM_GAINS[m];
-        }
-        out[max_run..].fill(0.0);
-        return out;
+        return inside_sums(&residuals[p - first..p - first + MAX_RUN], max_run);
     }
     let r = |j: usize| residuals[j - first];
     let mut out = [0.0; MAX_RUN];
