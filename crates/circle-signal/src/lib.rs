@@ -68,7 +68,9 @@ pub use integrate::{Measured, UnknownMeasured, cumulative_integral, displacement
 pub use oscillation::{NoOscillationReason, OscillationPeriod, oscillation_period};
 pub use resample::{RESAMPLE_HALF_WIDTH, Resampled, ResampledPieces, resample_pieces, resample_to_whole};
 pub use segment::{OrbitSource, Segment};
-pub use spikes::{Spike, SpikeParams, Spikes, find_and_repair_spikes, find_spikes, repair_spikes};
+pub use spikes::{
+    Spike, SpikeParams, Spikes, find_and_repair_spikes, find_spikes, find_spikes_in_place, repair_spikes,
+};
 pub use system::{Branch, MultiSystem, SecondOrderSystem, SingularMass};
 
 use std::f64::consts::{PI, TAU};

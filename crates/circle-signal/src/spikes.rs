@@ -572,6 +572,36 @@ pub fn find_spikes(x: &[f64], domain: Domain, params: &SpikeParams) -> Result<Sp
     find_and_repair_spikes(&mut work, domain, params)
 }
 
+/// Finds the outliers of `x` as [`find_spikes`] does, searching `x` itself and leaving it as it
+/// was (the search repairs what it finds as it goes; here those samples are put back at the
+/// end): the same outliers without a copy of the record.
+///
+/// ```
+/// use circle_signal::{Domain, SpikeParams, find_spikes, find_spikes_in_place};
+///
+/// let mut x: Vec<f64> = (0..2000).map(|i| (i as f64 * 0.05).sin()).collect();
+/// x[900] += 0.5;
+/// let before = x.clone();
+/// let params = SpikeParams::new();
+/// let found = find_spikes_in_place(&mut x, Domain::Line, &params)?;
+/// assert_eq!(x, before);
+/// assert_eq!(found, find_spikes(&x, Domain::Line, &params)?);
+/// assert_eq!(found.indices().collect::<Vec<_>>(), vec![900]);
+/// # Ok::<(), circle_signal::CircleError>(())
+/// ```
+pub fn find_spikes_in_place(
+    x: &mut [f64],
+    domain: Domain,
+    params: &SpikeParams,
+) -> Result<Spikes, CircleError> {
+    check_searchable(x)?;
+    let (spikes, originals) = search(x, domain, params, true);
+    for (i, v) in originals {
+        x[i] = v;
+    }
+    Ok(spikes)
+}
+
 /// Finds the outliers of `x` and replaces each by its local prediction, in place; the same
 /// outliers as [`find_spikes`], without a copy of the record.
 ///
@@ -581,6 +611,12 @@ pub fn find_and_repair_spikes(
     domain: Domain,
     params: &SpikeParams,
 ) -> Result<Spikes, CircleError> {
+    check_searchable(x)?;
+    Ok(search(x, domain, params, true).0)
+}
+
+/// Whether `x` can be searched: finite, and at least [`SpikeParams::MIN_SAMPLES`] long.
+fn check_searchable(x: &[f64]) -> Result<(), CircleError> {
     let n = x.len();
     if let Some((index, &value)) = x.iter().enumerate().find(|(_, v)| !v.is_finite()) {
         return Err(CircleError::NonFinite { index, value });
@@ -591,12 +627,18 @@ pub fn find_and_repair_spikes(
             needed: SpikeParams::MIN_SAMPLES,
         });
     }
-    Ok(search(x, domain, params, true))
+    Ok(())
 }
 
 /// The search of [`find_and_repair_spikes`] on a record it takes, with or without the
-/// `shortcuts` that spare it work (the same outliers either way; the tests compare them).
-fn search(x: &mut [f64], domain: Domain, params: &SpikeParams, shortcuts: bool) -> Spikes {
+/// `shortcuts` that spare it work (the same outliers either way; the tests compare them): the
+/// outliers, and the values of the samples it replaced.
+fn search(
+    x: &mut [f64],
+    domain: Domain,
+    params: &SpikeParams,
+    shortcuts: bool,
+) -> (Spikes, Vec<(usize, f64)>) {
     match domain {
         Domain::Circle => Search::<OnCircle>::run(x, params, TAU, shortcuts),
         Domain::Line => {
@@ -810,6 +852,8 @@ struct Search<'a, G> {
     /// unit (its prediction's noise gain times its threshold when it was flagged).
     bounds: BTreeMap<usize, f64>,
     spikes: Vec<Spike>,
+    /// The samples flagged and their values before, in the order flagged (each once).
+    originals: Vec<(usize, f64)>,
     /// The statistics and the local scale's levels of the stretch being swept.
     stretch: Stretch,
     /// Per use ([`SEARCHING`] or [`PEAK`]) and width of a statistic: the window last ranked for
@@ -897,7 +941,12 @@ impl Candidate {
 }
 
 impl<'a, G: Geometry> Search<'a, G> {
-    fn run(x: &'a mut [f64], params: &SpikeParams, span: f64, shortcuts: bool) -> Spikes {
+    fn run(
+        x: &'a mut [f64],
+        params: &SpikeParams,
+        span: f64,
+        shortcuts: bool,
+    ) -> (Spikes, Vec<(usize, f64)>) {
         let n = x.len();
         let floor = params.floor.unwrap_or(SpikeParams::DEFAULT_FLOOR_FRACTION * span);
         let block = params.block;
@@ -905,13 +954,16 @@ impl<'a, G: Geometry> Search<'a, G> {
         let scale = MAD_TO_SD * record_median;
         if floor.is_nan() || floor <= 0.0 {
             // A constant record on the line: nothing departs from anything.
-            return Spikes {
-                spikes: Vec::new(),
-                len: n,
-                domain: G::DOMAIN,
-                scale,
-                floor,
-            };
+            return (
+                Spikes {
+                    spikes: Vec::new(),
+                    len: n,
+                    domain: G::DOMAIN,
+                    scale,
+                    floor,
+                },
+                Vec::new(),
+            );
         }
         // A block's median is used where it stands out of the record's by three of its own
         // standard deviations (relative `MEDIAN_SPREAD / √(3 block)` for Gaussian residuals).
@@ -927,13 +979,16 @@ impl<'a, G: Geometry> Search<'a, G> {
         search.search();
         let mut spikes = search.spikes;
         spikes.sort_unstable_by_key(|s| s.index);
-        Spikes {
-            spikes,
-            len: n,
-            domain: G::DOMAIN,
-            scale,
-            floor,
-        }
+        (
+            Spikes {
+                spikes,
+                len: n,
+                domain: G::DOMAIN,
+                scale,
+                floor,
+            },
+            search.originals,
+        )
     }
 
     /// A search of `x` against `thresholds` (one per sample), nothing found yet: `block` and `k`
@@ -956,6 +1011,7 @@ impl<'a, G: Geometry> Search<'a, G> {
             flagged: vec![0; n.div_ceil(64)],
             bounds: BTreeMap::new(),
             spikes: Vec::new(),
+            originals: Vec::new(),
             stretch: Stretch::new(n, max_run),
             ranked: [[None; MAX_RUN]; 2],
             held: vec![(usize::MAX, Held::default()); HELD],
@@ -1301,6 +1357,7 @@ impl<'a, G: Geometry> Search<'a, G> {
 
     /// Flags sample `i` with the given replacement, its bound and its size.
     fn flag(&mut self, i: usize, size: f64, replacement: f64, bound: f64) {
+        self.originals.push((i, self.x[i]));
         self.x[i] = replacement;
         self.stretch.patch::<G>(self.x, i, i);
         self.flagged[i / 64] |= 1 << (i % 64);
@@ -2323,8 +2380,8 @@ mod tests {
     /// scale and repaired record, to the bit.
     fn assert_shortcuts_change_nothing(x: &[f64], domain: Domain, params: &SpikeParams, what: &str) {
         let (mut with, mut without) = (x.to_vec(), x.to_vec());
-        let fast = search(&mut with, domain, params, true);
-        let plain = search(&mut without, domain, params, false);
+        let fast = search(&mut with, domain, params, true).0;
+        let plain = search(&mut without, domain, params, false).0;
         let bits = |s: &Spikes| -> Vec<(usize, u64, u64)> {
             s.iter()
                 .map(|s| (s.index, s.size.to_bits(), s.replacement.to_bits()))

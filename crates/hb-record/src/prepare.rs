@@ -38,8 +38,8 @@ use crate::input::{
     TimeRepair, UNSETTLED_MAX, Unsettled, angle_range,
 };
 use circle_signal::{
-    CircleError, Domain, Measured, SampleClock, Spike, SpikeParams, find_and_repair_spikes, find_spikes,
-    resample_pieces,
+    CircleError, Domain, Measured, SampleClock, Spike, SpikeParams, find_and_repair_spikes,
+    find_spikes_in_place, resample_pieces,
 };
 
 use rayon::prelude::*;
@@ -692,9 +692,15 @@ pub fn condition(
     let mut x: Vec<f64> = Vec::new();
     let mut pieces = Vec::with_capacity(grid.pieces.len());
     for piece in grid.pieces {
-        x.resize(piece.first, f64::NAN);
         pieces.push(piece.first..piece.first + piece.samples.len());
-        x.extend(piece.samples);
+        if x.is_empty() && piece.first == 0 {
+            // The first piece from the grid's start (a record without gaps: the only one) is
+            // taken as it is, not copied.
+            x = piece.samples;
+        } else {
+            x.resize(piece.first, f64::NAN);
+            x.extend(piece.samples);
+        }
     }
     // The drives' and further coordinates' samples follow the record's in order: every sample
     // read and kept (not in an unsettled run at an end) is in a piece, the pieces in the order
@@ -923,7 +929,7 @@ fn spikes(
         let spikes = if policy == SpikePolicy::Repair {
             find_and_repair_spikes(piece, options.signal, &params)
         } else {
-            find_spikes(piece, options.signal, &params)
+            find_spikes_in_place(piece, options.signal, &params)
         }
         .map_err(PrepareError::Spikes)?;
         found.extend(spikes.iter().map(|s| Spike {

@@ -143,3 +143,88 @@ proptest::proptest! {
         }
     }
 }
+
+/// A file is read by path straight into its columns, a block of rows at a time (little-endian
+/// f8 in C order), and otherwise whole; either way the record (or the error) is that of its bytes
+/// read whole: rows cut by the blocks' ends, a column taken twice, bytes past the last row, 1-D
+/// arrays, Fortran order, other element types, and a file shorter than its header says.
+#[test]
+fn a_file_read_by_path_is_its_bytes_read_whole() {
+    use hb_record::input::{Column, read_path};
+    let dir = std::env::temp_dir().join(format!("hb-record-npy-file-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    // 3 columns of 8 bytes: a row crosses each 1 MiB block's end; 150 001 rows, 3.6 MB.
+    let rows = 150_001;
+    let values: Vec<f64> = (0..rows)
+        .flat_map(|i| [1e-3 * i as f64, (1e-2 * i as f64).sin(), (i % 7) as f64])
+        .collect();
+    let f8: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+    let f4: Vec<u8> = values.iter().flat_map(|&v| (v as f32).to_le_bytes()).collect();
+    let mut longer = f8.clone();
+    longer.extend_from_slice(&[7u8; 13]);
+    let twice = ReadOptions {
+        others: vec![Column::Position(3)],
+        drives: vec![Column::Position(3), Column::Position(2)],
+        ..ReadOptions::default()
+    };
+    let one_d = ReadOptions {
+        dt: Some(0.5),
+        ..ReadOptions::default()
+    };
+    let cases: Vec<(&str, Vec<u8>, ReadOptions)> = vec![
+        (
+            "c",
+            npy_bytes("<f8", &format!("({rows}, 3)"), false, &f8),
+            ReadOptions::default(),
+        ),
+        (
+            "twice",
+            npy_bytes("<f8", &format!("({rows}, 3)"), false, &f8),
+            twice,
+        ),
+        (
+            "longer",
+            npy_bytes("<f8", &format!("({rows}, 3)"), false, &longer),
+            ReadOptions::default(),
+        ),
+        (
+            "one-d",
+            npy_bytes("<f8", &format!("({},)", 3 * rows), false, &f8),
+            one_d,
+        ),
+        (
+            "fortran",
+            npy_bytes("<f8", &format!("({rows}, 3)"), true, &f8),
+            ReadOptions::default(),
+        ),
+        (
+            "f4",
+            npy_bytes("<f4", &format!("({rows}, 3)"), false, &f4),
+            ReadOptions::default(),
+        ),
+        (
+            "short",
+            npy_bytes("<f8", &format!("({}, 3)", rows + 1), false, &f8),
+            ReadOptions::default(),
+        ),
+    ];
+    for (name, bytes, options) in cases {
+        let path = dir.join(format!("{name}.npy"));
+        std::fs::write(&path, &bytes).unwrap();
+        let by_path = read_path(&path, &options);
+        let whole = read_bytes(&bytes, &options);
+        match (by_path, whole) {
+            (Ok(a), Ok(b)) => {
+                assert_eq!(
+                    (&a.t, &a.theta, &a.others, &a.drives, &a.velocities),
+                    (&b.t, &b.theta, &b.others, &b.drives, &b.velocities),
+                    "{name}"
+                );
+                assert!(a.theta.len() >= rows, "{name}");
+            }
+            (Err(a), Err(b)) => assert_eq!(a.to_string(), b.to_string(), "{name}"),
+            (a, b) => panic!("{name}: by path {:?}, whole {:?}", a.map(|_| ()), b.map(|_| ())),
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

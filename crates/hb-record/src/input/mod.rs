@@ -463,6 +463,13 @@ pub fn read_path(path: &Path, options: &ReadOptions) -> Result<Record, InputErro
                 path: path.to_owned(),
             });
         }
+        // The usual `.npy` straight into its columns; any other file read whole.
+        let mut file = std::fs::File::open(path).map_err(io)?;
+        let len = file.metadata().map_err(io)?.len();
+        if let Some(record) = npy::read_file(&mut file, len, options, io)? {
+            return Ok(record);
+        }
+        drop(file);
         std::fs::read(path).map_err(io)?
     };
     read_valid(&bytes, options)
