@@ -797,19 +797,42 @@ fn stencil(n: usize, i: usize) -> [(usize, f64); 4] {
     }
 }
 
-/// The `rank` largest of `values` (by [`f64::total_cmp`]) in decreasing order, `rank` from 1
-/// to the number of values and at most [`KEPT`]: one pass holding the largest `rank` in order,
-/// cheaper than a selection for the few a local scale ranks.
-fn largest(mut values: impl Iterator<Item = f64>, rank: usize) -> [f64; KEPT] {
-    let mut top = [f64::NEG_INFINITY; KEPT];
-    for (slot, value) in top[..rank].iter_mut().zip(values.by_ref()) {
-        *slot = value;
+/// The `rank` largest levels of width `m` (index `m − 1`) of `parts` in decreasing order (by
+/// [`f64::total_cmp`]), `rank` from 1 to [`KEPT`], `−∞` past the levels there are: one pass
+/// holding the largest `rank` in order, cheaper than a selection for the few a local scale ranks.
+///
+/// Levels are numbers from `+0` up (never NaN, never `−0`: see `Stretch::compute_levels`),
+/// whose bits, as unsigned integers, order as [`f64::total_cmp`] orders them; they are compared
+/// so.
+fn largest_levels(parts: [&[[f64; MAX_RUN]]; 2], m: usize, rank: usize) -> [f64; KEPT] {
+    let mut top = [0u64; KEPT];
+    let mut held = 0;
+    for part in parts {
+        for level in part {
+            let v = level[m - 1].to_bits();
+            debug_assert!(v >> 63 == 0 && !level[m - 1].is_nan(), "a level {}", level[m - 1]);
+            if held == rank {
+                if v <= top[rank - 1] {
+                    continue;
+                }
+            } else {
+                held += 1;
+            }
+            let mut at = held - 1;
+            while at > 0 && v > top[at - 1] {
+                top[at] = top[at - 1];
+                at -= 1;
+            }
+            top[at] = v;
+        }
     }
-    top[..rank].sort_unstable_by(|a, b| b.total_cmp(a));
-    for value in values {
-        push_largest(&mut top[..rank], value);
-    }
-    top
+    std::array::from_fn(|k| {
+        if k < held {
+            f64::from_bits(top[k])
+        } else {
+            f64::NEG_INFINITY
+        }
+    })
 }
 
 /// Puts `value` among the largest `top` (decreasing by [`f64::total_cmp`]) if it is larger than
@@ -1197,7 +1220,7 @@ impl<'a, G: Geometry> Search<'a, G> {
         let stretch = &self.stretch;
         let (left, right) = (stretch.levels(w.left), stretch.levels(w.right));
         let kept = KEPT.min(left.len() + right.len());
-        let top = largest(left.iter().chain(right).map(|l| l[m - 1]), kept);
+        let top = largest_levels([left, right], m, kept);
         self.ranked[using][m - 1] = Some(Ranked { window: w, top, kept });
         top[w.steps - 1]
     }
