@@ -544,12 +544,10 @@ impl GridRecord {
         // indices are `0, 1, …, n − 1` again makes the same sums in the same order, so gives
         // `line` back: it is not made.
         let mut through_all = runs == [(0, n - 1)] && starts == [0.0];
-        let mut line = least_squares(|f| {
-            for (&(s, e), &k) in runs.iter().zip(&starts) {
-                for i in s..=e {
-                    f(k + (i - s) as f64, tau(i));
-                }
-            }
+        let mut line = least_squares(|| {
+            runs.iter()
+                .zip(&starts)
+                .flat_map(|(&(s, e), &k)| (s..=e).map(move |i| (k + (i - s) as f64, tau(i))))
         })
         .ok_or_else(|| unresolved(n, None))?;
         // A record whose every stamp lies less than half a step from the grid time of its own
@@ -922,7 +920,12 @@ impl GridRecord {
             .rev()
             .map(|&(i, first)| Piece {
                 first,
-                samples: theta.split_off(i),
+                // The first piece takes the samples left as they are (split_off(0) copies them).
+                samples: if i == 0 {
+                    std::mem::take(&mut theta)
+                } else {
+                    theta.split_off(i)
+                },
             })
             .collect();
         pieces.reverse();
@@ -1304,11 +1307,11 @@ impl Moments {
     }
 }
 
-/// The least-squares line through the points `(n, τ)` that `visit` hands to its argument (it is
-/// called twice, and must hand the same points); `None` for fewer than two distinct indices.
-fn least_squares(visit: impl Fn(&mut dyn FnMut(f64, f64))) -> Option<Line> {
+/// The least-squares line through the points `(n, τ)` that `points` gives (it is called twice,
+/// and must give the same points); `None` for fewer than two distinct indices.
+fn least_squares<I: Iterator<Item = (f64, f64)>>(points: impl Fn() -> I) -> Option<Line> {
     let (mut count, mut sum_n, mut sum_t) = (0usize, Sum::default(), Sum::default());
-    visit(&mut |k, tau| {
+    points().for_each(|(k, tau)| {
         count += 1;
         sum_n.add(k);
         sum_t.add(tau);
@@ -1318,7 +1321,7 @@ fn least_squares(visit: impl Fn(&mut dyn FnMut(f64, f64))) -> Option<Line> {
     }
     let (mean_n, mean_t) = (sum_n.value() / count as f64, sum_t.value() / count as f64);
     let (mut sxx, mut sxy) = (Sum::default(), Sum::default());
-    visit(&mut |k, tau| {
+    points().for_each(|(k, tau)| {
         let dk = k - mean_n;
         sxx.add(dk * dk);
         sxy.add(dk * (tau - mean_t));
@@ -1365,9 +1368,7 @@ fn least_squares_indexed(
     }));
     if consecutive && *through_all {
         debug_assert!(
-            least_squares(|f| (0..n).for_each(|i| f(i as f64, tau(i)))).is_some_and(|again| again
-                .a
-                .to_bits()
+            least_squares(|| (0..n).map(|i| (i as f64, tau(i)))).is_some_and(|again| again.a.to_bits()
                 == line.a.to_bits()
                 && again.b.to_bits() == line.b.to_bits()),
             "a refit on the points of {line:?}"
@@ -1376,13 +1377,13 @@ fn least_squares_indexed(
     }
     *through_all = consecutive;
     let indices = &*indices;
-    least_squares(|f| {
-        for (i, &k) in indices.iter().enumerate() {
+    least_squares(|| {
+        indices
+            .iter()
+            .enumerate()
             // An index is a whole number (never NaN) where there is one.
-            if !k.is_nan() {
-                f(k, tau(i));
-            }
-        }
+            .filter(|(_, k)| !k.is_nan())
+            .map(|(i, &k)| (k, tau(i)))
     })
     .map(Refit::Line)
 }
