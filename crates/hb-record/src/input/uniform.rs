@@ -1410,10 +1410,22 @@ impl OwnIndices {
             at: 0,
             squares: Sum::default(),
         };
+        // Where `(τ − a) / b` is within a quarter of `i`, its rounding is `i`: a product by
+        // `1 / b` settles that without the division (the two differ by a few units in the last
+        // place, far less than a quarter), which the others take.
+        let per_step = 1.0 / line.b;
         for i in 0..n {
             let tau = tau(i);
-            let k = line.index(tau);
-            if k != i as f64 || !line.indexable(k, tau) {
+            let at = i as f64;
+            let k = if ((tau - line.a) * per_step - at).abs() < 0.25 {
+                at
+            } else {
+                line.index(tau)
+            };
+            // Equal as numbers (a stamp just before the origin rounds to −0, whose grid time
+            // `a + (−0) b` is `a` as well).
+            debug_assert_eq!(k, line.index(tau), "stamp {i}");
+            if k != at || !line.indexable(k, tau) {
                 return None;
             }
             let deviation = tau - line.at(k);
