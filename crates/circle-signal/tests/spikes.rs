@@ -345,3 +345,41 @@ proptest! {
         prop_assert_eq!(base.indices().collect::<Vec<_>>(), rng_spikes.iter().map(|s| s.index).collect::<Vec<_>>());
     }
 }
+
+/// Searched in the record itself, the spikes are those found in a copy, and the record is left as
+/// it was to the bit: bit errors on an encoder's angle (noisy and noise-free, among the paper's
+/// fast events, where the search weighs and rejects many candidates), and outliers and runs on a
+/// line.
+#[test]
+fn a_record_searched_in_place_is_left_as_it_was() {
+    use circle_signal::find_spikes_in_place;
+    let noisy = Record::new(Motion::Whirl, 100.0, 20_000, 0.003, true, 7).wrapped();
+    let spikes = bit_errors(&positions(20_000, RATE, GAP, 8), &[6, 7, 8, 9], 9);
+    let mut line: Vec<f64> = (0..20_000)
+        .map(|i| (i as f64 * 0.05).sin() + 0.3 * (i as f64 * 0.011).cos())
+        .collect();
+    for (k, at) in [(0.5, 1000), (-0.4, 5000), (0.6, 5001), (0.6, 5002), (1.0, 12_345)] {
+        line[at] += k;
+    }
+    let cases: Vec<(&str, Vec<f64>, Domain, SpikeParams)> = vec![
+        ("encoder", inject(&noisy, &spikes), Domain::Circle, quantum()),
+        (
+            "paper's chaotic record",
+            inject(&paper_record(), &spikes[..5]),
+            Domain::Circle,
+            SpikeParams::new(),
+        ),
+        ("line", line, Domain::Line, SpikeParams::new()),
+    ];
+    for (what, x, domain, params) in cases {
+        let copy = find_spikes(&x, domain, &params).expect("search");
+        assert!(!copy.is_empty(), "{what}: something to find");
+        let mut y = x.clone();
+        let here = find_spikes_in_place(&mut y, domain, &params).expect("search");
+        assert_eq!(here, copy, "{what}");
+        assert!(
+            y.iter().zip(&x).all(|(a, b)| a.to_bits() == b.to_bits()),
+            "{what}: the record changed"
+        );
+    }
+}
