@@ -216,3 +216,24 @@ fn fortran_arrays_standard_input_and_cr_alone_are_read_whole() {
     let (joined, _) = read_all(chunks(&path, &ReadOptions::default()), 15, 4);
     assert_eq!((joined.t, joined.theta), (whole.t, whole.theta));
 }
+
+/// A pipe is not read in chunks (they are read where they lie in the file): it is told to be read
+/// whole, before it is opened (which would wait for its writer).
+#[cfg(unix)]
+#[test]
+fn a_pipe_is_read_whole() {
+    let dir = std::env::temp_dir().join(format!("hb-record-chunks-pipe-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let pipe = dir.join("record.npy");
+    std::fs::remove_file(&pipe).ok();
+    let made = std::process::Command::new("mkfifo").arg(&pipe).status();
+    if !made.is_ok_and(|s| s.success()) {
+        eprintln!("mkfifo is not available: skipped");
+        return;
+    }
+    match Chunks::open(&pipe, &ReadOptions::default()).unwrap() {
+        Opened::Whole(why) => assert!(why.contains("pipe"), "{why}"),
+        Opened::Chunks(_) => panic!("a pipe read in chunks"),
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

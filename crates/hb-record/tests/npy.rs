@@ -228,3 +228,46 @@ fn a_file_read_by_path_is_its_bytes_read_whole() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A `.npy` record given by the path of a pipe (a shell's `<(cat record.npy)`) is read whole,
+/// as from a file: a pipe cannot be read again from its start, so its first block is not tried
+/// as a plain array's header first.
+#[cfg(unix)]
+#[test]
+fn an_npy_record_through_a_pipe_is_read_as_from_a_file() {
+    use hb_record::input::read_path;
+    let dir = std::env::temp_dir().join(format!("hb-record-npy-pipe-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let rows = 2000;
+    let f8: Vec<u8> = (0..rows)
+        .flat_map(|i| [1e-2 * i as f64, (1e-1 * i as f64).sin()])
+        .flat_map(f64::to_le_bytes)
+        .collect();
+    let bytes = npy_bytes("<f8", &format!("({rows}, 2)"), false, &f8);
+    let pipe = dir.join("record.npy");
+    std::fs::remove_file(&pipe).ok();
+    let made = std::process::Command::new("mkfifo").arg(&pipe).status();
+    if !made.is_ok_and(|s| s.success()) {
+        eprintln!("mkfifo is not available: skipped");
+        return;
+    }
+    let writer = {
+        let (pipe, bytes) = (pipe.clone(), bytes.clone());
+        std::thread::spawn(move || std::fs::write(pipe, bytes).unwrap())
+    };
+    // A reader that opened the pipe again would wait for a writer for ever: the test fails
+    // after a while instead.
+    let (sent, received) = std::sync::mpsc::channel();
+    {
+        let pipe = pipe.clone();
+        std::thread::spawn(move || sent.send(read_path(&pipe, &ReadOptions::default())));
+    }
+    let through_pipe = received
+        .recv_timeout(std::time::Duration::from_secs(60))
+        .expect("the pipe read within a minute")
+        .unwrap();
+    writer.join().unwrap();
+    let whole = read_bytes(&bytes, &ReadOptions::default()).unwrap();
+    assert_eq!((through_pipe.t, through_pipe.theta), (whole.t, whole.theta));
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -124,6 +124,13 @@ impl Chunks {
                 path: path.to_owned(),
             });
         }
+        // Chunks are read where they lie in the file: a pipe (a named one, a shell's `<(…)`) has
+        // no places to go back to. Asked before opening it, which waits for a pipe's writer.
+        if std::fs::metadata(path).is_ok_and(|m| !m.is_file()) {
+            return Ok(Opened::Whole(
+                "a pipe or device, not a regular file, is read whole",
+            ));
+        }
         let mut file = File::open(path).map_err(io)?;
         let mut magic = [0u8; 6];
         let n = read_up_to(&mut file, &mut magic).map_err(io)?;

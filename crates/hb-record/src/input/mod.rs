@@ -93,7 +93,7 @@ pub use uniform::{
     LEVEL_WINDOW, Piece, RecordEnd, Slip, TimeRepair, UNSETTLED_FRACTION, UNSETTLED_MAX, Unsettled,
 };
 
-use std::io::Read;
+use std::io::{Read, Seek};
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
 
@@ -463,14 +463,20 @@ pub fn read_path(path: &Path, options: &ReadOptions) -> Result<Record, InputErro
                 path: path.to_owned(),
             });
         }
-        // The usual `.npy` straight into its columns; any other file read whole.
+        // The usual `.npy` straight into its columns; any other file read whole, from the same
+        // handle. (A regular file only is tried: a pipe, such as a named one or a shell's `<(…)`,
+        // cannot be read again from its start, nor opened again with its data.)
         let mut file = std::fs::File::open(path).map_err(io)?;
-        let len = file.metadata().map_err(io)?.len();
-        if let Some(record) = npy::read_file(&mut file, len, options, io)? {
-            return Ok(record);
+        let meta = file.metadata().map_err(io)?;
+        if meta.is_file() {
+            if let Some(record) = npy::read_file(&mut file, meta.len(), options, io)? {
+                return Ok(record);
+            }
+            file.seek(std::io::SeekFrom::Start(0)).map_err(io)?;
         }
-        drop(file);
-        std::fs::read(path).map_err(io)?
+        let mut buf = Vec::with_capacity(usize::try_from(meta.len()).unwrap_or(0));
+        file.read_to_end(&mut buf).map_err(io)?;
+        buf
     };
     read_valid(&bytes, options)
 }
