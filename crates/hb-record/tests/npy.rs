@@ -271,3 +271,75 @@ fn an_npy_record_through_a_pipe_is_read_as_from_a_file() {
     assert_eq!((through_pipe.t, through_pipe.theta), (whole.t, whole.theta));
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Unsigned integers (an encoder's 16-bit counter, bytes) and one-byte signed ones read as their
+/// values; a type that is not read is named as NumPy writes it, not as a parser's structure.
+#[test]
+fn unsigned_counts_read_and_other_types_are_named_plainly() {
+    let rows: [(f64, f64); 3] = [(0.0, 4095.0), (1.0, 65535.0), (2.0, 7.0)];
+    let cases: [(&str, Vec<u8>); 5] = [
+        (
+            "<u2",
+            rows.iter()
+                .flat_map(|&(t, x)| [t as u16, x as u16])
+                .flat_map(u16::to_le_bytes)
+                .collect(),
+        ),
+        (
+            "<u4",
+            rows.iter()
+                .flat_map(|&(t, x)| [t as u32, x as u32])
+                .flat_map(u32::to_le_bytes)
+                .collect(),
+        ),
+        (
+            "<u8",
+            rows.iter()
+                .flat_map(|&(t, x)| [t as u64, x as u64])
+                .flat_map(u64::to_le_bytes)
+                .collect(),
+        ),
+        (
+            "|u1",
+            rows.iter()
+                .flat_map(|&(t, x)| [t as u8, (x as u64 % 256) as u8])
+                .collect(),
+        ),
+        (
+            "|i1",
+            rows.iter()
+                .flat_map(|&(t, x)| [t as i8, (x as u64 % 100) as i8])
+                .map(|v| v as u8)
+                .collect(),
+        ),
+    ];
+    for (descr, payload) in cases {
+        let r = read_bytes(
+            &npy_bytes(descr, "(3, 2)", false, &payload),
+            &ReadOptions::default(),
+        )
+        .unwrap();
+        assert_eq!(r.t, vec![0.0, 1.0, 2.0], "{descr}");
+        let expected: Vec<f64> = match descr {
+            "|u1" => rows.iter().map(|&(_, x)| (x as u64 % 256) as f64).collect(),
+            "|i1" => rows.iter().map(|&(_, x)| (x as u64 % 100) as f64).collect(),
+            _ => rows.iter().map(|&(_, x)| x).collect(),
+        };
+        assert_eq!(r.theta, expected, "{descr}");
+    }
+    let too_large: Vec<u8> = [0u64, (1 << 53) + 2]
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    let e = read_bytes(
+        &npy_bytes("<u8", "(1, 2)", false, &too_large),
+        &ReadOptions::default(),
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("too large to convert exactly"), "{e}");
+    let half: Vec<u8> = [0u16; 6].iter().flat_map(|v| v.to_le_bytes()).collect();
+    let e = read_bytes(&npy_bytes("<f2", "(3, 2)", false, &half), &ReadOptions::default()).unwrap_err();
+    let text = e.to_string();
+    assert!(text.contains("'<f2' is not supported"), "{text}");
+    assert!(!text.contains("TypeStr") && !text.contains("Plain("), "{text}");
+}

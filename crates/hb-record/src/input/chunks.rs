@@ -471,7 +471,9 @@ fn npy_source(mut file: File) -> Result<Option<Source>, Header> {
     let item = dtype
         .num_bytes()
         .ok_or_else(|| Header::Bad("the element type has no fixed size".into()))?;
-    let row_bytes = item * cols.max(1);
+    let row_bytes = item
+        .checked_mul(cols.max(1))
+        .ok_or_else(|| Header::Bad("shape overflows".into()))?;
     let payload = size - (at + len) as u64;
     if (payload as u128) < rows as u128 * row_bytes as u128 || row_bytes == 0 {
         return Err(Header::Bad(format!(

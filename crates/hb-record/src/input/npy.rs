@@ -33,21 +33,56 @@ fn npy_values(npy: npyz::NpyFile<&[u8]>) -> Result<Vec<f64>, InputError> {
         Ok(r) => return collect(r),
         Err(npy) => npy,
     };
-    match npy.try_data::<i64>() {
-        // Encoder counts fit in 53 bits; larger ones would not convert exactly and are refused.
+    // Unsigned counts (an encoder's 16-bit counter) and bytes.
+    let npy = match npy.try_data::<u16>() {
+        Ok(r) => return collect(r),
+        Err(npy) => npy,
+    };
+    let npy = match npy.try_data::<u32>() {
+        Ok(r) => return collect(r),
+        Err(npy) => npy,
+    };
+    let npy = match npy.try_data::<u8>() {
+        Ok(r) => return collect(r),
+        Err(npy) => npy,
+    };
+    let npy = match npy.try_data::<i8>() {
+        Ok(r) => return collect(r),
+        Err(npy) => npy,
+    };
+    // Encoder counts fit in 53 bits; larger ones would not convert exactly and are refused.
+    let too_large =
+        |v: &dyn std::fmt::Display| npy_error(format!("integer {v} is too large to convert exactly"));
+    let npy = match npy.try_data::<i64>() {
+        Ok(r) => {
+            return r
+                .map(|v| {
+                    let v = v.map_err(npy_error)?;
+                    if v.unsigned_abs() > (1u64 << 53) {
+                        Err(too_large(&v))
+                    } else {
+                        Ok(v as f64)
+                    }
+                })
+                .collect();
+        }
+        Err(npy) => npy,
+    };
+    match npy.try_data::<u64>() {
         Ok(r) => r
             .map(|v| {
                 let v = v.map_err(npy_error)?;
-                if v.unsigned_abs() > (1u64 << 53) {
-                    Err(npy_error(format!("integer {v} is too large to convert exactly")))
+                if v > (1u64 << 53) {
+                    Err(too_large(&v))
                 } else {
                     Ok(v as f64)
                 }
             })
             .collect(),
         Err(npy) => Err(npy_error(format!(
-            "element type {:?} is not supported (use f8, f4, i8, i4 or i2)",
-            npy.dtype()
+            "element type {} is not supported (use one of f8, f4, i8, i4, i2, i1, u8, u4, u2, u1: \
+             NumPy's float64, float32, int64 to int8 and uint64 to uint8)",
+            npy.dtype().descr()
         ))),
     }
 }
