@@ -3911,3 +3911,26 @@ fn a_systems_bad_inputs_are_one_line_errors() {
         assert!(out.stdout.is_empty(), "{args:?} printed a result");
     }
 }
+
+/// `hbid report` reads its record whole (it runs its models along it and draws it): `--stream`,
+/// an option it shares with `identify`, is refused in one line rather than ignored, and no
+/// report is written.
+#[test]
+fn the_report_refuses_to_read_in_chunks() {
+    let dir = scratch("report-stream");
+    let record = dir.join("pendulum.npy");
+    let out = hbid(&["simulate", "--samples", "4000", "--out", record.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let report = dir.join("report");
+    let out = hbid(&[
+        "report",
+        record.to_str().unwrap(),
+        "--stream",
+        "--out",
+        report.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert_clean_failure(&out, "stream");
+    assert!(!report.exists(), "a report was written");
+    std::fs::remove_dir_all(&dir).ok();
+}

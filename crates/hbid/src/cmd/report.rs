@@ -94,6 +94,14 @@ pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
             args.validation_periods
         );
     }
+    // A report runs its models over the record and draws it whole: read in chunks, it would be
+    // held whole anyway (the option is `identify`'s, which this command shares).
+    if args.identify.stream {
+        anyhow::bail!(
+            "«stream»: hbid report reads its record whole (it simulates its models along the record and draws \
+             it); identify a long record in chunks with hbid identify --stream"
+        );
+    }
     // A system of several coordinates, or a saved model: its own report.
     if args.model.is_some() || args.identify.input.coords.as_ref().is_some_and(|c| c.len() > 1) {
         return super::report_system::run(args, quiet);
