@@ -343,3 +343,18 @@ fn unsigned_counts_read_and_other_types_are_named_plainly() {
     assert!(text.contains("'<f2' is not supported"), "{text}");
     assert!(!text.contains("TypeStr") && !text.contains("Plain("), "{text}");
 }
+
+/// A header NumPy would not write (Python 2's `30000L`) is refused in one line that says where
+/// and what was expected, not with the parser's drawing of the header.
+#[test]
+fn a_header_that_does_not_parse_is_refused_in_one_line() {
+    let payload = vec![0u8; 4 * 3 * 8];
+    let bytes = npy_bytes("<f8", "(4L, 3L)", false, &payload);
+    let e = read_bytes(&bytes, &ReadOptions::default()).unwrap_err();
+    let text = e.to_string();
+    assert!(
+        !text.contains('\n') && !text.contains("^---") && !text.contains("-->"),
+        "{text}"
+    );
+    assert!(text.contains("at column") && text.contains("expected"), "{text}");
+}

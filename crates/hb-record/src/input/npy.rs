@@ -4,8 +4,33 @@ use std::io::Read;
 
 use super::{InputError, Location, ReadOptions, Record, Role, Times, grid};
 
+/// An `.npy` error in one line: the header parser's errors draw the header over several lines
+/// with a caret under the fault; that becomes the column it names and what it expected.
 fn npy_error(why: impl std::fmt::Display) -> InputError {
-    InputError::Npy { why: why.to_string() }
+    let text = why.to_string();
+    if !text.contains('\n') {
+        return InputError::Npy { why: text };
+    }
+    // Its lines less the drawing (the header's text after "1 |", the bars and the caret).
+    let kept: Vec<&str> = text
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty() && !l.starts_with('|') && !l.starts_with(|c: char| c.is_ascii_digit()))
+        .map(|l| l.trim_start_matches('=').trim())
+        .collect();
+    let mut why = kept.join(" ");
+    // "--> 1:57": the line and column of the header's text.
+    if let Some(at) = why.find("-->") {
+        let rest = &why[at + 3..];
+        let place = rest.split_whitespace().next().unwrap_or("");
+        let column = place.rsplit(':').next().unwrap_or(place);
+        let tail = rest.trim_start()[place.len()..].trim_start().to_owned();
+        why = format!(
+            "{} at column {column} of the header: {tail}",
+            why[..at].trim_end()
+        );
+    }
+    InputError::Npy { why }
 }
 
 /// Reads all elements of an `.npy` payload as f64, whatever the supported element type.
