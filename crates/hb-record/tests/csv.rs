@@ -42,6 +42,25 @@ fn reads_a_drive_column_beside_the_angle() {
             ..
         })
     ));
+    // Nor may the angle be the time (it was read as both, and failed later as a fit that
+    // cannot tell its terms apart).
+    for (time, angle) in [("1", "1"), ("t", "t"), ("t", "1")] {
+        let options = ReadOptions {
+            time: Some(time.parse().unwrap()),
+            angle: Some(angle.parse().unwrap()),
+            ..Default::default()
+        };
+        match with(text, options) {
+            Err(
+                e @ InputError::ColumnTwice {
+                    first: Role::Time,
+                    second: Role::Angle,
+                    ..
+                },
+            ) => assert!(e.to_string().contains("both the time and the angle"), "{e}"),
+            other => panic!("{time}, {angle}: {other:?}"),
+        }
+    }
     match with("t,theta,p\n0,1,2\n1,2,x\n", drive("p")) {
         Err(e @ InputError::NotANumber { line: 3, .. }) => assert!(e.to_string().contains("'p'"), "{e}"),
         other => panic!("{other:?}"),

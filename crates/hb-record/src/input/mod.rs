@@ -262,6 +262,14 @@ impl ReadOptions {
                 })?
             }
         };
+        // The time and the angle chosen as one column (the defaults never are).
+        if time.column() == Some(angle) {
+            return Err(InputError::ColumnTwice {
+                column: self.angle.clone().unwrap_or(Column::Position(angle + 1)),
+                first: Role::Time,
+                second: Role::Angle,
+            });
+        }
         // Every further column: found, and none of them a column already taken.
         let mut taken: Vec<(usize, Role)> = time.column().map(|c| (c, Role::Time)).into_iter().collect();
         taken.push((angle, Role::Angle));
