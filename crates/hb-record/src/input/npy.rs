@@ -42,39 +42,19 @@ fn npy_values(npy: npyz::NpyFile<&[u8]>) -> Result<Vec<f64>, InputError> {
             .collect::<Result<_, _>>()
             .map_err(npy_error)
     }
-    let npy = match npy.try_data::<f64>() {
-        Ok(r) => return collect(r),
-        Err(npy) => npy,
-    };
-    let npy = match npy.try_data::<f32>() {
-        Ok(r) => return collect(r),
-        Err(npy) => npy,
-    };
-    let npy = match npy.try_data::<i32>() {
-        Ok(r) => return collect(r),
-        Err(npy) => npy,
-    };
-    let npy = match npy.try_data::<i16>() {
-        Ok(r) => return collect(r),
-        Err(npy) => npy,
-    };
-    // Unsigned counts (an encoder's 16-bit counter) and bytes.
-    let npy = match npy.try_data::<u16>() {
-        Ok(r) => return collect(r),
-        Err(npy) => npy,
-    };
-    let npy = match npy.try_data::<u32>() {
-        Ok(r) => return collect(r),
-        Err(npy) => npy,
-    };
-    let npy = match npy.try_data::<u8>() {
-        Ok(r) => return collect(r),
-        Err(npy) => npy,
-    };
-    let npy = match npy.try_data::<i8>() {
-        Ok(r) => return collect(r),
-        Err(npy) => npy,
-    };
+    // Each type that converts exactly, tried in turn: floats, signed integers, and unsigned
+    // counts (an encoder's 16-bit counter) and bytes.
+    macro_rules! exactly {
+        ($npy:ident: $($t:ty),*) => {
+            $(
+                let $npy = match $npy.try_data::<$t>() {
+                    Ok(r) => return collect(r),
+                    Err(npy) => npy,
+                };
+            )*
+        };
+    }
+    exactly!(npy: f64, f32, i32, i16, u16, u32, u8, i8);
     // Encoder counts fit in 53 bits; larger ones would not convert exactly and are refused.
     let too_large =
         |v: &dyn std::fmt::Display| npy_error(format!("integer {v} is too large to convert exactly"));
