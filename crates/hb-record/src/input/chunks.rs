@@ -12,7 +12,7 @@ use std::fs::File;
 use std::io::{BufRead, BufReader, Read, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
 
-use super::{InputError, Location, ReadOptions, Record};
+use super::{InputError, Location, ReadOptions, Record, read_up_to};
 
 /// A record file read in chunks of rows; see the module docs.
 #[derive(Debug)]
@@ -409,17 +409,6 @@ fn push_line(
 fn is_blank_or_comment(line: &[u8]) -> bool {
     let text = line.trim_ascii();
     text.is_empty() || text.starts_with(b"#")
-}
-
-fn read_up_to(file: &mut File, buf: &mut [u8]) -> std::io::Result<usize> {
-    let mut at = 0;
-    while at < buf.len() {
-        match file.read(&mut buf[at..])? {
-            0 => break,
-            n => at += n,
-        }
-    }
-    Ok(at)
 }
 
 enum Header {

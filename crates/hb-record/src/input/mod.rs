@@ -489,6 +489,21 @@ pub fn read_path(path: &Path, options: &ReadOptions) -> Result<Record, InputErro
     read_valid(&bytes, options)
 }
 
+/// Reads into `buf` until it is full or the reader ends (an interrupted read tried again); how
+/// many bytes it read.
+pub(super) fn read_up_to(file: &mut impl Read, buf: &mut [u8]) -> std::io::Result<usize> {
+    let mut got = 0;
+    while got < buf.len() {
+        match file.read(&mut buf[got..]) {
+            Ok(0) => break,
+            Ok(k) => got += k,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(got)
+}
+
 /// Reads a record from bytes in memory, CSV or `.npy` by content.
 pub fn read_bytes(bytes: &[u8], options: &ReadOptions) -> Result<Record, InputError> {
     options.validate()?;

@@ -2,7 +2,7 @@
 
 use std::io::Read;
 
-use super::{InputError, Location, ReadOptions, Record, Role, Times, grid};
+use super::{InputError, Location, ReadOptions, Record, Role, Times, grid, read_up_to};
 
 /// An `.npy` error in one line: the header parser's errors draw the header over several lines
 /// with a caret under the fault; that becomes the column it names and what it expected.
@@ -189,20 +189,6 @@ pub(super) fn read_file(
         .expect("every column taken was read")
     })
     .map(Some)
-}
-
-/// Reads into `buf` until it is full or the reader ends; how many bytes it read.
-fn read_up_to(file: &mut impl Read, buf: &mut [u8]) -> std::io::Result<usize> {
-    let mut got = 0;
-    while got < buf.len() {
-        match file.read(&mut buf[got..]) {
-            Ok(0) => break,
-            Ok(k) => got += k,
-            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
-            Err(e) => return Err(e),
-        }
-    }
-    Ok(got)
 }
 
 /// The shape of a plain array and where its payload starts in its file.
