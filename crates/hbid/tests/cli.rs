@@ -1091,23 +1091,17 @@ fn simulated(dir: &Path, name: &str, args: &[&str]) -> PathBuf {
     path
 }
 
+/// [`simulated`] with `--truth`: the record and its truth file, read (`NAME.truth.json` in `dir`).
+fn simulated_with_truth(dir: &Path, name: &str, args: &[&str]) -> (PathBuf, serde_json::Value) {
+    let truth = dir.join(format!("{name}.truth.json"));
+    let record = simulated(dir, name, &[args, &["--truth", truth.to_str().unwrap()]].concat());
+    let truth = serde_json::from_str(&std::fs::read_to_string(&truth).unwrap()).unwrap();
+    (record, truth)
+}
+
 /// A record of 6400 samples of `system` (`hbid simulate --system`) in `dir`, and its truth.
 fn simulated_system(dir: &Path, name: &str, system: &str) -> (PathBuf, serde_json::Value) {
-    let truth = dir.join(format!("{name}.truth.json"));
-    let record = simulated(
-        dir,
-        name,
-        &[
-            "--system",
-            system,
-            "--samples",
-            "6400",
-            "--truth",
-            truth.to_str().unwrap(),
-        ],
-    );
-    let hint = serde_json::from_str(&std::fs::read_to_string(&truth).unwrap()).unwrap();
-    (record, hint)
+    simulated_with_truth(dir, name, &["--system", system, "--samples", "6400"])
 }
 
 /// Without the rig options the record is what it always was: the same bytes as with every new
@@ -2001,8 +1995,7 @@ fn report_measures_the_valid_prediction_time() {
 #[test]
 fn terms_choose_the_model_and_flow_into_json_and_saved_model() {
     let dir = scratch("terms");
-    let truth = dir.join("truth.json");
-    let record = simulated(
+    let (record, truth) = simulated_with_truth(
         &dir,
         "rig.csv",
         &[
@@ -2014,11 +2007,8 @@ fn terms_choose_the_model_and_flow_into_json_and_saved_model() {
             "2:0.1",
             "--samples",
             "40000",
-            "--truth",
-            truth.to_str().unwrap(),
         ],
     );
-    let truth: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&truth).unwrap()).unwrap();
     let list = "x', sign(x'), x'*|x'|, sin(x), {sin(t),sin(2t)}*cos(x)";
     let names = [
         "x'",
@@ -2158,8 +2148,7 @@ const SELECT_LIBRARY: &str =
 /// A rig pendulum (friction, drag, a second drive harmonic, 4096 counts) at `samples_per_period`,
 /// 40000 samples: the record and its truth file.
 fn rig_for_selection(dir: &Path, samples_per_period: &str) -> (PathBuf, serde_json::Value) {
-    let truth = dir.join(format!("truth-{samples_per_period}.json"));
-    let record = simulated(
+    simulated_with_truth(
         dir,
         &format!("rig-{samples_per_period}.csv"),
         &[
@@ -2175,12 +2164,8 @@ fn rig_for_selection(dir: &Path, samples_per_period: &str) -> (PathBuf, serde_js
             samples_per_period,
             "--samples",
             "40000",
-            "--truth",
-            truth.to_str().unwrap(),
         ],
-    );
-    let truth = serde_json::from_str(&std::fs::read_to_string(&truth).unwrap()).unwrap();
-    (record, truth)
+    )
 }
 
 fn strings(v: &serde_json::Value) -> Vec<&str> {
