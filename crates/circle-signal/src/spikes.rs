@@ -1422,6 +1422,16 @@ impl<'a, G: Geometry> Search<'a, G> {
         let (a, b) = (c.start, c.end());
         let nodes = [a - 2, a - 1, b + 1, b + 2];
         let res = self.run_residuals(c);
+        // A departure less the smooth motion's part is at most the departure: a sample that does
+        // not exceed without it does not exceed with it (most runs a choice weighs end here,
+        // before the smooth motion's residual is taken).
+        if res[..c.len]
+            .iter()
+            .enumerate()
+            .any(|(p, &(r, _))| r.abs() / run_cubic(c.len, p).gain <= own)
+        {
+            return None;
+        }
         // The smooth motion's residual there: the mean of the centred residuals over the run's
         // reach and two more on each side, from which any departure of the run's samples
         // cancels (the fourth differences of a local bump sum to zero).
