@@ -147,6 +147,18 @@ impl fmt::Display for Notice {
             Notice::Record(note) => {
                 write!(f, "{note}")?;
                 match note {
+                    // Runs of an angle's samples can be a motion too fast for the sampling
+                    // (a whirling double pendulum's), which a repair would cut.
+                    Note::Spikes {
+                        repaired: false,
+                        found,
+                        domain: circle_signal::Domain::Circle,
+                        ..
+                    } if found.windows(2).any(|w| w[1].index == w[0].index + 1) => {
+                        f.write_str(
+                            "; if they are errors and not the motion, run with «repair=True» to replace them",
+                        )?;
+                    }
                     Note::Spikes { repaired: false, .. } => {
                         f.write_str("; run with «repair=True» to replace them")?;
                     }

@@ -320,9 +320,19 @@ impl fmt::Display for Note {
                     .map(|s| format!("sample {} ({})", s.index + 1, signed_size(s.size)))
                     .collect();
                 let more = if found.len() > 5 { ", ..." } else { "" };
+                // On the circle the samples are an encoder's: isolated spikes are its bit errors;
+                // consecutive ones (runs) are said as such, not called isolated.
+                let (isolated, runs, longest) = groups(found);
                 let what = match domain {
-                    Domain::Circle => "isolated spike(s)",
-                    Domain::Line => "outlier(s)",
+                    Domain::Circle if runs == 0 => "isolated spike(s)".to_owned(),
+                    Domain::Circle => {
+                        let lengths = match longest {
+                            2 => "2".to_owned(),
+                            _ => format!("2 to {longest}"),
+                        };
+                        format!("outlying sample(s), {isolated} alone and {runs} run(s) of {lengths}")
+                    }
+                    Domain::Line => "outlier(s)".to_owned(),
                 };
                 let few = match policy {
                     SpikePolicy::RepairFew if *repaired => format!(
@@ -345,7 +355,8 @@ impl fmt::Display for Note {
                     )
                 } else {
                     let why = match domain {
-                        Domain::Circle => " (bit errors?)",
+                        Domain::Circle if runs == 0 => " (bit errors?)",
+                        Domain::Circle => " (bit errors, glitches, or motion too fast for the sampling?)",
                         Domain::Line => "",
                     };
                     write!(
@@ -1100,6 +1111,28 @@ impl GridData {
 
 /// A spike's size with four decimals, or in scientific notation where those would show it as
 /// zero (`+0.0123`, `-3.2e-5`).
+/// The flagged samples (increasing) in groups of consecutive ones: how many stand alone, how
+/// many groups are runs of two or more, and the longest run.
+fn groups(found: &[Spike]) -> (usize, usize, usize) {
+    let (mut isolated, mut runs, mut longest) = (0, 0, 0);
+    let mut k = 0;
+    while k < found.len() {
+        let mut end = k + 1;
+        while end < found.len() && found[end].index == found[end - 1].index + 1 {
+            end += 1;
+        }
+        match end - k {
+            1 => isolated += 1,
+            len => {
+                runs += 1;
+                longest = longest.max(len);
+            }
+        }
+        k = end;
+    }
+    (isolated, runs, longest)
+}
+
 fn signed_size(size: f64) -> String {
     if size != 0.0 && size.abs() < 5e-5 {
         format!("{size:+.1e}")

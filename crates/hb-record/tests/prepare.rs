@@ -45,6 +45,34 @@ fn the_spikes_note_speaks_of_bit_errors_on_the_circle_and_of_outliers_on_the_lin
     assert!(!note(Domain::Line, false).contains("bit error"));
 }
 
+/// Consecutive samples flagged on the circle are not called isolated spikes: the note counts the
+/// samples alone and the runs (a fast motion's bumps are runs of two to four).
+#[test]
+fn the_spikes_note_counts_runs_apart_from_isolated_spikes() {
+    let at = |index| Spike {
+        index,
+        size: 0.03,
+        replacement: 0.1,
+    };
+    let found: Vec<Spike> = [5, 9, 10, 11, 20, 30, 31].into_iter().map(at).collect();
+    let note = Note::Spikes {
+        coordinate: 1,
+        found,
+        repaired: false,
+        domain: Domain::Circle,
+        policy: SpikePolicy::Keep,
+    }
+    .to_string();
+    assert!(
+        note.starts_with(
+            "coordinate 2: 7 outlying sample(s), 2 alone and 2 run(s) of 2 to 3 (bit errors, glitches, or \
+             motion too fast for the sampling?) in the record: sample 6 (+0.0300), sample 10 (+0.0300)"
+        ),
+        "{note}"
+    );
+    assert!(!note.contains("isolated"), "{note}");
+}
+
 /// A row written twice (its stamp and every value the row before's) is left out of every
 /// column, with a note naming its line; the record is then the one without it. A stamp repeated
 /// with other values is not a duplicate (the grid fit judges it).

@@ -3319,7 +3319,8 @@ fn a_systems_spikes_are_named_by_their_column() {
         assert!(
             stderr
                 .lines()
-                .any(|l| l.starts_with(&format!("warning: {column}: ")) && l.contains("isolated spike(s)")),
+                .any(|l| l.starts_with(&format!("warning: {column}: "))
+                    && (l.contains("isolated spike(s)") || l.contains("outlying sample(s)"))),
             "{stderr}"
         );
     }
