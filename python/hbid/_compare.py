@@ -14,7 +14,7 @@ import numpy as np
 from . import _hbid
 from ._common import ArrayLike, ColumnsLike, PathLike, column, columns, emit, numbers, options_json, signals
 from ._model import Model
-from ._record import Record, source
+from ._record import Record, _columns_by_name, source
 from .errors import OptionsError
 
 #: The record's options of ``compare`` and their defaults (``signal``: the model's).
@@ -199,10 +199,12 @@ def compare(
         drive: the measured drive's samples (with arrays), or a dict of them by drive name.
         time_col: a file's time column (name or 1-based position).
         angle_col: a file's output column (angle or displacement).
-        coords: a system's coordinates' columns in a file, in the order of its coordinates
-            (default: the columns it was identified from).
-        drive_col: a file's measured drive column (several: a list, in the order of the
-            system's drives).
+        coords: a system's coordinates' columns in a file (``"q2=3,q1=2"``: by the model's
+            names, in any order; columns alone: in the order of its coordinates), or the names
+            of an array's columns (default: the columns it was identified from). A record's
+            columns are paired with the model's by name wherever they have its names.
+        drive_col: a file's measured drive column (several: a list, by the system's drive
+            names in any order or, columns alone, in the order of its drives).
         velocity_col: a file's columns of the coordinates' measured velocities: each piece then
             runs from its first sample's measured state, every sample scored.
         repair: replace isolated time-stamp glitches and every spike.
@@ -258,6 +260,11 @@ def compare(
         # By the model's names, checked as Model.simulate checks them (a name the model does not
         # have is not taken for another by its place).
         drive = dict(zip(saved.drives, saved._drives(drive)))
+    if saved.is_system and not isinstance(x, (Record, str, os.PathLike)):
+        # An array of shape (samples, coordinates) named by coords: by its names, as a dict.
+        x = _columns_by_name(x, options.get("coords"), "x", "coords")
+        if isinstance(x, Mapping):
+            options.pop("coords", None)
     samples = source(_in_order(x, saved), t, drive, options, COMPARE_DEFAULTS)
     if saved.is_system:
         if isinstance(x, Record):

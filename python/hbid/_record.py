@@ -235,9 +235,15 @@ def _columns_by_name(values: Any, names: Any, what: str, option: str) -> Any:
             f"{what}: an array of {columns} columns (shape {a.shape}); name each with {option}=[...] "
             f"(one name per column, in order)"
         )
-    if isinstance(names, Mapping):
-        raise OptionsError(f"{option}: name the columns of an array with a list, not a dict")
-    listed = [str(n).split("=")[0].strip() for n in (names.split(",") if isinstance(names, str) else names)]
+    items = [str(n).strip() for n in (names.split(",") if isinstance(names, str) else names)]
+    if isinstance(names, Mapping) or any("=" in n for n in items):
+        # A name with a column (a dict, or NAME=COLUMN) picks columns of a file; an array's
+        # columns are named in their order, and a position given here would be dropped.
+        raise OptionsError(
+            f"{option}: name the columns of an array with a list of names, one per column in order "
+            f"(NAME=COLUMN and dicts pick columns of a file)"
+        )
+    listed = items
     if len(listed) != columns:
         raise OptionsError(
             f"{option}: {len(listed)} name(s) for an array of {columns} columns (shape {a.shape}): give one per column"

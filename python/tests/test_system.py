@@ -237,6 +237,41 @@ def test_drives_by_name_from_arrays():
     np.testing.assert_array_equal(same["x2"], run["x2"])
 
 
+def test_compare_pairs_the_records_columns_with_the_model_by_name():
+    """The robot arm's joints and torques given in the reverse order (a dict, an array named by
+    ``coords`` and ``drive_col``, a Record read so) score as in the model's order; an array's
+    columns named with positions are refused rather than taken by their place."""
+    sim = hbid.simulate(system="arm", samples=6000)
+    hint = dict(sim.identify_options)
+    hint.pop("coords"), hint.pop("drive_col")
+    q = {n: sim.named[n] for n in ("q1", "q2")}
+    tau = {n: sim.named[n] for n in ("tau1", "tau2")}
+    model = hbid.identify(q, t=sim.t, drive=tau, bootstrap=0, **hint).model
+    assert model.coordinates == ["q1", "q2"] and model.drives == ["tau1", "tau2"]
+
+    def rmse(x, **kw):
+        c = hbid.compare(model, x, range=(2000, 3000), **kw)
+        assert [r.coordinate for r in c.ranges] == ["q1", "q2"]
+        return [r.rmse for r in c.ranges]
+
+    fitted = rmse(q, t=sim.t, drive=tau)
+    assert max(fitted) < 1e-3, fitted
+    reversed_q = np.column_stack([q["q2"], q["q1"]])
+    reversed_tau = np.column_stack([tau["tau2"], tau["tau1"]])
+    assert rmse({"q2": q["q2"], "q1": q["q1"]}, t=sim.t, drive={"tau2": tau["tau2"], "tau1": tau["tau1"]}) == fitted
+    assert rmse(reversed_q, t=sim.t, coords=["q2", "q1"], drive=reversed_tau, drive_col=["tau2", "tau1"]) == fitted
+    record = hbid.read({"q2": q["q2"], "q1": q["q1"]}, t=sim.t, drive={"tau2": tau["tau2"], "tau1": tau["tau1"]})
+    assert rmse(record) == fitted
+    # Names the model does not have are not paired by their place.
+    with pytest.raises(hbid.OptionsError, match="the model's coordinates are q1, q2"):
+        rmse(reversed_q, t=sim.t, coords=["a", "b"], drive=tau)
+    # NAME=POSITION (or a dict) picks columns of a file: for an array the positions would be
+    # dropped.
+    for coords in (["q1=2", "q2=1"], {"q1": 2, "q2": 1}):
+        with pytest.raises(hbid.OptionsError, match="name the columns of an array with a list of names"):
+            hbid.identify(reversed_q, t=sim.t, coords=coords, drive=tau, bootstrap=0, **hint)
+
+
 def test_bad_inputs_are_hbid_errors(double_pendulum):
     csv, sim = double_pendulum["csv"], double_pendulum["sim"]
     model = double_pendulum["result"].model
@@ -279,8 +314,11 @@ def test_bad_inputs_are_hbid_errors(double_pendulum):
         hbid.compare(model, {"q1": sim.named["theta1"], "q2": sim.named["theta2"]}, t=sim.t)
     with pytest.raises(hbid.OptionsError, match="x0"):
         hbid.compare(model, str(csv), x0=[0.1], v0=[0.0])
-    with pytest.raises(hbid.InputError, match="nope"):
+    # One of the model's names beside one it does not have: not paired by place.
+    with pytest.raises(hbid.OptionsError, match="'theta2' is one of the system's coordinates and 'nope' is not"):
         hbid.compare(model, str(csv), coords=["nope", "theta2"])
+    with pytest.raises(hbid.InputError, match="nope"):
+        hbid.compare(model, str(csv), coords=["nope", "omega2"])
 
 
 def test_simulate_takes_the_systems_options():

@@ -34,7 +34,7 @@ use std::str::FromStr;
 
 use circle_signal::{Domain, Measured, wrap};
 use hb_model::{IdentifiedModel, IdentifiedSystem, MeasuredDrive};
-use hb_record::prepare::GridData;
+use hb_record::prepare::{Channel, GridData};
 use pendulum_sim::multi::{self, MultiState, OneCoordinate};
 use pendulum_sim::{Tolerances, fit_initial_state, free_run};
 use serde::{Deserialize, Serialize};
@@ -333,7 +333,7 @@ impl CompareRequest {
             angle_unit: AngleUnit::Radians,
             ..record
         }
-        .check()?;
+        .check_columns()?;
         let tolerances =
             Tolerances::new(o.rtol, o.rtol / 10.0).map_err(|e| OptionError::value("rtol", o.rtol, e))?;
         Ok(Self { options, tolerances })
@@ -676,8 +676,122 @@ fn compare_one(
     })
 }
 
+/// Where each of a record's columns `given` (the `option` naming the system's `what`) goes among
+/// the system's `names`, and the list under those names: by name when every one has one of the
+/// system's names (in any order); in the order given when none has and none was named
+/// (`NAME=COLUMN`) otherwise, each then called by the system's name of its place. A name the
+/// system does not have, or a list of both kinds, is refused: a name would otherwise be taken for
+/// another coordinate by its place.
+fn placed(
+    option: &'static str,
+    what: &str,
+    given: &ColumnList,
+    names: &[String],
+) -> Result<(ColumnList, Vec<usize>), OptionError> {
+    let found: Vec<Option<usize>> = given
+        .names()
+        .iter()
+        .map(|g| names.iter().position(|n| n == g))
+        .collect();
+    if found.iter().all(Option::is_some) {
+        return Ok((given.clone(), found.into_iter().flatten().collect()));
+    }
+    let entries = || given.names().iter().zip(given.columns()).zip(&found);
+    if let Some(((name, _), _)) = entries().find(|((n, c), f)| f.is_none() && n != c) {
+        return Err(OptionError::value(
+            option,
+            given,
+            format!(
+                "'{name}' is not one of the system's {what} ({}): name each as the system does, or give the \
+                 columns alone, in that order",
+                names.join(", ")
+            ),
+        ));
+    }
+    if let Some(((known, _), _)) = entries().find(|(_, f)| f.is_some()) {
+        let ((stray, _), _) = entries().find(|(_, f)| f.is_none()).expect("not all found");
+        return Err(OptionError::value(
+            option,
+            given,
+            format!(
+                "'{known}' is one of the system's {what} and '{stray}' is not: name each as the system does \
+                 ({}; NAME=COLUMN), or none (the columns are then taken in that order)",
+                names.join(", ")
+            ),
+        ));
+    }
+    let renamed = names
+        .iter()
+        .zip(given.columns())
+        .map(|(n, c)| format!("{n}={c}"))
+        .collect::<Vec<_>>()
+        .join(",")
+        .parse::<ColumnList>()
+        .map_err(|e| OptionError::new(option, e))?;
+    Ok((renamed, (0..given.len()).collect()))
+}
+
+/// The measured velocities' columns `given` in the order of the record's coordinates, the `k`-th
+/// of which is the system's `coordinate_of[k]`-th: by name when every one has one of the
+/// system's coordinate `names`, as given otherwise (in the order of `coords`).
+fn velocities_in_record_order(
+    given: &ColumnList,
+    names: &[String],
+    coordinate_of: &[usize],
+) -> Result<ColumnList, OptionError> {
+    let by_name: Option<Vec<usize>> = given
+        .names()
+        .iter()
+        .map(|g| names.iter().position(|n| n == g))
+        .collect();
+    let Some(by_name) = by_name.filter(|b| b.len() == coordinate_of.len()) else {
+        return Ok(given.clone());
+    };
+    coordinate_of
+        .iter()
+        .map(|c| {
+            let k = by_name.iter().position(|b| b == c).expect("a permutation");
+            format!("{}={}", given.names()[k], given.columns()[k])
+        })
+        .collect::<Vec<_>>()
+        .join(",")
+        .parse::<ColumnList>()
+        .map_err(|e| OptionError::new("velocity_col", e))
+}
+
+/// Puts a record's coordinates (with their measured velocities) and drives, read in the order
+/// their columns were given, in the system's order: the `k`-th read is the system's
+/// `coordinate_of[k]`-th, the `k`-th drive its `drive_of[k]`-th.
+fn in_system_order(grid: &mut GridData, coordinate_of: &[usize], drive_of: &[usize]) {
+    fn permute<T>(items: Vec<T>, to: &[usize]) -> Vec<T> {
+        let mut slots: Vec<Option<T>> = std::iter::repeat_with(|| None).take(items.len()).collect();
+        for (item, &k) in items.into_iter().zip(to) {
+            slots[k] = Some(item);
+        }
+        slots.into_iter().map(|s| s.expect("a permutation")).collect()
+    }
+    if coordinate_of.iter().enumerate().any(|(k, &c)| k != c) {
+        let mut channels = vec![Channel {
+            x: std::mem::take(&mut grid.x),
+            domain: grid.domain,
+        }];
+        channels.append(&mut grid.others);
+        let mut channels = permute(channels, coordinate_of).into_iter();
+        let first = channels.next().expect("a coordinate");
+        (grid.x, grid.domain) = (first.x, first.domain);
+        grid.others = channels.collect();
+        if !grid.velocities.is_empty() {
+            grid.velocities = permute(std::mem::take(&mut grid.velocities), coordinate_of);
+        }
+    }
+    if drive_of.iter().enumerate().any(|(k, &d)| k != d) {
+        grid.drives = permute(std::mem::take(&mut grid.drives), drive_of);
+    }
+}
+
 /// [`compare`] of a system of several coordinates: the record's columns are the system's
-/// coordinates and drives by name unless `coords` and `drive_col` say otherwise; each range is
+/// coordinates and drives by name unless `coords` and `drive_col` say otherwise (given with the
+/// system's names, in any order, they are put in the system's order by name); each range is
 /// run piece by piece from the state given, or fitted to every coordinate's first `init`
 /// samples ([`pendulum_sim::multi::fit_initial_state`]); each coordinate is scored on its own.
 fn compare_system(
@@ -737,6 +851,16 @@ fn compare_system(
         )
         .into());
     }
+    // The system's coordinate each of the record's is, by its name when it has the system's.
+    let (coords, coordinate_of) = placed("coords", "coordinates", &coords, names.coordinates())?;
+    let velocity_col = match &o.velocity_col {
+        Some(v) => Some(velocities_in_record_order(
+            v,
+            names.coordinates(),
+            &coordinate_of,
+        )?),
+        None => None,
+    };
     let drives_needed = system.has_measured_drive();
     let drive_col = match (&o.drive_col, drives_needed) {
         (Some(d), true) => Some(d.clone()),
@@ -764,6 +888,13 @@ fn compare_system(
         )
         .into());
     }
+    let (drive_col, drive_of) = match drive_col {
+        Some(d) => {
+            let (d, of) = placed("drive_col", "drives", &d, names.drives())?;
+            (Some(d), of)
+        }
+        None => (None, Vec::new()),
+    };
     let record = RecordOptions {
         time_col: o.time_col.clone(),
         angle_col: None,
@@ -772,10 +903,10 @@ fn compare_system(
         drive_col,
         repair: o.repair,
         no_repair: o.no_repair,
-        velocity_col: o.velocity_col.clone(),
-        signal: domains
+        velocity_col,
+        signal: coordinate_of
             .iter()
-            .map(ToString::to_string)
+            .map(|&c| domains[c].to_string())
             .collect::<Vec<_>>()
             .join(",")
             .parse()
@@ -785,7 +916,8 @@ fn compare_system(
         drive_period: None,
         drive_frequency: None,
     };
-    let (grid, clock) = compared_record(source, &record, o.skip_unsettled, observer)?;
+    let (mut grid, clock) = compared_record(source, &record, o.skip_unsettled, observer)?;
+    in_system_order(&mut grid, &coordinate_of, &drive_of);
     observer.stage(Stage::Simulate);
     let len = grid.x.len();
     let ranges: Vec<std::ops::Range<usize>> = if o.range.is_empty() {

@@ -310,8 +310,17 @@ pub struct RecordOptions {
 }
 
 impl RecordOptions {
-    /// Checks the options that do not depend on the record.
+    /// Checks the options that do not depend on the record, the names terms will call its
+    /// columns by among them ([`names`](Self::names)).
     pub fn check(&self) -> Result<(), OptionError> {
+        self.check_columns()?;
+        self.names()?;
+        Ok(())
+    }
+
+    /// [`check`](Self::check) but for the names: for a record whose columns take the names of a
+    /// model's (`hbid compare`), which a column given by its position then has.
+    pub fn check_columns(&self) -> Result<(), OptionError> {
         if let Some(dt) = self.dt
             && !(dt.is_finite() && dt > 0.0)
         {
@@ -397,7 +406,6 @@ impl RecordOptions {
                 format!("give one velocity column per coordinate ({n})"),
             ));
         }
-        self.names()?;
         Ok(())
     }
 

@@ -659,3 +659,104 @@ fn a_systems_comparison_is_drawn_coordinate_by_coordinate() {
     ]);
     assert_clean_failure(&out, "--q0 sets the state of a saved --model with --init 0 only");
 }
+
+/// A system's record is paired with the model by the names of its columns, in whatever order
+/// `--coords`, `--drive-col` and `--velocity-col` give them: the robot arm's two joints and
+/// torques named in the reverse order score as in order. Columns given alone are taken in the
+/// model's order (positions too); a name the model does not have, or names of both kinds, are
+/// refused in one line.
+#[test]
+fn a_systems_columns_are_paired_with_the_model_by_name() {
+    let dir = scratch("system-by-name");
+    let record = dir.join("arm.csv");
+    let truth = dir.join("arm.json");
+    ok(&[
+        "simulate",
+        "--system",
+        "arm",
+        "--samples",
+        "6000",
+        "--truth",
+        s(&truth),
+        "--out",
+        s(&record),
+    ]);
+    let header = std::fs::read_to_string(&record).unwrap();
+    assert!(header.starts_with("t,q1,q2,v1,v2,tau1,tau2"), "{}", &header[..40]);
+    let hint: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&truth).unwrap()).unwrap();
+    let terms = hint["identify"]["terms"].as_str().unwrap();
+    let window = hint["identify"]["window"].as_f64().unwrap().to_string();
+    let model = dir.join("arm-model.json");
+    ok(&[
+        "identify",
+        s(&record),
+        "--coords",
+        "q1,q2",
+        "--drive-col",
+        "tau1,tau2",
+        "--window",
+        &window,
+        "--terms",
+        terms,
+        "--bootstrap",
+        "0",
+        "--save-model",
+        s(&model),
+    ]);
+    let rmse = |extra: &[&str]| -> Vec<f64> {
+        let mut args = vec![
+            "compare",
+            s(&model),
+            s(&record),
+            "--range",
+            "2000..3000",
+            "--json",
+        ];
+        args.extend_from_slice(extra);
+        json(&ok(&args))["ranges"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|r| r["rmse"].as_f64().unwrap())
+            .collect()
+    };
+    let fitted = rmse(&[]);
+    assert!(fitted.iter().all(|&e| e < 1e-3), "{fitted:?}");
+    for extra in [
+        &["--coords", "q2,q1"][..],
+        &["--coords", "q2=3,q1=2"],
+        &["--drive-col", "tau2,tau1"],
+        &["--drive-col", "6,7"],
+        &["--coords", "2,3", "--drive-col", "tau2=7,tau1=6"],
+    ] {
+        assert_eq!(rmse(extra), fitted, "{extra:?}");
+    }
+    let measured = rmse(&["--velocity-col", "v1,v2"]);
+    assert!(measured.iter().all(|&e| e < 1e-3), "{measured:?}");
+    assert_eq!(rmse(&["--velocity-col", "q2=v2,q1=v1"]), measured);
+    assert_eq!(
+        rmse(&["--coords", "q2,q1", "--velocity-col", "q1=v1,q2=v2"]),
+        measured
+    );
+    // Positions in another order are the user's pairing: the joints swapped score badly.
+    let swapped = rmse(&["--coords", "3,2"]);
+    assert!(swapped.iter().all(|&e| e > 0.1), "{swapped:?}");
+    for (extra, mentions) in [
+        (
+            &["--coords", "zz=2,yy=3"][..],
+            "'zz' is not one of the system's coordinates (q1, q2)",
+        ),
+        (
+            &["--coords", "q2,v1"],
+            "'q2' is one of the system's coordinates and 'v1' is not",
+        ),
+        (
+            &["--drive-col", "tau2=7,p=6"],
+            "'p' is not one of the system's drives (tau1, tau2)",
+        ),
+    ] {
+        let mut args = vec!["compare", s(&model), s(&record)];
+        args.extend_from_slice(extra);
+        assert_clean_failure(&hbid(&args), mentions);
+    }
+}

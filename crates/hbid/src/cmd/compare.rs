@@ -33,13 +33,14 @@ pub struct CompareArgs {
     /// Sampling step, for records without a time column (the first sample is at t = 0).
     #[arg(long, allow_hyphen_values = true)]
     pub dt: Option<f64>,
-    /// A system's coordinates: the record's columns in the order of the model's coordinates
-    /// [default: the model's names].
+    /// A system's coordinates: the record's columns, by the model's names in any order
+    /// (NAME=COLUMN, q2=3,q1=2), or alone (header names or positions) in the order of the
+    /// model's coordinates [default: the model's names].
     #[arg(long, value_name = "A,B[,..]", conflicts_with = "angle_col")]
     pub coords: Option<ColumnList>,
     /// The measured drives, for a model with terms in them: columns of the record, by header name
-    /// or 1-based position, in the order of the model's drives (a system's default: the model's
-    /// names). Between samples the model reads each from the interpolating cubic spline of the
+    /// or 1-based position, in the order of the model's drives, or for a system by its names in
+    /// any order (tau2=7,tau1=6; a system's default: the model's names). Between samples the model reads each from the interpolating cubic spline of the
     /// samples (not-a-knot), which keeps a band-limited drive's amplitude and has no kink.
     #[arg(long, value_name = "NAME|N[,..]")]
     pub drive_col: Option<ColumnList>,
@@ -47,7 +48,7 @@ pub struct CompareArgs {
     #[arg(long)]
     pub repair: bool,
     /// The coordinates' measured velocities (a motor driver's, a tachometer's): columns of the
-    /// record, one per coordinate in their order (NAME=COLUMN names one). `compare` starts each
+    /// record, one per coordinate in their order, or by the coordinates' names (q2=v2,q1=v1). `compare` starts each
     /// free run from the first sample's measured state, every sample scored.
     #[arg(long, value_name = "NAME|N[,..]")]
     pub velocity_col: Option<ColumnList>,
