@@ -54,7 +54,9 @@ pub use error::{ModelError, ModelIoError, TermError};
 pub use form::{Column, Forcing, Harmonics, ModelForm, columns, term_names};
 pub use io::{MODEL_FORMAT, MODEL_MAGIC, MODEL_OLDEST_VERSION, MODEL_VERSION, SYSTEM_VERSION};
 pub use model::{Coefficient, FitSummary, IdentifiedModel};
-pub use system::{Columns, IdentifiedSystem, SINGULAR_PIVOT, SingularMass, SingularState};
+pub use system::{
+    Columns, IdentifiedSystem, NEAR_SINGULAR_PIVOT, SINGULAR_PIVOT, SingularMass, SingularState,
+};
 pub use terms::{
     Combination, Coupling, DriveFactor, Factor, MAX_COORDINATES, MAX_COUPLING, MAX_DRIVE_HARMONIC,
     MAX_DRIVES, MAX_TERMS, Names, PositionFactor, Term, TermList, TermSpec, VelocityFactor, XFunction,

@@ -315,45 +315,127 @@ fn solve_mass(
 }
 
 impl<B: Basis + Sync> IdentifiedSystem<B> {
-    /// The first of `samples` (indices into `coordinates`, one record per coordinate; tried in
-    /// parallel, the first in their order told) at which the mass matrix cannot be solved, as
-    /// [`accelerations`](Self::accelerations) solves it at every step of a free run, with the
-    /// velocities taken as zero (a mass matrix is a function of the positions); `time(k)` is the
-    /// time of sample `k`. `None` where it is solved at every one: terms that leave the
-    /// accelerations undetermined on a record (a coordinate's column the copy of another's,
-    /// whose equations then explain each other's acceleration) are found before any run stops.
+    /// The first state of `paths` (each a list of indices into `coordinates`, one record per
+    /// coordinate, along a stretch of the record without gaps; tried in parallel, the first in
+    /// their order told) at which the mass matrix is singular or nearly so, with the velocities
+    /// taken as zero (a mass matrix is a function of the positions); `time(k)` is the time of
+    /// sample `k`. It is so at a state where its smallest pivot, relative to its largest entry
+    /// (as [`accelerations`](Self::accelerations) factorises it), is at most
+    /// [`NEAR_SINGULAR_PIVOT`], and between two states of one path where its determinant has
+    /// opposite signs: it is continuous along the path, so it vanishes between them, where every
+    /// free run along the record would stop (the state of the two with the smaller pivot is
+    /// told, [`SingularState::changes_sign`] set). `None` where neither is found: terms that
+    /// leave the accelerations undetermined on a record (a coordinate's column the copy of
+    /// another's, whose equations then explain each other's acceleration) are found before any
+    /// run stops.
     pub fn first_singular(
         &self,
         coordinates: &[&[f64]],
-        samples: &[usize],
+        paths: &[Vec<usize>],
         time: impl Fn(usize) -> f64 + Sync,
     ) -> Option<SingularState> {
         use rayon::prelude::*;
         let n = coordinates.len();
-        samples
-            .par_iter()
-            .map_init(
-                || (vec![0.0; n], vec![0.0; n]),
-                |(q, v), &k| {
-                    for (qi, x) in q.iter_mut().zip(coordinates) {
-                        *qi = x[k];
-                    }
-                    // The mass rows alone, as `accelerations` factorises them (the rest of each
-                    // equation does not decide whether it can solve).
-                    let t = time(k);
-                    let mass = self.mass(|_, model, row| model.mass_row_at(t, q, v, None, row));
-                    solve_mass(n, &mass, None, t, &mut [])
-                        .err()
-                        .map(|mass| SingularState {
-                            sample: k,
-                            q: q.clone(),
-                            mass,
-                        })
-                },
-            )
-            .find_map_first(|found| found)
+        let state = |q: &mut Vec<f64>, k: usize| {
+            for (qi, x) in q.iter_mut().zip(coordinates) {
+                *qi = x[k];
+            }
+        };
+        // The mass rows alone, as `accelerations` factorises them (the rest of each equation
+        // does not decide whether it can solve): each state's pivot and determinant.
+        let measured: Vec<Vec<(f64, f64)>> = paths
+            .iter()
+            .map(|path| {
+                path.par_iter()
+                    .map_init(
+                        || (vec![0.0; n], vec![0.0; n]),
+                        |(q, v), &k| {
+                            state(q, k);
+                            let t = time(k);
+                            mass_pivot(
+                                n,
+                                &self.mass(|_, model, row| model.mass_row_at(t, q, v, None, row)),
+                            )
+                        },
+                    )
+                    .collect()
+            })
+            .collect();
+        let told = |k: usize, pivot: f64, changes_sign: bool| {
+            let mut q = vec![0.0; n];
+            state(&mut q, k);
+            SingularState {
+                sample: k,
+                q,
+                mass: SingularMass { t: time(k), pivot },
+                changes_sign,
+            }
+        };
+        for (path, states) in paths.iter().zip(&measured) {
+            for (i, (&k, &(pivot, det))) in path.iter().zip(states).enumerate() {
+                if pivot.is_nan() || pivot <= NEAR_SINGULAR_PIVOT {
+                    return Some(told(k, pivot, false));
+                }
+                if let Some(&(next_pivot, next_det)) = states.get(i + 1)
+                    && det.signum() != next_det.signum()
+                    && next_pivot > NEAR_SINGULAR_PIVOT
+                {
+                    let (k, pivot) = if next_pivot < pivot {
+                        (path[i + 1], next_pivot)
+                    } else {
+                        (k, pivot)
+                    };
+                    return Some(told(k, pivot, true));
+                }
+            }
+        }
+        None
     }
 }
+
+/// The smallest pivot of the `n × n` mass matrix `m` relative to its largest entry, as
+/// [`solve_mass`] measures it, and its determinant (whose sign tells the two sides of a
+/// singular state apart).
+fn mass_pivot(n: usize, m: &MassRows) -> (f64, f64) {
+    macro_rules! sized {
+        ($n:literal) => {{
+            let matrix = nalgebra::SMatrix::<f64, $n, $n>::from_fn(|i, j| m[i][j]);
+            let padded = $n < MAX_COORDINATES;
+            let scale = if padded {
+                matrix.amax().max(1.0)
+            } else {
+                matrix.amax()
+            };
+            let lu = matrix.lu();
+            let smallest = lu
+                .u()
+                .diagonal()
+                .iter()
+                .map(|d| d.abs())
+                .fold(f64::INFINITY, f64::min);
+            let pivot = if padded { smallest.min(1.0) } else { smallest } / scale;
+            (pivot, lu.determinant())
+        }};
+    }
+    match n {
+        1 => sized!(1),
+        2 => sized!(2),
+        3 => sized!(3),
+        4 => sized!(4),
+        5 => sized!(5),
+        6 => sized!(6),
+        7 => sized!(7),
+        _ => sized!(8),
+    }
+}
+
+/// The smallest relative pivot of a mass matrix at a record's state below which an identified
+/// system is refused ([`IdentifiedSystem::first_singular`]): far above the
+/// [`SINGULAR_PIVOT`] a free run divides by, and far below a physical system's (a double
+/// pendulum's is `1 − μ cos²(θ1 − θ2) ≥ 1 − μ`, `μ` the lower link's share of the inertia): a
+/// system whose inertia nearly vanishes on the record is a column the copy of another's, or
+/// terms that explain one acceleration by another.
+pub const NEAR_SINGULAR_PIVOT: f64 = 1e-6;
 
 /// Where [`IdentifiedSystem::first_singular`] found the mass matrix singular.
 #[derive(Debug, Clone, PartialEq)]
@@ -364,6 +446,9 @@ pub struct SingularState {
     pub q: Vec<f64>,
     /// The time and the smallest pivot.
     pub mass: SingularMass,
+    /// Whether the determinant changes sign between this state and the next one checked of its
+    /// path (the matrix is singular between them) rather than the pivot being small here.
+    pub changes_sign: bool,
 }
 
 /// The smallest pivot of a mass matrix's factorisation, relative to its largest entry, that

@@ -271,17 +271,67 @@ fn the_first_state_where_the_mass_matrix_is_singular_is_found() {
     }
     let all: Vec<usize> = (0..400).collect();
     let found = system
-        .first_singular(&[&theta1, &theta2], &all, |k| 10.0 + 0.5 * k as f64)
+        .first_singular(&[&theta1, &theta2], &[all], |k| 10.0 + 0.5 * k as f64)
         .expect("singular where the angles are equal");
     assert_eq!(found.sample, 250);
     assert_eq!(found.q, vec![2.5, 2.5]);
     assert_eq!(found.mass.t, 135.0);
     assert!(found.mass.pivot < 1e-12, "pivot {}", found.mass.pivot);
+    assert!(!found.changes_sign);
     let apart: Vec<usize> = (0..250).collect();
     assert_eq!(
-        system.first_singular(&[&theta1, &theta2], &apart, |k| k as f64),
+        system.first_singular(&[&theta1, &theta2], &[apart], |k| k as f64),
         None
     );
+}
+
+/// A mass matrix `[[1 − 1.5 cos θ2]]` (one coordinate, its own acceleration times a function of
+/// another's position) vanishes where `cos θ2 = 2/3`: between two states of one path on either
+/// side of it, never at one of them, it is found by its determinant's change of sign; between
+/// states of two paths (a gap between them) it is not; a matrix whose pivot is a millionth of its
+/// scale is refused as nearly singular, one ten times larger is not.
+#[test]
+fn a_mass_matrix_that_changes_sign_between_states_or_nearly_vanishes_is_found() {
+    use hb_basis::Domain;
+    use hb_model::{IdentifiedSystem, NEAR_SINGULAR_PIVOT, Names, TermList};
+    let names = Names::new(["theta1", "theta2"], Vec::<String>::new()).unwrap();
+    let basis = BasisKind::from(Harmonic::new(1).unwrap());
+    let system = |c: f64| {
+        let equation = |own: usize, terms: &str, coefficients: &[f64]| {
+            let list = TermList::parse_in(terms, &names, own).unwrap();
+            IdentifiedModel::new(basis, ModelForm::from_terms(list), 1.0, coefficients).unwrap()
+        };
+        IdentifiedSystem::new(
+            names.clone(),
+            vec![Domain::Circle; 2],
+            vec![
+                equation(0, "theta1''*cos(theta2), sin(theta1)", &[c, 1.0]),
+                equation(1, "sin(theta2)", &[1.0]),
+            ],
+        )
+        .unwrap()
+    };
+    let crossing = (2.0f64 / 3.0).acos();
+    let theta1 = vec![0.3; 4];
+    // Two states on either side of the crossing, then two more beyond it.
+    let theta2 = vec![crossing - 0.05, crossing + 0.05, 1.2, 1.4];
+    let singular = system(-1.5);
+    let found = singular
+        .first_singular(&[&theta1, &theta2], &[vec![0, 1, 2, 3]], |k| k as f64)
+        .expect("singular between samples 0 and 1");
+    assert!(found.changes_sign && found.sample <= 1, "{found:?}");
+    assert!(found.mass.pivot > 1e-3, "{found:?}");
+    assert_eq!(
+        singular.first_singular(&[&theta1, &theta2], &[vec![0], vec![1, 2, 3]], |k| k as f64),
+        None
+    );
+    // 1 + c cos θ2 at θ2 = 0.1 with c = −1/cos(0.1) (1 + ε): a relative pivot of ε.
+    let near = |epsilon: f64| {
+        system(-(1.0 + epsilon) / 0.1f64.cos())
+            .first_singular(&[&[0.3][..], &[0.1][..]], &[vec![0]], |k| k as f64)
+    };
+    assert!(near(-0.5 * NEAR_SINGULAR_PIVOT).is_some());
+    assert!(near(-10.0 * NEAR_SINGULAR_PIVOT).is_none());
 }
 
 /// The cap of the harmonics in units of the drive frequency is saved under the name files have

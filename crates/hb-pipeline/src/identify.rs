@@ -1128,16 +1128,23 @@ fn check_mass_matrix(
     let n = coordinates.len();
     let samples: usize = data.pieces.iter().map(|p| p.len()).sum();
     let stride = samples.div_ceil(MASS_CHECKS).max(1);
-    let states: Vec<usize> = data
+    let paths: Vec<Vec<usize>> = data
         .pieces
         .iter()
-        .flat_map(|piece| piece.clone().step_by(stride))
+        .map(|piece| piece.clone().step_by(stride).collect())
         .collect();
     let records: Vec<&[f64]> = coordinates.iter().map(|&(x, _)| x).collect();
-    let Some(found) = system.first_singular(&records, &states, |k| data.clock.time(k)) else {
+    let Some(found) = system.first_singular(&records, &paths, |k| data.clock.time(k)) else {
         return Ok(());
     };
     let (t, q, singular) = (found.mass.t, found.q, found.mass);
+    let how = if found.changes_sign {
+        "singular next to"
+    } else if singular.pivot > hb_model::SINGULAR_PIVOT {
+        "nearly singular at"
+    } else {
+        "singular at"
+    };
     let names = request.names.coordinates();
     let state: Vec<String> = names
         .iter()
@@ -1147,11 +1154,16 @@ fn check_mass_matrix(
     Err(OptionError::new(
         "terms",
         format!(
-            "the identified mass matrix is singular at t = {t} ({}; smallest pivot {:.1e} of its largest \
-             entry): the acceleration terms leave the accelerations of {} undetermined on the record, and \
+            "the identified mass matrix is {how} t = {t} ({}; smallest pivot {:.1e} of its largest \
+             entry{}): the acceleration terms leave the accelerations of {} undetermined on the record, and \
              every free run of the model would stop there{}",
             state.join(", "),
             singular.pivot,
+            if found.changes_sign {
+                ", its determinant changing sign before the next state checked"
+            } else {
+                ""
+            },
             names.join(", "),
             if n > 1 {
                 "; is one coordinate's column («coords») a copy of another's?"
