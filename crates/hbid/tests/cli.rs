@@ -3825,12 +3825,43 @@ fn a_systems_bad_inputs_are_one_line_errors() {
     }
     let copy = dir.join("copy.csv");
     std::fs::write(&copy, copied).unwrap();
-    let (record, duffing, copy) = (
+    // The copy logged with its own noise (a second encoder on the same shaft), 1e-4 rad of
+    // seeded uniform noise: the matrix is not singular at any state, only nearly.
+    let mut seed = 7_u64;
+    let mut noise = || {
+        seed = seed
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        ((seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 3.5e-4
+    };
+    let mut lines = text.lines();
+    let mut noisy = format!("{},copy\n", lines.next().unwrap());
+    for line in lines {
+        let theta1: f64 = line.split(',').nth(1).unwrap().parse().unwrap();
+        noisy.push_str(&format!("{line},{}\n", theta1 + noise()));
+    }
+    let noisy_copy = dir.join("noisy-copy.csv");
+    std::fs::write(&noisy_copy, noisy).unwrap();
+    let h = std::f64::consts::TAU / 64.0;
+    let mut motions = "t,theta1,theta2\n".to_owned();
+    for n in 0..20_000 {
+        let t = n as f64 * h;
+        motions.push_str(&format!(
+            "{t},{},{}\n",
+            0.5 * t.sin() + 0.3 * (2.3 * t + 0.4).sin(),
+            0.3 * (0.37 * t).sin() + 0.02 * (3.1 * t).sin()
+        ));
+    }
+    let unphysical = dir.join("unphysical.csv");
+    std::fs::write(&unphysical, motions).unwrap();
+    let (record, duffing, copy, noisy_copy, unphysical) = (
         record.to_str().unwrap(),
         duffing.to_str().unwrap(),
         copy.to_str().unwrap(),
+        noisy_copy.to_str().unwrap(),
+        unphysical.to_str().unwrap(),
     );
-    let cases: [(&[&str], &str); 8] = [
+    let cases: [(&[&str], &str); 10] = [
         (&[record, "--coords", "theta1,theta3"], "--coords"),
         (&[record, "--coords", "theta1,theta1"], "named twice"),
         (
@@ -3870,6 +3901,28 @@ fn a_systems_bad_inputs_are_one_line_errors() {
                 "theta1: copy'', sin(theta1); copy: theta1'', sin(copy)",
             ],
             "mass matrix is singular",
+        ),
+        (
+            &[
+                noisy_copy,
+                "--coords",
+                "theta1,copy",
+                "--terms",
+                "theta1: copy''*cos(theta1-copy), sin(theta1); copy: theta1''*cos(theta1-copy), sin(copy)",
+            ],
+            "mass matrix is nearly singular",
+        ),
+        // Two motions no pendulum makes, theta1's inertia fitted as 1 − 1.02 cos(theta2): it
+        // crosses zero between states, never zero at one.
+        (
+            &[
+                unphysical,
+                "--coords",
+                "theta1,theta2",
+                "--terms",
+                "theta1: theta1''*cos(theta2), sin(theta1); theta2: sin(theta2)",
+            ],
+            "its determinant changing sign",
         ),
         (&[record, duffing, "--coords", "theta1,theta2"], "--coords"),
     ];
