@@ -1067,3 +1067,17 @@ fn glitches_beside_a_settling_start_are_handled_as_before() {
         Err(InputError::TimeGlitch { isolated: false, .. })
     ));
 }
+
+/// Stamps so large that the fit's arithmetic overflows (steps of 1e305, 1e300 at 1e8 steps in)
+/// are refused as an error, never a panic of the debug build's checks.
+#[test]
+fn stamps_near_the_largest_number_are_an_error_not_a_panic() {
+    for (step, start) in [(1e305, 0.0), (1e300, 1e308), (1.0, 1.7e308)] {
+        let t: Vec<f64> = (0..200).map(|k| start + k as f64 * step).collect();
+        let finite = t.iter().all(|v| v.is_finite());
+        match fit(t) {
+            Ok(grid) => assert!(finite && grid.dt.is_finite(), "{step}, {start}: {grid:?}"),
+            Err(e) => assert!(!e.to_string().is_empty()),
+        }
+    }
+}

@@ -1423,8 +1423,13 @@ impl OwnIndices {
                 line.index(tau)
             };
             // Equal as numbers (a stamp just before the origin rounds to −0, whose grid time
-            // `a + (−0) b` is `a` as well).
-            debug_assert_eq!(k, line.index(tau), "stamp {i}");
+            // `a + (−0) b` is `a` as well), or both not numbers (stamps so large that the
+            // line's arithmetic overflows, which `indexable` then refuses).
+            debug_assert!(
+                k == line.index(tau) || (k.is_nan() && line.index(tau).is_nan()),
+                "stamp {i}: {k} against {}",
+                line.index(tau)
+            );
             if k != at || !line.indexable(k, tau) {
                 return None;
             }
