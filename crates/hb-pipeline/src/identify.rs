@@ -426,7 +426,22 @@ impl IdentifyRequest {
                     .level(o.level)
                     .seed(o.seed)
                     .build()
-                    .map_err(|e| OptionError::checked("level", o.level, &e))?,
+                    .map_err(|e| match &e {
+                        // Too few resamples for the level: the count is what to change.
+                        hb_solve::SolveError::InvalidParameter {
+                            name: "bootstrap resamples",
+                            ..
+                        } => OptionError::value(
+                            "bootstrap",
+                            o.bootstrap,
+                            format!(
+                                "too few resamples for «level» {}: at least {} (max(20, 2 / (1 - level)))",
+                                o.level,
+                                (2.0 / (1.0 - o.level)).ceil().max(20.0)
+                            ),
+                        ),
+                        _ => OptionError::checked("level", o.level, &e),
+                    })?,
             )
         } else {
             None

@@ -3973,3 +3973,17 @@ fn the_report_refuses_to_read_in_chunks() {
     assert!(!report.exists(), "a report was written");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Too few bootstrap resamples for the confidence level name the count and how many are needed;
+/// a level out of range names the level.
+#[test]
+fn too_few_resamples_name_the_bootstrap_option() {
+    let data = paper_dataset();
+    let out = hbid(&["identify", &data, "--bootstrap", "20"]);
+    assert_clean_failure(
+        &out,
+        "--bootstrap 20: too few resamples for --level 0.95: at least 40",
+    );
+    let out = hbid(&["identify", &data, "--bootstrap", "200", "--level", "1.5"]);
+    assert_clean_failure(&out, "--level 1.5");
+}
