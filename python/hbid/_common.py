@@ -23,8 +23,24 @@ class HbidWarning(UserWarning):
     to do."""
 
 
+def refuse_non_real(values: Any, name: str) -> None:
+    """Refuses complex and boolean arrays, which a conversion to ``float64`` would take silently
+    (the real part, with only NumPy's warning; 0 and 1)."""
+    kind = getattr(getattr(values, "dtype", None), "kind", None)
+    if kind is None and isinstance(values, (list, tuple)):
+        try:
+            kind = np.asarray(values).dtype.kind
+        except (TypeError, ValueError):
+            return
+    if kind == "c":
+        raise OptionsError(f"{name}: complex values: give real numbers (np.real(...) if the real part is meant)")
+    if kind == "b":
+        raise OptionsError(f"{name}: boolean values: give numbers")
+
+
 def array(values: ArrayLike, name: str) -> np.ndarray:
     """``values`` as a contiguous one-dimensional ``float64`` array (borrowed by the extension)."""
+    refuse_non_real(values, name)
     try:
         a = np.ascontiguousarray(values, dtype=np.float64)
     except (TypeError, ValueError) as e:

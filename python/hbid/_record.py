@@ -10,7 +10,7 @@ from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 import numpy as np
 
 from . import _hbid
-from ._common import ArrayLike, ColumnsLike, PathLike, array, column, columns, emit, options_json, signals
+from ._common import ArrayLike, ColumnsLike, PathLike, array, column, columns, emit, options_json, refuse_non_real, signals
 from .errors import OptionsError
 
 
@@ -221,6 +221,7 @@ def _columns_by_name(values: Any, names: Any, what: str, option: str) -> Any:
     it is. A single column needs no name."""
     if isinstance(values, Mapping) or _is_path(values):
         return values
+    refuse_non_real(values, what)
     try:
         a = np.asarray(values, dtype=np.float64)
     except (TypeError, ValueError):

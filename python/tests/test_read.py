@@ -173,6 +173,18 @@ def test_missing_file_folder_and_bad_options(tmp_path):
         hbid.read(tmp_path / "x.csv", dt=-1.0)
 
 
+def test_complex_and_boolean_samples_are_refused():
+    """A conversion to floats would take the real part (with only NumPy's warning) or 0 and 1."""
+    x = np.sin(np.arange(400) * 0.1)
+    for bad, what in ((x + 1j, "complex"), (x > 0, "boolean"), ([complex(v) for v in x], "complex")):
+        with pytest.raises(hbid.OptionsError, match=f"x: {what} values"):
+            hbid.read(bad, dt=0.1)
+    with pytest.raises(hbid.OptionsError, match="t: complex values"):
+        hbid.read(x, t=np.arange(400) * 0.1 + 0j)
+    with pytest.raises(hbid.OptionsError, match="x: complex values"):
+        hbid.identify(np.column_stack([x, x]) + 2j, dt=0.1, coords=["a", "b"], terms="sin(a), sin(b)")
+
+
 def test_records_pickle(tmp_path, pendulum):
     record = hbid.read(write_csv(tmp_path / "r.csv", pendulum.t[:300], pendulum.x[:300]))
     back = pickle.loads(pickle.dumps(record))
