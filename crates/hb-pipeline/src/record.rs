@@ -897,8 +897,21 @@ pub fn load_all(
     drive: DriveSpec,
     observer: &mut dyn Observer,
 ) -> Result<Data, RunError> {
+    let several = sources.len() > 1;
+    let names: Vec<String> = sources.iter().map(source_name).collect();
+    let read = options.read_options()?;
+    // The first file's header names of the columns chosen, which every other file's must be.
+    let mut first_names: Option<(String, Vec<String>)> = None;
     let mut records = Vec::with_capacity(sources.len());
     for source in sources {
+        if let (true, Source::Path(path)) = (several, &source)
+            && let Some(names) = hb_record::input::chosen_names(path, &read)
+        {
+            match &first_names {
+                None => first_names = Some((path.display().to_string(), names)),
+                Some((first, expected)) => same_columns(options, first, expected, path, &names)?,
+            }
+        }
         records.push(load(source, options, drive, observer)?);
     }
     let mut records = records.into_iter();
@@ -908,11 +921,11 @@ pub fn load_all(
     let periodic = matches!(joined.drive, DriveFound::Given | DriveFound::Estimated { .. });
     let h = joined.clock.step();
     for (i, data) in records.enumerate() {
-        let which = i + 2;
+        let (which, first) = (&names[i + 1], &names[0]);
         let differs = |what: String| -> RunError {
             OptionError::new(
                 "file",
-                format!("record {which} {what}: records of one identification share one kind of grid"),
+                format!("{which} {what}: records of one identification share one kind of grid ({first} is the first)"),
             )
             .into()
         };
@@ -969,6 +982,62 @@ pub fn load_all(
             .extend(data.pieces.iter().map(|r| r.start + shift..r.end + shift));
     }
     Ok(joined)
+}
+
+/// That the columns `options` choose are named in the header of the file at `path` as in the
+/// first file's (`expected`): records chosen by position whose headers name other columns there
+/// would be joined silently, one's angle taken for another's.
+fn same_columns(
+    options: &RecordOptions,
+    first: &str,
+    expected: &[String],
+    path: &Path,
+    names: &[String],
+) -> Result<(), RunError> {
+    let Some(k) = (0..names.len().min(expected.len())).find(|&k| names[k] != expected[k]) else {
+        return Ok(());
+    };
+    let coordinates = options.coordinates();
+    let drives = options.drive_cols().len();
+    let (option, list) = if k < coordinates {
+        match &options.coords {
+            Some(c) => ("coords", c.columns().to_vec()),
+            None => (
+                "angle_col",
+                options.angle_col.iter().map(|c| c.to_string()).collect(),
+            ),
+        }
+    } else if k < coordinates + drives {
+        ("drive_col", options.drive_cols().to_vec())
+    } else {
+        (
+            "velocity_col",
+            options
+                .velocity_col
+                .as_ref()
+                .map(|v| v.columns().to_vec())
+                .unwrap_or_default(),
+        )
+    };
+    let slot = if k < coordinates {
+        k
+    } else if k < coordinates + drives {
+        k - coordinates
+    } else {
+        k - coordinates - drives
+    };
+    let column = list.get(slot).cloned().unwrap_or_default();
+    Err(OptionError::new(
+        option,
+        format!(
+            "column {column} is '{}' in {} and '{}' in {first}: the records of one identification hold the \
+             same columns (choose them by their header names)",
+            names[k],
+            path.display(),
+            expected[k]
+        ),
+    )
+    .into())
 }
 
 /// What the record turned out to be, for the reports.

@@ -3854,14 +3854,26 @@ fn a_systems_bad_inputs_are_one_line_errors() {
     }
     let unphysical = dir.join("unphysical.csv");
     std::fs::write(&unphysical, motions).unwrap();
-    let (record, duffing, copy, noisy_copy, unphysical) = (
+    // The same record with its angles' columns in the other order (header and values).
+    let swapped: String = text
+        .lines()
+        .map(|line| {
+            let mut cells: Vec<&str> = line.split(',').collect();
+            cells.swap(1, 2);
+            cells.join(",") + "\n"
+        })
+        .collect();
+    let swapped_path = dir.join("swapped.csv");
+    std::fs::write(&swapped_path, swapped).unwrap();
+    let (record, duffing, copy, noisy_copy, unphysical, swapped) = (
         record.to_str().unwrap(),
         duffing.to_str().unwrap(),
         copy.to_str().unwrap(),
         noisy_copy.to_str().unwrap(),
         unphysical.to_str().unwrap(),
+        swapped_path.to_str().unwrap(),
     );
-    let cases: [(&[&str], &str); 10] = [
+    let cases: [(&[&str], &str); 11] = [
         (&[record, "--coords", "theta1,theta3"], "--coords"),
         (&[record, "--coords", "theta1,theta1"], "named twice"),
         (
@@ -3925,6 +3937,11 @@ fn a_systems_bad_inputs_are_one_line_errors() {
             "its determinant changing sign",
         ),
         (&[record, duffing, "--coords", "theta1,theta2"], "--coords"),
+        // Chosen by position, the second record's header names the other angle there.
+        (
+            &[record, swapped, "--coords", "theta1=2,theta2=3"],
+            "--coords: column 2 is 'theta2' in",
+        ),
     ];
     for (args, mentions) in cases {
         let mut all = vec!["identify"];

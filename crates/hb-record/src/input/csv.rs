@@ -5,44 +5,7 @@ use super::{Column, Columns, InputError, Location, ReadOptions, Record, Role, Se
 
 /// Reads text; the options are assumed valid.
 pub(super) fn read<'a>(bytes: &'a [u8], options: &ReadOptions) -> Result<Record, InputError> {
-    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
-    // A text that is UTF-8 throughout has every line so (no byte of a longer character is a
-    // line end), checked once; otherwise line by line, so that the first bad row is named.
-    let mut lines = Lines {
-        rest: match std::str::from_utf8(bytes) {
-            Ok(text) => Rest::Text(text),
-            Err(_) => Rest::Bytes(bytes),
-        },
-        line: 0,
-        // Lines end in LF (CR LF included: the CR is trimmed), or in CR alone where no LF is
-        // (an old Mac's or some loggers' files).
-        end: if memchr::memchr(b'\n', bytes).is_none() && memchr::memchr(b'\r', bytes).is_some() {
-            b'\r'
-        } else {
-            b'\n'
-        },
-    };
-    let Some((first_line, first)) = lines.next_row()? else {
-        return Err(InputError::Empty);
-    };
-    let separator = match Separator::of(first) {
-        // Tabs alone separate where the first row's cells hold spaces (a header's `time [s]`):
-        // there are fewer of them between tabs than between spaces and tabs.
-        Some(Separator::Tab) => {
-            let mut by_tabs = Vec::new();
-            let mut by_white = Vec::new();
-            Separator::Tab.split(first, &mut by_tabs);
-            Separator::Whitespace.split(first, &mut by_white);
-            if by_tabs.len() < by_white.len() {
-                Separator::Tab
-            } else {
-                Separator::Whitespace
-            }
-        }
-        Some(s) => s,
-        // A single cell: any separator splits it into itself.
-        None => Separator::Whitespace,
-    };
+    let (mut lines, first_line, first, separator) = first_row(bytes)?;
     let mut first_cells = Vec::new();
     separator.split(first, &mut first_cells);
     let width = first_cells.len();
@@ -168,6 +131,68 @@ pub(super) fn read<'a>(bytes: &'a [u8], options: &ReadOptions) -> Result<Record,
         super::order_from_data(&mut record);
     }
     Ok(record)
+}
+
+/// The rows of `bytes` (a byte-order mark left out) after its first, that first row with its
+/// line number, and the separator of its cells.
+fn first_row(bytes: &[u8]) -> Result<(Lines<'_>, u64, &str, Separator), InputError> {
+    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+    // A text that is UTF-8 throughout has every line so (no byte of a longer character is a
+    // line end), checked once; otherwise line by line, so that the first bad row is named.
+    let mut lines = Lines {
+        rest: match std::str::from_utf8(bytes) {
+            Ok(text) => Rest::Text(text),
+            Err(_) => Rest::Bytes(bytes),
+        },
+        line: 0,
+        // Lines end in LF (CR LF included: the CR is trimmed), or in CR alone where no LF is
+        // (an old Mac's or some loggers' files).
+        end: if memchr::memchr(b'\n', bytes).is_none() && memchr::memchr(b'\r', bytes).is_some() {
+            b'\r'
+        } else {
+            b'\n'
+        },
+    };
+    let Some((first_line, first)) = lines.next_row()? else {
+        return Err(InputError::Empty);
+    };
+    let separator = match Separator::of(first) {
+        // Tabs alone separate where the first row's cells hold spaces (a header's `time [s]`):
+        // there are fewer of them between tabs than between spaces and tabs.
+        Some(Separator::Tab) => {
+            let mut by_tabs = Vec::new();
+            let mut by_white = Vec::new();
+            Separator::Tab.split(first, &mut by_tabs);
+            Separator::Whitespace.split(first, &mut by_white);
+            if by_tabs.len() < by_white.len() {
+                Separator::Tab
+            } else {
+                Separator::Whitespace
+            }
+        }
+        Some(s) => s,
+        // A single cell: any separator splits it into itself.
+        None => Separator::Whitespace,
+    };
+    Ok((lines, first_line, first, separator))
+}
+
+/// The header's names of the columns `options` choose (the coordinates', then the drives',
+/// then the velocities'), from the first row of `bytes` (the start of a text is enough); `None`
+/// when it is not a header, or names no such columns.
+pub(super) fn chosen_names(bytes: &[u8], options: &ReadOptions) -> Option<Vec<String>> {
+    let (_, _, first, separator) = first_row(bytes).ok()?;
+    let mut cells = Vec::new();
+    separator.split(first, &mut cells);
+    if cells.iter().all(|c| number(c, separator).is_some()) {
+        return None;
+    }
+    let columns = options.columns(Some(&cells), cells.len()).ok()?;
+    let chosen = std::iter::once(columns.angle)
+        .chain(columns.others)
+        .chain(columns.drives)
+        .chain(columns.velocities);
+    Some(chosen.map(|i| cells[i].to_owned()).collect())
 }
 
 /// The rows of a text: lines that are neither blank nor comments, with their line numbers.

@@ -489,6 +489,28 @@ pub fn read_path(path: &Path, options: &ReadOptions) -> Result<Record, InputErro
     read_valid(&bytes, options)
 }
 
+/// The header's names of the columns `options` choose in the text file at `path` (the
+/// coordinates', then the drives', then the velocities', as [`read_path`] finds them), from its
+/// first mebibyte: `None` without a header, for a `.npy` file or standard input, or where the
+/// file cannot be read (reading it says why). Records of one identification chosen by position
+/// are told apart by them.
+pub fn chosen_names(path: &Path, options: &ReadOptions) -> Option<Vec<String>> {
+    if path == Path::new("-") || options.validate().is_err() {
+        return None;
+    }
+    let mut file = std::fs::File::open(path).ok()?;
+    if !file.metadata().ok()?.is_file() {
+        return None;
+    }
+    let mut start = vec![0; 1 << 20];
+    let got = read_up_to(&mut file, &mut start).ok()?;
+    let start = &start[..got];
+    if start.starts_with(b"\x93NUMPY") {
+        return None;
+    }
+    csv::chosen_names(start, options)
+}
+
 /// Reads into `buf` until it is full or the reader ends (an interrupted read tried again); how
 /// many bytes it read.
 pub(super) fn read_up_to(file: &mut impl Read, buf: &mut [u8]) -> std::io::Result<usize> {
