@@ -759,6 +759,70 @@ fn velocities_in_record_order(
         .map_err(|e| OptionError::new("velocity_col", e))
 }
 
+/// That the columns a system was saved with (positions, where it was identified by them) are not
+/// the wrong ones in this record: a header that names the system's coordinates (or, `drives`,
+/// its drives) elsewhere than at the saved columns is refused, rather than its columns taken by
+/// their place. `record` chooses the columns as saved.
+fn saved_columns_named_elsewhere(
+    path: &std::path::Path,
+    record: &RecordOptions,
+    names: &hb_model::Names,
+    saved: &hb_model::Columns,
+    drives: bool,
+) -> Result<(), RunError> {
+    let (option, own, columns) = if drives {
+        ("drive_col", names.drives(), &saved.drives)
+    } else {
+        ("coords", names.coordinates(), &saved.coordinates)
+    };
+    if columns == own {
+        return Ok(());
+    }
+    let list = |v: &[String]| {
+        v.join(",")
+            .parse::<ColumnList>()
+            .map_err(|e| OptionError::new(option, e))
+    };
+    let by_name = if drives {
+        RecordOptions {
+            drive_col: Some(list(own)?),
+            velocity_col: None,
+            ..record.clone()
+        }
+    } else {
+        RecordOptions {
+            coords: Some(list(own)?),
+            drive_col: None,
+            velocity_col: None,
+            ..record.clone()
+        }
+    };
+    let (Some(at_saved), Some(_)) = (
+        hb_record::input::chosen_names(path, &record.read_options()?),
+        hb_record::input::chosen_names(path, &by_name.read_options()?),
+    ) else {
+        return Ok(());
+    };
+    let from = if drives { names.coordinates().len() } else { 0 };
+    let there = &at_saved[from..(from + own.len()).min(at_saved.len())];
+    if there == own {
+        return Ok(());
+    }
+    Err(OptionError::new(
+        option,
+        format!(
+            "the model read {} from the columns {} where it was identified; this record's header names {} there \
+             and has columns named {}: choose them («{option}» {} picks them by name)",
+            own.join(", "),
+            columns.join(", "),
+            there.join(", "),
+            own.join(", "),
+            own.join(","),
+        ),
+    )
+    .into())
+}
+
 /// Puts a record's coordinates (with their measured velocities) and drives, read in the order
 /// their columns were given, in the system's order: the `k`-th read is the system's
 /// `coordinate_of[k]`-th, the `k`-th drive its `drive_of[k]`-th.
@@ -916,6 +980,14 @@ fn compare_system(
         drive_period: None,
         drive_frequency: None,
     };
+    if let Source::Path(path) = &source {
+        if o.coords.is_none() {
+            saved_columns_named_elsewhere(path, &record, names, &columns, false)?;
+        }
+        if o.drive_col.is_none() && drives_needed {
+            saved_columns_named_elsewhere(path, &record, names, &columns, true)?;
+        }
+    }
     let (mut grid, clock) = compared_record(source, &record, o.skip_unsettled, observer)?;
     in_system_order(&mut grid, &coordinate_of, &drive_of);
     observer.stage(Stage::Simulate);

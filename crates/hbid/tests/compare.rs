@@ -741,6 +741,71 @@ fn a_systems_columns_are_paired_with_the_model_by_name() {
     // Positions in another order are the user's pairing: the joints swapped score badly.
     let swapped = rmse(&["--coords", "3,2"]);
     assert!(swapped.iter().all(|&e| e > 0.1), "{swapped:?}");
+    // A model identified by position (the truth's own arguments, q1=2,q2=3 and tau1=6,tau2=7),
+    // compared on the record with its columns in another order, its header naming them: refused
+    // until the columns are chosen, then as in order.
+    let positional = dir.join("arm-positions.json");
+    let mut args: Vec<String> = [
+        "identify",
+        s(&record),
+        "--bootstrap",
+        "0",
+        "--save-model",
+        s(&positional),
+    ]
+    .map(String::from)
+    .to_vec();
+    args.extend(
+        hint["identify"]["args"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|a| a.as_str().unwrap().to_owned()),
+    );
+    ok(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    let reordered: String = header
+        .lines()
+        .map(|line| {
+            let c: Vec<&str> = line.split(',').collect();
+            [c[0], c[2], c[1], c[4], c[3], c[6], c[5]].join(",") + "\n"
+        })
+        .collect();
+    let reordered_path = dir.join("arm-reordered.csv");
+    std::fs::write(&reordered_path, reordered).unwrap();
+    let on = |extra: &[&str]| {
+        let mut args = vec![
+            "compare",
+            s(&positional),
+            s(&reordered_path),
+            "--range",
+            "2000..3000",
+            "--json",
+        ];
+        args.extend_from_slice(extra);
+        hbid(&args)
+    };
+    assert_clean_failure(
+        &on(&[]),
+        "--coords: the model read q1, q2 from the columns 2, 3 where it was identified; this record's header \
+         names q2, q1 there",
+    );
+    assert_clean_failure(
+        &on(&["--coords", "q1,q2"]),
+        "--drive-col: the model read tau1, tau2 from the columns 6, 7",
+    );
+    let chosen = on(&["--coords", "q1,q2", "--drive-col", "tau1,tau2"]);
+    assert!(
+        chosen.status.success(),
+        "{}",
+        String::from_utf8_lossy(&chosen.stderr)
+    );
+    let scores: Vec<f64> = json(&chosen)["ranges"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["rmse"].as_f64().unwrap())
+        .collect();
+    assert!(scores.iter().all(|&e| e < 1e-3), "{scores:?}");
     for (extra, mentions) in [
         (
             &["--coords", "zz=2,yy=3"][..],
