@@ -1578,6 +1578,13 @@ struct VelocityParts {
     at: Option<usize>,
 }
 
+/// Why `sin` of a combination that leads with a minus is refused: the order is the coordinates'
+/// (`sin(theta1-theta2)` leads with a minus when theta2 is listed first).
+const SIN_TURNED: &str = "sin of a combination that starts with a minus, the coordinates taken in the order they \
+                          are listed, is −sin of the turned one: write it turned (sin(b-a) for \
+                          sin(a-b)), its coefficient then of the other sign, or list the coordinates in the other \
+                          order";
+
 impl Product {
     /// The term of the product, for the equation of coordinate `own`.
     fn term(&self, spec: &str, own: usize) -> Result<TermSpec, TermError> {
@@ -1684,10 +1691,7 @@ impl Product {
                 Some((c, k)) if c == own => {
                     let k = k.unsigned_abs();
                     if sine && combination.leads_negative() {
-                        return Err(clash(
-                            at,
-                            "sin of a combination that starts with a minus is −sin of the turned one: write it turned",
-                        ));
+                        return Err(clash(at, SIN_TURNED));
                     }
                     let f = if sine {
                         XFunction::Sin(k)
@@ -1704,11 +1708,7 @@ impl Product {
                 _ => {
                     let combination = if combination.leads_negative() {
                         if sine {
-                            return Err(clash(
-                                at,
-                                "sin of a combination that starts with a minus is −sin of the turned one: write it \
-                                 turned",
-                            ));
+                            return Err(clash(at, SIN_TURNED));
                         }
                         combination.negated()
                     } else {

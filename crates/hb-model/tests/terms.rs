@@ -325,6 +325,13 @@ fn terms_of_a_system_that_are_no_terms_are_refused_with_a_reason() {
     assert!(refused("q2''*q1''").contains("at most one acceleration"));
     // −sin of the turned combination is not written with a leading minus.
     assert!(refused("sin(q2-q1)").contains("turned"));
+    // The order is the coordinates' as listed, which the message says (the text has no minus
+    // in front).
+    assert!(
+        refused("sin(q2-q1)").contains("the coordinates taken in the order they are listed"),
+        "{}",
+        refused("sin(q2-q1)")
+    );
     // cos of it is: the same as the turned one.
     assert_eq!(
         TermList::parse_in("cos(q2-q1)", &names, 0).unwrap().names(),
