@@ -660,7 +660,19 @@ fn arrays_record(
     let columns = std::iter::once(t.as_slice())
         .chain(coords.iter().copied())
         .chain(drives.iter().copied());
-    for (role, column) in roles.zip(columns) {
+    // Each array by the name it was given (x and p for one coordinate and one drive).
+    let coordinate_names: Vec<String> = match &options.coords {
+        Some(c) => c.names().to_vec(),
+        None => vec!["x".to_owned()],
+    };
+    let drive_names: Vec<String> = match options.drive_cols() {
+        [] => vec!["p".to_owned()],
+        _ => options.drive_names().to_vec(),
+    };
+    let names = std::iter::once("t".to_owned())
+        .chain(coordinate_names)
+        .chain(drive_names);
+    for ((role, column), name) in roles.zip(columns).zip(names) {
         if let Some((i, &value)) = column.iter().enumerate().find(|(_, v)| !v.is_finite()) {
             return Err(RunError::Read {
                 name: "the arrays".to_owned(),
@@ -668,6 +680,7 @@ fn arrays_record(
                 source: Box::new(InputError::NonFinite {
                     at: hb_record::input::Location::Sample(i + 1),
                     role,
+                    column: hb_record::input::Column::Name(name),
                     value,
                 }),
             });

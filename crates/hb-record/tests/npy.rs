@@ -64,9 +64,10 @@ fn converted_elements_follow_the_order_and_name_samples() {
         .flat_map(|v| v.to_le_bytes())
         .collect();
     match read_bytes(&npy_bytes("<f8", "(2, 2)", false, &f8), &ReadOptions::default()) {
-        Err(InputError::NonFinite { at, role, .. }) => {
+        Err(e @ InputError::NonFinite { at, role, .. }) => {
             assert_eq!((at, role), (Location::Sample(2), Role::Angle));
             assert_eq!(at.to_string(), "sample 2");
+            assert!(e.to_string().contains("inf in column 2"), "{e}");
         }
         other => panic!("{other:?}"),
     }

@@ -441,6 +441,7 @@ impl Field<'_> {
             return Err(InputError::NonFinite {
                 at: Location::Line(line),
                 role: self.role,
+                column: self.column(),
                 value,
             });
         }

@@ -112,12 +112,14 @@ pub enum InputError {
         value: String,
     },
     /// A value is NaN or infinite.
-    #[error("{at}: {} is {value}: only finite numbers are accepted", .role.value_noun())]
+    #[error("{at}: {} is {value} in column {column}: only finite numbers are accepted", .role.value_noun())]
     NonFinite {
         /// Where.
         at: Location,
         /// What the value is.
         role: Role,
+        /// The column, by name with a header, by position without (a `.npy`'s by position).
+        column: Column,
         /// The value.
         value: f64,
     },
@@ -318,9 +320,15 @@ impl InputError {
                 column,
                 value,
             },
-            Self::NonFinite { at: a, role, value } => Self::NonFinite {
+            Self::NonFinite {
+                at: a,
+                role,
+                column,
+                value,
+            } => Self::NonFinite {
                 at: at(a),
                 role,
+                column,
                 value,
             },
             Self::Ragged {

@@ -2,7 +2,7 @@
 
 use std::io::Read;
 
-use super::{InputError, Location, ReadOptions, Record, Role, Times, grid, read_up_to};
+use super::{Column, InputError, Location, ReadOptions, Record, Role, Times, grid, read_up_to};
 
 /// An `.npy` error in one line: the header parser's errors draw the header over several lines
 /// with a caret under the fault; that becomes the column it names and what it expected.
@@ -242,7 +242,7 @@ fn assemble(
     } else {
         Role::Time
     };
-    check_finite(&t, time_role, &theta)?;
+    check_finite(&t, time_role, columns.time.column(), &theta, columns.angle)?;
     let mut read = |role: Role, cs: &[usize]| -> Result<Vec<Vec<f64>>, InputError> {
         cs.iter()
             .map(|&c| {
@@ -251,6 +251,7 @@ fn assemble(
                     Some((i, &value)) => Err(InputError::NonFinite {
                         at: Location::Sample(i + 1),
                         role,
+                        column: Column::Position(c + 1),
                         value,
                     }),
                     None => Ok(values),
@@ -442,13 +443,24 @@ fn matrix_shape(shape: &[u64]) -> Result<(usize, usize), InputError> {
 
 /// Checks that every time (read as `time_role`) and value is finite, naming the first sample
 /// that is not.
-fn check_finite(t: &[f64], time_role: Role, theta: &[f64]) -> Result<(), InputError> {
+fn check_finite(
+    t: &[f64],
+    time_role: Role,
+    time_column: Option<usize>,
+    theta: &[f64],
+    angle_column: usize,
+) -> Result<(), InputError> {
     for (i, (&ti, &xi)) in t.iter().zip(theta).enumerate() {
-        for (role, value) in [(time_role, ti), (Role::Angle, xi)] {
+        // A grid made from a step is finite: its column is never named.
+        for (role, column, value) in [
+            (time_role, time_column.unwrap_or(0), ti),
+            (Role::Angle, angle_column, xi),
+        ] {
             if !value.is_finite() {
                 return Err(InputError::NonFinite {
                     at: Location::Sample(i + 1),
                     role,
+                    column: Column::Position(column + 1),
                     value,
                 });
             }
