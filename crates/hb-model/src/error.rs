@@ -75,7 +75,7 @@ pub enum TermError {
         second: String,
     },
     /// A model term that does not belong on the basis' domain.
-    #[error("the term `{term}` cannot be used with a basis on the {domain:?} domain: {why}")]
+    #[error("the term `{term}` cannot be used with a basis on the {domain} (the signal of its coordinate): {why}")]
     TermNotAllowed {
         /// The term's name.
         term: String,
