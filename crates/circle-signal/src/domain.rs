@@ -108,3 +108,29 @@ mod tests {
         assert!("torus".parse::<Domain>().is_err());
     }
 }
+
+/// A number as messages show it: Rust's shortest decimal between `1e-4` and `1e12` in size
+/// (and zero), scientific notation outside, where the decimal runs to hundreds of digits
+/// (`1e300`, `1e-300`).
+///
+/// ```
+/// use circle_signal::Shown;
+///
+/// assert_eq!(Shown(0.25).to_string(), "0.25");
+/// assert_eq!(Shown(1e300).to_string(), "1e300");
+/// assert_eq!(Shown(-1.7e-300).to_string(), "-1.7e-300");
+/// assert_eq!(Shown(f64::NAN).to_string(), "NaN");
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Shown(pub f64);
+
+impl fmt::Display for Shown {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let v = self.0;
+        if v.is_finite() && v != 0.0 && !(1e-4..1e12).contains(&v.abs()) {
+            write!(f, "{v:e}")
+        } else {
+            write!(f, "{v}")
+        }
+    }
+}

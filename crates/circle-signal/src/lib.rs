@@ -63,7 +63,7 @@ mod spikes;
 pub mod system;
 
 pub use clock::SampleClock;
-pub use domain::{Domain, UnknownDomain};
+pub use domain::{Domain, Shown, UnknownDomain};
 pub use integrate::{Measured, UnknownMeasured, cumulative_integral, displacement};
 pub use oscillation::{NoOscillationReason, OscillationPeriod, oscillation_period};
 pub use resample::{RESAMPLE_HALF_WIDTH, Resampled, ResampledPieces, resample_pieces, resample_to_whole};
@@ -167,8 +167,8 @@ pub enum CircleError {
     },
     /// The forcing period is not a whole number of sampling steps, and the operation needs one.
     #[error(
-        "the forcing period is {samples_per_period} sampling steps, not a whole number: this stage \
-         cuts the record into whole forcing periods"
+        "the forcing period is {} sampling steps, not a whole number: this stage \
+         cuts the record into whole forcing periods", crate::Shown(*.samples_per_period)
     )]
     NotWholePeriod {
         /// Samples per forcing period, `T / h`.
@@ -195,7 +195,7 @@ pub enum CircleError {
         found: usize,
     },
     /// A parameter is out of range.
-    #[error("invalid {name}: {value} ({why})")]
+    #[error("invalid {name}: {} ({why})", crate::Shown(*.value))]
     InvalidParameter {
         /// The parameter's name.
         name: &'static str,

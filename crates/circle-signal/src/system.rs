@@ -133,7 +133,7 @@ pub const MAX_COORDINATES: usize = 8;
 /// The mass matrix of a system cannot be solved at time `t`: it is singular, or not positive
 /// definite, at the state reached.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
-#[error("the mass matrix is singular at t = {t} (relative pivot {pivot:e})")]
+#[error("the mass matrix is singular at t = {} (relative pivot {pivot:e})", crate::Shown(*.t))]
 pub struct SingularMass {
     /// The time of the evaluation.
     pub t: f64,

@@ -3,7 +3,7 @@
 #[non_exhaustive]
 pub enum EmbeddingError {
     /// A parameter is out of its range.
-    #[error("invalid {name}: {value} ({why})")]
+    #[error("invalid {name}: {} ({why})", circle_signal::Shown(*.value))]
     InvalidParameter {
         /// The parameter's name.
         name: &'static str,
@@ -29,7 +29,7 @@ pub enum EmbeddingError {
         needed: usize,
     },
     /// Every sample has the same value, so the range of the data is empty (linear metric).
-    #[error("every sample equals {value}: the range of the data is empty")]
+    #[error("every sample equals {}: the range of the data is empty", circle_signal::Shown(*.value))]
     ConstantSignal {
         /// The common value.
         value: f64,

@@ -70,7 +70,7 @@ pub enum DriveSearchError {
     #[error(transparent)]
     Model(#[from] ModelError),
     /// A parameter is out of range.
-    #[error("invalid {name}: {value} ({why})")]
+    #[error("invalid {name}: {} ({why})", circle_signal::Shown(*.value))]
     InvalidParameter {
         /// The parameter's name.
         name: &'static str,

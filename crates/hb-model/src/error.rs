@@ -75,7 +75,9 @@ pub enum TermError {
         second: String,
     },
     /// A model term that does not belong on the basis' domain.
-    #[error("the term `{term}` cannot be used with a basis on the {domain} (the signal of its coordinate): {why}")]
+    #[error(
+        "the term `{term}` cannot be used with a basis on the {domain} (the signal of its coordinate): {why}"
+    )]
     TermNotAllowed {
         /// The term's name.
         term: String,
@@ -172,7 +174,7 @@ pub enum ModelError {
     #[error(transparent)]
     Io(#[from] ModelIoError),
     /// A parameter is out of range.
-    #[error("invalid {name}: {value} ({why})")]
+    #[error("invalid {name}: {} ({why})", circle_signal::Shown(*.value))]
     InvalidParameter {
         /// The parameter's name.
         name: &'static str,

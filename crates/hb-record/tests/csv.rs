@@ -365,7 +365,13 @@ fn a_time_column_is_reported_as_a_time_whatever_its_name() {
             3,
             "a value is inf in column 'angle'",
         ),
-        ("0,1,2\n-inf,2,3\n", &unnamed, Role::Time, 2, "the time is -inf in column 1"),
+        (
+            "0,1,2\n-inf,2,3\n",
+            &unnamed,
+            Role::Time,
+            2,
+            "the time is -inf in column 1",
+        ),
         // Two unnamed columns: which is the time is not known yet.
         ("0,1\n-inf,2\n", &unnamed, Role::Angle, 2, "a value is -inf"),
     ] {

@@ -458,7 +458,7 @@ pub enum SolveError {
         expected: &'static str,
     },
     /// A parameter is out of range.
-    #[error("invalid {name}: {value} ({why})")]
+    #[error("invalid {name}: {} ({why})", circle_signal::Shown(*.value))]
     InvalidParameter {
         /// The parameter's name.
         name: &'static str,

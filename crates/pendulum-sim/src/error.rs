@@ -3,7 +3,7 @@
 #[non_exhaustive]
 pub enum SimError {
     /// A parameter is out of its range.
-    #[error("invalid {name}: {value} ({why})")]
+    #[error("invalid {name}: {} ({why})", circle_signal::Shown(*.value))]
     InvalidParameter {
         /// The parameter's name.
         name: &'static str,
@@ -14,7 +14,7 @@ pub enum SimError {
     },
     /// The step size fell below what floating point can resolve at this time: the solution is
     /// singular or blows up.
-    #[error("step size {h:e} too small at t = {t}: the solution blows up or is not smooth")]
+    #[error("step size {h:e} too small at t = {}: the solution blows up or is not smooth", circle_signal::Shown(*.t))]
     StepSizeTooSmall {
         /// Time reached.
         t: f64,
@@ -23,7 +23,7 @@ pub enum SimError {
     },
     /// The step budget ran out: the steps shrank as the solution grew (or turned stiff).
     #[error(
-        "more than {steps} steps before t = {t}: the solution blows up or is too stiff for the tolerances"
+        "more than {steps} steps before t = {}: the solution blows up or is too stiff for the tolerances", circle_signal::Shown(*.t)
     )]
     TooManySteps {
         /// Time reached.
@@ -50,7 +50,7 @@ pub enum SimError {
     },
     /// The mass matrix of a system of several coordinates cannot be solved at the state reached:
     /// it is singular, or not positive definite ([`crate::SingularMass`]).
-    #[error("the mass matrix is singular at t = {t} (relative pivot {pivot:e})")]
+    #[error("the mass matrix is singular at t = {} (relative pivot {pivot:e})", circle_signal::Shown(*.t))]
     SingularMass {
         /// Time reached.
         t: f64,
@@ -58,7 +58,7 @@ pub enum SimError {
         pivot: f64,
     },
     /// The right-hand side or the solution became NaN or infinite.
-    #[error("the solution is not finite at t = {t}")]
+    #[error("the solution is not finite at t = {}", circle_signal::Shown(*.t))]
     NonFinite {
         /// Time reached.
         t: f64,

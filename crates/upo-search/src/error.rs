@@ -5,7 +5,7 @@
 #[non_exhaustive]
 pub enum UpoError {
     /// The tolerance, a fraction of the span of the data, is outside `(0, 0.5)`.
-    #[error("invalid tolerance {value}: it is a fraction of the span of the data and must lie in (0, 0.5)")]
+    #[error("invalid tolerance {}: it is a fraction of the span of the data and must lie in (0, 0.5)", circle_signal::Shown(*.value))]
     InvalidTolerance {
         /// The fraction given.
         value: f64,
@@ -45,7 +45,7 @@ pub enum UpoError {
     #[error(transparent)]
     Clock(#[from] circle_signal::CircleError),
     /// With the linear metric, a constant record has zero span and so no tolerance.
-    #[error("the record is constant ({value}): its span is zero, so a tolerance relative to it is zero")]
+    #[error("the record is constant ({}): its span is zero, so a tolerance relative to it is zero", circle_signal::Shown(*.value))]
     ConstantSignal {
         /// The constant value.
         value: f64,

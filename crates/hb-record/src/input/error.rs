@@ -90,7 +90,7 @@ pub enum InputError {
         second: Role,
     },
     /// A sampling step that is not positive and finite.
-    #[error("the sampling step {dt} must be positive and finite")]
+    #[error("the sampling step {} must be positive and finite", circle_signal::Shown(*.dt))]
     BadStep {
         /// The step given.
         dt: f64,
@@ -175,7 +175,7 @@ pub enum InputError {
         needed: usize,
     },
     /// Time decreases in most steps.
-    #[error("{at}: time {t} does not increase (previous sample at {previous})")]
+    #[error("{at}: time {} does not increase (previous sample at {})", circle_signal::Shown(*.t), circle_signal::Shown(*.previous))]
     TimeNotIncreasing {
         /// Where.
         at: Location,
@@ -295,7 +295,7 @@ pub enum InputError {
         grid: usize,
     },
     /// A drive period that is not positive and finite.
-    #[error("the drive period {period} must be positive and finite")]
+    #[error("the drive period {} must be positive and finite", circle_signal::Shown(*.period))]
     BadDrivePeriod {
         /// The period given.
         period: f64,

@@ -157,7 +157,9 @@ fn cell(value: Option<f64>, f: impl Fn(f64) -> String) -> String {
 pub fn table(report: &CompareReport) -> String {
     // A system's coordinates have their own domains (one entry per coordinate for them).
     let unit = match report.signal {
-        _ if !report.coordinates.is_empty() => "each coordinate's unit (radians, shortest arcs, on the circle)",
+        _ if !report.coordinates.is_empty() => {
+            "each coordinate's unit (radians, shortest arcs, on the circle)"
+        }
         Domain::Circle => "radians (shortest arcs)",
         Domain::Line => "the record's unit",
     };
