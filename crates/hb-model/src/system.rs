@@ -271,6 +271,32 @@ fn solve_mass(
     t: f64,
     out: &mut [f64],
 ) -> Result<(), SingularMass> {
+    let factored = factor_mass(n, m, r, out);
+    let pivot = factored.pivot;
+    // Every pivot then non-zero: the factorisation solves.
+    let solves = pivot.is_finite() && pivot > SINGULAR_PIVOT && factored.invertible && factored.solved;
+    if !solves {
+        return Err(SingularMass { t, pivot });
+    }
+    Ok(())
+}
+
+/// What [`factor_mass`] found of a mass matrix.
+struct Factored {
+    /// The smallest pivot relative to the largest entry (both counting the identity that pads
+    /// the matrix to 8 × 8).
+    pivot: f64,
+    /// The determinant.
+    det: f64,
+    /// Whether every pivot is non-zero.
+    invertible: bool,
+    /// Whether the right-hand side given was solved into `out` (true without one).
+    solved: bool,
+}
+
+/// Factorises the `n × n` mass matrix `m` by nalgebra's LU with partial pivoting and, with a
+/// right-hand side `r` and a pivot above [`SINGULAR_PIVOT`], solves it into `out`.
+fn factor_mass(n: usize, m: &MassRows, r: Option<&[f64; MAX_COORDINATES]>, out: &mut [f64]) -> Factored {
     // One body per size (nalgebra's LU of a fixed size wants its size written out).
     macro_rules! sized {
         ($n:literal) => {{
@@ -289,17 +315,24 @@ fn solve_mass(
                 .map(|d| d.abs())
                 .fold(f64::INFINITY, f64::min);
             let pivot = if padded { smallest.min(1.0) } else { smallest } / scale;
-            // Every pivot then non-zero: the factorisation solves.
-            if !(pivot.is_finite() && pivot > SINGULAR_PIVOT && lu.is_invertible()) {
-                return Err(SingularMass { t, pivot });
+            let invertible = lu.is_invertible();
+            let mut solved = true;
+            if let Some(r) = r
+                && pivot.is_finite()
+                && pivot > SINGULAR_PIVOT
+                && invertible
+            {
+                match lu.solve(&nalgebra::SVector::<f64, $n>::from_fn(|i, _| r[i])) {
+                    Some(x) => out[..$n].copy_from_slice(x.as_slice()),
+                    None => solved = false,
+                }
             }
-            if let Some(r) = r {
-                let x = lu
-                    .solve(&nalgebra::SVector::<f64, $n>::from_fn(|i, _| r[i]))
-                    .ok_or(SingularMass { t, pivot })?;
-                out[..$n].copy_from_slice(x.as_slice());
+            Factored {
+                pivot,
+                det: lu.determinant(),
+                invertible,
+                solved,
             }
-            Ok(())
         }};
     }
     match n {
@@ -397,36 +430,8 @@ impl<B: Basis + Sync> IdentifiedSystem<B> {
 /// [`solve_mass`] measures it, and its determinant (whose sign tells the two sides of a
 /// singular state apart).
 fn mass_pivot(n: usize, m: &MassRows) -> (f64, f64) {
-    macro_rules! sized {
-        ($n:literal) => {{
-            let matrix = nalgebra::SMatrix::<f64, $n, $n>::from_fn(|i, j| m[i][j]);
-            let padded = $n < MAX_COORDINATES;
-            let scale = if padded {
-                matrix.amax().max(1.0)
-            } else {
-                matrix.amax()
-            };
-            let lu = matrix.lu();
-            let smallest = lu
-                .u()
-                .diagonal()
-                .iter()
-                .map(|d| d.abs())
-                .fold(f64::INFINITY, f64::min);
-            let pivot = if padded { smallest.min(1.0) } else { smallest } / scale;
-            (pivot, lu.determinant())
-        }};
-    }
-    match n {
-        1 => sized!(1),
-        2 => sized!(2),
-        3 => sized!(3),
-        4 => sized!(4),
-        5 => sized!(5),
-        6 => sized!(6),
-        7 => sized!(7),
-        _ => sized!(8),
-    }
+    let factored = factor_mass(n, m, None, &mut []);
+    (factored.pivot, factored.det)
 }
 
 /// The smallest relative pivot of a mass matrix at a record's state below which an identified
