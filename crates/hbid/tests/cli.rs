@@ -3988,6 +3988,23 @@ fn the_report_refuses_to_read_in_chunks() {
     ]);
     assert_clean_failure(&out, "stream");
     assert!(!report.exists(), "a report was written");
+    // identify's outputs, which the report would accept and not write, are refused too.
+    let saved = dir.join("m.json");
+    for (extra, mentions) in [
+        (&["--save-model", saved.to_str().unwrap()][..], "--save-model"),
+        (&["--json"], "--json"),
+    ] {
+        let mut args = vec![
+            "report",
+            record.to_str().unwrap(),
+            "--out",
+            report.to_str().unwrap(),
+            "--quiet",
+        ];
+        args.extend_from_slice(extra);
+        assert_clean_failure(&hbid(&args), mentions);
+        assert!(!report.exists() && !saved.exists(), "{extra:?} wrote something");
+    }
     std::fs::remove_dir_all(&dir).ok();
 }
 

@@ -102,6 +102,21 @@ pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
              it); identify a long record in chunks with hbid identify --stream"
         );
     }
+    // The report writes its models and tables into its folder: identify's outputs would be
+    // accepted and not written.
+    if let Some(path) = &args.identify.save_model {
+        anyhow::bail!(
+            "«save_model={}»: hbid report saves its models into its folder (model_METHOD.json in «out»); \
+             save one with hbid identify --save-model",
+            path.display()
+        );
+    }
+    if args.identify.json {
+        anyhow::bail!(
+            "«json»: hbid report writes Markdown and figures into its folder; print JSON with hbid identify \
+             --json"
+        );
+    }
     // A system of several coordinates, or a saved model: its own report.
     if args.model.is_some() || args.identify.input.coords.as_ref().is_some_and(|c| c.len() > 1) {
         return super::report_system::run(args, quiet);
