@@ -109,6 +109,28 @@ fn main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
+    // Standard output that cannot be written (a full disk, a reader that has closed its pipe):
+    // `print!` panics on it. That is said in one line, after removing whatever is half-written
+    // (nothing, for a closed pipe, whose reader asked for no more: the status a shell gives a
+    // process a pipe's signal stopped), never as a panic's backtrace.
+    let default_hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        let payload = info.payload();
+        let text = payload
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .or_else(|| payload.downcast_ref::<&str>().copied())
+            .unwrap_or("");
+        if let Some(why) = text.strip_prefix("failed printing to stdout: ") {
+            output::remove_partial_files();
+            if why.contains("Broken pipe") {
+                std::process::exit(141);
+            }
+            eprintln!("error: cannot write the standard output: {why}");
+            std::process::exit(1);
+        }
+        default_hook(info);
+    }));
     // Ctrl-C: remove whatever is half-written (results are only renamed into place when
     // complete), then exit with the conventional status of an interrupt.
     let _ = ctrlc::set_handler(|| {

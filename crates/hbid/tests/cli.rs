@@ -4021,3 +4021,31 @@ fn too_few_resamples_name_the_bootstrap_option() {
     let out = hbid(&["identify", &data, "--bootstrap", "200", "--level", "1.5"]);
     assert_clean_failure(&out, "--level 1.5");
 }
+
+/// Standard output that cannot be written (a full device) is a one-line error, not a panic's
+/// backtrace, for the table and for JSON alike.
+#[test]
+fn an_unwritable_standard_output_is_a_one_line_error() {
+    let Ok(full) = std::fs::OpenOptions::new().write(true).open("/dev/full") else {
+        return;
+    };
+    for json in [false, true] {
+        let data = paper_dataset();
+        let mut args = vec!["identify", data.as_str(), "--bootstrap", "0", "--quiet"];
+        if json {
+            args.push("--json");
+        }
+        let out = Command::new(env!("CARGO_BIN_EXE_hbid"))
+            .args(&args)
+            .stdout(full.try_clone().unwrap())
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{err}");
+        assert!(!err.contains("panicked"), "{err}");
+        assert_eq!(
+            err.trim(),
+            "error: cannot write the standard output: No space left on device (os error 28)"
+        );
+    }
+}

@@ -403,6 +403,33 @@ fn run_model(args: &SimulateArgs, model: &Path, input: &Path, quiet: bool) -> an
     let request = model_request(args)?;
     check_outputs(Some(&args.out), None)?;
     let model = hb_pipeline::read_model(model)?;
+    // A system's state is given by --q0 and --dq0 (the run's own checks name the library's x0
+    // and v0, which are one coordinate's options here).
+    let n = model.coordinates();
+    if n > 1 && args.init == Some(0) {
+        for (option, given) in [("q0", &args.q0), ("dq0", &args.dq0)] {
+            match given {
+                None => {
+                    return Err(OptionError::new(
+                        option,
+                        format!(
+                            "«init» 0 runs the system from «q0» and «dq0»: give both, one value per coordinate ({n})"
+                        ),
+                    )
+                    .into());
+                }
+                Some(values) if values.0.len() != n => {
+                    return Err(OptionError::value(
+                        option,
+                        values,
+                        format!("give one value per coordinate of the system ({n})"),
+                    )
+                    .into());
+                }
+                Some(_) => {}
+            }
+        }
+    }
     let mut console = Console::new("simulate", quiet, false);
     let run = hb_pipeline::model_run(&model, Source::Path(input), &request, &mut console)?;
     console.finish();
