@@ -658,6 +658,33 @@ fn a_systems_comparison_is_drawn_coordinate_by_coordinate() {
         s(&run),
     ]);
     assert_clean_failure(&out, "--q0 sets the state of a saved --model with --init 0 only");
+    // A system's state is --q0 and --dq0, both, one value per coordinate: said by their names.
+    for (state, mentions) in [
+        (&[][..], "--q0: --init 0 runs the system from --q0 and --dq0"),
+        (&["--q0", "0.5,0"], "--dq0: give the initial velocities with --q0"),
+        (
+            &["--q0", "0.5", "--dq0", "0,0"],
+            "--dq0 0,0: give as many initial velocities as positions (--q0: 1)",
+        ),
+        (
+            &["--q0", "0.5", "--dq0", "0"],
+            "--q0 0.5: give one value per coordinate of the system (2)",
+        ),
+    ] {
+        let mut args = vec![
+            "simulate",
+            "--model",
+            s(&model),
+            "--input",
+            s(&record),
+            "--init",
+            "0",
+            "--out",
+            s(&run),
+        ];
+        args.extend_from_slice(state);
+        assert_clean_failure(&hbid(&args), mentions);
+    }
 }
 
 /// A system's record is paired with the model by the names of its columns, in whatever order

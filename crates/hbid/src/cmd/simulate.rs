@@ -455,6 +455,38 @@ fn model_request(args: &SimulateArgs) -> anyhow::Result<CompareRequest> {
     }
     let given = args.init == Some(0);
     hb_pipeline::simulate::check_model_state(&args.options(), given)?;
+    // A system's state: both of --q0 and --dq0, as many of each (the request's own check would
+    // name x0 and v0, one coordinate's options here).
+    if given {
+        match (&args.q0, &args.dq0) {
+            (Some(_), None) => {
+                return Err(OptionError::new(
+                    "dq0",
+                    "give the initial velocities with «q0», one per coordinate",
+                )
+                .into());
+            }
+            (None, Some(_)) => {
+                return Err(OptionError::new(
+                    "q0",
+                    "give the initial positions with «dq0», one per coordinate",
+                )
+                .into());
+            }
+            (Some(q), Some(v)) if q.0.len() != v.0.len() => {
+                return Err(OptionError::value(
+                    "dq0",
+                    v,
+                    format!(
+                        "give as many initial velocities as positions («q0»: {})",
+                        q.0.len()
+                    ),
+                )
+                .into());
+            }
+            _ => {}
+        }
+    }
     Ok(CompareRequest::new(CompareOptions {
         time_col: args.time_col.clone(),
         angle_col: args.angle_col.clone(),
