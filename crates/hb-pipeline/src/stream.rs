@@ -289,12 +289,12 @@ impl Reading<'_> {
                 "the drive's period was estimated on the first {rows} rows, the record being read in chunks \
                  («stream»): its error grows into the drive's phase over the whole record and leaks into the \
                  drive terms' coefficients; give «drive_frequency», or estimate it on the record read whole \
-                 («stream=false»)",
+                 («no_stream»)",
             ),
             DriveSpec::Free => Some(
                 "the free oscillation's period, the windows' unit, was found on the first {rows} rows, the record \
                  being read in chunks («stream»): a decaying oscillation's period changes over the record; give \
-                 the windows' length («window»), or read the record whole («stream=false»)",
+                 the windows' length («window»), or read the record whole («no_stream»)",
             ),
             _ => None,
         };
@@ -499,7 +499,7 @@ impl Stream {
                 "stream",
                 format!(
                     "the record's sampling changes from one chunk to another ({} samples per period in steps of {} \
-                     from t = {}, the first chunk's {} in steps of {}): read it whole («stream=false»)",
+                     from t = {}, the first chunk's {} in steps of {}): read it whole («no_stream»)",
                     data.p,
                     data.clock.step(),
                     data.clock.start_time(),
@@ -767,8 +767,9 @@ impl Merged {
 /// Appends `pieces` (a chunk's, on a grid of step `h` whose sample 0 is `base` steps after the
 /// record's, `time` of each sample) within `(from, to)` (raw stamps) to `into` (the record's,
 /// indices from its first sample), a piece that goes on from the chunk before joined to it (a
-/// grid resampled on its own may be off the chunk before's by a fraction of a step, so its
-/// first index by one).
+/// grid resampled on its own may be off the chunk before's by a fraction of a step, so the
+/// chunk's first index by one; within a chunk its pieces are apart by the samples missing, one
+/// at least).
 fn add_pieces(
     into: &mut Vec<Range<usize>>,
     pieces: &[Range<usize>],
@@ -782,6 +783,7 @@ fn add_pieces(
         let t = time(j);
         from.is_none_or(|f| t >= f - half) && to.is_none_or(|e| t < e - half)
     };
+    let mut first = true;
     for piece in pieces {
         let (mut a, mut b) = (piece.start, piece.end);
         while a < b && !inside(a) {
@@ -797,8 +799,10 @@ fn add_pieces(
             (base + a as i64).max(0) as usize,
             (base + b as i64).max(0) as usize,
         );
+        let slack = usize::from(first);
+        first = false;
         match into.last_mut() {
-            Some(last) if last.end + 1 >= ga => last.end = last.end.max(gb),
+            Some(last) if last.end + slack >= ga => last.end = last.end.max(gb),
             _ => into.push(ga..gb),
         }
     }
@@ -924,6 +928,29 @@ mod tests {
             assert_eq!(e.model.summary().unwrap().segments, whole.segments);
             assert!(e.intervals.is_some() && e.quality.held_out.is_some());
         }
+    }
+
+    /// Gaps of one sample are gaps in chunks too: the pieces and the samples are the record's
+    /// read whole (a chunk's pieces one sample apart were joined as if they went on).
+    #[test]
+    fn gaps_of_one_sample_in_chunks_are_the_records() {
+        let path = record(
+            "one-sample-gaps.npy",
+            serde_json::json!({"samples": 120_000, "gaps": "6:1", "seed": 5}),
+        );
+        let (whole, streamed, notices) = both(&path, &request(serde_json::json!({})), 30_000);
+        assert_eq!(whole.record.pieces.len(), 7);
+        assert_eq!(
+            (whole.record.samples, &whole.record.pieces),
+            (streamed.record.samples, &streamed.record.pieces)
+        );
+        assert!(
+            notices
+                .0
+                .iter()
+                .any(|n| matches!(n, Notice::Record(Note::Gaps { gaps: 6, missing: 6 }))),
+            "{notices:?}"
+        );
     }
 
     #[test]
