@@ -85,6 +85,39 @@ pub enum PlotError {
 /// A backend's error, boxed.
 type BackendError = Box<dyn std::error::Error + Send + Sync>;
 
+/// A figure's file format, by the extension of its name (in any case).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Format {
+    /// `.png`.
+    Png,
+    /// `.svg`.
+    Svg,
+}
+
+impl Format {
+    /// The format of a figure written to `path`; `None` for a name that is neither `.png` nor
+    /// `.svg` (in any case), which no figure is written to.
+    ///
+    /// ```
+    /// use hb_plot::Format;
+    /// use std::path::Path;
+    ///
+    /// assert_eq!(Format::of(Path::new("a.SVG")), Some(Format::Svg));
+    /// assert_eq!(Format::of(Path::new("a.png")), Some(Format::Png));
+    /// assert_eq!(Format::of(Path::new("a.jpg")), None);
+    /// ```
+    pub fn of(path: &Path) -> Option<Self> {
+        let e = path.extension()?.to_str()?;
+        if e.eq_ignore_ascii_case("svg") {
+            Some(Self::Svg)
+        } else if e.eq_ignore_ascii_case("png") {
+            Some(Self::Png)
+        } else {
+            None
+        }
+    }
+}
+
 /// One series of a figure.
 #[derive(Debug)]
 pub struct Series<'a> {
@@ -196,7 +229,7 @@ pub fn save_row(panels: &[Figure<'_>], path: &Path) -> Result<(), PlotError> {
         root.present().map_err(area_error::<DB>)?;
         Ok(())
     }
-    let svg = path.extension().is_some_and(|e| e == "svg");
+    let svg = Format::of(path) == Some(Format::Svg);
     let drawn = if svg {
         draw(SVGBackend::new(path, size).into_drawing_area(), panels, &ranges)
     } else {
@@ -223,7 +256,7 @@ where
 impl Figure<'_> {
     /// Draws the figure into `path` (`.png` or `.svg`, by extension), 900×650 pixels.
     pub fn save(&self, path: &Path) -> Result<(), PlotError> {
-        let svg = path.extension().is_some_and(|e| e == "svg");
+        let svg = Format::of(path) == Some(Format::Svg);
         let drawn = if svg {
             self.draw(SVGBackend::new(path, PANEL).into_drawing_area())
         } else {

@@ -419,6 +419,16 @@ fn bad_requests_are_refused_in_one_line() {
         "--signal",
     );
     assert_clean_failure(&hbid(&["compare", t, t, "--drive-col", "p"]), t);
+    // A figure is PNG or SVG, by its extension in any case; any other is refused before the run.
+    let gif = dir.join("cmp.gif");
+    assert_clean_failure(
+        &hbid(&["compare", m, t, "--drive-col", "p", "--plot", s(&gif)]),
+        "--plot",
+    );
+    assert!(!gif.exists());
+    let upper = dir.join("cmp.SVG");
+    ok(&["compare", m, t, "--drive-col", "p", "--plot", s(&upper)]);
+    assert!(std::fs::read_to_string(&upper).unwrap().starts_with("<svg"));
     let out = dir.join("out.csv");
     assert_clean_failure(
         &hbid(&[

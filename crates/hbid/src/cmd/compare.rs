@@ -131,6 +131,12 @@ impl CompareArgs {
 pub fn run(args: &CompareArgs, quiet: bool) -> anyhow::Result<()> {
     let request = CompareRequest::new(args.options())?;
     if let Some(path) = &args.plot {
+        if hb_plot::Format::of(path).is_none() {
+            anyhow::bail!(
+                "«plot={}»: a figure is written as PNG or SVG: name its file .png or .svg",
+                path.display()
+            );
+        }
         hb_pipeline::output::check_output_path(path).context("«plot»")?;
     }
     let model = hb_pipeline::read_model(&args.model)?;
