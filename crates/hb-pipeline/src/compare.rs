@@ -559,6 +559,10 @@ pub struct CompareReport {
     /// JSON).
     #[serde(skip)]
     pub runs: Vec<Vec<RunPiece>>,
+    /// The domain of each coordinate of a system, in order (empty for a record of one: its
+    /// `signal`; not in the JSON, which has `signal`).
+    #[serde(skip)]
+    pub domains: Vec<Domain>,
 }
 
 /// Runs `model` freely on the ranges of the record of `source` and scores it against the
@@ -673,6 +677,7 @@ fn compare_one(
         coordinates: Vec::new(),
         ranges: scores,
         runs,
+        domains: Vec::new(),
     })
 }
 
@@ -1135,6 +1140,7 @@ fn compare_system(
         coordinates: names.coordinates().to_vec(),
         ranges: scores,
         runs,
+        domains: domains.clone(),
     })
 }
 

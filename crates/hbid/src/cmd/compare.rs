@@ -161,13 +161,19 @@ fn cell(value: Option<f64>, f: impl Fn(f64) -> String) -> String {
 
 /// The scores as a table, one line per range, and why a run stopped.
 pub fn table(report: &CompareReport) -> String {
-    // A system's coordinates have their own domains (one entry per coordinate for them).
-    let unit = match report.signal {
-        _ if !report.coordinates.is_empty() => {
-            "each coordinate's unit (radians, shortest arcs, on the circle)"
+    // A system's coordinates have their own domains.
+    let circle = |d: &Domain| *d == Domain::Circle;
+    let unit = if report.domains.is_empty() {
+        match report.signal {
+            Domain::Circle => "radians (shortest arcs)",
+            Domain::Line => "the record's unit",
         }
-        Domain::Circle => "radians (shortest arcs)",
-        Domain::Line => "the record's unit",
+    } else if report.domains.iter().all(circle) {
+        "radians (shortest arcs)"
+    } else if report.domains.iter().any(circle) {
+        "each coordinate's unit (radians, shortest arcs, for the angles)"
+    } else {
+        "the record's units"
     };
     let drive = if report.measured_drive {
         "driven by the record's measured drive"
