@@ -34,28 +34,35 @@ pub enum OutputError {
     },
 }
 
-/// Temporary files being written; removed by [`remove_partial_files`] on an interrupt.
+/// Temporary files (and folders) being written; removed by [`remove_partial_files`] on an
+/// interrupt.
 static PARTIAL: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
 
-/// Removes every temporary file still being written. Called from the binary's Ctrl-C handler
-/// before it exits, so that an interrupt leaves neither a partial file nor a stray temporary.
+/// Removes every temporary file (and folder, with what it holds) still being written. Called
+/// from the binary's Ctrl-C handler before it exits, so that an interrupt leaves neither a
+/// partial file nor a stray temporary.
 pub fn remove_partial_files() {
     if let Ok(mut files) = PARTIAL.lock() {
         for f in files.drain(..) {
-            let _ = std::fs::remove_file(f);
+            if f.is_dir() {
+                let _ = std::fs::remove_dir_all(f);
+            } else {
+                let _ = std::fs::remove_file(f);
+            }
         }
     }
 }
 
-/// Registers a temporary file for [`remove_partial_files`].
-fn track(path: &Path) {
+/// Registers a temporary file or folder for [`remove_partial_files`] (until
+/// [`untrack`]ed).
+pub fn track(path: &Path) {
     if let Ok(mut files) = PARTIAL.lock() {
         files.push(path.to_owned());
     }
 }
 
-/// Forgets a temporary file that was renamed into place or removed.
-fn untrack(path: &Path) {
+/// Forgets a temporary file or folder that was renamed into place or removed.
+pub fn untrack(path: &Path) {
     if let Ok(mut files) = PARTIAL.lock() {
         files.retain(|f| f != path);
     }

@@ -445,3 +445,62 @@ fn bad_input_leaves_no_report() {
     assert!(String::from_utf8_lossy(&result.stderr).contains("not a folder"));
     assert_eq!(std::fs::read_to_string(&file).unwrap(), "x");
 }
+
+/// A report is written beside its folder and moved into it whole: one that cannot write a file
+/// (a folder in the way) leaves none of its files, and a report written into an earlier one's
+/// folder leaves none of that report's files it does not write again.
+#[test]
+fn a_report_is_written_whole_or_not_at_all() {
+    let dir = scratch("whole");
+    let (record, _, _) = double_pendulum(&dir);
+    let out = dir.join("report");
+    std::fs::create_dir_all(out.join("prediction.png")).unwrap();
+    let r = s(&record);
+    let result = hbid(&[
+        "report",
+        r,
+        "--coords",
+        "theta1,theta2",
+        "--method",
+        "windowed",
+        "--out",
+        s(&out),
+    ]);
+    let err = String::from_utf8_lossy(&result.stderr);
+    assert!(!result.status.success() && !err.contains("panicked"), "{err}");
+    assert!(err.contains("prediction.png is a folder"), "{err}");
+    let left: Vec<_> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(left, ["prediction.png"], "{err}");
+    std::fs::remove_dir_all(&out).unwrap();
+    // Both methods, then the windowed method alone into the same folder: the orbits' files go.
+    ok(&["report", r, "--coords", "theta1,theta2", "--out", s(&out)]);
+    assert!(out.join("model_upo.json").exists());
+    ok(&[
+        "report",
+        r,
+        "--coords",
+        "theta1,theta2",
+        "--method",
+        "windowed",
+        "--out",
+        s(&out),
+    ]);
+    assert!(!out.join("model_upo.json").exists() && out.join("model_windowed.json").exists());
+    let mut names: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert!(names.iter().all(|n| !n.contains("upo")), "{names:?}");
+    assert_complete(&out);
+    // Nothing is left beside the folder.
+    let beside: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with(".hbid"))
+        .collect();
+    assert!(beside.is_empty(), "{beside:?}");
+}

@@ -3,7 +3,7 @@
 //! their own report ([`super::report_system`]).
 
 use std::fmt::Write as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use circle_signal::Measured;
@@ -206,6 +206,82 @@ pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// The name of the list of a report's files that each report leaves in its folder: the next
+/// report into that folder removes those it does not write again.
+const MANIFEST: &str = ".hbid-report";
+
+/// A report's files, written into a folder beside `--out` and moved into it together once every
+/// one is written: a report that fails part-way (a figure that cannot be drawn, a full disk)
+/// leaves none of its files, and one written into the folder of an earlier report leaves none
+/// of that report's files it does not write again (a model of a method not run this time).
+pub(crate) struct Staged {
+    dir: tempfile::TempDir,
+    out: PathBuf,
+}
+
+impl Staged {
+    /// A new folder for the files of the report into `out`, beside it (on its file system).
+    pub(crate) fn new(out: &Path) -> anyhow::Result<Self> {
+        let parent = match out.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+        let dir = tempfile::Builder::new()
+            .prefix(".hbid-report-")
+            .tempdir_in(parent)
+            .with_context(|| format!("cannot write beside {}", out.display()))?;
+        hb_pipeline::output::track(dir.path());
+        Ok(Self {
+            dir,
+            out: out.to_owned(),
+        })
+    }
+
+    /// Where the report's files are written.
+    pub(crate) fn path(&self) -> &Path {
+        self.dir.path()
+    }
+
+    /// Moves every file written into `out`, after removing the files an earlier report listed
+    /// there that this one does not write; refused, moving nothing, where a file's name in `out`
+    /// is a folder.
+    pub(crate) fn commit(self) -> anyhow::Result<()> {
+        let mut names: Vec<std::ffi::OsString> = std::fs::read_dir(self.dir.path())?
+            .map(|e| e.map(|e| e.file_name()))
+            .collect::<Result<_, _>>()?;
+        names.sort();
+        std::fs::create_dir_all(&self.out)
+            .with_context(|| format!("cannot create {}", self.out.display()))?;
+        if let Some(name) = names.iter().find(|n| self.out.join(n).is_dir()) {
+            anyhow::bail!(
+                "«out»: {} is a folder: the report's file of that name cannot be written (nothing was written)",
+                self.out.join(name).display()
+            );
+        }
+        let manifest = self.out.join(MANIFEST);
+        if let Ok(earlier) = std::fs::read_to_string(&manifest) {
+            for name in earlier.lines().filter(|l| !l.is_empty() && !l.contains('/')) {
+                if !names.iter().any(|n| n == name) {
+                    let _ = std::fs::remove_file(self.out.join(name));
+                }
+            }
+        }
+        for name in &names {
+            let to = self.out.join(name);
+            std::fs::rename(self.dir.path().join(name), &to)
+                .with_context(|| format!("cannot write {}", to.display()))?;
+        }
+        let listed: String = names
+            .iter()
+            .map(|n| format!("{}\n", n.to_string_lossy()))
+            .collect();
+        std::fs::write(&manifest, listed).with_context(|| format!("cannot write {}", manifest.display()))?;
+        hb_pipeline::output::untrack(self.dir.path());
+        eprintln!("report written to {}", self.out.join("README.md").display());
+        Ok(())
+    }
+}
+
 /// The folder a report made, if it made one: removed when dropped if it is still empty (the
 /// report was not written).
 struct MadeFolder {
@@ -228,7 +304,20 @@ fn write_report(
     notes: &[String],
     outcome: &Outcome,
 ) -> anyhow::Result<()> {
-    let out = &args.out;
+    let staged = Staged::new(&args.out)?;
+    write_files(args, request, data, notes, outcome, staged.path())?;
+    staged.commit()
+}
+
+/// The report's files, written into `out`.
+fn write_files(
+    args: &ReportArgs,
+    request: &IdentifyRequest,
+    data: &Data,
+    notes: &[String],
+    outcome: &Outcome,
+    out: &Path,
+) -> anyhow::Result<()> {
     let embedded = &outcome.embedded;
     let (delay, fnn, ami) = (embedded.delay, &embedded.fnn, &embedded.ami.values);
     let catalogue = &outcome.segments.catalogue;
@@ -525,7 +614,6 @@ fn write_report(
     }
     let path = out.join("README.md");
     hb_pipeline::output::write_atomically(&path, |w| w.write_all(r.as_bytes()))?;
-    eprintln!("report written to {}", path.display());
     Ok(())
 }
 

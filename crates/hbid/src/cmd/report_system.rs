@@ -150,7 +150,18 @@ pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
                 .map(|n| Spelling::CommandLine.render(&n.to_string())),
         )
         .collect();
-    write(args, file, &intro, &entries, &missing, &measured, &attractors)
+    // Written beside the folder, then moved into it together.
+    let staged = super::report::Staged::new(&args.out)?;
+    write(
+        staged.path(),
+        file,
+        &intro,
+        &entries,
+        &missing,
+        &measured,
+        &attractors,
+    )?;
+    staged.commit()
 }
 
 /// The record's options that read the coordinates of `system` (and its measured drives) as
@@ -276,7 +287,7 @@ fn prediction(
 /// Writes the figures, `compare.json`, `sections.json`, `prediction.json`, the models and
 /// README.md (last).
 fn write(
-    args: &ReportArgs,
+    out: &Path,
     file: &Path,
     intro: &[String],
     entries: &[Entry],
@@ -284,8 +295,6 @@ fn write(
     measured: &[Measured],
     attractors: &attractor::Attractors,
 ) -> anyhow::Result<()> {
-    let out = &args.out;
-    std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
     let mut r = String::new();
     let mut figures: Vec<(String, String)> = Vec::new();
     writeln!(r, "# Identification report: {}\n", file.display())?;
@@ -313,7 +322,6 @@ fn write(
     }
     let path = out.join("README.md");
     hb_pipeline::output::write_atomically(&path, |w| w.write_all(r.as_bytes()))?;
-    eprintln!("report written to {}", path.display());
     Ok(())
 }
 
