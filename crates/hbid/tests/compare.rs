@@ -843,6 +843,31 @@ fn a_systems_columns_are_paired_with_the_model_by_name() {
         .map(|r| r["rmse"].as_f64().unwrap())
         .collect();
     assert!(scores.iter().all(|&e| e < 1e-3), "{scores:?}");
+    // The saved system run over that record: its columns chosen as compare chooses them.
+    let run = dir.join("arm-run.csv");
+    let simulated = hbid(&[
+        "simulate",
+        "--model",
+        s(&positional),
+        "--input",
+        s(&reordered_path),
+        "--coords",
+        "q1,q2",
+        "--drive-col",
+        "tau1,tau2",
+        "--out",
+        s(&run),
+    ]);
+    assert!(
+        simulated.status.success(),
+        "{}",
+        String::from_utf8_lossy(&simulated.stderr)
+    );
+    assert!(
+        std::fs::read_to_string(&run)
+            .unwrap()
+            .starts_with("t,q1,q2,q1',q2'\n")
+    );
     for (extra, mentions) in [
         (
             &["--coords", "zz=2,yy=3"][..],

@@ -288,6 +288,11 @@ pub struct SimulateArgs {
     /// position: its first samples set the initial state.
     #[arg(long, value_name = "NAME|N", help_heading = MODEL)]
     angle_col: Option<String>,
+    /// A saved system's coordinates: the input's columns, as `hbid compare --coords` takes them
+    /// (by the model's names in any order, NAME=COLUMN, or alone in the order of its coordinates)
+    /// [default: the columns it was identified from].
+    #[arg(long, value_name = "A,B[,..]", conflicts_with = "angle_col", help_heading = MODEL)]
+    coords: Option<ColumnList>,
     /// The input's sampling step, for a record without a time column.
     #[arg(long, allow_hyphen_values = true, help_heading = MODEL)]
     dt: Option<f64>,
@@ -490,6 +495,7 @@ fn model_request(args: &SimulateArgs) -> anyhow::Result<CompareRequest> {
     Ok(CompareRequest::new(CompareOptions {
         time_col: args.time_col.clone(),
         angle_col: args.angle_col.clone(),
+        coords: args.coords.clone(),
         dt: args.dt,
         drive_col: args.drive_col.clone(),
         init: args.init.filter(|&n| n > 0),
@@ -508,6 +514,7 @@ pub fn run(args: &SimulateArgs, quiet: bool) -> anyhow::Result<()> {
     for (name, given) in [
         ("time_col", args.time_col.is_some()),
         ("angle_col", args.angle_col.is_some()),
+        ("coords", args.coords.is_some()),
         ("dt", args.dt.is_some()),
         ("drive_col", args.drive_col.is_some()),
         ("init", args.init.is_some()),
