@@ -460,7 +460,7 @@ fn a_slipping_logger_clock_fits_and_its_isolated_glitches_are_repaired() {
     );
     assert!(text.starts_with(&head), "{text}");
     assert!(
-        text.ends_with("can be repaired; 1 more glitch: line 76005"),
+        text.ends_with("; 1 more glitch: line 76005: an isolated glitch, which can be repaired"),
         "{text}"
     );
 

@@ -218,8 +218,9 @@ pub enum AssemblyError {
 pub enum LstsqError {
     /// The segments give no more equations than there are unknowns.
     #[error(
-        "too few orbits: {found} segment(s) found but at least {needed} are needed for the unknowns of this \
-         model; use a larger close-return tolerance, a longer record, more harmonics per orbit, or a smaller basis"
+        "too few segments (orbits or windows): {found} found but at least {needed} are needed for the unknowns \
+         of this model; use a longer record, shorter windows (orbits: a larger close-return tolerance), more \
+         harmonics per segment, or a smaller basis"
     )]
     TooFewOrbits {
         /// Segments given.

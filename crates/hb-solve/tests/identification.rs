@@ -359,7 +359,7 @@ fn too_few_orbits_says_how_many() {
     );
     let msg = err.to_string();
     assert!(
-        msg.contains("1 segment") && msg.contains("at least 3") && msg.contains("tolerance"),
+        msg.contains("1 found") && msg.contains("at least 3") && msg.contains("tolerance"),
         "{msg}"
     );
     let err = identify(

@@ -164,7 +164,7 @@ fn a_slipping_logger_clock_is_read_with_repair() {
     );
     assert!(
         err.contains(
-            "an isolated glitch, which can be repaired; 1 more glitch: line 40005; run with --repair"
+            "; 1 more glitch: line 40005: an isolated glitch, which can be repaired; run with --repair"
         ),
         "{err}"
     );

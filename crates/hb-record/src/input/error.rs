@@ -188,11 +188,11 @@ pub enum InputError {
     /// others, and is not repaired: either repair was not asked for, or the glitch is not
     /// isolated.
     #[error(
-        "{at}: time {t} {fault}; on the grid of step {} this sample is at {}: {}{}",
+        "{at}: time {t} {fault}; on the grid of step {} this sample is at {}{}: {}",
         Rounded(*.dt),
         Rounded(*.expected),
-        glitch_advice(*.isolated),
-        other_glitches(.others, *.other_count)
+        other_glitches(.others, *.other_count),
+        glitch_advice(*.isolated)
     )]
     TimeGlitch {
         /// Where.
