@@ -534,11 +534,16 @@ fn compare_section(
                 .get(piece.init.min(piece.t.len().saturating_sub(1)))
                 .copied()
                 .unwrap_or(0.0);
-            let shown: Vec<usize> = (0..piece.t.len()).filter(|&i| piece.t[i] <= t0 + span).collect();
-            let show = |value: &dyn Fn(usize) -> f64| -> Vec<(f64, f64)> {
+            // Every piece's samples within the span (a record with gaps runs piece by piece).
+            let shown: Vec<(&hb_pipeline::compare::RunPiece, usize)> = pieces
+                .iter()
+                .flat_map(|p| (0..p.t.len()).map(move |i| (p, i)))
+                .filter(|&(p, i)| p.t[i] <= t0 + span)
+                .collect();
+            let show = |value: &dyn Fn(&hb_pipeline::compare::RunPiece, usize) -> f64| -> Vec<(f64, f64)> {
                 shown
                     .iter()
-                    .map(|&i| (piece.t[i], value(i)))
+                    .map(|&(p, i)| (p.t[i], value(p, i)))
                     .filter(|p| p.1.is_finite())
                     .collect()
             };
@@ -546,9 +551,9 @@ fn compare_section(
                 Domain::Circle => wrap(x),
                 Domain::Line => x,
             };
-            let difference = |i: usize| match domain {
-                Domain::Circle => wrap(piece.x[i] - piece.measured[i]),
-                Domain::Line => piece.x[i] - piece.measured[i],
+            let difference = |p: &hb_pipeline::compare::RunPiece, i: usize| match domain {
+                Domain::Circle => wrap(p.x[i] - p.measured[i]),
+                Domain::Line => p.x[i] - p.measured[i],
             };
             let name = format!("compare_{}_{coordinate}.png", entry.name);
             let title = format!("{coordinate}: the record and the free run of {}", entry.name);
@@ -559,14 +564,14 @@ fn compare_section(
                 series: vec![
                     Series {
                         label: "model, free run",
-                        points: show(&|i| as_measured(piece.x[i])),
+                        points: show(&|p, i| as_measured(p.x[i])),
                         style: Style::Line { break_above },
                         color: ORANGE,
                     },
                     // The record last, as dots: where the model follows it, they lie on its line.
                     Series {
                         label: "measured",
-                        points: show(&|i| piece.measured[i]),
+                        points: show(&|p, i| p.measured[i]),
                         style: Style::Dots(1),
                         color: INK,
                     },
@@ -580,7 +585,7 @@ fn compare_section(
                 name,
                 format!(
                     "{coordinate}: the record (dots) and the free run of {} from the state fitted to its first {} \
-                     samples, over the first {SHOWN_PERIODS} drive periods.",
+                     samples (after a gap, from each piece's own), over the first {SHOWN_PERIODS} drive periods.",
                     entry.name, piece.init
                 ),
             );
