@@ -338,6 +338,7 @@ def run_model(
     rig: str,
     time_col: Union[str, int, None],
     angle_col: Union[str, int, None],
+    coords: ColumnsLike,
     dt: Optional[float],
     drive_col: ColumnsLike,
     init: Optional[int],
@@ -351,6 +352,7 @@ def run_model(
     options: Dict[str, Any] = dict(
         time_col=column(time_col, "time_col"),
         angle_col=column(angle_col, "angle_col"),
+        coords=columns(coords, "coords"),
         dt=dt,
         drive_col=columns(drive_col, "drive_col"),
         init=None if given else init,

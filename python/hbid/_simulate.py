@@ -195,6 +195,7 @@ def simulate(
     input: Any = None,
     time_col: Union[str, int, None] = None,
     angle_col: Union[str, int, None] = None,
+    coords: ColumnsLike = None,
     dt: Optional[float] = None,
     drive_col: ColumnsLike = None,
     init: Optional[int] = None,
@@ -283,6 +284,8 @@ def simulate(
         input: the record that drives ``model``: a path or a :class:`Record`.
         time_col: the input's time column.
         angle_col: the input's output column (its first samples set the initial state).
+        coords: a saved system's coordinates' columns in the input file, as :func:`compare`
+            takes them (default: the columns it was identified from).
         dt: the input's sampling step, for a record without times.
         drive_col: the input's measured drive column, for a model with terms in ``p`` (several
             as a list, for a system's drives).
@@ -379,6 +382,7 @@ def simulate(
             rig=options_json(rig),
             time_col=time_col,
             angle_col=angle_col,
+            coords=coords,
             dt=dt,
             drive_col=drive_col,
             init=init,
@@ -390,6 +394,7 @@ def simulate(
     for name, value in (
         ("time_col", time_col),
         ("angle_col", angle_col),
+        ("coords", coords),
         ("dt", dt),
         ("drive_col", drive_col),
         ("init", init),

@@ -185,7 +185,10 @@ impl fmt::Display for Notice {
             ),
             Notice::WindowUnit { samples, length } => write!(
                 f,
-                "no periodic drive: the windows' unit is {samples} samples ({length} in the record's time unit)"
+                "no periodic drive: the windows' unit is {samples} samples ({length} in the record's time unit); \
+                 with windows in the record's time a periodic drive is not looked for, and no term in it is \
+                 fitted: for one, give «drive_period» or «drive_frequency» instead (windows then in its periods, \
+                 «window_periods»)"
             ),
             Notice::Resampled { from, to } => write!(
                 f,
