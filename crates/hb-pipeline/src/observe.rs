@@ -95,6 +95,8 @@ pub enum Notice {
         samples: usize,
         /// Its length in the record's time unit.
         length: f64,
+        /// Whether the record has measured drives (then no periodic one is missed).
+        measured_drive: bool,
     },
     /// The record resampled onto a whole number of samples per period.
     Resampled {
@@ -183,13 +185,24 @@ impl fmt::Display for Notice {
                 f,
                 "no drive: windows in periods of the free oscillation, {samples:.2} samples ({used} used)"
             ),
-            Notice::WindowUnit { samples, length } => write!(
-                f,
-                "no periodic drive: the windows' unit is {samples} samples ({length} in the record's time unit); \
-                 with windows in the record's time a periodic drive is not looked for, and no term in it is \
-                 fitted: for one, give «drive_period» or «drive_frequency» instead (windows then in its periods, \
-                 «window_periods»)"
-            ),
+            Notice::WindowUnit {
+                samples,
+                length,
+                measured_drive,
+            } => {
+                write!(
+                    f,
+                    "no periodic drive: the windows' unit is {samples} samples ({length} in the record's time unit)"
+                )?;
+                if !measured_drive {
+                    f.write_str(
+                        "; with windows in the record's time a periodic drive is not looked for, and no term in \
+                         it is fitted: for one, give «drive_period» or «drive_frequency» instead (windows then in \
+                         its periods, «window_periods»)",
+                    )?;
+                }
+                Ok(())
+            }
             Notice::Resampled { from, to } => write!(
                 f,
                 "{from:.6} samples per period: resampled (band-limited) to {to}"

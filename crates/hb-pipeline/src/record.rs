@@ -885,6 +885,7 @@ pub(crate) fn on_clock(
         DriveFound::Windows { samples } => observer.notice(&Notice::WindowUnit {
             samples: *samples,
             length: *samples as f64 * data.clock.step(),
+            measured_drive: !data.drives.is_empty(),
         }),
     }
     if let Some(from) = data.resampled_from {

@@ -2268,12 +2268,20 @@ fn system_truth(rig: &Rig, frame: &RecordFrame) -> Result<(Hint, Equations), Run
     };
     let equations = pendulum_sim::truth::system_equations(&normalised, &names, frame)?;
     let free = o.drive == DriveKind::None;
+    // A passive joint's torque (--torque1 none) is a column of zeros: a term in it fits nothing.
+    let passive = |drive: &hb_model::DriveFactor| match (&rig.system, drive) {
+        (System::Arm(a), hb_model::DriveFactor::Measured(k)) => {
+            matches!(a.torques().get(usize::from(*k)), Some(Torque::None))
+        }
+        _ => false,
+    };
     let mut lists = Vec::new();
     for (name, equation) in coordinates.iter().zip(&equations) {
         // A free decay has no drive's phase to balance: its drive terms (all 0) are left out.
         let list = equation.terms();
         let terms: Vec<String> = (0..list.len())
             .filter(|&i| !(free && equation.values()[i] == 0.0 && list.terms()[i].drive.needs_phase()))
+            .filter(|&i| !passive(&list.terms()[i].drive))
             .map(|i| list.name(i))
             .collect();
         lists.push(format!("{name}: {}", terms.join(", ")));
@@ -2315,7 +2323,16 @@ fn system_truth(rig: &Rig, frame: &RecordFrame) -> Result<(Hint, Equations), Run
             Domain::Circle => "circle",
             Domain::Line => "line",
         },
-        drive_col: (!measured.is_empty()).then(|| by_position(measured)),
+        drive_col: {
+            // The drives a term reads (not a passive joint's).
+            let read: Vec<&str> = measured
+                .iter()
+                .enumerate()
+                .filter(|&(k, _)| !passive(&hb_model::DriveFactor::Measured(k as u8)))
+                .map(|(_, &d)| d)
+                .collect();
+            (!read.is_empty()).then(|| by_position(&read))
+        },
         // A free decay's time unit is its record's: no drive to give.
         drive_frequency: if kind.measured_input() || free {
             None

@@ -625,7 +625,7 @@ fn identify_refuses_bad_options_and_too_few_orbits() {
         (vec!["identify", &data, "--tolerance", "0.7"], "tolerance"),
         (
             vec!["identify", &data, "--method", "upo", "--tolerance", "0.0001"],
-            "0 segment(s) found but at least",
+            "too few segments (orbits or windows): 0 found but at least",
         ),
         (vec!["identify", &data, "--method", "magic"], "magic"),
     ] {
@@ -4048,4 +4048,37 @@ fn an_unwritable_standard_output_is_a_one_line_error() {
             "error: cannot write the standard output: No space left on device (os error 28)"
         );
     }
+}
+
+/// The arm with a passive shoulder (`--torque1 none`): its truth's identify options leave out
+/// the torque that is a column of zeros, and identify the record; the elbow's torque comes out
+/// as the truth has it.
+#[test]
+fn a_passive_joints_torque_is_not_in_the_truths_options() {
+    let dir = scratch("passive-joint");
+    let (record, truth) = simulated_with_truth(
+        &dir,
+        "arm.csv",
+        &["--system", "arm", "--torque1", "none", "--samples", "5000"],
+    );
+    let hint = &truth["identify"];
+    let terms = hint["terms"].as_str().unwrap();
+    assert!(!terms.contains("tau1") && terms.contains("tau2"), "{terms}");
+    let mut args = vec!["identify", record.to_str().unwrap(), "--bootstrap", "0", "--json"];
+    let given: Vec<&str> = hint["args"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|a| a.as_str().unwrap())
+        .collect();
+    args.extend(given);
+    let out = hbid(&args);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let found: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let tau2 = found["equations"]["q2"]["coefficients"]["tau2"].as_f64().unwrap();
+    let expected = truth["equations"]["q2"]["coefficients"]["tau2"].as_f64().unwrap();
+    assert!(
+        (tau2 - expected).abs() < 1e-3 * expected.abs(),
+        "{tau2} against {expected}"
+    );
 }
