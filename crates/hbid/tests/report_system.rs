@@ -456,7 +456,7 @@ fn a_report_is_written_whole_or_not_at_all() {
     let out = dir.join("report");
     std::fs::create_dir_all(out.join("prediction.png")).unwrap();
     let r = s(&record);
-    let result = hbid(&[
+    let windowed = [
         "report",
         r,
         "--coords",
@@ -465,7 +465,8 @@ fn a_report_is_written_whole_or_not_at_all() {
         "windowed",
         "--out",
         s(&out),
-    ]);
+    ];
+    let result = hbid(&windowed);
     let err = String::from_utf8_lossy(&result.stderr);
     assert!(!result.status.success() && !err.contains("panicked"), "{err}");
     assert!(err.contains("prediction.png is a folder"), "{err}");
@@ -478,16 +479,7 @@ fn a_report_is_written_whole_or_not_at_all() {
     // Both methods, then the windowed method alone into the same folder: the orbits' files go.
     ok(&["report", r, "--coords", "theta1,theta2", "--out", s(&out)]);
     assert!(out.join("model_upo.json").exists());
-    ok(&[
-        "report",
-        r,
-        "--coords",
-        "theta1,theta2",
-        "--method",
-        "windowed",
-        "--out",
-        s(&out),
-    ]);
+    ok(&windowed);
     assert!(!out.join("model_upo.json").exists() && out.join("model_windowed.json").exists());
     let mut names: Vec<String> = std::fs::read_dir(&out)
         .unwrap()
