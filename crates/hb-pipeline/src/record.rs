@@ -789,6 +789,18 @@ pub fn condition_source(
         Source::Grid(grid) => return Ok(grid),
         Source::Path(path) => {
             observer.stage(Stage::Read);
+            // A step given for a record that has its own stamps replaces them: said, since a
+            // wrong step would otherwise pass unseen.
+            if options.dt.is_some()
+                && options.time_col.is_none()
+                && hb_record::input::header_names(path).is_some_and(|h| h.iter().any(|n| n == "t"))
+            {
+                observer.notice(&Notice::Warning(
+                    "the record has a time column 't', whose stamps «dt» replaces (not read): give «time_col=t» \
+                     instead of «dt» to read them"
+                        .to_owned(),
+                ));
+            }
             read_path(path, &options.read_options()?).map_err(|source| RunError::Read {
                 name: name.clone(),
                 source: Box::new(source),

@@ -4082,3 +4082,50 @@ fn a_passive_joints_torque_is_not_in_the_truths_options() {
         "{tau2} against {expected}"
     );
 }
+
+/// A step given for a record whose header has its own time column replaces the stamps: a
+/// warning says so (a wrong step would otherwise pass unseen); a record without one gets none.
+#[test]
+fn a_step_that_replaces_the_records_stamps_is_warned_of() {
+    let data = paper_dataset();
+    let out = hbid(&[
+        "identify",
+        &data,
+        "--dt",
+        "0.25132741228718347",
+        "--bootstrap",
+        "0",
+        "--quiet",
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains(
+            "the record has a time column 't', whose stamps --dt replaces (not read): give --time-col t"
+        ),
+        "{err}"
+    );
+    let dir = scratch("step-without-stamps");
+    let text = std::fs::read_to_string(&data).unwrap();
+    // The angles alone, without the comments, the header and the stamps.
+    let angles: String = text
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .skip(1)
+        .map(|l| l.split(',').nth(1).unwrap().to_owned() + "\n")
+        .collect();
+    let bare = dir.join("angles.csv");
+    std::fs::write(&bare, angles).unwrap();
+    let out = hbid(&[
+        "identify",
+        bare.to_str().unwrap(),
+        "--dt",
+        "0.25132741228718347",
+        "--bootstrap",
+        "0",
+        "--quiet",
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(!err.contains("time column"), "{err}");
+}

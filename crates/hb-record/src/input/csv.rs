@@ -177,6 +177,18 @@ fn first_row(bytes: &[u8]) -> Result<(Lines<'_>, u64, &str, Separator), InputErr
     Ok((lines, first_line, first, separator))
 }
 
+/// The names of a text's header, from the first row of `bytes` (the start of a text is enough);
+/// `None` when that row is not a header.
+pub(super) fn header(bytes: &[u8]) -> Option<Vec<String>> {
+    let (_, _, first, separator) = first_row(bytes).ok()?;
+    let mut cells = Vec::new();
+    separator.split(first, &mut cells);
+    if cells.iter().all(|c| number(c, separator).is_some()) {
+        return None;
+    }
+    Some(cells.iter().map(|c| (*c).to_owned()).collect())
+}
+
 /// The header's names of the columns `options` choose (the coordinates', then the drives',
 /// then the velocities'), from the first row of `bytes` (the start of a text is enough); `None`
 /// when it is not a header, or names no such columns.

@@ -495,7 +495,21 @@ pub fn read_path(path: &Path, options: &ReadOptions) -> Result<Record, InputErro
 /// file cannot be read (reading it says why). Records of one identification chosen by position
 /// are told apart by them.
 pub fn chosen_names(path: &Path, options: &ReadOptions) -> Option<Vec<String>> {
-    if path == Path::new("-") || options.validate().is_err() {
+    if options.validate().is_err() {
+        return None;
+    }
+    csv::chosen_names(&text_start(path)?, options)
+}
+
+/// The names of the header of the text file at `path`, from its first mebibyte: `None` without
+/// a header, for a `.npy` file or standard input, or where the file cannot be read.
+pub fn header_names(path: &Path) -> Option<Vec<String>> {
+    csv::header(&text_start(path)?)
+}
+
+/// The first mebibyte of the regular text file at `path` (not standard input, not `.npy`).
+fn text_start(path: &Path) -> Option<Vec<u8>> {
+    if path == Path::new("-") {
         return None;
     }
     let mut file = std::fs::File::open(path).ok()?;
@@ -504,11 +518,8 @@ pub fn chosen_names(path: &Path, options: &ReadOptions) -> Option<Vec<String>> {
     }
     let mut start = vec![0; 1 << 20];
     let got = read_up_to(&mut file, &mut start).ok()?;
-    let start = &start[..got];
-    if start.starts_with(b"\x93NUMPY") {
-        return None;
-    }
-    csv::chosen_names(start, options)
+    start.truncate(got);
+    (!start.starts_with(b"\x93NUMPY")).then_some(start)
 }
 
 /// Reads into `buf` until it is full or the reader ends (an interrupted read tried again); how
