@@ -765,11 +765,11 @@ fn velocities_in_record_order(
 }
 
 /// That the columns a system was saved with (positions, where it was identified by them) are not
-/// the wrong ones in this record: a header that names the system's coordinates (or, `drives`,
+/// the wrong ones in the record of `header`: a header that names the system's coordinates (or, `drives`,
 /// its drives) elsewhere than at the saved columns is refused, rather than its columns taken by
 /// their place. `record` chooses the columns as saved.
 fn saved_columns_named_elsewhere(
-    path: &std::path::Path,
+    header: &hb_record::input::Header,
     record: &RecordOptions,
     names: &hb_model::Names,
     saved: &hb_model::Columns,
@@ -803,8 +803,8 @@ fn saved_columns_named_elsewhere(
         }
     };
     let (Some(at_saved), Some(_)) = (
-        hb_record::input::chosen_names(path, &record.read_options()?),
-        hb_record::input::chosen_names(path, &by_name.read_options()?),
+        header.chosen(&record.read_options()?),
+        header.chosen(&by_name.read_options()?),
     ) else {
         return Ok(());
     };
@@ -985,12 +985,16 @@ fn compare_system(
         drive_period: None,
         drive_frequency: None,
     };
-    if let Source::Path(path) = &source {
+    // A text file's header, read once for both checks.
+    if let Source::Path(path) = &source
+        && (o.coords.is_none() || o.drive_col.is_none() && drives_needed)
+        && let Some(header) = hb_record::input::Header::of(path)
+    {
         if o.coords.is_none() {
-            saved_columns_named_elsewhere(path, &record, names, &columns, false)?;
+            saved_columns_named_elsewhere(&header, &record, names, &columns, false)?;
         }
         if o.drive_col.is_none() && drives_needed {
-            saved_columns_named_elsewhere(path, &record, names, &columns, true)?;
+            saved_columns_named_elsewhere(&header, &record, names, &columns, true)?;
         }
     }
     let (mut grid, clock) = compared_record(source, &record, o.skip_unsettled, observer)?;

@@ -793,7 +793,7 @@ pub fn condition_source(
             // wrong step would otherwise pass unseen.
             if options.dt.is_some()
                 && options.time_col.is_none()
-                && hb_record::input::header_names(path).is_some_and(|h| h.iter().any(|n| n == "t"))
+                && hb_record::input::Header::of(path).is_some_and(|h| h.names().iter().any(|n| n == "t"))
             {
                 observer.notice(&Notice::Warning(
                     "the record has a time column 't', whose stamps «dt» replaces (not read): give «time_col=t» \
@@ -931,7 +931,7 @@ pub fn load_all(
     let mut records = Vec::with_capacity(sources.len());
     for source in sources {
         if let (true, Source::Path(path)) = (several, &source)
-            && let Some(names) = hb_record::input::chosen_names(path, &read)
+            && let Some(names) = hb_record::input::Header::of(path).and_then(|h| h.chosen(&read))
         {
             match &first_names {
                 None => first_names = Some((path.display().to_string(), names)),

@@ -189,24 +189,6 @@ pub(super) fn header(bytes: &[u8]) -> Option<Vec<String>> {
     Some(cells.iter().map(|c| (*c).to_owned()).collect())
 }
 
-/// The header's names of the columns `options` choose (the coordinates', then the drives',
-/// then the velocities'), from the first row of `bytes` (the start of a text is enough); `None`
-/// when it is not a header, or names no such columns.
-pub(super) fn chosen_names(bytes: &[u8], options: &ReadOptions) -> Option<Vec<String>> {
-    let (_, _, first, separator) = first_row(bytes).ok()?;
-    let mut cells = Vec::new();
-    separator.split(first, &mut cells);
-    if cells.iter().all(|c| number(c, separator).is_some()) {
-        return None;
-    }
-    let columns = options.columns(Some(&cells), cells.len()).ok()?;
-    let chosen = std::iter::once(columns.angle)
-        .chain(columns.others)
-        .chain(columns.drives)
-        .chain(columns.velocities);
-    Some(chosen.map(|i| cells[i].to_owned()).collect())
-}
-
 /// The rows of a text: lines that are neither blank nor comments, with their line numbers.
 struct Lines<'a> {
     /// What is left to read.

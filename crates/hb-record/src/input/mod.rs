@@ -489,22 +489,37 @@ pub fn read_path(path: &Path, options: &ReadOptions) -> Result<Record, InputErro
     read_valid(&bytes, options)
 }
 
-/// The header's names of the columns `options` choose in the text file at `path` (the
-/// coordinates', then the drives', then the velocities', as [`read_path`] finds them), from its
-/// first mebibyte: `None` without a header, for a `.npy` file or standard input, or where the
-/// file cannot be read (reading it says why). Records of one identification chosen by position
-/// are told apart by them.
-pub fn chosen_names(path: &Path, options: &ReadOptions) -> Option<Vec<String>> {
-    if options.validate().is_err() {
-        return None;
-    }
-    csv::chosen_names(&text_start(path)?, options)
-}
+/// The names of a text file's header, read once from its first mebibyte, and the columns
+/// options choose by them (records of one identification chosen by position are told apart by
+/// them; a model saved with positional columns must find its own names there).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Header(Vec<String>);
 
-/// The names of the header of the text file at `path`, from its first mebibyte: `None` without
-/// a header, for a `.npy` file or standard input, or where the file cannot be read.
-pub fn header_names(path: &Path) -> Option<Vec<String>> {
-    csv::header(&text_start(path)?)
+impl Header {
+    /// The header of the text file at `path`: `None` without one, for a `.npy` file or standard
+    /// input, or where the file cannot be read (reading it says why).
+    pub fn of(path: &Path) -> Option<Self> {
+        csv::header(&text_start(path)?).map(Self)
+    }
+
+    /// Its names, in the order of the columns.
+    pub fn names(&self) -> &[String] {
+        &self.0
+    }
+
+    /// The names of the columns `options` choose, as [`read_path`] finds them: the
+    /// coordinates', then the drives', then the velocities'; `None` for options that are not
+    /// valid or choose a column the header does not have.
+    pub fn chosen(&self, options: &ReadOptions) -> Option<Vec<String>> {
+        options.validate().ok()?;
+        let cells: Vec<&str> = self.0.iter().map(String::as_str).collect();
+        let columns = options.columns(Some(&cells), cells.len()).ok()?;
+        let chosen = std::iter::once(columns.angle)
+            .chain(columns.others)
+            .chain(columns.drives)
+            .chain(columns.velocities);
+        Some(chosen.map(|i| self.0[i].clone()).collect())
+    }
 }
 
 /// The first mebibyte of the regular text file at `path` (not standard input, not `.npy`).
