@@ -286,8 +286,9 @@ struct Factored {
     /// The smallest pivot relative to the largest entry (both counting the identity that pads
     /// the matrix to 8 × 8).
     pivot: f64,
-    /// The determinant.
-    det: f64,
+    /// The determinant, computed only without a right-hand side (the identification's check:
+    /// a free run's solve at every step has no use for it).
+    det: Option<f64>,
     /// Whether every pivot is non-zero.
     invertible: bool,
     /// Whether the right-hand side given was solved into `out` (true without one).
@@ -329,7 +330,7 @@ fn factor_mass(n: usize, m: &MassRows, r: Option<&[f64; MAX_COORDINATES]>, out: 
             }
             Factored {
                 pivot,
-                det: lu.determinant(),
+                det: r.is_none().then(|| lu.determinant()),
                 invertible,
                 solved,
             }
@@ -431,7 +432,7 @@ impl<B: Basis + Sync> IdentifiedSystem<B> {
 /// singular state apart).
 fn mass_pivot(n: usize, m: &MassRows) -> (f64, f64) {
     let factored = factor_mass(n, m, None, &mut []);
-    (factored.pivot, factored.det)
+    (factored.pivot, factored.det.unwrap_or(f64::NAN))
 }
 
 /// The smallest relative pivot of a mass matrix at a record's state below which an identified
