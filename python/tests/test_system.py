@@ -248,6 +248,10 @@ def test_compare_pairs_the_records_columns_with_the_model_by_name():
     tau = {n: sim.named[n] for n in ("tau1", "tau2")}
     model = hbid.identify(q, t=sim.t, drive=tau, bootstrap=0, **hint).model
     assert model.coordinates == ["q1", "q2"] and model.drives == ["tau1", "tau2"]
+    # Scored on a record the model was not fitted to: the arm from another initial state.
+    sim = hbid.simulate(system="arm", samples=6000, q0=[0.5, -0.3])
+    q = {n: sim.named[n] for n in ("q1", "q2")}
+    tau = {n: sim.named[n] for n in ("tau1", "tau2")}
 
     def rmse(x, **kw):
         c = hbid.compare(model, x, range=(2000, 3000), **kw)

@@ -4087,18 +4087,23 @@ fn a_passive_joints_torque_is_not_in_the_truths_options() {
 /// warning says so (a wrong step would otherwise pass unseen); a record without one gets none.
 #[test]
 fn a_step_that_replaces_the_records_stamps_is_warned_of() {
+    // The paper's record identified with its step given: what it says on stderr.
+    let with_step = |record: &str| {
+        let out = hbid(&[
+            "identify",
+            record,
+            "--dt",
+            "0.25132741228718347",
+            "--bootstrap",
+            "0",
+            "--quiet",
+        ]);
+        let err = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert!(out.status.success(), "{err}");
+        err
+    };
     let data = paper_dataset();
-    let out = hbid(&[
-        "identify",
-        &data,
-        "--dt",
-        "0.25132741228718347",
-        "--bootstrap",
-        "0",
-        "--quiet",
-    ]);
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{err}");
+    let err = with_step(&data);
     assert!(
         err.contains(
             "the record has a time column 't', whose stamps --dt replaces (not read): give --time-col t"
@@ -4116,16 +4121,29 @@ fn a_step_that_replaces_the_records_stamps_is_warned_of() {
         .collect();
     let bare = dir.join("angles.csv");
     std::fs::write(&bare, angles).unwrap();
-    let out = hbid(&[
-        "identify",
-        bare.to_str().unwrap(),
-        "--dt",
-        "0.25132741228718347",
-        "--bootstrap",
-        "0",
-        "--quiet",
-    ]);
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{err}");
+    let err = with_step(bare.to_str().unwrap());
     assert!(!err.contains("time column"), "{err}");
+}
+
+/// One coordinate as several: two records whose headers name other columns at the angle's
+/// position are refused when it is chosen by position, and joined when chosen by name.
+#[test]
+fn records_of_one_angle_with_other_columns_at_its_position_are_refused() {
+    let dir = scratch("one-angle-other-columns");
+    let first = simulated(&dir, "a.csv", &["--samples", "3000"]);
+    let text = std::fs::read_to_string(&first).unwrap();
+    let swapped: String = text
+        .lines()
+        .map(|line| {
+            let c: Vec<&str> = line.split(',').collect();
+            [c[0], c[2], c[1]].join(",") + "\n"
+        })
+        .collect();
+    let second = dir.join("b.csv");
+    std::fs::write(&second, swapped).unwrap();
+    let (a, b) = (first.to_str().unwrap(), second.to_str().unwrap());
+    let out = hbid(&["identify", a, b, "--angle-col", "2", "--bootstrap", "0"]);
+    assert_clean_failure(&out, "--angle-col: column 2 is 'omega' in");
+    let out = hbid(&["identify", a, b, "--angle-col", "theta", "--bootstrap", "0"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
 }

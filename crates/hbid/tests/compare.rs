@@ -718,7 +718,20 @@ fn a_systems_columns_are_paired_with_the_model_by_name() {
         "--out",
         s(&record),
     ]);
-    let header = std::fs::read_to_string(&record).unwrap();
+    // Scored on a record the model was not fitted to: the arm from another initial state.
+    let held_out = dir.join("arm-test.csv");
+    ok(&[
+        "simulate",
+        "--system",
+        "arm",
+        "--samples",
+        "6000",
+        "--q0",
+        "0.5,-0.3",
+        "--out",
+        s(&held_out),
+    ]);
+    let header = std::fs::read_to_string(&held_out).unwrap();
     assert!(header.starts_with("t,q1,q2,v1,v2,tau1,tau2"), "{}", &header[..40]);
     let hint: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&truth).unwrap()).unwrap();
     let terms = hint["identify"]["terms"].as_str().unwrap();
@@ -744,7 +757,7 @@ fn a_systems_columns_are_paired_with_the_model_by_name() {
         let mut args = vec![
             "compare",
             s(&model),
-            s(&record),
+            s(&held_out),
             "--range",
             "2000..3000",
             "--json",
