@@ -66,7 +66,10 @@ pub use clock::SampleClock;
 pub use domain::{Domain, Shown, UnknownDomain};
 pub use integrate::{Measured, UnknownMeasured, cumulative_integral, displacement};
 pub use oscillation::{NoOscillationReason, OscillationPeriod, oscillation_period};
-pub use resample::{RESAMPLE_HALF_WIDTH, Resampled, ResampledPieces, resample_pieces, resample_to_whole};
+pub use resample::{
+    RESAMPLE_HALF_WIDTH, Resampled, ResampledColumns, ResampledPieces, resample_columns, resample_pieces,
+    resample_to_whole,
+};
 pub use segment::{OrbitSource, Segment};
 pub use spikes::{
     Spike, SpikeParams, Spikes, find_and_repair_spikes, find_spikes, find_spikes_in_place, repair_spikes,

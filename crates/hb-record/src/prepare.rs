@@ -39,7 +39,7 @@ use crate::input::{
 };
 use circle_signal::{
     CircleError, Domain, Measured, SampleClock, Spike, SpikeParams, find_and_repair_spikes,
-    find_spikes_in_place, resample_pieces,
+    find_spikes_in_place, resample_columns,
 };
 
 use rayon::prelude::*;
@@ -1058,40 +1058,42 @@ impl GridData {
         let clock = SampleClock::from_step(period, dt)
             .and_then(|c| c.with_start_time(t0))
             .map_err(PrepareError::Clock)?;
-        let (out_clock, x, out_pieces, resampled_from) = match clock.whole_samples_per_period() {
-            Some(_) => (clock, x, pieces.clone(), None),
-            None => {
-                let r = resample_pieces(&x, &pieces, &clock, domain).map_err(PrepareError::Resample)?;
-                (r.clock, r.samples, r.pieces, Some(clock.samples_per_period()))
-            }
-        };
-        // The measured drives and further coordinates on the same grid: resampled as the record
-        // (a drive as a signal on the line), onto the same pieces.
-        let resample = |x: Vec<f64>, domain: Domain| -> Result<Vec<f64>, PrepareError> {
-            if resampled_from.is_none() {
-                return Ok(x);
-            }
-            let r = resample_pieces(&x, &pieces, &clock, domain).map_err(PrepareError::Resample)?;
-            debug_assert_eq!(r.pieces, out_pieces);
-            Ok(r.samples)
-        };
-        let drives = drives
-            .into_iter()
-            .map(|p| resample(p, Domain::Line))
-            .collect::<Result<Vec<_>, _>>()?;
-        let velocities = velocities
-            .into_iter()
-            .map(|v| resample(v, Domain::Line))
-            .collect::<Result<Vec<_>, _>>()?;
-        let others = others
-            .into_iter()
-            .map(|c| {
-                Ok(Channel {
-                    x: resample(c.x, c.domain)?,
-                    domain: c.domain,
-                })
-            })
-            .collect::<Result<Vec<_>, PrepareError>>()?;
+        // The coordinates, measured drives and velocities on one grid: resampled together (a
+        // drive or velocity as a signal on the line), the kernel's weights once for them all,
+        // onto the same pieces.
+        let (out_clock, x, out_pieces, resampled_from, others, drives, velocities) =
+            match clock.whole_samples_per_period() {
+                Some(_) => (clock, x, pieces, None, others, drives, velocities),
+                None => {
+                    let columns: Vec<(&[f64], Domain)> = std::iter::once((&x[..], domain))
+                        .chain(others.iter().map(|c| (&c.x[..], c.domain)))
+                        .chain(drives.iter().map(|p| (&p[..], Domain::Line)))
+                        .chain(velocities.iter().map(|v| (&v[..], Domain::Line)))
+                        .collect();
+                    let r = resample_columns(&columns, &pieces, &clock).map_err(PrepareError::Resample)?;
+                    let mut columns = r.columns.into_iter();
+                    let mut next = || columns.next().unwrap_or_default();
+                    let x = next();
+                    let others = others
+                        .iter()
+                        .map(|c| Channel {
+                            x: next(),
+                            domain: c.domain,
+                        })
+                        .collect();
+                    let drives = drives.iter().map(|_| next()).collect();
+                    let velocities = velocities.iter().map(|_| next()).collect();
+                    (
+                        r.clock,
+                        x,
+                        r.pieces,
+                        Some(clock.samples_per_period()),
+                        others,
+                        drives,
+                        velocities,
+                    )
+                }
+            };
         let (clock, pieces) = (out_clock, out_pieces);
         let p = clock.require_whole().map_err(PrepareError::Whole)?;
         Ok(Data {
