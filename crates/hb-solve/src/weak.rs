@@ -411,10 +411,10 @@ impl Windows {
         }
     }
 
-    /// `(sin, cos)` of the combination held in `slot` at sample `n` of the segment.
+    /// `(sin, cos)` of the combination held in `slot` at every sample of the segment.
     #[inline]
-    fn trig(&self, slot: usize, n: usize) -> (f64, f64) {
-        self.trig[slot].1[n]
+    fn trig_values(&self, slot: usize) -> &[(f64, f64)] {
+        &self.trig[slot].1
     }
 
     /// Estimates coordinate `c`'s velocity over the segment (its window made), `series`'
@@ -976,7 +976,6 @@ fn fill_block<B: Basis + ?Sized>(
     let (xc, forcing, anti, drive_harmonics, table) = (&*xc, &*forcing, &*anti, &*drive_harmonics, &*table);
     let (g, seconds) = g.split_at_mut(cols * samples);
     let start = seg.start();
-    let held = |arg: usize, n: usize| windows.trig(trig_slots[arg], n);
     // The drive factor of a term at sample `n`, and its time derivative (never needed for the
     // measured drive: a term in it is never integrated by parts).
     let drive = |term: &Term, n: usize| -> (f64, f64) {
@@ -1019,48 +1018,53 @@ fn fill_block<B: Basis + ?Sized>(
             Column::ForcingSin => fill(out, &|n| forcing[n].1),
             Column::Stiffness => out.copy_from_slice(raw),
             Column::Product(ref term) if !term.coupling.is_empty() => {
+                // Factor by factor over the window (each a loop of one kind), every entry the
+                // same arithmetic in the same order as a sample-by-sample product.
                 let factors = &sh.resolved[col];
                 let (q, v) = windows.all();
-                for n in 0..samples {
-                    let (phi, dphi) = table.at(n);
-                    let xr = raw[n];
-                    let f = match term.position {
-                        PositionFactor::One => 1.0,
-                        PositionFactor::Basis(i) => phi[i],
-                        PositionFactor::Linear => xr,
-                    };
-                    out[n] = match (sh.accelerations[col], &mut second) {
-                        (Some(j), _) if sh.modes[col] == Mode::DdPsi => q[j][n],
-                        (Some(j), Some(second)) => {
-                            // ∫ψ f q_j'' = −∫ψ' f q_j' − ∫ψ (df/dt) q_j'.
-                            let df = match term.position {
-                                PositionFactor::One => 0.0,
-                                PositionFactor::Basis(i) => dphi[i],
-                                PositionFactor::Linear => 1.0,
+                let held_of = |arg: usize| windows.trig_values(trig_slots[arg]);
+                match (sh.accelerations[col], &mut second) {
+                    (Some(j), _) if sh.modes[col] == Mode::DdPsi => out.copy_from_slice(&q[j][..samples]),
+                    (Some(j), Some(second)) => {
+                        // ∫ψ f q_j'' = −∫ψ' f q_j' − ∫ψ (df/dt) q_j': `out` holds f times the
+                        // factors so far and `second` its rate, by the product rule.
+                        for n in 0..samples {
+                            let (phi, dphi) = table.at(n);
+                            let (f, df) = match term.position {
+                                PositionFactor::One => (1.0, 0.0),
+                                PositionFactor::Basis(i) => (phi[i], dphi[i]),
+                                PositionFactor::Linear => (raw[n], 1.0),
                             };
-                            let (mut g, mut rate) = (f, df * xdot[n]);
-                            for factor in factors.iter().filter(|r| r.positional()) {
-                                let value = factor.value(&q, &v, n, &held);
-                                rate = rate * value + g * factor.rate(&q, &v, n, &held);
-                                g *= value;
-                            }
-                            second[n] = rate * v[j][n];
-                            g * v[j][n]
+                            out[n] = f;
+                            second[n] = df * xdot[n];
                         }
-                        _ => {
+                        for factor in factors.iter().filter(|r| r.positional()) {
+                            factor.fold_with_rate(&q, &v, &held_of, out, second);
+                        }
+                        for ((g, rate), vj) in out.iter_mut().zip(second.iter_mut()).zip(v[j]) {
+                            *rate *= vj;
+                            *g *= vj;
+                        }
+                    }
+                    _ => {
+                        for n in 0..samples {
                             let (d, _) = drive(term, n);
+                            let f = match term.position {
+                                PositionFactor::One => 1.0,
+                                PositionFactor::Basis(i) => table.at(n).0[i],
+                                PositionFactor::Linear => raw[n],
+                            };
                             let own_v = match term.velocity {
                                 VelocityFactor::One => 1.0,
                                 VelocityFactor::Sign => cell_sign(xdot, n, false),
                                 velocity => velocity.eval(xdot[n]),
                             };
-                            let mut g = d * f * own_v;
-                            for factor in factors {
-                                g *= factor.value(&q, &v, n, &held);
-                            }
-                            g
+                            out[n] = d * f * own_v;
                         }
-                    };
+                        for factor in factors {
+                            factor.fold(&q, &v, &held_of, out);
+                        }
+                    }
                 }
             }
             Column::Product(ref term) => {
@@ -1227,6 +1231,51 @@ impl Resolved {
         }
     }
 
+    /// Multiplies every entry of `g` (a column over the window) by the factor's value at its
+    /// sample ([`value`](Self::value)), one kind of factor per loop; an acceleration's 1 leaves
+    /// them as they are.
+    fn fold<'h>(&self, q: &Series8, v: &Series8, held: &impl Fn(usize) -> &'h [(f64, f64)], g: &mut [f64]) {
+        match *self {
+            Resolved::Acceleration => {}
+            Resolved::Trig { arg, sine, .. } => {
+                let values = &held(arg)[..g.len()];
+                if sine {
+                    for (g, &(sin, _)) in g.iter_mut().zip(values) {
+                        *g *= sin;
+                    }
+                } else {
+                    for (g, &(_, cos)) in g.iter_mut().zip(values) {
+                        *g *= cos;
+                    }
+                }
+            }
+            _ => {
+                let held = |arg: usize, n: usize| held(arg)[n];
+                for (n, g) in g.iter_mut().enumerate() {
+                    *g *= self.value(q, v, n, &held);
+                }
+            }
+        }
+    }
+
+    /// The product rule over a window: for every sample, `rate ← rate · f + g · f'` and
+    /// `g ← g · f`, `f` the factor's value and `f'` its [`rate`](Self::rate).
+    fn fold_with_rate<'h>(
+        &self,
+        q: &Series8,
+        v: &Series8,
+        held: &impl Fn(usize) -> &'h [(f64, f64)],
+        g: &mut [f64],
+        rate: &mut [f64],
+    ) {
+        let held = |arg: usize, n: usize| held(arg)[n];
+        for (n, (g, rate)) in g.iter_mut().zip(rate.iter_mut()).enumerate() {
+            let value = self.value(q, v, n, &held);
+            *rate = *rate * value + *g * self.rate(q, v, n, &held);
+            *g *= value;
+        }
+    }
+
     /// Whether the factor is a function of positions (a sine or cosine, or a power).
     #[inline]
     fn positional(&self) -> bool {
@@ -1390,6 +1439,75 @@ mod tests {
                 let rate = resolved.rate(&qs, &vs, 0, &held);
                 assert_eq!(rate.to_bits(), fresh.to_bits());
             }
+        }
+    }
+
+    /// A column built factor by factor over the window ([`Resolved::fold`],
+    /// [`Resolved::fold_with_rate`]) is, entry by entry, the product taken sample by sample.
+    #[test]
+    fn folds_over_a_window_are_the_products_sample_by_sample() {
+        let combination = Combination::new(&[1, -1]).expect("a combination");
+        let factors = [
+            Factor::Trig {
+                sine: true,
+                combination,
+            },
+            Factor::Power {
+                coordinate: 1,
+                power: 2,
+            },
+            Factor::Velocity {
+                coordinate: 1,
+                function: VelocityFactor::Square,
+            },
+            Factor::Velocity {
+                coordinate: 0,
+                function: VelocityFactor::Sign,
+            },
+            Factor::Trig {
+                sine: false,
+                combination,
+            },
+        ];
+        let args = [combination];
+        let len = 300;
+        let series = |f: &dyn Fn(f64) -> f64| (0..len).map(|k| f(k as f64)).collect::<Vec<f64>>();
+        let q = [
+            series(&|k| 3.0 * (0.05 * k).sin() + 0.02 * k),
+            series(&|k| -(0.03 * k).cos()),
+        ];
+        let v = [series(&|k| (0.07 * k).cos()), series(&|k| 2.0 * (0.13 * k).sin())];
+        let trig: Vec<(f64, f64)> = (0..len).map(|n| (q[0][n] - q[1][n]).sin_cos()).collect();
+        let (qs, vs): (Series8, Series8) = (
+            std::array::from_fn(|c| q.get(c).map_or(&[][..], |s| &s[..])),
+            std::array::from_fn(|c| v.get(c).map_or(&[][..], |s| &s[..])),
+        );
+        let resolved: Vec<Resolved> = factors.iter().map(|f| Resolved::new(f, &args, &[0, 1])).collect();
+        let start = series(&|k| 1.0 + 0.5 * (0.2 * k).sin());
+        let start_rate = series(&|k| 0.1 * k - 4.0);
+        let (mut g, mut rate) = (start.clone(), start_rate.clone());
+        let mut plain = start.clone();
+        for r in &resolved {
+            r.fold(&qs, &vs, &|_| &trig[..], &mut plain);
+            if r.positional() {
+                r.fold_with_rate(&qs, &vs, &|_| &trig[..], &mut g, &mut rate);
+            }
+        }
+        let held = |_: usize, n: usize| trig[n];
+        for n in 0..len {
+            let mut one = start[n];
+            let (mut gn, mut rn) = (start[n], start_rate[n]);
+            for r in &resolved {
+                one *= r.value(&qs, &vs, n, &held);
+                if r.positional() {
+                    let value = r.value(&qs, &vs, n, &held);
+                    rn = rn * value + gn * r.rate(&qs, &vs, n, &held);
+                    gn *= value;
+                }
+            }
+            assert_eq!(plain[n].to_bits(), one.to_bits(), "sample {n}");
+            assert_eq!(g[n].to_bits(), gn.to_bits(), "sample {n}");
+            assert_eq!(rate[n].to_bits(), rn.to_bits(), "sample {n}");
         }
     }
 
