@@ -6,12 +6,12 @@
 //! resampled once, at the input, onto the nearest grid with whole `P` (the choice and its measured
 //! cost are in `docs/identification.md`): every later stage sees an ordinary whole clock.
 
-use std::f64::consts::PI;
+use std::f64::consts::{PI, TAU};
 use std::ops::Range;
 
 use rayon::prelude::*;
 
-use crate::{CircleError, Domain, SampleClock, unwrap, wrap};
+use crate::{CircleError, Domain, SampleClock, wrap};
 
 /// Half the number of taps of the interpolation kernel: the output starts and ends this many
 /// input samples inside the record.
@@ -79,9 +79,19 @@ pub fn resample_to_whole(x: &[f64], clock: &SampleClock, domain: Domain) -> Resu
     let last = (n - 1 - half) as f64;
     let count = ((last - half as f64) / ratio).floor() as usize + 1;
     Ok(Resampled {
-        samples: interpolate(&[(x, domain)], 0.0, ratio, &Kernel::for_ratio(ratio), 0..count)
-            .pop()
-            .unwrap_or_default(),
+        samples: {
+            let mut y = x.to_vec();
+            let mut samples = vec![0.0; count];
+            interpolate(
+                &mut [Detrended::new(&mut y, domain)],
+                0.0,
+                ratio,
+                &Kernel::for_ratio(ratio),
+                0..count,
+                &mut [&mut samples],
+            );
+            samples
+        },
         clock: out_clock,
     })
 }
@@ -118,7 +128,7 @@ pub fn resample_pieces(
         mut columns,
         pieces,
         clock,
-    } = resample_columns(&[(x, domain)], pieces, clock)?;
+    } = resample_columns(vec![(x.to_vec(), domain)], pieces, clock)?;
     Ok(ResampledPieces {
         samples: columns.pop().unwrap_or_default(),
         pieces,
@@ -144,7 +154,9 @@ pub struct ResampledColumns {
 /// column's samples are those [`resample_pieces`] gives it alone, bit for bit, at a fraction of
 /// the cost of resampling them one by one, since the kernel's weights at an output sample (most
 /// of the work: 128 taps of a degree-16 interpolant) depend on its position alone and are
-/// computed once for all the columns.
+/// computed once for all the columns. The columns are taken, not copied: each one's storage holds
+/// its unwrapped and detrended samples while the outputs are made, so that the memory of a
+/// resampling is the outputs' beside the columns, however many there are.
 ///
 /// Errors as [`resample_pieces`] does, for the first column (in order) that has one; every
 /// column must be as long as the first.
@@ -157,18 +169,19 @@ pub struct ResampledColumns {
 /// let angle: Vec<f64> = (0..3000).map(|n| circle_signal::wrap(8.0 * t(n))).collect();
 /// let torque: Vec<f64> = (0..3000).map(|n| (8.0 * t(n)).cos()).collect();
 /// let pieces = [0..3000];
-/// let both = resample_columns(&[(&angle, Domain::Circle), (&torque, Domain::Line)], &pieces, &clock)?;
+/// let alone = resample_pieces(&torque, &pieces, &clock, Domain::Line)?;
+/// let both = resample_columns(vec![(angle, Domain::Circle), (torque, Domain::Line)], &pieces, &clock)?;
 /// assert_eq!(both.clock.whole_samples_per_period(), Some(385));
-/// assert_eq!(both.columns[1], resample_pieces(&torque, &pieces, &clock, Domain::Line)?.samples);
+/// assert_eq!(both.columns[1], alone.samples);
 /// # Ok::<(), circle_signal::CircleError>(())
 /// ```
 pub fn resample_columns(
-    columns: &[(&[f64], Domain)],
+    columns: Vec<(Vec<f64>, Domain)>,
     pieces: &[Range<usize>],
     clock: &SampleClock,
 ) -> Result<ResampledColumns, CircleError> {
     let len = columns.first().map_or(0, |(x, _)| x.len());
-    for (x, _) in columns {
+    for (x, _) in &columns {
         if x.len() != len {
             return Err(CircleError::LengthMismatch {
                 expected: len,
@@ -179,7 +192,7 @@ pub fn resample_columns(
     }
     if clock.whole_samples_per_period().is_some() {
         return Ok(ResampledColumns {
-            columns: columns.iter().map(|(x, _)| x.to_vec()).collect(),
+            columns: columns.into_iter().map(|(x, _)| x).collect(),
             pieces: pieces.to_vec(),
             clock: *clock,
         });
@@ -195,30 +208,87 @@ pub fn resample_columns(
     let out_clock = whole_clock(clock)?;
     let ratio = out_clock.step() / clock.step();
     let kernel = Kernel::for_ratio(ratio);
-    let mut out: Vec<Vec<f64>> = vec![Vec::new(); columns.len()];
-    let mut out_pieces = Vec::new();
-    for piece in pieces.iter().filter(|r| r.len() >= 2 * half + 2) {
-        // Output m sits at input position u_m = half + m · ratio; it needs
-        // piece.start + half <= u_m <= piece.end − 1 − half.
-        let first = (piece.start as f64 / ratio).ceil() as usize;
-        let last = ((piece.end - 1 - 2 * half) as f64 / ratio).floor() as usize;
-        if last < first {
-            continue;
-        }
-        let offset = piece.start as f64;
-        let inputs: Vec<(&[f64], Domain)> = columns.iter().map(|&(x, d)| (&x[piece.clone()], d)).collect();
-        let values = interpolate(&inputs, offset, ratio, &kernel, first..last + 1);
-        for (samples, values) in out.iter_mut().zip(values) {
-            samples.resize(first, f64::NAN);
-            samples.extend(values);
-        }
-        out_pieces.push(first..last + 1);
+    // Output m sits at input position u_m = half + m · ratio; a piece's outputs need
+    // piece.start + half <= u_m <= piece.end − 1 − half.
+    let out_pieces: Vec<(Range<usize>, Range<usize>)> = pieces
+        .iter()
+        .filter(|r| r.len() >= 2 * half + 2)
+        .filter_map(|piece| {
+            let first = (piece.start as f64 / ratio).ceil() as usize;
+            let last = ((piece.end - 1 - 2 * half) as f64 / ratio).floor() as usize;
+            (last >= first).then(|| (piece.clone(), first..last + 1))
+        })
+        .collect();
+    let out_len = out_pieces.last().map_or(0, |(_, out)| out.end);
+    let mut outputs: Vec<Vec<f64>> = vec![vec![f64::NAN; out_len]; columns.len()];
+    let mut columns = columns;
+    for (piece, out) in &out_pieces {
+        let mut inputs: Vec<Detrended<'_>> = columns
+            .iter_mut()
+            .map(|(x, domain)| Detrended::new(&mut x[piece.clone()], *domain))
+            .collect();
+        let mut targets: Vec<&mut [f64]> = outputs.iter_mut().map(|o| &mut o[out.clone()]).collect();
+        interpolate(
+            &mut inputs,
+            piece.start as f64,
+            ratio,
+            &kernel,
+            out.clone(),
+            &mut targets,
+        );
     }
     Ok(ResampledColumns {
-        columns: out,
-        pieces: out_pieces,
+        columns: outputs,
+        pieces: out_pieces.into_iter().map(|(_, out)| out).collect(),
         clock: out_clock,
     })
+}
+
+/// A column's samples over a piece, unwrapped on the circle and less the straight line through
+/// the first and last of them, in place, with that line and the column's domain.
+struct Detrended<'a> {
+    y: &'a [f64],
+    y0: f64,
+    slope: f64,
+    domain: Domain,
+}
+
+impl<'a> Detrended<'a> {
+    /// `x` (at least two samples) made so, in place: the numbers [`unwrap`](crate::unwrap) and the
+    /// subtraction give.
+    fn new(x: &'a mut [f64], domain: Domain) -> Self {
+        if domain == Domain::Circle {
+            unwrap_in_place(x);
+        }
+        let n = x.len();
+        let (y0, slope) = (x[0], (x[n - 1] - x[0]) / (n - 1) as f64);
+        for (m, v) in x.iter_mut().enumerate() {
+            *v -= y0 + slope * m as f64;
+        }
+        Self {
+            y: x,
+            y0,
+            slope,
+            domain,
+        }
+    }
+}
+
+/// [`unwrap`](crate::unwrap) in place: the same numbers, each sample's step read before it is overwritten.
+fn unwrap_in_place(x: &mut [f64]) {
+    let Some(&first) = x.first() else {
+        return;
+    };
+    let (mut turns, mut prev) = (0.0_f64, first);
+    for v in &mut x[1..] {
+        let xn = *v;
+        let step = (xn - prev) / TAU;
+        if step.abs() >= 0.5 || step.is_nan() {
+            turns -= step.round();
+        }
+        *v = xn + TAU * turns;
+        prev = xn;
+    }
 }
 
 /// The output clock of a resampling: `P = round(T / h)` (at least 2), the first sample
@@ -319,81 +389,64 @@ fn exact_weight(fc: f64, d: f64, norm: f64) -> f64 {
     fc * sinc(fc * d) * window
 }
 
-/// The Kaiser-windowed sinc interpolation of each column of `columns` (finite, all as long, at
-/// least `2 · half + 2` samples; their first sample at input position `offset`) at the positions
+/// The Kaiser-windowed sinc interpolation of each of `columns` (all as long, at least
+/// `2 · half + 2` samples; their first sample at input position `offset`) at the positions
 /// `half + m · ratio` for `m` in `outputs`, all of which must keep the kernel inside them, with
-/// `kernel` (built once per resampling, for all its pieces): the weights at each output once, for
-/// every column. The outputs are computed in parallel, each on its own: the result does not
-/// depend on the number of threads, nor on the other columns.
+/// `kernel` (built once per resampling, for all its pieces), into `targets` (one per column, as
+/// long as `outputs`): the weights at each output once, for every column. The outputs are
+/// computed in parallel, each on its own: the result depends neither on the number of threads
+/// nor on the other columns.
 fn interpolate(
-    columns: &[(&[f64], Domain)],
+    columns: &mut [Detrended<'_>],
     offset: f64,
     ratio: f64,
     kernel: &Kernel,
     outputs: Range<usize>,
-) -> Vec<Vec<f64>> {
+    targets: &mut [&mut [f64]],
+) {
     let half = RESAMPLE_HALF_WIDTH;
-    let Some(n) = columns.first().map(|(x, _)| x.len()) else {
-        return Vec::new();
+    let Some(n) = columns.first().map(|c| c.y.len()) else {
+        return;
     };
-    // Each column less the straight line through its first and last samples (unwrapped first on
-    // the circle).
-    let detrended: Vec<(Vec<f64>, f64, f64, Domain)> = columns
-        .iter()
-        .map(|&(x, domain)| {
-            let mut y = match domain {
-                Domain::Circle => unwrap(x),
-                Domain::Line => x.to_vec(),
-            };
-            let (y0, slope) = (y[0], (y[n - 1] - y[0]) / (n - 1) as f64);
-            for (m, v) in y.iter_mut().enumerate() {
-                *v -= y0 + slope * m as f64;
-            }
-            (y, y0, slope, domain)
-        })
-        .collect();
-    let one = |j: usize, weights: &mut [f64; TAPS], out: &mut [Vec<f64>]| {
+    let columns = &*columns;
+    let one = |j: usize, weights: &mut [f64; TAPS], out: &mut [&mut [f64]], at: usize| {
         // Position in the columns, clamped against rounding at the ends of the range.
         let u = (half as f64 + j as f64 * ratio - offset).clamp((half - 1) as f64, (n - 1 - half) as f64);
         let base = u.floor();
         kernel.weights(u - base, weights);
         let first = base as usize + 1 - half;
         let total: f64 = weights.iter().sum();
-        for ((y, y0, slope, domain), out) in detrended.iter().zip(out) {
+        for (c, out) in columns.iter().zip(out.iter_mut()) {
             let v: f64 = weights
                 .iter()
-                .zip(&y[first..first + TAPS])
+                .zip(&c.y[first..first + TAPS])
                 .map(|(w, y)| w * y)
                 .sum();
-            let value = v / total + y0 + slope * u;
-            out.push(match domain {
+            let value = v / total + c.y0 + c.slope * u;
+            out[at] = match c.domain {
                 Domain::Circle => wrap(value),
                 Domain::Line => value,
-            });
+            };
         }
     };
-    let starts: Vec<usize> = outputs.clone().step_by(CHUNK).collect();
-    let chunks: Vec<Vec<Vec<f64>>> = starts
-        .into_par_iter()
-        .map(|start| {
-            let end = (start + CHUNK).min(outputs.end);
-            let mut weights = [0.0; TAPS];
-            let mut out = vec![Vec::with_capacity(end - start); columns.len()];
-            for j in start..end {
-                one(j, &mut weights, &mut out);
-            }
-            out
-        })
+    // The outputs in chunks of CHUNK, each chunk's slice of every target together.
+    let mut chunks: Vec<(usize, Vec<&mut [f64]>)> = outputs
+        .clone()
+        .step_by(CHUNK)
+        .map(|start| (start, Vec::with_capacity(targets.len())))
         .collect();
-    (0..columns.len())
-        .map(|c| {
-            let mut column = Vec::with_capacity(outputs.len());
-            for chunk in &chunks {
-                column.extend_from_slice(&chunk[c]);
-            }
-            column
-        })
-        .collect()
+    for target in targets.iter_mut() {
+        for ((_, slices), slice) in chunks.iter_mut().zip(target.chunks_mut(CHUNK)) {
+            slices.push(slice);
+        }
+    }
+    chunks.into_par_iter().for_each(|(start, mut slices)| {
+        let mut weights = [0.0; TAPS];
+        let end = (start + CHUNK).min(outputs.end);
+        for (at, j) in (start..end).enumerate() {
+            one(j, &mut weights, &mut slices, at);
+        }
+    });
 }
 
 /// `sin(πz) / (πz)`.
@@ -493,11 +546,11 @@ mod tests {
         }
         let pieces = [0..CHUNK, CHUNK + 300..n];
         let domains = [Domain::Circle, Domain::Line, Domain::Line];
-        let columns: Vec<(&[f64], Domain)> = with_gap.iter().map(|c| &c[..]).zip(domains).collect();
-        let together = resample_columns(&columns, &pieces, &clock).unwrap();
+        let columns: Vec<(Vec<f64>, Domain)> = with_gap.iter().cloned().zip(domains).collect();
+        let together = resample_columns(columns.clone(), &pieces, &clock).unwrap();
         let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-        for (k, &(x, domain)) in columns.iter().enumerate() {
-            let alone = resample_pieces(x, &pieces, &clock, domain).unwrap();
+        for (k, (x, domain)) in columns.iter().enumerate() {
+            let alone = resample_pieces(x, &pieces, &clock, *domain).unwrap();
             assert_eq!(bits(&together.columns[k]), bits(&alone.samples), "column {k}");
             assert_eq!(together.pieces, alone.pieces);
             assert_eq!(together.clock, alone.clock);
@@ -506,18 +559,23 @@ mod tests {
         // Columns of other lengths, and a column with a NaN inside a piece, are refused.
         let short = vec![0.0; n - 1];
         assert!(matches!(
-            resample_columns(&[columns[0], (&short, Domain::Line)], &pieces, &clock),
+            resample_columns(vec![columns[0].clone(), (short, Domain::Line)], &pieces, &clock),
             Err(CircleError::LengthMismatch { .. })
         ));
         let mut bad = with_gap[1].clone();
         bad[10] = f64::NAN;
         assert!(matches!(
-            resample_columns(&[columns[0], (&bad, Domain::Line)], &pieces, &clock),
+            resample_columns(vec![columns[0].clone(), (bad, Domain::Line)], &pieces, &clock),
             Err(CircleError::NonFinite { index: 10, .. })
         ));
         // No column: nothing to do, on the output grid.
-        let none = resample_columns(&[], &pieces, &clock).unwrap();
+        let none = resample_columns(Vec::new(), &pieces, &clock).unwrap();
         assert!(none.columns.is_empty());
+        // A whole clock gives the columns back as they are.
+        let whole = SampleClock::new(TAU, 97).unwrap();
+        let same = resample_columns(columns.clone(), &pieces, &whole).unwrap();
+        assert_eq!(bits(&same.columns[1]), bits(&columns[1].0));
+        assert_eq!(same.pieces, pieces);
     }
 
     #[test]

@@ -1065,24 +1065,23 @@ impl GridData {
             match clock.whole_samples_per_period() {
                 Some(_) => (clock, x, pieces, None, others, drives, velocities),
                 None => {
-                    let columns: Vec<(&[f64], Domain)> = std::iter::once((&x[..], domain))
-                        .chain(others.iter().map(|c| (&c.x[..], c.domain)))
-                        .chain(drives.iter().map(|p| (&p[..], Domain::Line)))
-                        .chain(velocities.iter().map(|v| (&v[..], Domain::Line)))
+                    let (n_others, n_drives) = (others.len(), drives.len());
+                    let other_domains: Vec<Domain> = others.iter().map(|c| c.domain).collect();
+                    let columns: Vec<(Vec<f64>, Domain)> = std::iter::once((x, domain))
+                        .chain(others.into_iter().map(|c| (c.x, c.domain)))
+                        .chain(drives.into_iter().map(|p| (p, Domain::Line)))
+                        .chain(velocities.into_iter().map(|v| (v, Domain::Line)))
                         .collect();
-                    let r = resample_columns(&columns, &pieces, &clock).map_err(PrepareError::Resample)?;
+                    let r = resample_columns(columns, &pieces, &clock).map_err(PrepareError::Resample)?;
                     let mut columns = r.columns.into_iter();
-                    let mut next = || columns.next().unwrap_or_default();
-                    let x = next();
-                    let others = others
-                        .iter()
-                        .map(|c| Channel {
-                            x: next(),
-                            domain: c.domain,
-                        })
+                    let x = columns.next().unwrap_or_default();
+                    let others = other_domains
+                        .into_iter()
+                        .zip(columns.by_ref().take(n_others))
+                        .map(|(domain, x)| Channel { x, domain })
                         .collect();
-                    let drives = drives.iter().map(|_| next()).collect();
-                    let velocities = velocities.iter().map(|_| next()).collect();
+                    let drives = columns.by_ref().take(n_drives).collect();
+                    let velocities = columns.collect();
                     (
                         r.clock,
                         x,
