@@ -1,11 +1,12 @@
 //! Band-limited resampling onto a whole number of samples per forcing period: a whirling angle
 //! (wrapped, on the circle) and a displacement (on the line) at 100.3 samples per period,
-//! 10^5 and 10^6 samples, resampled to 100.
+//! 10^5 and 10^6 samples, resampled to 100; and both as the two columns of one record, resampled
+//! together (`resample_columns`, the kernel's weights once per output) against one after the other.
 use std::f64::consts::TAU;
 use std::hint::black_box;
 use std::time::Duration;
 
-use circle_signal::{Domain, SampleClock, resample_to_whole, wrap};
+use circle_signal::{Domain, SampleClock, resample_columns, resample_pieces, resample_to_whole, wrap};
 use criterion::{Criterion, criterion_group, criterion_main};
 
 fn bench_resample(c: &mut Criterion) {
@@ -25,6 +26,21 @@ fn bench_resample(c: &mut Criterion) {
         });
         group.bench_function(format!("line_{n}"), |b| {
             b.iter(|| resample_to_whole(black_box(&line), &clock, Domain::Line).expect("resample"))
+        });
+        let pieces = [0..n];
+        group.bench_function(format!("two_columns_one_by_one_{n}"), |b| {
+            b.iter(|| {
+                (
+                    resample_pieces(black_box(&angle), &pieces, &clock, Domain::Circle).expect("resample"),
+                    resample_pieces(black_box(&line), &pieces, &clock, Domain::Line).expect("resample"),
+                )
+            })
+        });
+        group.bench_function(format!("two_columns_together_{n}"), |b| {
+            b.iter(|| {
+                let columns = vec![(angle.clone(), Domain::Circle), (line.clone(), Domain::Line)];
+                resample_columns(black_box(columns), &pieces, &clock).expect("resample")
+            })
         });
     }
     group.finish();

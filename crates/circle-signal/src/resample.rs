@@ -154,9 +154,10 @@ pub struct ResampledColumns {
 /// column's samples are those [`resample_pieces`] gives it alone, bit for bit, at a fraction of
 /// the cost of resampling them one by one, since the kernel's weights at an output sample (most
 /// of the work: 128 taps of a degree-16 interpolant) depend on its position alone and are
-/// computed once for all the columns. The columns are taken, not copied: each one's storage holds
-/// its unwrapped and detrended samples while the outputs are made, so that the memory of a
-/// resampling is the outputs' beside the columns, however many there are.
+/// computed once for up to three columns at a time. The columns are taken, not copied: each one's
+/// storage holds its unwrapped and detrended samples while its outputs are made, and is dropped
+/// after, so that the memory of a resampling beside the columns is at most three outputs however
+/// many columns there are.
 ///
 /// Errors as [`resample_pieces`] does, for the first column (in order) that has one; every
 /// column must be as long as the first.
@@ -220,22 +221,34 @@ pub fn resample_columns(
         })
         .collect();
     let out_len = out_pieces.last().map_or(0, |(_, out)| out.end);
-    let mut outputs: Vec<Vec<f64>> = vec![vec![f64::NAN; out_len]; columns.len()];
-    let mut columns = columns;
-    for (piece, out) in &out_pieces {
-        let mut inputs: Vec<Detrended<'_>> = columns
-            .iter_mut()
-            .map(|(x, domain)| Detrended::new(&mut x[piece.clone()], *domain))
-            .collect();
-        let mut targets: Vec<&mut [f64]> = outputs.iter_mut().map(|o| &mut o[out.clone()]).collect();
-        interpolate(
-            &mut inputs,
-            piece.start as f64,
-            ratio,
-            &kernel,
-            out.clone(),
-            &mut targets,
-        );
+    // The columns a group at a time, each group's inputs dropped once its outputs are made: the
+    // memory beside the record's columns is a group's outputs, as when one column at a time was
+    // resampled with its copies.
+    let mut outputs: Vec<Vec<f64>> = Vec::with_capacity(columns.len());
+    let mut rest = columns.into_iter();
+    loop {
+        let mut group: Vec<(Vec<f64>, Domain)> = rest.by_ref().take(COLUMNS_TOGETHER).collect();
+        if group.is_empty() {
+            break;
+        }
+        let mut made: Vec<Vec<f64>> = vec![vec![f64::NAN; out_len]; group.len()];
+        for (piece, out) in &out_pieces {
+            let mut inputs: Vec<Detrended<'_>> = group
+                .iter_mut()
+                .map(|(x, domain)| Detrended::new(&mut x[piece.clone()], *domain))
+                .collect();
+            let mut targets: Vec<&mut [f64]> = made.iter_mut().map(|o| &mut o[out.clone()]).collect();
+            interpolate(
+                &mut inputs,
+                piece.start as f64,
+                ratio,
+                &kernel,
+                out.clone(),
+                &mut targets,
+            );
+        }
+        drop(group);
+        outputs.append(&mut made);
     }
     Ok(ResampledColumns {
         columns: outputs,
@@ -309,6 +322,12 @@ const KERNEL_DEGREE: usize = 16;
 
 /// Outputs per parallel task.
 const CHUNK: usize = 4096;
+
+/// Columns [`resample_columns`] resamples together, sharing the kernel's weights: a system's two
+/// or three coordinates (with a drive) in one pass, and a robot arm's two angles, two torques and
+/// two velocities in two, the memory beside the record's columns three outputs at most (what
+/// resampling one column at a time with its copies took).
+const COLUMNS_TOGETHER: usize = 3;
 
 /// The kernel's weights as functions of the fractional part `φ ∈ [0, 1)` of the input position:
 /// tap `k` (input sample `⌊u⌋ + 1 − half + k`) lies at distance `d = φ + half − 1 − k` and weighs
@@ -530,7 +549,7 @@ mod tests {
 
     #[test]
     fn columns_resampled_together_are_each_column_resampled_alone() {
-        // An angle through the wrap, a line signal and a constant, over two pieces (a gap of 300
+        // An angle through the wrap, a line signal, a constant and another angle, over two pieces (a gap of 300
         // samples), long enough for several parallel chunks: each column bit for bit what it
         // gives alone, on the same pieces and clock.
         let clock = SampleClock::from_step(TAU, TAU / 97.3).unwrap();
@@ -540,12 +559,15 @@ mod tests {
             .collect();
         let line: Vec<f64> = (0..n).map(|i| (0.7 * clock.time(i)).cos() * 3.0 + 1.0).collect();
         let constant = vec![0.25; n];
-        let mut with_gap = [angle, line, constant];
+        let other: Vec<f64> = (0..n).map(|i| wrap(-0.6 * clock.time(i) + 2.0)).collect();
+        // Four columns: two groups of those resampled together.
+        let mut with_gap = [angle, line, constant, other];
         for column in &mut with_gap {
             column[CHUNK..CHUNK + 300].fill(f64::NAN);
         }
         let pieces = [0..CHUNK, CHUNK + 300..n];
-        let domains = [Domain::Circle, Domain::Line, Domain::Line];
+        let domains = [Domain::Circle, Domain::Line, Domain::Line, Domain::Circle];
+        assert!(domains.len() > COLUMNS_TOGETHER);
         let columns: Vec<(Vec<f64>, Domain)> = with_gap.iter().cloned().zip(domains).collect();
         let together = resample_columns(columns.clone(), &pieces, &clock).unwrap();
         let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
