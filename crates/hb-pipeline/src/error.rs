@@ -46,6 +46,16 @@ pub enum RunError {
         /// «angle_col».
         coords: bool,
     },
+    /// One of several records given together failed (named: its file, or `the arrays`); a
+    /// failure to read one names it already ([`RunError::Read`]).
+    #[error("{name}")]
+    InRecord {
+        /// The record's file (or `the arrays`).
+        name: String,
+        /// What went wrong with it.
+        #[source]
+        source: Box<RunError>,
+    },
     /// Conditioning the record (spikes, integration).
     #[error(transparent)]
     Prepare(PrepareError),
@@ -110,6 +120,7 @@ impl RunError {
         match self {
             RunError::Options(_) => ErrorKind::Options,
             RunError::Read { .. } => ErrorKind::Input,
+            RunError::InRecord { source, .. } => source.kind(),
             RunError::Prepare(PrepareError::MeasuredOnCircle(_)) => ErrorKind::Options,
             RunError::Prepare(_) => ErrorKind::Input,
             RunError::Drive(PrepareError::Clock(_) | PrepareError::WindowTooShort { .. }) => {
@@ -176,7 +187,9 @@ fn drive_text(error: &PrepareError) -> String {
             "no drive («drive_period=none»): the period of the free oscillation".to_owned()
         }
         PrepareError::Clock(_) => "the drive's period («drive_period», «drive_frequency»)".to_owned(),
-        PrepareError::Resample(_) => "resampling onto a whole number of samples per period".to_owned(),
+        PrepareError::Resample(_) => {
+            "a drive period of no whole number of samples («drive_period», «drive_frequency»)".to_owned()
+        }
         PrepareError::Input(e) => format!("{e}{}", input_fix(e)),
         e => e.to_string(),
     }

@@ -929,7 +929,7 @@ pub fn load_all(
     // The first file's header names of the columns chosen, which every other file's must be.
     let mut first_names: Option<(String, Vec<String>)> = None;
     let mut records = Vec::with_capacity(sources.len());
-    for source in sources {
+    for (source, name) in sources.into_iter().zip(&names) {
         if let (true, Source::Path(path)) = (several, &source)
             && let Some(names) = hb_record::input::Header::of(path).and_then(|h| h.chosen(&read))
         {
@@ -938,7 +938,15 @@ pub fn load_all(
                 Some((first, expected)) => same_columns(options, first, expected, path, &names)?,
             }
         }
-        records.push(load(source, options, drive, observer)?);
+        // Of several records, the one that fails is named (a read error names it already).
+        records.push(load(source, options, drive, observer).map_err(|e| match e {
+            e @ (RunError::Read { .. } | RunError::Options(_)) => e,
+            e if several => RunError::InRecord {
+                name: name.clone(),
+                source: Box::new(e),
+            },
+            e => e,
+        })?);
     }
     let mut records = records.into_iter();
     let Some(mut joined) = records.next() else {

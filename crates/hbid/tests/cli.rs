@@ -4147,3 +4147,36 @@ fn records_of_one_angle_with_other_columns_at_its_position_are_refused() {
     let out = hbid(&["identify", a, b, "--angle-col", "theta", "--bootstrap", "0"]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
 }
+
+/// Of several records, the one too short to resample is named, and the message says once what
+/// failed: a drive period of no whole number of samples, the resampling, the length it needs.
+#[test]
+fn the_record_that_fails_among_several_is_named() {
+    let dir = scratch("several-one-fails");
+    let rig = ["--drive-frequency", "1.3", "--sample-rate", "500"];
+    let long = simulated(&dir, "long.csv", &[&rig[..], &["--samples", "3000"]].concat());
+    let short = simulated(&dir, "short.csv", &[&rig[..], &["--samples", "129"]].concat());
+    let run = |records: &[&Path]| {
+        let mut args = vec!["identify"];
+        args.extend(records.iter().map(|p| p.to_str().unwrap()));
+        args.extend(["--drive-frequency", "1.3", "--bootstrap", "0", "--quiet"]);
+        let out = hbid(&args);
+        assert!(!out.status.success());
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    let alone = run(&[&short]);
+    assert_eq!(
+        alone.matches("resampling onto a whole number").count(),
+        1,
+        "{alone}"
+    );
+    assert!(alone.contains("at least 130 are needed"), "{alone}");
+    assert!(!alone.contains("short.csv"), "{alone}");
+    let together = run(&[&long, &short]);
+    let named = format!(
+        "error: {}: a drive period of no whole number of samples",
+        short.display()
+    );
+    assert!(together.contains(&named), "{together}");
+    assert!(!together.contains("long.csv"), "{together}");
+}
