@@ -1074,7 +1074,11 @@ fn compare_system(
                     row.extend_from_slice(state.v());
                     row.push(rms);
                     states.push(row);
-                    multi::free_run(&driven, &times, &state, request.tolerances)?
+                    // The samples run so far, of all the ranges', told as they go.
+                    let before = done + (start - range.start);
+                    multi::free_run_reporting(&driven, &times, &state, request.tolerances, &mut |run| {
+                        observer.progress(before + run, total);
+                    })?
                 }
                 Err(why) => pendulum_sim::MultiFreeRun {
                     q: vec![vec![f64::NAN; times.len()]; n],

@@ -476,3 +476,34 @@ fn one_coordinate_is_fitted_and_run_through_an_unsettled_start() {
     assert!(r.rmse.unwrap() < 1e-6, "{r:?}");
     assert_eq!(&report.runs[0][0].t[..6], &t[..6]);
 }
+
+/// A system's comparison tells how far its free run is as it goes, not only when a range is
+/// done: a stiff identified system can run for minutes over one range.
+#[test]
+fn a_systems_comparison_tells_its_progress_within_a_range() {
+    use hb_pipeline::{Observer, Rig};
+    #[derive(Default)]
+    struct Told(Vec<(usize, usize)>);
+    impl Observer for Told {
+        fn progress(&mut self, done: usize, total: usize) {
+            self.0.push((done, total));
+        }
+    }
+    let system = double_pendulum();
+    let rig = Rig::from_json(serde_json::json!({"system": "double-pendulum", "samples": 2000})).unwrap();
+    let table = hb_pipeline::simulate(&rig, &mut ()).unwrap().table();
+    let column = |c: usize| -> Vec<f64> { table.iter().map(|row| row[c]).collect() };
+    let (t, q1, q2) = (column(0), column(1), column(2));
+    let source = Source::Arrays {
+        coords: vec![&q1, &q2],
+        t: Some(&t),
+        drives: Vec::new(),
+    };
+    let request = CompareRequest::new(CompareOptions::default()).unwrap();
+    let mut told = Told::default();
+    compare(&system, source, &request, &mut told).unwrap();
+    let within: Vec<&(usize, usize)> = told.0.iter().filter(|(done, total)| done < total).collect();
+    assert!(within.len() >= 10, "{:?}", told.0);
+    assert!(told.0.windows(2).all(|w| w[0].0 <= w[1].0), "{:?}", told.0);
+    assert_eq!(told.0.last(), Some(&(2000, 2000)));
+}

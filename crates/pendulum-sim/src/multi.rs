@@ -516,6 +516,33 @@ pub fn free_run<S: MultiSystem + ?Sized>(
     state: &MultiState,
     tolerances: Tolerances,
 ) -> Result<MultiFreeRun, SimError> {
+    free_run_reporting(system, times, state, tolerances, &mut |_| {})
+}
+
+/// [`free_run`], telling `progress` how many of the samples are done as it goes (at most
+/// [`PROGRESS_REPORTS`] times, and once all are): a stiff system's run can take minutes, which
+/// a front end shows.
+///
+/// ```
+/// use pendulum_sim::{CoupledDuffing, MultiState, Tolerances, multi};
+///
+/// let system = CoupledDuffing::two_wells();
+/// let times: Vec<f64> = (0..1000).map(|i| i as f64 * 0.05).collect();
+/// let state = MultiState::new(&[0.1, -0.2], &[0.0, 0.0])?;
+/// let mut told = Vec::new();
+/// let run = multi::free_run_reporting(&system, &times, &state, Tolerances::default(), &mut |done| told.push(done))?;
+/// assert!(run.stopped.is_none());
+/// assert_eq!(told.last(), Some(&1000));
+/// assert!(told.windows(2).all(|w| w[0] < w[1]) && told.len() <= multi::PROGRESS_REPORTS + 1);
+/// # Ok::<(), pendulum_sim::SimError>(())
+/// ```
+pub fn free_run_reporting<S: MultiSystem + ?Sized>(
+    system: &S,
+    times: &[f64],
+    state: &MultiState,
+    tolerances: Tolerances,
+    progress: &mut dyn FnMut(usize),
+) -> Result<MultiFreeRun, SimError> {
     let system: &dyn MultiSystem = &system;
     let n = matching_coordinates(system, state)?;
     if let Some(&bad) = times.iter().find(|t| !t.is_finite()) {
@@ -535,6 +562,7 @@ pub fn free_run<S: MultiSystem + ?Sized>(
         return Ok(MultiFreeRun { q, v, stopped: None });
     }
     let budget = steps_for(count);
+    let every = count.div_ceil(PROGRESS_REPORTS).max(1);
     let outcome = integrate(
         system,
         times[0],
@@ -547,6 +575,9 @@ pub fn free_run<S: MultiSystem + ?Sized>(
                 q[c][i] = y[c];
                 v[c][i] = y[n + c];
             }
+            if (i + 1) % every == 0 || i + 1 == count {
+                progress(i + 1);
+            }
             ControlFlow::Continue(())
         },
     );
@@ -556,6 +587,9 @@ pub fn free_run<S: MultiSystem + ?Sized>(
         stopped: outcome.err(),
     })
 }
+
+/// The most times [`free_run_reporting`] tells its progress before the end.
+pub const PROGRESS_REPORTS: usize = 200;
 
 /// The system's number of coordinates, checked against `state`'s.
 fn matching_coordinates(system: &dyn MultiSystem, state: &MultiState) -> Result<usize, SimError> {
