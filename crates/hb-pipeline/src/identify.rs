@@ -674,9 +674,16 @@ impl IdentifyRequest {
             if matches!(drive, DriveSpec::Free | DriveSpec::Windows(_))
                 && let Some(t) = list.phase_term()
             {
+                let why = match drive {
+                    DriveSpec::Windows(_) => {
+                        "windows of a given length («window», «window_samples») are for a record without a periodic \
+                         drive: leave them out for windows of drive periods («window_periods»)"
+                    }
+                    _ => "the record has no periodic drive («drive_period=none»)",
+                };
                 return Err(OptionError::new(
                     "terms",
-                    format!("the term `{t}` has a drive factor, but the record has no periodic drive"),
+                    format!("the term `{t}` has a drive factor, but {why}"),
                 ));
             }
             if let Some(t) = list.measured_term()
