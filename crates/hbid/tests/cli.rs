@@ -4180,3 +4180,30 @@ fn the_record_that_fails_among_several_is_named() {
     assert!(together.contains(&named), "{together}");
     assert!(!together.contains("long.csv"), "{together}");
 }
+
+/// A term in the drive's phase with windows of a given length names those options, which leave
+/// the record's drive out, and the one that counts windows in drive periods.
+#[test]
+fn a_drive_term_with_windows_of_a_given_length_names_the_options() {
+    let data = paper_dataset();
+    let out = hbid(&[
+        "identify",
+        &data,
+        "--terms",
+        "sin(t)*cos(x), sin(x), x'",
+        "--window-samples",
+        "75",
+        "--quiet",
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{err}");
+    assert!(
+        err.contains("the term `sin(t)*cos(x)` has a drive factor"),
+        "{err}"
+    );
+    assert!(
+        err.contains("--window-samples") && err.contains("--window-periods"),
+        "{err}"
+    );
+    assert!(!err.contains("the record has no periodic drive"), "{err}");
+}
