@@ -265,14 +265,18 @@ pub fn unwrap(x: &[f64]) -> Vec<f64> {
 /// [`unwrap`] into a caller's buffer (cleared first), to reuse one allocation over many segments.
 pub fn unwrap_into(x: &[f64], out: &mut Vec<f64>) {
     out.clear();
-    out.reserve(x.len());
-    let mut turns = 0.0_f64;
-    let mut prev = match x.first() {
-        Some(&p) => p,
-        None => return,
+    out.extend_from_slice(x);
+    unwrap_in_place(out);
+}
+
+/// [`unwrap`] in place: the same numbers, each sample's step read before it is overwritten.
+pub(crate) fn unwrap_in_place(x: &mut [f64]) {
+    let Some(&first) = x.first() else {
+        return;
     };
-    out.push(prev);
-    for &xn in &x[1..] {
+    let (mut turns, mut prev) = (0.0_f64, first);
+    for v in &mut x[1..] {
+        let xn = *v;
         // Within half a turn the step rounds to ±0, which leaves `turns` as it is (never −0):
         // the same numbers without a call of `round` (the x86-64 baseline has no instruction for
         // it) at nearly every sample. (A NaN step is rounded, and makes every later sample NaN,
@@ -281,7 +285,7 @@ pub fn unwrap_into(x: &[f64], out: &mut Vec<f64>) {
         if step.abs() >= 0.5 || step.is_nan() {
             turns -= step.round();
         }
-        out.push(xn + TAU * turns);
+        *v = xn + TAU * turns;
         prev = xn;
     }
 }

@@ -6,7 +6,7 @@
 //! resampled once, at the input, onto the nearest grid with whole `P` (the choice and its measured
 //! cost are in `docs/identification.md`): every later stage sees an ordinary whole clock.
 
-use std::f64::consts::{PI, TAU};
+use std::f64::consts::PI;
 use std::ops::Range;
 
 use rayon::prelude::*;
@@ -271,7 +271,7 @@ impl<'a> Detrended<'a> {
     /// subtraction give.
     fn new(x: &'a mut [f64], domain: Domain) -> Self {
         if domain == Domain::Circle {
-            unwrap_in_place(x);
+            crate::unwrap_in_place(x);
         }
         let n = x.len();
         let (y0, slope) = (x[0], (x[n - 1] - x[0]) / (n - 1) as f64);
@@ -284,23 +284,6 @@ impl<'a> Detrended<'a> {
             slope,
             domain,
         }
-    }
-}
-
-/// [`unwrap`](crate::unwrap) in place: the same numbers, each sample's step read before it is overwritten.
-fn unwrap_in_place(x: &mut [f64]) {
-    let Some(&first) = x.first() else {
-        return;
-    };
-    let (mut turns, mut prev) = (0.0_f64, first);
-    for v in &mut x[1..] {
-        let xn = *v;
-        let step = (xn - prev) / TAU;
-        if step.abs() >= 0.5 || step.is_nan() {
-            turns -= step.round();
-        }
-        *v = xn + TAU * turns;
-        prev = xn;
     }
 }
 
