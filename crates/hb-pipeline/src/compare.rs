@@ -36,7 +36,7 @@ use circle_signal::{Domain, Measured, wrap};
 use hb_model::{IdentifiedModel, IdentifiedSystem, MeasuredDrive};
 use hb_record::prepare::{Channel, GridData};
 use pendulum_sim::multi::{self, MultiState, OneCoordinate};
-use pendulum_sim::{Tolerances, fit_initial_state, free_run};
+use pendulum_sim::{Tolerances, fit_initial_state, free_run, free_run_reporting};
 use serde::{Deserialize, Serialize};
 
 use crate::error::RunError;
@@ -650,7 +650,9 @@ fn compare_one(
                 default_init(period, range.len())
             }
         });
-        let (score, pieces) = run_range(model, &grid, &clock, range.clone(), init, request)?;
+        let (score, pieces) = run_range(model, &grid, &clock, range.clone(), init, request, &mut |run| {
+            observer.progress(done + run, total);
+        })?;
         if score.scored == 0 && score.stopped.is_none() {
             return Err(OptionError::value(
                 "init",
@@ -1243,6 +1245,7 @@ fn run_range(
     range: std::ops::Range<usize>,
     init: usize,
     request: &CompareRequest,
+    progress: &mut dyn FnMut(usize),
 ) -> Result<(RangeScore, Vec<RunPiece>), RunError> {
     let o = &request.options;
     let domain = grid.domain;
@@ -1292,12 +1295,16 @@ fn run_range(
         let run = match state {
             Ok((state, fit_rms)) => {
                 states.push([state[0], state[1], fit_rms]);
+                // The range's samples run so far, told as they go.
+                let before = start - range.start;
+                let progress = &mut |run: usize| progress(before + run);
                 if uneven {
-                    let run = multi::free_run(
+                    let run = multi::free_run_reporting(
                         &one,
                         &times,
                         &MultiState::new(&[state[0]], &[state[1]])?,
                         request.tolerances,
+                        progress,
                     )?;
                     let (mut q, mut v) = (run.q, run.v);
                     pendulum_sim::FreeRun {
@@ -1306,7 +1313,7 @@ fn run_range(
                         stopped: run.stopped,
                     }
                 } else {
-                    free_run(model, t0, grid.dt, y.len(), state, request.tolerances)?
+                    free_run_reporting(model, t0, grid.dt, y.len(), state, request.tolerances, progress)?
                 }
             }
             // No state from which the model runs through the first samples: the piece has no run.

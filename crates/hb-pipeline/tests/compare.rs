@@ -477,18 +477,58 @@ fn one_coordinate_is_fitted_and_run_through_an_unsettled_start() {
     assert_eq!(&report.runs[0][0].t[..6], &t[..6]);
 }
 
+/// What a comparison tells of its progress: `(done, total)` in order.
+#[derive(Default)]
+struct Told(Vec<(usize, usize)>);
+
+impl hb_pipeline::Observer for Told {
+    fn progress(&mut self, done: usize, total: usize) {
+        self.0.push((done, total));
+    }
+}
+
+impl Told {
+    /// Told as the runs go (at least ten times before the end), never going back, ending with
+    /// all `samples` done.
+    fn as_it_goes(&self, samples: usize) {
+        let within = self.0.iter().filter(|(done, total)| done < total).count();
+        assert!(within >= 10, "{:?}", self.0);
+        assert!(self.0.windows(2).all(|w| w[0].0 <= w[1].0), "{:?}", self.0);
+        assert_eq!(self.0.last(), Some(&(samples, samples)));
+    }
+}
+
+/// A comparison of one coordinate tells its progress within a range too, on a grid and off one.
+#[test]
+fn a_models_comparison_tells_its_progress_within_a_range() {
+    let x = vec![0.0; 3000];
+    let t: Vec<f64> = (0..3000)
+        .map(|i| 0.05 * i as f64 + if i % 7 == 3 { 1e-4 } else { 0.0 })
+        .collect();
+    for times in [None, Some(&t[..])] {
+        let request = CompareRequest::new(CompareOptions {
+            dt: times.is_none().then_some(0.05),
+            x0: Some(0.0.into()),
+            v0: Some(0.0.into()),
+            ..CompareOptions::default()
+        })
+        .unwrap();
+        let source = Source::Arrays {
+            coords: vec![&x],
+            t: times,
+            drives: Vec::new(),
+        };
+        let mut told = Told::default();
+        compare(&IdentifiedSystem::one(at_rest(1.0)), source, &request, &mut told).unwrap();
+        told.as_it_goes(3000);
+    }
+}
+
 /// A system's comparison tells how far its free run is as it goes, not only when a range is
 /// done: a stiff identified system can run for minutes over one range.
 #[test]
 fn a_systems_comparison_tells_its_progress_within_a_range() {
-    use hb_pipeline::{Observer, Rig};
-    #[derive(Default)]
-    struct Told(Vec<(usize, usize)>);
-    impl Observer for Told {
-        fn progress(&mut self, done: usize, total: usize) {
-            self.0.push((done, total));
-        }
-    }
+    use hb_pipeline::Rig;
     let system = double_pendulum();
     let rig = Rig::from_json(serde_json::json!({"system": "double-pendulum", "samples": 2000})).unwrap();
     let table = hb_pipeline::simulate(&rig, &mut ()).unwrap().table();
@@ -502,8 +542,5 @@ fn a_systems_comparison_tells_its_progress_within_a_range() {
     let request = CompareRequest::new(CompareOptions::default()).unwrap();
     let mut told = Told::default();
     compare(&system, source, &request, &mut told).unwrap();
-    let within: Vec<&(usize, usize)> = told.0.iter().filter(|(done, total)| done < total).collect();
-    assert!(within.len() >= 10, "{:?}", told.0);
-    assert!(told.0.windows(2).all(|w| w[0].0 <= w[1].0), "{:?}", told.0);
-    assert_eq!(told.0.last(), Some(&(2000, 2000)));
+    told.as_it_goes(2000);
 }

@@ -111,6 +111,34 @@ pub fn free_run<S: SecondOrderSystem>(
     state: [f64; 2],
     tolerances: Tolerances,
 ) -> Result<FreeRun, SimError> {
+    free_run_reporting(system, t_first, dt, count, state, tolerances, &mut |_| {})
+}
+
+/// [`free_run`], telling `progress` how many of the samples are done as it goes (at most
+/// [`PROGRESS_REPORTS`](crate::multi::PROGRESS_REPORTS) times, and once all are), as
+/// [`multi::free_run_reporting`](crate::multi::free_run_reporting) does for a system.
+///
+/// ```
+/// use pendulum_sim::{Pendulum, Tolerances, free_run_reporting};
+///
+/// let mut told = Vec::new();
+/// let run = free_run_reporting(&Pendulum::paper(), 0.0, 0.25, 400, [0.1, 0.0], Tolerances::default(), &mut |done| {
+///     told.push(done)
+/// })?;
+/// assert!(run.stopped.is_none());
+/// assert_eq!(told.last(), Some(&400));
+/// assert!(told.windows(2).all(|w| w[0] < w[1]));
+/// # Ok::<(), pendulum_sim::SimError>(())
+/// ```
+pub fn free_run_reporting<S: SecondOrderSystem>(
+    system: &S,
+    t_first: f64,
+    dt: f64,
+    count: usize,
+    state: [f64; 2],
+    tolerances: Tolerances,
+    progress: &mut dyn FnMut(usize),
+) -> Result<FreeRun, SimError> {
     if !t_first.is_finite() {
         return Err(invalid("start time", t_first, "must be finite"));
     }
@@ -128,11 +156,15 @@ pub fn free_run<S: SecondOrderSystem>(
         return Ok(FreeRun { x, v, stopped: None });
     }
     let budget = steps_for(count);
+    let every = count.div_ceil(crate::multi::PROGRESS_REPORTS).max(1);
     let outcome = Flow::new(FirstOrder(OnMode::new(system)), t_first, state, tolerances).and_then(|flow| {
         flow.with_max_steps(budget)
             .sample_grid(t_first, dt, count, |n, _, y| {
                 x[n] = y[0];
                 v[n] = y[1];
+                if (n + 1) % every == 0 || n + 1 == count {
+                    progress(n + 1);
+                }
                 std::ops::ControlFlow::Continue(())
             })
     });

@@ -125,7 +125,7 @@ pub use double_pendulum::DoublePendulum;
 pub use equations::NormalisedEquation;
 pub use error::SimError;
 pub use frame::{InFrame, RecordFrame};
-pub use free_run::{FreeRun, InitialState, fit_initial_state, free_run};
+pub use free_run::{FreeRun, InitialState, fit_initial_state, free_run, free_run_reporting};
 pub use machine::{DriveHarmonic, DriveHarmonics, Losses};
 pub use multi::{
     MAX_COORDINATES, MultiConfig, MultiFreeRun, MultiInitialState, MultiState, MultiSystem, MultiTrajectory,
