@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import pickle
+import re
 import subprocess
 
 import numpy as np
@@ -109,6 +110,12 @@ def test_several_files_are_one_fit_as_on_the_command_line(double_pendulum, cli, 
     assert json.loads(out.stdout) == joined.report
     with pytest.raises(hbid.InputError, match="nope.csv"):
         hbid.identify([csv, tmp_path / "nope.csv"], bootstrap=0, **sim.identify_options)
+    # Of several records, the one too short to resample is named, as on the command line.
+    long, short = tmp_path / "long.csv", tmp_path / "short.csv"
+    hbid.simulate(drive_frequency=1.3, sample_rate=500, samples=3000, out=long)
+    hbid.simulate(drive_frequency=1.3, sample_rate=500, samples=129, out=short)
+    with pytest.raises(hbid.IdentificationError, match="^" + re.escape(str(short)) + ": a drive period"):
+        hbid.identify([long, short], drive_frequency=1.3, bootstrap=0)
 
 
 def test_a_saved_system_round_trips_and_runs_as_the_command_line_runs_it(double_pendulum, cli):
