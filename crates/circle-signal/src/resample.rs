@@ -74,25 +74,12 @@ pub fn resample_to_whole(x: &[f64], clock: &SampleClock, domain: Domain) -> Resu
             needed: 2 * half + 2,
         });
     }
-    let out_clock = whole_clock(clock)?;
-    let ratio = out_clock.step() / clock.step();
-    let last = (n - 1 - half) as f64;
-    let count = ((last - half as f64) / ratio).floor() as usize + 1;
+    // The whole record as one piece: the same outputs, `⌊(n − 1 − 2 half) / ratio⌋ + 1` of them.
+    let whole = 0..n;
+    let mut r = resample_columns(vec![(x.to_vec(), domain)], std::slice::from_ref(&whole), clock)?;
     Ok(Resampled {
-        samples: {
-            let mut y = x.to_vec();
-            let mut samples = vec![0.0; count];
-            interpolate(
-                &mut [Detrended::new(&mut y, domain)],
-                0.0,
-                ratio,
-                &Kernel::for_ratio(ratio),
-                0..count,
-                &mut [&mut samples],
-            );
-            samples
-        },
-        clock: out_clock,
+        samples: r.columns.pop().unwrap_or_default(),
+        clock: r.clock,
     })
 }
 
