@@ -405,13 +405,53 @@ impl SimulateArgs {
 
 /// `--model`: the saved model run under the input's measured drive.
 fn run_model(args: &SimulateArgs, model: &Path, input: &Path, quiet: bool) -> anyhow::Result<()> {
+    let model = hb_pipeline::read_model(model)?;
+    // The system's state first: the request's own checks would name the library's x0 and v0.
+    check_system_state(args, model.coordinates())?;
     let request = model_request(args)?;
     check_outputs(Some(&args.out), None)?;
-    let model = hb_pipeline::read_model(model)?;
-    // A system's state is given by --q0 and --dq0 (the run's own checks name the library's x0
-    // and v0, which are one coordinate's options here).
-    let n = model.coordinates();
-    if n > 1 && args.init == Some(0) {
+    let mut console = Console::new("simulate", quiet, false);
+    let run = hb_pipeline::model_run(&model, Source::Path(input), &request, &mut console)?;
+    console.finish();
+    if let Some(why) = &run.stopped {
+        eprintln!("warning: {why}; its later samples are NaN");
+    }
+    run.write(&args.out)?;
+    Ok(())
+}
+
+/// A saved system's state with `--init 0`: both of `--q0` and `--dq0`, as many of each, one per
+/// coordinate of its `n` (the run's own checks would name the library's x0 and v0, one
+/// coordinate's options here).
+fn check_system_state(args: &SimulateArgs, n: usize) -> anyhow::Result<()> {
+    if args.init != Some(0) {
+        return Ok(());
+    }
+    match (&args.q0, &args.dq0) {
+        (Some(_), None) => {
+            return Err(
+                OptionError::new("dq0", "give the initial velocities with «q0», one per coordinate").into(),
+            );
+        }
+        (None, Some(_)) => {
+            return Err(
+                OptionError::new("q0", "give the initial positions with «dq0», one per coordinate").into(),
+            );
+        }
+        (Some(q), Some(v)) if q.0.len() != v.0.len() => {
+            return Err(OptionError::value(
+                "dq0",
+                v,
+                format!(
+                    "give as many initial velocities as positions («q0»: {})",
+                    q.0.len()
+                ),
+            )
+            .into());
+        }
+        _ => {}
+    }
+    if n > 1 {
         for (option, given) in [("q0", &args.q0), ("dq0", &args.dq0)] {
             match given {
                 None => {
@@ -435,13 +475,6 @@ fn run_model(args: &SimulateArgs, model: &Path, input: &Path, quiet: bool) -> an
             }
         }
     }
-    let mut console = Console::new("simulate", quiet, false);
-    let run = hb_pipeline::model_run(&model, Source::Path(input), &request, &mut console)?;
-    console.finish();
-    if let Some(why) = &run.stopped {
-        eprintln!("warning: {why}; its later samples are NaN");
-    }
-    run.write(&args.out)?;
     Ok(())
 }
 
@@ -460,38 +493,6 @@ fn model_request(args: &SimulateArgs) -> anyhow::Result<CompareRequest> {
     }
     let given = args.init == Some(0);
     hb_pipeline::simulate::check_model_state(&args.options(), given)?;
-    // A system's state: both of --q0 and --dq0, as many of each (the request's own check would
-    // name x0 and v0, one coordinate's options here).
-    if given {
-        match (&args.q0, &args.dq0) {
-            (Some(_), None) => {
-                return Err(OptionError::new(
-                    "dq0",
-                    "give the initial velocities with «q0», one per coordinate",
-                )
-                .into());
-            }
-            (None, Some(_)) => {
-                return Err(OptionError::new(
-                    "q0",
-                    "give the initial positions with «dq0», one per coordinate",
-                )
-                .into());
-            }
-            (Some(q), Some(v)) if q.0.len() != v.0.len() => {
-                return Err(OptionError::value(
-                    "dq0",
-                    v,
-                    format!(
-                        "give as many initial velocities as positions («q0»: {})",
-                        q.0.len()
-                    ),
-                )
-                .into());
-            }
-            _ => {}
-        }
-    }
     Ok(CompareRequest::new(CompareOptions {
         time_col: args.time_col.clone(),
         angle_col: args.angle_col.clone(),
