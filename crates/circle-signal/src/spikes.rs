@@ -18,8 +18,10 @@ use serde::{Deserialize, Serialize};
 
 use crate::{CircleError, Domain, wrap};
 
+mod clearing;
 mod stretch;
 
+use clearing::Clearing;
 use stretch::{LEVEL_BLOCK, Stretch};
 
 /// The standard deviation of a Gaussian over its median absolute value, `1 / Φ⁻¹(3/4)`.
@@ -504,6 +506,24 @@ impl<'a> IntoIterator for &'a Spikes {
 /// period, noise-free, a rejected choice was weighed 2.2 times on average before, 1.1 times now,
 /// and every flag of the tables in `docs/spikes.md` is as it was.
 ///
+/// Most such peaks are not weighed at all: before its peak is looked for, a sample is passed
+/// (the sweep goes on from the next one) when no repair the search from it could choose would
+/// clear, those starting up to four recentrings (24 samples with the default runs) from the
+/// samples its peak can be at. That is decided for every repair at once, in closed form, on the
+/// record unwrapped locally: a repair moves its samples to their prediction and the residuals
+/// within two samples by those moves times their weights in the predictions (`1`, `−2/3`,
+/// `1/6`), and before that its gain is bounded by the squared distance of the residuals it
+/// reaches to a cubic, from their fourth differences (no move of its samples takes more from
+/// their energy: a move's residuals are orthogonal to the cubics there). On that record one
+/// repair in a thousand could clear, and the search takes 0.07 s per 10⁶ samples of an angle
+/// instead of 0.19 s. Where a step exceeds a quarter turn or a residual a radian, near the ends
+/// of the record, and within rounding (a millionth of the energy and a thousand times the
+/// rounding of the values), a repair counts as one that could clear. Where noise surrounds the
+/// samples, nearly half of the repairs could, and the test is work in vain: after eight samples
+/// that needed new tests and found a repair that could clear, none passed between them, the next
+/// 64 are searched without it. A sample so passed can flag nothing, and every flag of `docs/spikes.md` and of the
+/// tests is as it was without the test.
+///
 /// A repair moves sample `j` by minus the residual its clean value would have had, which is at
 /// most its threshold `g_j T_j`, and that enters sample `i`'s residual with the weight `c_ij` of
 /// `x_j` in `p_i` (`2/3` and `1/6` inside the record); so a sample whose prediction holds repaired
@@ -631,8 +651,12 @@ fn check_searchable(x: &[f64]) -> Result<(), CircleError> {
 }
 
 /// The search of [`find_and_repair_spikes`] on a record it takes, with or without the
-/// `shortcuts` that spare it work (the same outliers either way; the tests compare them): the
-/// outliers, and the values of the samples it replaced.
+/// `shortcuts` that spare it work: the outliers, and the values of the samples it replaced. The
+/// held residuals and ranked windows change nothing; the pass of samples from which no repair
+/// could clear (see "Isolating the outlier" on [`find_spikes`]) flags nothing at those samples
+/// but goes on from the next sample where the full search of a rejected peak goes on past it,
+/// so it could in principle change what a later sample finds. The tests compare the outliers
+/// with and without them: the same, to the bit, on every record they hold.
 fn search(
     x: &mut [f64],
     domain: Domain,
@@ -879,6 +903,12 @@ struct Search<'a, G> {
     originals: Vec<(usize, f64)>,
     /// The statistics and the local scale's levels of the stretch being swept.
     stretch: Stretch,
+    /// Per sample: whether a repair starting there could clear the residuals around it.
+    clearing: Clearing,
+    /// Samples that needed new tests in vain since the last passed, and samples left to search
+    /// without the test.
+    in_vain: usize,
+    untested: usize,
     /// Per use ([`SEARCHING`] or [`PEAK`]) and width of a statistic: the window last ranked for
     /// its local scale and its largest levels, which the next window, mostly the same positions,
     /// is ranked from (none after a repair).
@@ -1036,6 +1066,9 @@ impl<'a, G: Geometry> Search<'a, G> {
             spikes: Vec::new(),
             originals: Vec::new(),
             stretch: Stretch::new(n, max_run),
+            clearing: Clearing::new(n, max_run),
+            in_vain: 0,
+            untested: 0,
             ranked: [[None; MAX_RUN]; 2],
             held: vec![(usize::MAX, Held::default()); HELD],
             repaired: vec![(usize::MAX, [0.0; MAX_RUN + 4]); HELD * MAX_RUN],
@@ -1383,6 +1416,7 @@ impl<'a, G: Geometry> Search<'a, G> {
         self.originals.push((i, self.x[i]));
         self.x[i] = replacement;
         self.stretch.patch::<G>(self.x, i, i);
+        self.clearing.changed(i);
         self.flagged[i / 64] |= 1 << (i % 64);
         self.held.fill((usize::MAX, Held::default()));
         self.repaired.fill((usize::MAX, [0.0; MAX_RUN + 4]));
@@ -1685,6 +1719,44 @@ impl<'a, G: Geometry> Search<'a, G> {
         to
     }
 
+    /// Whether no repair that the search from sample `i` can choose could clear the residuals
+    /// around it (see [`could_clear_near`](Self::could_clear_near)), where that is worth
+    /// testing: after [`TESTS_IN_VAIN`] samples that needed new tests and found a repair that
+    /// could, none passed between them, the next [`UNTESTED`] samples are searched without the
+    /// test (where noise surrounds the samples, nearly half of the repairs could clear, and the
+    /// test is work in vain).
+    fn hopeless(&mut self, i: usize) -> bool {
+        if self.untested > 0 {
+            self.untested -= 1;
+            return false;
+        }
+        let (could, tested) = self.could_clear_near(i);
+        if could {
+            // Work in vain where the test had to be made.
+            if tested {
+                self.in_vain += 1;
+                if self.in_vain == TESTS_IN_VAIN {
+                    (self.in_vain, self.untested) = (0, UNTESTED);
+                }
+            }
+            return false;
+        }
+        self.in_vain = 0;
+        true
+    }
+
+    /// Whether a repair that the search from sample `i` can choose could clear the residuals
+    /// around it: those starting up to [`RECENTRE`] recentrings away from the samples its peak
+    /// can be at.
+    fn could_clear_near(&mut self, i: usize) -> (bool, bool) {
+        let drift = RECENTRE * (2 + 2 * (self.max_run - 1));
+        let (from, to) = (
+            i.saturating_sub(drift),
+            i + PEAK_SEARCH + self.max_run - 1 + drift,
+        );
+        self.clearing.could_clear::<G>(self.x, from, to)
+    }
+
     /// One sweep of samples `from .. to`.
     fn sweep(&mut self, from: usize, to: usize) {
         let n = self.x.len();
@@ -1696,6 +1768,10 @@ impl<'a, G: Geometry> Search<'a, G> {
             i = self.next_exceeding(i, to);
             if i == to {
                 break;
+            }
+            if self.shortcuts && self.hopeless(i) {
+                i += 1;
+                continue;
             }
             let stats = self.statistics(i);
             // The outlier that makes a statistic of sample i exceed is where the statistics
@@ -1805,6 +1881,13 @@ impl<'a, G: Geometry> Search<'a, G> {
 /// in a thousand, in squared standard deviations of the residual: the 0.999 quantile of χ² with
 /// one degree of freedom.
 const RUN_PENALTY: f64 = 10.83;
+
+/// Samples that needed new tests and found a repair that could clear, none passed between them,
+/// after which the test is left out for a while.
+const TESTS_IN_VAIN: usize = 8;
+
+/// Samples searched without the test after [`TESTS_IN_VAIN`] in a row where it was in vain.
+const UNTESTED: usize = 64;
 
 /// Half the local scale's window, in positions.
 const LOCAL_HALF_WINDOW: usize = 48;
@@ -2498,6 +2581,151 @@ mod tests {
                 assert_eq!(fast.to_bits(), naive.to_bits(), "at {at}, {len} replaced");
             }
         }
+    }
+
+    /// Every repair whose clearing the search measures (its energy after the repair over its
+    /// footprint, by [`Search::energy_after_repair`] on the record changed and put back) is one
+    /// the closed form says could clear; returns the repairs tested, those that clear, and the
+    /// starts the closed form marks without a repair that clears.
+    fn check_clearing<G: Geometry>(x: &mut [f64], max_run: usize, what: &str) -> (usize, usize, usize) {
+        let n = x.len();
+        let mut search = bare_search::<G>(x, max_run);
+        search.shortcuts = false;
+        let (mut tested, mut clear, mut marked_in_vain) = (0, 0, 0);
+        for a in 2..n - 2 {
+            let mut any = false;
+            for len in 1..=max_run {
+                let c = Candidate { start: a, len };
+                if len > 1 && c.end() + 3 > n {
+                    continue;
+                }
+                let window = footprint(n, (a.saturating_sub(2), (c.end() + 2).min(n - 1)));
+                let before = search.energy(window);
+                let after = search.energy_after_repair(c, window);
+                tested += 1;
+                if after <= CLEARED * before {
+                    clear += 1;
+                    any = true;
+                }
+            }
+            let marked = search.clearing.could_clear::<G>(search.x, a, a).0;
+            assert!(marked || !any, "{what}: sample {a} clears but is not marked");
+            if marked && !any && (10..n - 10 - max_run).contains(&a) {
+                marked_in_vain += 1;
+            }
+        }
+        (tested, clear, marked_in_vain)
+    }
+
+    #[test]
+    fn the_repairs_that_could_clear_are_found_in_closed_form() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(23);
+        let n = 6000;
+        let h = TAU / 64.0;
+        // Sharp turns (some repairs of runs clear), with spikes and a dropout; noise on the
+        // line (nearly half clear); an encoder's counts.
+        let mut turns: Vec<f64> = (0..n)
+            .map(|i| {
+                let t = i as f64 * h;
+                wrap(t + 2.0 * (3.0 * t.sin()).tanh())
+            })
+            .collect();
+        let smooth = turns.clone();
+        for j in (100..n).step_by(397) {
+            turns[j] = wrap(turns[j] + 0.05 * (j % 7) as f64 - 0.15);
+        }
+        turns[3000..3003].fill(0.0);
+        let noise: Vec<f64> = (0..n)
+            .map(|i| 0.4 * (i as f64 * 0.05).sin() + 1e-3 * (rng.random::<f64>() - 0.5))
+            .collect();
+        let q = TAU / 4096.0;
+        let counts: Vec<f64> = (0..n)
+            .map(|i| {
+                let t = i as f64 * TAU / 100.0;
+                wrap(((t + 0.6 * t.sin()) / q).round() * q)
+            })
+            .collect();
+        for max_run in [1, 3, MAX_RUN] {
+            // Where no step nears a quarter turn, the closed form marks exactly the samples
+            // whose repairs clear.
+            let (_, clear, in_vain) =
+                check_clearing::<OnCircle>(&mut smooth.clone(), max_run, "smooth turns");
+            assert!(
+                clear > 0 && in_vain == 0,
+                "smooth turns: {clear} clear, {in_vain} in vain"
+            );
+            let (tested, clear, in_vain) = check_clearing::<OnLine>(&mut noise.clone(), max_run, "noise");
+            assert!(
+                clear > tested / 10 && in_vain == 0,
+                "noise: {clear} of {tested}, {in_vain}"
+            );
+            // With spikes beside steps of 0.7 rad, and a dropout, some blocks hold steps of more
+            // than a quarter turn: all their samples are marked.
+            let (tested, clear, in_vain) = check_clearing::<OnCircle>(&mut turns.clone(), max_run, "turns");
+            assert!(
+                clear > 0 && clear < tested / 20,
+                "turns: {clear} of {tested} clear"
+            );
+            assert!(in_vain <= 64 * 17, "turns: {in_vain} marked in vain");
+            check_clearing::<OnCircle>(&mut counts.clone(), max_run, "counts");
+        }
+    }
+
+    /// The bound of a repair's gain by the residuals' distance to a cubic: the inverse Gram
+    /// matrices are inverses, and no move of a run's samples takes more from the energy of the
+    /// residuals they reach.
+    #[test]
+    fn no_repair_takes_more_than_the_distance_to_a_cubic() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        for m in 1..=MAX_RUN {
+            let g = clearing::inverse_gram(m);
+            // The residuals of m + 4 samples moved by `moves` at samples 2 ..= m + 1 of them.
+            for _ in 0..2000 {
+                let r: Vec<f64> = (0..m + 4).map(|_| rng.random::<f64>() - 0.5).collect();
+                let moves: Vec<f64> = (0..m).map(|_| 2.0 * rng.random::<f64>() - 1.0).collect();
+                let fourth: Vec<f64> = (2..m + 2)
+                    .map(|k| r[k - 2] + r[k + 2] - 4.0 * (r[k - 1] + r[k + 1]) + 6.0 * r[k])
+                    .collect();
+                let most: f64 = (0..m)
+                    .map(|i| fourth[i] * (0..m).map(|j| g[i][j] * fourth[j]).sum::<f64>())
+                    .sum();
+                let gain: f64 = (0..m + 4)
+                    .map(|k| {
+                        let moved = r[k]
+                            + (0..m)
+                                .map(|p| weight_of(k.abs_diff(p + 2)) * moves[p])
+                                .sum::<f64>();
+                        r[k] * r[k] - moved * moved
+                    })
+                    .sum();
+                assert!(gain <= most * (1.0 + 1e-12) + 1e-15, "m {m}: {gain} > {most}");
+            }
+            // The best move attains it: the residuals of a spike (or run) alone are cleared.
+            let mut r = vec![0.0; m + 4];
+            for p in 0..m {
+                for (k, v) in r.iter_mut().enumerate() {
+                    *v -= weight_of(k.abs_diff(p + 2)) * (p as f64 + 1.0);
+                }
+            }
+            let fourth: Vec<f64> = (2..m + 2)
+                .map(|k| r[k - 2] + r[k + 2] - 4.0 * (r[k - 1] + r[k + 1]) + 6.0 * r[k])
+                .collect();
+            let most: f64 = (0..m)
+                .map(|i| fourth[i] * (0..m).map(|j| g[i][j] * fourth[j]).sum::<f64>())
+                .sum();
+            let energy: f64 = r.iter().map(|v| v * v).sum();
+            assert!(
+                (most - energy).abs() <= 1e-9 * energy,
+                "m {m}: {most} against {energy}"
+            );
+        }
+    }
+
+    /// The weight of a move of a sample `d` away in a residual.
+    fn weight_of(d: usize) -> f64 {
+        [1.0, -2.0 / 3.0, 1.0 / 6.0].get(d).copied().unwrap_or(0.0)
     }
 
     #[test]
