@@ -132,27 +132,31 @@ impl Clearing {
         // and the two samples beyond those that their predictions read.
         let lo = lo_start - REACH - 2;
         let hi = hi_start + max_run - 1 + REACH + 2;
-        let u = &mut self.unwrapped;
-        u.clear();
-        u.push(x[lo]);
-        let mut steep = false;
-        for k in lo + 1..=hi {
-            let step = G::diff(x[k] - x[k - 1]);
-            steep |= G::DOMAIN == crate::Domain::Circle && step.abs() > PI / 4.0;
-            let last = u[u.len() - 1];
-            u.push(last + step);
+        let len = hi + 1 - lo;
+        let circle = G::DOMAIN == crate::Domain::Circle;
+        self.unwrapped.resize(len, 0.0);
+        let u = &mut self.unwrapped[..len];
+        let (mut at, mut steep) = (x[lo], false);
+        u[0] = at;
+        for (slot, w) in u[1..].iter_mut().zip(x[lo..=hi].windows(2)) {
+            let step = G::diff(w[1] - w[0]);
+            steep |= circle && step.abs() > PI / 4.0;
+            at += step;
+            *slot = at;
         }
-        if steep || u.iter().any(|v| !v.is_finite()) {
+        if steep || !at.is_finite() || u.iter().any(|v| !v.is_finite()) {
             return all(first, end);
         }
-        let r = &mut self.residuals;
-        r.clear();
-        r.resize(hi + 1 - lo, 0.0);
-        for k in 2..=hi - lo - 2 {
-            r[k] = u[k] - (4.0 * (u[k - 1] + u[k + 1]) - u[k - 2] - u[k + 2]) / 6.0;
+        self.residuals.resize(len, 0.0);
+        let r = &mut self.residuals[..len];
+        // The first and last two have no centred residual here (nothing reads them).
+        for k in [0, 1, len - 2, len - 1] {
+            r[k] = 0.0;
         }
-        let circle = G::DOMAIN == crate::Domain::Circle;
-        if circle && r[2..=hi - lo - 2].iter().any(|v| v.abs() > 1.0) {
+        for (k, w) in (2..).zip(u.windows(5)) {
+            r[k] = w[2] - (4.0 * (w[1] + w[3]) - w[0] - w[4]) / 6.0;
+        }
+        if circle && r[2..len - 2].iter().any(|v| v.abs() > 1.0) {
             return all(first, end);
         }
         let scale = u.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
@@ -160,32 +164,39 @@ impl Clearing {
         let tol = 1e3 * 16.0 * f64::EPSILON * (1.0 + scale);
         // The residuals' energies from the first (as sums from it), and their fourth
         // differences where the tested repairs reach.
-        let energy = &mut self.energies;
-        energy.clear();
-        energy.push(0.0);
-        for &v in r.iter() {
-            let last = energy[energy.len() - 1];
-            energy.push(last + v * v);
+        self.energies.resize(len + 1, 0.0);
+        let mut sum = 0.0;
+        for (e, &v) in self.energies[1..].iter_mut().zip(r.iter()) {
+            sum += v * v;
+            *e = sum;
         }
-        let fourth = &mut self.fourth;
-        fourth.clear();
-        fourth.resize(r.len(), 0.0);
-        for k in REACH..r.len() - REACH {
-            fourth[k] = r[k - 2] + r[k + 2] - 4.0 * (r[k - 1] + r[k + 1]) + 6.0 * r[k];
+        self.fourth.resize(len, 0.0);
+        for (k, w) in (2..).zip(r.windows(5)) {
+            self.fourth[k] = w[0] + w[4] - 4.0 * (w[1] + w[3]) + 6.0 * w[2];
         }
         let grams = &*INVERSE_GRAMS;
+        let most = |s: usize, len: usize| -> f64 {
+            let (e, g) = (&self.fourth[s..s + len], &grams[len - 1]);
+            (0..len)
+                .map(|i| e[i] * (0..len).map(|j| g[i][j] * e[j]).sum::<f64>())
+                .sum()
+        };
+        // Below this energy the slack's margin grows faster than half the energy.
+        let settled_above = (128.0 * tol) * (128.0 * tol);
         let mut bits = bits;
         for a in from..to {
             let s = a - lo;
+            // The longest run's bound holds every shorter one's (their residuals are a part of
+            // its), and the single sample's energy is the least (its window is a part of every
+            // longer one's): most repairs from `a` are settled at once.
+            let least = self.energies[s + 1 + REACH] - self.energies[s - REACH];
+            if least > settled_above && most(s, max_run) < (1.0 - CLEARED) * least - slack(least, tol) {
+                continue;
+            }
             for len in 1..=max_run {
                 let before = self.energies[s + len + REACH] - self.energies[s - REACH];
-                let e = &self.fourth[s..s + len];
-                let g = &grams[len - 1];
-                let most: f64 = (0..len)
-                    .map(|i| e[i] * (0..len).map(|j| g[i][j] * e[j]).sum::<f64>())
-                    .sum();
                 let slack = slack(before, tol);
-                if most >= (1.0 - CLEARED) * before - slack
+                if most(s, len) >= (1.0 - CLEARED) * before - slack
                     && self.repair_clears(s, len, circle, before, slack)
                 {
                     bits |= 1 << (a - first);
