@@ -1028,15 +1028,20 @@ fn fill_block<B: Basis + ?Sized>(
                     (Some(j), Some(second)) => {
                         // ∫ψ f q_j'' = −∫ψ' f q_j' − ∫ψ (df/dt) q_j': `out` holds f times the
                         // factors so far and `second` its rate, by the product rule.
-                        for n in 0..samples {
-                            let (phi, dphi) = table.at(n);
-                            let (f, df) = match term.position {
-                                PositionFactor::One => (1.0, 0.0),
-                                PositionFactor::Basis(i) => (phi[i], dphi[i]),
-                                PositionFactor::Linear => (raw[n], 1.0),
-                            };
-                            out[n] = f;
-                            second[n] = df * xdot[n];
+                        let mut start = |f: &dyn Fn(usize) -> (f64, f64)| {
+                            for (n, (g, rate)) in out.iter_mut().zip(second.iter_mut()).enumerate() {
+                                let (f, df) = f(n);
+                                *g = f;
+                                *rate = df * xdot[n];
+                            }
+                        };
+                        match term.position {
+                            PositionFactor::One => start(&|_| (1.0, 0.0)),
+                            PositionFactor::Basis(i) => start(&|n| {
+                                let (phi, dphi) = table.at(n);
+                                (phi[i], dphi[i])
+                            }),
+                            PositionFactor::Linear => start(&|n| (raw[n], 1.0)),
                         }
                         for factor in factors.iter().filter(|r| r.positional()) {
                             factor.fold_with_rate(&q, &v, &held_of, out, second);
@@ -1047,20 +1052,18 @@ fn fill_block<B: Basis + ?Sized>(
                         }
                     }
                     _ => {
-                        for n in 0..samples {
-                            let (d, _) = drive(term, n);
-                            let f = match term.position {
-                                PositionFactor::One => 1.0,
-                                PositionFactor::Basis(i) => table.at(n).0[i],
-                                PositionFactor::Linear => raw[n],
-                            };
-                            let own_v = match term.velocity {
-                                VelocityFactor::One => 1.0,
-                                VelocityFactor::Sign => cell_sign(xdot, n, false),
-                                velocity => velocity.eval(xdot[n]),
-                            };
-                            out[n] = d * f * own_v;
+                        // `d · f · v` of the drive, the own position and velocity factors, each
+                        // in a loop of its own (a factor 1 leaves the product as it is).
+                        match term.drive {
+                            DriveFactor::One => out.fill(1.0),
+                            _ => fill(out, &|n| drive(term, n).0),
                         }
+                        match term.position {
+                            PositionFactor::One => {}
+                            PositionFactor::Basis(i) => scale(out, &|n| table.at(n).0[i]),
+                            PositionFactor::Linear => scale(out, &|n| raw[n]),
+                        }
+                        scale_by(out, xdot, term.velocity);
                         for factor in factors {
                             factor.fold(&q, &v, &held_of, out);
                         }
@@ -1166,6 +1169,34 @@ fn fill(out: &mut [f64], f: &dyn Fn(usize) -> f64) {
     }
 }
 
+/// Multiplies every entry `n` of `out` by `f(n)`, in one loop (`f` through a pointer, as in
+/// [`fill`]).
+fn scale(out: &mut [f64], f: &dyn Fn(usize) -> f64) {
+    for (n, o) in out.iter_mut().enumerate() {
+        *o *= f(n);
+    }
+}
+
+/// Multiplies every entry `n` of `out` by `function` of the velocity `v` at sample `n` (the
+/// sign averaged over the sample's cell, [`cell_sign`]), one loop per function (chosen once,
+/// not at every sample).
+fn scale_by(out: &mut [f64], v: &[f64], function: VelocityFactor) {
+    #[inline(always)]
+    fn each(out: &mut [f64], v: &[f64], f: impl Fn(f64) -> f64) {
+        for (o, &v) in out.iter_mut().zip(v) {
+            *o *= f(v);
+        }
+    }
+    match function {
+        VelocityFactor::One => {}
+        VelocityFactor::Linear => each(out, v, |v| v),
+        VelocityFactor::Square => each(out, v, |v| VelocityFactor::Square.eval(v)),
+        VelocityFactor::Cubic => each(out, v, |v| VelocityFactor::Cubic.eval(v)),
+        VelocityFactor::Quadratic => each(out, v, |v| VelocityFactor::Quadratic.eval(v)),
+        VelocityFactor::Sign => scale(out, &|n| cell_sign(v, n, false)),
+    }
+}
+
 /// A window's samples of each coordinate (its positions, or its velocities), by coordinate.
 type Series8<'a> = [&'a [f64]; MAX_COORDINATES];
 
@@ -1249,6 +1280,7 @@ impl Resolved {
                     }
                 }
             }
+            Resolved::Velocity { coordinate, function } => scale_by(g, v[coordinate], function),
             _ => {
                 let held = |arg: usize, n: usize| held(arg)[n];
                 for (n, g) in g.iter_mut().enumerate() {
@@ -1268,6 +1300,29 @@ impl Resolved {
         g: &mut [f64],
         rate: &mut [f64],
     ) {
+        if let Resolved::Trig {
+            arg,
+            sine,
+            terms,
+            count,
+        } = *self
+        {
+            // `value` and `rate` of a sine or cosine, the kind chosen once.
+            let values = &held(arg)[..g.len()];
+            for (n, ((g, rate), &(sin, cos))) in g.iter_mut().zip(rate.iter_mut()).zip(values).enumerate() {
+                let value = if sine { sin } else { cos };
+                let d: f64 = terms[..count]
+                    .iter()
+                    .map(|&(c, a)| {
+                        let dq = if sine { a * cos } else { -a * sin };
+                        dq * v[c][n]
+                    })
+                    .sum();
+                *rate = *rate * value + *g * d;
+                *g *= value;
+            }
+            return;
+        }
         let held = |arg: usize, n: usize| held(arg)[n];
         for (n, (g, rate)) in g.iter_mut().zip(rate.iter_mut()).enumerate() {
             let value = self.value(q, v, n, &held);
