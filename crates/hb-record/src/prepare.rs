@@ -716,7 +716,13 @@ pub fn condition(
     // The drives' and further coordinates' samples follow the record's in order: every sample
     // read and kept (not in an unsettled run at an end) is in a piece, the pieces in the order
     // of the samples.
+    let whole = pieces.len() == 1 && pieces[0] == (0..x.len());
     let on_grid = |read: Vec<f64>| {
+        // A record without gaps, every row read kept: the column is its grid as it is (no
+        // copy, as for the first coordinate's).
+        if whole && read_kept == (0..read.len()) && read.len() == x.len() {
+            return read;
+        }
         let mut out = vec![f64::NAN; x.len()];
         let mut next = read.into_iter().skip(read_kept.start).take(read_kept.len());
         for r in &pieces {

@@ -153,8 +153,10 @@ impl Clearing {
         for k in [0, 1, len - 2, len - 1] {
             r[k] = 0.0;
         }
+        // (A sixth by multiplication: these residuals are within rounding of the search's,
+        // which `tol` allows for.)
         for (k, w) in (2..).zip(u.windows(5)) {
-            r[k] = w[2] - (4.0 * (w[1] + w[3]) - w[0] - w[4]) / 6.0;
+            r[k] = w[2] - (4.0 * (w[1] + w[3]) - w[0] - w[4]) * (1.0 / 6.0);
         }
         if circle && r[2..len - 2].iter().any(|v| v.abs() > 1.0) {
             return all(first, end);
@@ -174,6 +176,17 @@ impl Clearing {
         for (k, w) in (2..).zip(r.windows(5)) {
             self.fourth[k] = w[0] + w[4] - 4.0 * (w[1] + w[3]) + 6.0 * w[2];
         }
+        // The longest run's bound holds every shorter one's (their residuals are a part of its),
+        // and the single sample's energy is the least (its window is a part of every longer
+        // one's): most starts are settled at once, the others tested run by run.
+        let (fourth, energies) = (&self.fourth[..], &self.energies[..]);
+        let starts = (from - lo, to - lo);
+        let open = match max_run {
+            1 => screen::<1>(fourth, energies, starts, tol),
+            2 => screen::<2>(fourth, energies, starts, tol),
+            3 => screen::<3>(fourth, energies, starts, tol),
+            _ => screen::<MAX_RUN>(fourth, energies, starts, tol),
+        };
         let grams = &*INVERSE_GRAMS;
         let most = |s: usize, len: usize| -> f64 {
             let (e, g) = (&self.fourth[s..s + len], &grams[len - 1]);
@@ -181,25 +194,19 @@ impl Clearing {
                 .map(|i| e[i] * (0..len).map(|j| g[i][j] * e[j]).sum::<f64>())
                 .sum()
         };
-        // Below this energy the slack's margin grows faster than half the energy.
-        let settled_above = (128.0 * tol) * (128.0 * tol);
         let mut bits = bits;
-        for a in from..to {
-            let s = a - lo;
-            // The longest run's bound holds every shorter one's (their residuals are a part of
-            // its), and the single sample's energy is the least (its window is a part of every
-            // longer one's): most repairs from `a` are settled at once.
-            let least = self.energies[s + 1 + REACH] - self.energies[s - REACH];
-            if least > settled_above && most(s, max_run) < (1.0 - CLEARED) * least - slack(least, tol) {
-                continue;
-            }
+        let mut open = open;
+        while open != 0 {
+            let k = open.trailing_zeros() as usize;
+            open &= open - 1;
+            let s = from - lo + k;
             for len in 1..=max_run {
                 let before = self.energies[s + len + REACH] - self.energies[s - REACH];
                 let slack = slack(before, tol);
                 if most(s, len) >= (1.0 - CLEARED) * before - slack
                     && self.repair_clears(s, len, circle, before, slack)
                 {
-                    bits |= 1 << (a - first);
+                    bits |= 1 << (from + k - first);
                     break;
                 }
             }
@@ -241,6 +248,26 @@ impl Clearing {
         }
         after <= CLEARED * before + slack
     }
+}
+
+/// The starts `starts.0 .. starts.1` (in the scratch; at most 64) whose repairs, of up to `M`
+/// samples, are not settled by the bound of the longest run against the single sample's energy,
+/// as bits from the first: in one loop without branches over the starts.
+fn screen<const M: usize>(fourth: &[f64], energies: &[f64], starts: (usize, usize), tol: f64) -> u64 {
+    let g = INVERSE_GRAMS[M - 1];
+    // Below this energy the slack's margin grows faster than half the energy.
+    let settled_above = (128.0 * tol) * (128.0 * tol);
+    let mut open = 0u64;
+    for s in starts.0..starts.1 {
+        let least = energies[s + 1 + REACH] - energies[s - REACH];
+        let e: [f64; M] = std::array::from_fn(|i| fourth[s + i]);
+        let most: f64 = (0..M)
+            .map(|i| e[i] * (0..M).map(|j| g[i][j] * e[j]).sum::<f64>())
+            .sum();
+        let settled = least > settled_above && most < (1.0 - CLEARED) * least - slack(least, tol);
+        open |= u64::from(!settled) << (s - starts.0);
+    }
+    open
 }
 
 /// What rounding can make of an energy `e` of residuals each within `tol` of its value, and of

@@ -7,9 +7,10 @@
 //! at each position, 16 partners per level, three selections. Where the smooth motion's own
 //! residual stands out of its block (the paper's noise-free chaotic record at 25 samples per
 //! period: a fifth of its samples) that was `3.2 · 10¹⁰` instructions, seconds, per 10⁶ samples
-//! (`docs/spikes.md`). Here each residual,
-//! statistic and level is computed once per stretch of a few thousand samples; the partners'
-//! maxima by a sliding maximum; and a lower bound of the local scale, the `r`-th largest of the
+//! (`docs/spikes.md`). Here each residual and
+//! statistic is computed once per stretch of a few thousand samples, and each level once, where
+//! a window asks for it (with a few hundred positions ahead); the partners' maxima by a sliding
+//! maximum; and a lower bound of the local scale, the `r`-th largest of the
 //! maxima of the blocks of [`LEVEL_BLOCK`] levels inside the window (`r` of those blocks hold `r`
 //! distinct levels at least that large), settles most of those samples without a selection.
 
@@ -20,6 +21,10 @@ pub(super) const LEVEL_BLOCK: usize = 8;
 
 /// Positions a stretch spans past the ones asked for (the sweep moves forward).
 const AHEAD: usize = 4096;
+
+/// Positions past the ones asked for whose levels are computed with them (the sweep moves
+/// forward).
+const LEVELS_AHEAD: usize = 256;
 
 /// Positions a stretch starts before the ones asked for: the sweep steps back to two samples
 /// before a repair, and a local window reaches about fifty positions behind its outlier.
@@ -42,7 +47,10 @@ pub(super) struct Stretch {
     /// The last position a stretch need reach for the current sweep (exclusive).
     horizon: usize,
     stats: Vec<[f64; MAX_RUN]>,
-    levels_ready: bool,
+    /// The positions `from .. to` whose levels (and the maxima of the blocks in them) are
+    /// computed: inside the level range, every block of [`LEVEL_BLOCK`] positions they touch
+    /// whole (as far as the level range goes). Empty when none are.
+    computed: (usize, usize),
     /// Per position from `lo` (valid in [`level_range`](Self::level_range)).
     levels: Vec<[f64; MAX_RUN]>,
     /// Per block of [`LEVEL_BLOCK`] positions from `lo / LEVEL_BLOCK`: the largest level of the
@@ -67,7 +75,7 @@ impl Stretch {
             hi: 0,
             horizon: n,
             stats: Vec::new(),
-            levels_ready: false,
+            computed: (0, 0),
             levels: Vec::new(),
             maxima: Vec::new(),
             residuals: Vec::new(),
@@ -108,23 +116,43 @@ impl Stretch {
         (self.lo, &self.stats)
     }
 
-    /// Makes the levels of positions `a ..= b` (and their blocks' maxima) available.
+    /// Makes the levels of positions `a ..= b` (and their blocks' maxima) available: computed
+    /// where they are asked for, with [`LEVELS_AHEAD`] positions more (a sweep asks for the
+    /// windows of samples here and there; computing the whole stretch's levels at the first
+    /// such sample cost a double pendulum's search an eighth of its time).
     pub(super) fn ensure_levels<G: Geometry>(&mut self, x: &[f64], a: usize, b: usize) {
         let (lo, hi) = self.level_range();
         if a < lo || b >= hi {
             self.refill::<G>(x, a, b);
         }
-        if !self.levels_ready {
-            let (lo, hi) = self.level_range();
-            self.compute_levels(lo, hi);
-            self.levels_ready = true;
+        let (lo, hi) = self.level_range();
+        let (from, to) = self.computed;
+        if from <= a && b < to {
+            return;
+        }
+        // Whole blocks, within the level range.
+        let down = |p: usize| (p / LEVEL_BLOCK * LEVEL_BLOCK).max(lo);
+        let up = |p: usize| p.div_ceil(LEVEL_BLOCK).saturating_mul(LEVEL_BLOCK).min(hi);
+        let (want_from, want_to) = (down(a), up(b + 1 + LEVELS_AHEAD));
+        if from < to && want_from <= to && from <= want_to {
+            // Next to the levels computed: the missing parts.
+            if want_from < from {
+                self.compute_levels(want_from, from);
+            }
+            if to < want_to {
+                self.compute_levels(to, want_to);
+            }
+            self.computed = (from.min(want_from), to.max(want_to));
+        } else {
+            self.compute_levels(want_from, want_to);
+            self.computed = (want_from, want_to);
         }
     }
 
     /// Whether the levels of positions `a ..= b` are held.
     pub(super) fn holds_levels(&self, a: usize, b: usize) -> bool {
-        let (lo, hi) = self.level_range();
-        self.levels_ready && lo <= a && b < hi
+        let (from, to) = self.computed;
+        from <= a && b < to
     }
 
     /// The levels of positions `from .. to` (made available by
@@ -192,7 +220,7 @@ impl Stretch {
             self.stats
                 .extend((lo..hi).map(|p| statistics(&self.residuals, lo, p, n, self.max_run)));
         }
-        self.levels_ready = false;
+        self.computed = (0, 0);
     }
 
     /// Samples `a ..= b` of `x` were changed: the statistics and levels they reach are
@@ -211,15 +239,15 @@ impl Stretch {
         for p in from..=to {
             self.stats[p - self.lo] = statistics(&self.residuals, from, p, n, self.max_run);
         }
-        if self.levels_ready {
-            let (lo, hi) = self.level_range();
-            let (pa, pb) = (
-                from.saturating_sub(self.margin).max(lo),
-                (to + 1 + self.margin).min(hi),
-            );
-            if pa < pb {
-                self.compute_levels(pa, pb);
-            }
+        // The levels computed that these statistics reach (the computed range holds whole
+        // blocks, so the blocks' maxima read only levels computed).
+        let (lo, hi) = self.computed;
+        let (pa, pb) = (
+            from.saturating_sub(self.margin).max(lo),
+            (to + 1 + self.margin).min(hi),
+        );
+        if pa < pb {
+            self.compute_levels(pa, pb);
         }
     }
 
