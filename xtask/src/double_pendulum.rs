@@ -439,6 +439,14 @@ fn validate(
             points: section_of(&m.system, START)?,
         });
     }
+    // Each model from the floor's start too: another draw of its section (after the models', which
+    // the figures take in order).
+    for m in models {
+        sections.push(Section {
+            label: format!("{} from ({}, {})", m.label, FLOOR_START[0], FLOOR_START[1]),
+            points: section_of(&m.system, FLOOR_START)?,
+        });
+    }
     // The held-out continuation.
     let clock = SampleClock::nondimensional(P)?.with_start_time(run.t[n])?;
     let record =
@@ -524,7 +532,16 @@ fn validation_text(
             Err(why) => writeln!(report, "| {} | its simulation stopped: {why} | | |", s.label)?,
         }
     }
-    writeln!(report)?;
+    writeln!(
+        report,
+        "\nThe free runs are chaotic: a system run from another start, or with its coefficients changed in \
+         their last digits, follows another trajectory on its attractor, and its section is another draw of {} \
+         points. The rows \"from ({}, {})\" are such draws, the truth's and each system's: how far a system's \
+         two distances lie apart is how far these figures can move without any change of the system. They tell \
+         a system whose sections differ (distances many times those) from one whose sections cannot be told \
+         apart; the coefficients' errors above are the finer measure.\n",
+        plan.section_points, FLOOR_START[0], FLOOR_START[1]
+    )?;
     let first = &v.prediction[0].1;
     writeln!(
         report,

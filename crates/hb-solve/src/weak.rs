@@ -329,10 +329,16 @@ struct Windows {
     /// Per coordinate: the velocity harmonics its velocity was estimated with, and the velocity.
     v: Vec<(Option<usize>, Vec<f64>)>,
     /// The first `trig_made` entries: a combination of the coordinates and its `(sin, cos)` at
-    /// every sample of the segment, made from the windows (the equations of a double pendulum
-    /// both read `theta1 − theta2`).
+    /// every sample of the segment (the equations of a double pendulum both read
+    /// `theta1 − theta2`), of the samples as recorded (wrapped on the circle): the values of a
+    /// sample depend on that sample alone, whatever window holds it.
     trig: Vec<(Combination, Vec<(f64, f64)>)>,
     trig_made: usize,
+    /// The same of the segment before (start, samples), whose samples the next one shares (the
+    /// windows overlap: with the default hop of one drive period, a sample lies in three).
+    previous_trig: Vec<(Combination, Vec<(f64, f64)>)>,
+    previous_made: usize,
+    previous_at: Option<(usize, usize)>,
     /// The window less its trend (scratch of the velocity).
     detrended: Vec<f64>,
     /// The trend's functions of the last window length.
@@ -345,6 +351,8 @@ impl Windows {
     fn on(&mut self, segment: &Segment, coordinates: usize) {
         let at = Some((segment.start(), segment.len() + 1));
         if self.at != at {
+            std::mem::swap(&mut self.trig, &mut self.previous_trig);
+            (self.previous_made, self.previous_at) = (self.trig_made, self.at);
             self.at = at;
             self.x
                 .resize_with(coordinates.max(self.x.len()), Default::default);
@@ -375,10 +383,20 @@ impl Windows {
         self.trig_made = 0;
     }
 
-    /// Makes the sines and cosines of `combinations` over the segment (the windows of the
-    /// coordinates they read made), and writes where each is held into `slots`.
-    fn make_trig(&mut self, combinations: &[Combination], slots: &mut Vec<usize>) {
+    /// Makes the sines and cosines of `combinations` over the segment from `raw`, each
+    /// coordinate's samples of the segment as recorded and whether it is on the circle (wrapped
+    /// there), and writes where each is held into `slots`. The samples the segment before made
+    /// are copied.
+    fn make_trig<'r>(
+        &mut self,
+        combinations: &[Combination],
+        raw: impl Fn(usize) -> (&'r [f64], bool),
+        slots: &mut Vec<usize>,
+    ) {
         slots.clear();
+        let Some((start, samples)) = self.at else {
+            return;
+        };
         for &combination in combinations {
             if let Some(at) = self.trig[..self.trig_made]
                 .iter()
@@ -390,22 +408,39 @@ impl Windows {
             if self.trig.len() == self.trig_made {
                 self.trig.push((combination, Vec::new()));
             }
-            let samples = combination
-                .terms()
-                .map(|(c, _)| self.x[c].1.len())
-                .min()
-                .unwrap_or(0);
             let (held, values) = &mut self.trig[self.trig_made];
             *held = combination;
             values.clear();
+            values.resize(samples, (0.0, 0.0));
+            // The samples the segment before holds, copied at once.
+            let before = self.previous_at.and_then(|(from, count)| {
+                self.previous_trig[..self.previous_made]
+                    .iter()
+                    .find(|(c, _)| *c == combination)
+                    .map(|(_, v)| (from, count, v))
+            });
+            let (lo, hi) = match before {
+                Some((from, count, previous)) => {
+                    let (lo, hi) = (start.max(from), (start + samples).min(from + count));
+                    if lo < hi {
+                        values[lo - start..hi - start].copy_from_slice(&previous[lo - from..hi - from]);
+                    }
+                    (lo, hi)
+                }
+                None => (0, 0),
+            };
             let mut q = [0.0; MAX_COORDINATES];
-            values.extend((0..samples).map(|n| {
+            for (n, value) in values.iter_mut().enumerate() {
+                if (lo..hi).contains(&(start + n)) {
+                    continue;
+                }
                 for (c, _) in combination.terms() {
-                    q[c] = self.x[c].1[n];
+                    let (x, circle) = raw(c);
+                    q[c] = if circle { wrap(x[n]) } else { x[n] };
                 }
                 let a = combination.eval(&q);
-                (a.sin(), a.cos())
-            }));
+                *value = (a.sin(), a.cos());
+            }
             slots.push(self.trig_made);
             self.trig_made += 1;
         }
@@ -901,7 +936,20 @@ fn fill_block<B: Basis + ?Sized>(
         windows.make_velocity(c, seg.len(), series)?;
     }
     if sh.coupled {
-        windows.make_trig(&sh.trig, &mut ws.trig_slots);
+        // As the windows were made: the own coordinate in the equation's domain.
+        let raw = |c: usize| {
+            let x = sh.signals.coordinate(c).expect("checked by the layout");
+            let domain = if c == own {
+                Some(sh.domain)
+            } else {
+                sh.signals.domain(c)
+            };
+            (
+                &x[seg.start()..seg.start() + samples],
+                domain == Some(Domain::Circle),
+            )
+        };
+        windows.make_trig(&sh.trig, raw, &mut ws.trig_slots);
     }
     let windows = &*windows;
     let x = windows.window(own);
