@@ -35,7 +35,7 @@ use std::ops::Range;
 
 use crate::input::{
     AngleRange, GridOptions, GridRecord, GridReport, InputError, Location, Record as InputRecord, RecordEnd,
-    TimeRepair, UNSETTLED_MAX, Unsettled, angle_range,
+    TimeRepair, UNSETTLED_MAX, Unsettled, angle_range_of,
 };
 use circle_signal::{
     CircleError, Domain, Measured, SampleClock, Spike, SpikeParams, find_and_repair_spikes,
@@ -807,9 +807,15 @@ fn condition_channel(
 ) -> Conditioned {
     let mut unwrapped = false;
     if domain == Domain::Circle {
-        let present = || pieces.iter().flat_map(|r| x[r.clone()].iter().copied());
-        if present().any(|v| !(-PI..PI).contains(&v)) {
-            unwrapped = angle_range(&present().collect::<Vec<f64>>()) == AngleRange::Unwrapped;
+        let parts: Vec<&[f64]> = pieces.iter().map(|r| &x[r.clone()]).collect();
+        if parts
+            .iter()
+            .flat_map(|p| p.iter())
+            .any(|v| !(-PI..PI).contains(v))
+        {
+            // The pieces read where they are (a copy of the column in one would be a column's
+            // memory more, in each coordinate's thread).
+            unwrapped = angle_range_of(&parts) == AngleRange::Unwrapped;
             for r in pieces {
                 for v in &mut x[r.clone()] {
                     *v = circle_signal::wrap(*v);

@@ -665,14 +665,21 @@ pub enum AngleRange {
 /// [`ANGLE_PRINT_TOLERANCE`] and half a unit in the last decimal of the values, when they all
 /// have at most 9 decimals (half of 0.001 for values printed to 3 decimals).
 pub fn angle_range(x: &[f64]) -> AngleRange {
+    angle_range_of(&[x])
+}
+
+/// [`angle_range`] of the values of `parts` together (a record's pieces, without a copy of
+/// them in one column).
+pub(crate) fn angle_range_of(parts: &[&[f64]]) -> AngleRange {
     use std::f64::consts::{PI, TAU};
-    let (lo, hi) = x.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
+    let values = || parts.iter().flat_map(|p| p.iter());
+    let (lo, hi) = values().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
         (lo.min(v), hi.max(v))
     });
-    let tolerance = printed_decimals(x).map_or(ANGLE_PRINT_TOLERANCE, |k| {
+    let tolerance = printed_decimals(parts).map_or(ANGLE_PRINT_TOLERANCE, |k| {
         (0.5 * 10f64.powi(-(k as i32))).max(ANGLE_PRINT_TOLERANCE)
     });
-    if x.is_empty() || (lo >= -PI - tolerance && hi <= PI + tolerance) {
+    if values().next().is_none() || (lo >= -PI - tolerance && hi <= PI + tolerance) {
         AngleRange::Wrapped
     } else if lo >= -tolerance && hi <= TAU + tolerance {
         AngleRange::FromZero
@@ -687,12 +694,14 @@ pub const ANGLE_PRINT_TOLERANCE: f64 = 1e-5;
 
 /// The fewest decimals (at most 9) that write every value of `x`, if any: the values are then
 /// multiples of `10^−k` up to floating-point rounding.
-fn printed_decimals(x: &[f64]) -> Option<u32> {
+fn printed_decimals(parts: &[&[f64]]) -> Option<u32> {
     (0..=9u32).find(|&k| {
         let scale = 10f64.powi(k as i32);
-        x.iter().all(|&v| {
-            let scaled = v * scale;
-            (scaled - round(scaled)).abs() <= 1e-9 + 1e-12 * scaled.abs()
+        parts.iter().all(|p| {
+            p.iter().all(|&v| {
+                let scaled = v * scale;
+                (scaled - round(scaled)).abs() <= 1e-9 + 1e-12 * scaled.abs()
+            })
         })
     })
 }

@@ -512,7 +512,7 @@ impl GridRecord {
             Some(&line) => Location::Line(line),
             None => Location::Sample(before + i + 1),
         };
-        let decimals = printed_decimals(&t);
+        let decimals = printed_decimals(&[&t]);
         let unresolved = |off: usize, scatter: Option<f64>| InputError::TimeUnresolved {
             off,
             total: n,
