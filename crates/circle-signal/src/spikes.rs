@@ -2681,16 +2681,21 @@ mod tests {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
         for m in 1..=MAX_RUN {
             let g = clearing::inverse_gram(m);
+            // The bound of the residuals `r` of m + 4 samples: `e G e` of their fourth
+            // differences at samples 2 ..= m + 1.
+            let bound = |r: &[f64]| -> f64 {
+                let fourth: Vec<f64> = (2..m + 2)
+                    .map(|k| r[k - 2] + r[k + 2] - 4.0 * (r[k - 1] + r[k + 1]) + 6.0 * r[k])
+                    .collect();
+                (0..m)
+                    .map(|i| fourth[i] * (0..m).map(|j| g[i][j] * fourth[j]).sum::<f64>())
+                    .sum()
+            };
             // The residuals of m + 4 samples moved by `moves` at samples 2 ..= m + 1 of them.
             for _ in 0..2000 {
                 let r: Vec<f64> = (0..m + 4).map(|_| rng.random::<f64>() - 0.5).collect();
                 let moves: Vec<f64> = (0..m).map(|_| 2.0 * rng.random::<f64>() - 1.0).collect();
-                let fourth: Vec<f64> = (2..m + 2)
-                    .map(|k| r[k - 2] + r[k + 2] - 4.0 * (r[k - 1] + r[k + 1]) + 6.0 * r[k])
-                    .collect();
-                let most: f64 = (0..m)
-                    .map(|i| fourth[i] * (0..m).map(|j| g[i][j] * fourth[j]).sum::<f64>())
-                    .sum();
+                let most = bound(&r);
                 let gain: f64 = (0..m + 4)
                     .map(|k| {
                         let moved = r[k]
@@ -2709,12 +2714,7 @@ mod tests {
                     *v -= weight_of(k.abs_diff(p + 2)) * (p as f64 + 1.0);
                 }
             }
-            let fourth: Vec<f64> = (2..m + 2)
-                .map(|k| r[k - 2] + r[k + 2] - 4.0 * (r[k - 1] + r[k + 1]) + 6.0 * r[k])
-                .collect();
-            let most: f64 = (0..m)
-                .map(|i| fourth[i] * (0..m).map(|j| g[i][j] * fourth[j]).sum::<f64>())
-                .sum();
+            let most = bound(&r);
             let energy: f64 = r.iter().map(|v| v * v).sum();
             assert!(
                 (most - energy).abs() <= 1e-9 * energy,
