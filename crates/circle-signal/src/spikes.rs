@@ -516,13 +516,14 @@ impl<'a> IntoIterator for &'a Spikes {
 /// reaches to a cubic, from their fourth differences (no move of its samples takes more from
 /// their energy: a move's residuals are orthogonal to the cubics there). On that record one
 /// repair in a thousand could clear, and the search takes 0.07 s per 10⁶ samples of an angle
-/// instead of 0.19 s. Where a step exceeds a quarter turn or a residual a radian, near the ends
-/// of the record, and within rounding (a millionth of the energy and a thousand times the
-/// rounding of the values), a repair counts as one that could clear. Where noise surrounds the
-/// samples, nearly half of the repairs could, and the test is work in vain: after eight samples
-/// that needed new tests and found a repair that could clear, none passed between them, the next
-/// 64 are searched without it. A sample so passed can flag nothing, and every flag of `docs/spikes.md` and of the
-/// tests is as it was without the test.
+/// instead of 0.19 s. Where a step reaches π/4 (π/5 with runs of 4) or a residual a radian,
+/// where the residuals' squares could overflow, near the ends of the record, and within rounding
+/// (a millionth of the energy and a thousand times the rounding of the values), a repair counts
+/// as one that could clear. Where noise surrounds the samples, nearly half of the repairs could,
+/// and the test is work in vain: after eight samples that needed new tests and found a repair
+/// that could clear, none passed between them, the next 64 are searched without it. A sample so
+/// passed can flag nothing, and every flag of `docs/spikes.md` and of the tests is as it was
+/// without the test.
 ///
 /// A repair moves sample `j` by minus the residual its clean value would have had, which is at
 /// most its threshold `g_j T_j`, and that enters sample `i`'s residual with the weight `c_ij` of
@@ -2647,12 +2648,13 @@ mod tests {
             })
             .collect();
         for max_run in [1, 3, MAX_RUN] {
-            // Where no step nears a quarter turn, the closed form marks exactly the samples
-            // whose repairs clear.
+            // Where no step nears π/4, the closed form marks exactly the samples whose repairs
+            // clear (with runs of four its steps of up to 0.69 rad exceed π/5: every sample is
+            // marked).
             let (_, clear, in_vain) =
                 check_clearing::<OnCircle>(&mut smooth.clone(), max_run, "smooth turns");
             assert!(
-                clear > 0 && in_vain == 0,
+                clear > 0 && (in_vain == 0 || max_run == 4),
                 "smooth turns: {clear} clear, {in_vain} in vain"
             );
             let (tested, clear, in_vain) = check_clearing::<OnLine>(&mut noise.clone(), max_run, "noise");
@@ -2661,14 +2663,67 @@ mod tests {
                 "noise: {clear} of {tested}, {in_vain}"
             );
             // With spikes beside steps of 0.7 rad, and a dropout, some blocks hold steps of more
-            // than a quarter turn: all their samples are marked.
+            // than π/4: all their samples are marked (all blocks with runs of four).
             let (tested, clear, in_vain) = check_clearing::<OnCircle>(&mut turns.clone(), max_run, "turns");
             assert!(
                 clear > 0 && clear < tested / 20,
                 "turns: {clear} of {tested} clear"
             );
-            assert!(in_vain <= 64 * 17, "turns: {in_vain} marked in vain");
+            assert!(
+                in_vain <= 64 * 17 || max_run == 4,
+                "turns: {in_vain} marked in vain"
+            );
             check_clearing::<OnCircle>(&mut counts.clone(), max_run, "counts");
+        }
+    }
+
+    /// Records where the closed form once missed a repair that clears: a run of four whose
+    /// prediction unwraps five steps of about 0.6 rad (more than half a turn); small noise in
+    /// the block of a much larger spike (energies as differences of sums from the block's start
+    /// lost their digits); residuals whose squares overflow (found through `find_spikes` too).
+    #[test]
+    fn the_closed_form_misses_no_repair_where_it_once_did() {
+        use rand::{Rng, SeedableRng};
+        let mut wide: Vec<f64> = [
+            0.0, -0.52992, -1.00316, -1.44196, -1.93616, -2.49681, -3.09139, 2.64372, 2.15547, 1.62225,
+            1.08179, 0.54054, -0.05941, -0.63568, -1.19849, -1.74464, -2.25376, -2.83040, 2.91713, 2.35560,
+            1.63796, 0.92032, 0.20268, -0.51497, -0.47103, -1.05734, -1.56520, -2.09681, -2.63513, -3.12386,
+            2.71019, 2.32571, 1.99910, 1.75467, 1.58050, 1.32444, 1.06410, 0.85109, 0.59911, 0.29555,
+            -0.05735, -0.49296, -0.85242, -1.24095, -1.55815, -1.91645, -2.27895, -2.66507,
+        ]
+        .to_vec();
+        check_clearing::<OnCircle>(&mut wide, 4, "steps of 0.6 rad, runs of four");
+        for seed in 0..40 {
+            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+            let mut line: Vec<f64> = (0..200).map(|_| 3e-6 * (rng.random::<f64>() - 0.5)).collect();
+            let mut circle: Vec<f64> = (0..200).map(|_| 1e-8 * (rng.random::<f64>() - 0.5)).collect();
+            let j = 64 + rng.random_range(0..8);
+            line[j] += 100.0;
+            circle[j] += 0.5;
+            check_clearing::<OnLine>(&mut line, 3, &format!("noise beside a spike of 100, seed {seed}"));
+            check_clearing::<OnCircle>(
+                &mut circle,
+                3,
+                &format!("noise beside a spike of 0.5, seed {seed}"),
+            );
+        }
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
+        let base: Vec<f64> = (0..2000)
+            .map(|i| 0.4 * (i as f64 * 0.05).sin() + 1e-3 * (rng.random::<f64>() - 0.5))
+            .collect();
+        for scale in [1.0, 1e150, 1e160, 1e200, 1e300] {
+            let mut x: Vec<f64> = base.iter().map(|v| v * scale).collect();
+            for j in (100..x.len()).step_by(300) {
+                x[j] += 0.05 * scale;
+            }
+            let found = find_spikes(&x, Domain::Line, &SpikeParams::new()).unwrap();
+            assert_eq!(found.len(), 7, "scale {scale:e}");
+            assert_shortcuts_change_nothing(
+                &x,
+                Domain::Line,
+                &SpikeParams::new(),
+                &format!("scale {scale:e}"),
+            );
         }
     }
 

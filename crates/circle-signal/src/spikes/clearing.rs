@@ -15,12 +15,16 @@
 //! differences, [`INVERSE_GRAMS`]): a smooth motion's residuals are nearly a cubic locally.
 //!
 //! The residuals are taken from the record unwrapped over the block's reach. Where a step of the
-//! record on the circle exceeds a quarter turn, or a residual or a move a radian, the local
-//! unwrapping of the search could differ from this one: every repair of such a block counts as
-//! one that could clear. So does every repair near the ends of the record (their predictions and
-//! gains differ there). Rounding is allowed for generously: a repair counts as one that could
-//! clear when it leaves at most [`CLEARED`] of the energy plus a millionth of it and a margin of a
-//! thousand times the rounding of the record's values.
+//! record on the circle reaches π/4 (π/5 with runs of 4: a run's prediction unwraps the step
+//! across it and its neighbours), or a residual or a move a radian, the local unwrapping of the
+//! search could differ from this one: every repair of such a block counts as one that could
+//! clear. So does every repair of a block whose residuals' squares could overflow (the search
+//! then compares infinities), and every repair near the ends of the record (their predictions and
+//! gains differ there). Each energy is summed over its own window (sums from a block's first
+//! residual would lose a small energy's digits to a large one before it), and rounding is allowed
+//! for generously: a repair counts as one that could clear when it leaves at most [`CLEARED`] of
+//! the energy plus a millionth of it and a margin of a thousand times the rounding of the
+//! record's values.
 
 use std::f64::consts::PI;
 use std::sync::LazyLock;
@@ -51,11 +55,11 @@ pub(super) struct Clearing {
     could: Vec<u64>,
     /// One bit per block: `could` holds the block's samples for the record as it stands.
     known: Vec<u64>,
-    /// Scratch: the record unwrapped over a block's reach, its centred residuals, their energy
-    /// summed from the first, and their fourth differences.
+    /// Scratch: the record unwrapped over a block's reach, its centred residuals, their squares
+    /// and their fourth differences.
     unwrapped: Vec<f64>,
     residuals: Vec<f64>,
-    energies: Vec<f64>,
+    squares: Vec<f64>,
     fourth: Vec<f64>,
 }
 
@@ -70,7 +74,7 @@ impl Clearing {
             known: vec![0; blocks.div_ceil(64)],
             unwrapped: Vec::new(),
             residuals: Vec::new(),
-            energies: Vec::new(),
+            squares: Vec::new(),
             fourth: Vec::new(),
         }
     }
@@ -136,11 +140,15 @@ impl Clearing {
         let circle = G::DOMAIN == crate::Domain::Circle;
         self.unwrapped.resize(len, 0.0);
         let u = &mut self.unwrapped[..len];
+        // A run's prediction unwraps the step across it and its two neighbours: `max_run + 1`
+        // steps of less than this stay within half a turn (π/4 for single samples and runs of up
+        // to 3, π/5 for runs of 4).
+        let quarter = PI / (max_run as f64 + 1.0).max(4.0);
         let (mut at, mut steep) = (x[lo], false);
         u[0] = at;
         for (slot, w) in u[1..].iter_mut().zip(x[lo..=hi].windows(2)) {
             let step = G::diff(w[1] - w[0]);
-            steep |= circle && step.abs() > PI / 4.0;
+            steep |= circle && step.abs() >= quarter;
             at += step;
             *slot = at;
         }
@@ -164,13 +172,18 @@ impl Clearing {
         let scale = u.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
         // What rounding can make of a residual, with a thousandfold margin.
         let tol = 1e3 * 16.0 * f64::EPSILON * (1.0 + scale);
-        // The residuals' energies from the first (as sums from it), and their fourth
-        // differences where the tested repairs reach.
-        self.energies.resize(len + 1, 0.0);
-        let mut sum = 0.0;
-        for (e, &v) in self.energies[1..].iter_mut().zip(r.iter()) {
-            sum += v * v;
-            *e = sum;
+        // The residuals' squares (each repair's energy summed over its own window: sums from
+        // the block's first residual would lose a small energy's digits to a large one before
+        // it), and their fourth differences where the tested repairs reach. Residuals so large
+        // that their squares, or a repair's, could overflow count as able to clear (the search's
+        // test then compares infinities).
+        self.squares.resize(len, 0.0);
+        for (q, &v) in self.squares.iter_mut().zip(r.iter()) {
+            *q = v * v;
+        }
+        let total: f64 = self.squares.iter().sum();
+        if total.is_nan() || total >= 1e290 {
+            return all(first, end);
         }
         self.fourth.resize(len, 0.0);
         for (k, w) in (2..).zip(r.windows(5)) {
@@ -179,13 +192,13 @@ impl Clearing {
         // The longest run's bound holds every shorter one's (their residuals are a part of its),
         // and the single sample's energy is the least (its window is a part of every longer
         // one's): most starts are settled at once, the others tested run by run.
-        let (fourth, energies) = (&self.fourth[..], &self.energies[..]);
+        let (fourth, squares) = (&self.fourth[..], &self.squares[..]);
         let starts = (from - lo, to - lo);
         let open = match max_run {
-            1 => screen::<1>(fourth, energies, starts, tol),
-            2 => screen::<2>(fourth, energies, starts, tol),
-            3 => screen::<3>(fourth, energies, starts, tol),
-            _ => screen::<MAX_RUN>(fourth, energies, starts, tol),
+            1 => screen::<1>(fourth, squares, starts, tol),
+            2 => screen::<2>(fourth, squares, starts, tol),
+            3 => screen::<3>(fourth, squares, starts, tol),
+            _ => screen::<MAX_RUN>(fourth, squares, starts, tol),
         };
         let grams = &*INVERSE_GRAMS;
         let most = |s: usize, len: usize| -> f64 {
@@ -201,7 +214,7 @@ impl Clearing {
             open &= open - 1;
             let s = from - lo + k;
             for len in 1..=max_run {
-                let before = self.energies[s + len + REACH] - self.energies[s - REACH];
+                let before: f64 = self.squares[s - REACH..s + len + REACH].iter().sum();
                 let slack = slack(before, tol);
                 if most(s, len) >= (1.0 - CLEARED) * before - slack
                     && self.repair_clears(s, len, circle, before, slack)
@@ -253,13 +266,13 @@ impl Clearing {
 /// The starts `starts.0 .. starts.1` (in the scratch; at most 64) whose repairs, of up to `M`
 /// samples, are not settled by the bound of the longest run against the single sample's energy,
 /// as bits from the first: in one loop without branches over the starts.
-fn screen<const M: usize>(fourth: &[f64], energies: &[f64], starts: (usize, usize), tol: f64) -> u64 {
+fn screen<const M: usize>(fourth: &[f64], squares: &[f64], starts: (usize, usize), tol: f64) -> u64 {
     let g = INVERSE_GRAMS[M - 1];
     // Below this energy the slack's margin grows faster than half the energy.
     let settled_above = (128.0 * tol) * (128.0 * tol);
     let mut open = 0u64;
     for s in starts.0..starts.1 {
-        let least = energies[s + 1 + REACH] - energies[s - REACH];
+        let least: f64 = squares[s - REACH..=s + REACH].iter().sum();
         let e: [f64; M] = std::array::from_fn(|i| fourth[s + i]);
         let most: f64 = (0..M)
             .map(|i| e[i] * (0..M).map(|j| g[i][j] * e[j]).sum::<f64>())
