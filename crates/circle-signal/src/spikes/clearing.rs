@@ -80,7 +80,8 @@ impl Clearing {
     }
 
     /// Whether a repair starting at a sample of `from ..= to` could clear the residuals around
-    /// it, in the record `x` as it stands.
+    /// it, in the record `x` as it stands, and whether a block had to be tested to say so (the
+    /// rest are read from the bits held).
     pub(super) fn could_clear<G: Geometry>(&mut self, x: &[f64], from: usize, to: usize) -> (bool, bool) {
         let to = to.min(self.n - 1);
         let mut tested = false;
