@@ -276,13 +276,13 @@ impl BasisTable {
         self.values.resize(stride * samples, 0.0);
         // The samples the segment before holds, copied at once.
         let (lo, hi) = if self.previous_at.0 == source {
-            let (from, count) = (self.previous_at.1, self.previous_at.2);
-            let (lo, hi) = (start.max(from), (start + samples).min(from + count));
-            if lo < hi {
-                self.values[(lo - start) * stride..(hi - start) * stride]
-                    .copy_from_slice(&self.previous[(lo - from) * stride..(hi - from) * stride]);
-            }
-            (lo, hi)
+            copy_shared(
+                &mut self.values,
+                start,
+                &self.previous,
+                self.previous_at.1,
+                stride,
+            )
         } else {
             (0, 0)
         };
@@ -413,30 +413,28 @@ impl Windows {
             values.clear();
             values.resize(samples, (0.0, 0.0));
             // The samples the segment before holds, copied at once.
-            let before = self.previous_at.and_then(|(from, count)| {
+            let before = self.previous_at.and_then(|(from, _)| {
                 self.previous_trig[..self.previous_made]
                     .iter()
                     .find(|(c, _)| *c == combination)
-                    .map(|(_, v)| (from, count, v))
+                    .map(|(_, v)| (from, v))
             });
             let (lo, hi) = match before {
-                Some((from, count, previous)) => {
-                    let (lo, hi) = (start.max(from), (start + samples).min(from + count));
-                    if lo < hi {
-                        values[lo - start..hi - start].copy_from_slice(&previous[lo - from..hi - from]);
-                    }
-                    (lo, hi)
-                }
+                Some((from, previous)) => copy_shared(values, start, previous, from, 1),
                 None => (0, 0),
             };
+            // Each coordinate's samples, looked up once per combination.
+            let columns: [Option<(&[f64], bool)>; MAX_COORDINATES] =
+                std::array::from_fn(|c| (combination.coefficient(c) != 0).then(|| raw(c)));
             let mut q = [0.0; MAX_COORDINATES];
             for (n, value) in values.iter_mut().enumerate() {
                 if (lo..hi).contains(&(start + n)) {
                     continue;
                 }
-                for (c, _) in combination.terms() {
-                    let (x, circle) = raw(c);
-                    q[c] = if circle { wrap(x[n]) } else { x[n] };
+                for (c, column) in columns.iter().enumerate() {
+                    if let Some((x, circle)) = *column {
+                        q[c] = if circle { wrap(x[n]) } else { x[n] };
+                    }
                 }
                 let a = combination.eval(&q);
                 *value = (a.sin(), a.cos());
@@ -487,6 +485,27 @@ impl Windows {
     fn velocity(&self, c: usize) -> &[f64] {
         &self.v[c].1
     }
+}
+
+/// Copies into `values`, the entries of the samples from `start` (`stride` per sample), those of
+/// `previous`, the entries of the samples from `from`, that both hold (overlapping windows share
+/// samples); returns the samples copied, `lo .. hi` in the record (empty when none).
+fn copy_shared<T: Copy>(
+    values: &mut [T],
+    start: usize,
+    previous: &[T],
+    from: usize,
+    stride: usize,
+) -> (usize, usize) {
+    let (lo, hi) = (
+        start.max(from),
+        (start + values.len() / stride).min(from + previous.len() / stride),
+    );
+    if lo < hi {
+        values[(lo - start) * stride..(hi - start) * stride]
+            .copy_from_slice(&previous[(lo - from) * stride..(hi - from) * stride]);
+    }
+    (lo, hi)
 }
 
 /// How a column's samples become its entries `A[r, c]`.
