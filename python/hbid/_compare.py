@@ -168,6 +168,7 @@ def compare(
     velocity_col: ColumnsLike = None,
     repair: bool = False,
     no_repair: bool = False,
+    bridge_gaps: int = 0,
     signal: Union[str, Sequence[str], None] = None,
     measured: str = "displacement",
     angle_unit: str = "rad",
@@ -209,6 +210,9 @@ def compare(
             runs from its first sample's measured state, every sample scored.
         repair: replace isolated time-stamp glitches and every spike.
         no_repair: keep every spike instead of replacing the few large ones.
+        bridge_gaps: bridge every gap of at most this many missing samples by the cubic through
+            its neighbours, in every column, as for :func:`identify`: a run then goes on through
+            it, and its samples are scored as the record's.
         signal: ``"circle"`` or ``"line"`` (default: the model's).
         measured: ``"displacement"``, ``"velocity"`` or ``"acceleration"`` (integrated).
         angle_unit: the unit of the angles on the circle (and of their measured velocities):
@@ -246,6 +250,7 @@ def compare(
         velocity_col=columns(velocity_col, "velocity_col"),
         repair=bool(repair),
         no_repair=bool(no_repair),
+        bridge_gaps=bridge_gaps,
         signal=signals(signal),
         measured=measured,
         angle_unit=angle_unit,

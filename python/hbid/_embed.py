@@ -67,6 +67,7 @@ def _record_options(
     velocity_col: ColumnsLike,
     repair: bool,
     no_repair: bool,
+    bridge_gaps: int,
     signal: Union[str, Sequence[str]],
     measured: str,
     angle_unit: str,
@@ -82,6 +83,7 @@ def _record_options(
         velocity_col=columns(velocity_col, "velocity_col"),
         repair=bool(repair),
         no_repair=bool(no_repair),
+        bridge_gaps=bridge_gaps,
         signal=signals(signal),
         measured=measured,
         angle_unit=angle_unit,
@@ -103,6 +105,7 @@ def embed(
     velocity_col: ColumnsLike = None,
     repair: bool = False,
     no_repair: bool = False,
+    bridge_gaps: int = 0,
     signal: Union[str, Sequence[str]] = "circle",
     measured: str = "displacement",
     angle_unit: str = "rad",
@@ -120,7 +123,8 @@ def embed(
 
     Args:
         x, t, dt, drive, time_col, angle_col, coords, drive_col, velocity_col, repair,
-            no_repair, signal, measured, angle_unit, drive_period, drive_frequency: the record, as for
+            no_repair, bridge_gaps, signal, measured, angle_unit, drive_period, drive_frequency:
+            the record, as for
             :func:`identify` (one file, a Record or arrays).
         max_lag: largest lag of the mutual information (default: two drive periods, at least 40).
         bins: equal boxes of the mutual-information histogram.
@@ -140,6 +144,7 @@ def embed(
         velocity_col,
         repair,
         no_repair,
+        bridge_gaps,
         signal,
         measured,
         angle_unit,
@@ -230,6 +235,7 @@ def upos(
     velocity_col: ColumnsLike = None,
     repair: bool = False,
     no_repair: bool = False,
+    bridge_gaps: int = 0,
     signal: Union[str, Sequence[str]] = "circle",
     measured: str = "displacement",
     angle_unit: str = "rad",
@@ -245,7 +251,8 @@ def upos(
 
     Args:
         x, t, dt, drive, time_col, angle_col, coords, drive_col, velocity_col, repair,
-            no_repair, signal, measured, angle_unit, drive_period, drive_frequency: the record, as for
+            no_repair, bridge_gaps, signal, measured, angle_unit, drive_period, drive_frequency:
+            the record, as for
             :func:`identify` (one file, a Record or arrays).
         tolerance: close-return tolerance, a fraction of the data's span.
         max_period: longest orbit period searched, in drive periods.
@@ -264,6 +271,7 @@ def upos(
         velocity_col,
         repair,
         no_repair,
+        bridge_gaps,
         signal,
         measured,
         angle_unit,

@@ -41,6 +41,7 @@ RECORD_DEFAULTS: Dict[str, Any] = dict(
     velocity_col=None,
     repair=False,
     no_repair=False,
+    bridge_gaps=0,
     signal="circle",
     measured="displacement",
     angle_unit="rad",
@@ -373,6 +374,7 @@ def identify(
     velocity_col: ColumnsLike = None,
     repair: bool = False,
     no_repair: bool = False,
+    bridge_gaps: int = 0,
     signal: Union[str, Sequence[str]] = "circle",
     measured: str = "displacement",
     angle_unit: str = "rad",
@@ -444,6 +446,11 @@ def identify(
         repair: replace isolated time-stamp glitches and every spike.
         no_repair: keep every spike (a warning) instead of replacing those larger than the
             record's own steps when they are few (at most one in 1000 samples, the default).
+        bridge_gaps: bridge every gap of at most this many missing samples (two samples or more
+            on each side) by the cubic through its neighbours, in every column, so that the pieces
+            on either side are analysed as one (a logger's dropped rows; a note counts them). Its
+            error is about ``((bridge_gaps + 3) * omega * dt)**4 / 100`` of a motion of angular
+            frequency ``omega``; 0 bridges none (at most 64; a displacement record only).
         signal: ``"circle"`` (an angle) or ``"line"`` (a displacement), for every coordinate or
             one per coordinate (``["circle", "line"]``); a Record's own.
         measured: ``"displacement"``, or (on the line) ``"velocity"`` or ``"acceleration"``,
@@ -529,6 +536,7 @@ def identify(
         velocity_col=columns(velocity_col, "velocity_col"),
         repair=bool(repair),
         no_repair=bool(no_repair),
+        bridge_gaps=bridge_gaps,
         signal=signals(signal),
         measured=measured,
         angle_unit=angle_unit,

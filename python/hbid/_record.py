@@ -140,6 +140,7 @@ def read(
     velocity_col: ColumnsLike = None,
     repair: bool = False,
     no_repair: bool = False,
+    bridge_gaps: int = 0,
     signal: Union[str, Sequence[str]] = "circle",
     measured: str = "displacement",
     angle_unit: str = "rad",
@@ -170,6 +171,11 @@ def read(
         velocity_col: the columns of the coordinates' measured velocities, one per coordinate.
         repair: replace isolated time-stamp glitches and every spike (listed in the notes).
         no_repair: keep every spike (a warning), even those replaced by default.
+        bridge_gaps: bridge every gap of at most this many missing samples (two samples or more
+            on each side) by the cubic through its neighbours, in every column, so that the pieces
+            on either side are analysed as one (a logger's dropped rows; a note counts them). Its
+            error is about ``((bridge_gaps + 3) * omega * dt)**4 / 100`` of a motion of angular
+            frequency ``omega``; 0 bridges none (at most 64; a displacement record only).
         signal: ``"circle"`` for an angle (wrapped into ``[-pi, pi)``) or ``"line"`` for a
             displacement; for several coordinates one for all or a list, one per coordinate.
         measured: ``"displacement"``, or (on the line) ``"velocity"`` or ``"acceleration"``,
@@ -194,6 +200,7 @@ def read(
         dt=None if dt is None else float(dt),
         repair=bool(repair),
         no_repair=bool(no_repair),
+        bridge_gaps=bridge_gaps,
         signal=signals(signal),
         measured=measured,
         angle_unit=angle_unit,
@@ -208,7 +215,17 @@ def read(
 
 
 #: The options of a record that a :class:`~hbid.Record` fixes when it is read.
-RECORD_FIXED = ("time_col", "angle_col", "coords", "dt", "drive_col", "velocity_col", "repair", "no_repair")
+RECORD_FIXED = (
+    "time_col",
+    "angle_col",
+    "coords",
+    "dt",
+    "drive_col",
+    "velocity_col",
+    "repair",
+    "no_repair",
+    "bridge_gaps",
+)
 
 
 def _is_path(x: Any) -> bool:

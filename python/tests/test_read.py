@@ -54,6 +54,30 @@ def test_gaps_become_pieces_and_notes(tmp_path, pendulum):
     ]
 
 
+def test_short_gaps_are_bridged_on_request_and_the_record_keeps_it(tmp_path, pendulum):
+    # Rows 500, 1200 and 1201 dropped (a logger's lost rows), and a gap of 10 too long to bridge.
+    keep = np.setdiff1d(np.arange(3000), np.r_[500, 1200, 1201, 2000:2010])
+    path = write_csv(tmp_path / "dropped.csv", pendulum.t[keep], pendulum.x[keep])
+    assert len(hbid.read(path).pieces) == 4
+    record = hbid.read(path, bridge_gaps=2)
+    assert record.pieces == [(0, 2000), (2010, 3000)]
+    assert record.notes == [
+        "1 gap(s) in the time stamps (10 samples missing): the record is analysed in 2 pieces",
+        "2 gap(s) of at most 2 missing sample(s) bridged: 3 sample(s) interpolated in every column by the cubic "
+        "through the two samples on each side",
+    ]
+    # The paper's 25 samples per period: the cubic misses by up to 1.2e-3 rad here (a straight
+    # line between the neighbours of sample 500 would miss by 1.4e-2).
+    missing = [500, 1200, 1201]
+    error = np.abs(np.angle(np.exp(1j * (record.x[missing] - pendulum.x[missing]))))
+    assert 0 < error.max() < 3e-3
+    np.testing.assert_array_equal(record.x[keep[keep < 2000]], pendulum.x[keep[keep < 2000]])
+    with pytest.raises(hbid.OptionsError, match="bridge_gaps: the Record was read with its own"):
+        hbid.identify(record, bridge_gaps=1)
+    with pytest.raises(hbid.OptionsError, match="at most 64"):
+        hbid.read(path, bridge_gaps=65)
+
+
 def test_a_glitch_is_an_error_unless_repaired(tmp_path, pendulum):
     t = pendulum.t.copy()
     t[500] += 0.4 * (t[1] - t[0])

@@ -89,6 +89,14 @@ fn rigs() -> Vec<Rig> {
             make: None,
         },
         Rig {
+            name: "pendulum-dropped-rows",
+            what: "the first rig's record from a logger that drops one row in a hundred (1500 single rows at seeded random places): no stretch of the three drive periods a window needs is left whole, so the gaps are bridged",
+            simulate: &[PENDULUM, &["--gaps", "1500:1", "--seed", "5"]],
+            identify: &["--drive-frequency", "1.02", "--bridge-gaps", "1"],
+            rewrite: None,
+            make: None,
+        },
+        Rig {
             name: "pendulum-headerless",
             what: "the first record written as a DAQ might: no header, angle first, time second, separated by spaces",
             simulate: &[PENDULUM],
@@ -445,7 +453,7 @@ pub fn run(out: &Path, data: &Path) -> anyhow::Result<()> {
         "# Real records\n\n\
          Records shaped like real rigs' — any sampling rate, DAQ time stamps (printed to a fixed resolution, \
          jittering, from a clock that slips, with glitches), encoder counts, an encoder zero away from the bottom, \
-         bit errors and half-turn spikes, a vibrometer's dropouts, gaps, an unknown drive frequency, drive \
+         bit errors and half-turn spikes, a vibrometer's dropouts, gaps, a logger's dropped rows, an unknown drive frequency, drive \
          harmonics, no drive, and a drive the library cannot express — made by `hbid simulate` (the last one by \
          `pendulum-sim` directly) and each identified by one `hbid identify` command, with no preprocessing. The truth is the simulated equation \
          written in the record's own time unit (seconds), `x'' + Σ c_i g_i = 0`, from `hbid simulate --truth`. \

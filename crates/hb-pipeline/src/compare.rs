@@ -201,6 +201,10 @@ pub struct CompareOptions {
     pub repair: bool,
     /// Keep every spike (a warning) instead of replacing them when few.
     pub no_repair: bool,
+    /// Bridge every gap of at most this many missing samples by the cubic through its
+    /// neighbours, in every column (see [`RecordOptions::bridge_gaps`]): a free run then goes on
+    /// through it, and its samples are scored as the record's.
+    pub bridge_gaps: usize,
     /// The columns of the coordinates' measured velocities: each piece's free run then starts
     /// from its first sample's measured state (positions and these velocities), every sample
     /// scored, unless «x0» and «v0» are given.
@@ -247,6 +251,7 @@ impl Default for CompareOptions {
             drive_col: None,
             repair: false,
             no_repair: false,
+            bridge_gaps: 0,
             velocity_col: None,
             signal: None,
             measured: Measured::Displacement,
@@ -361,6 +366,7 @@ impl CompareOptions {
             drive_col: self.drive_col.clone(),
             repair: self.repair,
             no_repair: self.no_repair,
+            bridge_gaps: self.bridge_gaps,
             velocity_col: self.velocity_col.clone(),
             signal: signal.into(),
             measured: self.measured,
@@ -974,6 +980,7 @@ fn compare_system(
         drive_col,
         repair: o.repair,
         no_repair: o.no_repair,
+        bridge_gaps: o.bridge_gaps,
         velocity_col,
         signal: coordinate_of
             .iter()

@@ -288,6 +288,11 @@ pub struct RecordOptions {
     /// Keep every spike in the record (a warning) instead of replacing them when they are few
     /// (at most one per 1000 samples; the default, said in a note).
     pub no_repair: bool,
+    /// Bridge every gap of at most this many missing samples (two samples or more on each
+    /// side) by the cubic through its neighbours, in every column, so that its pieces are
+    /// analysed as one (a logger's dropped rows; each bridge counted in a note). 0, the default,
+    /// bridges none; at most [`hb_record::prepare::MAX_BRIDGE`]; a displacement record only.
+    pub bridge_gaps: usize,
     /// An angle on the circle or a displacement on the line: one for every coordinate, or one
     /// per coordinate.
     #[serde(with = "text")]
@@ -349,6 +354,24 @@ impl RecordOptions {
             return Err(OptionError::new(
                 "no_repair",
                 "give «repair» or «no_repair», not both",
+            ));
+        }
+        if self.bridge_gaps > hb_record::prepare::MAX_BRIDGE {
+            return Err(OptionError::value(
+                "bridge_gaps",
+                self.bridge_gaps,
+                format!(
+                    "at most {}: a cubic through two samples on each side is no measurement of a longer gap",
+                    hb_record::prepare::MAX_BRIDGE
+                ),
+            ));
+        }
+        if self.bridge_gaps > 0 && self.measured != Measured::Displacement {
+            return Err(OptionError::value(
+                "bridge_gaps",
+                self.bridge_gaps,
+                "a velocity or acceleration record («measured») is integrated piece by piece: its gaps cannot be \
+                 bridged",
             ));
         }
         if self.angle_col.is_some() && self.coords.is_some() {
@@ -836,7 +859,8 @@ pub(crate) fn condition_read(
         } else {
             SpikePolicy::RepairFew
         })
-        .with_measured(options.measured);
+        .with_measured(options.measured)
+        .with_bridge(options.bridge_gaps);
     condition(record, &prepare, &mut |note| {
         let note = note.relocated(relocate);
         let notice = match note {

@@ -66,6 +66,8 @@ pub(crate) fn streams(path: &Path, request: &IdentifyRequest) -> Result<bool, Ru
         Some("an integrated record's drift is fitted over the whole record («measured»)")
     } else if request.options().refine {
         Some("the refinement («refine») runs the model over the whole record")
+    } else if request.options().record.bridge_gaps > 0 {
+        Some("a gap is bridged («bridge_gaps») within one chunk's reading, not across two")
     } else if path == Path::new("-") {
         Some("standard input is read whole")
     } else {

@@ -7,10 +7,11 @@
 //!   split it into pieces, isolated glitches are named (and replaced on request), a logger's
 //!   few samples at another rate before it settles (or as it stops) are left out;
 //! - [`prepare`] makes the read record what every stage of the identification takes: pieces on
-//!   one grid with NaN in the gaps, an angle wrapped into `[−π, π)`, encoder spikes found (and
-//!   replaced on request), a velocity or acceleration integrated to the displacement, the drive's
-//!   period given (or estimated above this crate) or absent (a free oscillation), and the record
-//!   resampled once onto a whole number of samples per period when needed.
+//!   one grid with NaN in the gaps (gaps of a few samples bridged on request), an angle wrapped
+//!   into `[−π, π)`, encoder spikes found (and replaced on request), a velocity or acceleration
+//!   integrated to the displacement, the drive's period given (or estimated above this crate) or
+//!   absent (a free oscillation), and the record resampled once onto a whole number of samples
+//!   per period when needed.
 //!
 //! The crate sits on the vocabulary crate (`circle-signal`) alone: reading a record builds no
 //! solver, model or integrator.

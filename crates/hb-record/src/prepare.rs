@@ -44,6 +44,9 @@ use circle_signal::{
 
 use rayon::prelude::*;
 
+pub mod bridge;
+pub use bridge::MAX_BRIDGE;
+
 /// Where the windows' unit, a drive period, comes from.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum PeriodSource {
@@ -112,6 +115,11 @@ pub struct PrepareOptions {
     /// What the sensor measured: the displacement itself, or its velocity or acceleration (on the
     /// line only), integrated to the displacement by [`circle_signal::displacement`].
     pub measured: Measured,
+    /// Bridge every gap of at most this many missing samples (with two samples on each side) by
+    /// the cubic through its neighbours, in every column (see [`bridge`]); 0, the
+    /// default, bridges none. At most [`MAX_BRIDGE`], and only for a record of the displacement
+    /// itself (a velocity or acceleration is integrated piece by piece).
+    pub bridge: usize,
 }
 
 impl PrepareOptions {
@@ -123,6 +131,7 @@ impl PrepareOptions {
             repair: false,
             spikes: SpikePolicy::RepairFew,
             measured: Measured::Displacement,
+            bridge: 0,
         }
     }
 
@@ -152,6 +161,12 @@ impl PrepareOptions {
         self
     }
 
+    /// Bridging gaps of at most `bridge` missing samples (see [`PrepareOptions::bridge`]).
+    pub fn with_bridge(mut self, bridge: usize) -> Self {
+        self.bridge = bridge;
+        self
+    }
+
     /// With repairs (see [`PrepareOptions::repair`]).
     pub fn with_repair(mut self, repair: bool) -> Self {
         self.repair = repair;
@@ -176,6 +191,16 @@ pub enum Note {
         gaps: usize,
         /// Samples missing in them.
         missing: usize,
+    },
+    /// Gaps of at most `limit` missing samples bridged ([`PrepareOptions::bridge`]): the samples
+    /// they miss interpolated in every column, their pieces analysed as one.
+    Bridged {
+        /// The gaps bridged.
+        gaps: usize,
+        /// The samples interpolated in them.
+        missing: usize,
+        /// The most samples a bridged gap may miss.
+        limit: usize,
     },
     /// Rows written twice (a stamp and every value the same as the row before), the second of
     /// each left out.
@@ -286,6 +311,11 @@ impl fmt::Display for Note {
                 f,
                 "{gaps} gap(s) in the time stamps ({missing} samples missing): the record is analysed in {} pieces",
                 gaps + 1
+            ),
+            Note::Bridged { gaps, missing, limit } => write!(
+                f,
+                "{gaps} gap(s) of at most {limit} missing sample(s) bridged: {missing} sample(s) interpolated in every \
+                 column by the cubic through the two samples on each side"
             ),
             Note::Wrapped => f.write_str("values outside [-π, π): read as an unwrapped angle and wrapped"),
             Note::DuplicateRows { first, count, .. } => write!(
@@ -412,6 +442,9 @@ pub enum PrepareError {
         /// The record's step.
         dt: f64,
     },
+    /// Gaps to bridge in a record integrated piece by piece, or too long to bridge.
+    #[error("{0}")]
+    Bridge(String),
     /// Further coordinates read and their domains do not match.
     #[error("{read} coordinate(s) were read but {domains} domain(s) given")]
     Coordinates {
@@ -624,6 +657,19 @@ pub fn condition(
         notes(&n);
         kept.push(n);
     };
+    if options.bridge > MAX_BRIDGE {
+        return Err(PrepareError::Bridge(format!(
+            "a bridged gap may miss at most {MAX_BRIDGE} samples, not {}: a cubic through two samples on each \
+             side is no measurement of a longer one",
+            options.bridge
+        )));
+    }
+    if options.bridge > 0 && options.measured != Measured::Displacement {
+        return Err(PrepareError::Bridge(
+            "a velocity or acceleration record is integrated piece by piece: its gaps cannot be bridged"
+                .into(),
+        ));
+    }
     let mut record = record;
     if let Some(duplicates) = drop_duplicate_rows(&mut record) {
         note(duplicates);
@@ -732,8 +778,8 @@ pub fn condition(
         }
         out
     };
-    let drives: Vec<Vec<f64>> = drives_read.into_iter().map(on_grid).collect();
-    let velocities: Vec<Vec<f64>> = velocities_read.into_iter().map(on_grid).collect();
+    let mut drives: Vec<Vec<f64>> = drives_read.into_iter().map(on_grid).collect();
+    let mut velocities: Vec<Vec<f64>> = velocities_read.into_iter().map(on_grid).collect();
     let mut others: Vec<Channel> = others_read
         .into_iter()
         .zip(&options.others)
@@ -742,10 +788,15 @@ pub fn condition(
             domain,
         })
         .collect();
-    if pieces.len() > 1 {
-        let missing = x.len() - pieces.iter().map(Range::len).sum::<usize>();
+    // The gaps bridged are filled once every coordinate is conditioned on its pieces (its spikes
+    // found and replaced as asked, so that none is a node of the cubic); the note of the gaps
+    // counts those left.
+    let bridged = bridge::bridgeable(&pieces, options.bridge);
+    let after = bridge::joined(&pieces, &bridged);
+    if after.len() > 1 {
+        let missing = x.len() - after.iter().map(Range::len).sum::<usize>();
         note(Note::Gaps {
-            gaps: pieces.len() - 1,
+            gaps: after.len() - 1,
             missing,
         });
     }
@@ -773,11 +824,30 @@ pub fn condition(
     if options.measured != Measured::Displacement {
         note(Note::Integrated(options.measured));
     }
+    if !bridged.is_empty() {
+        let mut missing = 0;
+        for &g in &bridged {
+            let (end, start) = (pieces[g].end, pieces[g + 1].start);
+            missing += start - end;
+            bridge::fill(&mut x, end, start, options.signal);
+            for c in &mut others {
+                bridge::fill(&mut c.x, end, start, c.domain);
+            }
+            for v in drives.iter_mut().chain(velocities.iter_mut()) {
+                bridge::fill(v, end, start, Domain::Line);
+            }
+        }
+        note(Note::Bridged {
+            gaps: bridged.len(),
+            missing,
+            limit: options.bridge,
+        });
+    }
     Ok(GridData {
         t0,
         dt,
         x,
-        pieces,
+        pieces: after,
         domain: options.signal,
         others,
         drives,

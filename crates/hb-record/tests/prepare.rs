@@ -534,3 +534,102 @@ fn a_half_turn_spike_in_a_short_record_is_replaced_by_default() {
     assert_eq!((found.len(), found[0].index, *repaired), (1, a, true));
     assert!((grid.x[a] - clean[a]).abs() <= 2.0 * COUNT);
 }
+
+/// Rows dropped here and there (a networked logger's lost packets: one to three in a row) split a
+/// record into pieces; bridged, the pieces are one again and every column's missing samples are
+/// the cubic through their neighbours: a whirling angle across its wraps, a further coordinate
+/// on the line, a drive and a measured velocity. A gap longer than the limit stays a gap, and
+/// the notes count both.
+#[test]
+fn short_gaps_are_bridged_in_every_column_and_longer_ones_kept() {
+    let dt = 2e-3;
+    // 3 turns a second and a sway: the angle wraps about every 170 samples.
+    let angle = |t: f64| 6.0 * std::f64::consts::PI * t + 0.3 * (7.0 * t).sin();
+    let line = |t: f64| 0.2 * (5.0 * t).cos();
+    let drive = |t: f64| 0.5 * (10.0 * t).sin();
+    let velocity = |t: f64| 6.0 * std::f64::consts::PI + 2.1 * (7.0 * t).cos();
+    // Rows 100, 400..403, 900..902 and 1500..1520 missing (1, 3, 2 and 20 samples).
+    let rows: Vec<usize> = (0..2_000)
+        .filter(|i| ![100, 400, 401, 402, 900, 901].contains(i) && !(1_500..1_520).contains(i))
+        .collect();
+    let of = |f: &dyn Fn(f64) -> f64| rows.iter().map(|&i| f(i as f64 * dt)).collect::<Vec<f64>>();
+    let record = Record {
+        t: of(&|t| t),
+        theta: of(&|t| wrap(angle(t))),
+        others: vec![of(&line)],
+        drives: vec![of(&drive)],
+        velocities: vec![of(&velocity), of(&|t| -5.0 * (5.0 * t).sin())],
+        lines: None,
+    };
+    let options = PrepareOptions::new(Domain::Circle).with_others(vec![Domain::Line]);
+    let kept = condition(record.clone(), &options, &mut |_| {}).unwrap();
+    assert_eq!(
+        kept.pieces,
+        [0..100, 101..400, 403..900, 902..1_500, 1_520..2_000]
+    );
+    assert!(
+        kept.notes.contains(&Note::Gaps { gaps: 4, missing: 26 }),
+        "{:?}",
+        kept.notes
+    );
+
+    let grid = condition(record, &options.with_bridge(3), &mut |_| {}).unwrap();
+    assert_eq!(grid.pieces, [0..1_500, 1_520..2_000]);
+    assert!(
+        grid.notes.contains(&Note::Gaps { gaps: 1, missing: 20 }),
+        "{:?}",
+        grid.notes
+    );
+    let bridged = Note::Bridged {
+        gaps: 3,
+        missing: 6,
+        limit: 3,
+    };
+    assert!(grid.notes.contains(&bridged), "{:?}", grid.notes);
+    assert_eq!(
+        bridged.to_string(),
+        "3 gap(s) of at most 3 missing sample(s) bridged: 6 sample(s) interpolated in every column by the \
+         cubic through the two samples on each side"
+    );
+    // Every column at every sample within a cubic's error of the truth (below 1e-6 here, where
+    // a straight line between the neighbours would miss the drive by 4e-4), the samples read
+    // exactly as they were.
+    for i in 0..1_500 {
+        let t = i as f64 * dt;
+        let tol = if rows.contains(&i) { 1e-12 } else { 1e-6 };
+        let close = |got: f64, want: f64, what: &str| {
+            assert!((got - want).abs() <= tol, "{what} at {i}: {got} against {want}");
+        };
+        close(wrap(grid.x[i] - angle(t)), 0.0, "angle");
+        assert!((-std::f64::consts::PI..std::f64::consts::PI).contains(&grid.x[i]));
+        close(grid.others[0].x[i], line(t), "further coordinate");
+        close(grid.drives[0][i], drive(t), "drive");
+        close(grid.velocities[0][i], velocity(t), "velocity");
+    }
+    assert!(grid.x[1_500..1_520].iter().all(|v| v.is_nan()));
+}
+
+/// Bridging is refused where it cannot be right: a velocity record integrated piece by piece,
+/// and gaps longer than a cubic through four samples can stand for.
+#[test]
+fn bridging_is_refused_for_an_integrated_record_and_beyond_its_limit() {
+    let x: Vec<f64> = (0..200).map(|n| (n as f64 * 0.1).sin()).collect();
+    let line = PrepareOptions::new(Domain::Line);
+    let err = condition(
+        record(x.clone()),
+        &line
+            .clone()
+            .with_measured(circle_signal::Measured::Velocity)
+            .with_bridge(2),
+        &mut |_| {},
+    )
+    .unwrap_err();
+    assert!(err.to_string().contains("integrated piece by piece"), "{err}");
+    let err = condition(
+        record(x),
+        &line.with_bridge(hb_record::prepare::MAX_BRIDGE + 1),
+        &mut |_| {},
+    )
+    .unwrap_err();
+    assert!(err.to_string().contains("at most 64 samples, not 65"), "{err}");
+}

@@ -401,3 +401,86 @@ proptest! {
         prop_assert!((grid.t0 - t0).abs() <= e + mean * bound, "t0 {} vs {t0}", grid.t0);
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig {
+        cases: 128,
+        rng_seed: RngSeed::Fixed(0x0b41_d6e5),
+        ..ProptestConfig::default()
+    })]
+
+    /// Rows dropped anywhere but at the ends, bridged up to `limit` samples a gap: a cubic motion
+    /// (a whirling angle on the circle, a displacement, a drive) comes back exactly at every
+    /// sample bridged, every sample read is kept as it was, the angle stays in [-π, π), and the
+    /// pieces left are those of the gaps too long, or with one sample on a side.
+    #[test]
+    fn bridged_gaps_give_back_a_cubic_in_every_column(
+        n in 60..400usize,
+        limit in 1..6usize,
+        drops in proptest::collection::vec((2..1000usize, 1..8usize), 1..12),
+        c in proptest::array::uniform4(-1.0..1.0f64),
+    ) {
+        use circle_signal::{Domain, wrap};
+        use hb_record::input::Record;
+        use hb_record::prepare::{PrepareOptions, condition};
+        let s = n as f64;
+        // Unwrapped angle: up to 1.3 rad a step; displacement and drive: other cubics.
+        let angle = |t: f64| c[0] + 1.3 * c[1] * t + 0.3 * c[2] * t * t / s + 0.1 * c[3] * t * t * t / (s * s);
+        let line = |t: f64| 2.0 * c[3] - c[2] * t / s + c[1] * (t / s).powi(2) + 3.0 * c[0] * (t / s).powi(3);
+        let drive = |t: f64| 0.5 + c[2] * (t / s).powi(3);
+        let mut missing = vec![false; n];
+        for (at, len) in drops {
+            let at = 2 + at % (n - 4);
+            for m in missing.iter_mut().take((at + len).min(n - 2)).skip(at) {
+                *m = true;
+            }
+        }
+        let rows: Vec<usize> = (0..n).filter(|&i| !missing[i]).collect();
+        let of = |f: &dyn Fn(f64) -> f64| rows.iter().map(|&i| f(i as f64)).collect::<Vec<f64>>();
+        let record = Record {
+            t: of(&|t| t),
+            theta: of(&|t| wrap(angle(t))),
+            others: vec![of(&line)],
+            drives: vec![of(&drive)],
+            ..Record::default()
+        };
+        let options = PrepareOptions::new(Domain::Circle)
+            .with_others(vec![Domain::Line])
+            .with_bridge(limit);
+        let grid = condition(record, &options, &mut |_| {}).map_err(|e| TestCaseError::fail(e.to_string()))?;
+        // The gaps of the record as read, and those left.
+        let mut expected: Vec<std::ops::Range<usize>> = Vec::new();
+        let mut i = 0;
+        while i < n {
+            let start = i;
+            while i < n && !missing[i] {
+                i += 1;
+            }
+            expected.push(start..i);
+            while i < n && missing[i] {
+                i += 1;
+            }
+        }
+        // A gap is bridged when it misses at most `limit` samples and the pieces read on both
+        // sides have two samples or more.
+        let mut joined: Vec<std::ops::Range<usize>> = vec![expected[0].clone()];
+        for w in expected.windows(2) {
+            let bridged = w[1].start - w[0].end <= limit && w[0].len() >= 2 && w[1].len() >= 2;
+            match joined.last_mut() {
+                Some(last) if bridged => last.end = w[1].end,
+                _ => joined.push(w[1].clone()),
+            }
+        }
+        prop_assert_eq!(&grid.pieces, &joined);
+        for piece in &grid.pieces {
+            for i in piece.clone() {
+                let t = i as f64;
+                let tol = if missing[i] { 1e-9 } else { 1e-12 };
+                prop_assert!(wrap(grid.x[i] - angle(t)).abs() <= tol, "angle at {}: {} vs {}", i, grid.x[i], wrap(angle(t)));
+                prop_assert!((-std::f64::consts::PI..std::f64::consts::PI).contains(&grid.x[i]));
+                prop_assert!((grid.others[0].x[i] - line(t)).abs() <= tol * 10.0, "line at {}", i);
+                prop_assert!((grid.drives[0][i] - drive(t)).abs() <= tol * 10.0, "drive at {}", i);
+            }
+        }
+    }
+}

@@ -56,6 +56,13 @@ pub struct CompareArgs {
     /// prediction when they are few (at most one per 1000 samples; the default, said in a note).
     #[arg(long, conflicts_with = "repair")]
     pub no_repair: bool,
+    /// Bridge every gap of at most N missing samples (two samples or more on each side) by the
+    /// cubic through its neighbours, in every column: a free run then goes on through it, and
+    /// its samples are scored as the record's (a logger's dropped rows; a note counts them). Its
+    /// error, a cubic's over N + 3 steps, is about ((N+3) ω dt)^4 / 100 of a motion of angular
+    /// frequency ω; 0 bridges none (at most 64; a displacement record only).
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub bridge_gaps: usize,
     /// circle or line [default: the model's].
     #[arg(long, value_parser = choice::<Domain>(&["circle", "line"]))]
     pub signal: Option<Domain>,
@@ -114,6 +121,7 @@ impl CompareArgs {
             drive_col: self.drive_col.clone(),
             repair: self.repair,
             no_repair: self.no_repair,
+            bridge_gaps: self.bridge_gaps,
             velocity_col: self.velocity_col.clone(),
             signal: self.signal,
             measured: self.measured,

@@ -66,6 +66,13 @@ pub struct InputArgs {
     /// prediction when they are few (at most one per 1000 samples; the default, said in a note).
     #[arg(long, conflicts_with = "repair")]
     pub no_repair: bool,
+    /// Bridge every gap of at most N missing samples (two samples or more on each side) by the
+    /// cubic through its neighbours, in every column, so that the pieces on either side are
+    /// analysed as one: a logger's dropped rows (a note counts them). Its error, a cubic's over
+    /// N + 3 steps, is about ((N+3) ω dt)^4 / 100 of a motion of angular frequency ω; 0 bridges
+    /// none (at most 64; a displacement record only, not with --stream).
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub bridge_gaps: usize,
     /// An angle on the circle (wrapped into [-π, π), unwrapped per orbit, circle metric) or a
     /// displacement on the line (no wrapping, plain differences): circle or line, for every
     /// coordinate or one per coordinate of --coords (circle,line).
@@ -119,6 +126,7 @@ impl InputArgs {
             drive_col: self.drive_col.clone(),
             repair: self.repair,
             no_repair: self.no_repair,
+            bridge_gaps: self.bridge_gaps,
             velocity_col: self.velocity_col.clone(),
             signal: self.signal.clone(),
             measured: self.measured,

@@ -215,6 +215,7 @@ fn record_options(args: &ReportArgs, system: &IdentifiedSystem) -> anyhow::Resul
         drive_col,
         repair: input.repair,
         no_repair: input.no_repair,
+        bridge_gaps: input.bridge_gaps,
         velocity_col: input.velocity_col.clone(),
         signal: system
             .domains()
@@ -248,6 +249,7 @@ fn measure(
         drive_col: input.drive_col.clone().filter(|_| system.has_measured_drive()),
         repair: input.repair,
         no_repair: input.no_repair,
+        bridge_gaps: input.bridge_gaps,
         velocity_col: input.velocity_col.clone(),
         measured: input.measured,
         // On the record's grid, as the report draws it beside the models' runs.
