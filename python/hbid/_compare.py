@@ -222,7 +222,8 @@ def compare(
             of them, each scored on its own (default: the whole record). A file's first rows
             that its logger stamped before it settled to its rate are run through at their own
             stamps and counted as its first samples (a note says so), so that the samples are the
-            file's rows for a record without gaps.
+            file's rows for a record without gaps (the samples bridged into gaps, with
+            ``bridge_gaps``, count among them).
         init: samples that set the initial state of each piece (default: one period of the
             model's drive, at most a tenth of the range, at least 8).
         x0: the initial position instead of fitting it (with ``v0``): one per coordinate of a

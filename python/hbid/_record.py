@@ -171,11 +171,13 @@ def read(
         velocity_col: the columns of the coordinates' measured velocities, one per coordinate.
         repair: replace isolated time-stamp glitches and every spike (listed in the notes).
         no_repair: keep every spike (a warning), even those replaced by default.
-        bridge_gaps: bridge every gap of at most this many missing samples (two samples or more
-            on each side) by the cubic through its neighbours, in every column, so that the pieces
-            on either side are analysed as one (a logger's dropped rows; a note counts them). Its
-            error is about ``((bridge_gaps + 3) * omega * dt)**4 / 100`` of a motion of angular
-            frequency ``omega``; 0 bridges none (at most 64; a displacement record only).
+        bridge_gaps: bridge every gap of at most this many missing samples (at most 4), between
+            pieces of at least 7 samples, by the cubic through the two samples on each side, in
+            every column, so that the pieces are analysed as one (a logger's dropped rows; a note
+            counts them). A bridged sample is off by about
+            ``((bridge_gaps + 3) * omega * dt)**4 / 100`` of a motion of angular frequency
+            ``omega`` and carries at most 1.6 times one sample's noise; 0 bridges none (a
+            displacement record only).
         signal: ``"circle"`` for an angle (wrapped into ``[-pi, pi)``) or ``"line"`` for a
             displacement; for several coordinates one for all or a list, one per coordinate.
         measured: ``"displacement"``, or (on the line) ``"velocity"`` or ``"acceleration"``,

@@ -90,7 +90,7 @@ fn rigs() -> Vec<Rig> {
         },
         Rig {
             name: "pendulum-dropped-rows",
-            what: "the first rig's record from a logger that drops one row in a hundred (1500 single rows at seeded random places): no stretch of the three drive periods a window needs is left whole, so the gaps are bridged",
+            what: "the first rig's record from a logger that drops one row in a hundred (1500 single rows at seeded random places): no stretch of the three drive periods a window needs is left whole, so the gaps are bridged, all but those beside a piece too short for the spike search (fewer than 7 samples between two dropped rows)",
             simulate: &[PENDULUM, &["--gaps", "1500:1", "--seed", "5"]],
             identify: &["--drive-frequency", "1.02", "--bridge-gaps", "1"],
             rewrite: None,

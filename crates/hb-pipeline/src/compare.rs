@@ -47,7 +47,8 @@ use crate::record::{AngleUnit, ColumnList, RecordOptions, Source, condition_sour
 /// A range of samples of the record, `A..B` (0-based, `B` excluded), or `A..` to the record's
 /// end: the grid's samples, after the rows a logger stamped before it settled, when the record
 /// has them (see the [module documentation](self)). For a record without gaps the samples are
-/// the file's rows.
+/// the file's rows; a record whose gaps were bridged (`bridge_gaps`) counts the samples bridged
+/// among them, rows the file does not have.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct SampleRange {
     /// The first sample.

@@ -288,10 +288,12 @@ pub struct RecordOptions {
     /// Keep every spike in the record (a warning) instead of replacing them when they are few
     /// (at most one per 1000 samples; the default, said in a note).
     pub no_repair: bool,
-    /// Bridge every gap of at most this many missing samples (two samples or more on each
-    /// side) by the cubic through its neighbours, in every column, so that its pieces are
-    /// analysed as one (a logger's dropped rows; each bridge counted in a note). 0, the default,
-    /// bridges none; at most [`hb_record::prepare::MAX_BRIDGE`]; a displacement record only.
+    /// Bridge every gap of at most this many missing samples, between pieces of at least 7 (each
+    /// searched for spikes), by the cubic through the two samples on each side, in every column,
+    /// so that its pieces are analysed as one (a logger's dropped rows; each bridge counted in a
+    /// note). 0, the default, bridges none; at most [`hb_record::prepare::MAX_BRIDGE`] (4: a
+    /// bridged sample then carries at most 1.6 times one sample's noise); a displacement record
+    /// only.
     pub bridge_gaps: usize,
     /// An angle on the circle or a displacement on the line: one for every coordinate, or one
     /// per coordinate.
@@ -361,7 +363,8 @@ impl RecordOptions {
                 "bridge_gaps",
                 self.bridge_gaps,
                 format!(
-                    "at most {}: a cubic through two samples on each side is no measurement of a longer gap",
+                    "at most {}: the cubic through two samples on each side would carry more than 1.6 times one \
+                     sample's noise into a longer gap's samples",
                     hb_record::prepare::MAX_BRIDGE
                 ),
             ));

@@ -115,10 +115,11 @@ pub struct PrepareOptions {
     /// What the sensor measured: the displacement itself, or its velocity or acceleration (on the
     /// line only), integrated to the displacement by [`circle_signal::displacement`].
     pub measured: Measured,
-    /// Bridge every gap of at most this many missing samples (with two samples on each side) by
-    /// the cubic through its neighbours, in every column (see [`bridge`]); 0, the
-    /// default, bridges none. At most [`MAX_BRIDGE`], and only for a record of the displacement
-    /// itself (a velocity or acceleration is integrated piece by piece).
+    /// Bridge every gap of at most this many missing samples, between pieces long enough to be
+    /// searched for spikes, by the cubic through the two samples on each side, in every column
+    /// (see [`bridge`]); 0, the default, bridges none. At most [`MAX_BRIDGE`], and only for a
+    /// record of the displacement itself (a velocity or acceleration is integrated piece by
+    /// piece).
     pub bridge: usize,
 }
 
@@ -659,8 +660,8 @@ pub fn condition(
     };
     if options.bridge > MAX_BRIDGE {
         return Err(PrepareError::Bridge(format!(
-            "a bridged gap may miss at most {MAX_BRIDGE} samples, not {}: a cubic through two samples on each \
-             side is no measurement of a longer one",
+            "a bridged gap may miss at most {MAX_BRIDGE} samples, not {}: the cubic through two samples on each \
+             side would carry more than 1.6 times one sample's noise into a longer one's",
             options.bridge
         )));
     }

@@ -631,5 +631,5 @@ fn bridging_is_refused_for_an_integrated_record_and_beyond_its_limit() {
         &mut |_| {},
     )
     .unwrap_err();
-    assert!(err.to_string().contains("at most 64 samples, not 65"), "{err}");
+    assert!(err.to_string().contains("at most 4 samples, not 5"), "{err}");
 }

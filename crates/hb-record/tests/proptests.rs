@@ -409,14 +409,15 @@ proptest! {
         ..ProptestConfig::default()
     })]
 
-    /// Rows dropped anywhere but at the ends, bridged up to `limit` samples a gap: a cubic motion
+    /// Rows dropped anywhere but at the ends, bridged up to `limit` samples a gap between pieces
+    /// searched for spikes: a cubic motion
     /// (a whirling angle on the circle, a displacement, a drive) comes back exactly at every
     /// sample bridged, every sample read is kept as it was, the angle stays in [-π, π), and the
     /// pieces left are those of the gaps too long, or with one sample on a side.
     #[test]
     fn bridged_gaps_give_back_a_cubic_in_every_column(
         n in 60..400usize,
-        limit in 1..6usize,
+        limit in 1..=hb_record::prepare::MAX_BRIDGE,
         drops in proptest::collection::vec((2..1000usize, 1..8usize), 1..12),
         c in proptest::array::uniform4(-1.0..1.0f64),
     ) {
@@ -462,10 +463,10 @@ proptest! {
             }
         }
         // A gap is bridged when it misses at most `limit` samples and the pieces read on both
-        // sides have two samples or more.
+        // sides have 7 samples or more (the spike search's least).
         let mut joined: Vec<std::ops::Range<usize>> = vec![expected[0].clone()];
         for w in expected.windows(2) {
-            let bridged = w[1].start - w[0].end <= limit && w[0].len() >= 2 && w[1].len() >= 2;
+            let bridged = w[1].start - w[0].end <= limit && w[0].len() >= 7 && w[1].len() >= 7;
             match joined.last_mut() {
                 Some(last) if bridged => last.end = w[1].end,
                 _ => joined.push(w[1].clone()),

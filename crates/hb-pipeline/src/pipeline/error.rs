@@ -118,8 +118,8 @@ pub enum PipelineError {
             format!("in the record: it has {} samples", .longest)
         },
         if *.pieces > 1 {
-            " (a window never spans a gap); give a shorter «window», or bridge the gaps of a few samples \
-             («bridge_gaps»)"
+            " (a window never spans a gap); give a shorter «window», or bridge gaps of at most 4 missing \
+             samples («bridge_gaps»)"
         } else {
             "; give a shorter «window», or a longer record"
         }

@@ -8,30 +8,42 @@
 //! ([`PrepareOptions::bridge`](super::PrepareOptions::bridge)): each missing sample is the cubic
 //! through the two samples on each side (Lagrange interpolation at their grid times), of the
 //! angles unwrapped across the gap, of the displacements, drives and measured velocities as they
-//! are. Its error is that of a cubic over `m + 3` steps: about `(ω h)^4 (m + 3)^4 / 100` of the
-//! amplitude of a motion of angular frequency `ω` sampled every `h` (a few 1e-6 rad for a gap of
-//! one sample at 50 samples per period of the fastest motion), and a bridged sample carries
-//! no noise of its own beyond its neighbours'.
+//! are.
+//!
+//! - **Its error**, that of a cubic over `m + 3` steps for a gap of `m`, is about
+//!   `((m + 3) ω h)^4 / 100` of the amplitude of a motion of angular frequency `ω` sampled every
+//!   `h` (a few 1e-6 rad for a gap of one sample at 50 samples per period of the fastest motion).
+//! - **Its noise**: the cubic's weights carry the four samples' noise into a bridged sample, at
+//!   most 0.97, 1.18, 1.39 and 1.61 times one sample's for gaps of 1, 2, 3 and 4 samples, and
+//!   about `m / 4` times beyond (16.5 at 64). So no longer gap is bridged ([`MAX_BRIDGE`]).
+//! - **Only searched samples are its nodes**: a gap is bridged only between pieces of at least
+//!   [`SpikeParams::MIN_SAMPLES`] samples, each searched for spikes (and repaired as asked)
+//!   before the fill; a shorter piece is not searched, and stays apart.
+//! - **On the circle** the far side's branch is the one nearest the line that leaves the near
+//!   side with the mean of the two sides' steps, so that a fast whirl keeps its turns and a
+//!   motion that turns back within the gap gains none.
 
 use std::ops::Range;
 
-use circle_signal::{Domain, wrap};
+use circle_signal::{Domain, SpikeParams, wrap};
 
-/// The most samples a bridged gap may miss: beyond, a cubic through two samples on each side is
-/// no measurement of what happened in between.
-pub const MAX_BRIDGE: usize = 64;
+/// The most samples a bridged gap may miss: beyond, the cubic through two samples on each side
+/// carries more than 1.6 times one sample's noise into the samples it stands for (see the
+/// [module documentation](self)).
+pub const MAX_BRIDGE: usize = 4;
 
 /// The gaps between consecutive `pieces` (ranges of one grid, in order) that miss at most
-/// `limit` samples and have at least two samples on each side: gap `i` lies between `pieces[i]`
-/// and `pieces[i + 1]`.
+/// `limit` samples, between pieces of at least [`SpikeParams::MIN_SAMPLES`] samples (searched
+/// for spikes): gap `i` lies between `pieces[i]` and `pieces[i + 1]`.
 pub(crate) fn bridgeable(pieces: &[Range<usize>], limit: usize) -> Vec<usize> {
     if limit == 0 {
         return Vec::new();
     }
+    let searched = |p: &Range<usize>| p.len() >= SpikeParams::MIN_SAMPLES.max(2);
     pieces
         .windows(2)
         .enumerate()
-        .filter(|(_, w)| w[1].start - w[0].end <= limit && w[0].len() >= 2 && w[1].len() >= 2)
+        .filter(|(_, w)| w[1].start - w[0].end <= limit && searched(&w[0]) && searched(&w[1]))
         .map(|(i, _)| i)
         .collect()
 }
@@ -39,18 +51,18 @@ pub(crate) fn bridgeable(pieces: &[Range<usize>], limit: usize) -> Vec<usize> {
 /// Fills the samples `end..start` of `x` (a gap: `x[end - 2..end]` and `x[start..start + 2]`
 /// hold samples) with the cubic through the two samples on each side, on `domain`: on the
 /// circle the four samples unwrapped across the gap (the far side's branch the one nearest the
-/// line through the near side's two samples, so that a fast whirl keeps its turns) and the
-/// result wrapped into `[-π, π)`.
+/// line that leaves the near side with the mean of both sides' steps) and the result wrapped
+/// into `[-π, π)`.
 pub(crate) fn fill(x: &mut [f64], end: usize, start: usize, domain: Domain) {
     let m = start - end;
     let (y0, y1, y2, y3) = (x[end - 2], x[end - 1], x[start], x[start + 1]);
     let (u0, u1, u2, u3) = match domain {
         Domain::Line => (y0, y1, y2, y3),
         Domain::Circle => {
-            let u0 = y1 + wrap(y0 - y1);
-            let guess = y1 + (m + 1) as f64 * (y1 - u0);
+            let (near, far) = (wrap(y1 - y0), wrap(y3 - y2));
+            let guess = y1 + (m + 1) as f64 * 0.5 * (near + far);
             let u2 = guess + wrap(y2 - guess);
-            (u0, y1, u2, u2 + wrap(y3 - y2))
+            (y1 - near, y1, u2, u2 + far)
         }
     };
     // Nodes at grid steps -1, 0, m + 1, m + 2 from the gap's last sample before it.
@@ -147,16 +159,61 @@ mod tests {
     }
 
     #[test]
-    fn only_short_gaps_with_two_samples_on_each_side_are_bridged() {
-        let pieces = vec![0..5, 6..8, 11..14, 15..16, 17..20, 30..40];
+    fn only_short_gaps_between_searched_pieces_are_bridged() {
+        let pieces = vec![0..10, 11..20, 23..30, 31..36, 37..50, 60..80];
         assert_eq!(bridgeable(&pieces, 0), Vec::<usize>::new());
-        // 5..6 misses 1; 8..11 misses 3; 14..15 and 16..17 have one sample on a side; 20..30
-        // misses 10.
+        // 10..11 misses 1; 20..23 misses 3; 30..31 and 36..37 border a piece of 5 samples, too
+        // short for the spike search; 50..60 misses 10.
         assert_eq!(bridgeable(&pieces, 1), vec![0]);
         assert_eq!(bridgeable(&pieces, 3), vec![0, 1]);
         assert_eq!(bridgeable(&pieces, 10), vec![0, 1, 4]);
-        assert_eq!(joined(&pieces, &[0, 1, 4]), vec![0..14, 15..16, 17..40]);
+        assert_eq!(joined(&pieces, &[0, 1, 4]), vec![0..30, 31..36, 37..80]);
         assert_eq!(joined(&pieces, &[]), pieces);
-        assert_eq!(joined(&pieces, &[0, 1, 2, 3, 4]), vec![0..40]);
+        assert_eq!(joined(&pieces, &[0, 1, 2, 3, 4]), vec![0..80]);
+    }
+
+    #[test]
+    fn a_motion_that_turns_back_within_a_gap_gains_no_turn() {
+        // 0.72 rad a step into the gap and out of it the other way: the line through the near
+        // side alone would land 3.6 rad off, on the wrong branch.
+        let f = |n: f64| 3.0 - 0.12 * (n - 3.5) * (n - 3.5);
+        let mut x: Vec<f64> = (0..8).map(|n| wrap(f(n as f64))).collect();
+        let truth = x.clone();
+        for v in &mut x[2..6] {
+            *v = f64::NAN;
+        }
+        fill(&mut x, 2, 6, Domain::Circle);
+        for n in 0..8 {
+            assert!(
+                wrap(x[n] - truth[n]).abs() < 1e-12,
+                "sample {n}: {} against {}",
+                x[n],
+                truth[n]
+            );
+        }
+    }
+
+    #[test]
+    fn the_noise_a_bridge_carries_is_at_most_its_documented_gain() {
+        // The root sum of squares of the cubic's weights at each bridged sample.
+        let gain = |m: usize| {
+            let mut worst: f64 = 0.0;
+            for k in 0..m {
+                let mut x = vec![0.0; m + 4];
+                let mut sum = 0.0;
+                for node in [0, 1, m + 2, m + 3] {
+                    x.iter_mut().for_each(|v| *v = 0.0);
+                    x[node] = 1.0;
+                    fill(&mut x, 2, m + 2, Domain::Line);
+                    sum += x[2 + k] * x[2 + k];
+                }
+                worst = worst.max(sum.sqrt());
+            }
+            worst
+        };
+        for (m, documented) in [(1, 0.97), (2, 1.17), (3, 1.39), (4, 1.61)] {
+            assert!((gain(m) - documented).abs() < 0.005, "{m}: {}", gain(m));
+        }
+        assert!((gain(64) - 16.5).abs() < 0.05, "{}", gain(64));
     }
 }

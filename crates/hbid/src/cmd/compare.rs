@@ -56,11 +56,12 @@ pub struct CompareArgs {
     /// prediction when they are few (at most one per 1000 samples; the default, said in a note).
     #[arg(long, conflicts_with = "repair")]
     pub no_repair: bool,
-    /// Bridge every gap of at most N missing samples (two samples or more on each side) by the
-    /// cubic through its neighbours, in every column: a free run then goes on through it, and
-    /// its samples are scored as the record's (a logger's dropped rows; a note counts them). Its
-    /// error, a cubic's over N + 3 steps, is about ((N+3) ω dt)^4 / 100 of a motion of angular
-    /// frequency ω; 0 bridges none (at most 64; a displacement record only).
+    /// Bridge every gap of at most N missing samples (N at most 4), between pieces of at least 7
+    /// samples, by the cubic through the two samples on each side, in every column (angles
+    /// across their wraps), a free run then goes on through it, and its samples are scored as the
+    /// record's (a logger's dropped rows; a note counts them). A bridged sample is off by about ((N+3) ω dt)^4 / 100 of a motion of
+    /// angular frequency ω and carries at most 1.6 times one sample's noise; 0 bridges none (a
+    /// displacement record only).
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub bridge_gaps: usize,
     /// circle or line [default: the model's].
@@ -77,8 +78,8 @@ pub struct CompareArgs {
     pub angle_unit: AngleUnit,
     /// Samples compared, A..B (0-based, B excluded) or A.. to the end: the record's rows for a
     /// record without gaps, its first rows included when a logger stamped them before it settled
-    /// to its rate (see --skip-unsettled); repeatable, each range scored on its own [default: the
-    /// whole record].
+    /// to its rate (see --skip-unsettled), samples bridged into gaps (--bridge-gaps) counted among
+    /// them; repeatable, each range scored on its own [default: the whole record].
     #[arg(long, value_name = "A..B")]
     pub range: Vec<SampleRange>,
     /// Samples at the start of each range (and after each gap) that set the model's initial state

@@ -66,11 +66,12 @@ pub struct InputArgs {
     /// prediction when they are few (at most one per 1000 samples; the default, said in a note).
     #[arg(long, conflicts_with = "repair")]
     pub no_repair: bool,
-    /// Bridge every gap of at most N missing samples (two samples or more on each side) by the
-    /// cubic through its neighbours, in every column, so that the pieces on either side are
-    /// analysed as one: a logger's dropped rows (a note counts them). Its error, a cubic's over
-    /// N + 3 steps, is about ((N+3) ω dt)^4 / 100 of a motion of angular frequency ω; 0 bridges
-    /// none (at most 64; a displacement record only, not with --stream).
+    /// Bridge every gap of at most N missing samples (N at most 4), between pieces of at least 7
+    /// samples, by the cubic through the two samples on each side, in every column (angles
+    /// across their wraps), so that the pieces are analysed as one: a logger's dropped rows (a
+    /// note counts them). A bridged sample is off by about ((N+3) ω dt)^4 / 100 of a motion of
+    /// angular frequency ω and carries at most 1.6 times one sample's noise; 0 bridges none (a
+    /// displacement record only, not with --stream).
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub bridge_gaps: usize,
     /// An angle on the circle (wrapped into [-π, π), unwrapped per orbit, circle metric) or a

@@ -16,7 +16,7 @@ use hb_pipeline::pipeline::{
 };
 use hb_pipeline::{IdentifyRequest, Notice, Observer, Spelling};
 use hb_plot::{BLUE, Figure, GREY, ORANGE, RED, Series, Style, add_figure};
-use hb_record::prepare::Data;
+use hb_record::prepare::{Data, Note};
 use pendulum_sim::Domain;
 
 use super::report_args::Kept;
@@ -193,10 +193,13 @@ pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
     let notes: Vec<String> = notices
         .iter()
         .filter(|n| {
-            !matches!(
-                n,
-                Notice::Resampled { .. } | Notice::Record(_) | Notice::Column { .. }
-            )
+            // The record's notes are on the console; the one that changes what its samples are
+            // (gaps bridged: samples the file does not have) is in the report too.
+            matches!(n, Notice::Record(Note::Bridged { .. }))
+                || !matches!(
+                    n,
+                    Notice::Resampled { .. } | Notice::Record(_) | Notice::Column { .. }
+                )
         })
         .map(|n| Spelling::CommandLine.render(&n.to_string()))
         .collect();

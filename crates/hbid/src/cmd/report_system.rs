@@ -19,7 +19,7 @@ use hb_pipeline::{
     OptionError, RecordOptions, Source, Spelling,
 };
 use hb_plot::{BLUE, Figure, GREEN, INK, ORANGE, PURPLE, RED, Series, Style, add_figure};
-use hb_record::prepare::GridData;
+use hb_record::prepare::{GridData, Note};
 use pendulum_sim::PredictionConfig;
 use pendulum_sim::prediction::{
     SystemPredictionRecord, SystemPredictionTimes, system_prediction_starts, system_valid_prediction_times,
@@ -142,10 +142,13 @@ pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
             notices
                 .iter()
                 .filter(|n| {
-                    !matches!(
-                        n,
-                        Notice::Resampled { .. } | Notice::Record(_) | Notice::Column { .. }
-                    )
+                    // The record's notes are on the console; the one that changes what its samples are
+                    // (gaps bridged: samples the file does not have) is in the report too.
+                    matches!(n, Notice::Record(Note::Bridged { .. }))
+                        || !matches!(
+                            n,
+                            Notice::Resampled { .. } | Notice::Record(_) | Notice::Column { .. }
+                        )
                 })
                 .map(|n| Spelling::CommandLine.render(&n.to_string())),
         )
