@@ -14,8 +14,9 @@
 //!   `((m + 3) ω h)^4 / 100` of the amplitude of a motion of angular frequency `ω` sampled every
 //!   `h` (a few 1e-6 rad for a gap of one sample at 50 samples per period of the fastest motion).
 //! - **Its noise**: the cubic's weights carry the four samples' noise into a bridged sample, at
-//!   most 0.97, 1.18, 1.39 and 1.61 times one sample's for gaps of 1, 2, 3 and 4 samples, and
-//!   about `m / 4` times beyond (16.5 at 64). So no longer gap is bridged ([`MAX_BRIDGE`]).
+//!   most 0.97, 1.17, 1.39 and 1.61 times one sample's for gaps of 1, 2, 3 and 4 samples, and
+//!   growing about as `m / 4` beyond (2.6 at 8, 16.5 at 64). So no longer gap is bridged
+//!   ([`MAX_BRIDGE`]).
 //! - **Only searched samples are its nodes**: a gap is bridged only between pieces of at least
 //!   [`SpikeParams::MIN_SAMPLES`] samples, each searched for spikes (and repaired as asked)
 //!   before the fill; a shorter piece is not searched, and stays apart.

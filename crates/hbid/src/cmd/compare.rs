@@ -58,10 +58,10 @@ pub struct CompareArgs {
     pub no_repair: bool,
     /// Bridge every gap of at most N missing samples (N at most 4), between pieces of at least 7
     /// samples, by the cubic through the two samples on each side, in every column (angles
-    /// across their wraps), a free run then goes on through it, and its samples are scored as the
-    /// record's (a logger's dropped rows; a note counts them). A bridged sample is off by about ((N+3) ω dt)^4 / 100 of a motion of
-    /// angular frequency ω and carries at most 1.6 times one sample's noise; 0 bridges none (a
-    /// displacement record only).
+    /// across their wraps): a free run then goes on through it, and its samples are scored as the
+    /// record's (a logger's dropped rows; a note counts them). A bridged sample is off by about
+    /// ((N+3) ω dt)^4 / 100 of a motion of angular frequency ω and carries at most 1.6 times one
+    /// sample's noise; 0 bridges none (a displacement record only).
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub bridge_gaps: usize,
     /// circle or line [default: the model's].
