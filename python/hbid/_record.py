@@ -148,7 +148,8 @@ def read(
     """Reads a record from a file (or takes it from arrays), as ``hbid`` reads one.
 
     Text (cells separated by commas, semicolons, spaces or tabs; a header with columns ``t``
-    and ``theta`` (or ``x``, ``angle``), or headerless time and angle in either order) or
+    and ``theta`` (or ``x``, ``angle``), a row of units under it passed, or headerless time and
+    angle in either order) or
     ``.npy`` (a 1-D array of samples with ``dt``, or samples x channels). The time stamps are
     fitted to a uniform grid: gaps split the record into pieces, and an isolated glitch is an
     error unless ``repair=True`` replaces it by its grid time. Isolated spikes (an encoder's bit

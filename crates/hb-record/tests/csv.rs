@@ -139,6 +139,33 @@ fn reads_with_comments_and_extra_columns() {
     );
 }
 
+/// A row of the columns' units under the header (as a data-acquisition export writes it) is
+/// passed like the header, its lines counted; a row under the header with a number in it is
+/// data, and its other cells name their line; without a header no row is units.
+#[test]
+fn a_row_of_units_under_the_header_is_passed() {
+    let r = read("# export\nt,theta,tau\ns,rad,N m\n0,0.1,2\n0.5,0.2,3\n").unwrap();
+    assert_eq!(
+        (r.t, r.theta, r.lines),
+        (vec![0.0, 0.5], vec![0.1, 0.2], Some(vec![4, 5]))
+    );
+    let r = read("t;theta\n[s];[rad]\n0;0,1\n0,5;0,2\n").unwrap();
+    assert_eq!((r.t, r.theta), (vec![0.0, 0.5], vec![0.1, 0.2]));
+    assert!(matches!(
+        read("t,theta\n0,rad\n0.5,0.2\n"),
+        Err(InputError::NotANumber { line: 2, .. })
+    ));
+    // Only the row right under the header.
+    assert!(matches!(
+        read("t,theta\ns,rad\n0,0.1\ns,rad\n"),
+        Err(InputError::NotANumber { line: 4, .. })
+    ));
+    assert!(matches!(
+        read("0,0.1\ns,rad\n"),
+        Err(InputError::NotANumber { line: 2, .. })
+    ));
+}
+
 #[test]
 fn whitespace_semicolons_and_tabs_separate_cells() {
     let expected = (vec![0.0, 0.5, 1.0], vec![0.1, -0.2, 0.3]);

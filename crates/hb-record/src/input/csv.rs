@@ -1,5 +1,5 @@
-//! Text records: comments, an optional header, cells separated by commas, semicolons or white
-//! space, columns by name or position.
+//! Text records: comments, an optional header (and a row of units under it), cells separated by
+//! commas, semicolons or white space, columns by name or position.
 
 use super::{Column, Columns, InputError, Location, ReadOptions, Record, Role, Separator, Times, grid};
 
@@ -117,7 +117,13 @@ pub(super) fn read<'a>(bytes: &'a [u8], options: &ReadOptions) -> Result<Record,
     if header.is_none() {
         push(first_line, first, &mut cells)?;
     }
+    let mut under_header = header.is_some();
     while let Some((line, text)) = lines.next_row()? {
+        // A row of the columns' units under the header (`s, rad, N m`): as many cells, none of
+        // them a number, so no data; passed as the header is.
+        if std::mem::take(&mut under_header) && units_row(text, separator, width) {
+            continue;
+        }
         push(line, text, &mut cells)?;
     }
     if record.theta.is_empty() {
@@ -175,6 +181,14 @@ fn first_row(bytes: &[u8]) -> Result<(Lines<'_>, u64, &str, Separator), InputErr
         None => Separator::Whitespace,
     };
     Ok((lines, first_line, first, separator))
+}
+
+/// Whether `text` is a row of `width` cells none of which is a number (a row of units under a
+/// header).
+fn units_row(text: &str, separator: Separator, width: usize) -> bool {
+    let mut cells = Vec::new();
+    separator.split(text, &mut cells);
+    cells.len() == width && cells.iter().all(|c| number(c, separator).is_none())
 }
 
 /// The names of a text's header, from the first row of `bytes` (the start of a text is enough);

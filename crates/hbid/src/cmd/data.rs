@@ -24,7 +24,7 @@ where
 /// The record's options shared by the analysis subcommands.
 #[derive(Debug, Args)]
 pub struct InputArgs {
-    /// The record: text (cells separated by commas, semicolons, spaces or tabs; header with columns t and theta, or headerless time and angle in either order) or .npy; `-` reads standard input. `identify` takes several records of the same columns and one fit: each is conditioned on its own and they are joined, a gap between each two.
+    /// The record: text (cells separated by commas, semicolons, spaces or tabs; header with columns t and theta, a row of units under it passed, or headerless time and angle in either order) or .npy; `-` reads standard input. `identify` takes several records of the same columns and one fit: each is conditioned on its own and they are joined, a gap between each two.
     #[arg(required = true, num_args = 1.., value_name = "FILE")]
     pub files: Vec<PathBuf>,
     /// Time column, by header name or 1-based position.
