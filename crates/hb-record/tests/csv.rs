@@ -164,6 +164,22 @@ fn a_row_of_units_under_the_header_is_passed() {
         read("0,0.1\ns,rad\n"),
         Err(InputError::NotANumber { line: 2, .. })
     ));
+    // Missing values are no units: the row stays data, and is refused as such.
+    for missing in ["NA,NA", ",", "null,", "N/A,rad"] {
+        let text = format!("t,theta\n{missing}\n0,0.1\n0.5,0.2\n");
+        assert!(read(&text).is_err(), "{missing}");
+    }
+    // Units with a space, or one left out, in a text of tabs whose names have no spaces.
+    for units in ["s\trad\trad s-1", "s\t\trad/s", "[s]\t[rad]\t[rad/s]"] {
+        let text = format!("t\ttheta\tomega\n{units}\n0\t0.1\t1\n0.5\t0.2\t2\n");
+        let r = read(&text).unwrap_or_else(|e| panic!("{units:?}: {e}"));
+        assert_eq!((r.t, r.theta), (vec![0.0, 0.5], vec![0.1, 0.2]), "{units:?}");
+    }
+    let r = read("t,theta,omega\ns,,rad/s\n0,0.1,1\n").unwrap();
+    assert_eq!(r.theta, vec![0.1]);
+    // Quoted numbers under a header of tabs are data.
+    let r = read("t\ttheta\n\"0\"\t\"0.1\"\n\"0.5\"\t\"0.2\"\n").unwrap();
+    assert_eq!((r.t, r.theta), (vec![0.0, 0.5], vec![0.1, 0.2]));
 }
 
 #[test]

@@ -183,12 +183,40 @@ fn first_row(bytes: &[u8]) -> Result<(Lines<'_>, u64, &str, Separator), InputErr
     Ok((lines, first_line, first, separator))
 }
 
-/// Whether `text` is a row of `width` cells none of which is a number (a row of units under a
-/// header).
+/// Whether `text` is a row of units under a header of `width` cells: as many cells, none of them
+/// a number or a missing value's marker (`NA`, `null`, ...), at least one not empty. In a text
+/// separated by tabs a unit may hold a space (`rad s-1`) or be left empty (two tabs in a row),
+/// so such a row is also split at each tab.
 fn units_row(text: &str, separator: Separator, width: usize) -> bool {
+    let units = |cells: &[&str]| {
+        cells.len() == width
+            && cells.iter().any(|c| !c.is_empty())
+            && cells
+                .iter()
+                .all(|c| c.is_empty() || (number(c, separator).is_none() && !missing_marker(c)))
+    };
     let mut cells = Vec::new();
     separator.split(text, &mut cells);
-    cells.len() == width && cells.iter().all(|c| number(c, separator).is_none())
+    if cells.iter().any(|c| number(c, separator).is_some()) {
+        return false;
+    }
+    if units(&cells) {
+        return true;
+    }
+    if matches!(separator, Separator::Tab | Separator::Whitespace) && text.contains('\t') {
+        let unquoted = |c: &'_ str| -> String { c.trim().trim_matches('"').trim().to_owned() };
+        let tabbed: Vec<String> = text.split('\t').map(unquoted).collect();
+        let tabbed: Vec<&str> = tabbed.iter().map(String::as_str).collect();
+        return units(&tabbed);
+    }
+    false
+}
+
+/// Whether a cell is how a program writes a missing value, not a unit.
+fn missing_marker(cell: &str) -> bool {
+    ["na", "n/a", "nan", "null", "none", "nil", "missing", "#n/a"]
+        .iter()
+        .any(|m| cell.eq_ignore_ascii_case(m))
 }
 
 /// The names of a text's header, from the first row of `bytes` (the start of a text is enough);
