@@ -175,9 +175,10 @@ def read(
         bridge_gaps: bridge every gap of at most this many missing samples (at most 4), between
             pieces of at least 7 samples, by the cubic through the two samples on each side, in
             every column, so that the pieces are analysed as one (a logger's dropped rows; a note
-            counts them). A bridged sample is off by about
-            ``((bridge_gaps + 3) * omega * dt)**4 / 100`` of a motion of angular frequency
-            ``omega`` and carries at most 1.6 times one sample's noise; 0 bridges none (a
+            counts them). A bridged sample of a sine of amplitude ``A`` and angular frequency
+            ``omega`` is off by at most ``A * (omega * dt)**4`` times 1/6, 1/2, 3/2 or 3 for gaps
+            of 1, 2, 3 or 4 samples, and carries at most 1.61 times one sample's noise; an angle
+            that moves too far across a gap to tell its turn leaves it a gap. 0 bridges none (a
             displacement record only).
         signal: ``"circle"`` for an angle (wrapped into ``[-pi, pi)``) or ``"line"`` for a
             displacement; for several coordinates one for all or a list, one per coordinate.

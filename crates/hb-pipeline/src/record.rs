@@ -292,7 +292,7 @@ pub struct RecordOptions {
     /// searched for spikes), by the cubic through the two samples on each side, in every column,
     /// so that its pieces are analysed as one (a logger's dropped rows; each bridge counted in a
     /// note). 0, the default, bridges none; at most [`hb_record::prepare::MAX_BRIDGE`] (4: a
-    /// bridged sample then carries at most 1.6 times one sample's noise); a displacement record
+    /// bridged sample then carries at most 1.61 times one sample's noise); a displacement record
     /// only.
     pub bridge_gaps: usize,
     /// An angle on the circle or a displacement on the line: one for every coordinate, or one
@@ -363,7 +363,7 @@ impl RecordOptions {
                 "bridge_gaps",
                 self.bridge_gaps,
                 format!(
-                    "at most {}: the cubic through two samples on each side would carry more than 1.6 times one \
+                    "at most {}: the cubic through two samples on each side would carry more than 1.61 times one \
                      sample's noise into a longer gap's samples",
                     hb_record::prepare::MAX_BRIDGE
                 ),

@@ -202,6 +202,9 @@ pub enum Note {
         missing: usize,
         /// The most samples a bridged gap may miss.
         limit: usize,
+        /// Gaps short enough but left as they are: an angle moved too far across them to tell
+        /// its turn (see [`bridge`]).
+        unclear: usize,
     },
     /// Rows written twice (a stamp and every value the same as the row before), the second of
     /// each left out.
@@ -313,11 +316,25 @@ impl fmt::Display for Note {
                 "{gaps} gap(s) in the time stamps ({missing} samples missing): the record is analysed in {} pieces",
                 gaps + 1
             ),
-            Note::Bridged { gaps, missing, limit } => write!(
-                f,
-                "{gaps} gap(s) of at most {limit} missing sample(s) bridged: {missing} sample(s) interpolated in every \
-                 column by the cubic through the two samples on each side"
-            ),
+            Note::Bridged {
+                gaps,
+                missing,
+                limit,
+                unclear,
+            } => {
+                write!(
+                    f,
+                    "{gaps} gap(s) of at most {limit} missing sample(s) bridged: {missing} sample(s) interpolated in \
+                     every column by the cubic through the two samples on each side"
+                )?;
+                if *unclear > 0 {
+                    write!(
+                        f,
+                        "; {unclear} more left as gaps: an angle moves too far across them to tell its turn"
+                    )?;
+                }
+                Ok(())
+            }
             Note::Wrapped => f.write_str("values outside [-π, π): read as an unwrapped angle and wrapped"),
             Note::DuplicateRows { first, count, .. } => write!(
                 f,
@@ -661,7 +678,7 @@ pub fn condition(
     if options.bridge > MAX_BRIDGE {
         return Err(PrepareError::Bridge(format!(
             "a bridged gap may miss at most {MAX_BRIDGE} samples, not {}: the cubic through two samples on each \
-             side would carry more than 1.6 times one sample's noise into a longer one's",
+             side would carry more than 1.61 times one sample's noise into a longer one's",
             options.bridge
         )));
     }
@@ -792,7 +809,14 @@ pub fn condition(
     // The gaps bridged are filled once every coordinate is conditioned on its pieces (its spikes
     // found and replaced as asked, so that none is a node of the cubic); the note of the gaps
     // counts those left.
-    let bridged = bridge::bridgeable(&pieces, options.bridge);
+    let (bridged, unclear): (Vec<usize>, Vec<usize>) = bridge::bridgeable(&pieces, options.bridge)
+        .into_iter()
+        .partition(|&g| {
+            let (end, start) = (pieces[g].end, pieces[g + 1].start);
+            std::iter::once((&x, options.signal))
+                .chain(others.iter().map(|c| (&c.x, c.domain)))
+                .all(|(x, domain)| domain == Domain::Line || bridge::turn_clear(x, end, start))
+        });
     let after = bridge::joined(&pieces, &bridged);
     if after.len() > 1 {
         let missing = x.len() - after.iter().map(Range::len).sum::<usize>();
@@ -825,7 +849,7 @@ pub fn condition(
     if options.measured != Measured::Displacement {
         note(Note::Integrated(options.measured));
     }
-    if !bridged.is_empty() {
+    if !bridged.is_empty() || !unclear.is_empty() {
         let mut missing = 0;
         for &g in &bridged {
             let (end, start) = (pieces[g].end, pieces[g + 1].start);
@@ -842,6 +866,7 @@ pub fn condition(
             gaps: bridged.len(),
             missing,
             limit: options.bridge,
+            unclear: unclear.len(),
         });
     }
     Ok(GridData {

@@ -584,6 +584,7 @@ fn short_gaps_are_bridged_in_every_column_and_longer_ones_kept() {
         gaps: 3,
         missing: 6,
         limit: 3,
+        unclear: 0,
     };
     assert!(grid.notes.contains(&bridged), "{:?}", grid.notes);
     assert_eq!(
@@ -632,4 +633,50 @@ fn bridging_is_refused_for_an_integrated_record_and_beyond_its_limit() {
     )
     .unwrap_err();
     assert!(err.to_string().contains("at most 4 samples, not 5"), "{err}");
+}
+
+/// A coarsely sampled angle (16 samples a period of a 3 rad swing) that can reverse twice within
+/// a gap of four: where its turn across a gap cannot be told, the gap stays and the note counts
+/// it; every gap bridged is filled on the right turn (within a quarter turn: the cubic itself
+/// misses by up to a radian at this sampling).
+#[test]
+fn a_gap_across_which_an_angle_cannot_tell_its_turn_is_left() {
+    let f = |n: f64| {
+        3.0 * (n * std::f64::consts::TAU / 16.0).sin() + 0.4 * (n * std::f64::consts::TAU / 5.0).sin()
+    };
+    // Four rows missing every 23 from row 20.
+    let missing = |i: usize| i >= 20 && (i - 20) % 23 < 4;
+    let rows: Vec<usize> = (0..700).filter(|&i| !missing(i)).collect();
+    let record = Record {
+        t: rows.iter().map(|&i| i as f64).collect(),
+        theta: rows.iter().map(|&i| wrap(f(i as f64))).collect(),
+        ..Record::default()
+    };
+    let grid = condition(
+        record,
+        &PrepareOptions::new(Domain::Circle)
+            .with_spikes(SpikePolicy::Keep)
+            .with_bridge(4),
+        &mut |_| {},
+    )
+    .unwrap();
+    let (gaps, unclear) = grid
+        .notes
+        .iter()
+        .find_map(|n| match n {
+            Note::Bridged { gaps, unclear, .. } => Some((*gaps, *unclear)),
+            _ => None,
+        })
+        .expect("a note of the gaps bridged");
+    assert!(gaps > 0 && unclear > 0, "{:?}", grid.notes);
+    assert_eq!(grid.pieces.len(), unclear + 1, "{:?}", grid.pieces);
+    assert!(grid.notes.last().unwrap().to_string().ends_with(&format!(
+        "; {unclear} more left as gaps: an angle moves too far across them to tell its turn"
+    )));
+    for piece in &grid.pieces {
+        for i in piece.clone().filter(|&i| missing(i)) {
+            let error = wrap(grid.x[i] - f(i as f64)).abs();
+            assert!(error < std::f64::consts::FRAC_PI_2, "sample {i}: {error}");
+        }
+    }
 }

@@ -57,11 +57,12 @@ pub struct CompareArgs {
     #[arg(long, conflicts_with = "repair")]
     pub no_repair: bool,
     /// Bridge every gap of at most N missing samples (N at most 4), between pieces of at least 7
-    /// samples, by the cubic through the two samples on each side, in every column (angles
-    /// across their wraps): a free run then goes on through it, and its samples are scored as the
-    /// record's (a logger's dropped rows; a note counts them). A bridged sample is off by about
-    /// ((N+3) ω dt)^4 / 100 of a motion of angular frequency ω and carries at most 1.6 times one
-    /// sample's noise; 0 bridges none (a displacement record only).
+    /// samples, by the cubic through the two samples on each side, in every column (angles across
+    /// their wraps): a free run then goes on through it, and its samples are scored as the record's
+    /// (a logger's dropped rows; a note counts them). A bridged sample of a sine of amplitude A and
+    /// angular frequency ω is off by at most A (ω dt)^4 times 1/6, 1/2, 3/2 or 3 for N = 1, 2, 3 or
+    /// 4, and carries at most 1.61 times one sample's noise; an angle that moves too far across a
+    /// gap to tell its turn leaves it a gap; 0 bridges none (a displacement record only).
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub bridge_gaps: usize,
     /// circle or line [default: the model's].
