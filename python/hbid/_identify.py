@@ -446,14 +446,9 @@ def identify(
         repair: replace isolated time-stamp glitches and every spike.
         no_repair: keep every spike (a warning) instead of replacing those larger than the
             record's own steps when they are few (at most one in 1000 samples, the default).
-        bridge_gaps: bridge every gap of at most this many missing samples (at most 4), between
-            pieces of at least 7 samples, by the cubic through the two samples on each side, in
-            every column, so that the pieces are analysed as one (a logger's dropped rows; a note
-            counts them). A bridged sample of a sine of amplitude ``A`` and angular frequency
-            ``omega`` is off by at most ``A * (omega * dt)**4`` times 1/6, 1/2, 3/2 or 3 for gaps
-            of 1, 2, 3 or 4 samples, and carries at most 1.61 times one sample's noise; an angle
-            that moves too far across a gap to tell its turn leaves it a gap. 0 bridges none (a
-            displacement record only).
+        bridge_gaps: bridge every gap of at most this many missing samples (at most 4) by the
+            cubic through its neighbours, in every column, as :func:`read` describes; 0 bridges
+            none.
         signal: ``"circle"`` (an angle) or ``"line"`` (a displacement), for every coordinate or
             one per coordinate (``["circle", "line"]``); a Record's own.
         measured: ``"displacement"``, or (on the line) ``"velocity"`` or ``"acceleration"``,
