@@ -51,6 +51,9 @@ class RangeScore:
     coordinate: Optional[str] = None
     """The coordinate scored, for a system of several (each range has one score per
     coordinate); None for a model of one."""
+    bridged: int = 0
+    """Samples after each piece's ``init`` that were bridged into gaps (``bridge_gaps``): run
+    through, not scored (they were not measured)."""
 
 
 @dataclass(frozen=True)
@@ -64,7 +67,7 @@ class RunPiece:
     t: np.ndarray
     """The times."""
     measured: np.ndarray
-    """The measured output."""
+    """The measured output (NaN at the samples bridged into gaps, which were not measured)."""
     x: np.ndarray
     """The simulated position (on the turn of the measured angle, on the circle)."""
     v: np.ndarray
@@ -212,7 +215,8 @@ def compare(
         no_repair: keep every spike instead of replacing the few large ones.
         bridge_gaps: bridge every gap of at most this many missing samples by the cubic through
             its neighbours, in every column, as for :func:`identify`: a run then goes on through
-            it, and its samples are scored as the record's.
+            it (driven by the bridged drives), and the bridged samples, not measured, are counted
+            apart (``bridged`` of each range) and not scored.
         signal: ``"circle"`` or ``"line"`` (default: the model's).
         measured: ``"displacement"``, ``"velocity"`` or ``"acceleration"`` (integrated).
         angle_unit: the unit of the angles on the circle (and of their measured velocities):
@@ -299,6 +303,7 @@ def compare(
             skipped_pieces=r["skipped_pieces"],
             stopped=r["stopped"],
             coordinate=r.get("coordinate"),
+            bridged=r["bridged"],
         )
         for r in report["ranges"]
     ]

@@ -58,6 +58,10 @@ class Record:
     """The coordinates' measured velocities (``velocity_col``) on the grid, by coordinate."""
     spikes_by_coordinate: Dict[str, List[Tuple[int, float, bool]]] = field(default_factory=dict, repr=False)
     """The spikes found in each coordinate, ``(index, size, replaced)``."""
+    bridged: List[Tuple[int, int]] = field(default_factory=list)
+    """The samples filled by ``bridge_gaps`` (``(start, stop)`` ranges inside ``pieces``):
+    interpolated in every column, not measured; :func:`compare` runs through them and scores
+    none of them."""
     columns: Dict[str, Any] = field(default_factory=dict, repr=False)
     """The options that named its columns (``coords``, ``drive_col``, ``velocity_col``), as it
     was read: an identification of the record names them in its saved model."""
@@ -95,8 +99,14 @@ class Record:
             f"signal={self.signal!r}{several}{gaps}, {len(self.notes)} notes)"
         )
 
-    def _grid(self) -> Tuple[float, float, List[Tuple[int, int]], str]:
-        return (float(self.t0), float(self.dt), [(int(a), int(b)) for a, b in self.pieces], self.signal)
+    def _grid(self) -> Tuple[float, float, List[Tuple[int, int]], str, List[Tuple[int, int]]]:
+        return (
+            float(self.t0),
+            float(self.dt),
+            [(int(a), int(b)) for a, b in self.pieces],
+            self.signal,
+            [(int(a), int(b)) for a, b in self.bridged],
+        )
 
 
 def _record(d: Any, options: Mapping[str, Any], path: Optional[str] = None) -> Record:
@@ -111,6 +121,7 @@ def _record(d: Any, options: Mapping[str, Any], path: Optional[str] = None) -> R
         t0=d["t0"],
         dt=d["dt"],
         pieces=[tuple(p) for p in d["pieces"]],
+        bridged=[tuple(b) for b in d["bridged"]],
         signal=d["signal"],
         measured=d["measured"],
         repaired=d["repaired"],

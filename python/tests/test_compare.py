@@ -3,6 +3,7 @@ freely under a held-out record's measured drive, the same numbers as the command
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import subprocess
 
@@ -121,3 +122,32 @@ def test_a_refined_model_keeps_the_weak_forms_beside(shaker):
     assert list(refined.coefficients) == list(weak.coefficients)
     with pytest.raises(hbid.OptionsError, match="refine"):
         hbid.identify(train.x, refine_init=100, **kwargs)
+
+
+def test_bridged_samples_are_run_through_and_not_scored(shaker, tmp_path):
+    # Every 97th row of the held-out record dropped (a logger's lost rows), bridged on reading.
+    lines = open(shaker["csv"]).read().splitlines()
+    rows = lines[1:]
+    dropped = [i for i in range(len(rows)) if i % 97 == 50]
+    path = tmp_path / "dropped.csv"
+    path.write_text("\n".join([lines[0]] + [r for i, r in enumerate(rows) if i % 97 != 50]) + "\n")
+    record = hbid.read(path, drive_col="p", signal="line", bridge_gaps=1)
+    assert record.bridged == [(i, i + 1) for i in dropped]
+    c = hbid.compare(shaker["model"], record, init=100)
+    r = c.ranges[0]
+    # The first (row 50) is among the 100 samples that set the state: neither scored nor counted.
+    after_init = [i for i in dropped if i >= 100]
+    assert r.bridged == len(after_init) == len(dropped) - 1
+    assert r.scored == len(rows) - 100 - len(after_init)
+    piece = c.runs[0][0]
+    assert len(c.runs[0]) == 1 and len(piece.t) == len(rows), "one run through every gap"
+    assert np.isnan(piece.measured[dropped]).all()
+    assert np.isfinite(np.delete(piece.measured, dropped)).all()
+    kept = np.isfinite(piece.measured)
+    kept[:100] = False
+    assert np.sqrt(np.mean((piece.x[kept] - piece.measured[kept]) ** 2)) == pytest.approx(r.rmse)
+    assert json.loads(c.to_json())["ranges"][0]["bridged"] == len(after_init)
+    # A record whose bridged samples are not inside its pieces is refused, not scored.
+    for bad in ([(0, 1)], [(5, 5)], [(len(rows) - 1, len(rows) + 3)]):
+        with pytest.raises(hbid.OptionsError, match="bridged samples lie inside its pieces"):
+            hbid.compare(shaker["model"], dataclasses.replace(record, bridged=bad), init=100)

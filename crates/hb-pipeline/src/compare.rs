@@ -204,7 +204,8 @@ pub struct CompareOptions {
     pub no_repair: bool,
     /// Bridge every gap of at most this many missing samples by the cubic through its
     /// neighbours, in every column (see [`RecordOptions::bridge_gaps`]): a free run then goes on
-    /// through it, and its samples are scored as the record's.
+    /// through it, driven by the bridged drives; the bridged samples, not measured, are not
+    /// scored ([`RangeScore::bridged`] counts them).
     pub bridge_gaps: usize,
     /// The columns of the coordinates' measured velocities: each piece's free run then starts
     /// from its first sample's measured state (positions and these velocities), every sample
@@ -391,6 +392,9 @@ pub struct RangeScore {
     pub init: usize,
     /// Samples scored.
     pub scored: usize,
+    /// Samples of the range after each piece's `init` that were bridged into gaps
+    /// (`bridge_gaps`): run through, not scored (they were not measured).
+    pub bridged: usize,
     /// Root mean square of the measured output less the simulated one, in the record's unit
     /// (`None` when the model's run stopped before the range's end).
     pub rmse: Option<f64>,
@@ -514,6 +518,9 @@ fn compared_record(
     for (i, piece) in grid.pieces.iter_mut().enumerate() {
         *piece = if i == 0 { 0 } else { piece.start + k }..piece.end + k;
     }
+    for b in &mut grid.bridged {
+        *b = b.start + k..b.end + k;
+    }
     let clock = Clock {
         lead: lead.t,
         t0: grid.t0,
@@ -529,7 +536,8 @@ pub struct RunPiece {
     pub start: usize,
     /// The times.
     pub t: Vec<f64>,
-    /// The measured output.
+    /// The measured output: NaN at the samples bridged into gaps (`bridge_gaps`), which were
+    /// not measured (the run goes on through them; they are not scored).
     pub measured: Vec<f64>,
     /// The simulated position (on the circle, on the turn of the measured angle: unwrapped
     /// along the run, then shifted by whole turns).
@@ -1112,7 +1120,7 @@ fn compare_system(
                 pieces[c].push(RunPiece {
                     start,
                     t: times.clone(),
-                    measured: y.to_vec(),
+                    measured: unmeasured(y, start, &grid.bridged),
                     x,
                     v,
                     init,
@@ -1346,7 +1354,7 @@ fn run_range(
         pieces.push(RunPiece {
             start,
             t: times,
-            measured: y.to_vec(),
+            measured: unmeasured(y, start, &grid.bridged),
             x,
             v: run.v,
             init,
@@ -1364,7 +1372,18 @@ fn run_range(
     Ok((score, pieces))
 }
 
-/// The scores of the pieces of a range, over the samples after each one's `init`.
+/// The measured samples `y` from the grid's sample `start`, NaN at those `bridged` into gaps.
+fn unmeasured(y: &[f64], start: usize, bridged: &[std::ops::Range<usize>]) -> Vec<f64> {
+    let mut out = y.to_vec();
+    let end = start + y.len();
+    for b in bridged.iter().filter(|b| b.start < end && b.end > start) {
+        out[b.start.max(start) - start..b.end.min(end) - start].fill(f64::NAN);
+    }
+    out
+}
+
+/// The scores of the pieces of a range, over the samples after each one's `init` that were
+/// measured (those bridged into gaps are counted, not scored).
 fn score(
     pieces: &[RunPiece],
     domain: Domain,
@@ -1374,15 +1393,16 @@ fn score(
     initial_states: Vec<[f64; 3]>,
     stopped: Option<String>,
 ) -> RangeScore {
-    let scored: Vec<(f64, f64)> = pieces
-        .iter()
-        .flat_map(|p| {
-            p.measured[p.init..]
+    let all = || {
+        pieces.iter().flat_map(|p| {
+            p.measured[p.init.min(p.measured.len())..]
                 .iter()
-                .zip(&p.x[p.init..])
+                .zip(&p.x[p.init.min(p.x.len())..])
                 .map(|(&y, &x)| (y, x))
         })
-        .collect();
+    };
+    let scored: Vec<(f64, f64)> = all().filter(|(y, _)| !y.is_nan()).collect();
+    let bridged = all().filter(|(y, _)| y.is_nan()).count();
     let n = scored.len();
     let finite = n > 0 && scored.iter().all(|(_, x)| x.is_finite());
     let (rmse, nrmse, fit, max) = if finite {
@@ -1414,6 +1434,7 @@ fn score(
         range,
         init,
         scored: n,
+        bridged,
         rmse,
         nrmse,
         fit_percent: fit,

@@ -1538,6 +1538,7 @@ pub(crate) fn finish(
             others: Vec::new(),
             drives: data.drives.clone(),
             velocities: Vec::new(),
+            bridged: Vec::new(),
             notes: Vec::new(),
             lead_in: None,
         };

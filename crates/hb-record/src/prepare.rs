@@ -501,6 +501,9 @@ pub struct GridData {
     pub drives: Vec<Vec<f64>>,
     /// The coordinates' measured velocities on the same grid (NaN in the gaps), when read.
     pub velocities: Vec<Vec<f64>>,
+    /// The samples filled by bridging gaps ([`PrepareOptions::bridge`]), in order: inside
+    /// `pieces`, but interpolated in every column, not measured (empty when none were).
+    pub bridged: Vec<Range<usize>>,
     /// What was done to the record or found in it, in order.
     pub notes: Vec<Note>,
     /// The record's first rows, left out of the grid because a logger stamped them before it
@@ -849,11 +852,13 @@ pub fn condition(
     if options.measured != Measured::Displacement {
         note(Note::Integrated(options.measured));
     }
+    let mut filled = Vec::with_capacity(bridged.len());
     if !bridged.is_empty() || !unclear.is_empty() {
         let mut missing = 0;
         for &g in &bridged {
             let (end, start) = (pieces[g].end, pieces[g + 1].start);
             missing += start - end;
+            filled.push(end..start);
             bridge::fill(&mut x, end, start, options.signal);
             for c in &mut others {
                 bridge::fill(&mut c.x, end, start, c.domain);
@@ -878,6 +883,7 @@ pub fn condition(
         others,
         drives,
         velocities,
+        bridged: filled,
         notes: kept,
         lead_in,
     })

@@ -21,10 +21,16 @@ use pyo3::types::{PyBytes, PyDict, PyList};
 use crate::errors::{Kind, option_error, raise, run_error};
 
 /// A record's grid as Python hands it back (from a `Record`): the time of sample 0, the sampling
-/// step, the ranges of samples that hold data `(start, stop)` and the signal (`circle`, `line`,
-/// or one per coordinate, `circle,line`).
+/// step, the ranges of samples that hold data `(start, stop)`, the signal (`circle`, `line`,
+/// or one per coordinate, `circle,line`) and the ranges of samples bridged into gaps.
 #[derive(Debug, Clone, FromPyObject)]
-pub struct Grid(pub f64, pub f64, pub Vec<(usize, usize)>, pub String);
+pub struct Grid(
+    pub f64,
+    pub f64,
+    pub Vec<(usize, usize)>,
+    pub String,
+    pub Vec<(usize, usize)>,
+);
 
 /// Arrays as Python passes them: one per coordinate, drive or velocity.
 type Arrays<'py> = Option<Vec<PyReadonlyArray1<'py, f64>>>;
@@ -96,8 +102,18 @@ impl<'a> Samples<'a> {
                 t: self.t,
                 drives: self.drives.clone(),
             }),
-            ([x, others @ ..], Some(Grid(t0, dt, pieces, signal))) => {
+            ([x, others @ ..], Some(Grid(t0, dt, pieces, signal, bridged))) => {
                 let pieces: Vec<Range<usize>> = pieces.iter().map(|&(a, b)| a..b).collect();
+                let bridged: Vec<Range<usize>> = bridged.iter().map(|&(a, b)| a..b).collect();
+                if bridged
+                    .iter()
+                    .any(|b| b.start >= b.end || !pieces.iter().any(|p| p.start < b.start && b.end < p.end))
+                {
+                    return Err(raise(
+                        Kind::Options,
+                        "a record's bridged samples lie inside its pieces, none at a piece's end",
+                    ));
+                }
                 for series in self.x.iter().chain(&self.drives).chain(&self.velocities) {
                     if series.len() != x.len() {
                         return Err(raise(
@@ -147,6 +163,7 @@ impl<'a> Samples<'a> {
                         .collect(),
                     drives: self.drives.iter().map(|d| d.to_vec()).collect(),
                     velocities: self.velocities.iter().map(|v| v.to_vec()).collect(),
+                    bridged,
                     notes: Vec::new(),
                     lead_in: None,
                 }))
@@ -247,6 +264,10 @@ pub fn condition<'py>(
     out.set_item(
         "pieces",
         PyList::new(py, grid.pieces.iter().map(|r| (r.start, r.end)))?,
+    )?;
+    out.set_item(
+        "bridged",
+        PyList::new(py, grid.bridged.iter().map(|r| (r.start, r.end)))?,
     )?;
     out.set_item("signal", signal)?;
     out.set_item("measured", record.measured.to_string())?;

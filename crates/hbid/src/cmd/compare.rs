@@ -58,8 +58,9 @@ pub struct CompareArgs {
     pub no_repair: bool,
     /// Bridge every gap of at most N missing samples (N at most 4), between pieces of at least 7
     /// samples, by the cubic through the two samples on each side, in every column (angles across
-    /// their wraps): a free run then goes on through it, and its samples are scored as the record's
-    /// (a logger's dropped rows; a note counts them). A bridged sample of a sine of amplitude A and
+    /// their wraps): a free run then goes on through it (driven by the bridged drives), and the
+    /// bridged samples, not measured, are counted apart and not scored (a logger's dropped rows; a
+    /// note counts them). A bridged sample of a sine of amplitude A and
     /// angular frequency ω is off by at most A (ω dt)^4 times 1/6, 1/2, 3/2 or 3 for N = 1, 2, 3 or
     /// 4, and carries at most 1.61 times one sample's noise; an angle that moves too far across a
     /// gap to tell its turn leaves it a gap; 0 bridges none (a displacement record only).
@@ -238,6 +239,12 @@ pub fn table(report: &CompareReport) -> String {
             out.push_str(&format!(
                 "range {}..{}: {} piece(s) between gaps no longer than --init {} were not run\n",
                 r.range[0], r.range[1], r.skipped_pieces, r.init
+            ));
+        }
+        if r.bridged > 0 {
+            out.push_str(&format!(
+                "range {}..{}: {} sample(s) bridged into gaps (--bridge-gaps) were run through, not scored\n",
+                r.range[0], r.range[1], r.bridged
             ));
         }
     }
