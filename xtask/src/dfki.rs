@@ -820,6 +820,18 @@ pub fn run(exe: &Path, shared: &Path, work: &Path, python: Option<&str>) -> anyh
     // The published model in the untied model's saved form (TERMS' order of terms).
     published_model(&untied_model, &p, &published_path)?;
     let (published_rerun, _) = score(exe, &data, &published_path)?;
+    // The published model on the training records, as each fold's left-out record is scored: the
+    // scale of the cross-validation's figures (in-sample for it: its fit saw these records).
+    let published_train = TRAIN
+        .par_iter()
+        .map(|rec| -> anyhow::Result<[f64; 2]> {
+            let first = horizon_ranges(&data, rec, 0)?.swap_remove(0);
+            let (r, _, _) = compare(exe, &data, &published_path, rec, &[first])?;
+            Ok(r[0].map(|v| v.unwrap_or(std::f64::consts::PI)))
+        })
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let published_train_mean =
+        |j: usize| published_train.iter().map(|r| r[j]).sum::<f64>() / published_train.len() as f64;
     // Where the 1 s error lies: the chosen and the published model by the protocol, and the
     // chosen one from rest (row 0's angles, no velocity), a diagnosis outside the protocol.
     let rows = split_rows(&data)?;
@@ -935,7 +947,24 @@ pub fn run(exe: &Path, shared: &Path, work: &Path, python: Option<&str>) -> anyh
             )?;
         }
     }
+    let (pq1, pq2) = (published_train_mean(0), published_train_mean(1));
+    writeln!(
+        r,
+        "| published model run here on each training record (in-sample: its fit saw them; no fold) | — | {pq1:.4} | {pq2:.4} | {:.4} |",
+        (pq1 + pq2) / 2.0
+    )?;
     writeln!(r)?;
+    writeln!(
+        r,
+        "The last row is the scale of the folds' figures: the published model's 1 s free run on the five training \
+         records, run here as each left-out record is scored (per record q1 / q2: {}).\n",
+        TRAIN
+            .iter()
+            .zip(&published_train)
+            .map(|(rec, v)| format!("`{rec}` {:.3} / {:.3}", v[0], v[1]))
+            .collect::<Vec<_>>()
+            .join(", ")
+    )?;
 
     // The score tables, one per horizon.
     let chosen = |tied: bool| if tied == tied_chosen { ", chosen" } else { "" };
@@ -1426,6 +1455,11 @@ pub fn run(exe: &Path, shared: &Path, work: &Path, python: Option<&str>) -> anyh
             "chosen_fit": if tied_chosen { "tied" } else { "untied" },
             "untied": {"by_window": cv_json_of(&cvs[0]), "window_s": untied_window, "mean": untied_cv},
             "tied": {"by_window": cv_json_of(&cvs[1]), "window_s": tied_window, "mean": tied_cv},
+            "published_in_sample": {
+                "records": TRAIN.iter().zip(&published_train).map(|(rec, v)| ((*rec).to_owned(), json!({"q1": v[0], "q2": v[1]}))).collect::<Map<String, Value>>(),
+                "q1": published_train_mean(0),
+                "q2": published_train_mean(1),
+            },
         },
         "parameters": parameters_json,
         "untied": {
