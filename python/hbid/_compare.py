@@ -172,6 +172,7 @@ def compare(
     repair: bool = False,
     no_repair: bool = False,
     bridge_gaps: int = 0,
+    skip_missing: bool = False,
     signal: Union[str, Sequence[str], None] = None,
     measured: str = "displacement",
     angle_unit: str = "rad",
@@ -217,6 +218,8 @@ def compare(
             its neighbours, in every column, as for :func:`identify`: a run then goes on through
             it (driven by the bridged drives), and the bridged samples, not measured, are counted
             apart (``bridged`` of each range) and not scored.
+        skip_missing: leave out every row with a missing value in a column read, as a
+            logger's dropped row, as for :func:`identify`.
         signal: ``"circle"`` or ``"line"`` (default: the model's).
         measured: ``"displacement"``, ``"velocity"`` or ``"acceleration"`` (integrated).
         angle_unit: the unit of the angles on the circle (and of their measured velocities):
@@ -256,6 +259,7 @@ def compare(
         repair=bool(repair),
         no_repair=bool(no_repair),
         bridge_gaps=bridge_gaps,
+        skip_missing=bool(skip_missing),
         signal=signals(signal),
         measured=measured,
         angle_unit=angle_unit,

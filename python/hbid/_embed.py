@@ -68,6 +68,7 @@ def _record_options(
     repair: bool,
     no_repair: bool,
     bridge_gaps: int,
+    skip_missing: bool,
     signal: Union[str, Sequence[str]],
     measured: str,
     angle_unit: str,
@@ -84,6 +85,7 @@ def _record_options(
         repair=bool(repair),
         no_repair=bool(no_repair),
         bridge_gaps=bridge_gaps,
+        skip_missing=bool(skip_missing),
         signal=signals(signal),
         measured=measured,
         angle_unit=angle_unit,
@@ -106,6 +108,7 @@ def embed(
     repair: bool = False,
     no_repair: bool = False,
     bridge_gaps: int = 0,
+    skip_missing: bool = False,
     signal: Union[str, Sequence[str]] = "circle",
     measured: str = "displacement",
     angle_unit: str = "rad",
@@ -123,7 +126,8 @@ def embed(
 
     Args:
         x, t, dt, drive, time_col, angle_col, coords, drive_col, velocity_col, repair,
-            no_repair, bridge_gaps, signal, measured, angle_unit, drive_period, drive_frequency:
+            no_repair, bridge_gaps, skip_missing, signal, measured, angle_unit, drive_period,
+            drive_frequency:
             the record, as for
             :func:`identify` (one file, a Record or arrays).
         max_lag: largest lag of the mutual information (default: two drive periods, at least 40).
@@ -145,6 +149,7 @@ def embed(
         repair,
         no_repair,
         bridge_gaps,
+        skip_missing,
         signal,
         measured,
         angle_unit,
@@ -236,6 +241,7 @@ def upos(
     repair: bool = False,
     no_repair: bool = False,
     bridge_gaps: int = 0,
+    skip_missing: bool = False,
     signal: Union[str, Sequence[str]] = "circle",
     measured: str = "displacement",
     angle_unit: str = "rad",
@@ -251,7 +257,8 @@ def upos(
 
     Args:
         x, t, dt, drive, time_col, angle_col, coords, drive_col, velocity_col, repair,
-            no_repair, bridge_gaps, signal, measured, angle_unit, drive_period, drive_frequency:
+            no_repair, bridge_gaps, skip_missing, signal, measured, angle_unit, drive_period,
+            drive_frequency:
             the record, as for
             :func:`identify` (one file, a Record or arrays).
         tolerance: close-return tolerance, a fraction of the data's span.
@@ -272,6 +279,7 @@ def upos(
         repair,
         no_repair,
         bridge_gaps,
+        skip_missing,
         signal,
         measured,
         angle_unit,

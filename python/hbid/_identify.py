@@ -42,6 +42,7 @@ RECORD_DEFAULTS: Dict[str, Any] = dict(
     repair=False,
     no_repair=False,
     bridge_gaps=0,
+    skip_missing=False,
     signal="circle",
     measured="displacement",
     angle_unit="rad",
@@ -375,6 +376,7 @@ def identify(
     repair: bool = False,
     no_repair: bool = False,
     bridge_gaps: int = 0,
+    skip_missing: bool = False,
     signal: Union[str, Sequence[str]] = "circle",
     measured: str = "displacement",
     angle_unit: str = "rad",
@@ -449,6 +451,8 @@ def identify(
         bridge_gaps: bridge every gap of at most this many missing samples (at most 4) by the
             cubic through its neighbours, in every column, as :func:`read` describes; 0 bridges
             none.
+        skip_missing: leave out every row with a missing value in a column read, as a
+            logger's dropped row, as :func:`read` describes.
         signal: ``"circle"`` (an angle) or ``"line"`` (a displacement), for every coordinate or
             one per coordinate (``["circle", "line"]``); a Record's own.
         measured: ``"displacement"``, or (on the line) ``"velocity"`` or ``"acceleration"``,
@@ -535,6 +539,7 @@ def identify(
         repair=bool(repair),
         no_repair=bool(no_repair),
         bridge_gaps=bridge_gaps,
+        skip_missing=bool(skip_missing),
         signal=signals(signal),
         measured=measured,
         angle_unit=angle_unit,

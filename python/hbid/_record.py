@@ -152,6 +152,7 @@ def read(
     repair: bool = False,
     no_repair: bool = False,
     bridge_gaps: int = 0,
+    skip_missing: bool = False,
     signal: Union[str, Sequence[str]] = "circle",
     measured: str = "displacement",
     angle_unit: str = "rad",
@@ -191,6 +192,11 @@ def read(
             of 1, 2, 3 or 4 samples, and carries at most 1.61 times one sample's noise; an angle
             that moves too far across a gap to tell its turn leaves it a gap. 0 bridges none (a
             displacement record only).
+        skip_missing: leave out every row with a missing value in a column read (an empty
+            cell, ``NA``, ``null``, ``NaN``, ...; an array's NaN), as if the logger had not
+            written it: its time is then a gap's (with ``dt`` the rows keep their places), which
+            ``bridge_gaps`` may bridge; a note counts them and names the first. Without it such
+            a value is an error naming its line.
         signal: ``"circle"`` for an angle (wrapped into ``[-pi, pi)``) or ``"line"`` for a
             displacement; for several coordinates one for all or a list, one per coordinate.
         measured: ``"displacement"``, or (on the line) ``"velocity"`` or ``"acceleration"``,
@@ -216,6 +222,7 @@ def read(
         repair=bool(repair),
         no_repair=bool(no_repair),
         bridge_gaps=bridge_gaps,
+        skip_missing=bool(skip_missing),
         signal=signals(signal),
         measured=measured,
         angle_unit=angle_unit,
@@ -240,6 +247,7 @@ RECORD_FIXED = (
     "repair",
     "no_repair",
     "bridge_gaps",
+    "skip_missing",
 )
 
 

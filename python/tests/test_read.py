@@ -220,3 +220,29 @@ def test_the_paper_data_set(paper_csv):
     record = hbid.read(paper_csv)
     assert record.samples == 30000 and record.pieces == [(0, 30000)]
     assert record.dt == pytest.approx(2 * np.pi / 25, rel=1e-9)
+
+
+def test_rows_with_a_missing_value_are_left_out_on_request(tmp_path, pendulum):
+    # Rows 500 and 1200 of a logger's file hold no angle (an empty cell, NA).
+    lines = [f"{float(t)!r},{float(x)!r}" for t, x in zip(pendulum.t[:3000], pendulum.x[:3000])]
+    lines[500] = f"{float(pendulum.t[500])!r},"
+    lines[1200] = f"{float(pendulum.t[1200])!r},NA"
+    path = tmp_path / "missing.csv"
+    path.write_text("t,theta\n" + "\n".join(lines) + "\n")
+    with pytest.raises(hbid.InputError, match=r"line 502: '' in column 'theta' is not a number .*skip_missing=True"):
+        hbid.read(path)
+    record = hbid.read(path, skip_missing=True)
+    assert record.pieces == [(0, 500), (501, 1200), (1201, 3000)]
+    assert record.notes[0] == (
+        "2 row(s) with a missing value in a column read left out, as a logger's dropped rows: line 502, line 1202"
+    )
+    bridged = hbid.read(path, skip_missing=True, bridge_gaps=1)
+    assert bridged.pieces == [(0, 3000)] and bridged.bridged == [(500, 501), (1200, 1201)]
+    # Arrays: a NaN is a missing value too, and the samples keep their times.
+    x = pendulum.x[:3000].copy()
+    x[[10, 2000]] = np.nan
+    with pytest.raises(hbid.InputError, match="skip_missing=True"):
+        hbid.read(x, t=pendulum.t[:3000])
+    arrays = hbid.read(x, t=pendulum.t[:3000], skip_missing=True)
+    assert arrays.pieces == [(0, 10), (11, 2000), (2001, 3000)]
+    np.testing.assert_array_equal(arrays.x[11:2000], pendulum.x[11:2000])

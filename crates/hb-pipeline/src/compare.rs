@@ -207,6 +207,9 @@ pub struct CompareOptions {
     /// through it, driven by the bridged drives; the bridged samples, not measured, are not
     /// scored ([`RangeScore::bridged`] counts them).
     pub bridge_gaps: usize,
+    /// Leave out every row with a missing value in a column read, as a logger's dropped row (see
+    /// [`RecordOptions::skip_missing`]).
+    pub skip_missing: bool,
     /// The columns of the coordinates' measured velocities: each piece's free run then starts
     /// from its first sample's measured state (positions and these velocities), every sample
     /// scored, unless «x0» and «v0» are given.
@@ -254,6 +257,7 @@ impl Default for CompareOptions {
             repair: false,
             no_repair: false,
             bridge_gaps: 0,
+            skip_missing: false,
             velocity_col: None,
             signal: None,
             measured: Measured::Displacement,
@@ -369,6 +373,7 @@ impl CompareOptions {
             repair: self.repair,
             no_repair: self.no_repair,
             bridge_gaps: self.bridge_gaps,
+            skip_missing: self.skip_missing,
             velocity_col: self.velocity_col.clone(),
             signal: signal.into(),
             measured: self.measured,
@@ -990,6 +995,7 @@ fn compare_system(
         repair: o.repair,
         no_repair: o.no_repair,
         bridge_gaps: o.bridge_gaps,
+        skip_missing: o.skip_missing,
         velocity_col,
         signal: coordinate_of
             .iter()

@@ -295,6 +295,11 @@ pub struct RecordOptions {
     /// bridged sample then carries at most 1.61 times one sample's noise); a displacement record
     /// only.
     pub bridge_gaps: usize,
+    /// Leave out every row of a file with a missing value in a column read (an empty cell, `NA`,
+    /// `null`, `NaN`, ...), as if the logger had not written it: its time is then a gap's (with
+    /// `dt`, the rows keep their places), which `bridge_gaps` may bridge; a note counts them and
+    /// names the first. Off by default: such a value is an error naming its line.
+    pub skip_missing: bool,
     /// An angle on the circle or a displacement on the line: one for every coordinate, or one
     /// per coordinate.
     #[serde(with = "text")]
@@ -556,6 +561,7 @@ impl RecordOptions {
                 "velocity_col",
                 self.velocity_col.as_ref().map_or(&[], |v| v.columns()),
             )?,
+            skip_missing: self.skip_missing,
         })
     }
 }
@@ -683,9 +689,50 @@ fn arrays_record(
     let roles = std::iter::once(Role::Time)
         .chain(coords.iter().map(|_| Role::Angle))
         .chain(drives.iter().map(|_| Role::Drive));
-    let columns = std::iter::once(t.as_slice())
-        .chain(coords.iter().copied())
-        .chain(drives.iter().copied());
+    // With «skip_missing», the samples with a NaN in any array left out, as a file's rows are.
+    let mut missing = Vec::new();
+    let mut kept: Vec<Vec<f64>> = Vec::new();
+    // Each sample kept's place in the arrays (when some are left out).
+    let mut places: Vec<usize> = Vec::new();
+    if options.skip_missing {
+        let all: Vec<&[f64]> = std::iter::once(t.as_slice())
+            .chain(coords.iter().copied())
+            .chain(drives.iter().copied())
+            .collect();
+        let keep: Vec<bool> = (0..x.len()).map(|i| all.iter().all(|v| !v[i].is_nan())).collect();
+        missing = (0..x.len())
+            .filter(|&i| !keep[i])
+            .map(|i| hb_record::input::Location::Sample(i + 1))
+            .collect();
+        if missing.len() == x.len() {
+            return Err(RunError::Read {
+                name: "the arrays".to_owned(),
+                coords: options.coords.is_some(),
+                source: Box::new(InputError::AllMissing { rows: x.len() }),
+            });
+        }
+        if !missing.is_empty() {
+            places = (0..x.len()).filter(|&i| keep[i]).collect();
+            kept = all
+                .iter()
+                .map(|v| {
+                    v.iter()
+                        .zip(&keep)
+                        .filter(|(_, k)| **k)
+                        .map(|(a, _)| *a)
+                        .collect()
+                })
+                .collect();
+        }
+    }
+    let columns: Vec<&[f64]> = if kept.is_empty() {
+        std::iter::once(t.as_slice())
+            .chain(coords.iter().copied())
+            .chain(drives.iter().copied())
+            .collect()
+    } else {
+        kept.iter().map(Vec::as_slice).collect()
+    };
     // Each array by the name it was given (x and p for one coordinate and one drive).
     let coordinate_names: Vec<String> = match &options.coords {
         Some(c) => c.names().to_vec(),
@@ -698,13 +745,13 @@ fn arrays_record(
     let names = std::iter::once("t".to_owned())
         .chain(coordinate_names)
         .chain(drive_names);
-    for ((role, column), name) in roles.zip(columns).zip(names) {
+    for ((role, column), name) in roles.zip(columns.iter().copied()).zip(names) {
         if let Some((i, &value)) = column.iter().enumerate().find(|(_, v)| !v.is_finite()) {
             return Err(RunError::Read {
                 name: "the arrays".to_owned(),
                 coords: options.coords.is_some(),
                 source: Box::new(InputError::NonFinite {
-                    at: hb_record::input::Location::Sample(i + 1),
+                    at: hb_record::input::Location::Sample(places.get(i).map_or(i, |&p| p) + 1),
                     role,
                     column: hb_record::input::Column::Name(name),
                     value,
@@ -712,13 +759,15 @@ fn arrays_record(
             });
         }
     }
+    let n = 1 + coords.len();
     Ok(InputRecord {
-        t,
-        theta: x.to_vec(),
-        others: others.iter().map(|o| o.to_vec()).collect(),
+        t: columns[0].to_vec(),
+        theta: columns[1].to_vec(),
+        others: columns[2..n].iter().map(|o| o.to_vec()).collect(),
         lines: None,
-        drives: drives.iter().map(|d| d.to_vec()).collect(),
+        drives: columns[n..].iter().map(|d| d.to_vec()).collect(),
         velocities: Vec::new(),
+        missing,
     })
 }
 

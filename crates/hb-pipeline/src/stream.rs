@@ -68,6 +68,10 @@ pub(crate) fn streams(path: &Path, request: &IdentifyRequest) -> Result<bool, Ru
         Some("the refinement («refine») runs the model over the whole record")
     } else if request.options().record.bridge_gaps > 0 {
         Some("a gap is bridged («bridge_gaps») within one chunk's reading, not across two")
+    } else if request.options().record.skip_missing {
+        Some(
+            "rows with a missing value are left out («skip_missing») of a file read whole: chunks overlap by rows",
+        )
     } else if path == Path::new("-") {
         Some("standard input is read whole")
     } else {

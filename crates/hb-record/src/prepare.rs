@@ -216,6 +216,14 @@ pub enum Note {
         /// Their time stamps (where a record read in chunks counts each once).
         times: Vec<f64>,
     },
+    /// Rows with a missing value in a column read, left out as a logger's dropped rows
+    /// ([`crate::input::ReadOptions::skip_missing`]).
+    MissingRows {
+        /// How many.
+        count: usize,
+        /// Where the first few are (at most [`MISSING_NAMED`]).
+        first: Vec<Location>,
+    },
     /// Values outside `[-π, π)` read as an unwrapped angle, and wrapped.
     Wrapped,
     /// A velocity or acceleration record integrated to the displacement.
@@ -286,6 +294,10 @@ impl Note {
                 count: *count,
                 times: times.clone(),
             },
+            Note::MissingRows { count, first } => Note::MissingRows {
+                count: *count,
+                first: first.iter().map(|&l| at(l)).collect(),
+            },
             other => other.clone(),
         }
     }
@@ -336,6 +348,15 @@ impl fmt::Display for Note {
                 Ok(())
             }
             Note::Wrapped => f.write_str("values outside [-π, π): read as an unwrapped angle and wrapped"),
+            Note::MissingRows { count, first } => {
+                let named: Vec<String> = first.iter().map(ToString::to_string).collect();
+                write!(
+                    f,
+                    "{count} row(s) with a missing value in a column read left out, as a logger's dropped rows: {}{}",
+                    named.join(", "),
+                    if *count > first.len() { ", ..." } else { "" }
+                )
+            }
             Note::DuplicateRows { first, count, .. } => write!(
                 f,
                 "{count} row(s) written twice (the stamp and every value of the row before) left out, the \
@@ -481,6 +502,9 @@ pub struct Channel {
     /// What they are.
     pub domain: Domain,
 }
+
+/// How many of the rows left out for a missing value [`Note::MissingRows`] names.
+pub const MISSING_NAMED: usize = 5;
 
 /// A record on its grid `t0 + n · dt`: read, fitted, wrapped (on the circle), spikes found.
 #[derive(Debug, Clone, PartialEq)]
@@ -692,6 +716,12 @@ pub fn condition(
         ));
     }
     let mut record = record;
+    if !record.missing.is_empty() {
+        note(Note::MissingRows {
+            count: record.missing.len(),
+            first: record.missing.iter().take(MISSING_NAMED).copied().collect(),
+        });
+    }
     if let Some(duplicates) = drop_duplicate_rows(&mut record) {
         note(duplicates);
     }

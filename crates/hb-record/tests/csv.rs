@@ -434,6 +434,7 @@ fn bad_cells_name_their_column() {
             line: 3,
             column,
             value,
+            missing: false,
         }) => {
             assert_eq!((column, value.as_str()), (Column::Name("theta".into()), "x"));
         }
@@ -614,4 +615,75 @@ proptest::proptest! {
             proptest::prop_assert_eq!(got.to_bits(), write(v).parse::<f64>().unwrap().to_bits());
         }
     }
+}
+
+/// A missing value in a column read (an empty cell, a marker, a NaN) is an error naming its line
+/// and how to read the record without its row; with `skip_missing` the row is left out and
+/// listed, its time a gap's (with a sampling step the other rows keep their places), a missing
+/// value in a column not read changes nothing, and an infinity stays an error.
+#[test]
+fn rows_with_a_missing_value_are_left_out_on_request() {
+    let text = "t,theta,p,unused\n0,0.1,1,\n0.5,,2,x\n1,0.3,NA,0\n1.5,0.4,4,\n2,nan,5,1\n2.5,0.6,6,NaN\n";
+    let drive = |skip: bool| ReadOptions {
+        drives: vec!["p".parse().unwrap()],
+        skip_missing: skip,
+        ..ReadOptions::default()
+    };
+    let hint =
+        "(a missing value: «skip_missing=True» leaves out every row with one, as a logger's dropped row)";
+    {
+        let (err, line, column) = (with(text, drive(false)).unwrap_err(), 3, "'theta'");
+        assert!(
+            matches!(&err, InputError::NotANumber { line: l, missing: true, .. } if *l == line),
+            "{err:?}"
+        );
+        let said = err.to_string();
+        assert!(said.contains(column) && said.ends_with(hint), "{said}");
+    }
+    // NaN parses: it is named as a value that is not finite, with the same hint.
+    let nan = with("t,theta\n0,0.1\n0.5,NaN\n", ReadOptions::default()).unwrap_err();
+    assert!(nan.to_string().ends_with(hint), "{nan}");
+    // A word that is no marker of a missing value is not one.
+    let word = with("t,theta\n0,0.1\n0.5,oops\n", ReadOptions::default()).unwrap_err();
+    assert!(!word.to_string().contains("skip_missing"), "{word}");
+
+    let r = with(text, drive(true)).unwrap();
+    assert_eq!(r.t, vec![0.0, 1.5, 2.5]);
+    assert_eq!(r.theta, vec![0.1, 0.4, 0.6]);
+    assert_eq!(r.drives, vec![vec![1.0, 4.0, 6.0]]);
+    assert_eq!(r.lines, Some(vec![2, 5, 7]));
+    assert_eq!(
+        r.missing,
+        vec![Location::Line(3), Location::Line(4), Location::Line(6)]
+    );
+    // With a sampling step and no time column, the rows kept keep their places.
+    let stepped = ReadOptions {
+        dt: Some(0.5),
+        angle: Some("theta".parse().unwrap()),
+        skip_missing: true,
+        ..ReadOptions::default()
+    };
+    // (A blank line is no row: a single column's empty cell cannot be told from one.)
+    let r = with("theta\n0.1\n\n0.2\nNA\n0.4\n", stepped).unwrap();
+    assert_eq!((r.t, r.theta), (vec![0.0, 0.5, 1.5], vec![0.1, 0.2, 0.4]));
+    // Every row missing a value: no row is left, said so.
+    assert!(matches!(
+        with(
+            "t,theta\n0,\n1,NA\n",
+            ReadOptions {
+                skip_missing: true,
+                ..ReadOptions::default()
+            }
+        ),
+        Err(InputError::AllMissing { rows: 2 })
+    ));
+    // An infinity is a value out of range, not a missing one.
+    let inf = with(
+        "t,theta\n0,0.1\n0.5,inf\n",
+        ReadOptions {
+            skip_missing: true,
+            ..ReadOptions::default()
+        },
+    );
+    assert!(matches!(inf, Err(InputError::NonFinite { .. })), "{inf:?}");
 }

@@ -1,6 +1,6 @@
 //! The `.npy` reader: 1-D and 2-D arrays in C and Fortran order, converted element types, and
 //! corrupted or hostile headers refused before anything is allocated.
-use hb_record::input::{InputError, Location, ReadOptions, Role, read_bytes};
+use hb_record::input::{Column, InputError, Location, ReadOptions, Role, read_bytes};
 
 use crate::common::{is_about_the_content, npy_bytes};
 
@@ -358,4 +358,65 @@ fn a_header_that_does_not_parse_is_refused_in_one_line() {
         "{text}"
     );
     assert!(text.contains("at column") && text.contains("expected"), "{text}");
+}
+
+/// An array's NaN in a column read is an error naming its sample and how to read the record
+/// without its row; with `skip_missing` the row is left out and listed, the others keeping their
+/// times (a sampling step's places too), and an error after it still names the file's sample.
+#[test]
+fn rows_with_a_nan_are_left_out_on_request() {
+    let rows: [[f64; 3]; 5] = [
+        [0.0, 0.1, 1.0],
+        [0.5, f64::NAN, 2.0],
+        [1.0, 0.3, 3.0],
+        [1.5, 0.4, f64::NAN],
+        [2.0, 0.5, 5.0],
+    ];
+    let payload: Vec<u8> = rows.iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
+    let bytes = npy_bytes("<f8", "(5, 3)", false, &payload);
+    let options = |skip: bool| ReadOptions {
+        time: Some(Column::Position(1)),
+        angle: Some(Column::Position(2)),
+        drives: vec![Column::Position(3)],
+        skip_missing: skip,
+        ..ReadOptions::default()
+    };
+    let err = read_bytes(&bytes, &options(false)).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            InputError::NonFinite {
+                at: Location::Sample(2),
+                ..
+            }
+        ),
+        "{err:?}"
+    );
+    assert!(err.to_string().contains("«skip_missing=True»"), "{err}");
+    let r = read_bytes(&bytes, &options(true)).unwrap();
+    assert_eq!((r.t, r.theta), (vec![0.0, 1.0, 2.0], vec![0.1, 0.3, 0.5]));
+    assert_eq!(r.drives, vec![vec![1.0, 3.0, 5.0]]);
+    assert_eq!(r.missing, vec![Location::Sample(2), Location::Sample(4)]);
+    let stepped = ReadOptions {
+        time: None,
+        dt: Some(0.25),
+        ..options(true)
+    };
+    let r = read_bytes(&bytes, &stepped).unwrap();
+    assert_eq!(r.t, vec![0.0, 0.5, 1.0]);
+    // An infinity after a row left out is named by its place in the file.
+    let mut with_inf = rows;
+    with_inf[4][1] = f64::INFINITY;
+    let payload: Vec<u8> = with_inf.iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
+    let err = read_bytes(&npy_bytes("<f8", "(5, 3)", false, &payload), &options(true)).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            InputError::NonFinite {
+                at: Location::Sample(5),
+                ..
+            }
+        ),
+        "{err:?}"
+    );
 }

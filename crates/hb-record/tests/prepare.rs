@@ -175,6 +175,7 @@ fn an_unsettled_start_and_end_are_left_out_of_every_column() {
         drives: vec![place(-1.0)],
         velocities: vec![place(5.0), place(6.0)],
         lines: Some((2..n as u64 + 2).collect()),
+        missing: Vec::new(),
     };
     let options = PrepareOptions::new(Domain::Line).with_others(vec![Domain::Line]);
     let mut heard = Vec::new();
@@ -560,6 +561,7 @@ fn short_gaps_are_bridged_in_every_column_and_longer_ones_kept() {
         drives: vec![of(&drive)],
         velocities: vec![of(&velocity), of(&|t| -5.0 * (5.0 * t).sin())],
         lines: None,
+        missing: Vec::new(),
     };
     let options = PrepareOptions::new(Domain::Circle).with_others(vec![Domain::Line]);
     let kept = condition(record.clone(), &options, &mut |_| {}).unwrap();
@@ -678,5 +680,68 @@ fn a_gap_across_which_an_angle_cannot_tell_its_turn_is_left() {
             let error = wrap(grid.x[i] - f(i as f64)).abs();
             assert!(error < std::f64::consts::FRAC_PI_2, "sample {i}: {error}");
         }
+    }
+}
+
+/// Rows left out for a missing value are a logger's dropped rows: a note counts them and names
+/// the first five, the record is split at them as at any gap, and bridging closes the gaps.
+#[test]
+fn rows_left_out_for_a_missing_value_are_gaps_and_can_be_bridged() {
+    let n = 400;
+    let dt = 0.01;
+    let missing = [50usize, 120, 121, 200, 260, 333];
+    let mut text = String::from("t,theta\n");
+    for i in 0..n {
+        let t = i as f64 * dt;
+        let x = if missing.contains(&i) {
+            "NA".to_owned()
+        } else {
+            format!("{}", (2.0 * t).sin())
+        };
+        text.push_str(&format!("{t},{x}\n"));
+    }
+    let options = ReadOptions {
+        skip_missing: true,
+        ..ReadOptions::default()
+    };
+    let record = hb_record::input::read_bytes(text.as_bytes(), &options).unwrap();
+    let lines: Vec<Location> = missing.iter().map(|&i| Location::Line(i as u64 + 2)).collect();
+    assert_eq!(record.missing, lines);
+    let grid = condition(record.clone(), &PrepareOptions::new(Domain::Line), &mut |_| {}).unwrap();
+    assert_eq!(
+        grid.notes[..2],
+        [
+            Note::MissingRows {
+                count: 6,
+                first: lines[..5].to_vec(),
+            },
+            Note::Gaps { gaps: 5, missing: 6 },
+        ]
+    );
+    assert_eq!(
+        grid.notes[0].to_string(),
+        "6 row(s) with a missing value in a column read left out, as a logger's dropped rows: line 52, line 122, \
+         line 123, line 202, line 262, ..."
+    );
+    assert_eq!(grid.pieces.len(), 6);
+    assert!(missing.iter().all(|&i| grid.x[i].is_nan()));
+    let bridged = condition(
+        record,
+        &PrepareOptions::new(Domain::Line).with_bridge(2),
+        &mut |_| {},
+    )
+    .unwrap();
+    assert_eq!(bridged.pieces, vec![0..n]);
+    assert_eq!(
+        bridged.bridged,
+        vec![50..51, 120..122, 200..201, 260..261, 333..334]
+    );
+    for &i in &missing {
+        let truth = (2.0 * i as f64 * dt).sin();
+        assert!(
+            (bridged.x[i] - truth).abs() < 1e-7,
+            "sample {i}: {} against {truth}",
+            bridged.x[i]
+        );
     }
 }

@@ -1,7 +1,9 @@
 //! Text records: comments, an optional header (and a row of units under it), cells separated by
 //! commas, semicolons or white space, columns by name or position.
 
-use super::{Column, Columns, InputError, Location, ReadOptions, Record, Role, Separator, Times, grid};
+use super::{
+    Column, Columns, InputError, Location, ReadOptions, Record, Role, Separator, Times, grid, grid_of,
+};
 
 /// Reads text; the options are assumed valid.
 pub(super) fn read<'a>(bytes: &'a [u8], options: &ReadOptions) -> Result<Record, InputError> {
@@ -45,7 +47,10 @@ pub(super) fn read<'a>(bytes: &'a [u8], options: &ReadOptions) -> Result<Record,
     let mut numbers = Vec::new();
     let mut cells: Vec<&'a str> = Vec::with_capacity(width);
     let mut values: Vec<f64> = Vec::with_capacity(width);
+    // Every row of data's place, and the places of those kept when rows are left out.
+    let (mut rows, mut places) = (0usize, Vec::new());
     let mut push = |line: u64, text: &'a str, cells: &mut Vec<&'a str>| -> Result<(), InputError> {
+        rows += 1;
         // A row of numbers only, each cell parsed as it is found: the common row, without
         // splitting it first; any other row takes the general path below.
         if numbers_only(text, separator, &mut values) && values.len() == width {
@@ -81,6 +86,9 @@ pub(super) fn read<'a>(bytes: &'a [u8], options: &ReadOptions) -> Result<Record,
                 column.push(cell(field));
             }
             numbers.push(line);
+            if options.skip_missing {
+                places.push(rows - 1);
+            }
             return Ok(());
         }
         if let Some(found) = separator.of_row(text).filter(|&s| s != separator && width > 1) {
@@ -98,6 +106,18 @@ pub(super) fn read<'a>(bytes: &'a [u8], options: &ReadOptions) -> Result<Record,
                 found: cells.len(),
             });
         }
+        if options.skip_missing
+            && time_field
+                .iter()
+                .chain([&angle_field])
+                .chain(&other_fields)
+                .chain(&drive_fields)
+                .chain(&velocity_fields)
+                .any(|field| missing_value(cells[field.index], separator))
+        {
+            record.missing.push(Location::Line(line));
+            return Ok(());
+        }
         if let Some(time) = &time_field {
             record.t.push(time.value(cells, line)?);
         }
@@ -112,6 +132,9 @@ pub(super) fn read<'a>(bytes: &'a [u8], options: &ReadOptions) -> Result<Record,
             values.push(field.value(cells, line)?);
         }
         numbers.push(line);
+        if options.skip_missing {
+            places.push(rows - 1);
+        }
         Ok(())
     };
     if header.is_none() {
@@ -127,10 +150,17 @@ pub(super) fn read<'a>(bytes: &'a [u8], options: &ReadOptions) -> Result<Record,
         push(line, text, &mut cells)?;
     }
     if record.theta.is_empty() {
-        return Err(InputError::NoData);
+        return Err(match record.missing.len() {
+            0 => InputError::NoData,
+            rows => InputError::AllMissing { rows },
+        });
     }
     if let Times::Step(dt) = time {
-        record.t = grid(record.theta.len(), dt)?;
+        record.t = if record.missing.is_empty() {
+            grid(record.theta.len(), dt)?
+        } else {
+            grid_of(&places, rows, dt)?
+        };
     }
     record.lines = Some(numbers);
     if columns.order_from_data {
@@ -210,6 +240,12 @@ fn units_row(text: &str, separator: Separator, width: usize) -> bool {
         return units(&tabbed);
     }
     false
+}
+
+/// Whether a cell holds no value: empty, a missing value's marker, or a number that is NaN
+/// ([`ReadOptions::skip_missing`]).
+fn missing_value(cell: &str, separator: Separator) -> bool {
+    cell.is_empty() || missing_marker(cell) || number(cell, separator).is_some_and(f64::is_nan)
 }
 
 /// Whether a cell is how a program writes a missing value, not a unit.
@@ -472,6 +508,7 @@ impl Field<'_> {
             line,
             column: self.column(),
             value: text.chars().take(40).collect(),
+            missing: text.is_empty() || missing_marker(text),
         })?;
         if !value.is_finite() {
             return Err(InputError::NonFinite {

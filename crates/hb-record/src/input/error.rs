@@ -8,6 +8,10 @@ use std::path::PathBuf;
 
 use super::{Column, RecordEnd, Role, Separator, UNSETTLED_FRACTION, UNSETTLED_MAX};
 
+/// What an error about a missing value adds: how to read the record without its row.
+const MISSING_HINT: &str =
+    " (a missing value: «skip_missing=True» leaves out every row with one, as a logger's dropped row)";
+
 /// Where in the input a value is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Location {
@@ -50,6 +54,13 @@ pub enum InputError {
     /// A header but no data rows.
     #[error("the input has a header but no data rows")]
     NoData,
+    /// Every row has a missing value in a column read
+    /// ([`ReadOptions::skip_missing`](super::ReadOptions::skip_missing)).
+    #[error("every row ({rows}) has a missing value in a column read: no row is left")]
+    AllMissing {
+        /// The rows left out.
+        rows: usize,
+    },
     /// A column the reader needs is not in the input.
     #[error("no {role} column {wanted} in the input ({})", columns_found(.found, *.width, .wanted))]
     MissingColumn {
@@ -102,7 +113,10 @@ pub enum InputError {
     #[error("the input has a single column: give its sampling step")]
     NeedStep,
     /// A cell is not a number.
-    #[error("line {line}: '{value}' in column {column} is not a number")]
+    #[error(
+        "line {line}: '{value}' in column {column} is not a number{}",
+        if *.missing { MISSING_HINT } else { "" }
+    )]
     NotANumber {
         /// Line number.
         line: u64,
@@ -110,9 +124,15 @@ pub enum InputError {
         column: Column,
         /// The cell.
         value: String,
+        /// Whether the cell is empty or a missing value's marker (`NA`, `null`, ...).
+        missing: bool,
     },
     /// A value is NaN or infinite.
-    #[error("{at}: {} is {value} in column {column}: only finite numbers are accepted", .role.value_noun())]
+    #[error(
+        "{at}: {} is {value} in column {column}: only finite numbers are accepted{}",
+        .role.value_noun(),
+        if .value.is_nan() { MISSING_HINT } else { "" }
+    )]
     NonFinite {
         /// Where.
         at: Location,
@@ -315,10 +335,12 @@ impl InputError {
                 line: n,
                 column,
                 value,
+                missing,
             } => Self::NotANumber {
                 line: line(n),
                 column,
                 value,
+                missing,
             },
             Self::NonFinite {
                 at: a,

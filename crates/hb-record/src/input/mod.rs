@@ -13,6 +13,10 @@
 //!   separate the cells, a decimal comma (`0,5`) is read as a decimal point. A cell may be
 //!   enclosed in double quotes.
 //! - The first row is a header when any of its cells is not a number.
+//! - A cell of a column read must hold a finite number. A missing value (an empty cell, a marker
+//!   such as `NA`, `null` or `NaN`) is an error naming its line, unless
+//!   [`ReadOptions::skip_missing`] leaves its row out (listed in [`Record::missing`]): the row is
+//!   then a logger's dropped row, its time a gap's. An `.npy`'s NaN is a missing value too.
 //!
 //! # Columns
 //!
@@ -113,6 +117,9 @@ pub struct Record {
     pub drives: Vec<Vec<f64>>,
     /// The measured velocities at each time, in the order of [`ReadOptions::velocities`].
     pub velocities: Vec<Vec<f64>>,
+    /// The rows left out for a missing value in a column read ([`ReadOptions::skip_missing`]),
+    /// in order: a line of text, a sample of an array.
+    pub missing: Vec<Location>,
 }
 
 /// A column chosen by header name or by 1-based position.
@@ -171,6 +178,12 @@ pub struct ReadOptions {
     /// Columns of the coordinates' measured velocities (a motor driver's, a tachometer's), one
     /// per coordinate in their order, read beside them.
     pub velocities: Vec<Column>,
+    /// Leave out every row with a missing value in a column read (an empty cell, a marker such
+    /// as `NA`, `null` or `NaN`; an array's NaN), as if the logger had not written it, and list
+    /// it in [`Record::missing`]: its time stamp is then a gap's (with a sampling step, the rows
+    /// keep their places). Off by default: such a value is an error that names it. An infinity
+    /// is an error either way (a value out of range, not a missing one).
+    pub skip_missing: bool,
 }
 
 impl ReadOptions {
@@ -585,6 +598,15 @@ fn grid(n: usize, dt: f64) -> Result<Vec<f64>, InputError> {
         return Err(InputError::StepOverflow { dt, samples: n });
     }
     Ok((0..n).map(|i| i as f64 * dt).collect())
+}
+
+/// The times of the rows `kept` (their places among `n` rows) `dt` apart from 0: the rows left
+/// out ([`ReadOptions::skip_missing`]) keep theirs, as a gap.
+fn grid_of(kept: &[usize], n: usize, dt: f64) -> Result<Vec<f64>, InputError> {
+    if !(n.saturating_sub(1) as f64 * dt).is_finite() {
+        return Err(InputError::StepOverflow { dt, samples: n });
+    }
+    Ok(kept.iter().map(|&i| i as f64 * dt).collect())
 }
 
 /// Largest relative spread of a column's steps (see [`step_spread`]) for it to be read as the

@@ -96,7 +96,7 @@ fn npy_values(npy: npyz::NpyFile<&[u8]>) -> Result<Vec<f64>, InputError> {
 pub(super) fn read(bytes: &[u8], options: &ReadOptions) -> Result<Record, InputError> {
     let array = Array::open(bytes)?;
     let columns = options.columns(None, array.cols)?;
-    assemble(array.rows, &columns, |c| array.column(c))
+    assemble(array.rows, &columns, options.skip_missing, |c| array.column(c))
 }
 
 /// Bytes of a file read at once by [`read_file`]: its header, then its rows a block at a time.
@@ -180,7 +180,7 @@ pub(super) fn read_file(
         buf.drain(..used);
     }
     // A column taken more than once (the angle also a drive) is copied for all but its last use.
-    assemble(header.rows, &columns, |c| {
+    assemble(header.rows, &columns, options.skip_missing, |c| {
         uses[c] -= 1;
         match (&mut wanted[c], uses[c]) {
             (slot, 0) => slot.take(),
@@ -225,16 +225,66 @@ fn plain_header(first: &[u8], len: u64) -> Option<PlainHeader> {
 }
 
 /// The record of an array of `rows` rows read by `columns`, each column's values given by
-/// `column` (asked once for each use).
+/// `column` (asked once for each use); with `skip_missing`, the rows with a NaN in a column read
+/// left out ([`ReadOptions::skip_missing`]).
 fn assemble(
     rows: usize,
     columns: &super::Columns,
+    skip_missing: bool,
     mut column: impl FnMut(usize) -> Vec<f64>,
 ) -> Result<Record, InputError> {
-    let theta = column(columns.angle);
-    let t = match columns.time {
+    let mut theta = column(columns.angle);
+    let mut t = match columns.time {
         Times::Column(c) => column(c),
         Times::Step(dt) => grid(rows, dt)?,
+    };
+    let mut others: Vec<Vec<f64>> = columns.others.iter().map(|&c| column(c)).collect();
+    let mut drives: Vec<Vec<f64>> = columns.drives.iter().map(|&c| column(c)).collect();
+    let mut velocities: Vec<Vec<f64>> = columns.velocities.iter().map(|&c| column(c)).collect();
+    let mut missing = Vec::new();
+    if skip_missing {
+        let nan_at = |i: usize| {
+            std::iter::once(&t)
+                .chain([&theta])
+                .chain(&others)
+                .chain(&drives)
+                .chain(&velocities)
+                .any(|v| v[i].is_nan())
+        };
+        let keep: Vec<bool> = (0..rows).map(|i| !nan_at(i)).collect();
+        missing = (0..rows)
+            .filter(|&i| !keep[i])
+            .map(|i| Location::Sample(i + 1))
+            .collect();
+        if !missing.is_empty() {
+            if missing.len() == rows {
+                return Err(InputError::AllMissing { rows });
+            }
+            for v in std::iter::once(&mut t)
+                .chain([&mut theta])
+                .chain(&mut others)
+                .chain(&mut drives)
+                .chain(&mut velocities)
+            {
+                let mut k = keep.iter();
+                v.retain(|_| *k.next().expect("one flag a row"));
+            }
+        }
+    }
+    // Each row kept names its own sample in errors.
+    let sample = |i: usize| -> usize {
+        if missing.is_empty() {
+            return i + 1;
+        }
+        // The i-th row kept: its place among all rows.
+        let mut left_out = 0;
+        for m in &missing {
+            match m {
+                Location::Sample(s) if *s - 1 <= i + left_out => left_out += 1,
+                _ => break,
+            }
+        }
+        i + left_out + 1
     };
     // Until the data decide which column is the time, neither is called one.
     let time_role = if columns.order_from_data {
@@ -242,26 +292,30 @@ fn assemble(
     } else {
         Role::Time
     };
-    check_finite(&t, time_role, columns.time.column(), &theta, columns.angle)?;
-    let mut read = |role: Role, cs: &[usize]| -> Result<Vec<Vec<f64>>, InputError> {
-        cs.iter()
-            .map(|&c| {
-                let values = column(c);
-                match values.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-                    Some((i, &value)) => Err(InputError::NonFinite {
-                        at: Location::Sample(i + 1),
-                        role,
-                        column: Column::Position(c + 1),
-                        value,
-                    }),
-                    None => Ok(values),
-                }
-            })
-            .collect()
+    check_finite(
+        &t,
+        time_role,
+        columns.time.column(),
+        &theta,
+        columns.angle,
+        &sample,
+    )?;
+    let finite = |role: Role, cs: &[usize], values: &[Vec<f64>]| -> Result<(), InputError> {
+        for (&c, values) in cs.iter().zip(values) {
+            if let Some((i, &value)) = values.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+                return Err(InputError::NonFinite {
+                    at: Location::Sample(sample(i)),
+                    role,
+                    column: Column::Position(c + 1),
+                    value,
+                });
+            }
+        }
+        Ok(())
     };
-    let others = read(Role::Angle, &columns.others)?;
-    let drives = read(Role::Drive, &columns.drives)?;
-    let velocities = read(Role::Velocity, &columns.velocities)?;
+    finite(Role::Angle, &columns.others, &others)?;
+    finite(Role::Drive, &columns.drives, &drives)?;
+    finite(Role::Velocity, &columns.velocities, &velocities)?;
     let mut record = Record {
         t,
         theta,
@@ -269,6 +323,7 @@ fn assemble(
         lines: None,
         drives,
         velocities,
+        missing,
     };
     if columns.order_from_data {
         super::order_from_data(&mut record);
@@ -449,6 +504,7 @@ fn check_finite(
     time_column: Option<usize>,
     theta: &[f64],
     angle_column: usize,
+    sample: &dyn Fn(usize) -> usize,
 ) -> Result<(), InputError> {
     for (i, (&ti, &xi)) in t.iter().zip(theta).enumerate() {
         // A grid made from a step is finite: its column is never named.
@@ -458,7 +514,7 @@ fn check_finite(
         ] {
             if !value.is_finite() {
                 return Err(InputError::NonFinite {
-                    at: Location::Sample(i + 1),
+                    at: Location::Sample(sample(i)),
                     role,
                     column: Column::Position(column + 1),
                     value,

@@ -66,6 +66,12 @@ pub struct CompareArgs {
     /// gap to tell its turn leaves it a gap; 0 bridges none (a displacement record only).
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub bridge_gaps: usize,
+    /// Leave out every row with a missing value in a column read (an empty cell, NA, null, NaN,
+    /// ...), as if the logger had not written it: its time is a gap's (with --dt the rows keep
+    /// their places), which --bridge-gaps may bridge; a note counts them and names the first.
+    /// Without it such a value is an error naming its line.
+    #[arg(long)]
+    pub skip_missing: bool,
     /// circle or line [default: the model's].
     #[arg(long, value_parser = choice::<Domain>(&["circle", "line"]))]
     pub signal: Option<Domain>,
@@ -125,6 +131,7 @@ impl CompareArgs {
             repair: self.repair,
             no_repair: self.no_repair,
             bridge_gaps: self.bridge_gaps,
+            skip_missing: self.skip_missing,
             velocity_col: self.velocity_col.clone(),
             signal: self.signal,
             measured: self.measured,

@@ -75,6 +75,12 @@ pub struct InputArgs {
     /// bridges none (a displacement record only, not with --stream).
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub bridge_gaps: usize,
+    /// Leave out every row with a missing value in a column read (an empty cell, NA, null, NaN,
+    /// ...), as if the logger had not written it: its time is a gap's (with --dt the rows keep
+    /// their places), which --bridge-gaps may bridge; a note counts them and names the first.
+    /// Without it such a value is an error naming its line (not with --stream).
+    #[arg(long)]
+    pub skip_missing: bool,
     /// An angle on the circle (wrapped into [-π, π), unwrapped per orbit, circle metric) or a
     /// displacement on the line (no wrapping, plain differences): circle or line, for every
     /// coordinate or one per coordinate of --coords (circle,line).
@@ -129,6 +135,7 @@ impl InputArgs {
             repair: self.repair,
             no_repair: self.no_repair,
             bridge_gaps: self.bridge_gaps,
+            skip_missing: self.skip_missing,
             velocity_col: self.velocity_col.clone(),
             signal: self.signal.clone(),
             measured: self.measured,

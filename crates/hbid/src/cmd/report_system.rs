@@ -219,6 +219,7 @@ fn record_options(args: &ReportArgs, system: &IdentifiedSystem) -> anyhow::Resul
         repair: input.repair,
         no_repair: input.no_repair,
         bridge_gaps: input.bridge_gaps,
+        skip_missing: input.skip_missing,
         velocity_col: input.velocity_col.clone(),
         signal: system
             .domains()
@@ -253,6 +254,7 @@ fn measure(
         repair: input.repair,
         no_repair: input.no_repair,
         bridge_gaps: input.bridge_gaps,
+        skip_missing: input.skip_missing,
         velocity_col: input.velocity_col.clone(),
         measured: input.measured,
         // On the record's grid, as the report draws it beside the models' runs.
