@@ -151,3 +151,19 @@ def test_bridged_samples_are_run_through_and_not_scored(shaker, tmp_path):
     for bad in ([(0, 1)], [(5, 5)], [(len(rows) - 1, len(rows) + 3)]):
         with pytest.raises(hbid.OptionsError, match="bridged samples lie inside its pieces"):
             hbid.compare(shaker["model"], dataclasses.replace(record, bridged=bad), init=100)
+
+
+def test_a_refinement_does_not_score_bridged_samples(shaker, tmp_path):
+    # The held-out record with every 97th row dropped, bridged: its refinement runs through the
+    # bridged samples and scores none of them (each one is one or two samples once resampled onto
+    # a whole number of samples per drive period).
+    lines = open(shaker["csv"]).read().splitlines()
+    rows = lines[1:]
+    path = tmp_path / "dropped.csv"
+    path.write_text("\n".join([lines[0]] + [r for i, r in enumerate(rows) if i % 97 != 50]) + "\n")
+    kwargs = dict(drive_col="p", signal="line", drive_frequency=6.5, terms="x', x, x^3, p", bootstrap=0)
+    kwargs.update(refine=True, refine_init=100)
+    whole = hbid.identify(str(shaker["csv"]), **kwargs).refinement
+    bridged = hbid.identify(str(path), bridge_gaps=1, **kwargs).refinement
+    after_init = len([i for i in range(len(rows)) if i % 97 == 50 and i >= 100])
+    assert after_init <= whole["scored"] - bridged["scored"] <= 2 * after_init + 2, (whole, bridged)

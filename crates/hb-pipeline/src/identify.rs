@@ -1538,7 +1538,7 @@ pub(crate) fn finish(
             others: Vec::new(),
             drives: data.drives.clone(),
             velocities: Vec::new(),
-            bridged: Vec::new(),
+            bridged: data.bridged.clone(),
             notes: Vec::new(),
             lead_in: None,
         };

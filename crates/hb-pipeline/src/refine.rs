@@ -46,7 +46,8 @@ pub struct Refinement {
     pub rmse_before: f64,
     /// The same with the refined coefficients.
     pub rmse_after: f64,
-    /// Samples scored (those after each piece's first `init`).
+    /// Samples scored (those after each piece's first `init`, but the samples bridged into gaps,
+    /// which were not measured).
     pub scored: usize,
     /// Samples of each piece that set its state and are not scored.
     pub init: usize,
@@ -69,6 +70,11 @@ fn residuals(
     tolerances: Tolerances,
 ) -> Result<Option<Vec<f64>>, RunError> {
     let mut r = Vec::new();
+    // A sample bridged into a gap was not measured: the run goes on through it, unscored.
+    let mut bridged = vec![false; grid.x.len()];
+    for b in &grid.bridged {
+        bridged[b.start.min(grid.x.len())..b.end.min(grid.x.len())].fill(true);
+    }
     for piece in grid.pieces.iter().filter(|p| p.len() > init) {
         let y = &grid.x[piece.clone()];
         let t0 = grid.t0 + piece.start as f64 * grid.dt;
@@ -81,10 +87,9 @@ fn residuals(
             return Ok(None);
         }
         r.extend(
-            run.x[init..]
-                .iter()
-                .zip(&y[init..])
-                .map(|(&x, &y)| difference(grid.domain, x, y)),
+            (init..y.len())
+                .filter(|&j| !bridged[piece.start + j])
+                .map(|j| difference(grid.domain, run.x[j], y[j])),
         );
     }
     Ok(Some(r))

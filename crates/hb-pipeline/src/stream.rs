@@ -216,6 +216,7 @@ fn streamed_in(
         others: Vec::new(),
         drives: Vec::new(),
         velocities: Vec::new(),
+        bridged: Vec::new(),
     });
     let coordinates = first.coordinates();
     finish(

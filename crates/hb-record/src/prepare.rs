@@ -595,6 +595,9 @@ pub struct Data {
     /// The coordinates' measured velocities on the same clock (resampled with the record), when
     /// read.
     pub velocities: Vec<Vec<f64>>,
+    /// The samples filled by bridging gaps ([`GridData::bridged`]), on this clock: a resampled
+    /// record's every sample within a bridged stretch's time.
+    pub bridged: Vec<Range<usize>>,
 }
 
 impl Data {
@@ -1171,6 +1174,7 @@ impl GridData {
             others,
             drives,
             velocities,
+            bridged,
             ..
         } = self;
         let (period, found) = match source {
@@ -1239,6 +1243,24 @@ impl GridData {
             };
         let (clock, pieces) = (out_clock, out_pieces);
         let p = clock.require_whole().map_err(PrepareError::Whole)?;
+        // A bridged stretch's samples on the new clock: every one from the sample before its
+        // first to the one after its last (the resampling's kernel reads the stretch there).
+        let bridged = match resampled_from {
+            None => bridged,
+            Some(_) => {
+                let (step, start, len) = (clock.step(), clock.start_time(), x.len());
+                bridged
+                    .iter()
+                    .map(|b| {
+                        let (a, z) = (t0 + b.start as f64 * dt, t0 + (b.end - 1) as f64 * dt);
+                        let first = ((a - start) / step).floor().max(0.0) as usize;
+                        let last = ((z - start) / step).ceil().max(0.0) as usize;
+                        first.min(len)..(last + 1).min(len)
+                    })
+                    .filter(|r| !r.is_empty())
+                    .collect()
+            }
+        };
         Ok(Data {
             clock,
             p,
@@ -1250,6 +1272,7 @@ impl GridData {
             others,
             drives,
             velocities,
+            bridged,
         })
     }
 }
