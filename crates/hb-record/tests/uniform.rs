@@ -197,6 +197,60 @@ fn repair_fixes_isolated_glitches_of_every_kind() {
     }
 }
 
+/// A logger that drops a row and stamps the next one late: the count from its neighbours leaves
+/// it two slots, and with repair it takes the free one its stamp is nearest (within 0.4 steps),
+/// the gap staying where the row was dropped; without repair the error says it can be repaired
+/// and where. Early or late, before or after the gap, a gap of one or of several samples.
+#[test]
+fn a_glitch_beside_a_gap_takes_its_nearest_free_slot_on_repair() {
+    let grid = || -> Vec<f64> { (0..200).map(|i| i as f64 * 0.5).collect() };
+    // (samples dropped, the glitch's sample, its shift in steps, where it lands, the pieces)
+    type Case<'a> = (&'a [usize], usize, f64, usize, [std::ops::Range<usize>; 2]);
+    let cases: [Case<'_>; 4] = [
+        (&[70], 71, 0.38, 71, [0..70, 71..200]),
+        (&[70], 69, -0.3, 69, [0..70, 71..200]),
+        (&[70, 71, 72], 73, -0.35, 73, [0..70, 73..200]),
+        (&[100], 101, -0.35, 101, [0..100, 101..200]),
+    ];
+    for (dropped, glitch, shift, lands, pieces) in cases {
+        let mut t = grid();
+        t[glitch] += shift * 0.5;
+        let kept: Vec<f64> = t
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| !dropped.contains(i))
+            .map(|(_, &v)| v)
+            .collect();
+        let line = kept.iter().position(|&v| v == t[glitch]).unwrap() as u64 + 2;
+        match fit(kept.clone()) {
+            Err(e @ InputError::TimeGlitch { isolated: true, .. }) => {
+                let text = e.to_string();
+                assert!(text.starts_with(&format!("line {line}:")), "{text}");
+                assert!(
+                    text.contains(&format!("this sample is at {}", lands as f64 * 0.5)),
+                    "{text}"
+                );
+                assert!(text.contains("can be repaired"), "{text}");
+            }
+            other => panic!("{dropped:?}: {other:?}"),
+        }
+        let u = repair(kept).unwrap();
+        assert_eq!(u.repaired.len(), 1, "{dropped:?}");
+        assert_eq!(u.repaired[0].at, Location::Line(line));
+        assert!(
+            (u.repaired[0].now - lands as f64 * 0.5).abs() < 1e-9,
+            "{:?}",
+            u.repaired
+        );
+        let got: Vec<std::ops::Range<usize>> = u
+            .pieces
+            .iter()
+            .map(|p| p.first..p.first + p.samples.len())
+            .collect();
+        assert_eq!(got, pieces, "{dropped:?}");
+    }
+}
+
 #[test]
 fn non_isolated_glitches_fail_even_with_repair() {
     let grid = || -> Vec<f64> { (0..100).map(|i| i as f64 * 0.5).collect() };
@@ -204,10 +258,15 @@ fn non_isolated_glitches_fail_even_with_repair() {
     (two[40], two[41]) = (20.2, 20.7); // two neighbours off the grid
     let mut swapped = grid();
     swapped.swap(60, 61);
+    // The sample after a gap off the grid by more than NEAREST_SLOT (0.4) steps of its nearest
+    // free slot, or nearest the slot of the sample after it: its slot is in doubt.
     let mut beside_a_gap = grid();
     beside_a_gap.remove(70);
-    beside_a_gap[70] += 0.15; // the sample after the gap is off the grid
-    for (t, line) in [(two, 42), (swapped, 62), (beside_a_gap, 72)] {
+    beside_a_gap[70] += 0.225;
+    let mut nearest_taken = grid();
+    nearest_taken.remove(70);
+    nearest_taken[70] += 0.35;
+    for (t, line) in [(two, 42), (swapped, 62), (beside_a_gap, 72), (nearest_taken, 72)] {
         for options in [GridOptions::default(), GridOptions { repair: true }] {
             match GridRecord::fit(record(t.clone()), &options) {
                 Err(e @ InputError::TimeGlitch { isolated: false, .. }) => {

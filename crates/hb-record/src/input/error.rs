@@ -225,8 +225,9 @@ pub enum InputError {
         expected: f64,
         /// The grid's step.
         dt: f64,
-        /// Whether the neighbours on both sides fit the grid one step away, so that repair would
-        /// replace this stamp by its grid time.
+        /// Whether the neighbours on both sides fit the grid, one step away or with a gap beside
+        /// it and the stamp within 0.4 steps of a free slot, so that repair would replace this
+        /// stamp by its grid time.
         isolated: bool,
         /// The next glitches after this one that are errors too (at most five), in order.
         others: Vec<Location>,

@@ -191,6 +191,11 @@ const MAD_TO_SIGMA: f64 = 1.482_602_218_505_602;
 /// The most other glitches an error names.
 const GLITCHES_NAMED: usize = 5;
 
+/// A glitch beside a gap is repaired onto the free grid slot its stamp is nearest when within
+/// this many steps of it (from the slot's time, and from its level where the clock slips): the
+/// next nearest slot is then at least 0.6 steps away, so that the slot is not in doubt.
+const NEAREST_SLOT: f64 = 0.4;
+
 /// A record whose gaps make its grid more than this many times its samples, and more than
 /// [`GAP_MISSING_ALLOWED`] steps longer, is refused ([`InputError::GapTooLong`]): every stage
 /// holds the grid, NaN in the gaps, so a stamp far off the others would take all memory.
@@ -781,7 +786,27 @@ impl GridRecord {
                 return Ok(grid);
             }
         }
-        let error = |p: usize| !(isolated(p) && options.repair);
+        // A glitch between stamps that fit with a gap beside it (a logger that dropped a row and
+        // stamped the next late): the count from its neighbours leaves it more than one slot,
+        // so it takes the free slot its stamp is nearest, when within NEAREST_SLOT steps of it
+        // (the next nearest then at least 1 − NEAREST_SLOT away).
+        let beside_gap = |p: usize| -> Option<f64> {
+            let i = bad[p];
+            let prev_good = i > 0 && (p == 0 || bad[p - 1] != i - 1);
+            let next_good = i + 1 < n && bad.get(p + 1) != Some(&(i + 1));
+            if !(prev_good && next_good) {
+                return None;
+            }
+            let (before, after, k) = (index(i - 1), index(i + 1), index(i));
+            (after - before >= 3.0
+                && k > before
+                && k < after
+                && off_level(line, k, i).abs() <= NEAREST_SLOT * line.b
+                && (tau(i) - line.at(k)).abs() <= NEAREST_SLOT * line.b)
+                .then_some(k)
+        };
+        let repairable = |p: usize| isolated(p) || beside_gap(p).is_some();
+        let error = |p: usize| !(repairable(p) && options.repair);
         if let Some(p) = (0..bad.len()).find(|&p| error(p)) {
             let i = bad[p];
             let fault = match i.checked_sub(1).map(|j| t[j]) {
@@ -794,9 +819,10 @@ impl GridRecord {
                 at: at(i),
                 t: t[i],
                 fault,
-                expected: origin + line.at(expected_index(&bad, p, n, index)),
+                expected: origin
+                    + line.at(beside_gap(p).unwrap_or_else(|| expected_index(&bad, p, n, index))),
                 dt: line.b,
-                isolated: isolated(p),
+                isolated: repairable(p),
                 others: others.iter().take(GLITCHES_NAMED).map(|&q| at(bad[q])).collect(),
                 other_count: others.len(),
             });
@@ -805,7 +831,9 @@ impl GridRecord {
             .iter()
             .enumerate()
             .map(|(p, &i)| {
-                if i > 0 && (p == 0 || bad[p - 1] != i - 1) {
+                if let Some(k) = beside_gap(p) {
+                    k
+                } else if i > 0 && (p == 0 || bad[p - 1] != i - 1) {
                     index(i - 1) + 1.0
                 } else {
                     index(i + 1) - 1.0
