@@ -97,6 +97,24 @@ fn rigs() -> Vec<Rig> {
             make: None,
         },
         Rig {
+            name: "pendulum-late-and-missing",
+            what: "the first rig's record from a networked logger that stamps to 0.1 ms: one row in 500 dropped and the \
+                   row after it stamped 0.6 ms (0.3 step) late, and rows whose angle it wrote as `NaN` (one in 700) or \
+                   left empty (one in 900); the late stamps repaired onto their nearest free slot, the rows with a \
+                   missing value left out as dropped rows, and every gap bridged",
+            simulate: &[PENDULUM],
+            identify: &[
+                "--drive-frequency",
+                "1.02",
+                "--repair",
+                "--skip-missing",
+                "--bridge-gaps",
+                "1",
+            ],
+            rewrite: Some(late_and_missing),
+            make: None,
+        },
+        Rig {
             name: "pendulum-headerless",
             what: "the first record written as a DAQ might: no header, angle first, time second, separated by spaces",
             simulate: &[PENDULUM],
@@ -334,6 +352,28 @@ fn half_turn_spikes(text: &str) -> String {
         }
     }
     joined(&header, &rows)
+}
+
+/// Stamps to 0.1 ms; one row in 500 dropped and the next stamped 0.6 ms late; the angle of one
+/// row in 700 written `NaN` and of one in 900 left empty.
+fn late_and_missing(text: &str) -> String {
+    let (header, rows) = rows(text);
+    let mut out = Vec::with_capacity(rows.len());
+    for (i, mut row) in rows.into_iter().enumerate() {
+        if i % 500 == 250 {
+            continue;
+        }
+        let Ok(t) = row[0].parse::<f64>() else { continue };
+        let late = if i % 500 == 251 { 6e-4 } else { 0.0 };
+        row[0] = format!("{:.4}", t + late);
+        if i % 700 == 350 {
+            row[1] = "NaN".to_owned();
+        } else if i % 900 == 450 {
+            row[1] = String::new();
+        }
+        out.push(row);
+    }
+    joined(&header, &out)
 }
 
 /// The stamps of two runs 1 ms behind the grid, and two stamps, three apart, 7 ms early.

@@ -1,6 +1,7 @@
 //! Progress bars on stderr, hidden off a terminal and with `--quiet`.
 
 use hb_pipeline::{Notice, Observer, Spelling, Stage};
+use hb_record::prepare::Note;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 /// A progress bar for one stage.
@@ -110,24 +111,44 @@ impl Stages {
 /// the command line spells them.
 pub struct Console {
     stages: Stages,
+    /// Time stamps replaced by their grid time so far, and those of them not printed.
+    repairs: (usize, usize),
 }
+
+/// The time-stamp repairs the console prints one by one; the rest are counted in one note (a
+/// logger that stamps one row in 500 late has hundreds in a long record).
+const REPAIRS_SHOWN: usize = 5;
 
 impl Console {
     /// The observer of `command`.
     pub fn new(command: &str, quiet: bool, timings: bool) -> Self {
         Self {
             stages: Stages::new(command, quiet, timings),
+            repairs: (0, 0),
         }
     }
 
     /// Ends the run's display (and prints the times with `--timings`).
-    pub fn finish(self) {
+    pub fn finish(mut self) {
+        self.held_repairs();
         self.stages.finish();
+    }
+
+    /// The note of the repairs not printed, if any.
+    fn held_repairs(&mut self) {
+        let held = std::mem::take(&mut self.repairs.1);
+        if held > 0 {
+            self.stages.print(&format!(
+                "note: {held} more time stamp(s) replaced by their grid times ({} in all; `hbid report` and Python's `read` list every one)",
+                self.repairs.0
+            ));
+        }
     }
 }
 
 impl Observer for Console {
     fn stage(&mut self, stage: Stage) {
+        self.held_repairs();
         self.stages.start(stage.name());
     }
 
@@ -136,6 +157,15 @@ impl Observer for Console {
     }
 
     fn notice(&mut self, notice: &Notice) {
+        if let Notice::Record(Note::TimeRepaired(_)) = notice {
+            self.repairs.0 += 1;
+            if self.repairs.0 > REPAIRS_SHOWN {
+                self.repairs.1 += 1;
+                return;
+            }
+        } else {
+            self.held_repairs();
+        }
         let kind = if notice.is_warning() { "warning" } else { "note" };
         self.stages.print(&format!(
             "{kind}: {}",

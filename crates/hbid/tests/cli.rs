@@ -3992,6 +3992,52 @@ fn compare_runs_through_bridged_gaps_on_a_half_the_model_did_not_see() {
     );
 }
 
+/// Many time-stamp repairs are not a page of notes: the first five are printed, the rest
+/// counted in one note, and the other notes follow in their order.
+#[test]
+fn many_time_stamp_repairs_are_counted_after_the_first_five() {
+    let dir = scratch("repairs");
+    let record = simulated(&dir, "r.csv", &["--samples", "4000"]);
+    let text = std::fs::read_to_string(&record).unwrap();
+    let mut lines: Vec<String> = text.lines().map(str::to_owned).collect();
+    // Eight stamps, 300 rows apart, 0.4 step late: isolated glitches.
+    let t = |l: &str| l.split(',').next().unwrap().parse::<f64>().unwrap();
+    let dt = t(&lines[2]) - t(&lines[1]);
+    for k in 1..=8 {
+        let row = 300 * k;
+        let mut cells: Vec<String> = lines[row].split(',').map(str::to_owned).collect();
+        cells[0] = format!("{}", t(&lines[row]) + 0.4 * dt);
+        lines[row] = cells.join(",");
+    }
+    let path = dir.join("glitches.csv");
+    std::fs::write(&path, lines.join("\n") + "\n").unwrap();
+    let out = hbid(&["identify", path.to_str().unwrap(), "--repair", "--bootstrap", "0"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let notes: Vec<&str> = stderr.lines().filter(|l| l.starts_with("note: ")).collect();
+    let first = notes
+        .iter()
+        .position(|l| l.contains("replaced by its grid time"))
+        .unwrap();
+    for (k, note) in notes[first..first + 5].iter().enumerate() {
+        assert!(
+            note.starts_with(&format!("note: line {}: time ", 300 * (k + 1) + 1)),
+            "{stderr}"
+        );
+    }
+    assert_eq!(
+        notes[first + 5],
+        "note: 3 more time stamp(s) replaced by their grid times (8 in all; `hbid report` and Python's `read` \
+         list every one)"
+    );
+    assert!(
+        !notes[first + 6..]
+            .iter()
+            .any(|l| l.contains("replaced by its grid time")),
+        "{stderr}"
+    );
+}
+
 /// Bridging is refused, in one line, where it cannot hold: a gap longer than a cubic through
 /// four samples stands for, a record read in chunks (a gap at a chunk's edge would not be
 /// bridged), and a velocity record integrated piece by piece.
