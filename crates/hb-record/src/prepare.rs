@@ -659,7 +659,7 @@ fn drop_duplicate_rows(record: &mut InputRecord) -> Option<Note> {
     let &first = drop.first()?;
     let first = match record.lines.as_ref().and_then(|l| l.get(first)) {
         Some(&line) => Location::Line(line),
-        None => Location::Sample(first + 1),
+        None => crate::input::sample_location(&record.missing, first),
     };
     let times: Vec<f64> = drop.iter().map(|&i| record.t[i]).collect();
     /// `v` without the rows `drop` (increasing).

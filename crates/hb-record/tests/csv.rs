@@ -687,3 +687,44 @@ fn rows_with_a_missing_value_are_left_out_on_request() {
     );
     assert!(matches!(inf, Err(InputError::NonFinite { .. })), "{inf:?}");
 }
+
+/// A missing value in the first row of data is data, not a header or a row of units: a
+/// headerless first row of numbers and missing values, a lone `NA` first, and a row under the
+/// header whose columns read are empty (whatever a column not read holds).
+#[test]
+fn a_missing_value_in_the_first_row_of_data_is_no_header() {
+    let skip = |options: ReadOptions| ReadOptions {
+        skip_missing: true,
+        ..options
+    };
+    let err = read("0,NA\n0.1,0.2\n0.2,0.3\n").unwrap_err();
+    assert!(
+        matches!(err, InputError::NotANumber { line: 1, missing: true, .. }),
+        "{err:?}"
+    );
+    let r = with("0,NA\n0.1,0.2\n0.2,0.3\n", skip(ReadOptions::default())).unwrap();
+    assert_eq!((r.t, r.missing), (vec![0.1, 0.2], vec![Location::Line(1)]));
+    let stepped = ReadOptions {
+        dt: Some(0.5),
+        ..ReadOptions::default()
+    };
+    let r = with("NA\n0.2\n0.3\n0.4\n", skip(stepped.clone())).unwrap();
+    assert_eq!((r.t, r.theta), (vec![0.5, 1.0, 1.5], vec![0.2, 0.3, 0.4]));
+    assert_eq!(r.missing, vec![Location::Line(1)]);
+    let labelled = ReadOptions {
+        dt: Some(1.0),
+        angle: Some("x".parse().unwrap()),
+        ..ReadOptions::default()
+    };
+    let text = "x,label\n,start\n0.1,a\n0.2,b\n,c\n0.4,d\n";
+    assert!(matches!(
+        with(text, labelled.clone()),
+        Err(InputError::NotANumber { line: 2, missing: true, .. })
+    ));
+    let r = with(text, skip(labelled)).unwrap();
+    assert_eq!((r.t, r.theta), (vec![1.0, 2.0, 4.0], vec![0.1, 0.2, 0.4]));
+    assert_eq!(r.missing, vec![Location::Line(2), Location::Line(5)]);
+    // A row of units is still one when a column read names its unit.
+    let r = with("t,theta,label\ns,rad,\n0,0.1,a\n1,0.2,b\n", ReadOptions::default()).unwrap();
+    assert_eq!(r.t, vec![0.0, 1.0]);
+}

@@ -420,3 +420,39 @@ fn rows_with_a_nan_are_left_out_on_request() {
         "{err:?}"
     );
 }
+
+/// After rows are left out for a NaN, what the grid fit and the duplicate rows' note name is
+/// the array's own sample, not its place among the rows kept.
+#[test]
+fn samples_after_rows_left_out_are_named_by_their_place_in_the_array() {
+    use hb_record::input::{GridOptions, GridRecord};
+    use hb_record::prepare::{Note, PrepareOptions, condition};
+    let array = |edit: &dyn Fn(&mut Vec<[f64; 2]>)| {
+        let mut rows: Vec<[f64; 2]> = (0..400).map(|i| [0.1 * i as f64, (0.1 * i as f64).sin()]).collect();
+        rows[1][1] = f64::NAN; // sample 2
+        edit(&mut rows);
+        let payload: Vec<u8> = rows.iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
+        let bytes = npy_bytes("<f8", "(400, 2)", false, &payload);
+        let options = ReadOptions {
+            skip_missing: true,
+            ..ReadOptions::default()
+        };
+        read_bytes(&bytes, &options).unwrap()
+    };
+    // Sample 10's time goes back.
+    let back = array(&|rows| rows[9][0] = 0.75);
+    match GridRecord::fit(back, &GridOptions::default()) {
+        Err(e) => assert!(e.to_string().starts_with("sample 10: "), "{e}"),
+        Ok(_) => panic!("a time going back fits"),
+    }
+    // Sample 21 repeats sample 20.
+    let twice = array(&|rows| rows[20] = rows[19]);
+    let grid = condition(twice, &PrepareOptions::new(circle_signal::Domain::Line), &mut |_| {}).unwrap();
+    assert!(
+        grid.notes
+            .iter()
+            .any(|n| matches!(n, Note::DuplicateRows { first: Location::Sample(21), .. })),
+        "{:?}",
+        grid.notes
+    );
+}

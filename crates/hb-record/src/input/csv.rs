@@ -11,7 +11,10 @@ pub(super) fn read<'a>(bytes: &'a [u8], options: &ReadOptions) -> Result<Record,
     let mut first_cells = Vec::new();
     separator.split(first, &mut first_cells);
     let width = first_cells.len();
-    let is_header = first_cells.iter().any(|c| number(c, separator).is_none());
+    // A row of numbers and missing values (`0,NA`, `0.5,`) is data, not a header.
+    let is_header = first_cells
+        .iter()
+        .any(|c| number(c, separator).is_none() && !c.is_empty() && !missing_marker(c));
     let header = is_header.then_some(&first_cells[..]);
     let columns = options.columns(header, width)?;
     let Columns { time, angle, .. } = columns.clone();
@@ -31,6 +34,15 @@ pub(super) fn read<'a>(bytes: &'a [u8], options: &ReadOptions) -> Result<Record,
         field(Role::Angle, angle),
     );
     let other_fields: Vec<Field<'_>> = columns.others.iter().map(|&i| field(Role::Angle, i)).collect();
+    // The columns read, where a row of units names at least one unit.
+    let read_columns: Vec<usize> = time
+        .column()
+        .into_iter()
+        .chain([angle])
+        .chain(columns.others.iter().copied())
+        .chain(columns.drives.iter().copied())
+        .chain(columns.velocities.iter().copied())
+        .collect();
     let drive_fields: Vec<Field<'_>> = columns.drives.iter().map(|&i| field(Role::Drive, i)).collect();
     let velocity_fields: Vec<Field<'_>> = columns
         .velocities
@@ -144,7 +156,7 @@ pub(super) fn read<'a>(bytes: &'a [u8], options: &ReadOptions) -> Result<Record,
     while let Some((line, text)) = lines.next_row()? {
         // A row of the columns' units under the header (`s, rad, N m`): as many cells, none of
         // them a number, so no data; passed as the header is.
-        if std::mem::take(&mut under_header) && units_row(text, separator, width) {
+        if std::mem::take(&mut under_header) && units_row(text, separator, width, &read_columns) {
             continue;
         }
         push(line, text, &mut cells)?;
@@ -214,13 +226,14 @@ fn first_row(bytes: &[u8]) -> Result<(Lines<'_>, u64, &str, Separator), InputErr
 }
 
 /// Whether `text` is a row of units under a header of `width` cells: as many cells, none of them
-/// a number or a missing value's marker (`NA`, `null`, ...), at least one not empty. In a text
+/// a number or a missing value's marker (`NA`, `null`, ...), at least one of the columns `read`
+/// not empty (a row whose columns read are empty is data with missing values). In a text
 /// separated by tabs a unit may hold a space (`rad s-1`) or be left empty (two tabs in a row),
 /// so such a row is also split at each tab.
-fn units_row(text: &str, separator: Separator, width: usize) -> bool {
+fn units_row(text: &str, separator: Separator, width: usize, read: &[usize]) -> bool {
     let units = |cells: &[&str]| {
         cells.len() == width
-            && cells.iter().any(|c| !c.is_empty())
+            && read.iter().any(|&c| cells.get(c).is_some_and(|c| !c.is_empty()))
             && cells
                 .iter()
                 .all(|c| c.is_empty() || (number(c, separator).is_none() && !missing_marker(c)))

@@ -12,7 +12,10 @@
 //!   one ([`InputError::MixedSeparators`] names the first that does not). Where semicolons
 //!   separate the cells, a decimal comma (`0,5`) is read as a decimal point. A cell may be
 //!   enclosed in double quotes.
-//! - The first row is a header when any of its cells is not a number.
+//! - The first row is a header when any of its cells is neither a number nor a missing value
+//!   (empty, `NA`, `null`, ...): a first row of numbers and missing values is data. A row right
+//!   under the header whose cells are no numbers nor missing values' markers, with a unit in a
+//!   column read, is a row of units, passed.
 //! - A cell of a column read must hold a finite number. A missing value (an empty cell, a marker
 //!   such as `NA`, `null` or `NaN`) is an error naming its line, unless
 //!   [`ReadOptions::skip_missing`] leaves its row out (listed in [`Record::missing`]): the row is
@@ -124,6 +127,20 @@ pub struct Record {
     /// The rows left out for a missing value in a column read ([`ReadOptions::skip_missing`]),
     /// in order: a line of text, a sample of an array.
     pub missing: Vec<Location>,
+}
+
+/// Where sample `i` (from 0) of a record without lines (an array's) is in the array as read: its
+/// sample counted from 1 among every row, those left out for a missing value (`missing`, in
+/// order, [`Record::missing`]) included.
+pub fn sample_location(missing: &[Location], i: usize) -> Location {
+    let mut place = i;
+    for m in missing {
+        match m {
+            Location::Sample(s) if *s <= place + 1 => place += 1,
+            _ => break,
+        }
+    }
+    Location::Sample(place + 1)
 }
 
 /// A column chosen by header name or by 1-based position.

@@ -272,19 +272,9 @@ fn assemble(
         }
     }
     // Each row kept names its own sample in errors.
-    let sample = |i: usize| -> usize {
-        if missing.is_empty() {
-            return i + 1;
-        }
-        // The i-th row kept: its place among all rows.
-        let mut left_out = 0;
-        for m in &missing {
-            match m {
-                Location::Sample(s) if *s - 1 <= i + left_out => left_out += 1,
-                _ => break,
-            }
-        }
-        i + left_out + 1
+    let sample = |i: usize| match super::sample_location(&missing, i) {
+        Location::Sample(s) => s,
+        Location::Line(_) => i + 1,
     };
     // Until the data decide which column is the time, neither is called one.
     let time_role = if columns.order_from_data {

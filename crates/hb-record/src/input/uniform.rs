@@ -508,14 +508,16 @@ impl GridRecord {
         settle: bool,
         quick: bool,
     ) -> Result<Self, InputError> {
-        let Record { t, theta, lines, .. } = record;
+        let Record {
+            t, theta, lines, missing, ..
+        } = record;
         let n = t.len();
         if n < 2 {
             return Err(InputError::TooFewSamples { found: n, needed: 2 });
         }
         let at = |i: usize| match lines.as_ref().and_then(|lines| lines.get(i)) {
             Some(&line) => Location::Line(line),
-            None => Location::Sample(before + i + 1),
+            None => super::sample_location(&missing, before + i),
         };
         let decimals = printed_decimals(&[&t]);
         let unresolved = |off: usize, scatter: Option<f64>| InputError::TimeUnresolved {
@@ -772,6 +774,7 @@ impl GridRecord {
                         .as_ref()
                         .and_then(|lines| lines.get(start..stop))
                         .map(<[u64]>::to_vec),
+                    missing: missing.clone(),
                     ..Record::default()
                 };
                 let mut grid = Self::fit_from(rest, options, before + start, false, quick)?;
