@@ -199,6 +199,7 @@ def simulate(
     dt: Optional[float] = None,
     drive_col: ColumnsLike = None,
     init: Optional[int] = None,
+    skip_missing: bool = False,
     **old: Any,
 ) -> Any:
     """Simulates a rig's record, as ``hbid simulate`` does (defaults: the paper's data set).
@@ -292,6 +293,8 @@ def simulate(
         init: samples of the input that set the initial state of each piece (default: one period
             of the model's drive, at most a tenth of the record, at least 8); 0 starts from
             ``x0``, ``v0``.
+        skip_missing: leave out every row of the input with a missing value in a column read, as
+            a logger's dropped row (a gap, where the run starts again).
 
     Returns:
         A :class:`Simulation` (``t, x, v = ...`` unpacks the arrays); with ``model``, a
@@ -386,6 +389,7 @@ def simulate(
             dt=dt,
             drive_col=drive_col,
             init=init,
+            skip_missing=skip_missing,
             x0=state["x0"],
             v0=state["v0"],
             rtol=options["rtol"],
@@ -398,6 +402,7 @@ def simulate(
         ("dt", dt),
         ("drive_col", drive_col),
         ("init", init),
+        ("skip_missing", True if skip_missing else None),
     ):
         if value is not None:
             raise OptionsError(f"{name} reads the record of input=, for a saved model=")

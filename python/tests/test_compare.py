@@ -167,3 +167,22 @@ def test_a_refinement_does_not_score_bridged_samples(shaker, tmp_path):
     bridged = hbid.identify(str(path), bridge_gaps=1, **kwargs).refinement
     after_init = len([i for i in range(len(rows)) if i % 97 == 50 and i >= 100])
     assert after_init <= whole["scored"] - bridged["scored"] <= 2 * after_init + 2, (whole, bridged)
+
+
+def test_a_model_runs_on_an_input_with_missing_values_on_request(shaker, tmp_path):
+    lines = open(shaker["csv"]).read().splitlines()
+    cells = lines[3001].split(",")
+    cells[1] = "NA"
+    lines[3001] = ",".join(cells)
+    path = tmp_path / "na.csv"
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(hbid.InputError, match="line 3002: 'NA' .*skip_missing=True"):
+        hbid.simulate(model=shaker["model"], input=str(path), drive_col="p", init=100)
+    t, x, v = hbid.simulate(model=shaker["model"], input=str(path), drive_col="p", init=100, skip_missing=True)
+    # The row left out is a gap, which the run's samples skip (the run starts again after it).
+    rows = len(lines) - 1
+    assert len(t) == rows - 1 and np.isfinite(x).all()
+    steps = np.diff(t)
+    assert np.argmax(steps) == 2999 and steps[2999] == pytest.approx(2 * np.median(steps), rel=1e-6)
+    with pytest.raises(hbid.OptionsError, match="skip_missing"):
+        hbid.simulate(system="duffing", skip_missing=True)

@@ -48,7 +48,8 @@ use crate::record::{AngleUnit, ColumnList, RecordOptions, Source, condition_sour
 /// end: the grid's samples, after the rows a logger stamped before it settled, when the record
 /// has them (see the [module documentation](self)). For a record without gaps the samples are
 /// the file's rows; a record whose gaps were bridged (`bridge_gaps`) counts the samples bridged
-/// among them, rows the file does not have.
+/// among them, which hold no row of the file (or a row left out for a missing value,
+/// `skip_missing`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct SampleRange {
     /// The first sample.
@@ -393,7 +394,8 @@ pub struct RangeScore {
     pub coordinate: Option<String>,
     /// The range compared, `[start, end)` samples of the grid.
     pub range: [usize; 2],
-    /// Samples that set the initial state of each piece (not scored).
+    /// Samples that set the initial state of each piece whose state is fitted (not scored); the
+    /// piece that starts from a state given (`x0`, `v0`) scores all of its samples.
     pub init: usize,
     /// Samples scored.
     pub scored: usize,
@@ -556,7 +558,7 @@ pub struct RunPiece {
 /// What `hbid compare` reports; its serialisation is the JSON of `hbid compare --json`.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct CompareReport {
-    /// The record's samples that hold data.
+    /// The record's samples that hold data (those bridged into gaps among them).
     pub samples: usize,
     /// The sampling step (of the grid).
     pub step: f64,
@@ -660,7 +662,8 @@ fn compare_one(
     let mut runs = Vec::with_capacity(ranges.len());
     let total: usize = ranges.iter().map(|r| r.len()).sum();
     let mut done = 0;
-    // A state given, or measured, sets the start: every sample is scored.
+    // A state measured sets every piece's start, a state given the first piece's: their samples
+    // are all scored (`RunPiece::init` 0); the pieces after a gap fit theirs.
     let measured_state = o.x0.is_none() && !grid.velocities.is_empty();
     for range in &ranges {
         let init = o.init.unwrap_or_else(|| {
@@ -673,6 +676,18 @@ fn compare_one(
         let (score, pieces) = run_range(model, &grid, &clock, range.clone(), init, request, &mut |run| {
             observer.progress(done + run, total);
         })?;
+        if score.scored == 0 && score.bridged > 0 && score.stopped.is_none() {
+            return Err(OptionError::value(
+                "range",
+                format!("{}..{}", range.start, range.end),
+                format!(
+                    "holds no measured sample to score after the {init} that set the state: the {} sample(s) left are \
+                     bridged («bridge_gaps»)",
+                    score.bridged
+                ),
+            )
+            .into());
+        }
         if score.scored == 0 && score.stopped.is_none() {
             return Err(OptionError::value(
                 "init",
@@ -1041,9 +1056,10 @@ fn compare_system(
     let mut done = 0;
     let measured_state = given.is_none() && !grid.velocities.is_empty();
     for range in &ranges {
-        // A state given, or measured, sets the start: every sample is scored.
+        // A state measured sets every piece's start, a state given the first piece's: their
+        // samples are all scored (`RunPiece::init` 0); the pieces after a gap fit theirs.
         let init = o.init.unwrap_or_else(|| {
-            if given.is_some() || measured_state {
+            if measured_state {
                 0
             } else {
                 default_init(period, range.len())
@@ -1129,7 +1145,7 @@ fn compare_system(
                     measured: unmeasured(y, start, &grid.bridged),
                     x,
                     v,
-                    init,
+                    init: if state_given.is_some() { 0 } else { init },
                 });
             }
         }
@@ -1140,6 +1156,27 @@ fn compare_system(
                 format!(
                     "leaves no sample of the range {}..{} to score: its pieces between gaps are no longer",
                     range.start, range.end
+                ),
+            )
+            .into());
+        }
+        let after_init = |measured: bool| -> usize {
+            pieces[0]
+                .iter()
+                .map(|p| {
+                    let rest = &p.measured[p.init.min(p.measured.len())..];
+                    rest.iter().filter(|y| y.is_nan() != measured).count()
+                })
+                .sum()
+        };
+        if after_init(true) == 0 && after_init(false) > 0 && stopped.is_none() {
+            return Err(OptionError::value(
+                "range",
+                format!("{}..{}", range.start, range.end),
+                format!(
+                    "holds no measured sample to score after the {init} that set the state: the {} sample(s) left are \
+                     bridged («bridge_gaps»)",
+                    after_init(false)
                 ),
             )
             .into());
@@ -1363,7 +1400,8 @@ fn run_range(
             measured: unmeasured(y, start, &grid.bridged),
             x,
             v: run.v,
-            init,
+            // A state given sets the piece's start: every sample of it is scored.
+            init: if given.is_some() { 0 } else { init },
         });
     }
     let score = score(

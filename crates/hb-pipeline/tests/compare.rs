@@ -119,6 +119,8 @@ fn the_default_init_scales_with_the_drive_and_the_range() {
     assert_eq!(default_init(6283.0, 20_000), 2000);
     assert_eq!(default_init(3.0, 1000), 8);
     assert_eq!(default_init(f64::INFINITY, 1000), 8);
+    // Its piece starts from the state given: every sample is scored, the first `init` too.
+    assert_eq!(scores(1.0, TAU / 25.0, 1000, &[]).unwrap()[0].scored, 1000);
 }
 
 /// The double pendulum of `hbid simulate --system double-pendulum` (its truth's equations,

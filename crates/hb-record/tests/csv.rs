@@ -699,7 +699,14 @@ fn a_missing_value_in_the_first_row_of_data_is_no_header() {
     };
     let err = read("0,NA\n0.1,0.2\n0.2,0.3\n").unwrap_err();
     assert!(
-        matches!(err, InputError::NotANumber { line: 1, missing: true, .. }),
+        matches!(
+            err,
+            InputError::NotANumber {
+                line: 1,
+                missing: true,
+                ..
+            }
+        ),
         "{err:?}"
     );
     let r = with("0,NA\n0.1,0.2\n0.2,0.3\n", skip(ReadOptions::default())).unwrap();
@@ -719,12 +726,20 @@ fn a_missing_value_in_the_first_row_of_data_is_no_header() {
     let text = "x,label\n,start\n0.1,a\n0.2,b\n,c\n0.4,d\n";
     assert!(matches!(
         with(text, labelled.clone()),
-        Err(InputError::NotANumber { line: 2, missing: true, .. })
+        Err(InputError::NotANumber {
+            line: 2,
+            missing: true,
+            ..
+        })
     ));
     let r = with(text, skip(labelled)).unwrap();
     assert_eq!((r.t, r.theta), (vec![1.0, 2.0, 4.0], vec![0.1, 0.2, 0.4]));
     assert_eq!(r.missing, vec![Location::Line(2), Location::Line(5)]);
     // A row of units is still one when a column read names its unit.
-    let r = with("t,theta,label\ns,rad,\n0,0.1,a\n1,0.2,b\n", ReadOptions::default()).unwrap();
+    let r = with(
+        "t,theta,label\ns,rad,\n0,0.1,a\n1,0.2,b\n",
+        ReadOptions::default(),
+    )
+    .unwrap();
     assert_eq!(r.t, vec![0.0, 1.0]);
 }

@@ -428,7 +428,9 @@ fn samples_after_rows_left_out_are_named_by_their_place_in_the_array() {
     use hb_record::input::{GridOptions, GridRecord};
     use hb_record::prepare::{Note, PrepareOptions, condition};
     let array = |edit: &dyn Fn(&mut Vec<[f64; 2]>)| {
-        let mut rows: Vec<[f64; 2]> = (0..400).map(|i| [0.1 * i as f64, (0.1 * i as f64).sin()]).collect();
+        let mut rows: Vec<[f64; 2]> = (0..400)
+            .map(|i| [0.1 * i as f64, (0.1 * i as f64).sin()])
+            .collect();
         rows[1][1] = f64::NAN; // sample 2
         edit(&mut rows);
         let payload: Vec<u8> = rows.iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
@@ -447,11 +449,20 @@ fn samples_after_rows_left_out_are_named_by_their_place_in_the_array() {
     }
     // Sample 21 repeats sample 20.
     let twice = array(&|rows| rows[20] = rows[19]);
-    let grid = condition(twice, &PrepareOptions::new(circle_signal::Domain::Line), &mut |_| {}).unwrap();
+    let grid = condition(
+        twice,
+        &PrepareOptions::new(circle_signal::Domain::Line),
+        &mut |_| {},
+    )
+    .unwrap();
     assert!(
-        grid.notes
-            .iter()
-            .any(|n| matches!(n, Note::DuplicateRows { first: Location::Sample(21), .. })),
+        grid.notes.iter().any(|n| matches!(
+            n,
+            Note::DuplicateRows {
+                first: Location::Sample(21),
+                ..
+            }
+        )),
         "{:?}",
         grid.notes
     );

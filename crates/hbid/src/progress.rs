@@ -139,7 +139,7 @@ impl Console {
         let held = std::mem::take(&mut self.repairs.1);
         if held > 0 {
             self.stages.print(&format!(
-                "note: {held} more time stamp(s) replaced by their grid times ({} in all; `hbid report` and Python's `read` list every one)",
+                "note: {held} more time stamp(s) replaced by their grid times ({} in all; Python's `read` lists every one in `time_repairs`)",
                 self.repairs.0
             ));
         }

@@ -3990,6 +3990,28 @@ fn compare_runs_through_bridged_gaps_on_a_half_the_model_did_not_see() {
         "{}",
         String::from_utf8_lossy(&text.stdout)
     );
+    // A range whose samples after the state's are all bridged has nothing measured to score
+    // (the record's own warnings of its outliers come first).
+    let out = hbid(&[
+        "compare",
+        model.to_str().unwrap(),
+        dropped.to_str().unwrap(),
+        "--bridge-gaps",
+        "1",
+        "--range",
+        "47..51",
+        "--init",
+        "3",
+        "--quiet",
+    ]);
+    assert!(!out.status.success());
+    assert_eq!(
+        String::from_utf8_lossy(&out.stderr).trim().lines().last(),
+        Some(
+            "error: --range 47..51: holds no measured sample to score after the 3 that set the state: the 1 \
+             sample(s) left are bridged (--bridge-gaps)"
+        )
+    );
 }
 
 /// Many time-stamp repairs are not a page of notes: the first five are printed, the rest
@@ -4027,8 +4049,8 @@ fn many_time_stamp_repairs_are_counted_after_the_first_five() {
     }
     assert_eq!(
         notes[first + 5],
-        "note: 3 more time stamp(s) replaced by their grid times (8 in all; `hbid report` and Python's `read` \
-         list every one)"
+        "note: 3 more time stamp(s) replaced by their grid times (8 in all; Python's `read` lists every one in \
+         `time_repairs`)"
     );
     assert!(
         !notes[first + 6..]

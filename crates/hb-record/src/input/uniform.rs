@@ -509,7 +509,11 @@ impl GridRecord {
         quick: bool,
     ) -> Result<Self, InputError> {
         let Record {
-            t, theta, lines, missing, ..
+            t,
+            theta,
+            lines,
+            missing,
+            ..
         } = record;
         let n = t.len();
         if n < 2 {

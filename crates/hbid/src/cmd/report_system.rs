@@ -143,8 +143,9 @@ pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
                 .iter()
                 .filter(|n| {
                     // The record's notes are on the console; the one that changes what its samples are
-                    // (gaps bridged: samples the file does not have) is in the report too.
-                    matches!(n, Notice::Record(Note::Bridged { .. }))
+                    // (gaps bridged: samples the file does not have; rows left out for a missing value) are in the
+                    // report too.
+                    matches!(n, Notice::Record(Note::Bridged { .. } | Note::MissingRows { .. }))
                         || !matches!(
                             n,
                             Notice::Resampled { .. } | Notice::Record(_) | Notice::Column { .. }

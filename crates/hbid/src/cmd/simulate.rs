@@ -300,6 +300,10 @@ pub struct SimulateArgs {
     /// position); read between samples from the C¹ cubic spline through them.
     #[arg(long, value_name = "NAME|N[,..]", help_heading = MODEL)]
     drive_col: Option<ColumnList>,
+    /// Leave out every row of the input with a missing value in a column read (an empty cell,
+    /// NA, NaN, ...), as if the logger had not written it: a gap, where the run starts again.
+    #[arg(long, help_heading = MODEL)]
+    skip_missing: bool,
     /// Samples of the input that set the initial state of each piece [default: one period of the
     /// model's drive, at most a tenth of the record, at least 8]; 0 starts from --x0, --v0.
     #[arg(long, value_name = "N", help_heading = MODEL)]
@@ -499,6 +503,7 @@ fn model_request(args: &SimulateArgs) -> anyhow::Result<CompareRequest> {
         coords: args.coords.clone(),
         dt: args.dt,
         drive_col: args.drive_col.clone(),
+        skip_missing: args.skip_missing,
         init: args.init.filter(|&n| n > 0),
         // A system's state by --q0, --dq0; one coordinate's by --x0, --v0.
         x0: given.then(|| args.q0.clone().map_or(args.x0.into(), |q| Values(q.0))),
@@ -519,6 +524,7 @@ pub fn run(args: &SimulateArgs, quiet: bool) -> anyhow::Result<()> {
         ("dt", args.dt.is_some()),
         ("drive_col", args.drive_col.is_some()),
         ("init", args.init.is_some()),
+        ("skip_missing", args.skip_missing),
     ] {
         if given {
             return Err(
