@@ -200,6 +200,7 @@ def simulate(
     drive_col: ColumnsLike = None,
     init: Optional[int] = None,
     skip_missing: bool = False,
+    repair: bool = False,
     **old: Any,
 ) -> Any:
     """Simulates a rig's record, as ``hbid simulate`` does (defaults: the paper's data set).
@@ -295,6 +296,8 @@ def simulate(
             ``x0``, ``v0``.
         skip_missing: leave out every row of the input with a missing value in a column read, as
             a logger's dropped row (a gap, where the run starts again).
+        repair: replace the input's isolated time-stamp glitches and every spike, as
+            :func:`compare` does.
 
     Returns:
         A :class:`Simulation` (``t, x, v = ...`` unpacks the arrays); with ``model``, a
@@ -390,6 +393,7 @@ def simulate(
             drive_col=drive_col,
             init=init,
             skip_missing=skip_missing,
+            repair=repair,
             x0=state["x0"],
             v0=state["v0"],
             rtol=options["rtol"],
@@ -403,6 +407,7 @@ def simulate(
         ("drive_col", drive_col),
         ("init", init),
         ("skip_missing", True if skip_missing else None),
+        ("repair", True if repair else None),
     ):
         if value is not None:
             raise OptionsError(f"{name} reads the record of input=, for a saved model=")

@@ -186,3 +186,17 @@ def test_a_model_runs_on_an_input_with_missing_values_on_request(shaker, tmp_pat
     assert np.argmax(steps) == 2999 and steps[2999] == pytest.approx(2 * np.median(steps), rel=1e-6)
     with pytest.raises(hbid.OptionsError, match="skip_missing"):
         hbid.simulate(system="duffing", skip_missing=True)
+
+
+def test_a_model_runs_on_an_input_with_a_glitch_on_request(shaker, tmp_path):
+    lines = open(shaker["csv"]).read().splitlines()
+    cells = lines[2001].split(",")
+    t, dt = float(cells[0]), float(lines[3].split(",")[0]) - float(lines[2].split(",")[0])
+    cells[0] = repr(t + 0.4 * dt)
+    lines[2001] = ",".join(cells)
+    path = tmp_path / "glitch.csv"
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(hbid.InputError, match="line 2002: .*repair=True"):
+        hbid.simulate(model=shaker["model"], input=str(path), drive_col="p", init=100)
+    t, x, v = hbid.simulate(model=shaker["model"], input=str(path), drive_col="p", init=100, repair=True)
+    assert len(t) == len(lines) - 1 and np.isfinite(x).all()

@@ -304,6 +304,10 @@ pub struct SimulateArgs {
     /// NA, NaN, ...), as if the logger had not written it: a gap, where the run starts again.
     #[arg(long, help_heading = MODEL)]
     skip_missing: bool,
+    /// Replace the input's isolated time-stamp glitches and every encoder spike (each listed),
+    /// as `hbid compare --repair` does.
+    #[arg(long, help_heading = MODEL)]
+    repair: bool,
     /// Samples of the input that set the initial state of each piece [default: one period of the
     /// model's drive, at most a tenth of the record, at least 8]; 0 starts from --x0, --v0.
     #[arg(long, value_name = "N", help_heading = MODEL)]
@@ -504,6 +508,7 @@ fn model_request(args: &SimulateArgs) -> anyhow::Result<CompareRequest> {
         dt: args.dt,
         drive_col: args.drive_col.clone(),
         skip_missing: args.skip_missing,
+        repair: args.repair,
         init: args.init.filter(|&n| n > 0),
         // A system's state by --q0, --dq0; one coordinate's by --x0, --v0.
         x0: given.then(|| args.q0.clone().map_or(args.x0.into(), |q| Values(q.0))),
@@ -525,6 +530,7 @@ pub fn run(args: &SimulateArgs, quiet: bool) -> anyhow::Result<()> {
         ("drive_col", args.drive_col.is_some()),
         ("init", args.init.is_some()),
         ("skip_missing", args.skip_missing),
+        ("repair", args.repair),
     ] {
         if given {
             return Err(
