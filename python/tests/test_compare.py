@@ -167,6 +167,10 @@ def test_a_refinement_does_not_score_bridged_samples(shaker, tmp_path):
     bridged = hbid.identify(str(path), bridge_gaps=1, **kwargs).refinement
     after_init = len([i for i in range(len(rows)) if i % 97 == 50 and i >= 100])
     assert after_init <= whole["scored"] - bridged["scored"] <= 2 * after_init + 2, (whole, bridged)
+    # Two records joined: the second one's bridged samples are left out as the first one's.
+    whole2 = hbid.identify([str(shaker["csv"])] * 2, **kwargs).refinement
+    bridged2 = hbid.identify([str(path)] * 2, bridge_gaps=1, **kwargs).refinement
+    assert whole2["scored"] - bridged2["scored"] == 2 * (whole["scored"] - bridged["scored"]), (whole2, bridged2)
 
 
 def test_a_model_runs_on_an_input_with_missing_values_on_request(shaker, tmp_path):

@@ -1057,7 +1057,8 @@ fn compare_system(
     let measured_state = given.is_none() && !grid.velocities.is_empty();
     for range in &ranges {
         // A state measured sets every piece's start, a state given the first piece's: their
-        // samples are all scored (`RunPiece::init` 0); the pieces after a gap fit theirs.
+        // samples are all scored (`RunPiece::init` 0); the pieces after a gap fit theirs,
+        // unless measured.
         let init = o.init.unwrap_or_else(|| {
             if measured_state {
                 0
@@ -1068,12 +1069,23 @@ fn compare_system(
         let mut pieces: Vec<Vec<RunPiece>> = vec![Vec::new(); n];
         let (mut skipped, mut stopped) = (0, None);
         let mut states = Vec::new();
+        let mut first_piece = true;
         for piece in &grid.pieces {
             let (start, end) = (piece.start.max(range.start), piece.end.min(range.end));
             if start >= end {
                 continue;
             }
-            let state_given = given.as_ref().filter(|_| start == range.start);
+            // The state given is the state at the range's first sample (or, for a range that
+            // starts in a gap, at the first after it).
+            let state_given = given.as_ref().filter(|_| first_piece);
+            first_piece = false;
+            // A piece that starts from a state given or measured scores every sample (unless
+            // «init» says otherwise); one whose state is fitted, all but its first `init`.
+            let measured_state = state_given.is_none() && !grid.velocities.is_empty();
+            let init = match state_given.is_some() || measured_state {
+                true => o.init.unwrap_or(0),
+                false => init,
+            };
             // A fit needs a sample beyond its own; a measured state needs none.
             let needed = if measured_state { init } else { init.max(1) };
             if state_given.is_none() && end - start <= needed {
@@ -1145,7 +1157,7 @@ fn compare_system(
                     measured: unmeasured(y, start, &grid.bridged),
                     x,
                     v,
-                    init: if state_given.is_some() { 0 } else { init },
+                    init,
                 });
             }
         }
@@ -1312,20 +1324,29 @@ fn run_range(
     let mut skipped = 0;
     let mut stopped = None;
     let mut states = Vec::new();
+    let mut first_piece = true;
     for piece in &grid.pieces {
         let (start, end) = (piece.start.max(range.start), piece.end.min(range.end));
         if start >= end {
             continue;
         }
-        // The state given is the state at the range's start: its piece is run whatever its length.
+        // The state given is the state at the range's first sample (or, for a range that starts
+        // in a gap, at the first after it): its piece is run whatever its length.
         let given = match (
             o.x0.as_ref().and_then(Values::one),
             o.v0.as_ref().and_then(Values::one),
         ) {
-            (Some(x), Some(v)) if start == range.start => Some([x, v]),
+            (Some(x), Some(v)) if first_piece => Some([x, v]),
             _ => None,
         };
+        first_piece = false;
         let measured_state = given.is_none() && !grid.velocities.is_empty();
+        // A piece that starts from a state given or measured scores every sample (unless
+        // «init» says otherwise); one whose state is fitted, all but its first `init`.
+        let init = match given.is_some() || measured_state {
+            true => o.init.unwrap_or(0),
+            false => init,
+        };
         if given.is_none() && end - start <= init {
             skipped += 1;
             continue;
@@ -1400,8 +1421,7 @@ fn run_range(
             measured: unmeasured(y, start, &grid.bridged),
             x,
             v: run.v,
-            // A state given sets the piece's start: every sample of it is scored.
-            init: if given.is_some() { 0 } else { init },
+            init,
         });
     }
     let score = score(

@@ -1090,6 +1090,9 @@ pub fn load_all(
         joined
             .pieces
             .extend(data.pieces.iter().map(|r| r.start + shift..r.end + shift));
+        joined
+            .bridged
+            .extend(data.bridged.iter().map(|r| r.start + shift..r.end + shift));
     }
     Ok(joined)
 }

@@ -546,3 +546,55 @@ fn a_systems_comparison_tells_its_progress_within_a_range() {
     compare(&system, source, &request, &mut told).unwrap();
     told.as_it_goes(2000);
 }
+
+/// A state given sets the first piece of a range, measured velocities every later one: both
+/// score every sample; a piece after a gap without measured velocities fits its state from its
+/// first `init` samples, which are not scored. A range that starts in a gap takes the state
+/// given at the first sample after it.
+#[test]
+fn pieces_from_a_state_given_or_measured_score_every_sample() {
+    use circle_signal::Domain;
+    use hb_record::prepare::GridData;
+    let n = 300;
+    let mut x = vec![0.0; n];
+    x[100..110].fill(f64::NAN);
+    let grid = |velocities: bool| GridData {
+        t0: 0.0,
+        dt: TAU / 25.0,
+        x: x.clone(),
+        pieces: vec![0..100, 110..n],
+        domain: Domain::Line,
+        others: Vec::new(),
+        drives: Vec::new(),
+        velocities: if velocities {
+            vec![vec![0.0; n]]
+        } else {
+            Vec::new()
+        },
+        bridged: Vec::new(),
+        notes: Vec::new(),
+        lead_in: None,
+    };
+    let scored = |velocities: bool, range: &str| {
+        let request = CompareRequest::new(CompareOptions {
+            x0: Some(0.0.into()),
+            v0: Some(0.0.into()),
+            range: vec![range.parse().unwrap()],
+            ..CompareOptions::default()
+        })
+        .unwrap();
+        let report = compare(
+            &IdentifiedSystem::one(at_rest(1.0)),
+            Source::Grid(grid(velocities)),
+            &request,
+            &mut (),
+        )
+        .unwrap();
+        (report.ranges[0].scored, report.ranges[0].initial_states.len())
+    };
+    // The default init is one drive period, 25 samples.
+    assert_eq!(scored(true, "0.."), (290, 2));
+    assert_eq!(scored(false, "0.."), (290 - 25, 2));
+    // From inside the gap: the state given is the first sample's after it.
+    assert_eq!(scored(false, "105.."), (190, 1));
+}

@@ -743,3 +743,32 @@ fn a_missing_value_in_the_first_row_of_data_is_no_header() {
     .unwrap();
     assert_eq!(r.t, vec![0.0, 1.0]);
 }
+
+/// pandas' header of an unnamed index column and numbered columns (`,0,1,2`) is a header, and
+/// both readers of a header agree on it.
+#[test]
+fn an_empty_name_beside_numbered_columns_is_a_header() {
+    let text = ",0,1,2\n0,0.0,0.1,5\n1,0.5,0.2,6\n2,1.0,0.3,7\n";
+    let options = ReadOptions {
+        time: Some(Column::Position(2)),
+        angle: Some(Column::Position(3)),
+        ..ReadOptions::default()
+    };
+    let r = with(text, options).unwrap();
+    assert_eq!((r.t, r.theta), (vec![0.0, 0.5, 1.0], vec![0.1, 0.2, 0.3]));
+    assert_eq!(r.lines, Some(vec![2, 3, 4]));
+    let path = std::env::temp_dir().join(format!("hb-record-pandas-{}.csv", std::process::id()));
+    std::fs::write(&path, text).unwrap();
+    let named = hb_record::input::Header::of(&path).map(|h| h.names().to_vec());
+    std::fs::remove_file(&path).unwrap();
+    assert_eq!(
+        named,
+        Some(vec![String::new(), "0".into(), "1".into(), "2".into()])
+    );
+    // A first row of numbers and markers of missing values is data to both.
+    let data = std::env::temp_dir().join(format!("hb-record-na-{}.csv", std::process::id()));
+    std::fs::write(&data, "0,NA\n0.1,0.2\n").unwrap();
+    let none = hb_record::input::Header::of(&data).map(|h| h.names().to_vec());
+    std::fs::remove_file(&data).unwrap();
+    assert_eq!(none, None);
+}

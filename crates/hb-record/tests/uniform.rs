@@ -206,11 +206,17 @@ fn a_glitch_beside_a_gap_takes_its_nearest_free_slot_on_repair() {
     let grid = || -> Vec<f64> { (0..200).map(|i| i as f64 * 0.5).collect() };
     // (samples dropped, the glitch's sample, its shift in steps, where it lands, the pieces)
     type Case<'a> = (&'a [usize], usize, f64, usize, [std::ops::Range<usize>; 2]);
-    let cases: [Case<'_>; 4] = [
+    let cases: [Case<'_>; 8] = [
         (&[70], 71, 0.38, 71, [0..70, 71..200]),
         (&[70], 69, -0.3, 69, [0..70, 71..200]),
         (&[70, 71, 72], 73, -0.35, 73, [0..70, 73..200]),
         (&[100], 101, -0.35, 101, [0..100, 101..200]),
+        // Near an end, where a run of glitches would be a logger settling: repaired all the same.
+        (&[2], 3, 0.3, 3, [0..2, 3..200]),
+        // The first or the last sample, with rows dropped beside it.
+        (&[1], 0, -0.3, 0, [0..1, 2..200]),
+        (&[198], 199, 0.3, 199, [0..198, 199..200]),
+        (&[194, 195, 196, 197, 198], 199, 0.3, 199, [0..194, 199..200]),
     ];
     for (dropped, glitch, shift, lands, pieces) in cases {
         let mut t = grid();
@@ -1100,24 +1106,30 @@ fn glitches_beside_a_settling_start_are_handled_as_before() {
             })
         ));
     }
-    // A single slow first step is one stamp off the grid: an isolated glitch, as anywhere, not
-    // a run left out.
-    let (t, grid) = settling(n, &[1.7], &[], 17);
-    assert!(matches!(
-        fit(t.clone()),
-        Err(InputError::TimeGlitch {
-            at: Location::Line(2),
-            isolated: true,
-            ..
-        })
-    ));
-    let u = repair(t).unwrap();
-    assert!(u.unsettled.is_empty() && u.repaired.len() == 1, "{u:?}");
-    assert!(
-        (u.repaired[0].now - (grid[0] - 2e-3)).abs() < 1e-4,
-        "{:?}",
-        u.repaired
-    );
+    // A single slow first step is one stamp off the grid: a glitch that can be repaired, as
+    // anywhere, not a run left out. Its stamp, 1.7 steps before the next, lies past the slot
+    // next to it, nearest the one before (0.3 step off): a row may have been dropped between,
+    // as at a gap, so it takes that slot and a gap of one sample follows it. 1.3 steps before
+    // the next, it takes the slot next to it.
+    for (first, slots) in [(1.7, 2.0), (1.3, 1.0)] {
+        let (t, grid) = settling(n, &[first], &[], 17);
+        assert!(matches!(
+            fit(t.clone()),
+            Err(InputError::TimeGlitch {
+                at: Location::Line(2),
+                isolated: true,
+                ..
+            })
+        ));
+        let u = repair(t).unwrap();
+        assert!(u.unsettled.is_empty() && u.repaired.len() == 1, "{u:?}");
+        assert!(
+            (u.repaired[0].now - (grid[0] - slots * 2e-3)).abs() < 1e-4,
+            "{first}: {:?}",
+            u.repaired
+        );
+        assert_eq!(u.pieces.len(), slots as usize, "{first}");
+    }
     // A clock going backwards at the start is a glitch of the clock, not a rate.
     let mut t = settling(n, &SETTLING, &[], 18).0;
     t.swap(1, 2);

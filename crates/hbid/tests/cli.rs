@@ -4058,6 +4058,33 @@ fn many_time_stamp_repairs_are_counted_after_the_first_five() {
             .any(|l| l.contains("replaced by its grid time")),
         "{stderr}"
     );
+    // Two records: each one's repairs counted on their own.
+    let both = hbid(&[
+        "identify",
+        path.to_str().unwrap(),
+        path.to_str().unwrap(),
+        "--repair",
+        "--bootstrap",
+        "0",
+    ]);
+    assert!(both.status.success(), "{}", String::from_utf8_lossy(&both.stderr));
+    let stderr = String::from_utf8_lossy(&both.stderr);
+    let shown = stderr
+        .lines()
+        .filter(|l| l.contains("replaced by its grid time"))
+        .count();
+    let counted: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.contains("more time stamp(s)"))
+        .collect();
+    assert_eq!(shown, 10, "{stderr}");
+    assert_eq!(counted.len(), 2, "{stderr}");
+    assert!(
+        counted
+            .iter()
+            .all(|l| l.contains("3 more time stamp(s) replaced by their grid times (8 in all")),
+        "{stderr}"
+    );
 }
 
 /// Bridging is refused, in one line, where it cannot hold: a gap longer than a cubic through

@@ -11,10 +11,7 @@ pub(super) fn read<'a>(bytes: &'a [u8], options: &ReadOptions) -> Result<Record,
     let mut first_cells = Vec::new();
     separator.split(first, &mut first_cells);
     let width = first_cells.len();
-    // A row of numbers and missing values (`0,NA`, `0.5,`) is data, not a header.
-    let is_header = first_cells
-        .iter()
-        .any(|c| number(c, separator).is_none() && !c.is_empty() && !missing_marker(c));
+    let is_header = is_header(&first_cells, separator);
     let header = is_header.then_some(&first_cells[..]);
     let columns = options.columns(header, width)?;
     let Columns { time, angle, .. } = columns.clone();
@@ -274,10 +271,20 @@ pub(super) fn header(bytes: &[u8]) -> Option<Vec<String>> {
     let (_, _, first, separator) = first_row(bytes).ok()?;
     let mut cells = Vec::new();
     separator.split(first, &mut cells);
-    if cells.iter().all(|c| number(c, separator).is_some()) {
+    if !is_header(&cells, separator) {
         return None;
     }
     Some(cells.iter().map(|c| (*c).to_owned()).collect())
+}
+
+/// Whether a first row is a header: a cell in it is neither a number nor a missing value's
+/// marker (`NA`, `NaN`, `null`, ...). A row of numbers and such markers (`0,NA`) is data; an
+/// empty cell is a name left empty (pandas' unnamed index column, `,0,1,2`), so a first row of
+/// data with an empty cell cannot be told from a header and is one.
+fn is_header(cells: &[&str], separator: Separator) -> bool {
+    cells
+        .iter()
+        .any(|c| number(c, separator).is_none() && !missing_marker(c))
 }
 
 /// The rows of a text: lines that are neither blank nor comments, with their line numbers.

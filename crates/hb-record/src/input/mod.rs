@@ -12,8 +12,10 @@
 //!   one ([`InputError::MixedSeparators`] names the first that does not). Where semicolons
 //!   separate the cells, a decimal comma (`0,5`) is read as a decimal point. A cell may be
 //!   enclosed in double quotes.
-//! - The first row is a header when any of its cells is neither a number nor a missing value
-//!   (empty, `NA`, `null`, ...): a first row of numbers and missing values is data. A row right
+//! - The first row is a header when any of its cells is neither a number nor a missing value's
+//!   marker (`NA`, `NaN`, `null`, ...): a first row of numbers and markers is data. An empty cell
+//!   is a name left empty (pandas' unnamed index column: `,0,1,2`), so a first row of data with
+//!   an empty cell is read as a header. A row right
 //!   under the header whose cells are no numbers nor missing values' markers, with a unit in a
 //!   column read, is a row of units, passed.
 //! - A cell of a column read must hold a finite number. A missing value (an empty cell, a marker

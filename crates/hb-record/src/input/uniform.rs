@@ -737,18 +737,52 @@ impl GridRecord {
         }
 
         // Every glitch repaired, or the first one that cannot be is an error.
-        let isolated = |p: usize| {
+        // The grid index a glitch is repaired onto, when it can be. Isolated (its neighbours fit
+        // one grid step apart on either side): the slot between them; at an end, the slot next
+        // to its neighbour, unless its stamp lies past that slot, where rows may have been
+        // dropped. Beside a gap (a logger that dropped a row and stamped the next late), or at
+        // an end past the next slot: the count from its neighbours leaves it more than one
+        // slot, so it takes the free slot its stamp is nearest, when within NEAREST_SLOT steps
+        // of it (the next nearest then at least 1 − NEAREST_SLOT away).
+        let slot = |p: usize| -> Option<f64> {
             let i = bad[p];
             let prev_good = i > 0 && (p == 0 || bad[p - 1] != i - 1);
             let next_good = i + 1 < n && bad.get(p + 1) != Some(&(i + 1));
-            (i == 0 || prev_good)
-                && (i + 1 == n || next_good)
-                && (i == 0 || i + 1 == n || index(i + 1) - index(i - 1) == 2.0)
+            let k = index(i);
+            let near = || {
+                off_level(line, k, i).abs() <= NEAREST_SLOT * line.b
+                    && (tau(i) - line.at(k)).abs() <= NEAREST_SLOT * line.b
+            };
+            if i + 1 == n {
+                // The last (a record has two samples at least).
+                let next = index(i - 1) + 1.0;
+                return match (prev_good, k <= next) {
+                    (false, _) => None,
+                    (true, true) => Some(next),
+                    (true, false) => near().then_some(k),
+                };
+            }
+            if i == 0 {
+                let previous = index(1) - 1.0;
+                return match (next_good, k >= previous) {
+                    (false, _) => None,
+                    (true, true) => Some(previous),
+                    (true, false) => near().then_some(k),
+                };
+            }
+            if !(prev_good && next_good) {
+                return None;
+            }
+            let (before, after) = (index(i - 1), index(i + 1));
+            if after - before == 2.0 {
+                return Some(before + 1.0);
+            }
+            (after - before >= 3.0 && k > before && k < after && near()).then_some(k)
         };
         // A logger's unsettled start or end, when there are glitches at all: the rest is fitted
         // on its own, as a record without those samples would be.
         if settle && !bad.is_empty() {
-            let runs = unsettled(&t, &bad, index, isolated, &at);
+            let runs = unsettled(&t, &bad, index, |p| slot(p).is_some(), &at);
             let bound = ((UNSETTLED_FRACTION * n as f64) as usize).min(UNSETTLED_MAX);
             if let Some(long) = runs.iter().find(|r| r.samples.len() > bound) {
                 return Err(InputError::TimeUnsettled {
@@ -793,26 +827,7 @@ impl GridRecord {
                 return Ok(grid);
             }
         }
-        // A glitch between stamps that fit with a gap beside it (a logger that dropped a row and
-        // stamped the next late): the count from its neighbours leaves it more than one slot,
-        // so it takes the free slot its stamp is nearest, when within NEAREST_SLOT steps of it
-        // (the next nearest then at least 1 − NEAREST_SLOT away).
-        let beside_gap = |p: usize| -> Option<f64> {
-            let i = bad[p];
-            let prev_good = i > 0 && (p == 0 || bad[p - 1] != i - 1);
-            let next_good = i + 1 < n && bad.get(p + 1) != Some(&(i + 1));
-            if !(prev_good && next_good) {
-                return None;
-            }
-            let (before, after, k) = (index(i - 1), index(i + 1), index(i));
-            (after - before >= 3.0
-                && k > before
-                && k < after
-                && off_level(line, k, i).abs() <= NEAREST_SLOT * line.b
-                && (tau(i) - line.at(k)).abs() <= NEAREST_SLOT * line.b)
-                .then_some(k)
-        };
-        let repairable = |p: usize| isolated(p) || beside_gap(p).is_some();
+        let repairable = |p: usize| slot(p).is_some();
         let error = |p: usize| !(repairable(p) && options.repair);
         if let Some(p) = (0..bad.len()).find(|&p| error(p)) {
             let i = bad[p];
@@ -826,27 +841,15 @@ impl GridRecord {
                 at: at(i),
                 t: t[i],
                 fault,
-                expected: origin
-                    + line.at(beside_gap(p).unwrap_or_else(|| expected_index(&bad, p, n, index))),
+                expected: origin + line.at(slot(p).unwrap_or_else(|| expected_index(&bad, p, n, index))),
                 dt: line.b,
                 isolated: repairable(p),
                 others: others.iter().take(GLITCHES_NAMED).map(|&q| at(bad[q])).collect(),
                 other_count: others.len(),
             });
         }
-        let fixed: Vec<f64> = bad
-            .iter()
-            .enumerate()
-            .map(|(p, &i)| {
-                if let Some(k) = beside_gap(p) {
-                    k
-                } else if i > 0 && (p == 0 || bad[p - 1] != i - 1) {
-                    index(i - 1) + 1.0
-                } else {
-                    index(i + 1) - 1.0
-                }
-            })
-            .collect();
+        // Every glitch is repairable here (the first that is not was an error).
+        let fixed: Vec<f64> = (0..bad.len()).map(|p| slot(p).unwrap_or(f64::NAN)).collect();
         let final_index = |i: usize| match bad.binary_search(&i) {
             Ok(p) => fixed[p],
             Err(_) => index(i),
