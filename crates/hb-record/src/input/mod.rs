@@ -75,10 +75,11 @@
 //!   (the neighbours on both sides fit, one grid step away from it) and repair is asked for
 //!   ([`GridOptions::repair`]): then it is replaced by its grid time and listed in
 //!   [`GridRecord::repaired`]. A glitch whose neighbours fit with a gap beside it (a logger that
-//!   dropped a row and stamped the next late) is repaired onto the free slot its stamp is
-//!   nearest, when within 0.4 steps of it (from its level too, where the clock slips), the gap
-//!   kept where the row is missing. Two glitches side by side, or one beside a gap farther from
-//!   a free slot, stay errors.
+//!   dropped a row and stamped the next late), or a first or last stamp nearest a slot past the
+//!   one next to its neighbour, is repaired onto the free slot its stamp is nearest, when within
+//!   0.4 steps of it (from its level too, where the clock slips), the gap kept where the row is
+//!   missing. Two glitches side by side, or one beside a gap farther from a free slot, stay
+//!   errors; at an end of the record, such glitches make an unsettled run.
 //! - A logger's unsettled start or end: a run of stamps at an end of the record off the grid of
 //!   the rest, increasing at another rate (a loop not yet at its rate), holding glitches that
 //!   could not be repaired, is left out when it is at most 1 % of the samples and at most 50
