@@ -173,13 +173,20 @@ def test_a_refinement_does_not_score_bridged_samples(shaker, tmp_path):
     assert whole2["scored"] - bridged2["scored"] == 2 * (whole["scored"] - bridged["scored"]), (whole2, bridged2)
 
 
-def test_a_model_runs_on_an_input_with_missing_values_on_request(shaker, tmp_path):
+def _one_cell_edited(shaker, path, line, column, edit):
+    """The held-out record written to ``path`` with the cell of ``column`` on ``line`` (from
+    0, the header's 0) replaced by ``edit(cell)``; its lines."""
     lines = open(shaker["csv"]).read().splitlines()
-    cells = lines[3001].split(",")
-    cells[1] = "NA"
-    lines[3001] = ",".join(cells)
-    path = tmp_path / "na.csv"
+    cells = lines[line].split(",")
+    cells[column] = edit(cells[column])
+    lines[line] = ",".join(cells)
     path.write_text("\n".join(lines) + "\n")
+    return lines
+
+
+def test_a_model_runs_on_an_input_with_missing_values_on_request(shaker, tmp_path):
+    path = tmp_path / "na.csv"
+    lines = _one_cell_edited(shaker, path, 3001, 1, lambda _: "NA")
     with pytest.raises(hbid.InputError, match="line 3002: 'NA' .*skip_missing=True"):
         hbid.simulate(model=shaker["model"], input=str(path), drive_col="p", init=100)
     t, x, v = hbid.simulate(model=shaker["model"], input=str(path), drive_col="p", init=100, skip_missing=True)
@@ -193,13 +200,9 @@ def test_a_model_runs_on_an_input_with_missing_values_on_request(shaker, tmp_pat
 
 
 def test_a_model_runs_on_an_input_with_a_glitch_on_request(shaker, tmp_path):
-    lines = open(shaker["csv"]).read().splitlines()
-    cells = lines[2001].split(",")
-    t, dt = float(cells[0]), float(lines[3].split(",")[0]) - float(lines[2].split(",")[0])
-    cells[0] = repr(t + 0.4 * dt)
-    lines[2001] = ",".join(cells)
     path = tmp_path / "glitch.csv"
-    path.write_text("\n".join(lines) + "\n")
+    dt = shaker["test"].t[1] - shaker["test"].t[0]
+    lines = _one_cell_edited(shaker, path, 2001, 0, lambda t: repr(float(float(t) + 0.4 * dt)))
     with pytest.raises(hbid.InputError, match="line 2002: .*repair=True"):
         hbid.simulate(model=shaker["model"], input=str(path), drive_col="p", init=100)
     t, x, v = hbid.simulate(model=shaker["model"], input=str(path), drive_col="p", init=100, repair=True)

@@ -677,16 +677,7 @@ fn compare_one(
             observer.progress(done + run, total);
         })?;
         if score.scored == 0 && score.bridged > 0 && score.stopped.is_none() {
-            return Err(OptionError::value(
-                "range",
-                format!("{}..{}", range.start, range.end),
-                format!(
-                    "holds no measured sample to score after the {init} that set the state: the {} sample(s) left are \
-                     bridged («bridge_gaps»)",
-                    score.bridged
-                ),
-            )
-            .into());
+            return Err(all_bridged(range, init, score.bridged).into());
         }
         if score.scored == 0 && score.stopped.is_none() {
             return Err(OptionError::value(
@@ -1182,16 +1173,7 @@ fn compare_system(
                 .sum()
         };
         if after_init(true) == 0 && after_init(false) > 0 && stopped.is_none() {
-            return Err(OptionError::value(
-                "range",
-                format!("{}..{}", range.start, range.end),
-                format!(
-                    "holds no measured sample to score after the {init} that set the state: the {} sample(s) left are \
-                     bridged («bridge_gaps»)",
-                    after_init(false)
-                ),
-            )
-            .into());
+            return Err(all_bridged(range, init, after_init(false)).into());
         }
         for (c, coordinate_pieces) in pieces.into_iter().enumerate() {
             let states_c: Vec<[f64; 3]> = states.iter().map(|s| [s[c], s[n + c], s[2 * n]]).collect();
@@ -1434,6 +1416,19 @@ fn run_range(
         stopped,
     );
     Ok((score, pieces))
+}
+
+/// The error of a range whose samples after the `init` that set the state are all bridged (the
+/// `bridged` left): nothing measured to score.
+fn all_bridged(range: &std::ops::Range<usize>, init: usize, bridged: usize) -> OptionError {
+    OptionError::value(
+        "range",
+        format!("{}..{}", range.start, range.end),
+        format!(
+            "holds no measured sample to score after the {init} that set the state: the {bridged} sample(s) left \
+             are bridged («bridge_gaps»)"
+        ),
+    )
 }
 
 /// The measured samples `y` from the grid's sample `start`, NaN at those `bridged` into gaps.
