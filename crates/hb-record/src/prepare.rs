@@ -682,8 +682,23 @@ fn drop_duplicate_rows(record: &mut InputRecord) -> Option<Note> {
     {
         without(column, &drop);
     }
-    if let Some(lines) = &mut record.lines {
-        without(lines, &drop);
+    match &mut record.lines {
+        Some(lines) => without(lines, &drop),
+        // An array's samples are named by their place in it: the rows dropped here join those
+        // left out before (`Record::missing`, a place list from here on) so that later places
+        // stay the array's.
+        None => {
+            let mut left: Vec<Location> = drop
+                .iter()
+                .map(|&i| crate::input::sample_location(&record.missing, i))
+                .chain(record.missing.iter().copied())
+                .collect();
+            left.sort_by_key(|l| match *l {
+                Location::Sample(s) => s as u64,
+                Location::Line(l) => l,
+            });
+            record.missing = left;
+        }
     }
     Some(Note::DuplicateRows {
         first,

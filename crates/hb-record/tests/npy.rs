@@ -466,4 +466,17 @@ fn samples_after_rows_left_out_are_named_by_their_place_in_the_array() {
         "{:?}",
         grid.notes
     );
+    // After a row written twice, too: sample 41's time going back is named as the array's.
+    let both = array(&|rows| {
+        rows[20] = rows[19];
+        rows[40][0] = 3.75;
+    });
+    match condition(
+        both,
+        &PrepareOptions::new(circle_signal::Domain::Line),
+        &mut |_| {},
+    ) {
+        Err(e) => assert!(e.to_string().contains("sample 41: "), "{e}"),
+        Ok(_) => panic!("a time going back fits"),
+    }
 }

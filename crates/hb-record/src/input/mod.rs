@@ -128,7 +128,9 @@ pub struct Record {
     /// The measured velocities at each time, in the order of [`ReadOptions::velocities`].
     pub velocities: Vec<Vec<f64>>,
     /// The rows left out for a missing value in a column read ([`ReadOptions::skip_missing`]),
-    /// in order: a line of text, a sample of an array.
+    /// in order: a line of text, a sample of an array. An array's samples are named by their
+    /// place in it through this list ([`sample_location`]): the preparation adds the rows it
+    /// drops (written twice) to it.
     pub missing: Vec<Location>,
 }
 
