@@ -211,7 +211,8 @@ def compare(
         drive_col: a file's measured drive column (several: a list, by the system's drive
             names in any order or, columns alone, in the order of its drives).
         velocity_col: a file's columns of the coordinates' measured velocities: each piece then
-            runs from its first sample's measured state, every sample scored.
+            runs from its first sample's measured state, every sample scored (unless ``init``
+            says otherwise).
         repair: replace isolated time-stamp glitches and every spike.
         no_repair: keep every spike instead of replacing the few large ones.
         bridge_gaps: bridge every gap of at most this many missing samples by the cubic through

@@ -213,7 +213,8 @@ pub struct CompareOptions {
     pub skip_missing: bool,
     /// The columns of the coordinates' measured velocities: each piece's free run then starts
     /// from its first sample's measured state (positions and these velocities), every sample
-    /// scored, unless «x0» and «v0» are given.
+    /// scored unless «init» says otherwise; with «x0» and «v0», every piece but the range's
+    /// first.
     #[serde(with = "optional_text")]
     pub velocity_col: Option<ColumnList>,
     /// An angle on the circle or a displacement on the line (default: the model's).
@@ -395,7 +396,8 @@ pub struct RangeScore {
     /// The range compared, `[start, end)` samples of the grid.
     pub range: [usize; 2],
     /// Samples that set the initial state of each piece whose state is fitted (not scored); the
-    /// piece that starts from a state given (`x0`, `v0`) scores all of its samples.
+    /// piece that starts from a state given (`x0`, `v0`) or measured (`velocity_col`) scores all
+    /// of its samples, unless `init` was given.
     pub init: usize,
     /// Samples scored.
     pub scored: usize,

@@ -1,7 +1,6 @@
 //! Progress bars on stderr, hidden off a terminal and with `--quiet`.
 
 use hb_pipeline::{Notice, Observer, Spelling, Stage};
-use hb_record::input::Location;
 use hb_record::prepare::Note;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
@@ -112,9 +111,9 @@ impl Stages {
 /// the command line spells them.
 pub struct Console {
     stages: Stages,
-    /// Time stamps of the record being read replaced by their grid time so far, those of them
-    /// not printed, and where the last one was.
-    repairs: (usize, usize, Option<Location>),
+    /// Time stamps of the record being read replaced by their grid time so far, and those of
+    /// them not printed.
+    repairs: (usize, usize),
 }
 
 /// The time-stamp repairs the console prints one by one; the rest are counted in one note (a
@@ -126,7 +125,7 @@ impl Console {
     pub fn new(command: &str, quiet: bool, timings: bool) -> Self {
         Self {
             stages: Stages::new(command, quiet, timings),
-            repairs: (0, 0, None),
+            repairs: (0, 0),
         }
     }
 
@@ -151,6 +150,10 @@ impl Console {
 impl Observer for Console {
     fn stage(&mut self, stage: Stage) {
         self.held_repairs();
+        // Each record read (identify reads several) has its repairs counted on their own.
+        if stage == Stage::Read {
+            self.repairs = (0, 0);
+        }
         self.stages.start(stage.name());
     }
 
@@ -159,22 +162,7 @@ impl Observer for Console {
     }
 
     fn notice(&mut self, notice: &Notice) {
-        if let Notice::Record(Note::TimeRepaired(repair)) = notice {
-            // The repairs of a record come in its order: one at an earlier place than the last
-            // is the next record's (identify reads several), counted on its own.
-            let place = |at: &Location| match *at {
-                Location::Line(l) => l,
-                Location::Sample(s) => s as u64,
-            };
-            if self
-                .repairs
-                .2
-                .is_some_and(|last| place(&repair.at) <= place(&last))
-            {
-                self.held_repairs();
-                self.repairs = (0, 0, None);
-            }
-            self.repairs.2 = Some(repair.at);
+        if let Notice::Record(Note::TimeRepaired(_)) = notice {
             self.repairs.0 += 1;
             if self.repairs.0 > REPAIRS_SHOWN {
                 self.repairs.1 += 1;

@@ -4021,18 +4021,23 @@ fn many_time_stamp_repairs_are_counted_after_the_first_five() {
     let dir = scratch("repairs");
     let record = simulated(&dir, "r.csv", &["--samples", "4000"]);
     let text = std::fs::read_to_string(&record).unwrap();
-    let mut lines: Vec<String> = text.lines().map(str::to_owned).collect();
-    // Eight stamps, 300 rows apart, 0.4 step late: isolated glitches.
-    let t = |l: &str| l.split(',').next().unwrap().parse::<f64>().unwrap();
-    let dt = t(&lines[2]) - t(&lines[1]);
-    for k in 1..=8 {
-        let row = 300 * k;
-        let mut cells: Vec<String> = lines[row].split(',').map(str::to_owned).collect();
-        cells[0] = format!("{}", t(&lines[row]) + 0.4 * dt);
-        lines[row] = cells.join(",");
-    }
-    let path = dir.join("glitches.csv");
-    std::fs::write(&path, lines.join("\n") + "\n").unwrap();
+    // Eight stamps, 300 rows apart from row `from`, 0.4 step late: isolated glitches.
+    let glitched = |name: &str, from: usize| {
+        let mut lines: Vec<String> = text.lines().map(str::to_owned).collect();
+        let t = |l: &str| l.split(',').next().unwrap().parse::<f64>().unwrap();
+        let dt = t(&lines[2]) - t(&lines[1]);
+        for k in 0..8 {
+            let row = from + 300 * k;
+            let mut cells: Vec<String> = lines[row].split(',').map(str::to_owned).collect();
+            cells[0] = format!("{}", t(&lines[row]) + 0.4 * dt);
+            lines[row] = cells.join(",");
+        }
+        let path = dir.join(name);
+        std::fs::write(&path, lines.join("\n") + "\n").unwrap();
+        path
+    };
+    let path = glitched("glitches.csv", 300);
+    let later = glitched("later.csv", 1300);
     let out = hbid(&["identify", path.to_str().unwrap(), "--repair", "--bootstrap", "0"]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let stderr = String::from_utf8_lossy(&out.stderr);
@@ -4058,11 +4063,11 @@ fn many_time_stamp_repairs_are_counted_after_the_first_five() {
             .any(|l| l.contains("replaced by its grid time")),
         "{stderr}"
     );
-    // Two records: each one's repairs counted on their own.
+    // Two records, the second's repairs at later lines: each one's counted on their own.
     let both = hbid(&[
         "identify",
         path.to_str().unwrap(),
-        path.to_str().unwrap(),
+        later.to_str().unwrap(),
         "--repair",
         "--bootstrap",
         "0",

@@ -738,12 +738,12 @@ impl GridRecord {
 
         // Every glitch repaired, or the first one that cannot be is an error.
         // The grid index a glitch is repaired onto, when it can be. Isolated (its neighbours fit
-        // one grid step apart on either side): the slot between them; at an end, the slot next
-        // to its neighbour, unless its stamp lies past that slot, where rows may have been
-        // dropped. Beside a gap (a logger that dropped a row and stamped the next late), or at
-        // an end past the next slot: the count from its neighbours leaves it more than one
-        // slot, so it takes the free slot its stamp is nearest, when within NEAREST_SLOT steps
-        // of it (the next nearest then at least 1 − NEAREST_SLOT away).
+        // one grid step apart on either side): the slot between them. Beside a gap (a logger
+        // that dropped a row and stamped the next late): the count from its neighbours leaves it
+        // more than one slot, so it takes the free slot its stamp is nearest, when within
+        // NEAREST_SLOT steps of it (the next nearest then at least 1 − NEAREST_SLOT away). At an
+        // end: the slot next to its neighbour, unless its stamp is within NEAREST_SLOT of a slot
+        // past that one (rows may have been dropped there), which it then takes.
         let slot = |p: usize| -> Option<f64> {
             let i = bad[p];
             let prev_good = i > 0 && (p == 0 || bad[p - 1] != i - 1);
@@ -756,19 +756,11 @@ impl GridRecord {
             if i + 1 == n {
                 // The last (a record has two samples at least).
                 let next = index(i - 1) + 1.0;
-                return match (prev_good, k <= next) {
-                    (false, _) => None,
-                    (true, true) => Some(next),
-                    (true, false) => near().then_some(k),
-                };
+                return prev_good.then(|| if k > next && near() { k } else { next });
             }
             if i == 0 {
                 let previous = index(1) - 1.0;
-                return match (next_good, k >= previous) {
-                    (false, _) => None,
-                    (true, true) => Some(previous),
-                    (true, false) => near().then_some(k),
-                };
+                return next_good.then(|| if k < previous && near() { k } else { previous });
             }
             if !(prev_good && next_good) {
                 return None;
@@ -780,9 +772,20 @@ impl GridRecord {
             (after - before >= 3.0 && k > before && k < after && near()).then_some(k)
         };
         // A logger's unsettled start or end, when there are glitches at all: the rest is fitted
-        // on its own, as a record without those samples would be.
+        // on its own, as a record without those samples would be. A run is one where a glitch
+        // is not isolated (its neighbours fit, one grid step apart, or it is at an end beside
+        // one that fits): a logger settling to its rate stamps some rows near a slot by chance,
+        // the others then beside gaps, which are not taken for a logger's dropped rows there.
+        let isolated = |p: usize| {
+            let i = bad[p];
+            let prev_good = i > 0 && (p == 0 || bad[p - 1] != i - 1);
+            let next_good = i + 1 < n && bad.get(p + 1) != Some(&(i + 1));
+            (i == 0 || prev_good)
+                && (i + 1 == n || next_good)
+                && (i == 0 || i + 1 == n || index(i + 1) - index(i - 1) == 2.0)
+        };
         if settle && !bad.is_empty() {
-            let runs = unsettled(&t, &bad, index, |p| slot(p).is_some(), &at);
+            let runs = unsettled(&t, &bad, index, isolated, &at);
             let bound = ((UNSETTLED_FRACTION * n as f64) as usize).min(UNSETTLED_MAX);
             if let Some(long) = runs.iter().find(|r| r.samples.len() > bound) {
                 return Err(InputError::TimeUnsettled {
