@@ -61,20 +61,17 @@ pub struct Refinement {
     pub start: Vec<(String, f64)>,
 }
 
-/// The residuals of `model`'s free runs on the pieces of `grid` longer than `init`: `None` when a
-/// run cannot start or stops (the model blows up, or no state runs through the first samples).
+/// The residuals of `model`'s free runs on the pieces of `grid` longer than `init`, the samples
+/// flagged in `bridged` left out: `None` when a run cannot start or stops (the model blows up,
+/// or no state runs through the first samples).
 fn residuals(
     model: &IdentifiedModel,
     grid: &GridData,
+    bridged: &[bool],
     init: usize,
     tolerances: Tolerances,
 ) -> Result<Option<Vec<f64>>, RunError> {
     let mut r = Vec::new();
-    // A sample bridged into a gap was not measured: the run goes on through it, unscored.
-    let mut bridged = vec![false; grid.x.len()];
-    for b in &grid.bridged {
-        bridged[b.start.min(grid.x.len())..b.end.min(grid.x.len())].fill(true);
-    }
     for piece in grid.pieces.iter().filter(|p| p.len() > init) {
         let y = &grid.x[piece.clone()];
         let t0 = grid.t0 + piece.start as f64 * grid.dt;
@@ -149,8 +146,19 @@ pub fn refine(
     }
     let start: Vec<f64> = model.coefficients().iter().map(|c| c.value).collect();
     let n = start.len();
+    // A sample bridged into a gap was not measured: every run goes on through it, unscored.
+    let mut bridged = vec![false; grid.x.len()];
+    for b in &grid.bridged {
+        bridged[b.start.min(grid.x.len())..b.end.min(grid.x.len())].fill(true);
+    }
     let evaluate = |values: &[f64]| -> Result<Option<Vec<f64>>, RunError> {
-        residuals(&with_values(model, values, None)?, grid, init, tolerances)
+        residuals(
+            &with_values(model, values, None)?,
+            grid,
+            &bridged,
+            init,
+            tolerances,
+        )
     };
     let Some(mut r) = evaluate(&start)? else {
         return Err(RunError::Refine(

@@ -17,6 +17,20 @@ fn read_rows(path: &Path) -> (String, Vec<Vec<f64>>) {
     (header, rows)
 }
 
+/// `text` (a header line, then rows) with each row `i` (from 0) replaced by `edit(i, row)`, or
+/// left out where that gives `None`: a logger's faults written into a record.
+fn rows_edited(text: &str, mut edit: impl FnMut(usize, &str) -> Option<String>) -> String {
+    let mut lines = text.lines();
+    let mut out = format!("{}\n", lines.next().unwrap());
+    for (i, line) in lines.enumerate() {
+        if let Some(row) = edit(i, line) {
+            out.push_str(&row);
+            out.push('\n');
+        }
+    }
+    out
+}
+
 fn assert_clean_failure(out: &Output, mentions: &str) {
     assert!(!out.status.success(), "expected failure");
     let err = String::from_utf8_lossy(&out.stderr);
@@ -345,17 +359,7 @@ fn a_record_no_window_fits_is_named_and_writes_nothing() {
         assert!(!model.exists(), "a model was written");
     };
     // Every seventh row of a text with a header line dropped.
-    let drop_sevenths = |text: &str| {
-        let mut lines = text.lines();
-        let mut kept = format!("{}\n", lines.next().unwrap());
-        for (i, line) in lines.enumerate() {
-            if i % 7 != 3 {
-                kept.push_str(line);
-                kept.push('\n');
-            }
-        }
-        kept
-    };
+    let drop_sevenths = |text: &str| rows_edited(text, |i, row| (i % 7 != 3).then(|| row.to_owned()));
     let paper: String = std::iter::once("t,theta".to_owned())
         .chain(
             paper_rows()
@@ -3737,17 +3741,12 @@ fn a_loggers_dropped_rows_are_bridged_and_the_truth_recovered() {
         let truth = dir.join(format!("{name}.truth.json"));
         let whole = system_round_trip(&record, &truth);
         let text = std::fs::read_to_string(&record).unwrap();
-        let mut lines = text.lines();
-        let mut kept = format!("{}\n", lines.next().unwrap());
         let mut dropped = 0;
-        for (i, line) in lines.enumerate() {
-            if i % 97 == 50 || (i % 131 == 70 || i % 131 == 71) {
-                dropped += 1;
-                continue;
-            }
-            kept.push_str(line);
-            kept.push('\n');
-        }
+        let kept = rows_edited(&text, |i, row| {
+            let drop = i % 97 == 50 || (i % 131 == 70 || i % 131 == 71);
+            dropped += usize::from(drop);
+            (!drop).then(|| row.to_owned())
+        });
         assert!(dropped > 100, "{dropped}");
         let path = dir.join(format!("{system}-dropped.csv"));
         std::fs::write(&path, kept).unwrap();
@@ -3805,10 +3804,8 @@ fn rows_with_a_missing_value_are_left_out_and_bridged_on_request() {
     );
     let truth = dir.join("dp.csv.truth.json");
     let text = std::fs::read_to_string(&record).unwrap();
-    let mut lines = text.lines();
-    let mut out = format!("{}\n", lines.next().unwrap());
     let mut blanked = 0;
-    for (i, line) in lines.enumerate() {
+    let out = rows_edited(&text, |i, line| {
         let mut cells: Vec<String> = line.split(',').map(str::to_owned).collect();
         // omega1 (column 4) is not read: its missing cells are no row's loss.
         if i % 7 == 3 {
@@ -3824,9 +3821,8 @@ fn rows_with_a_missing_value_are_left_out_and_bridged_on_request() {
             cells[c] = m.to_owned();
             blanked += 1;
         }
-        out.push_str(&cells.join(","));
-        out.push('\n');
-    }
+        Some(cells.join(","))
+    });
     assert!(blanked > 200, "{blanked}");
     let path = dir.join("dp-missing.csv");
     std::fs::write(&path, out).unwrap();
@@ -3863,6 +3859,28 @@ fn rows_with_a_missing_value_are_left_out_and_bridged_on_request() {
     );
     let bridged = system_round_trip_with(&path, &truth, &["--skip-missing", "--bridge-gaps", "1"]);
     assert!(bridged < 1e-4, "worst relative error {bridged:e}");
+    // The report reads the record the same way and says which rows it left out.
+    let report = dir.join("report");
+    let out = hbid(&[
+        "report",
+        path.to_str().unwrap(),
+        "--coords",
+        "theta1,theta2",
+        "--skip-missing",
+        "--bridge-gaps",
+        "1",
+        "--quiet",
+        "--out",
+        report.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let readme = std::fs::read_to_string(report.join("README.md")).unwrap();
+    assert!(
+        readme.contains(&format!(
+            "{blanked} row(s) with a missing value in a column read left out"
+        )),
+        "{readme}"
+    );
 }
 
 /// `compare` through a logger's dropped rows: the coupled Duffing pair identified on the first
@@ -4021,19 +4039,27 @@ fn many_time_stamp_repairs_are_counted_after_the_first_five() {
     let dir = scratch("repairs");
     let record = simulated(&dir, "r.csv", &["--samples", "4000"]);
     let text = std::fs::read_to_string(&record).unwrap();
-    // Eight stamps, 300 rows apart from row `from`, 0.4 step late: isolated glitches.
+    // Eight stamps, 300 rows apart from the line `from` (after the header's 0), 0.4 step late:
+    // isolated glitches.
+    let t = |l: &str| l.split(',').next().unwrap().parse::<f64>().unwrap();
+    let dt = {
+        let rows: Vec<&str> = text.lines().skip(1).take(2).collect();
+        t(rows[1]) - t(rows[0])
+    };
     let glitched = |name: &str, from: usize| {
-        let mut lines: Vec<String> = text.lines().map(str::to_owned).collect();
-        let t = |l: &str| l.split(',').next().unwrap().parse::<f64>().unwrap();
-        let dt = t(&lines[2]) - t(&lines[1]);
-        for k in 0..8 {
-            let row = from + 300 * k;
-            let mut cells: Vec<String> = lines[row].split(',').map(str::to_owned).collect();
-            cells[0] = format!("{}", t(&lines[row]) + 0.4 * dt);
-            lines[row] = cells.join(",");
-        }
+        let edited = rows_edited(&text, |i, row| {
+            // Row `i` is the record's line `i + 1` after the header's 0.
+            let line = i + 1;
+            if line < from || !(line - from).is_multiple_of(300) || line >= from + 300 * 8 {
+                return Some(row.to_owned());
+            }
+            let mut cells: Vec<&str> = row.split(',').collect();
+            let late = format!("{}", t(row) + 0.4 * dt);
+            cells[0] = &late;
+            Some(cells.join(","))
+        });
         let path = dir.join(name);
-        std::fs::write(&path, lines.join("\n") + "\n").unwrap();
+        std::fs::write(&path, edited).unwrap();
         path
     };
     let path = glitched("glitches.csv", 300);

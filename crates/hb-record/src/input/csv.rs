@@ -168,7 +168,7 @@ pub(super) fn read<'a>(bytes: &'a [u8], options: &ReadOptions) -> Result<Record,
         record.t = if record.missing.is_empty() {
             grid(record.theta.len(), dt)?
         } else {
-            grid_of(&places, rows, dt)?
+            grid_of(places.iter().copied(), rows, dt)?
         };
     }
     record.lines = Some(numbers);

@@ -620,19 +620,16 @@ pub fn read_csv(input: impl Read) -> Result<Record, InputError> {
 /// The times of `n` samples `dt` apart from 0, for records without a time column; an error when
 /// the last one overflows.
 fn grid(n: usize, dt: f64) -> Result<Vec<f64>, InputError> {
-    if !(n.saturating_sub(1) as f64 * dt).is_finite() {
-        return Err(InputError::StepOverflow { dt, samples: n });
-    }
-    Ok((0..n).map(|i| i as f64 * dt).collect())
+    grid_of(0..n, n, dt)
 }
 
 /// The times of the rows `kept` (their places among `n` rows) `dt` apart from 0: the rows left
 /// out ([`ReadOptions::skip_missing`]) keep theirs, as a gap.
-fn grid_of(kept: &[usize], n: usize, dt: f64) -> Result<Vec<f64>, InputError> {
+fn grid_of(kept: impl IntoIterator<Item = usize>, n: usize, dt: f64) -> Result<Vec<f64>, InputError> {
     if !(n.saturating_sub(1) as f64 * dt).is_finite() {
         return Err(InputError::StepOverflow { dt, samples: n });
     }
-    Ok(kept.iter().map(|&i| i as f64 * dt).collect())
+    Ok(kept.into_iter().map(|i| i as f64 * dt).collect())
 }
 
 /// Largest relative spread of a column's steps (see [`step_spread`]) for it to be read as the

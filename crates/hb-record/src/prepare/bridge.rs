@@ -129,6 +129,14 @@ mod tests {
     use super::*;
     use std::f64::consts::PI;
 
+    /// Every sample of `x` on `truth`'s point of the circle, and wrapped into [-π, π).
+    fn assert_on_the_circle(x: &[f64], truth: &[f64]) {
+        for (n, (&x, &truth)) in x.iter().zip(truth).enumerate() {
+            assert!(wrap(x - truth).abs() < 1e-12, "sample {n}: {x} against {truth}");
+            assert!((-PI..PI).contains(&x), "sample {n}: {x}");
+        }
+    }
+
     #[test]
     fn a_cubic_is_bridged_exactly_on_the_line() {
         let f = |n: f64| 0.3 - 1.2 * n + 0.05 * n * n - 0.002 * n * n * n;
@@ -155,15 +163,7 @@ mod tests {
         x[4] = f64::NAN;
         x[5] = f64::NAN;
         fill(&mut x, 4, 6, Domain::Circle);
-        for n in 0..10 {
-            assert!(
-                wrap(x[n] - truth[n]).abs() < 1e-12,
-                "sample {n}: {} against {}",
-                x[n],
-                truth[n]
-            );
-            assert!((-PI..PI).contains(&x[n]));
-        }
+        assert_on_the_circle(&x, &truth);
     }
 
     #[test]
@@ -234,14 +234,7 @@ mod tests {
             *v = f64::NAN;
         }
         fill(&mut x, 2, 6, Domain::Circle);
-        for n in 0..8 {
-            assert!(
-                wrap(x[n] - truth[n]).abs() < 1e-12,
-                "sample {n}: {} against {}",
-                x[n],
-                truth[n]
-            );
-        }
+        assert_on_the_circle(&x, &truth);
     }
 
     #[test]
