@@ -121,6 +121,14 @@ pub enum Notice {
     /// A comparison runs through the record's first rows, which a logger stamped before it
     /// settled to its rate, at their own stamps (an identification leaves them out).
     UnevenStart(hb_record::input::Unsettled),
+    /// A notice of one of several records read together (`identify` on several files), named by
+    /// its file.
+    InRecord {
+        /// The record's name (its file's path).
+        record: String,
+        /// The notice.
+        notice: Box<Notice>,
+    },
 }
 
 impl Notice {
@@ -130,7 +138,16 @@ impl Notice {
         match self {
             Notice::Record(note) | Notice::Column { note, .. } => note.is_warning(),
             Notice::Warning(_) => true,
+            Notice::InRecord { notice, .. } => notice.is_warning(),
             _ => false,
+        }
+    }
+
+    /// The notice itself, apart from the record it is of ([`Notice::InRecord`]).
+    pub fn inner(&self) -> &Notice {
+        match self {
+            Notice::InRecord { notice, .. } => notice.inner(),
+            other => other,
         }
     }
 }
@@ -249,6 +266,7 @@ impl fmt::Display for Notice {
                 significant(run.step, 6)
             ),
             Notice::Warning(w) => f.write_str(w),
+            Notice::InRecord { record, notice } => write!(f, "{record}: {notice}"),
         }
     }
 }
@@ -274,6 +292,30 @@ pub trait Observer {
 
 /// Hears nothing.
 impl Observer for () {}
+
+/// Passes on what `inner` hears of one of several records, each notice named by the record
+/// ([`Notice::InRecord`]).
+pub(crate) struct OfRecord<'a> {
+    /// The record's name.
+    pub record: &'a str,
+    /// The observer of the run.
+    pub inner: &'a mut dyn Observer,
+}
+
+impl Observer for OfRecord<'_> {
+    fn stage(&mut self, stage: Stage) {
+        self.inner.stage(stage);
+    }
+    fn progress(&mut self, done: usize, total: usize) {
+        self.inner.progress(done, total);
+    }
+    fn notice(&mut self, notice: &Notice) {
+        self.inner.notice(&Notice::InRecord {
+            record: self.record.to_owned(),
+            notice: Box::new(notice.clone()),
+        });
+    }
+}
 
 /// Keeps every notice, in order (what the Python package hands back).
 #[derive(Debug, Default, Clone, PartialEq)]

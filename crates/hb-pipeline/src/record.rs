@@ -1015,6 +1015,12 @@ pub fn load_all(
             }
         }
         // Of several records, the one that fails is named (a read error names it already).
+        // Of several records, each one's notes are named by it.
+        let mut named = crate::observe::OfRecord {
+            record: name,
+            inner: &mut *observer,
+        };
+        let observer: &mut dyn Observer = if several { &mut named } else { &mut *observer };
         records.push(load(source, options, drive, observer).map_err(|e| match e {
             e @ (RunError::Read { .. } | RunError::Options(_)) => e,
             e if several => RunError::InRecord {

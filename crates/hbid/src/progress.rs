@@ -93,12 +93,12 @@ impl Stages {
     }
 
     /// Ends the last stage, clears the spinner and, with `--timings`, prints the stages' times.
-    pub fn finish(mut self) {
+    pub fn finish(&mut self) {
         self.end();
         self.bar.finish();
         if self.timings {
             let total: std::time::Duration = self.done.iter().map(|(_, d)| *d).sum();
-            for (name, d) in &self.done {
+            for (name, d) in &std::mem::take(&mut self.done) {
                 eprintln!("{name:>12} {:>9.3} s", d.as_secs_f64());
             }
             eprintln!("{:>12} {:>9.3} s", "total", total.as_secs_f64());
@@ -114,6 +114,8 @@ pub struct Console {
     /// Time stamps of the record being read replaced by their grid time so far, and those of
     /// them not printed.
     repairs: (usize, usize),
+    /// The record they are of, when it is one of several.
+    repaired: Option<String>,
 }
 
 /// The time-stamp repairs the console prints one by one; the rest are counted in one note (a
@@ -126,6 +128,7 @@ impl Console {
         Self {
             stages: Stages::new(command, quiet, timings),
             repairs: (0, 0),
+            repaired: None,
         }
     }
 
@@ -139,11 +142,24 @@ impl Console {
     fn held_repairs(&mut self) {
         let held = std::mem::take(&mut self.repairs.1);
         if held > 0 {
+            let of = self
+                .repaired
+                .as_ref()
+                .map(|r| format!("{r}: "))
+                .unwrap_or_default();
             self.stages.print(&format!(
-                "note: {held} more time stamp(s) replaced by their grid times ({} in all; Python's `read` lists every one in `time_repairs`)",
+                "note: {of}{held} more time stamp(s) replaced by their grid times ({} in all; Python's `read` lists every one in `time_repairs`)",
                 self.repairs.0
             ));
         }
+    }
+}
+
+impl Drop for Console {
+    /// The count of the repairs not printed is printed also when the command fails (before its
+    /// error).
+    fn drop(&mut self) {
+        self.held_repairs();
     }
 }
 
@@ -162,7 +178,11 @@ impl Observer for Console {
     }
 
     fn notice(&mut self, notice: &Notice) {
-        if let Notice::Record(Note::TimeRepaired(_)) = notice {
+        if let Notice::Record(Note::TimeRepaired(_)) = notice.inner() {
+            self.repaired = match notice {
+                Notice::InRecord { record, .. } => Some(record.clone()),
+                _ => None,
+            };
             self.repairs.0 += 1;
             if self.repairs.0 > REPAIRS_SHOWN {
                 self.repairs.1 += 1;

@@ -4116,6 +4116,41 @@ fn many_time_stamp_repairs_are_counted_after_the_first_five() {
             .all(|l| l.contains("3 more time stamp(s) replaced by their grid times (8 in all")),
         "{stderr}"
     );
+    // Of several records, each note names its record: the repairs (line 301 is in both) and
+    // their count.
+    for (file, line) in [(&path, 301), (&later, 1301)] {
+        let file = file.to_str().unwrap();
+        assert!(
+            stderr.contains(&format!("note: {file}: line {line}: time ")),
+            "{stderr}"
+        );
+        assert!(
+            stderr.contains(&format!("note: {file}: 3 more time stamp(s) replaced")),
+            "{stderr}"
+        );
+    }
+    // A command that fails after the repairs still counts those it did not print, before its
+    // error.
+    let failed = hbid(&[
+        "identify",
+        path.to_str().unwrap(),
+        "--repair",
+        "--window-periods",
+        "100000",
+    ]);
+    let stderr = String::from_utf8_lossy(&failed.stderr);
+    let lines: Vec<&str> = stderr.lines().collect();
+    assert!(
+        !failed.status.success() && !stderr.contains("panicked"),
+        "{stderr}"
+    );
+    assert!(lines.last().unwrap().starts_with("error: "), "{stderr}");
+    assert!(
+        lines[..lines.len() - 1]
+            .iter()
+            .any(|l| l.starts_with("note: 3 more time stamp(s) replaced")),
+        "{stderr}"
+    );
 }
 
 /// Bridging is refused, in one line, where it cannot hold: a gap longer than a cubic through
@@ -4619,7 +4654,13 @@ fn the_record_that_fails_among_several_is_named() {
         short.display()
     );
     assert!(together.contains(&named), "{together}");
-    assert!(!together.contains("long.csv"), "{together}");
+    // The error names the record that failed; the other's notes name theirs.
+    let error = together.lines().find(|l| l.starts_with("error: ")).unwrap();
+    assert!(!error.contains("long.csv"), "{together}");
+    assert!(
+        together.contains(&format!("note: {}: 384.615385 samples per period", long.display())),
+        "{together}"
+    );
 }
 
 /// A term in the drive's phase with windows of a given length names those options, which leave

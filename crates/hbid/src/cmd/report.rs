@@ -32,6 +32,17 @@ struct MethodResult<'a> {
     validation: Result<&'a Validation, &'a hb_pipeline::pipeline::PipelineError>,
 }
 
+/// Whether a report's README keeps the notice: the record's notes are on the console, but
+/// those that change what its samples are (gaps bridged: samples the file does not have; rows left
+/// out for a missing value) are in the report too, as is every notice of the fit.
+pub fn in_report(notice: &Notice) -> bool {
+    match notice.inner() {
+        Notice::Record(Note::Bridged { .. } | Note::MissingRows { .. }) => true,
+        Notice::Resampled { .. } | Notice::Record(_) | Notice::Column { .. } => false,
+        _ => true,
+    }
+}
+
 /// The report's figures need a folder; checked before any work.
 pub fn check_out(path: &Path) -> anyhow::Result<()> {
     if path.exists() && !path.is_dir() {
@@ -192,16 +203,7 @@ pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
     drop(bar);
     let notes: Vec<String> = notices
         .iter()
-        .filter(|n| {
-            // The record's notes are on the console; the one that changes what its samples are
-            // (gaps bridged: samples the file does not have; rows left out for a missing value) are in the
-            // report too.
-            matches!(n, Notice::Record(Note::Bridged { .. } | Note::MissingRows { .. }))
-                || !matches!(
-                    n,
-                    Notice::Resampled { .. } | Notice::Record(_) | Notice::Column { .. }
-                )
-        })
+        .filter(|n| in_report(n))
         .map(|n| Spelling::CommandLine.render(&n.to_string()))
         .collect();
     write_report(args, &request, &data, &notes, &outcome.map_err(naming_options)?)?;

@@ -15,11 +15,11 @@ use circle_signal::{Domain, SampleClock, wrap};
 use hb_model::IdentifiedSystem;
 use hb_pipeline::pipeline::Method;
 use hb_pipeline::{
-    ColumnList, CompareOptions, CompareReport, CompareRequest, IdentifyReport, IdentifyRequest, Notice,
-    OptionError, RecordOptions, Source, Spelling,
+    ColumnList, CompareOptions, CompareReport, CompareRequest, IdentifyReport, IdentifyRequest, OptionError,
+    RecordOptions, Source, Spelling,
 };
 use hb_plot::{BLUE, Figure, GREEN, INK, ORANGE, PURPLE, RED, Series, Style, add_figure};
-use hb_record::prepare::{GridData, Note};
+use hb_record::prepare::GridData;
 use pendulum_sim::PredictionConfig;
 use pendulum_sim::prediction::{
     SystemPredictionRecord, SystemPredictionTimes, system_prediction_starts, system_valid_prediction_times,
@@ -141,16 +141,7 @@ pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
         .chain(
             notices
                 .iter()
-                .filter(|n| {
-                    // The record's notes are on the console; the one that changes what its samples are
-                    // (gaps bridged: samples the file does not have; rows left out for a missing value) are in the
-                    // report too.
-                    matches!(n, Notice::Record(Note::Bridged { .. } | Note::MissingRows { .. }))
-                        || !matches!(
-                            n,
-                            Notice::Resampled { .. } | Notice::Record(_) | Notice::Column { .. }
-                        )
-                })
+                .filter(|n| super::report::in_report(n))
                 .map(|n| Spelling::CommandLine.render(&n.to_string())),
         )
         .collect();
