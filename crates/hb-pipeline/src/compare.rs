@@ -326,11 +326,15 @@ impl CompareRequest {
             _ => {}
         }
         let record = o.record_options(Domain::Line);
-        if o.measured != Measured::Displacement && o.signal == Some(Domain::Circle) {
+        // Integrated, the record's displacement has an unknown offset (and from an acceleration a
+        // slope) per piece, which the free run would be scored against: not a model's error.
+        if o.measured != Measured::Displacement {
             return Err(OptionError::value(
                 "measured",
                 o.measured,
-                "a velocity or acceleration record is integrated to a displacement on the line: needs «signal=line»",
+                "a record integrated from a velocity or an acceleration has an unknown offset (and slope) per \
+                 piece, which a free run would be scored against as the model's error: compare the model with \
+                 a displacement record, or let `hbid report` fit the drift and run the model on the record",
             ));
         }
         // The velocity columns are counted against the system's coordinates, known once the
@@ -397,7 +401,8 @@ pub struct RangeScore {
     pub range: [usize; 2],
     /// Samples that set the initial state of each piece whose state is fitted (not scored); the
     /// piece that starts from a state given (`x0`, `v0`) or measured (`velocity_col`) scores all
-    /// of its samples, unless `init` was given.
+    /// of its samples, unless `init` was given. A range whose pieces all start so has 0 (or the
+    /// `init` given).
     pub init: usize,
     /// Samples scored.
     pub scored: usize,
@@ -659,6 +664,7 @@ fn compare_one(
     } else {
         o.range.iter().map(|r| r.on(len)).collect::<Result<_, _>>()?
     };
+    one_start_for_a_given_state(o, &ranges)?;
     let period = std::f64::consts::TAU / model.drive_angular_frequency() / grid.dt;
     let mut scores = Vec::with_capacity(ranges.len());
     let mut runs = Vec::with_capacity(ranges.len());
@@ -682,15 +688,7 @@ fn compare_one(
             return Err(all_bridged(range, init, score.bridged).into());
         }
         if score.scored == 0 && score.stopped.is_none() {
-            return Err(OptionError::value(
-                "init",
-                init,
-                format!(
-                    "leaves no sample of the range {}..{} to score: its pieces between gaps are no longer",
-                    range.start, range.end
-                ),
-            )
-            .into());
+            return Err(nothing_left(range, init, grid.pieces.len()).into());
         }
         done += range.len();
         observer.progress(done, total);
@@ -767,21 +765,19 @@ fn placed(
 }
 
 /// The measured velocities' columns `given` in the order of the record's coordinates, the `k`-th
-/// of which is the system's `coordinate_of[k]`-th: by name when every one has one of the
-/// system's coordinate `names`, as given otherwise (in the order of `coords`).
+/// of which is the system's `coordinate_of[k]`-th: by name when named (`NAME=COLUMN`, each one of
+/// the system's coordinate `names`), as given otherwise (in the order of `coords`). A name that is
+/// not a coordinate's is refused ([`placed`]'s rule), not taken for a coordinate by its place.
 fn velocities_in_record_order(
     given: &ColumnList,
     names: &[String],
     coordinate_of: &[usize],
 ) -> Result<ColumnList, OptionError> {
-    let by_name: Option<Vec<usize>> = given
-        .names()
-        .iter()
-        .map(|g| names.iter().position(|n| n == g))
-        .collect();
-    let Some(by_name) = by_name.filter(|b| b.len() == coordinate_of.len()) else {
+    let named = given.names().iter().zip(given.columns()).any(|(n, c)| n != c);
+    if !named || given.len() != coordinate_of.len() {
         return Ok(given.clone());
-    };
+    }
+    let (_, by_name) = placed("velocity_col", "coordinates", given, names)?;
     coordinate_of
         .iter()
         .map(|c| {
@@ -924,6 +920,24 @@ fn compare_system(
         .into());
     }
     // The system's own columns, each under the name its terms give it.
+    // What reads one coordinate's record is refused, not ignored.
+    if o.angle_col.is_some() {
+        return Err(OptionError::new(
+            "angle_col",
+            format!(
+                "reads the angle of a model of one coordinate; this one has {n} ({}): give their columns with «coords»",
+                names.coordinates().join(", ")
+            ),
+        )
+        .into());
+    }
+    if o.measured != Measured::Displacement {
+        return Err(OptionError::new(
+            "measured",
+            "is for a record of one coordinate, not a system of several («coords»)",
+        )
+        .into());
+    }
     let columns = system.columns();
     let as_columns = |names: &[String], columns: &[String]| {
         names
@@ -1038,6 +1052,7 @@ fn compare_system(
     } else {
         o.range.iter().map(|r| r.on(len)).collect::<Result<_, _>>()?
     };
+    one_start_for_a_given_state(o, &ranges)?;
     let period = std::f64::consts::TAU / system.drive_angular_frequency() / grid.dt;
     let given = o.x0.clone().zip(o.v0.clone());
     let columns: Vec<&[f64]> = std::iter::once(grid.x.as_slice())
@@ -1155,15 +1170,7 @@ fn compare_system(
             }
         }
         if pieces[0].is_empty() && stopped.is_none() {
-            return Err(OptionError::value(
-                "init",
-                init,
-                format!(
-                    "leaves no sample of the range {}..{} to score: its pieces between gaps are no longer",
-                    range.start, range.end
-                ),
-            )
-            .into());
+            return Err(nothing_left(range, init, grid.pieces.len()).into());
         }
         let after_init = |measured: bool| -> usize {
             pieces[0]
@@ -1420,6 +1427,46 @@ fn run_range(
     Ok((score, pieces))
 }
 
+/// The error of a range that `init` samples setting the state leave nothing to score, in a
+/// record of `pieces` pieces between gaps.
+fn nothing_left(range: &std::ops::Range<usize>, init: usize, pieces: usize) -> OptionError {
+    let why = match pieces {
+        1 => format!("the range has {} sample(s)", range.len()),
+        _ => "its pieces between gaps are no longer".to_owned(),
+    };
+    OptionError::value(
+        "init",
+        init,
+        format!(
+            "leaves no sample of the range {}..{} to score: {why}",
+            range.start, range.end
+        ),
+    )
+}
+
+/// That a state given (`x0`, `v0`), the state at a range's first sample, is not asked to start
+/// ranges that start at different samples.
+fn one_start_for_a_given_state(
+    o: &CompareOptions,
+    ranges: &[std::ops::Range<usize>],
+) -> Result<(), OptionError> {
+    let Some(first) = ranges.first().filter(|_| o.x0.is_some()) else {
+        return Ok(());
+    };
+    match ranges.iter().find(|r| r.start != first.start) {
+        Some(other) => Err(OptionError::new(
+            "x0",
+            format!(
+                "is the state at the first sample of a range, and the ranges start at samples {} and {}: compare \
+                 them one command each, or start each from the record («init», or its measured velocities, \
+                 «velocity_col»)",
+                first.start, other.start
+            ),
+        )),
+        None => Ok(()),
+    }
+}
+
 /// The error of a range whose samples after the `init` that set the state are all bridged (the
 /// `bridged` left): nothing measured to score.
 fn all_bridged(range: &std::ops::Range<usize>, init: usize, bridged: usize) -> OptionError {
@@ -1493,7 +1540,9 @@ fn score(
     RangeScore {
         coordinate: None,
         range,
-        init,
+        // What the pieces run left unscored: a range whose pieces all start from a state given or
+        // measured fitted none.
+        init: pieces.iter().map(|p| p.init).max().unwrap_or(init),
         scored: n,
         bridged,
         rmse,

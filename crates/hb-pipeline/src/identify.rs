@@ -400,6 +400,13 @@ impl IdentifyRequest {
     pub fn new(options: IdentifyOptions) -> Result<Self, OptionError> {
         let o = &options;
         o.record.check()?;
+        if o.record.velocity_col.is_some() {
+            return Err(OptionError::new(
+                "velocity_col",
+                "sets the state of a free run (compare, simulate with a model, a report's runs): the \
+                 identification reads no velocities, leave it out",
+            ));
+        }
         check_tie_with(o)?;
         let search = o.orbits.search()?;
         o.orbits.check_delay()?;

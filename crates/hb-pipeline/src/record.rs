@@ -484,9 +484,9 @@ impl RecordOptions {
                 hb_model::TermError::BadName { name, .. } => Some(name.as_str()),
                 _ => None,
             };
+            // A name in both lists is the drive's to change: the coordinates are named first.
             let in_drives = bad.is_some_and(|b| drives.iter().any(|d| d == b));
-            let in_coordinates = bad.is_some_and(|b| coordinates.iter().any(|c| c == b));
-            let option = if single || (in_drives && !in_coordinates) {
+            let option = if single || in_drives {
                 "drive_col"
             } else {
                 "coords"

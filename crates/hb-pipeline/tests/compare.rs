@@ -24,11 +24,23 @@ fn at_rest(omega: f64) -> IdentifiedModel {
 /// The scores of [`at_rest`]`(omega)` on a record of `len` samples at rest, `dt` apart, over
 /// `ranges` (none: the whole record), run from the state given (at rest: nothing is fitted).
 fn scores(omega: f64, dt: f64, len: usize, ranges: &[SampleRange]) -> Result<Vec<RangeScore>, RunError> {
+    scores_from(omega, dt, len, ranges, true)
+}
+
+/// [`scores`], from the state given or (`given` false) from the state fitted to each range's
+/// first samples.
+fn scores_from(
+    omega: f64,
+    dt: f64,
+    len: usize,
+    ranges: &[SampleRange],
+    given: bool,
+) -> Result<Vec<RangeScore>, RunError> {
     let x = vec![0.0; len];
     let request = CompareRequest::new(CompareOptions {
         dt: Some(dt),
-        x0: Some(0.0.into()),
-        v0: Some(0.0.into()),
+        x0: given.then(|| 0.0.into()),
+        v0: given.then(|| 0.0.into()),
         range: ranges.to_vec(),
         ..CompareOptions::default()
     })
@@ -110,8 +122,9 @@ fn the_default_init_scales_with_the_drive_and_the_range() {
             (f64::MIN_POSITIVE, 1.0)
         };
         assert_eq!(TAU / omega / dt == f64::INFINITY, period_samples.is_infinite());
-        let scores = scores(omega, dt, range, &[]).unwrap();
+        let scores = scores_from(omega, dt, range, &[], false).unwrap();
         assert_eq!(scores[0].range, [0, range]);
+        assert_eq!(scores[0].scored, range - scores[0].init);
         scores[0].init
     };
     assert_eq!(default_init(25.0, 30_000), 25);
@@ -119,8 +132,9 @@ fn the_default_init_scales_with_the_drive_and_the_range() {
     assert_eq!(default_init(6283.0, 20_000), 2000);
     assert_eq!(default_init(3.0, 1000), 8);
     assert_eq!(default_init(f64::INFINITY, 1000), 8);
-    // Its piece starts from the state given: every sample is scored, the first `init` too.
-    assert_eq!(scores(1.0, TAU / 25.0, 1000, &[]).unwrap()[0].scored, 1000);
+    // A piece that starts from the state given fits none: every sample is scored.
+    let given = &scores(1.0, TAU / 25.0, 1000, &[]).unwrap()[0];
+    assert_eq!((given.init, given.scored), (0, 1000));
 }
 
 /// The double pendulum of `hbid simulate --system double-pendulum` (its truth's equations,

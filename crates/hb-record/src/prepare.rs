@@ -611,6 +611,7 @@ impl Data {
             self.p,
             match self.drive {
                 DriveFound::Free { .. } => "oscillation period",
+                DriveFound::Windows { .. } => "window unit",
                 _ => "forcing period",
             }
         );

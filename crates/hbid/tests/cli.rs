@@ -4277,7 +4277,8 @@ fn coupled_oscillators_are_selected_and_predict_the_other_half() {
 /// column), never a panic or a table: a coordinate missing or named twice, a term naming an
 /// unknown column, an equation without terms, a drive that is also a coordinate, the own
 /// acceleration as a bare term, a mass matrix singular at the record's states (a column the copy
-/// of another), and records with other columns in one fit.
+/// of another), records with other columns in one fit, a column chosen twice, a drive named as a
+/// coordinate, and velocities, which no fit reads.
 #[test]
 fn a_systems_bad_inputs_are_one_line_errors() {
     let dir = scratch("system-bad-inputs");
@@ -4349,9 +4350,35 @@ fn a_systems_bad_inputs_are_one_line_errors() {
         unphysical.to_str().unwrap(),
         swapped_path.to_str().unwrap(),
     );
-    let cases: [(&[&str], &str); 11] = [
+    let cases: [(&[&str], &str); 14] = [
         (&[record, "--coords", "theta1,theta3"], "--coords"),
         (&[record, "--coords", "theta1,theta1"], "named twice"),
+        (
+            &[record, "--coords", "theta1=theta1,theta2=2"],
+            "column 2 is chosen twice, as two angle columns",
+        ),
+        // A name in both lists is the drive's to change.
+        (
+            &[
+                record,
+                "--coords",
+                "theta1,theta2",
+                "--drive-col",
+                "theta1=omega1",
+            ],
+            "--drive-col: the name `theta1` cannot be used: named twice",
+        ),
+        // Velocities set a free run's state; the fit reads none.
+        (
+            &[
+                record,
+                "--coords",
+                "theta1,theta2",
+                "--velocity-col",
+                "omega1,omega2",
+            ],
+            "--velocity-col: sets the state of a free run",
+        ),
         (
             &[record, "--coords", "theta1,theta2", "--terms", "sin(theta3)"],
             "a coordinate (theta1, theta2)",
@@ -4658,7 +4685,10 @@ fn the_record_that_fails_among_several_is_named() {
     let error = together.lines().find(|l| l.starts_with("error: ")).unwrap();
     assert!(!error.contains("long.csv"), "{together}");
     assert!(
-        together.contains(&format!("note: {}: 384.615385 samples per period", long.display())),
+        together.contains(&format!(
+            "note: {}: 384.615385 samples per period",
+            long.display()
+        )),
         "{together}"
     );
 }

@@ -410,6 +410,28 @@ fn bad_requests_are_refused_in_one_line() {
         "--range",
     );
     assert_clean_failure(&hbid(&["compare", m, t, "--drive-col", "p", "--x0", "1"]), "--x0");
+    // An integrated record's offset would be scored as the model's error.
+    for measured in ["velocity", "acceleration"] {
+        assert_clean_failure(
+            &hbid(&["compare", m, t, "--drive-col", "p", "--measured", measured]),
+            "has an unknown offset (and slope) per piece",
+        );
+    }
+    // A range no longer than the samples that set its state says so, not that it has gaps.
+    assert_clean_failure(
+        &hbid(&[
+            "compare",
+            m,
+            t,
+            "--drive-col",
+            "p",
+            "--init",
+            "8",
+            "--range",
+            "100..105",
+        ]),
+        "--init 8: leaves no sample of the range 100..105 to score: the range has 5 sample(s)",
+    );
     assert_clean_failure(
         &hbid(&["compare", m, t, "--drive-col", "p", "--init", "1"]),
         "--init",
@@ -788,6 +810,50 @@ fn a_systems_columns_are_paired_with_the_model_by_name() {
         rmse(&["--coords", "q2,q1", "--velocity-col", "q1=v1,q2=v2"]),
         measured
     );
+    // A name that is not a coordinate's is refused, not taken for another by its place; so are
+    // the options of one coordinate's record.
+    let refused = |extra: &[&str], mentions: &str| {
+        let mut args = vec!["compare", s(&model), s(&held_out), "--range", "2000..3000"];
+        args.extend_from_slice(extra);
+        assert_clean_failure(&hbid(&args), mentions);
+    };
+    refused(
+        &["--velocity-col", "q2=v2,Q1=v1"],
+        "--velocity-col q2=v2,Q1=v1: 'Q1' is not one of the system's coordinates (q1, q2)",
+    );
+    refused(
+        &["--angle-col", "q1"],
+        "--angle-col: reads the angle of a model of one coordinate; this one has 2 (q1, q2)",
+    );
+    // A state given is that at a range's start: ranges that start elsewhere are refused, those
+    // that start there scored in full.
+    let state = ["--x0", "0.5,-0.3", "--v0", "0,0"];
+    refused(
+        &[&state[..], &["--range", "500..600"]].concat(),
+        "--x0: is the state at the first sample of a range, and the ranges start at samples 2000 and 500",
+    );
+    let out = ok(&[
+        &[
+            "compare",
+            s(&model),
+            s(&held_out),
+            "--range",
+            "0..100",
+            "--range",
+            "0..200",
+            "--json",
+        ][..],
+        &state[..],
+    ]
+    .concat());
+    for r in json(&out)["ranges"].as_array().unwrap() {
+        assert_eq!(r["init"], 0, "{r}");
+        assert_eq!(
+            r["scored"].as_u64().unwrap(),
+            r["range"][1].as_u64().unwrap(),
+            "{r}"
+        );
+    }
     // Positions in another order are the user's pairing: the joints swapped score badly.
     let swapped = rmse(&["--coords", "3,2"]);
     assert!(swapped.iter().all(|&e| e > 0.1), "{swapped:?}");

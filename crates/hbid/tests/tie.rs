@@ -150,6 +150,54 @@ fn tied_fit_recovers_the_arms_physical_parameters() {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
 }
 
+/// A report of a tied fit lists its physical parameters as `identify` gives them; with the
+/// measured velocities its free runs start from the measured states, and it says so.
+#[test]
+fn a_report_of_a_tied_fit_lists_its_parameters() {
+    let dir = scratch("tied-report");
+    let (record, truth) = arm(&dir);
+    let spec = write(&dir, "tie.json", &arm_spec(&truth));
+    let mut args = base_args(&truth, &record);
+    args.extend([
+        "--tie".to_owned(),
+        spec.to_str().unwrap().to_owned(),
+        "--bootstrap".into(),
+        "0".into(),
+    ]);
+    let mut identify = args.clone();
+    identify.push("--json".into());
+    let v = run_json(&identify);
+    let out = dir.join("report");
+    args[0] = "report".into();
+    args.extend([
+        "--velocity-col".into(),
+        "v1,v2".into(),
+        "--method".into(),
+        "windowed".into(),
+        "--out".into(),
+        out.to_str().unwrap().into(),
+    ]);
+    let refs: Vec<&str> = args.iter().map(String::as_str).collect();
+    let run = hbid(&refs);
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let text = std::fs::read_to_string(out.join("README.md")).unwrap();
+    assert!(text.contains("### The tied parameters"), "{text}");
+    for (name, _) in physical(&truth) {
+        let value = v["parameters"][name]["value"].as_f64().unwrap();
+        assert!(
+            text.contains(&format!("| `{name}` | {value:.6e} |")),
+            "{name} {value:.6e} not in the report: {text}"
+        );
+    }
+    assert!(
+        text.contains(
+            "from each piece's first measured state (the angles and `--velocity-col`), every sample scored"
+        ),
+        "{text}"
+    );
+    assert!(!text.contains("fitted to its first"), "{text}");
+}
+
 /// A spec whose every coefficient is a parameter of its own, the own acceleration fixed to 1, ties
 /// nothing: the stacked least squares is the two equations' own, and gives the untied fit's
 /// coefficients.

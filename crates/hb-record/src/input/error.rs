@@ -91,7 +91,13 @@ pub enum InputError {
         given: String,
     },
     /// One column chosen for two roles.
-    #[error("column {column} cannot be both the {first} and the {second}")]
+    #[error(
+        "column {column} {}",
+        match first == second {
+            true => format!("is chosen twice, as two {second} columns"),
+            false => format!("cannot be both the {first} and the {second}"),
+        }
+    )]
     ColumnTwice {
         /// The column as chosen.
         column: Column,

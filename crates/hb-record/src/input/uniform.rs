@@ -936,13 +936,14 @@ impl GridRecord {
         }
         // A grid far longer than the samples: refused before anything holds it.
         let span = match starts.last() {
-            Some(&(i, first)) => first + (n - i),
+            // Saturating: a stamp far off (1e299) puts its index past any grid.
+            Some(&(i, first)) => first.saturating_add(n - i),
             None => n,
         };
         if span > GAP_GRID_FACTOR.saturating_mul(n) && span - n > GAP_MISSING_ALLOWED {
             let (at_gap, missing) = starts
                 .windows(2)
-                .map(|w| (w[1].0, w[1].1 - w[0].1 - (w[1].0 - w[0].0)))
+                .map(|w| (w[1].0, (w[1].1 - w[0].1).saturating_sub(w[1].0 - w[0].0)))
                 .max_by_key(|&(_, missing)| missing)
                 .unwrap_or((n - 1, span - n));
             return Err(InputError::GapTooLong {

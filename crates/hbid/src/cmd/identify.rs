@@ -229,6 +229,14 @@ impl IdentifyArgs {
     pub fn request(&self) -> anyhow::Result<IdentifyRequest> {
         Ok(IdentifyRequest::new(self.options())?)
     }
+
+    /// The request of a report's identification: the measured velocities (`--velocity-col`)
+    /// set the report's free runs, not the fit.
+    pub fn request_for_report(&self) -> anyhow::Result<IdentifyRequest> {
+        let mut options = self.options();
+        options.record.velocity_col = None;
+        Ok(IdentifyRequest::new(options)?)
+    }
 }
 
 pub fn run(args: &IdentifyArgs, quiet: bool, timings: bool) -> anyhow::Result<()> {

@@ -132,7 +132,7 @@ pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
     if args.model.is_some() || args.identify.input.coords.as_ref().is_some_and(|c| c.len() > 1) {
         return super::report_system::run(args, quiet);
     }
-    let request = args.identify.request()?;
+    let request = args.identify.request_for_report()?;
     if let Some(spec) = &args.identify.tie {
         anyhow::bail!(
             "«tie={}»: the report of one coordinate identifies by both methods and a tied fit is the weak \

@@ -19,7 +19,7 @@ use hb_pipeline::{
     RecordOptions, Source, Spelling,
 };
 use hb_plot::{BLUE, Figure, GREEN, INK, ORANGE, PURPLE, RED, Series, Style, add_figure};
-use hb_record::prepare::GridData;
+use hb_record::prepare::{DriveFound, GridData};
 use pendulum_sim::PredictionConfig;
 use pendulum_sim::prediction::{
     SystemPredictionRecord, SystemPredictionTimes, system_prediction_starts, system_valid_prediction_times,
@@ -49,6 +49,9 @@ struct Measured {
     compare: CompareReport,
     /// The valid prediction times, or why there are none.
     prediction: Result<SystemPredictionTimes, String>,
+    /// Whether the free runs start from the measured states (`--velocity-col`), every sample
+    /// scored, rather than from states fitted to first samples.
+    from_measured: bool,
 }
 
 /// The report of `args`: a system identified by both methods on the record, or the saved model of
@@ -87,8 +90,9 @@ pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
             (vec![entry], summary, grid)
         }
         None => {
-            let request = args.identify.request()?;
-            let record = &request.options().record;
+            let request = args.identify.request_for_report()?;
+            // Read with the measured velocities, which the free runs start from.
+            let record = &args.identify.input.options();
             // Read and conditioned once: every model is identified on it and run against it.
             let grid = hb_pipeline::condition_source(Source::Path(file), record, &mut kept)?;
             let data = hb_pipeline::load(Source::Grid(grid.clone()), record, request.drive(), &mut kept)?;
@@ -119,12 +123,17 @@ pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
                     Err(e) => missing.push((method, how, e)),
                 }
             }
+            let period = match data.drive {
+                DriveFound::Given | DriveFound::Estimated { .. } => {
+                    format!("; forcing period {}", data.clock.drive_period())
+                }
+                _ => String::new(),
+            };
             let summary = format!(
-                "A system of {} coordinates ({}): {}; forcing period {}.",
+                "A system of {} coordinates ({}): {}{period}.",
                 request.equations(),
                 request.names().coordinates().join(", "),
                 data.summary(),
-                data.clock.drive_period()
             );
             (entries, summary, grid)
         }
@@ -260,7 +269,11 @@ fn measure(
     } else {
         prediction(system, grid)?
     };
-    Ok(Measured { compare, prediction })
+    Ok(Measured {
+        compare,
+        prediction,
+        from_measured: input.velocity_col.is_some(),
+    })
 }
 
 /// The valid prediction time of `system` on the record's grid (not resampled), or why there is
@@ -338,6 +351,9 @@ fn equations_section(r: &mut String, out: &Path, entry: &Entry) -> anyhow::Resul
                 report.basis.spec()
             )?;
             writeln!(r, "{}.\n", report.found)?;
+            if let Some(parameters) = &report.parameters {
+                tied_parameters(r, parameters, report.parameter_intervals.as_ref())?;
+            }
         }
         None => writeln!(r, "## The model: {}\n", entry.how)?,
     }
@@ -391,6 +407,41 @@ fn equations_section(r: &mut String, out: &Path, entry: &Entry) -> anyhow::Resul
              `hb_model::IdentifiedSystem::from_json` loads it).\n"
         )?;
     }
+    Ok(())
+}
+
+/// A tied fit's physical parameters (`--tie`), which every equation's coefficients below are
+/// made of.
+fn tied_parameters(
+    r: &mut String,
+    parameters: &[hb_solve::TiedParameter],
+    intervals: Option<&hb_solve::Bootstrap>,
+) -> anyhow::Result<()> {
+    writeln!(
+        r,
+        "### The tied parameters
+
+Shared by the equations (`--tie`): each equation's coefficients below are \
+         the spec's combinations of them, divided by its own acceleration's. Standard errors of the weighted \
+         stacked regression.\n"
+    )?;
+    writeln!(
+        r,
+        "| parameter | value | std. error | interval |\n| --- | --- | --- | --- |"
+    )?;
+    for p in parameters {
+        let interval = intervals
+            .and_then(|b| b.interval(&p.name))
+            .map_or("—".to_owned(), |i| {
+                format!("[{:.6e}, {:.6e}]", i.lower, i.upper)
+            });
+        writeln!(
+            r,
+            "| `{}` | {:.6e} | {:.2e} | {interval} |",
+            p.name, p.value, p.std_error
+        )?;
+    }
+    writeln!(r)?;
     Ok(())
 }
 
@@ -457,11 +508,18 @@ fn compare_section(
     entries: &[Entry],
     measured: &[Measured],
 ) -> anyhow::Result<()> {
+    // Every run starts alike: from the measured states when the record's velocities are read.
+    let from_measured = measured.iter().any(|m| m.from_measured);
+    let start = match from_measured {
+        true => {
+            "from each piece's first measured state (the angles and `--velocity-col`), every sample scored"
+        }
+        false => "from the state whose free run best matches the first samples of each piece (not scored)",
+    };
     writeln!(r, "## Free run against the record\n")?;
     writeln!(
         r,
-        "Each model run freely over the whole record as `hbid compare` runs it: from the state whose free run \
-         best matches the first samples of each piece (not scored), driven as `hbid compare` drives it (its own \
+        "Each model run freely over the whole record as `hbid compare` runs it: {start}, driven as `hbid compare` drives it (its own \
          periodic drive on the record's clock, or the record's measured drives), every coordinate at once; RMSE in the record's unit (shortest arcs on the circle), NRMSE (over the measured \
          coordinate's standard deviation) and fit % = 100 (1 − ‖y − ŷ‖ / ‖y − ȳ‖). A chaotic record is followed \
          for a few drive periods at best, so the scores over the whole record say little; the figures show the \
@@ -582,11 +640,18 @@ fn compare_section(
             add_figure(
                 figures,
                 name,
-                format!(
-                    "{coordinate}: the record (dots) and the free run of {} from the state fitted to its first {} \
-                     samples (after a gap, from each piece's own), over the first {SHOWN_PERIODS} drive periods.",
-                    entry.name, piece.init
-                ),
+                match from_measured {
+                    true => format!(
+                        "{coordinate}: the record (dots) and the free run of {} from its first measured state (after \
+                         a gap, from each piece's own), over the first {SHOWN_PERIODS} drive periods.",
+                        entry.name
+                    ),
+                    false => format!(
+                        "{coordinate}: the record (dots) and the free run of {} from the state fitted to its first {} \
+                         samples (after a gap, from each piece's own), over the first {SHOWN_PERIODS} drive periods.",
+                        entry.name, piece.init
+                    ),
+                },
             );
             let name = format!("residual_{}_{coordinate}.png", entry.name);
             let title = format!("{coordinate}: free run of {} less the record", entry.name);

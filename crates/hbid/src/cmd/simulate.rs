@@ -273,7 +273,8 @@ pub struct SimulateArgs {
     /// over the grid of the record --input, driven by its measured drive (--drive-col) or by the
     /// model's own drive on the record's clock; writes t,x,v at every sample of the record, piece
     /// by piece between gaps, each piece from the state whose free run best matches its first
-    /// --init samples (or from --x0, --v0 with --init 0); pieces no longer than --init are not run.
+    /// --init samples (or, with --init 0, from --x0, --v0 for a model of one coordinate, --q0, --dq0
+    /// for a system of several); pieces no longer than --init are not run.
     /// A record's first rows stamped before its logger settled to its rate are run at their own
     /// stamps, as `hbid compare` runs them. Takes no option of a built-in system.
     #[arg(long, value_name = "MODEL", requires = "input", help_heading = MODEL)]
