@@ -38,6 +38,14 @@ def refuse_non_real(values: Any, name: str) -> None:
         raise OptionsError(f"{name}: boolean values: give numbers")
 
 
+def flag(value: Any, name: str) -> bool:
+    """An option that is on or off: ``True`` or ``False`` (a numpy bool too), not a value that
+    Python would call true (``"no"``)."""
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    raise OptionsError(f"{name}: {value!r} is not True or False")
+
+
 def array(values: ArrayLike, name: str) -> np.ndarray:
     """``values`` as a contiguous one-dimensional ``float64`` array (borrowed by the extension)."""
     refuse_non_real(values, name)

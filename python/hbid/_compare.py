@@ -6,13 +6,14 @@ from __future__ import annotations
 
 import json
 import os
+import warnings
 from dataclasses import dataclass, field
 from typing import Any, Dict, Iterator, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
 from . import _hbid
-from ._common import ArrayLike, ColumnsLike, PathLike, column, columns, emit, numbers, options_json, signals
+from ._common import ArrayLike, ColumnsLike, HbidWarning, PathLike, column, columns, emit, flag, numbers, options_json, signals
 from ._model import Model
 from ._record import Record, _columns_by_name, source
 from .errors import OptionsError
@@ -82,12 +83,12 @@ class Comparison:
     ``hbid compare --json`` prints it (``report``)."""
 
     ranges: List[RangeScore]
-    runs: List[List[RunPiece]]
+    runs: List[List[RunPiece]] = field(repr=False)
     measured_drive: bool
     """Whether the model was driven by the record's measured drive."""
     notes: List[str]
-    report: Dict[str, Any]
-    json_text: str
+    report: Dict[str, Any] = field(repr=False)
+    json_text: str = field(repr=False)
     coordinates: List[str] = field(default_factory=list)
     """The coordinates of a system, in order; empty for a model of one."""
 
@@ -257,10 +258,10 @@ def compare(
         dt=dt,
         drive_col=columns(drive_col, "drive_col"),
         velocity_col=columns(velocity_col, "velocity_col"),
-        repair=bool(repair),
-        no_repair=bool(no_repair),
+        repair=flag(repair, "repair"),
+        no_repair=flag(no_repair, "no_repair"),
         bridge_gaps=bridge_gaps,
-        skip_missing=bool(skip_missing),
+        skip_missing=flag(skip_missing, "skip_missing"),
         signal=signals(signal),
         measured=measured,
         angle_unit=angle_unit,
@@ -269,7 +270,7 @@ def compare(
         x0=numbers(x0, "x0"),
         v0=numbers(v0, "v0"),
         rtol=rtol,
-        skip_unsettled=bool(skip_unsettled),
+        skip_unsettled=flag(skip_unsettled, "skip_unsettled"),
     )
     if isinstance(drive, Mapping):
         # By the model's names, checked as Model.simulate checks them (a name the model does not
@@ -280,6 +281,14 @@ def compare(
         x = _columns_by_name(x, options.get("coords"), "x", "coords")
         if isinstance(x, Mapping):
             options.pop("coords", None)
+    if isinstance(x, Record) and x.lead_rows > 0:
+        warnings.warn(
+            f"the Record leaves out its file's first {x.lead_rows} rows (stamped before the logger settled to its "
+            "rate): the ranges count from its grid's first sample; compare the file itself to run from row 0 "
+            "through them, as the command line does",
+            HbidWarning,
+            stacklevel=2,
+        )
     samples = source(_in_order(x, saved), t, drive, options, COMPARE_DEFAULTS)
     if saved.is_system:
         if isinstance(x, Record):
@@ -374,8 +383,8 @@ def run_model(
         dt=dt,
         drive_col=columns(drive_col, "drive_col"),
         init=None if given else init,
-        skip_missing=bool(skip_missing),
-        repair=bool(repair),
+        skip_missing=flag(skip_missing, "skip_missing"),
+        repair=flag(repair, "repair"),
         x0=numbers(x0, "x0") if given else None,
         v0=numbers(v0, "v0") if given else None,
         rtol=rtol,

@@ -18,6 +18,7 @@ from ._common import (
     PathLike,
     column,
     columns,
+    flag,
     drive_value,
     emit,
     options_json,
@@ -25,7 +26,7 @@ from ._common import (
     signals,
 )
 from ._equation import DroppedTerm, Equation, Selection, SelectionStep, equation_text, flattened
-from ._record import source
+from ._record import Record, source
 from ._model import Model
 from .errors import OptionsError
 
@@ -443,8 +444,9 @@ def identify(
         drive_col: a file's column of the measured drive p(t): terms in ``p`` (``p``,
             ``p*cos(x)``, ``p*x'``) are balanced by the weak form as measured; several drives as
             a list (or a dict of names to columns), named in terms by their names.
-        velocity_col: a file's columns of the coordinates' measured velocities, one per
-            coordinate (read with the record; :func:`compare` starts its runs from them).
+        velocity_col: refused, as the command line refuses it: the fit reads no velocities
+            (they start :func:`compare`'s runs; a :class:`Record` read with them is identified
+            without them).
         repair: replace isolated time-stamp glitches and every spike.
         no_repair: keep every spike (a warning) instead of replacing those larger than the
             record's own steps when they are few (at most one in 1000 samples, the default).
@@ -528,6 +530,8 @@ def identify(
         OptionsError: a bad argument (a term naming a coordinate the record does not have, ...).
         IdentificationError: too few segments, a rank-deficient system, a drive that cannot be
             estimated.
+        OutputError: ``save_model`` in a folder that does not exist, or a folder (checked before
+            any work).
     """
     options: Dict[str, Any] = dict(
         time_col=column(time_col, "time_col"),
@@ -536,10 +540,10 @@ def identify(
         dt=None if dt is None else float(dt),
         drive_col=columns(drive_col, "drive_col"),
         velocity_col=columns(velocity_col, "velocity_col"),
-        repair=bool(repair),
-        no_repair=bool(no_repair),
+        repair=flag(repair, "repair"),
+        no_repair=flag(no_repair, "no_repair"),
         bridge_gaps=bridge_gaps,
-        skip_missing=bool(skip_missing),
+        skip_missing=flag(skip_missing, "skip_missing"),
         signal=signals(signal),
         measured=measured,
         angle_unit=angle_unit,
@@ -562,12 +566,12 @@ def identify(
         dim=dim,
         delay=delay,
         forcing=forcing,
-        no_parametric=bool(no_parametric),
+        no_parametric=flag(no_parametric, "no_parametric"),
         drive_harmonics=drive_harmonics,
         terms=_terms(terms),
         select_folds=select_folds,
         select_tolerance=select_tolerance,
-        refine=bool(refine),
+        refine=flag(refine, "refine"),
         refine_init=refine_init,
         tie=_tie(tie),
         stream=True if stream else (False if no_stream else None),
@@ -582,6 +586,14 @@ def identify(
     for name in ("drive_period", "drive_frequency"):
         options[name] = drive_value(options[name], name)
     samples = source(x, t, drive, options, RECORD_DEFAULTS, several_files=True)
+    if isinstance(x, Record):
+        # A Record read with its velocities (for a comparison's start) is identified without
+        # them: the fit reads none.
+        options.pop("velocity_col", None)
+        samples.pop("velocity", None)
+    if save_model is not None:
+        # Before the work, as the command line checks it.
+        _hbid.check_output(os.fspath(save_model))
     d = _hbid.identify(options_json(options), **samples)
     result = Identification._from(d, emit(d["notes"]))
     if save_model is not None:

@@ -290,6 +290,11 @@ class Model:
                 raise OptionsError("drive: a measured drive is given at times: give t= with it")
             if samples is None:
                 raise OptionsError("give samples= (on the record's grid) or the times t=")
+            if self._info["drives"]:
+                raise OptionsError(
+                    f"drive: the model has terms in the measured drive {', '.join(self._info['drives'])}: "
+                    "give its samples at the times t= (drive=...)"
+                )
             (start,) = _one_state(x0, 0.1, "x0")
             (speed,) = _one_state(v0, 0.0, "v0")
             return _hbid.model_simulate(
@@ -357,7 +362,7 @@ class Model:
 
     def save(self, path: PathLike) -> None:
         """Saves the model: JSON if the name ends in ``.json``, compact binary otherwise (written
-        to a temporary file and renamed into place)."""
+        to a temporary file and renamed into place; ``OutputError`` if it cannot be)."""
         _hbid.model_save(self._bytes, os.fspath(path))
 
     @classmethod

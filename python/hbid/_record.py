@@ -10,7 +10,7 @@ from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 import numpy as np
 
 from . import _hbid
-from ._common import ArrayLike, ColumnsLike, PathLike, array, column, columns, emit, options_json, refuse_non_real, signals
+from ._common import ArrayLike, ColumnsLike, PathLike, array, column, columns, emit, flag, options_json, refuse_non_real, signals
 from .errors import OptionsError
 
 
@@ -65,6 +65,10 @@ class Record:
     columns: Dict[str, Any] = field(default_factory=dict, repr=False)
     """The options that named its columns (``coords``, ``drive_col``, ``velocity_col``), as it
     was read: an identification of the record names them in its saved model."""
+    lead_rows: int = 0
+    """The file's first rows left out of the grid because a logger stamped them before it
+    settled to its rate (a note says so). :func:`compare` of the file runs through them from row
+    0; of this Record it starts at the grid's first sample, and warns."""
 
     @property
     def t(self) -> np.ndarray:
@@ -116,8 +120,18 @@ def _record(d: Any, options: Mapping[str, Any], path: Optional[str] = None) -> R
     by_coordinate: Dict[str, List[Tuple[int, float, bool]]] = {name: [] for name in names}
     for i, size, replaced, c in d["spikes"]:
         by_coordinate[names[c]].append((int(i), float(size), bool(replaced)))
+    drives = dict(zip(d["drive_names"], d["drives"]))
+    drive = d["drive"]
+    # One array per series: the first coordinate's (and a lone drive's) under both names, so that
+    # an edit of either is the record's.
+    if names:
+        x = coordinates[names[0]]
+    else:
+        x = d["x"]
+    if drive is not None and len(drives) == 1:
+        drive = next(iter(drives.values()))
     return Record(
-        x=d["x"],
+        x=x,
         t0=d["t0"],
         dt=d["dt"],
         pieces=[tuple(p) for p in d["pieces"]],
@@ -128,13 +142,14 @@ def _record(d: Any, options: Mapping[str, Any], path: Optional[str] = None) -> R
         notes=emit(d["notes"], stacklevel=4),
         time_repairs=[tuple(r) for r in d["time_repairs"]],
         spikes=spikes,
-        drive=d["drive"],
+        drive=drive,
         path=path,
         positions=coordinates,
-        drives=dict(zip(d["drive_names"], d["drives"])),
+        drives=drives,
         velocities=dict(zip(names, d["velocities"])),
         spikes_by_coordinate=by_coordinate,
         columns={name: options[name] for name in ("coords", "drive_col", "velocity_col") if options.get(name) is not None},
+        lead_rows=int(d.get("lead_rows", 0)),
     )
 
 
@@ -219,10 +234,10 @@ def read(
         drive_col=columns(drive_col, "drive_col"),
         velocity_col=columns(velocity_col, "velocity_col"),
         dt=None if dt is None else float(dt),
-        repair=bool(repair),
-        no_repair=bool(no_repair),
+        repair=flag(repair, "repair"),
+        no_repair=flag(no_repair, "no_repair"),
         bridge_gaps=bridge_gaps,
-        skip_missing=bool(skip_missing),
+        skip_missing=flag(skip_missing, "skip_missing"),
         signal=signals(signal),
         measured=measured,
         angle_unit=angle_unit,

@@ -244,6 +244,26 @@ def test_drives_by_name_from_arrays():
     np.testing.assert_array_equal(same["x2"], run["x2"])
 
 
+def test_one_coordinate_under_two_named_drives(tmp_path):
+    """One coordinate under two measured drives by name (the pendulum's shaker ``u`` and a
+    series ``w`` it does not feel): identified, saved and loaded as the system it is, compared
+    and run under the drives by name."""
+    sim = hbid.simulate(samples=3000, write_drive=True)
+    t, x, v = sim
+    drive = {"u": sim.drive, "w": np.cos(t)}
+    result = hbid.identify(x, t=t, drive=drive, bootstrap=0)
+    assert result.coefficients["u*cos(x)"] == pytest.approx(-1.0, abs=1e-6)
+    assert abs(result.coefficients["w*cos(x)"]) < 1e-6
+    result.model.save(tmp_path / "two.json")
+    model = hbid.Model.load(tmp_path / "two.json")
+    assert model.drives == ["u", "w"]
+    c = hbid.compare(model, x, t=t, drive={"w": drive["w"], "u": drive["u"]}, range=(0, 100))
+    assert c.ranges[0].rmse < 1e-3
+    run = model.simulate(t=t[:50], drive={"u": drive["u"][:50], "w": drive["w"][:50]}, x0=[x[0]], v0=[v[0]])
+    _, run_x, _ = run
+    assert np.abs(wrap(run_x - x[:50])).max() < 1e-3
+
+
 def test_compare_pairs_the_records_columns_with_the_model_by_name():
     """The robot arm's joints and torques given in the reverse order (a dict, an array named by
     ``coords`` and ``drive_col``, a Record read so) score as in the model's order; an array's

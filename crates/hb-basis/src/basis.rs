@@ -227,6 +227,7 @@ impl Harmonic {
                 min: 1,
             });
         }
+        at_most("harmonic order K", order, crate::MAX_FUNCTIONS / 2)?;
         Ok(Self { order })
     }
 
@@ -299,6 +300,14 @@ impl Basis for Harmonic {
 
 // ---------------------------------------------------------------------------------------------
 
+/// `value` of the size parameter `name`, refused beyond `max`.
+fn at_most(name: &'static str, value: usize, max: usize) -> Result<(), BasisError> {
+    match value > max {
+        true => Err(BasisError::TooLarge { name, value, max }),
+        false => Ok(()),
+    }
+}
+
 /// Periodic linear-interpolation ("hat") basis on the circle (paper section 4.2.2).
 ///
 /// `N` nodes evenly over `[−π, π)`, node `i` at `x_i = −π + 2π i / N`, spacing `d = 2π / N`.
@@ -339,6 +348,7 @@ impl Hat {
                 min: 3,
             });
         }
+        at_most("number of hat nodes N", nodes, crate::MAX_FUNCTIONS)?;
         Ok(Self { nodes })
     }
 
@@ -553,6 +563,7 @@ impl Polynomial {
                 min: 1,
             });
         }
+        at_most("polynomial degree", degree, crate::MAX_FUNCTIONS)?;
         Ok(Self { degree })
     }
 

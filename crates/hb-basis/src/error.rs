@@ -12,6 +12,20 @@ pub enum BasisError {
         /// The smallest accepted value.
         min: usize,
     },
+    /// A size parameter is beyond what a least-squares fit of a record can determine
+    /// ([`crate::MAX_FUNCTIONS`] functions).
+    #[error(
+        "invalid {name}: {value} (at most {max}: a basis of more than {} functions is more unknowns than a fit determines)",
+        crate::MAX_FUNCTIONS
+    )]
+    TooLarge {
+        /// The parameter's name.
+        name: &'static str,
+        /// The value given.
+        value: usize,
+        /// The largest accepted value.
+        max: usize,
+    },
     /// A slice does not have the length the operation needs.
     #[error("{what} has {found} elements but {expected} are needed")]
     LengthMismatch {

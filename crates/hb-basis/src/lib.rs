@@ -49,6 +49,11 @@ mod error;
 mod fourier;
 
 pub use basis::{Basis, BasisKind, Domain, Harmonic, Hat, Polynomial};
+
+/// The most functions a basis may have (`2K` harmonics, `N` hats, `D` monomials): each is an
+/// unknown of the least squares, and a record determines a few dozen, not thousands. A size
+/// beyond it is refused when the basis is made (and read), not met as memory the fit cannot have.
+pub const MAX_FUNCTIONS: usize = 4096;
 pub use error::BasisError;
 pub use fourier::{
     Complex64, FourierPlan, FourierPlanner, Spectrum, coefficients_from_bin, fourier_coefficients,

@@ -549,21 +549,29 @@ impl<B: Basis + Clone + Serialize> IdentifiedSystem<B> {
         })
     }
 
-    /// Pretty JSON: a system of one coordinate as its model ([`IdentifiedModel::to_json`],
-    /// format 4), a system of several as `{"format": "hbid-model", "version": 5,
+    /// Whether the system is saved as its one model (format 4): one coordinate in the names of
+    /// one (`x`, and at most the drive `p`), which that format keeps no names for. One
+    /// coordinate with drives of other names (two measured drives, `u` and `w`) is saved as a
+    /// system.
+    fn is_one_model(&self) -> bool {
+        self.equations.len() == 1 && self.names == Names::default()
+    }
+
+    /// Pretty JSON: a system of one coordinate in the names of one as its model
+    /// ([`IdentifiedModel::to_json`], format 4), any other system as `{"format": "hbid-model", "version": 5,
     /// "coordinates": [..], "domains": [..], "drives": [..], "equations": [{"coordinate": ..,
     /// "basis": .., "terms": [..], "forcing_frequency": .., "coefficients": {..}, "fit": ..}]}`.
     pub fn to_json(&self) -> Result<String, ModelError> {
-        if self.equations.len() == 1 {
+        if self.is_one_model() {
             return self.equations[0].to_json();
         }
         Ok(serde_json::to_string_pretty(&self.record()?)?)
     }
 
     /// Compact binary: [`MODEL_MAGIC`], the version as a little-endian `u32`, then postcard (a
-    /// system of one coordinate as its model).
+    /// system of one coordinate in the names of one as its model).
     pub fn to_bytes(&self) -> Result<Vec<u8>, ModelError> {
-        if self.equations.len() == 1 {
+        if self.is_one_model() {
             return self.equations[0].to_bytes();
         }
         let mut out = MODEL_MAGIC.to_vec();

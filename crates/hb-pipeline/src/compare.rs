@@ -608,7 +608,11 @@ pub fn compare(
     observer: &mut dyn Observer,
 ) -> Result<CompareReport, RunError> {
     match system.equations() {
-        [model] => compare_one(model, source, request, observer),
+        // One coordinate in the names of one (`x`, the drive `p`); one with drives of their own
+        // names (two measured drives) is run as the system it is.
+        [model] if *system.names() == hb_model::Names::default() => {
+            compare_one(model, source, request, observer)
+        }
         _ => compare_system(system, source, request, observer),
     }
 }
@@ -920,8 +924,9 @@ fn compare_system(
         .into());
     }
     // The system's own columns, each under the name its terms give it.
-    // What reads one coordinate's record is refused, not ignored.
-    if o.angle_col.is_some() {
+    // What reads one coordinate's record is refused, not ignored (a system of one coordinate
+    // reads its angle's column from «angle_col» too).
+    if o.angle_col.is_some() && (n > 1 || o.coords.is_some()) {
         return Err(OptionError::new(
             "angle_col",
             format!(
@@ -949,9 +954,10 @@ fn compare_system(
             .parse::<ColumnList>()
             .map_err(|e| OptionError::new("coords", e))
     };
-    let coords = match &o.coords {
-        Some(c) => c.clone(),
-        None => as_columns(names.coordinates(), &columns.coordinates)?,
+    let coords = match (&o.coords, &o.angle_col) {
+        (Some(c), _) => c.clone(),
+        (None, Some(angle)) => as_columns(names.coordinates(), std::slice::from_ref(angle))?,
+        (None, None) => as_columns(names.coordinates(), &columns.coordinates)?,
     };
     if coords.len() != n {
         return Err(OptionError::value(
@@ -965,7 +971,17 @@ fn compare_system(
         .into());
     }
     // The system's coordinate each of the record's is, by its name when it has the system's.
-    let (coords, coordinate_of) = placed("coords", "coordinates", &coords, names.coordinates())?;
+    // One coordinate saved without its column (identified from the record's default angle
+    // column) is read from the record's default column again.
+    let default_angle =
+        n == 1 && o.coords.is_none() && o.angle_col.is_none() && columns.coordinates == names.coordinates();
+    let (coords, coordinate_of) = match default_angle {
+        true => (None, vec![0]),
+        false => {
+            let (coords, of) = placed("coords", "coordinates", &coords, names.coordinates())?;
+            (Some(coords), of)
+        }
+    };
     let velocity_col = match &o.velocity_col {
         Some(v) => Some(velocities_in_record_order(
             v,
@@ -1011,7 +1027,7 @@ fn compare_system(
     let record = RecordOptions {
         time_col: o.time_col.clone(),
         angle_col: None,
-        coords: Some(coords),
+        coords,
         dt: o.dt,
         drive_col,
         repair: o.repair,
@@ -1036,7 +1052,7 @@ fn compare_system(
         && (o.coords.is_none() || o.drive_col.is_none() && drives_needed)
         && let Some(header) = hb_record::input::Header::of(path)
     {
-        if o.coords.is_none() {
+        if o.coords.is_none() && !default_angle {
             saved_columns_named_elsewhere(&header, &record, names, &columns, false)?;
         }
         if o.drive_col.is_none() && drives_needed {
@@ -1800,7 +1816,9 @@ pub fn run_system_on_times(
             return Err(OptionError::value(name, bad, "the initial state must be finite").into());
         }
     }
-    if let [model] = system.equations() {
+    if let [model] = system.equations()
+        && *system.names() == hb_model::Names::default()
+    {
         let drive = match drives {
             [] => None,
             [p] => Some(*p),

@@ -1701,6 +1701,9 @@ pub fn simulate(rig: &Rig, observer: &mut dyn Observer) -> Result<Simulation, Ru
     let samples = rig.config.samples();
     let coordinates = rig.coordinates();
     let counts = rig.writes_counts();
+    // The memory of every column (times, positions, velocities, a drive, what is kept) asked
+    // for first: a record too long for it is an error, not an abort.
+    pendulum_sim::reserve_series(2 * coordinates + 3, samples)?;
     let mut t = Vec::with_capacity(samples);
     let mut reported: Vec<Reported> = (0..coordinates)
         .map(|_| {

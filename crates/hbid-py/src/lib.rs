@@ -31,7 +31,8 @@ use pyo3::prelude::*;
 use errors::{Kind, raise};
 
 /// The samples of a one-dimensional array, borrowed: the Python side passes contiguous `float64`
-/// arrays (`numpy.ascontiguousarray`), so nothing is copied.
+/// arrays (`numpy.ascontiguousarray`). Callers copy them before the interpreter's lock is
+/// released, so that no other thread writes to what the work reads.
 fn slice<'a>(array: &'a PyReadonlyArray1<'_, f64>) -> PyResult<&'a [f64]> {
     array.as_slice().map_err(|_| {
         raise(
@@ -59,6 +60,7 @@ fn _hbid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(model::model_json, m)?)?;
     m.add_function(wrap_pyfunction!(model::model_from_json, m)?)?;
     m.add_function(wrap_pyfunction!(model::model_save, m)?)?;
+    m.add_function(wrap_pyfunction!(model::check_output, m)?)?;
     m.add_function(wrap_pyfunction!(model::model_load, m)?)?;
     m.add_function(wrap_pyfunction!(model::model_simulate, m)?)?;
     m.add_function(wrap_pyfunction!(bench::rayon_sweep, m)?)?;

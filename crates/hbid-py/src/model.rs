@@ -134,10 +134,22 @@ pub fn model_save(py: Python<'_>, model: &[u8], path: PathBuf) -> PyResult<()> {
     py.detach(|| hb_pipeline::output::write_atomically(&path, |w: &mut dyn Write| w.write_all(&bytes)))
         .map_err(|e| {
             crate::errors::raise(
-                Kind::Model,
+                Kind::Output,
                 format!("{}: {}", path.display(), crate::errors::chain(&e)),
             )
         })
+}
+
+/// That a result can be written at `path` (its folder exists, it is not a folder), checked
+/// before any work: `OutputError` otherwise.
+#[pyfunction]
+pub fn check_output(path: PathBuf) -> PyResult<()> {
+    hb_pipeline::output::check_output_path(&path).map_err(|e| {
+        crate::errors::raise(
+            Kind::Output,
+            format!("{}: {}", path.display(), crate::errors::chain(&e)),
+        )
+    })
 }
 
 /// Loads a model saved by `model_save` or `hbid identify --save-model` (JSON or binary; a model

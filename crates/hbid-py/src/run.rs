@@ -36,34 +36,36 @@ pub struct Grid(
 type Arrays<'py> = Option<Vec<PyReadonlyArray1<'py, f64>>>;
 
 /// The samples of a request, as Python passes them: paths, arrays, or a record on its grid.
-struct Samples<'a> {
+struct Samples {
     paths: Vec<PathBuf>,
     /// One series per coordinate.
-    x: Vec<&'a [f64]>,
-    t: Option<&'a [f64]>,
+    x: Vec<Vec<f64>>,
+    t: Option<Vec<f64>>,
     /// One series per measured drive.
-    drives: Vec<&'a [f64]>,
+    drives: Vec<Vec<f64>>,
     /// One series per coordinate's measured velocity (a record on its grid only).
-    velocities: Vec<&'a [f64]>,
+    velocities: Vec<Vec<f64>>,
     grid: Option<Grid>,
 }
 
-impl<'a> Samples<'a> {
-    /// The samples of a function's `path`, `x`, `t`, `drive`, `velocity` and `grid` arguments.
+impl Samples {
+    /// The samples of a function's `path`, `x`, `t`, `drive`, `velocity` and `grid` arguments,
+    /// copied while the interpreter's lock is held: the work runs without it, and another thread
+    /// may write to the arrays meanwhile.
     fn new(
         paths: Vec<PathBuf>,
-        x: &'a Arrays<'_>,
-        t: &'a Option<PyReadonlyArray1<'_, f64>>,
-        drive: &'a Arrays<'_>,
-        velocity: &'a Arrays<'_>,
+        x: &Arrays<'_>,
+        t: &Option<PyReadonlyArray1<'_, f64>>,
+        drive: &Arrays<'_>,
+        velocity: &Arrays<'_>,
         grid: Option<Grid>,
     ) -> PyResult<Self> {
         Ok(Self {
             paths,
-            x: slices(x)?,
-            t: optional(t)?,
-            drives: slices(drive)?,
-            velocities: slices(velocity)?,
+            x: copies(x)?,
+            t: optional(t)?.map(<[f64]>::to_vec),
+            drives: copies(drive)?,
+            velocities: copies(velocity)?,
             grid,
         })
     }
@@ -98,9 +100,9 @@ impl<'a> Samples<'a> {
                 "give a path, or the samples x (with t, dt or a record's grid)",
             )),
             (coords, None) => Ok(Source::Arrays {
-                coords: coords.to_vec(),
-                t: self.t,
-                drives: self.drives.clone(),
+                coords: coords.iter().map(Vec::as_slice).collect(),
+                t: self.t.as_deref(),
+                drives: self.drives.iter().map(Vec::as_slice).collect(),
             }),
             ([x, others @ ..], Some(Grid(t0, dt, pieces, signal, bridged))) => {
                 let pieces: Vec<Range<usize>> = pieces.iter().map(|&(a, b)| a..b).collect();
@@ -150,19 +152,19 @@ impl<'a> Samples<'a> {
                 Ok(Source::Grid(GridData {
                     t0: *t0,
                     dt: *dt,
-                    x: x.to_vec(),
+                    x: x.clone(),
                     pieces,
                     domain: signals.first(),
                     others: others
                         .iter()
                         .enumerate()
                         .map(|(i, o)| Channel {
-                            x: o.to_vec(),
+                            x: o.clone(),
                             domain: signals.of(i + 1),
                         })
                         .collect(),
-                    drives: self.drives.iter().map(|d| d.to_vec()).collect(),
-                    velocities: self.velocities.iter().map(|v| v.to_vec()).collect(),
+                    drives: self.drives.clone(),
+                    velocities: self.velocities.clone(),
                     bridged,
                     notes: Vec::new(),
                     lead_in: None,
@@ -182,12 +184,12 @@ impl<'a> Samples<'a> {
     }
 }
 
-/// The borrowed samples of optional arrays.
-fn slices<'a>(arrays: &'a Arrays<'_>) -> PyResult<Vec<&'a [f64]>> {
+/// The samples of optional arrays, copied.
+fn copies(arrays: &Arrays<'_>) -> PyResult<Vec<Vec<f64>>> {
     arrays
         .iter()
         .flatten()
-        .map(crate::slice)
+        .map(|a| crate::slice(a).map(<[f64]>::to_vec))
         .collect::<PyResult<Vec<_>>>()
 }
 
@@ -273,6 +275,7 @@ pub fn condition<'py>(
     out.set_item("measured", record.measured.to_string())?;
     out.set_item("repaired", record.repair)?;
     out.set_item("notes", notice_texts(&notices.0))?;
+    out.set_item("lead_rows", grid.lead_in.as_ref().map_or(0, |l| l.t.len()))?;
     out.set_item("time_repairs", time_repairs)?;
     out.set_item("spikes", spikes)?;
     out.set_item("names", names.coordinates())?;
@@ -531,10 +534,12 @@ pub fn model_run_on<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let rtol = rtol.unwrap_or(pendulum_sim::Tolerances::DEFAULT_RTOL);
     let system = hb_model::IdentifiedSystem::from_bytes(model).map_err(|e| raise(Kind::Model, e))?;
-    let times = crate::slice(&t)?;
-    let drives = slices(&drive)?;
+    // Copied under the interpreter's lock, as every function's samples are.
+    let times = crate::slice(&t)?.to_vec();
+    let drives = copies(&drive)?;
+    let drives: Vec<&[f64]> = drives.iter().map(Vec::as_slice).collect();
     let run = py
-        .detach(|| hb_pipeline::run_system_on_times(&system, times, &drives, &x0, &v0, rtol))
+        .detach(|| hb_pipeline::run_system_on_times(&system, &times, &drives, &x0, &v0, rtol))
         .map_err(run_error)?;
     let out = PyDict::new(py);
     run_columns(py, &run, &out)?;

@@ -966,3 +966,70 @@ fn a_systems_columns_are_paired_with_the_model_by_name() {
         assert_clean_failure(&hbid(&args), mentions);
     }
 }
+
+/// One coordinate under two measured drives of their own names: the model is saved as the
+/// system it is (the one-model format has no names for them), read back, compared and run under
+/// the record's drives by name.
+#[test]
+fn one_coordinate_under_two_named_drives_is_saved_compared_and_run() {
+    let dir = scratch("two-drives");
+    let base = dir.join("base.csv");
+    ok(&[
+        "simulate",
+        "--samples",
+        "3000",
+        "--write-drive",
+        "--out",
+        s(&base),
+    ]);
+    // The shaker's drive as `u`, and a second measured series `w` the pendulum does not feel.
+    let text = std::fs::read_to_string(&base).unwrap();
+    let mut lines = text.lines();
+    lines.next();
+    let mut record = "t,theta,omega,u,w\n".to_owned();
+    for line in lines {
+        let t: f64 = line.split(',').next().unwrap().parse().unwrap();
+        record.push_str(&format!("{line},{}\n", t.cos()));
+    }
+    let path = dir.join("two.csv");
+    std::fs::write(&path, record).unwrap();
+    let model = dir.join("model.json");
+    ok(&[
+        "identify",
+        s(&path),
+        "--drive-col",
+        "u,w",
+        "--bootstrap",
+        "0",
+        "--save-model",
+        s(&model),
+    ]);
+    let saved: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&model).unwrap()).unwrap();
+    assert_eq!(saved["drives"], serde_json::json!(["u", "w"]), "{saved}");
+    let rmse = |extra: &[&str]| -> f64 {
+        let mut args = vec!["compare", s(&model), s(&path), "--range", "0..100", "--json"];
+        args.extend_from_slice(extra);
+        json(&ok(&args))["ranges"][0]["rmse"].as_f64().unwrap()
+    };
+    // The record's own columns by default, or named; the drives by name in any order.
+    let by_default = rmse(&[]);
+    assert!(by_default < 1e-3, "{by_default}");
+    assert_eq!(rmse(&["--angle-col", "theta", "--drive-col", "w,u"]), by_default);
+    assert_clean_failure(
+        &hbid(&["compare", s(&model), s(&path), "--drive-col", "u"]),
+        "--drive-col u: the system reads 2 drive(s) (u, w)",
+    );
+    let run = dir.join("run.csv");
+    ok(&[
+        "simulate",
+        "--model",
+        s(&model),
+        "--input",
+        s(&path),
+        "--out",
+        s(&run),
+    ]);
+    let rows = std::fs::read_to_string(&run).unwrap();
+    assert!(rows.starts_with("t,x,"), "{}", &rows[..20]);
+    assert_eq!(rows.lines().count(), 3001);
+}

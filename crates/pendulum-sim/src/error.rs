@@ -63,6 +63,37 @@ pub enum SimError {
         /// Time reached.
         t: f64,
     },
+    /// A trajectory kept in memory that the memory cannot hold.
+    #[error(
+        "{samples} samples of {series} series ({:.3e} GiB) cannot be held in memory: simulate fewer, or \
+         write them as they are made",
+        *.samples as f64 * *.series as f64 * 8.0 / (1u64 << 30) as f64
+    )]
+    TooLarge {
+        /// Samples asked for.
+        samples: usize,
+        /// Series of them kept (times, positions, velocities).
+        series: usize,
+    },
+}
+
+/// `series` empty series with room for `samples` values each, or [`SimError::TooLarge`] when the
+/// memory cannot be had: an allocation that fails aborts the process, a reservation that fails
+/// is an error.
+pub fn reserve_series(series: usize, samples: usize) -> Result<Vec<Vec<f64>>, SimError> {
+    let too_large = || SimError::TooLarge { samples, series };
+    // All of them at once first: each alone could be had where all cannot.
+    let total = samples.checked_mul(series).ok_or_else(too_large)?;
+    Vec::<f64>::new()
+        .try_reserve_exact(total)
+        .map_err(|_| too_large())?;
+    (0..series)
+        .map(|_| {
+            let mut v = Vec::new();
+            v.try_reserve_exact(samples).map_err(|_| too_large())?;
+            Ok(v)
+        })
+        .collect()
 }
 
 /// An [`SimError::InvalidParameter`].

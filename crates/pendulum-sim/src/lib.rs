@@ -123,7 +123,7 @@ pub use coupled_duffing::{BaseAcceleration, CoupledDuffing};
 pub use dop853::{Dop853, OdeSystem, Stats, Tolerances};
 pub use double_pendulum::DoublePendulum;
 pub use equations::NormalisedEquation;
-pub use error::SimError;
+pub use error::{SimError, reserve_series};
 pub use frame::{InFrame, RecordFrame};
 pub use free_run::{FreeRun, InitialState, fit_initial_state, free_run, free_run_reporting};
 pub use machine::{DriveHarmonic, DriveHarmonics, Losses};

@@ -337,12 +337,12 @@ pub struct MultiTrajectory {
 }
 
 impl MultiTrajectory {
-    fn with_capacity(n: usize, samples: usize) -> Self {
-        Self {
-            t: Vec::with_capacity(samples),
-            q: vec![Vec::with_capacity(samples); n],
-            v: vec![Vec::with_capacity(samples); n],
-        }
+    fn with_capacity(n: usize, samples: usize) -> Result<Self, SimError> {
+        let mut series = crate::reserve_series(1 + 2 * n, samples)?;
+        let v = series.split_off(1 + n);
+        let q = series.split_off(1);
+        let t = series.pop().expect("the times");
+        Ok(Self { t, q, v })
     }
 
     /// Number of coordinates.
@@ -419,7 +419,7 @@ pub fn simulate_with_progress<S: MultiSystem + ?Sized>(
         let system: &dyn MultiSystem = &system;
         matching_coordinates(system, &config.initial)?
     };
-    let mut traj = MultiTrajectory::with_capacity(n, config.sampling.samples());
+    let mut traj = MultiTrajectory::with_capacity(n, config.sampling.samples())?;
     simulate_each(system, config, progress, |_, t, q, v| {
         traj.t.push(t);
         for c in 0..n {

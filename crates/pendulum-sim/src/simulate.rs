@@ -391,11 +391,10 @@ pub fn simulate_with_progress<S: SecondOrderSystem>(
     config: &SimulationConfig,
     progress: impl FnMut(usize, usize),
 ) -> Result<Trajectory, SimError> {
-    let mut traj = Trajectory {
-        t: Vec::with_capacity(config.samples),
-        theta: Vec::with_capacity(config.samples),
-        omega: Vec::with_capacity(config.samples),
-    };
+    let [t, theta, omega]: [Vec<f64>; 3] = crate::reserve_series(3, config.samples)?
+        .try_into()
+        .expect("three series");
+    let mut traj = Trajectory { t, theta, omega };
     simulate_each(system, config, progress, |_, t, theta, omega| {
         traj.t.push(t);
         traj.theta.push(theta);

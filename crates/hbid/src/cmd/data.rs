@@ -59,7 +59,8 @@ pub struct InputArgs {
     pub repair: bool,
     /// The coordinates' measured velocities (a motor driver's, a tachometer's): columns of the
     /// record, one per coordinate in their order (NAME=COLUMN names one). `compare` starts each
-    /// free run from the first sample's measured state, every sample scored (unless --init says otherwise).
+    /// free run from the first sample's measured state, every sample scored (unless --init says otherwise);
+    /// so does `report`. `identify` refuses it: the fit reads no velocities.
     #[arg(long, value_name = "NAME|N[,..]")]
     pub velocity_col: Option<ColumnList>,
     /// Keep every isolated spike in the record (warned of) instead of replacing them by the local
