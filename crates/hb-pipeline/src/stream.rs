@@ -727,7 +727,14 @@ impl Merged {
             });
             match slot {
                 Some((_, _, all)) => all.extend(mine),
-                None => self.spikes.push((column, note.clone(), mine)),
+                None => {
+                    // Indexed on the record's grid now: named by its times.
+                    let mut note = note.clone();
+                    if let Note::Spikes { grid, .. } = &mut note {
+                        *grid = Some(record);
+                    }
+                    self.spikes.push((column, note, mine));
+                }
             }
         }
     }
@@ -740,6 +747,7 @@ impl Merged {
                 repaired,
                 domain,
                 policy,
+                grid,
                 ..
             } = note
             else {
@@ -751,6 +759,7 @@ impl Merged {
                 repaired,
                 domain,
                 policy,
+                grid,
             };
             observer.notice(&match column {
                 Some(column) => Notice::Column { column, note },

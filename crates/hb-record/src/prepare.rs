@@ -241,6 +241,10 @@ pub enum Note {
         domain: Domain,
         /// The policy they were met with: [`SpikePolicy::Repair`] when repairs were asked for.
         policy: SpikePolicy,
+        /// The grid's first time and step, when known: each spike is then named by its time
+        /// too (a sample's index counts on the grid, which a logger's first rows or a gap do
+        /// not keep in step with the file's rows).
+        grid: Option<(f64, f64)>,
     },
 }
 
@@ -254,6 +258,7 @@ impl Note {
                 repaired,
                 domain,
                 policy,
+                grid,
                 ..
             } => Note::Spikes {
                 coordinate,
@@ -261,6 +266,7 @@ impl Note {
                 repaired: *repaired,
                 domain: *domain,
                 policy: *policy,
+                grid: *grid,
             },
             other => other.clone(),
         }
@@ -379,6 +385,7 @@ impl fmt::Display for Note {
                 repaired,
                 domain,
                 policy,
+                grid,
             } => {
                 if *coordinate > 0 {
                     write!(f, "coordinate {}: ", coordinate + 1)?;
@@ -386,7 +393,15 @@ impl fmt::Display for Note {
                 let list: Vec<String> = found
                     .iter()
                     .take(5)
-                    .map(|s| format!("sample {} ({})", s.index + 1, signed_size(s.size)))
+                    .map(|s| match grid {
+                        Some((t0, dt)) => format!(
+                            "sample {} at t = {} ({})",
+                            s.index + 1,
+                            circle_signal::Shown(t0 + s.index as f64 * dt),
+                            signed_size(s.size)
+                        ),
+                        None => format!("sample {} ({})", s.index + 1, signed_size(s.size)),
+                    })
                     .collect();
                 let more = if found.len() > 5 { ", ..." } else { "" };
                 // On the circle the samples are an encoder's: isolated spikes are its bit errors;
@@ -885,7 +900,7 @@ pub fn condition(
     let conditioned: Vec<Conditioned> = channels
         .into_par_iter()
         .enumerate()
-        .map(|(coordinate, (x, domain))| condition_channel(x, domain, coordinate, &pieces, dt, options))
+        .map(|(coordinate, (x, domain))| condition_channel(x, domain, coordinate, &pieces, (t0, dt), options))
         .collect();
     let mut wrapped = false;
     for channel in conditioned {
@@ -953,9 +968,10 @@ fn condition_channel(
     domain: Domain,
     coordinate: usize,
     pieces: &[Range<usize>],
-    dt: f64,
+    grid: (f64, f64),
     options: &PrepareOptions,
 ) -> Conditioned {
+    let dt = grid.1;
     let mut unwrapped = false;
     if domain == Domain::Circle {
         let parts: Vec<&[f64]> = pieces.iter().map(|r| &x[r.clone()]).collect();
@@ -976,7 +992,7 @@ fn condition_channel(
     }
     let mut channel_options = options.clone();
     channel_options.signal = domain;
-    let found = match spikes(x, pieces, &channel_options) {
+    let found = match spikes(x, pieces, Some(grid), &channel_options) {
         Ok(found) => found,
         Err(e) => {
             return Conditioned {
@@ -1082,6 +1098,7 @@ impl SpikePolicy {
 fn spikes(
     x: &mut [f64],
     pieces: &[Range<usize>],
+    grid: Option<(f64, f64)>,
     options: &PrepareOptions,
 ) -> Result<Vec<Note>, PrepareError> {
     let params = match quantum(x, pieces, options.signal) {
@@ -1117,6 +1134,7 @@ fn spikes(
         repaired,
         domain: options.signal,
         policy,
+        grid,
     };
     Ok(match policy {
         SpikePolicy::Repair | SpikePolicy::Keep => {

@@ -27,6 +27,7 @@ fn the_spikes_note_speaks_of_bit_errors_on_the_circle_and_of_outliers_on_the_lin
             } else {
                 SpikePolicy::Keep
             },
+            grid: None,
         }
         .to_string()
     };
@@ -43,6 +44,19 @@ fn the_spikes_note_speaks_of_bit_errors_on_the_circle_and_of_outliers_on_the_lin
         "1 outlier(s) replaced by the local prediction: sample 42 (+0.5000)"
     );
     assert!(!note(Domain::Line, false).contains("bit error"));
+    // With the grid's clock, each is named by its time too.
+    let timed = Note::Spikes {
+        coordinate: 0,
+        found: found.clone(),
+        repaired: false,
+        domain: Domain::Line,
+        policy: SpikePolicy::Keep,
+        grid: Some((10.0, 0.5)),
+    };
+    assert_eq!(
+        timed.to_string(),
+        "1 outlier(s) in the record: sample 42 at t = 30.5 (+0.5000)"
+    );
 }
 
 /// Consecutive samples flagged on the circle are not called isolated spikes: the note counts the
@@ -61,6 +75,7 @@ fn the_spikes_note_counts_runs_apart_from_isolated_spikes() {
         repaired: false,
         domain: Domain::Circle,
         policy: SpikePolicy::Keep,
+        grid: None,
     }
     .to_string();
     assert!(
@@ -300,6 +315,7 @@ fn the_spikes_note_says_when_they_were_replaced_by_default_and_when_they_were_to
         repaired,
         domain: Domain::Circle,
         policy: SpikePolicy::RepairFew,
+        grid: None,
     };
     assert_eq!(
         note(true).to_string(),
@@ -324,6 +340,7 @@ fn the_spikes_note_says_when_they_were_replaced_by_default_and_when_they_were_to
         repaired: false,
         domain: Domain::Circle,
         policy: SpikePolicy::RepairFew,
+        grid: None,
     };
     assert!(
         tiny.to_string().starts_with("coordinate 2: 1 isolated spike(s)"),
