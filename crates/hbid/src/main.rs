@@ -131,8 +131,9 @@ fn main() -> ExitCode {
         }
         default_hook(info);
     }));
-    // Ctrl-C: remove whatever is half-written (results are only renamed into place when
-    // complete), then exit with the conventional status of an interrupt.
+    // Ctrl-C, and a termination or hang-up (a job scheduler's kill, a closed terminal): remove
+    // whatever is half-written (results are only renamed into place when complete), then exit
+    // with the conventional status of an interrupt.
     let _ = ctrlc::set_handler(|| {
         output::remove_partial_files();
         eprintln!("interrupted: no output written");

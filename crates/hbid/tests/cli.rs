@@ -871,32 +871,35 @@ fn report_identifies_by_the_method_given() {
 
 #[test]
 fn interrupt_leaves_no_file() {
-    // A long simulation, interrupted while it runs: neither the output nor a temporary remains.
-    let dir = scratch("interrupt");
-    let target = dir.join("long.csv");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_hbid"))
-        .args([
-            "simulate",
-            "--samples",
-            "30000000",
-            "--quiet",
-            "--out",
-            target.to_str().unwrap(),
-        ])
-        .spawn()
-        .unwrap();
-    std::thread::sleep(std::time::Duration::from_millis(400));
-    let pid = child.id().to_string();
-    let sent = Command::new("kill").args(["-INT", &pid]).status().unwrap();
-    assert!(sent.success());
-    let status = child.wait().unwrap();
-    assert!(!status.success());
-    assert_eq!(
-        std::fs::read_dir(&dir).unwrap().count(),
-        0,
-        "something was left in {}",
-        dir.display()
-    );
+    // A long simulation, interrupted while it runs (Ctrl-C, a scheduler's termination, a closed
+    // terminal): neither the output nor a temporary remains.
+    for signal in ["-INT", "-TERM", "-HUP"] {
+        let dir = scratch(&format!("interrupt{signal}"));
+        let target = dir.join("long.csv");
+        let mut child = Command::new(env!("CARGO_BIN_EXE_hbid"))
+            .args([
+                "simulate",
+                "--samples",
+                "30000000",
+                "--quiet",
+                "--out",
+                target.to_str().unwrap(),
+            ])
+            .spawn()
+            .unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(400));
+        let pid = child.id().to_string();
+        let sent = Command::new("kill").args([signal, &pid]).status().unwrap();
+        assert!(sent.success());
+        let status = child.wait().unwrap();
+        assert_eq!(status.code(), Some(130), "{signal}: {status:?}");
+        assert_eq!(
+            std::fs::read_dir(&dir).unwrap().count(),
+            0,
+            "{signal}: something was left in {}",
+            dir.display()
+        );
+    }
 }
 
 #[test]
