@@ -46,16 +46,35 @@ def flag(value: Any, name: str) -> bool:
     raise OptionsError(f"{name}: {value!r} is not True or False")
 
 
+def step(value: Any, name: str = "dt") -> Optional[float]:
+    """A sampling step or other number given as an argument: ``None`` or a real number (the
+    library checks its range), never text or a complex value taken as one."""
+    if value is None:
+        return None
+    if isinstance(value, (str, bytes, bool, np.bool_)) or np.iscomplexobj(value):
+        raise OptionsError(f"{name}={value!r}: give a number")
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        raise OptionsError(f"{name}={value!r}: give a number") from None
+
+
 def array(values: ArrayLike, name: str) -> np.ndarray:
-    """``values`` as a contiguous one-dimensional ``float64`` array (borrowed by the extension)."""
+    """``values`` as a contiguous one-dimensional ``float64`` array (borrowed by the extension).
+    A masked array's masked samples are NaN: missing values, which ``skip_missing`` leaves out
+    as a logger's dropped rows (an error names the first otherwise)."""
+    if values is None:
+        raise OptionsError(f"{name}: no samples (None)")
     refuse_non_real(values, name)
     try:
-        a = np.ascontiguousarray(values, dtype=np.float64)
+        if np.ma.isMaskedArray(values):
+            values = np.ma.filled(np.ma.asarray(values, dtype=np.float64), np.nan)
+        a = np.asarray(values, dtype=np.float64)
     except (TypeError, ValueError) as e:
         raise OptionsError(f"{name}: not an array of numbers ({e})") from None
     if a.ndim != 1:
         raise OptionsError(f"{name}: a one-dimensional array is needed, not shape {a.shape}")
-    return a
+    return np.ascontiguousarray(a)
 
 
 def _plain(value: Any) -> Any:

@@ -13,7 +13,7 @@ from typing import Any, Dict, Iterator, List, Mapping, Optional, Sequence, Tuple
 import numpy as np
 
 from . import _hbid
-from ._common import ArrayLike, ColumnsLike, HbidWarning, PathLike, column, columns, emit, flag, numbers, options_json, signals
+from ._common import ArrayLike, ColumnsLike, HbidWarning, PathLike, column, columns, emit, flag, numbers, options_json, signals, step
 from ._model import Model
 from ._record import Record, _columns_by_name, source
 from .errors import OptionsError
@@ -255,7 +255,7 @@ def compare(
         time_col=column(time_col, "time_col"),
         angle_col=column(angle_col, "angle_col"),
         coords=columns(coords, "coords"),
-        dt=dt,
+        dt=step(dt),
         drive_col=columns(drive_col, "drive_col"),
         velocity_col=columns(velocity_col, "velocity_col"),
         repair=flag(repair, "repair"),
@@ -380,7 +380,7 @@ def run_model(
         time_col=column(time_col, "time_col"),
         angle_col=column(angle_col, "angle_col"),
         coords=columns(coords, "coords"),
-        dt=dt,
+        dt=step(dt),
         drive_col=columns(drive_col, "drive_col"),
         init=None if given else init,
         skip_missing=flag(skip_missing, "skip_missing"),

@@ -10,7 +10,7 @@ from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 import numpy as np
 
 from . import _hbid
-from ._common import ArrayLike, ColumnsLike, PathLike, array, column, columns, emit, flag, options_json, refuse_non_real, signals
+from ._common import ArrayLike, ColumnsLike, PathLike, array, column, columns, emit, flag, options_json, refuse_non_real, signals, step
 from .errors import OptionsError
 
 
@@ -233,7 +233,7 @@ def read(
         coords=columns(coords, "coords"),
         drive_col=columns(drive_col, "drive_col"),
         velocity_col=columns(velocity_col, "velocity_col"),
-        dt=None if dt is None else float(dt),
+        dt=step(dt),
         repair=flag(repair, "repair"),
         no_repair=flag(no_repair, "no_repair"),
         bridge_gaps=bridge_gaps,

@@ -83,3 +83,24 @@ def test_comparing_a_record_without_the_loggers_first_rows_warns(tmp_path):
     model = hbid.identify(record, bootstrap=0).model
     with pytest.warns(hbid.HbidWarning, match=f"first {record.lead_rows} rows"):
         hbid.compare(model, record, range=(0, 500))
+
+
+def test_a_step_is_a_number_and_samples_are_an_array():
+    x = hbid.simulate(samples=3000).x
+    for dt in ("abc", "0.25", 1j, True):
+        with pytest.raises(hbid.OptionsError, match="dt=.*: give a number"):
+            hbid.read(x, dt=dt)
+    with pytest.raises(hbid.OptionsError, match=r"x: no samples \(None\)"):
+        hbid.identify(None, dt=0.25)
+    with pytest.raises(hbid.OptionsError, match=r"not shape \(\)"):
+        hbid.identify(np.float64(3.0), dt=0.25)
+
+
+def test_a_masked_sample_is_a_missing_value():
+    sim = hbid.simulate(samples=3000)
+    x = np.ma.masked_array(sim.x, mask=np.zeros(sim.x.size, bool))
+    x.mask[100] = True
+    with pytest.raises(hbid.InputError, match="sample 101: a value is NaN.*skip_missing=True"):
+        hbid.identify(x, t=sim.t, bootstrap=0)
+    left_out = hbid.identify(x, t=sim.t, bootstrap=0, skip_missing=True)
+    assert left_out.coefficients["sin(x)"] == pytest.approx(1.44, rel=1e-3)
