@@ -223,7 +223,9 @@ def compare(
         skip_missing: leave out every row with a missing value in a column read, as a
             logger's dropped row, as for :func:`identify`.
         signal: ``"circle"`` or ``"line"`` (default: the model's).
-        measured: ``"displacement"``, ``"velocity"`` or ``"acceleration"`` (integrated).
+        measured: ``"displacement"``, ``"velocity"`` or ``"acceleration"`` (one coordinate on
+            the line: integrated piece by piece with the constants the model's equation holds
+            best with, given in a note; a logger's unsettled first rows left out).
         angle_unit: the unit of the angles on the circle (and of their measured velocities):
             ``"rad"``, ``"deg"`` or ``"counts:N"`` (an encoder's N counts per turn); converted
             to radians as they are read.
@@ -281,7 +283,7 @@ def compare(
         x = _columns_by_name(x, options.get("coords"), "x", "coords")
         if isinstance(x, Mapping):
             options.pop("coords", None)
-    if isinstance(x, Record) and x.lead_rows > 0:
+    if isinstance(x, Record) and x.lead_rows > 0 and not skip_unsettled:
         warnings.warn(
             f"the Record leaves out its file's first {x.lead_rows} rows (stamped before the logger settled to its "
             "rate): the ranges count from its grid's first sample; compare the file itself to run from row 0 "

@@ -575,7 +575,7 @@ def identify(
         refine=flag(refine, "refine"),
         refine_init=refine_init,
         tie=_tie(tie),
-        stream=True if stream else (False if no_stream else None),
+        stream=True if flag(stream, "stream") else (False if flag(no_stream, "no_stream") else None),
     )
     if stream and no_stream:
         raise OptionsError("stream: give «stream» or «no_stream», not both")

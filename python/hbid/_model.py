@@ -10,7 +10,7 @@ from typing import Any, Dict, Iterator, List, Mapping, Optional, Sequence, Union
 import numpy as np
 
 from . import _hbid
-from ._common import HbidWarning, PathLike, array
+from ._common import HbidWarning, PathLike, array, flag
 from ._equation import Equation, equation_text, flattened
 from .errors import OptionsError
 
@@ -305,7 +305,7 @@ class Model:
                 samples_per_period=None if samples_per_period is None else _count(samples_per_period, "samples_per_period", 2),
                 transient_periods=_count(transient_periods, "transient_periods", 0),
                 rtol=rtol,
-                wrapped=wrapped,
+                wrapped=flag(wrapped, "wrapped"),
             )
         if samples is not None or samples_per_period is not None or transient_periods != 0:
             raise OptionsError("t: the times say where to run; give no samples, samples_per_period or transient_periods")
@@ -328,7 +328,7 @@ class Model:
         values = list(d["values"])
         for i, signal in enumerate(self._info["signals"]):
             x = values[1 + i]
-            if wrapped and signal == "circle":
+            if flag(wrapped, "wrapped") and signal == "circle":
                 values[1 + i] = np.where(np.isfinite(x), (x + np.pi) % (2.0 * np.pi) - np.pi, x)
         if n == 1:
             return values[0], values[1], values[2]

@@ -391,6 +391,9 @@ def source(
             raise OptionsError("a Record carries its own time and drive: give no t or drive with it")
         options.update(x.columns)
         positions = list(x.positions.values()) or [x.x]
+        # A Record made anew with another first coordinate (dataclasses.replace(record, x=...)).
+        if positions[0] is not x.x:
+            positions[0] = x.x
         args: Dict[str, Any] = dict(x=[array(p, "x") for p in positions], grid=x._grid())
         drives = list(x.drives.values()) or ([] if x.drive is None else [x.drive])
         if drives:

@@ -12,7 +12,7 @@ capability the library does not have yet is also :class:`NotImplementedError`.
     ├── OptionsError         (ValueError)  an argument's value, or a combination of arguments
     ├── IdentificationError                a valid record that cannot be analysed as asked
     ├── SimulationError                    a simulation that failed
-    ├── ModelError                         a saved model that cannot be read or written
+    ├── ModelError                         a saved model that cannot be read or made
     ├── OutputError          (OSError)     a result file that cannot be written
     └── NotSupportedError    (NotImplementedError)  not in the library yet
 """
@@ -56,7 +56,8 @@ class SimulationError(HbidError):
 
 
 class ModelError(HbidError):
-    """A saved model cannot be read or written."""
+    """A saved model cannot be read, or made from what was given (a file that cannot be
+    written is an :class:`OutputError`)."""
 
 
 class OutputError(HbidError, OSError):

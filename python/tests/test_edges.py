@@ -30,6 +30,12 @@ def test_a_flag_is_true_or_false():
     for name in ("repair", "no_repair", "skip_missing", "no_parametric"):
         with pytest.raises(hbid.OptionsError, match=f"{name}: 'no' is not True or False"):
             hbid.identify(x, dt=2 * np.pi / 25, bootstrap=0, **{name: "no"})
+    for name in ("stream", "no_stream"):
+        with pytest.raises(hbid.OptionsError, match=f"{name}: 'no' is not True or False"):
+            hbid.identify(x, dt=2 * np.pi / 25, bootstrap=0, **{name: "no"})
+    model = hbid.identify(x, dt=2 * np.pi / 25, bootstrap=0).model
+    with pytest.raises(hbid.OptionsError, match="wrapped: 'no' is not True or False"):
+        model.simulate(samples=100, wrapped="no")
     # NumPy's booleans are flags too.
     hbid.identify(x, dt=2 * np.pi / 25, bootstrap=0, repair=np.False_)
 
@@ -59,6 +65,11 @@ def test_a_records_first_coordinate_is_one_array(tmp_path):
     record.x[:] = hbid.simulate(samples=3000, r=1 / np.sqrt(1.2), write_drive=True).x
     after = hbid.identify(record, bootstrap=0).coefficients["sin(x)"]
     assert before == pytest.approx(1.44, rel=1e-3) and after == pytest.approx(1.2, rel=1e-2)
+    # A Record made anew with another first coordinate is that one's.
+    import dataclasses
+
+    again = dataclasses.replace(record, x=hbid.simulate(samples=3000, write_drive=True).x)
+    assert hbid.identify(again, bootstrap=0).coefficients["sin(x)"] == pytest.approx(1.44, rel=1e-3)
 
 
 def test_a_comparisons_repr_is_short():
@@ -83,6 +94,12 @@ def test_comparing_a_record_without_the_loggers_first_rows_warns(tmp_path):
     model = hbid.identify(record, bootstrap=0).model
     with pytest.warns(hbid.HbidWarning, match=f"first {record.lead_rows} rows"):
         hbid.compare(model, record, range=(0, 500))
+    # Left out of the file's comparison too, they count alike: nothing to warn of.
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", hbid.HbidWarning)
+        hbid.compare(model, record, range=(0, 500), skip_unsettled=True)
 
 
 def test_a_step_is_a_number_and_samples_are_an_array():

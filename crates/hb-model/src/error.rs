@@ -152,8 +152,9 @@ pub enum ModelIoError {
         /// Which value.
         name: String,
     },
-    /// A saved system of several coordinates read as one model.
-    #[error("a saved system of several coordinates (format 5): read it as a system, not as one model")]
+    /// A saved system (several coordinates, or one under drives of its own names) read as one
+    /// model.
+    #[error("a saved system (format 5): read it as a system, not as one model")]
     SavedSystem,
     /// JSON (de)serialisation failed.
     #[error("JSON: {0}")]

@@ -1,7 +1,7 @@
 //! A system of equations, one per coordinate: `q_i'' + Σ_k c_ik g_ik(t, q, q', q'') = 0`, each
 //! an [`IdentifiedModel`] whose terms are written in the system's [`Names`], solved for the
-//! accelerations through its mass matrix, and saved (format 5; a system of one coordinate is
-//! saved as the model it is, in format 4).
+//! accelerations through its mass matrix, and saved (format 5; a system of one coordinate in the
+//! names of one, `x` and at most the drive `p`, is saved as the model it is, in format 4).
 
 use circle_signal::system::MultiSystem;
 pub use circle_signal::system::SingularMass;
@@ -549,11 +549,12 @@ impl<B: Basis + Clone + Serialize> IdentifiedSystem<B> {
         })
     }
 
-    /// Whether the system is saved as its one model (format 4): one coordinate in the names of
+    /// Whether the system is its one model (saved in format 4, compared and run as one model):
+    /// one coordinate in the names of
     /// one (`x`, and at most the drive `p`), which that format keeps no names for. One
     /// coordinate with drives of other names (two measured drives, `u` and `w`) is saved as a
     /// system.
-    fn is_one_model(&self) -> bool {
+    pub fn is_one_model(&self) -> bool {
         self.equations.len() == 1 && self.names == Names::default()
     }
 

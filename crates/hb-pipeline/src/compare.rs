@@ -326,15 +326,11 @@ impl CompareRequest {
             _ => {}
         }
         let record = o.record_options(Domain::Line);
-        // Integrated, the record's displacement has an unknown offset (and from an acceleration a
-        // slope) per piece, which the free run would be scored against: not a model's error.
-        if o.measured != Measured::Displacement {
+        if o.measured != Measured::Displacement && o.signal == Some(Domain::Circle) {
             return Err(OptionError::value(
                 "measured",
                 o.measured,
-                "a record integrated from a velocity or an acceleration has an unknown offset (and slope) per \
-                 piece, which a free run would be scored against as the model's error: compare the model with \
-                 a displacement record, or let `hbid report` fit the drift and run the model on the record",
+                "a velocity or acceleration record is integrated to a displacement on the line: needs «signal=line»",
             ));
         }
         // The velocity columns are counted against the system's coordinates, known once the
@@ -610,9 +606,7 @@ pub fn compare(
     match system.equations() {
         // One coordinate in the names of one (`x`, the drive `p`); one with drives of their own
         // names (two measured drives) is run as the system it is.
-        [model] if *system.names() == hb_model::Names::default() => {
-            compare_one(model, source, request, observer)
-        }
+        [model] if system.is_one_model() => compare_one(model, source, request, observer),
         _ => compare_system(system, source, request, observer),
     }
 }
@@ -659,8 +653,30 @@ fn compare_one(
     }
     // A drive given as an array is Python's `drive=`, even when its name comes with it.
     let named = !matches!(source, Source::Arrays { .. });
-    let (grid, clock) = compared_record(source, &o.record_options(domain), o.skip_unsettled, observer)?;
+    // A velocity or acceleration record is read as measured and integrated here, with the
+    // constants the model's equation holds best with (`integrated`); its first rows stamped
+    // before the logger settled are left out (a run through them would start before the
+    // integral does).
+    let integrate = o.measured != Measured::Displacement;
+    let mut options = o.record_options(domain);
+    options.measured = Measured::Displacement;
+    let (mut grid, clock) = compared_record(source, &options, o.skip_unsettled || integrate, observer)?;
     let measured_drive = check_drive(model, &grid, named)?;
+    if integrate {
+        if domain == Domain::Circle {
+            return Err(OptionError::value(
+                "measured",
+                o.measured,
+                "a velocity or acceleration record is integrated to a displacement on the line: needs «signal=line»",
+            )
+            .into());
+        }
+        let found = crate::integrated::integrate(model, &mut grid, o.measured)?;
+        observer.notice(&Notice::Integrated {
+            measured: o.measured,
+            pieces: found,
+        });
+    }
     observer.stage(Stage::Simulate);
     let len = grid.x.len();
     let ranges: Vec<std::ops::Range<usize>> = if o.range.is_empty() {
@@ -692,7 +708,7 @@ fn compare_one(
             return Err(all_bridged(range, init, score.bridged).into());
         }
         if score.scored == 0 && score.stopped.is_none() {
-            return Err(nothing_left(range, init, grid.pieces.len()).into());
+            return Err(nothing_left(range, init, &grid.pieces).into());
         }
         done += range.len();
         observer.progress(done, total);
@@ -1186,7 +1202,7 @@ fn compare_system(
             }
         }
         if pieces[0].is_empty() && stopped.is_none() {
-            return Err(nothing_left(range, init, grid.pieces.len()).into());
+            return Err(nothing_left(range, init, &grid.pieces).into());
         }
         let after_init = |measured: bool| -> usize {
             pieces[0]
@@ -1443,11 +1459,19 @@ fn run_range(
     Ok((score, pieces))
 }
 
-/// The error of a range that `init` samples setting the state leave nothing to score, in a
-/// record of `pieces` pieces between gaps.
-fn nothing_left(range: &std::ops::Range<usize>, init: usize, pieces: usize) -> OptionError {
-    let why = match pieces {
-        1 => format!("the range has {} sample(s)", range.len()),
+/// The error of a range that `init` samples setting the state leave nothing to score, its
+/// samples in the record's `pieces` between gaps.
+fn nothing_left(
+    range: &std::ops::Range<usize>,
+    init: usize,
+    pieces: &[std::ops::Range<usize>],
+) -> OptionError {
+    let within = pieces
+        .iter()
+        .filter(|p| p.start < range.end && p.end > range.start)
+        .count();
+    let why = match within {
+        0 | 1 => format!("the range has {} sample(s)", range.len()),
         _ => "its pieces between gaps are no longer".to_owned(),
     };
     OptionError::value(
@@ -1817,7 +1841,7 @@ pub fn run_system_on_times(
         }
     }
     if let [model] = system.equations()
-        && *system.names() == hb_model::Names::default()
+        && system.is_one_model()
     {
         let drive = match drives {
             [] => None,

@@ -434,6 +434,12 @@ impl IdentifyRequest {
                     .seed(o.seed)
                     .build()
                     .map_err(|e| match &e {
+                        hb_solve::SolveError::InvalidParameter {
+                            name: "bootstrap resamples",
+                            ..
+                        } if o.bootstrap > BootstrapParams::MAX_RESAMPLES => {
+                            OptionError::checked("bootstrap", o.bootstrap, &e)
+                        }
                         // Too few resamples for the level: the count is what to change.
                         hb_solve::SolveError::InvalidParameter {
                             name: "bootstrap resamples",
@@ -1118,7 +1124,7 @@ impl IdentifyReport {
     /// system of its model).
     pub fn system(&self) -> Result<IdentifiedSystem, RunError> {
         let system = system_of(&self.names, &self.equations)?;
-        if self.equations.len() == 1 {
+        if system.is_one_model() {
             return Ok(system);
         }
         Ok(match &self.columns {
@@ -1584,14 +1590,15 @@ pub(crate) fn finish(
         basis: request.basis,
         equations,
         names: request.names.clone(),
-        columns: (n > 1).then(|| hb_model::Columns {
-            coordinates: request
-                .options
-                .record
-                .coords
-                .as_ref()
-                .map(|c| c.columns().to_vec())
-                .unwrap_or_default(),
+        // A system's columns; one coordinate's too when its drives have names of their own (the
+        // one-model format keeps its own): its angle's column, or its name for the record's
+        // default column.
+        columns: (n > 1 || request.names != Names::default()).then(|| hb_model::Columns {
+            coordinates: match (&request.options.record.coords, &request.options.record.angle_col) {
+                (Some(c), _) => c.columns().to_vec(),
+                (None, Some(angle)) if n == 1 => vec![angle.clone()],
+                _ => request.names.coordinates().to_vec(),
+            },
             drives: request.options.record.drive_cols().to_vec(),
         }),
         refinement,

@@ -49,6 +49,7 @@ pub mod drive;
 pub mod embed;
 pub mod error;
 pub mod identify;
+pub mod integrated;
 pub mod observe;
 pub mod options;
 pub mod output;

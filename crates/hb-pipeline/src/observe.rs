@@ -121,6 +121,14 @@ pub enum Notice {
     /// A comparison runs through the record's first rows, which a logger stamped before it
     /// settled to its rate, at their own stamps (an identification leaves them out).
     UnevenStart(hb_record::input::Unsettled),
+    /// A velocity or acceleration record integrated for a saved model's free run, with the
+    /// constants its equation holds best with ([`crate::integrated`]).
+    Integrated {
+        /// What the record measured.
+        measured: Measured,
+        /// The constants found, piece by piece.
+        pieces: Vec<crate::integrated::PieceConstants>,
+    },
     /// A notice of one of several records read together (`identify` on several files), named by
     /// its file.
     InRecord {
@@ -267,6 +275,33 @@ impl fmt::Display for Notice {
             ),
             Notice::Warning(w) => f.write_str(w),
             Notice::InRecord { record, notice } => write!(f, "{record}: {notice}"),
+            Notice::Integrated { measured, pieces } => {
+                let shown: Vec<String> = pieces
+                    .iter()
+                    .take(3)
+                    .map(|p| match measured {
+                        Measured::Acceleration => format!(
+                            "samples {}..{}: velocity {:+.4e}, offset {:+.4e} (unexplained {:.2e})",
+                            p.start, p.end, p.velocity, p.offset, p.unexplained
+                        ),
+                        _ => format!(
+                            "samples {}..{}: offset {:+.4e} (unexplained {:.2e})",
+                            p.start, p.end, p.offset, p.unexplained
+                        ),
+                    })
+                    .collect();
+                let more = if pieces.len() > 3 {
+                    format!("; {} pieces more", pieces.len() - 3)
+                } else {
+                    String::new()
+                };
+                write!(
+                    f,
+                    "the {measured} record integrated to the displacement, each piece's constants those the model's \
+                     equation holds best with: {}{more}",
+                    shown.join("; ")
+                )
+            }
         }
     }
 }

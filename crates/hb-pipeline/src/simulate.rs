@@ -1703,7 +1703,8 @@ pub fn simulate(rig: &Rig, observer: &mut dyn Observer) -> Result<Simulation, Ru
     let counts = rig.writes_counts();
     // The memory of every column (times, positions, velocities, a drive, what is kept) asked
     // for first: a record too long for it is an error, not an abort.
-    pendulum_sim::reserve_series(2 * coordinates + 3, samples)?;
+    // (Times, positions, velocities, what is kept, and two drives, the arm's.)
+    pendulum_sim::reserve_series(2 * coordinates + 4, samples)?;
     let mut t = Vec::with_capacity(samples);
     let mut reported: Vec<Reported> = (0..coordinates)
         .map(|_| {

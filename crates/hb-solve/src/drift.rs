@@ -150,8 +150,8 @@ pub fn fit_drift(
 }
 
 /// The minimiser of `f` on `[lo, hi]`: the best of [`SCAN_POINTS`] equally spaced values, then
-/// golden-section search between its neighbours. A value that fails to identify is an error.
-fn minimise(lo: f64, hi: f64, mut f: impl FnMut(f64) -> Result<f64, SolveError>) -> Result<f64, SolveError> {
+/// golden-section search between its neighbours. A value that fails to evaluate is an error.
+pub fn minimise<E>(lo: f64, hi: f64, mut f: impl FnMut(f64) -> Result<f64, E>) -> Result<f64, E> {
     let n = SCAN_POINTS;
     let at = |k: usize| lo + (hi - lo) * k as f64 / (n - 1) as f64;
     let mut best = (0, f64::INFINITY);

@@ -1,7 +1,8 @@
 //! Identified models and systems: their coefficients, saved and loaded as `hbid identify
 //! --save-model` does, and simulated by `pendulum_sim`. A model crosses into Python as its
-//! compact bytes ([`IdentifiedSystem::to_bytes`]: a model of one coordinate in format 4, a system
-//! of several in format 5), so that it pickles as it is.
+//! compact bytes ([`IdentifiedSystem::to_bytes`]: a model of one coordinate in format 4, any other
+//! system, one coordinate under drives of their own names among them, in format 5), so that it
+//! pickles as it is.
 
 use std::io::Write;
 use std::path::PathBuf;

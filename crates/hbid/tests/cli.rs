@@ -4511,6 +4511,24 @@ fn the_report_refuses_to_read_in_chunks() {
         assert_clean_failure(&hbid(&args), mentions);
         assert!(!report.exists() && !saved.exists(), "{extra:?} wrote something");
     }
+    // Measured velocities, which the report of one coordinate does not start its runs from.
+    let csv = dir.join("pendulum.csv");
+    let out = hbid(&["simulate", "--samples", "4000", "--out", csv.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = hbid(&[
+        "report",
+        csv.to_str().unwrap(),
+        "--velocity-col",
+        "omega",
+        "--out",
+        report.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert_clean_failure(
+        &out,
+        "--velocity-col omega: the report of one coordinate runs its models",
+    );
+    assert!(!report.exists(), "a report was written");
     std::fs::remove_dir_all(&dir).ok();
 }
 
@@ -4526,6 +4544,10 @@ fn too_few_resamples_name_the_bootstrap_option() {
     );
     let out = hbid(&["identify", &data, "--bootstrap", "200", "--level", "1.5"]);
     assert_clean_failure(&out, "--level 1.5");
+    // Beyond what a percentile needs, each resample's coefficients kept: refused, not an abort
+    // on the memory.
+    let out = hbid(&["identify", &data, "--bootstrap", "1000000000000"]);
+    assert_clean_failure(&out, "--bootstrap 1000000000000: too many: at most 10^6");
 }
 
 /// Standard output that cannot be written (a full device) is a one-line error, not a panic's

@@ -65,8 +65,7 @@ pub enum SimError {
     },
     /// A trajectory kept in memory that the memory cannot hold.
     #[error(
-        "{samples} samples of {series} series ({:.3e} GiB) cannot be held in memory: simulate fewer, or \
-         write them as they are made",
+        "{samples} samples of {series} series ({:.3e} GiB) cannot be held in memory: simulate fewer",
         *.samples as f64 * *.series as f64 * 8.0 / (1u64 << 30) as f64
     )]
     TooLarge {

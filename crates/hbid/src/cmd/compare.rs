@@ -75,10 +75,11 @@ pub struct CompareArgs {
     /// circle or line [default: the model's].
     #[arg(long, value_parser = choice::<Domain>(&["circle", "line"]))]
     pub signal: Option<Domain>,
-    /// What the sensor measured: only a displacement (or angle) is compared. A record integrated
-    /// from a velocity or an acceleration has an unknown offset (and slope) per piece, which the
-    /// free run would be scored against; velocity and acceleration are refused with that reason
-    /// (`hbid report` fits the drift and runs the model on such a record).
+    /// What the sensor measured, on the line: displacement, velocity or acceleration. A velocity
+    /// or acceleration record is integrated to the displacement piece by piece, with the
+    /// constants (offset; and velocity, for an acceleration) the model's equation holds best with
+    /// (a note gives them), and its free run is scored against that displacement. A logger's
+    /// first rows stamped before it settled are left out.
     #[arg(long, default_value_t = Measured::Displacement, value_parser = choice::<Measured>(&["displacement", "velocity", "acceleration"]))]
     pub measured: Measured,
     /// The unit of the angles on the circle, and of their measured velocities (per time unit):

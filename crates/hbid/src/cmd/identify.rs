@@ -395,7 +395,7 @@ pub fn dropped_lines(selection: &TermSelection) -> String {
     text
 }
 
-/// Saves a system (a model of one coordinate as that model, format 4; several as format 5) as
+/// Saves a system (a model of one coordinate as that model, format 4; any other as format 5) as
 /// JSON (`.json`) or compact binary (anything else), atomically.
 pub fn save_system(system: &IdentifiedSystem, path: &std::path::Path) -> anyhow::Result<()> {
     let json = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("json"));

@@ -133,6 +133,13 @@ pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
         return super::report_system::run(args, quiet);
     }
     let request = args.identify.request_for_report()?;
+    if let Some(col) = &args.identify.input.velocity_col {
+        anyhow::bail!(
+            "«velocity_col={col}»: the report of one coordinate runs its models from the record's own states \
+             (fitted to its samples), which measured velocities do not set; start a saved model's run from them with \
+             hbid compare --velocity-col {col}"
+        );
+    }
     if let Some(spec) = &args.identify.tie {
         anyhow::bail!(
             "«tie={}»: the report of one coordinate identifies by both methods and a tied fit is the weak \

@@ -68,11 +68,25 @@ pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
     let (entries, summary, grid) = match &args.model {
         Some(path) => {
             let system = hb_pipeline::read_model(path)?;
-            let grid = hb_pipeline::condition_source(
-                Source::Path(file),
-                &record_options(args, &system)?,
-                &mut kept,
-            )?;
+            // A velocity or acceleration record read as measured, and integrated with the
+            // constants the model's equation holds best with, as `hbid compare` does.
+            let mut options = record_options(args, &system)?;
+            let measured = std::mem::take(&mut options.measured);
+            let mut grid = hb_pipeline::condition_source(Source::Path(file), &options, &mut kept)?;
+            if measured != circle_signal::Measured::Displacement {
+                let [model] = system.equations() else {
+                    return Err(OptionError::new(
+                        "measured",
+                        "is for a record of one coordinate, not a system of several («coords»)",
+                    )
+                    .into());
+                };
+                let pieces = hb_pipeline::integrated::integrate(model, &mut grid, measured)?;
+                hb_pipeline::Observer::notice(
+                    &mut kept,
+                    &hb_pipeline::Notice::Integrated { measured, pieces },
+                );
+            }
             let summary = format!(
                 "The saved model `{}` ({} coordinate(s): {}) against the record: {} samples in steps of {}.",
                 path.display(),
@@ -197,16 +211,18 @@ fn record_options(args: &ReportArgs, system: &IdentifiedSystem) -> anyhow::Resul
         )
         .into());
     }
+    // A system's own columns; one coordinate's angle from the record's default column unless
+    // saved with one, its drives by their names unless it is one model (the drive `p`).
     let coords = match &input.coords {
         Some(c) => Some(c.clone()),
-        None if system.coordinates() > 1 => {
+        None if system.coordinates() > 1 || columns.coordinates != system.names().coordinates() => {
             Some(as_columns(system.names().coordinates(), &columns.coordinates)?)
         }
         None => None,
     };
     let drive_col = match &input.drive_col {
         Some(d) if system.has_measured_drive() => Some(d.clone()),
-        None if system.has_measured_drive() && system.coordinates() > 1 => {
+        None if system.has_measured_drive() && !system.is_one_model() => {
             Some(as_columns(system.names().drives(), &columns.drives)?)
         }
         _ => None,
@@ -257,7 +273,8 @@ fn measure(
         bridge_gaps: input.bridge_gaps,
         skip_missing: input.skip_missing,
         velocity_col: input.velocity_col.clone(),
-        measured: input.measured,
+        // A velocity or acceleration record is integrated once, when read.
+        measured: circle_signal::Measured::Displacement,
         // On the record's grid, as the report draws it beside the models' runs.
         skip_unsettled: true,
         ..CompareOptions::default()

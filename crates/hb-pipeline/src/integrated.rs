@@ -1,0 +1,289 @@
+//! A velocity or acceleration record made a displacement for a saved model's free run
+//! (`compare`, `simulate --model --input` with `measured`).
+//!
+//! Integrating a velocity leaves each piece's offset unknown; integrating an acceleration twice
+//! leaves its offset and its velocity's offset unknown. `hb_solve::drift` finds them in an
+//! identification by the fit itself; a saved model is a fit already, so here they are the
+//! constants with which the model's own equation holds best on the piece, its coefficients fixed:
+//!
+//! - a velocity `v`: the displacement `x = ∫v + c`, and `c` minimises `Σ_k R_k²` with
+//!   `R_k = v(e_k) − v(b_k) − ∫_{b_k}^{e_k} F(t, x, v) dt` over consecutive windows of
+//!   [`WINDOW`] samples: the equation integrated, so that no measured sample is differentiated;
+//! - an acceleration `a`: `v = ∫a + s` and `x = ∫∫a + s (t − t_m) + c`, and `(s, c)` minimise
+//!   `Σ_i (a_i − F(t_i, x_i, v_i))²`, the equation at each sample.
+//!
+//! Every integral is the identification's sixth-order rule ([`circle_signal::cumulative_integral`]).
+//! Each unknown is scanned over the range a bounded signal allows and refined by golden section
+//! ([`hb_solve::drift::minimise`]), `s` first, then `c`, twice over. A constant that the model's
+//! equation does not see (the offset of a model with no stiffness) is left at the integral's
+//! mean: the free run from a state fitted to the samples does not see it either.
+
+use std::ops::Range;
+
+use circle_signal::{Measured, SecondOrderSystem};
+use hb_model::IdentifiedModel;
+use hb_record::prepare::GridData;
+
+use crate::compare::driven_on;
+use crate::error::RunError;
+
+/// Samples of each window of a velocity piece's integrated equation.
+pub const WINDOW: usize = 8;
+
+/// The integration's constants found for one piece.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PieceConstants {
+    /// The piece's samples.
+    pub start: usize,
+    /// Its end (exclusive).
+    pub end: usize,
+    /// The offset added to the velocity (an acceleration record's; 0 for a velocity).
+    pub velocity: f64,
+    /// The offset added to the displacement, after the integral's mean (or, with a velocity
+    /// found, its least-squares line) was taken out.
+    pub offset: f64,
+    /// The fraction of the measured side the model's equation leaves unexplained with the
+    /// constants found (`Σ R² / Σ (measured side)²`).
+    pub unexplained: f64,
+}
+
+/// `grid.x`, read as `measured` (a velocity or an acceleration), replaced by the displacement
+/// with each piece's constants that `model` explains best; the constants found. Pieces of fewer
+/// than `2 WINDOW` samples are integrated with the integral's mean (and line) taken out alone.
+pub fn integrate(
+    model: &IdentifiedModel,
+    grid: &mut GridData,
+    measured: Measured,
+) -> Result<Vec<PieceConstants>, RunError> {
+    let mut found = Vec::new();
+    let pieces: Vec<Range<usize>> = grid.pieces.clone();
+    let mut x = grid.x.clone();
+    for r in pieces {
+        let driven = driven_on(model, grid, r.start, r.end)?;
+        let t: Vec<f64> = (r.start..r.end).map(|i| grid.t0 + i as f64 * grid.dt).collect();
+        let raw = &grid.x[r.clone()];
+        let constants = match measured {
+            Measured::Displacement => continue,
+            Measured::Velocity => velocity_piece(&driven, &t, raw, grid.dt, &mut x[r.clone()]),
+            Measured::Acceleration => acceleration_piece(&driven, &t, raw, grid.dt, &mut x[r.clone()]),
+        };
+        found.push(PieceConstants {
+            start: r.start,
+            end: r.end,
+            ..constants
+        });
+    }
+    grid.x = x;
+    Ok(found)
+}
+
+/// `∫ y dt` from 0 at the first sample, by the sixth-order rule of the identification's
+/// integration ([`circle_signal::cumulative_integral`]; trapezoids below its 4 samples, or for
+/// a value that is not finite).
+fn cumulative(y: &[f64], dt: f64) -> Vec<f64> {
+    circle_signal::cumulative_integral(y, dt).unwrap_or_else(|_| {
+        let mut out = Vec::with_capacity(y.len());
+        let mut sum = 0.0;
+        for (i, &v) in y.iter().enumerate() {
+            if i > 0 {
+                sum += 0.5 * dt * (y[i - 1] + v);
+            }
+            out.push(sum);
+        }
+        out
+    })
+}
+
+/// `y` less its mean.
+fn centred(mut y: Vec<f64>) -> Vec<f64> {
+    let mean = y.iter().sum::<f64>() / y.len().max(1) as f64;
+    y.iter_mut().for_each(|v| *v -= mean);
+    y
+}
+
+/// The range `max − min` of `y`.
+fn range(y: &[f64]) -> f64 {
+    let (lo, hi) = y.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
+        (lo.min(v), hi.max(v))
+    });
+    hi - lo
+}
+
+/// A velocity piece `v`: `out` gets `∫v` (mean taken out) plus the offset found.
+fn velocity_piece<S: SecondOrderSystem>(
+    model: &S,
+    t: &[f64],
+    v: &[f64],
+    dt: f64,
+    out: &mut [f64],
+) -> PieceConstants {
+    let x = centred(cumulative(v, dt));
+    let n = v.len();
+    let windows: Vec<(usize, usize)> = (0..n.saturating_sub(1) / WINDOW)
+        .map(|k| (k * WINDOW, (k + 1) * WINDOW))
+        .collect();
+    let measured: f64 = windows.iter().map(|&(b, e)| (v[e] - v[b]).powi(2)).sum();
+    let residual = |c: f64| -> f64 {
+        let a: Vec<f64> = (0..n).map(|i| model.acceleration(t[i], x[i] + c, v[i])).collect();
+        let integral = cumulative(&a, dt);
+        windows
+            .iter()
+            .map(|&(b, e)| (v[e] - v[b] - (integral[e] - integral[b])).powi(2))
+            .sum()
+    };
+    let span = range(&x);
+    let offset = if windows.len() >= 2 && span.is_finite() && span > 0.0 {
+        best(-span, span, residual)
+    } else {
+        0.0
+    };
+    for (o, xi) in out.iter_mut().zip(&x) {
+        *o = xi + offset;
+    }
+    PieceConstants {
+        start: 0,
+        end: 0,
+        velocity: 0.0,
+        offset,
+        unexplained: relative(residual(offset), measured),
+    }
+}
+
+/// An acceleration piece `a`: `out` gets `∫∫a` (its least-squares line taken out) plus the
+/// velocity and the offset found.
+fn acceleration_piece<S: SecondOrderSystem>(
+    model: &S,
+    t: &[f64],
+    a: &[f64],
+    dt: f64,
+    out: &mut [f64],
+) -> PieceConstants {
+    let n = a.len();
+    let v0 = centred(cumulative(a, dt));
+    let x0 = cumulative(&v0, dt);
+    // The line of x0 taken out, and its slope from the velocity, so that x stays ∫v.
+    let middle = 0.5 * (t[0] + t[n - 1]);
+    let (slope, mean) = line(t, &x0, middle);
+    let x: Vec<f64> = x0
+        .iter()
+        .zip(t)
+        .map(|(x, &ti)| x - mean - slope * (ti - middle))
+        .collect();
+    let v: Vec<f64> = v0.iter().map(|v| v - slope).collect();
+    let measured: f64 = a.iter().map(|a| a * a).sum();
+    let residual = |s: f64, c: f64| -> f64 {
+        (0..n)
+            .map(|i| (a[i] - model.acceleration(t[i], x[i] + s * (t[i] - middle) + c, v[i] + s)).powi(2))
+            .sum()
+    };
+    let (span_x, span_v) = (range(&x), range(&v));
+    let (mut s, mut c) = (0.0, 0.0);
+    if n >= 2 * WINDOW && span_x.is_finite() && span_x > 0.0 && span_v.is_finite() {
+        // The least-squares slope of a signal within a range R over a time L is at most
+        // 1.5 R / L: a true velocity's offset within its range of that.
+        let bound = span_v.max(1.5 * span_x / (t[n - 1] - t[0]));
+        for _ in 0..2 {
+            s = best(-bound, bound, |s| residual(s, c));
+            c = best(-span_x, span_x, |c| residual(s, c));
+        }
+    }
+    for (i, o) in out.iter_mut().enumerate() {
+        *o = x[i] + s * (t[i] - middle) + c;
+    }
+    PieceConstants {
+        start: 0,
+        end: 0,
+        velocity: s,
+        offset: c,
+        unexplained: relative(residual(s, c), measured),
+    }
+}
+
+/// The least-squares line `y ≈ mean + slope (t − middle)`: `(slope, mean)`.
+fn line(t: &[f64], y: &[f64], middle: f64) -> (f64, f64) {
+    let n = y.len() as f64;
+    let mean = y.iter().sum::<f64>() / n;
+    let (mut sxy, mut sxx) = (0.0, 0.0);
+    let tm = t.iter().sum::<f64>() / n;
+    for (&ti, &yi) in t.iter().zip(y) {
+        sxy += (ti - tm) * (yi - mean);
+        sxx += (ti - tm) * (ti - tm);
+    }
+    let slope = if sxx > 0.0 { sxy / sxx } else { 0.0 };
+    // The line's value at `middle`.
+    (slope, mean + slope * (middle - tm))
+}
+
+/// The minimiser of `f` on `[lo, hi]`; a non-finite value counts as the worst.
+fn best(lo: f64, hi: f64, mut f: impl FnMut(f64) -> f64) -> f64 {
+    let found: Result<f64, std::convert::Infallible> = hb_solve::drift::minimise(lo, hi, |c| {
+        let v = f(c);
+        Ok(if v.is_finite() { v } else { f64::INFINITY })
+    });
+    found.unwrap_or_else(|never| match never {})
+}
+
+/// `part / whole`, 0 for nothing to explain.
+fn relative(part: f64, whole: f64) -> f64 {
+    if whole > 0.0 { part / whole } else { 0.0 }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A linear oscillator `x'' = −4 x − 0.1 x'` about 0.7 (a stiffness that sees the offset).
+    struct Spring;
+
+    impl SecondOrderSystem for Spring {
+        fn acceleration(&self, _t: f64, x: f64, v: f64) -> f64 {
+            -4.0 * (x - 0.7) - 0.1 * v
+        }
+        fn jacobian(&self, _t: f64, _x: f64, _v: f64) -> [f64; 2] {
+            [-4.0, -0.1]
+        }
+    }
+
+    /// Its motion from `x(0) = 1.5`, `v(0) = 0.3`, sampled every `dt` (closed form).
+    fn motion(n: usize, dt: f64) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) {
+        let (zeta_w, wd) = (0.05, (4.0f64 - 0.0025).sqrt());
+        let (x0, v0) = (1.5 - 0.7, 0.3);
+        let (a, b) = (x0, (v0 + zeta_w * x0) / wd);
+        let mut out = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        for i in 0..n {
+            let t = i as f64 * dt;
+            let e = (-zeta_w * t).exp();
+            let (c, s) = ((wd * t).cos(), (wd * t).sin());
+            let x = e * (a * c + b * s);
+            let v = e * ((-zeta_w * a + b * wd) * c + (-zeta_w * b - a * wd) * s);
+            out.0.push(t);
+            out.1.push(x + 0.7);
+            out.2.push(v);
+            out.3.push(-4.0 * x - 0.1 * v);
+        }
+        out
+    }
+
+    #[test]
+    fn a_velocity_records_offset_is_the_one_the_equation_holds_with() {
+        let (t, x, v, _) = motion(2000, 0.01);
+        let mut out = vec![0.0; t.len()];
+        let found = velocity_piece(&Spring, &t, &v, 0.01, &mut out);
+        let worst = out.iter().zip(&x).map(|(o, x)| (o - x).abs()).fold(0.0, f64::max);
+        // The sixth-order rule at 0.01 s on a 0.3 Hz motion: the integral is exact to ~1e-12.
+        assert!(worst < 1e-8, "{worst} ({found:?})");
+        assert!(found.unexplained < 1e-6, "{found:?}");
+    }
+
+    #[test]
+    fn an_acceleration_records_velocity_and_offset_are_found_together() {
+        let (t, x, v, a) = motion(2000, 0.01);
+        let mut out = vec![0.0; t.len()];
+        let found = acceleration_piece(&Spring, &t, &a, 0.01, &mut out);
+        let worst = out.iter().zip(&x).map(|(o, x)| (o - x).abs()).fold(0.0, f64::max);
+        assert!(worst < 1e-3, "{worst} ({found:?})");
+        // The velocity's offset: v = ∫a (mean out) − slope + s.
+        assert!(found.unexplained < 1e-6, "{found:?}");
+        let _ = v;
+    }
+}
