@@ -639,6 +639,14 @@ fn compare_one(
         )
         .into());
     }
+    if o.measured != Measured::Displacement && model.domain() == Domain::Circle {
+        return Err(OptionError::value(
+            "measured",
+            o.measured,
+            "a model on the circle is not compared with a velocity or acceleration record (integrated on the line)",
+        )
+        .into());
+    }
     let domain = o.signal.unwrap_or_else(|| model.domain());
     if domain != model.domain() {
         return Err(OptionError::value(
@@ -672,10 +680,9 @@ fn compare_one(
             .into());
         }
         let found = crate::integrated::integrate(model, &mut grid, o.measured)?;
-        observer.notice(&Notice::Integrated {
-            measured: o.measured,
-            pieces: found,
-        });
+        for notice in crate::integrated::notices(o.measured, &found) {
+            observer.notice(&notice);
+        }
     }
     observer.stage(Stage::Simulate);
     let len = grid.x.len();

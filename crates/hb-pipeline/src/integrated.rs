@@ -1,5 +1,5 @@
 //! A velocity or acceleration record made a displacement for a saved model's free run
-//! (`compare`, `simulate --model --input` with `measured`).
+//! (`compare` and `report --model` with `measured`, a model of one coordinate on the line).
 //!
 //! Integrating a velocity leaves each piece's offset unknown; integrating an acceleration twice
 //! leaves its offset and its velocity's offset unknown. `hb_solve::drift` finds them in an
@@ -13,10 +13,13 @@
 //!   `Σ_i (a_i − F(t_i, x_i, v_i))²`, the equation at each sample.
 //!
 //! Every integral is the identification's sixth-order rule ([`circle_signal::cumulative_integral`]).
-//! Each unknown is scanned over the range a bounded signal allows and refined by golden section
-//! ([`hb_solve::drift::minimise`]), `s` first, then `c`, twice over. A constant that the model's
-//! equation does not see (the offset of a model with no stiffness) is left at the integral's
-//! mean: the free run from a state fitted to the samples does not see it either.
+//! Each unknown is scanned ([`hb_solve::drift::minimise`]) over the integral's range about 0, the
+//! bracket doubled about the best value while that value lies at its edge (a record whose mean is
+//! far from the integral's, an oscillation about 5); an acceleration's two, which move together,
+//! are then refined together by Gauss–Newton with the model's Jacobian. A constant that the
+//! model's equation does not see (the offset of a model with no stiffness) stays 0, the integral's
+//! mean: the free run from a state fitted to the samples does not see it either. A piece too
+//! short for the constants ([`MIN_SAMPLES`]) is left out as a gap, and said so.
 
 use std::ops::Range;
 
@@ -29,6 +32,14 @@ use crate::error::RunError;
 
 /// Samples of each window of a velocity piece's integrated equation.
 pub const WINDOW: usize = 8;
+
+/// The fewest samples of a piece whose constants are found (two windows and one): a shorter one
+/// is left out, as a gap.
+pub const MIN_SAMPLES: usize = 2 * WINDOW + 1;
+
+/// The fraction of the measured side left unexplained above which the constants, and the scores,
+/// are warned of.
+pub const UNEXPLAINED_WARNING: f64 = 1e-2;
 
 /// The integration's constants found for one piece.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -47,18 +58,38 @@ pub struct PieceConstants {
     pub unexplained: f64,
 }
 
+/// What [`integrate`] found and did.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Integration {
+    /// The constants of each piece integrated.
+    pub pieces: Vec<PieceConstants>,
+    /// Pieces shorter than [`MIN_SAMPLES`], left out as gaps: `(start, end)`.
+    pub left_out: Vec<(usize, usize)>,
+}
+
 /// `grid.x`, read as `measured` (a velocity or an acceleration), replaced by the displacement
-/// with each piece's constants that `model` explains best; the constants found. Pieces of fewer
-/// than `2 WINDOW` samples are integrated with the integral's mean (and line) taken out alone.
+/// with each piece's constants that `model` explains best; what was found. Pieces of fewer than
+/// [`MIN_SAMPLES`] samples are left out of the grid's pieces (their samples NaN, as a gap's).
 pub fn integrate(
     model: &IdentifiedModel,
     grid: &mut GridData,
     measured: Measured,
-) -> Result<Vec<PieceConstants>, RunError> {
+) -> Result<Integration, RunError> {
     let mut found = Vec::new();
+    let mut left_out = Vec::new();
     let pieces: Vec<Range<usize>> = grid.pieces.clone();
     let mut x = grid.x.clone();
+    let mut kept = Vec::with_capacity(pieces.len());
     for r in pieces {
+        if r.len() < MIN_SAMPLES || measured == Measured::Displacement {
+            if measured != Measured::Displacement {
+                x[r.clone()].fill(f64::NAN);
+                left_out.push((r.start, r.end));
+            } else {
+                kept.push(r);
+            }
+            continue;
+        }
         let driven = driven_on(model, grid, r.start, r.end)?;
         let t: Vec<f64> = (r.start..r.end).map(|i| grid.t0 + i as f64 * grid.dt).collect();
         let raw = &grid.x[r.clone()];
@@ -72,9 +103,40 @@ pub fn integrate(
             end: r.end,
             ..constants
         });
+        kept.push(r);
     }
     grid.x = x;
-    Ok(found)
+    grid.pieces = kept;
+    Ok(Integration {
+        pieces: found,
+        left_out,
+    })
+}
+
+/// What an integration tells a run: the note of the constants and, when a piece's equation
+/// leaves more than [`UNEXPLAINED_WARNING`] of its measured side unexplained, a warning that the
+/// scores include the integration's error.
+pub fn notices(measured: Measured, integration: &Integration) -> Vec<crate::observe::Notice> {
+    use crate::observe::Notice;
+    let mut out = vec![Notice::Integrated {
+        measured,
+        integration: integration.clone(),
+    }];
+    if let Some(worst) = integration
+        .pieces
+        .iter()
+        .filter(|p| p.unexplained > UNEXPLAINED_WARNING || p.unexplained.is_nan())
+        .max_by(|a, b| a.unexplained.total_cmp(&b.unexplained))
+    {
+        out.push(Notice::Warning(format!(
+            "the model's equation leaves {:.2e} of the measured {measured} unexplained on samples {}..{} with the \
+             best constants found: the integrated displacement, and the scores against it, carry that error (a \
+             model that does not describe the record, noise the integral accumulates, or too few samples per \
+             period for the integral)",
+            worst.unexplained, worst.start, worst.end
+        )));
+    }
+    out
 }
 
 /// `∫ y dt` from 0 at the first sample, by the sixth-order rule of the identification's
@@ -133,7 +195,7 @@ fn velocity_piece<S: SecondOrderSystem>(
     };
     let span = range(&x);
     let offset = if windows.len() >= 2 && span.is_finite() && span > 0.0 {
-        best(-span, span, residual)
+        widening(span, residual)
     } else {
         0.0
     };
@@ -180,12 +242,14 @@ fn acceleration_piece<S: SecondOrderSystem>(
     let (mut s, mut c) = (0.0, 0.0);
     if n >= 2 * WINDOW && span_x.is_finite() && span_x > 0.0 && span_v.is_finite() {
         // The least-squares slope of a signal within a range R over a time L is at most
-        // 1.5 R / L: a true velocity's offset within its range of that.
+        // 1.5 R / L: a true velocity's offset within its range of that (to begin with).
         let bound = span_v.max(1.5 * span_x / (t[n - 1] - t[0]));
+        // Scans for the basin, then Gauss–Newton for the two together.
         for _ in 0..2 {
-            s = best(-bound, bound, |s| residual(s, c));
-            c = best(-span_x, span_x, |c| residual(s, c));
+            s = widening(bound, |s| residual(s, c));
+            c = widening(span_x, |c| residual(s, c));
         }
+        (s, c) = gauss_newton(model, t, a, &x, &v, middle, (s, c), &residual);
     }
     for (i, o) in out.iter_mut().enumerate() {
         *o = x[i] + s * (t[i] - middle) + c;
@@ -214,6 +278,86 @@ fn line(t: &[f64], y: &[f64], middle: f64) -> (f64, f64) {
     (slope, mean + slope * (middle - tm))
 }
 
+/// `(s, c)` refined from `start` by Gauss–Newton on the residuals `a_i − F(t_i, x_i + s (t_i −
+/// middle) + c, v_i + s)` with the model's Jacobian, each step halved until it lowers
+/// `residual`; at most 50 steps.
+#[allow(clippy::too_many_arguments)]
+fn gauss_newton<S: SecondOrderSystem>(
+    model: &S,
+    t: &[f64],
+    a: &[f64],
+    x: &[f64],
+    v: &[f64],
+    middle: f64,
+    start: (f64, f64),
+    residual: &dyn Fn(f64, f64) -> f64,
+) -> (f64, f64) {
+    let (mut s, mut c) = start;
+    let mut current = residual(s, c);
+    for _ in 0..50 {
+        // Normal equations of the 2 × 2 problem.
+        let (mut jss, mut jsc, mut jcc, mut gs, mut gc) = (0.0, 0.0, 0.0, 0.0, 0.0);
+        for i in 0..t.len() {
+            let dt = t[i] - middle;
+            let (xi, vi) = (x[i] + s * dt + c, v[i] + s);
+            let r = a[i] - model.acceleration(t[i], xi, vi);
+            let [fx, fv] = model.jacobian(t[i], xi, vi);
+            // ∂r/∂s and ∂r/∂c.
+            let (js, jc) = (-(fx * dt + fv), -fx);
+            jss += js * js;
+            jsc += js * jc;
+            jcc += jc * jc;
+            gs += js * r;
+            gc += jc * r;
+        }
+        let det = jss * jcc - jsc * jsc;
+        if !(det.is_finite() && det > 0.0) {
+            break;
+        }
+        let (ds, dc) = (-(jcc * gs - jsc * gc) / det, -(jss * gc - jsc * gs) / det);
+        let mut step = 1.0;
+        let mut moved = false;
+        while step > 1e-6 {
+            let trial = residual(s + step * ds, c + step * dc);
+            if trial < current {
+                (s, c, current) = (s + step * ds, c + step * dc, trial);
+                moved = true;
+                break;
+            }
+            step *= 0.5;
+        }
+        if !moved
+            || (step * ds).abs() <= 1e-14 * (1.0 + s.abs()) && (step * dc).abs() <= 1e-14 * (1.0 + c.abs())
+        {
+            break;
+        }
+    }
+    (s, c)
+}
+
+/// The minimiser of `f`, scanned over `[−width, width]` and, while the best value lies at the
+/// bracket's edge, over brackets doubled about it (at most 40 times); 0 unless a value explains
+/// better than 0 does (a flat objective: a constant the equation does not see).
+fn widening(width: f64, mut f: impl FnMut(f64) -> f64) -> f64 {
+    let at_zero = f(0.0);
+    let (mut centre, mut width) = (0.0, width);
+    let mut found = 0.0;
+    for _ in 0..40 {
+        found = best(centre - width, centre + width, &mut f);
+        let edge = 2.0 * width / (hb_solve::drift::SCAN_POINTS - 1) as f64;
+        if (found - (centre - width)).abs() > edge && (centre + width - found).abs() > edge {
+            break;
+        }
+        (centre, width) = (found, 2.0 * width);
+    }
+    let value = f(found);
+    if value.is_finite() && value < at_zero * (1.0 - 1e-9) {
+        found
+    } else {
+        0.0
+    }
+}
+
 /// The minimiser of `f` on `[lo, hi]`; a non-finite value counts as the worst.
 fn best(lo: f64, hi: f64, mut f: impl FnMut(f64) -> f64) -> f64 {
     let found: Result<f64, std::convert::Infallible> = hb_solve::drift::minimise(lo, hi, |c| {
@@ -232,22 +376,23 @@ fn relative(part: f64, whole: f64) -> f64 {
 mod tests {
     use super::*;
 
-    /// A linear oscillator `x'' = −4 x − 0.1 x'` about 0.7 (a stiffness that sees the offset).
+    /// A linear oscillator `x'' = −4 (x − 5) − 0.1 x'` about 5, far beyond its own swing: the
+    /// offset's bracket must widen to reach it.
     struct Spring;
 
     impl SecondOrderSystem for Spring {
         fn acceleration(&self, _t: f64, x: f64, v: f64) -> f64 {
-            -4.0 * (x - 0.7) - 0.1 * v
+            -4.0 * (x - 5.0) - 0.1 * v
         }
         fn jacobian(&self, _t: f64, _x: f64, _v: f64) -> [f64; 2] {
             [-4.0, -0.1]
         }
     }
 
-    /// Its motion from `x(0) = 1.5`, `v(0) = 0.3`, sampled every `dt` (closed form).
+    /// Its motion from `x(0) = 5.8`, `v(0) = 0.3`, sampled every `dt` (closed form).
     fn motion(n: usize, dt: f64) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) {
         let (zeta_w, wd) = (0.05, (4.0f64 - 0.0025).sqrt());
-        let (x0, v0) = (1.5 - 0.7, 0.3);
+        let (x0, v0) = (0.8, 0.3);
         let (a, b) = (x0, (v0 + zeta_w * x0) / wd);
         let mut out = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         for i in 0..n {
@@ -257,7 +402,7 @@ mod tests {
             let x = e * (a * c + b * s);
             let v = e * ((-zeta_w * a + b * wd) * c + (-zeta_w * b - a * wd) * s);
             out.0.push(t);
-            out.1.push(x + 0.7);
+            out.1.push(x + 5.0);
             out.2.push(v);
             out.3.push(-4.0 * x - 0.1 * v);
         }
@@ -282,8 +427,59 @@ mod tests {
         let found = acceleration_piece(&Spring, &t, &a, 0.01, &mut out);
         let worst = out.iter().zip(&x).map(|(o, x)| (o - x).abs()).fold(0.0, f64::max);
         assert!(worst < 1e-3, "{worst} ({found:?})");
-        // The velocity's offset: v = ∫a (mean out) − slope + s.
         assert!(found.unexplained < 1e-6, "{found:?}");
         let _ = v;
+    }
+
+    /// A free mass under a periodic force, `x'' = −0.1 x' + cos t`: no term sees the offset, which
+    /// stays the integral's mean (0) rather than a scan's arbitrary end.
+    struct Free;
+
+    impl SecondOrderSystem for Free {
+        fn acceleration(&self, t: f64, _x: f64, v: f64) -> f64 {
+            -0.1 * v + t.cos()
+        }
+        fn jacobian(&self, _t: f64, _x: f64, _v: f64) -> [f64; 2] {
+            [0.0, -0.1]
+        }
+    }
+
+    #[test]
+    fn constants_the_equation_leaves_much_unexplained_are_warned_of() {
+        let piece = |unexplained| PieceConstants {
+            start: 0,
+            end: 100,
+            velocity: 0.0,
+            offset: 0.1,
+            unexplained,
+        };
+        let told = |unexplained: f64| {
+            notices(
+                Measured::Velocity,
+                &Integration {
+                    pieces: vec![piece(1e-6), piece(unexplained)],
+                    left_out: Vec::new(),
+                },
+            )
+        };
+        assert_eq!(told(1e-3).len(), 1);
+        for bad in [0.5, f64::NAN] {
+            let notices = told(bad);
+            assert_eq!(notices.len(), 2, "{notices:?}");
+            assert!(notices[1].is_warning() && notices[1].to_string().contains("unexplained"));
+        }
+    }
+
+    #[test]
+    fn an_offset_the_equation_does_not_see_stays_the_integrals_mean() {
+        let dt = 0.01;
+        let t: Vec<f64> = (0..2000).map(|i| i as f64 * dt).collect();
+        // The steady response's velocity, (0.1 cos t + sin t) / 1.01.
+        let v: Vec<f64> = t.iter().map(|t| (0.1 * t.cos() + t.sin()) / 1.01).collect();
+        let mut out = vec![0.0; t.len()];
+        let found = velocity_piece(&Free, &t, &v, dt, &mut out);
+        assert_eq!(found.offset, 0.0, "{found:?}");
+        let mean = out.iter().sum::<f64>() / out.len() as f64;
+        assert!(mean.abs() < 1e-12, "{mean}");
     }
 }

@@ -126,8 +126,8 @@ pub enum Notice {
     Integrated {
         /// What the record measured.
         measured: Measured,
-        /// The constants found, piece by piece.
-        pieces: Vec<crate::integrated::PieceConstants>,
+        /// The constants found, piece by piece, and the pieces left out.
+        integration: crate::integrated::Integration,
     },
     /// A notice of one of several records read together (`identify` on several files), named by
     /// its file.
@@ -275,7 +275,11 @@ impl fmt::Display for Notice {
             ),
             Notice::Warning(w) => f.write_str(w),
             Notice::InRecord { record, notice } => write!(f, "{record}: {notice}"),
-            Notice::Integrated { measured, pieces } => {
+            Notice::Integrated {
+                measured,
+                integration,
+            } => {
+                let pieces = &integration.pieces;
                 let shown: Vec<String> = pieces
                     .iter()
                     .take(3)
@@ -291,7 +295,7 @@ impl fmt::Display for Notice {
                     })
                     .collect();
                 let more = if pieces.len() > 3 {
-                    format!("; {} pieces more", pieces.len() - 3)
+                    format!("; {} more piece(s)", pieces.len() - 3)
                 } else {
                     String::new()
                 };
@@ -300,7 +304,16 @@ impl fmt::Display for Notice {
                     "the {measured} record integrated to the displacement, each piece's constants those the model's \
                      equation holds best with: {}{more}",
                     shown.join("; ")
-                )
+                )?;
+                if let Some(&(start, end)) = integration.left_out.first() {
+                    write!(
+                        f,
+                        "; {} piece(s) of fewer than {} samples left out as gaps (the first {start}..{end})",
+                        integration.left_out.len(),
+                        crate::integrated::MIN_SAMPLES
+                    )?;
+                }
+                Ok(())
             }
         }
     }

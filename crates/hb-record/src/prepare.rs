@@ -394,10 +394,12 @@ impl fmt::Display for Note {
                     .iter()
                     .take(5)
                     .map(|s| match grid {
+                        // To a tenth of the step: the time a file's stamp shows.
                         Some((t0, dt)) => format!(
-                            "sample {} at t = {} ({})",
+                            "sample {} at t = {:.*} ({})",
                             s.index + 1,
-                            circle_signal::Shown(t0 + s.index as f64 * dt),
+                            (1.0 - dt.log10()).ceil().clamp(0.0, 12.0) as usize,
+                            t0 + s.index as f64 * dt,
                             signed_size(s.size)
                         ),
                         None => format!("sample {} ({})", s.index + 1, signed_size(s.size)),

@@ -55,7 +55,7 @@ fn the_spikes_note_speaks_of_bit_errors_on_the_circle_and_of_outliers_on_the_lin
     };
     assert_eq!(
         timed.to_string(),
-        "1 outlier(s) in the record: sample 42 at t = 30.5 (+0.5000)"
+        "1 outlier(s) in the record: sample 42 at t = 30.50 (+0.5000)"
     );
 }
 

@@ -1181,4 +1181,49 @@ fn a_velocity_record_is_compared_as_its_displacement() {
         text.contains("the velocity record integrated to the displacement"),
         "{text}"
     );
+    // Two rows dropped 11 apart leave a piece of 10 samples, too short for its constants: left
+    // out as a gap, and said so; the pieces around it are integrated each with their own.
+    let gapped = dir.join("gapped.csv");
+    let kept: String = rows
+        .lines()
+        .enumerate()
+        .filter(|(i, _)| *i != 30 && *i != 41)
+        .map(|(_, l)| format!("{l}\n"))
+        .collect();
+    std::fs::write(&gapped, format!("t,v\n{kept}")).unwrap();
+    let out = ok(&[
+        "compare",
+        s(&model),
+        s(&gapped),
+        "--measured",
+        "velocity",
+        "--range",
+        "0..200",
+        "--json",
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("1 piece(s) of fewer than 17 samples left out as gaps (the first 31..41)"),
+        "{stderr}"
+    );
+    assert!(
+        json(&out)["ranges"][0]["rmse"].as_f64().unwrap() < 1e-3,
+        "{stderr}"
+    );
+    // A model on the circle is not compared with an integrated record.
+    let pendulum = dir.join("pendulum.csv");
+    ok(&["simulate", "--samples", "3000", "--out", s(&pendulum)]);
+    let circle = dir.join("circle.json");
+    ok(&[
+        "identify",
+        s(&pendulum),
+        "--bootstrap",
+        "0",
+        "--save-model",
+        s(&circle),
+    ]);
+    assert_clean_failure(
+        &hbid(&["compare", s(&circle), s(&velocity), "--measured", "velocity"]),
+        "a model on the circle is not compared with a velocity or acceleration record",
+    );
 }

@@ -81,11 +81,19 @@ pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
                     )
                     .into());
                 };
-                let pieces = hb_pipeline::integrated::integrate(model, &mut grid, measured)?;
-                hb_pipeline::Observer::notice(
-                    &mut kept,
-                    &hb_pipeline::Notice::Integrated { measured, pieces },
-                );
+                if system.domains()[0] == Domain::Circle {
+                    return Err(OptionError::value(
+                        "measured",
+                        measured,
+                        "a model on the circle is not compared with a velocity or acceleration record (integrated \
+                         on the line)",
+                    )
+                    .into());
+                }
+                let found = hb_pipeline::integrated::integrate(model, &mut grid, measured)?;
+                for notice in hb_pipeline::integrated::notices(measured, &found) {
+                    hb_pipeline::Observer::notice(&mut kept, &notice);
+                }
             }
             let summary = format!(
                 "The saved model `{}` ({} coordinate(s): {}) against the record: {} samples in steps of {}.",
