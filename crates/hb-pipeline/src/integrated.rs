@@ -336,27 +336,36 @@ fn gauss_newton<S: SecondOrderSystem>(
 }
 
 /// The minimiser of `f`, scanned over `[−width, width]` and, while the best value lies at the
-/// bracket's edge, over brackets doubled about it (at most 40 times); 0 unless a value explains
-/// better than 0 does (a flat objective: a constant the equation does not see).
+/// bracket's edge and still falls, over brackets doubled about it (at most [`WIDENINGS`] times,
+/// a bracket 10⁶ times the first); 0 unless a value explains better than 0 does (a flat
+/// objective: a constant the equation does not see).
 fn widening(width: f64, mut f: impl FnMut(f64) -> f64) -> f64 {
     let at_zero = f(0.0);
     let (mut centre, mut width) = (0.0, width);
-    let mut found = 0.0;
-    for _ in 0..40 {
-        found = best(centre - width, centre + width, &mut f);
+    let (mut found, mut value) = (0.0, at_zero);
+    for _ in 0..WIDENINGS {
+        let next = best(centre - width, centre + width, &mut f);
+        let next_value = f(next);
+        // Not finite, or no lower than the last bracket's best: nothing further to find.
+        if !(next_value.is_finite() && next_value <= value) {
+            break;
+        }
+        (found, value) = (next, next_value);
         let edge = 2.0 * width / (hb_solve::drift::SCAN_POINTS - 1) as f64;
         if (found - (centre - width)).abs() > edge && (centre + width - found).abs() > edge {
             break;
         }
         (centre, width) = (found, 2.0 * width);
     }
-    let value = f(found);
     if value.is_finite() && value < at_zero * (1.0 - 1e-9) {
         found
     } else {
         0.0
     }
 }
+
+/// The most times [`widening`] doubles its bracket (2²⁰ ≈ 10⁶).
+const WIDENINGS: usize = 20;
 
 /// The minimiser of `f` on `[lo, hi]`; a non-finite value counts as the worst.
 fn best(lo: f64, hi: f64, mut f: impl FnMut(f64) -> f64) -> f64 {
