@@ -680,6 +680,31 @@ fn compare_one(
             .into());
         }
         let found = crate::integrated::integrate(model, &mut grid, o.measured)?;
+        if grid.pieces.is_empty() {
+            return Err(OptionError::value(
+                "measured",
+                o.measured,
+                format!(
+                    "every piece of the record is shorter than {} samples: too short to find its integration's \
+                     constants",
+                    crate::integrated::MIN_SAMPLES
+                ),
+            )
+            .into());
+        }
+        if let (Some(_), Some(&(start, end))) = (&o.x0, found.left_out.first()) {
+            return Err(OptionError::new(
+                "x0",
+                format!(
+                    "is the state at a range's first sample, but pieces too short to integrate were left out \
+                     (the first {start}..{end}), and a range's first piece may now start after its first sample: \
+                     let each piece's state be fitted («init»), or give a record whose pieces are each at least {} \
+                     samples",
+                    crate::integrated::MIN_SAMPLES
+                ),
+            )
+            .into());
+        }
         for notice in crate::integrated::notices(o.measured, &found) {
             observer.notice(&notice);
         }

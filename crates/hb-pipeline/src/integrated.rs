@@ -195,7 +195,7 @@ fn velocity_piece<S: SecondOrderSystem>(
     };
     let span = range(&x);
     let offset = if windows.len() >= 2 && span.is_finite() && span > 0.0 {
-        widening(span, residual)
+        widening(span, good(windows.len(), measured), residual)
     } else {
         0.0
     };
@@ -244,12 +244,33 @@ fn acceleration_piece<S: SecondOrderSystem>(
         // The least-squares slope of a signal within a range R over a time L is at most
         // 1.5 R / L: a true velocity's offset within its range of that (to begin with).
         let bound = span_v.max(1.5 * span_x / (t[n - 1] - t[0]));
+        let good = good(n / WINDOW, measured);
         // Scans for the basin, then Gauss–Newton for the two together.
-        for _ in 0..2 {
-            s = widening(bound, |s| residual(s, c));
-            c = widening(span_x, |c| residual(s, c));
+        // The two move together: scanned one after the other from both ends (the offset first,
+        // as a bounded oscillation's velocity has about the integral's mean while its offset can
+        // be a well away; and the velocity first), each refined by Gauss–Newton, the lower kept.
+        let search = |offset_first: bool| {
+            let (mut s, mut c) = (0.0, 0.0);
+            for _ in 0..2 {
+                if offset_first {
+                    c = widening(span_x, good, |c| residual(s, c));
+                    s = widening(bound, good, |s| residual(s, c));
+                } else {
+                    s = widening(bound, good, |s| residual(s, c));
+                    c = widening(span_x, good, |c| residual(s, c));
+                }
+            }
+            gauss_newton(model, t, a, &x, &v, middle, (s, c), &residual)
+        };
+        let first = search(true);
+        (s, c) = first;
+        let settled = residual(first.0, first.1) <= good;
+        if !settled || good == 0.0 {
+            let second = search(false);
+            if residual(second.0, second.1) < residual(first.0, first.1) {
+                (s, c) = second;
+            }
         }
-        (s, c) = gauss_newton(model, t, a, &x, &v, middle, (s, c), &residual);
     }
     for (i, o) in out.iter_mut().enumerate() {
         *o = x[i] + s * (t[i] - middle) + c;
@@ -335,37 +356,74 @@ fn gauss_newton<S: SecondOrderSystem>(
     (s, c)
 }
 
-/// The minimiser of `f`, scanned over `[−width, width]` and, while the best value lies at the
-/// bracket's edge and still falls, over brackets doubled about it (at most [`WIDENINGS`] times,
-/// a bracket 10⁶ times the first); 0 unless a value explains better than 0 does (a flat
-/// objective: a constant the equation does not see).
-fn widening(width: f64, mut f: impl FnMut(f64) -> f64) -> f64 {
+/// The minimiser of `f`: scanned over `[−width, width]`, then over brackets doubled (at most
+/// [`WIDENINGS`] times, to 10⁶ times the first) while the best value so far lies at the
+/// bracket's edge or is above `good` (a basin of its own within the first bracket, as the wrong
+/// well of a two-well oscillator), centred on that value when it lies at the edge. A wider
+/// bracket's best replaces the one so far only when it is lower by more than [`BETTER`] of it,
+/// and the result is 0 unless it is that much lower than at 0: a constant the equation hardly
+/// sees (a stiffness of 1e-12) stays the integral's mean rather than running off.
+fn widening(width: f64, good: f64, mut f: impl FnMut(f64) -> f64) -> f64 {
     let at_zero = f(0.0);
     let (mut centre, mut width) = (0.0, width);
     let (mut found, mut value) = (0.0, at_zero);
+    let mut idle = 0;
     for _ in 0..WIDENINGS {
         let next = best(centre - width, centre + width, &mut f);
         let next_value = f(next);
-        // Not finite, or no lower than the last bracket's best: nothing further to find.
-        if !(next_value.is_finite() && next_value <= value) {
-            break;
-        }
-        (found, value) = (next, next_value);
         let edge = 2.0 * width / (hb_solve::drift::SCAN_POINTS - 1) as f64;
-        if (found - (centre - width)).abs() > edge && (centre + width - found).abs() > edge {
+        let at_edge = (next - (centre - width)).abs() <= edge || (centre + width - next).abs() <= edge;
+        let better = next_value.is_finite() && next_value < value * (1.0 - BETTER);
+        if better {
+            (found, value, idle) = (next, next_value, 0);
+        } else {
+            idle += 1;
+        }
+        // Good, and inside its bracket: found. Doubling after doubling without a better value
+        // (a flat objective, or one only noise keeps above `good`): nothing further to find.
+        // (A value that is NaN is not good.)
+        let good_enough = value <= good;
+        if (good_enough && !(better && at_edge)) || idle >= IDLE {
             break;
         }
-        (centre, width) = (found, 2.0 * width);
+        if better && at_edge {
+            centre = found;
+        }
+        width *= 2.0;
     }
-    if value.is_finite() && value < at_zero * (1.0 - 1e-9) {
+    if value.is_finite() && value < at_zero * (1.0 - BETTER) {
         found
     } else {
         0.0
     }
 }
 
+/// The value of the objective below which [`widening`] takes a basin for the one: a piece of
+/// [`FEW_WINDOWS`] windows or more, whose equation holds in one basin alone, stops at the first
+/// that leaves at most [`UNEXPLAINED_WARNING`] of the `measured` side unexplained; a shorter one,
+/// which the wrong well of a two-well oscillator can explain to a few thousandths, searches
+/// every bracket for the lowest (0).
+fn good(windows: usize, measured: f64) -> f64 {
+    if windows >= FEW_WINDOWS {
+        UNEXPLAINED_WARNING * measured
+    } else {
+        0.0
+    }
+}
+
+/// Windows (of [`WINDOW`] samples) below which a piece's constants are searched over every
+/// bracket ([`good`]).
+pub const FEW_WINDOWS: usize = 32;
+
 /// The most times [`widening`] doubles its bracket (2²⁰ ≈ 10⁶).
 const WIDENINGS: usize = 20;
+
+/// Doublings in a row without a better value after which [`widening`] stops (a basin 2⁴ times
+/// the first bracket away is still reached).
+const IDLE: usize = 4;
+
+/// How much lower a value must be to be taken for a better constant: a thousandth.
+const BETTER: f64 = 1e-3;
 
 /// The minimiser of `f` on `[lo, hi]`; a non-finite value counts as the worst.
 fn best(lo: f64, hi: f64, mut f: impl FnMut(f64) -> f64) -> f64 {

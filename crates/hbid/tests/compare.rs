@@ -1210,6 +1210,35 @@ fn a_velocity_record_is_compared_as_its_displacement() {
         json(&out)["ranges"][0]["rmse"].as_f64().unwrap() < 1e-3,
         "{stderr}"
     );
+    // A state given is a range's first sample's, which a left-out piece could put after it.
+    let given = hbid(&[
+        "compare",
+        s(&model),
+        s(&gapped),
+        "--measured",
+        "velocity",
+        "--x0",
+        "0.5",
+        "--v0",
+        "0",
+    ]);
+    let err = String::from_utf8_lossy(&given.stderr);
+    assert!(!given.status.success() && !err.contains("panicked"), "{err}");
+    assert!(
+        err.lines().last().unwrap().starts_with(
+            "error: --x0: is the state at a range's first sample, but pieces too short to integrate were left \
+             out (the first 31..41)"
+        ),
+        "{err}"
+    );
+    // A record of one piece too short for its constants.
+    let short = dir.join("short.csv");
+    let first: String = rows.lines().take(16).map(|l| format!("{l}\n")).collect();
+    std::fs::write(&short, format!("t,v\n{first}")).unwrap();
+    assert_clean_failure(
+        &hbid(&["compare", s(&model), s(&short), "--measured", "velocity"]),
+        "--measured velocity: every piece of the record is shorter than 17 samples",
+    );
     // A model on the circle is not compared with an integrated record.
     let pendulum = dir.join("pendulum.csv");
     ok(&["simulate", "--samples", "3000", "--out", s(&pendulum)]);
