@@ -26,6 +26,7 @@ use std::ops::Range;
 use circle_signal::{Measured, SecondOrderSystem};
 use hb_model::IdentifiedModel;
 use hb_record::prepare::GridData;
+use rayon::prelude::*;
 
 use crate::compare::driven_on;
 use crate::error::RunError;
@@ -172,7 +173,7 @@ fn range(y: &[f64]) -> f64 {
 }
 
 /// A velocity piece `v`: `out` gets `∫v` (mean taken out) plus the offset found.
-fn velocity_piece<S: SecondOrderSystem>(
+fn velocity_piece<S: SecondOrderSystem + Sync>(
     model: &S,
     t: &[f64],
     v: &[f64],
@@ -186,7 +187,12 @@ fn velocity_piece<S: SecondOrderSystem>(
         .collect();
     let measured: f64 = windows.iter().map(|&(b, e)| (v[e] - v[b]).powi(2)).sum();
     let residual = |c: f64| -> f64 {
-        let a: Vec<f64> = (0..n).map(|i| model.acceleration(t[i], x[i] + c, v[i])).collect();
+        // Each sample's acceleration on the pool (collected in order: the sums below stay the
+        // same from run to run).
+        let a: Vec<f64> = (0..n)
+            .into_par_iter()
+            .map(|i| model.acceleration(t[i], x[i] + c, v[i]))
+            .collect();
         let integral = cumulative(&a, dt);
         windows
             .iter()
@@ -213,7 +219,7 @@ fn velocity_piece<S: SecondOrderSystem>(
 
 /// An acceleration piece `a`: `out` gets `∫∫a` (its least-squares line taken out) plus the
 /// velocity and the offset found.
-fn acceleration_piece<S: SecondOrderSystem>(
+fn acceleration_piece<S: SecondOrderSystem + Sync>(
     model: &S,
     t: &[f64],
     a: &[f64],
@@ -234,9 +240,11 @@ fn acceleration_piece<S: SecondOrderSystem>(
     let v: Vec<f64> = v0.iter().map(|v| v - slope).collect();
     let measured: f64 = a.iter().map(|a| a * a).sum();
     let residual = |s: f64, c: f64| -> f64 {
-        (0..n)
+        let squares: Vec<f64> = (0..n)
+            .into_par_iter()
             .map(|i| (a[i] - model.acceleration(t[i], x[i] + s * (t[i] - middle) + c, v[i] + s)).powi(2))
-            .sum()
+            .collect();
+        squares.iter().sum()
     };
     let (span_x, span_v) = (range(&x), range(&v));
     let (mut s, mut c) = (0.0, 0.0);
