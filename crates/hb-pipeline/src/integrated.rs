@@ -420,7 +420,7 @@ fn good(windows: usize, measured: f64) -> f64 {
 }
 
 /// Windows (of [`WINDOW`] samples) below which a piece's constants are searched over every
-/// bracket ([`good`]).
+/// bracket, not stopped at the first basin that explains all but [`UNEXPLAINED_WARNING`].
 pub const FEW_WINDOWS: usize = 32;
 
 /// The most times [`widening`] doubles its bracket (2²⁰ ≈ 10⁶).
