@@ -253,10 +253,10 @@ fn acceleration_piece<S: SecondOrderSystem + Sync>(
         // 1.5 R / L: a true velocity's offset within its range of that (to begin with).
         let bound = span_v.max(1.5 * span_x / (t[n - 1] - t[0]));
         let good = good(n / WINDOW, measured);
-        // Scans for the basin, then Gauss–Newton for the two together.
-        // The two move together: scanned one after the other from both ends (the offset first,
-        // as a bounded oscillation's velocity has about the integral's mean while its offset can
-        // be a well away; and the velocity first), each refined by Gauss–Newton, the lower kept.
+        // The two move together: scanned one after the other for the basin (the offset first, as
+        // a bounded oscillation's velocity has about the integral's mean while its offset can be
+        // a well away; on a short piece the velocity first too, the lower kept), then refined
+        // together by Gauss–Newton.
         let search = |offset_first: bool| {
             let (mut s, mut c) = (0.0, 0.0);
             for _ in 0..2 {
@@ -272,8 +272,10 @@ fn acceleration_piece<S: SecondOrderSystem + Sync>(
         };
         let first = search(true);
         (s, c) = first;
-        let settled = residual(first.0, first.1) <= good;
-        if !settled || good == 0.0 {
+        // A short piece (every bracket searched) is searched the other way too; a long one,
+        // whose equation holds in one basin, once (noise that keeps it above `good` would
+        // otherwise double the work for nothing).
+        if good == 0.0 {
             let second = search(false);
             if residual(second.0, second.1) < residual(first.0, first.1) {
                 (s, c) = second;
@@ -365,7 +367,7 @@ fn gauss_newton<S: SecondOrderSystem>(
 }
 
 /// The minimiser of `f`: scanned over `[−width, width]`, then over brackets doubled (at most
-/// [`WIDENINGS`] times, to 10⁶ times the first) while the best value so far lies at the
+/// [`WIDENINGS`] times, to 10³ times the first) while the best value so far lies at the
 /// bracket's edge or is above `good` (a basin of its own within the first bracket, as the wrong
 /// well of a two-well oscillator), centred on that value when it lies at the edge. A wider
 /// bracket's best replaces the one so far only when it is lower by more than [`BETTER`] of it,
@@ -423,8 +425,9 @@ fn good(windows: usize, measured: f64) -> f64 {
 /// bracket, not stopped at the first basin that explains all but [`UNEXPLAINED_WARNING`].
 pub const FEW_WINDOWS: usize = 32;
 
-/// The most times [`widening`] doubles its bracket (2²⁰ ≈ 10⁶).
-const WIDENINGS: usize = 20;
+/// The most times [`widening`] doubles its bracket (2¹⁰ ≈ 10³): a constant found further off
+/// than that is one the equation hardly sees.
+const WIDENINGS: usize = 10;
 
 /// Doublings in a row without a better value after which [`widening`] stops (a basin 2⁴ times
 /// the first bracket away is still reached).
