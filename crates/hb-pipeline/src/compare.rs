@@ -639,14 +639,8 @@ fn compare_one(
         )
         .into());
     }
-    if o.measured != Measured::Displacement && model.domain() == Domain::Circle {
-        return Err(OptionError::value(
-            "measured",
-            o.measured,
-            "a model on the circle is not compared with a velocity or acceleration record (integrated on the line)",
-        )
-        .into());
-    }
+    // Before the signal's check, which would send the user to «signal» and back.
+    crate::integrated::check_model(model, o.measured)?;
     let domain = o.signal.unwrap_or_else(|| model.domain());
     if domain != model.domain() {
         return Err(OptionError::value(
@@ -671,27 +665,7 @@ fn compare_one(
     let (mut grid, clock) = compared_record(source, &options, o.skip_unsettled || integrate, observer)?;
     let measured_drive = check_drive(model, &grid, named)?;
     if integrate {
-        if domain == Domain::Circle {
-            return Err(OptionError::value(
-                "measured",
-                o.measured,
-                "a velocity or acceleration record is integrated to a displacement on the line: needs «signal=line»",
-            )
-            .into());
-        }
         let found = crate::integrated::integrate(model, &mut grid, o.measured)?;
-        if grid.pieces.is_empty() {
-            return Err(OptionError::value(
-                "measured",
-                o.measured,
-                format!(
-                    "every piece of the record is shorter than {} samples: too short to find its integration's \
-                     constants",
-                    crate::integrated::MIN_SAMPLES
-                ),
-            )
-            .into());
-        }
         if let (Some(_), Some(&(start, end))) = (&o.x0, found.left_out.first()) {
             return Err(OptionError::new(
                 "x0",

@@ -30,6 +30,7 @@ use rayon::prelude::*;
 
 use crate::compare::driven_on;
 use crate::error::RunError;
+use crate::options::OptionError;
 
 /// Samples of each window of a velocity piece's integrated equation.
 pub const WINDOW: usize = 8;
@@ -68,27 +69,48 @@ pub struct Integration {
     pub left_out: Vec<(usize, usize)>,
 }
 
+/// That `model` can be run against a record integrated from `measured`: a displacement needs
+/// nothing; a velocity or an acceleration is integrated on the line, so a model on the circle is
+/// refused (before the record is read, by each front end that integrates).
+pub fn check_model(model: &IdentifiedModel, measured: Measured) -> Result<(), OptionError> {
+    if measured != Measured::Displacement && model.domain() == circle_signal::Domain::Circle {
+        return Err(OptionError::value(
+            "measured",
+            measured,
+            "a model on the circle is not compared with a velocity or acceleration record (integrated on the line)",
+        ));
+    }
+    Ok(())
+}
+
 /// `grid.x`, read as `measured` (a velocity or an acceleration), replaced by the displacement
-/// with each piece's constants that `model` explains best; what was found. Pieces of fewer than
-/// [`MIN_SAMPLES`] samples are left out of the grid's pieces (their samples NaN, as a gap's).
+/// with each piece's constants that `model` explains best; what was found (a displacement is
+/// left as it is). Pieces of fewer than [`MIN_SAMPLES`] samples are left out of the grid's
+/// pieces (their samples NaN, as a gap's).
+///
+/// Errors: a model on the circle ([`check_model`]), every piece too short, a measured drive the
+/// model cannot be driven by.
 pub fn integrate(
     model: &IdentifiedModel,
     grid: &mut GridData,
     measured: Measured,
 ) -> Result<Integration, RunError> {
+    check_model(model, measured)?;
     let mut found = Vec::new();
     let mut left_out = Vec::new();
+    if measured == Measured::Displacement {
+        return Ok(Integration {
+            pieces: found,
+            left_out,
+        });
+    }
     let pieces: Vec<Range<usize>> = grid.pieces.clone();
     let mut x = grid.x.clone();
     let mut kept = Vec::with_capacity(pieces.len());
     for r in pieces {
-        if r.len() < MIN_SAMPLES || measured == Measured::Displacement {
-            if measured != Measured::Displacement {
-                x[r.clone()].fill(f64::NAN);
-                left_out.push((r.start, r.end));
-            } else {
-                kept.push(r);
-            }
+        if r.len() < MIN_SAMPLES {
+            x[r.clone()].fill(f64::NAN);
+            left_out.push((r.start, r.end));
             continue;
         }
         let driven = driven_on(model, grid, r.start, r.end)?;
@@ -105,6 +127,17 @@ pub fn integrate(
             ..constants
         });
         kept.push(r);
+    }
+    if kept.is_empty() {
+        return Err(OptionError::value(
+            "measured",
+            measured,
+            format!(
+                "every piece of the record is shorter than {MIN_SAMPLES} samples: too short to find its \
+                 integration's constants"
+            ),
+        )
+        .into());
     }
     grid.x = x;
     grid.pieces = kept;

@@ -1255,4 +1255,20 @@ fn a_velocity_record_is_compared_as_its_displacement() {
         &hbid(&["compare", s(&circle), s(&velocity), "--measured", "velocity"]),
         "a model on the circle is not compared with a velocity or acceleration record",
     );
+    // Nor reported on one, refused before the record is read and with no report left.
+    let refused = dir.join("refused");
+    assert_clean_failure(
+        &hbid(&[
+            "report",
+            "--model",
+            s(&circle),
+            s(&velocity),
+            "--measured",
+            "velocity",
+            "--out",
+            s(&refused),
+        ]),
+        "a model on the circle is not compared with a velocity or acceleration record",
+    );
+    assert!(!refused.exists());
 }

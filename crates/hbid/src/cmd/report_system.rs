@@ -72,24 +72,23 @@ pub fn run(args: &ReportArgs, quiet: bool) -> anyhow::Result<()> {
             // constants the model's equation holds best with, as `hbid compare` does.
             let mut options = record_options(args, &system)?;
             let measured = std::mem::take(&mut options.measured);
-            let mut grid = hb_pipeline::condition_source(Source::Path(file), &options, &mut kept)?;
-            if measured != circle_signal::Measured::Displacement {
-                let [model] = system.equations() else {
+            // Checked before the record is read.
+            let integrated = match (measured, system.equations()) {
+                (circle_signal::Measured::Displacement, _) => None,
+                (_, [model]) => {
+                    hb_pipeline::integrated::check_model(model, measured)?;
+                    Some(model)
+                }
+                _ => {
                     return Err(OptionError::new(
                         "measured",
                         "is for a record of one coordinate, not a system of several («coords»)",
                     )
                     .into());
-                };
-                if system.domains()[0] == Domain::Circle {
-                    return Err(OptionError::value(
-                        "measured",
-                        measured,
-                        "a model on the circle is not compared with a velocity or acceleration record (integrated \
-                         on the line)",
-                    )
-                    .into());
                 }
+            };
+            let mut grid = hb_pipeline::condition_source(Source::Path(file), &options, &mut kept)?;
+            if let Some(model) = integrated {
                 let found = hb_pipeline::integrated::integrate(model, &mut grid, measured)?;
                 for notice in hb_pipeline::integrated::notices(measured, &found) {
                     hb_pipeline::Observer::notice(&mut kept, &notice);
